@@ -1,0 +1,7 @@
+//! Core geometric types of the renderer (f32, `Vec3A` in the hot path).
+
+mod bounds;
+mod ray;
+
+pub use bounds::Aabb;
+pub use ray::{Hit, Ray};

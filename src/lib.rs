@@ -1,0 +1,16 @@
+//! sppm-lang: a POV-Ray-like scene language and a stochastic progressive photon mapping renderer.
+//!
+//! The pipeline, one module boundary per arrow:
+//!
+//! ```text
+//! source text → syntax (pest parse, AST with spans) → eval (interpreter) → scene::Scene (plain data)
+//!             → render (prepared scene: BVH, light sampler) → integrators → film → image files
+//! ```
+//!
+//! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
+//! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
+
+pub mod geometry;
+pub mod scene;
+pub mod shapes;
+pub mod span;

@@ -1,0 +1,406 @@
+//! The evaluated scene: plain data, the boundary between the language and the renderer.
+//!
+//! Everything here is what a `.scn` file declared, with explicit defaults filled in by the
+//! evaluator (see `docs/language.md`). No rendering state lives here: the renderer builds its own
+//! prepared structures (BVH, light sampler) from a `Scene` and never writes back.
+//!
+//! Geometry is in f64 (`glam::DVec3`) so that the renderer chooses where precision matters.
+//! Colors are linear RGB.
+
+mod assets;
+
+pub use assets::{ColorSpace, ImageData, MeshData};
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{DAffine3, DVec2, DVec3};
+
+use crate::span::Span;
+
+/// Linear RGB color.
+pub type Color = DVec3;
+
+/// Index into [`Scene::materials`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MaterialId(pub u32);
+
+/// Index into [`Scene::textures`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TextureId(pub u32);
+
+/// The whole evaluated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub settings: Settings,
+    pub camera: Camera,
+    /// Every object, flattened (groups and unions resolved, transforms composed).
+    pub objects: Vec<Object>,
+    /// Lights that are not shapes (point, spot). Emissive objects are lights too.
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    /// Only textures some material actually uses.
+    pub textures: Vec<Texture>,
+    pub background: Background,
+    /// Every file the evaluation read (the scene, includes, images, meshes), for `watch`.
+    pub dependencies: Vec<PathBuf>,
+}
+
+impl Scene {
+    pub fn material(&self, id: MaterialId) -> &Material {
+        &self.materials[id.0 as usize]
+    }
+
+    pub fn texture(&self, id: TextureId) -> &Texture {
+        &self.textures[id.0 as usize]
+    }
+}
+
+/// Render settings (`settings { ... }`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Width and height in pixels.
+    pub resolution: (u32, u32),
+    /// Number of SPPM iterations (camera pass + photon pass).
+    pub iterations: u32,
+    /// Photons traced per iteration.
+    pub photons: u64,
+    /// Initial gather radius in scene units; `None`: chosen from the scene's size.
+    pub radius: Option<f64>,
+    /// SPPM radius reduction parameter, in (0, 1].
+    pub alpha: f64,
+    /// Maximum path depth for camera paths and photon paths.
+    pub max_depth: u32,
+    pub seed: u64,
+    pub integrator: Integrator,
+    /// Exposure multiplier applied before tone mapping to PNG (linear outputs are unscaled).
+    pub exposure: f64,
+    /// Stop after this many seconds even if iterations remain.
+    pub time_limit: Option<f64>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            resolution: (512, 512),
+            iterations: 64,
+            photons: 200_000,
+            radius: None,
+            alpha: 2.0 / 3.0,
+            max_depth: 16,
+            seed: 0,
+            integrator: Integrator::Sppm,
+            exposure: 1.0,
+            time_limit: None,
+        }
+    }
+}
+
+/// Which light-transport algorithm renders the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Integrator {
+    Whitted,
+    PhotonMap,
+    Ppm,
+    #[default]
+    Sppm,
+    Path,
+}
+
+impl Integrator {
+    pub const ALL: [Integrator; 5] = [
+        Integrator::Whitted,
+        Integrator::PhotonMap,
+        Integrator::Ppm,
+        Integrator::Sppm,
+        Integrator::Path,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Whitted => "whitted",
+            Integrator::PhotonMap => "photon_map",
+            Integrator::Ppm => "ppm",
+            Integrator::Sppm => "sppm",
+            Integrator::Path => "path",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|i| i.name() == name)
+    }
+}
+
+/// Pinhole or thin-lens camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    pub location: DVec3,
+    pub look_at: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view in degrees.
+    pub fov: f64,
+    /// Lens radius; 0 is a pinhole.
+    pub aperture: f64,
+    /// Distance to the plane in focus; `None`: the distance to `look_at`.
+    pub focus_distance: Option<f64>,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            location: DVec3::new(0.0, 0.0, -5.0),
+            look_at: DVec3::ZERO,
+            up: DVec3::Y,
+            fov: 40.0,
+            aperture: 0.0,
+            focus_distance: None,
+        }
+    }
+}
+
+/// What a ray that leaves the scene sees.
+#[derive(Debug, Clone)]
+pub enum Background {
+    Color(Color),
+    /// Equirectangular image that also lights the scene.
+    Environment {
+        image: Arc<ImageData>,
+        intensity: f64,
+        /// World-to-environment rotation.
+        transform: DAffine3,
+    },
+}
+
+impl Default for Background {
+    fn default() -> Self {
+        Background::Color(Color::ZERO)
+    }
+}
+
+/// One object: a shape in object space, its object-to-world transform, and its appearance.
+#[derive(Debug, Clone)]
+pub struct Object {
+    pub shape: Shape,
+    /// Object-to-world transform (identity when the file gave none).
+    pub transform: DAffine3,
+    pub material: MaterialId,
+    /// Emitted radiance; an emissive object is an area light.
+    pub emission: Option<Emission>,
+    /// Where the object was declared.
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Emission {
+    /// Radiance leaving the surface (W / (m^2 sr) per channel).
+    pub radiance: Color,
+    /// Emit from both sides; otherwise only on the side the geometric normal faces.
+    pub two_sided: bool,
+}
+
+/// Shapes in object space.
+#[derive(Debug, Clone)]
+pub enum Shape {
+    Sphere {
+        center: DVec3,
+        radius: f64,
+    },
+    /// All points `p` with `dot(normal, p) = offset` (normal is unit length).
+    Plane {
+        normal: DVec3,
+        offset: f64,
+    },
+    /// Parallelogram `origin + s*edge_u + t*edge_v`, s,t in [0,1]; normal `edge_u x edge_v`.
+    Quad {
+        origin: DVec3,
+        edge_u: DVec3,
+        edge_v: DVec3,
+    },
+    Box {
+        min: DVec3,
+        max: DVec3,
+    },
+    Cylinder {
+        base: DVec3,
+        cap: DVec3,
+        radius: f64,
+        /// No end caps.
+        open: bool,
+    },
+    Disk {
+        center: DVec3,
+        normal: DVec3,
+        radius: f64,
+    },
+    Triangle {
+        vertices: [DVec3; 3],
+    },
+    Mesh {
+        mesh: Arc<MeshData>,
+    },
+    /// A profile curve `(radius, height)` swept around the object-space y axis.
+    Revolve {
+        profile: Profile,
+        /// Partial sweep `(start, end)` in degrees with flat side caps; `None`: full turn.
+        sweep: Option<(f64, f64)>,
+        method: IntersectMethod,
+    },
+    /// Bicubic Bezier patch, control points row-major (`points[4*i + j]`, i along u).
+    BezierPatch {
+        points: Box<[DVec3; 16]>,
+        method: IntersectMethod,
+    },
+}
+
+impl Shape {
+    /// The keyword that declares this shape, for messages and summaries.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shape::Sphere { .. } => "sphere",
+            Shape::Plane { .. } => "plane",
+            Shape::Quad { .. } => "quad",
+            Shape::Box { .. } => "box",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::Disk { .. } => "disk",
+            Shape::Triangle { .. } => "triangle",
+            Shape::Mesh { .. } => "mesh",
+            Shape::Revolve { .. } => "revolve",
+            Shape::BezierPatch { .. } => "bezier_patch",
+        }
+    }
+}
+
+/// A piecewise Bezier profile in the (radius, height) half-plane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// Segments in order; each has 2..=8 control points (degree 1..=7), and each segment starts
+    /// where the previous one ended.
+    pub segments: Vec<Vec<DVec2>>,
+}
+
+/// How curved surfaces are intersected.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum IntersectMethod {
+    /// Root isolation that cannot miss a root (the default).
+    #[default]
+    Robust,
+    /// The seed reports' Newton iteration from several starting guesses (for comparison only).
+    Newton { iterations: u32, starts: u32 },
+}
+
+/// Lights that are not shapes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Light {
+    Point {
+        position: DVec3,
+        /// Radiant intensity (W/sr per channel).
+        intensity: Color,
+        span: Span,
+    },
+    Spot {
+        position: DVec3,
+        /// Unit direction the spot points in.
+        direction: DVec3,
+        intensity: Color,
+        /// Total cone half-angle in degrees: no light outside it.
+        cone_angle: f64,
+        /// Half-angle in degrees where the falloff to the cone edge starts.
+        falloff_angle: f64,
+        span: Span,
+    },
+}
+
+/// A color-valued material parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ColorParam {
+    Const(Color),
+    Texture(TextureId),
+}
+
+/// A scalar material parameter (a texture contributes its luminance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ScalarParam {
+    Const(f64),
+    Texture(TextureId),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Material {
+    /// Lambertian reflection.
+    Diffuse { albedo: ColorParam },
+    /// Perfect specular reflection scaled by `tint`.
+    Mirror { tint: ColorParam },
+    /// Smooth dielectric: Fresnel reflection and refraction, Beer–Lambert absorption inside.
+    Glass {
+        ior: f64,
+        /// Absorption coefficient per unit length inside the medium.
+        absorb: ColorParam,
+        /// Multiplies both reflection and transmission.
+        tint: Color,
+    },
+    /// A GGX microfacet lobe (metal-like, tinted by `specular`) over a Lambertian base.
+    Glossy {
+        albedo: ColorParam,
+        specular: ColorParam,
+        roughness: ScalarParam,
+    },
+}
+
+/// A texture: a pattern evaluated at mapped coordinates.
+#[derive(Debug, Clone)]
+pub struct Texture {
+    pub pattern: Pattern,
+    pub mapping: Mapping,
+    /// Texture-space transform applied to the mapped coordinates (the inverse of the
+    /// `scale`/`rotate`/`translate` the file gave, so that `scale 2` makes the pattern larger).
+    pub transform: DAffine3,
+    pub span: Span,
+}
+
+/// Where a texture's coordinates come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mapping {
+    /// Solid texturing: the object-space point (default for procedural patterns).
+    #[default]
+    Solid,
+    /// The shape's own (u, v) (default for image textures).
+    Uv,
+    Planar,
+    Spherical,
+    Cylindrical,
+}
+
+/// Wrapping of image coordinates outside [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
+/// A piecewise-linear color map over [0, 1]: `(position, color)` sorted by position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColorMap(pub Vec<(f64, Color)>);
+
+#[derive(Debug, Clone)]
+pub enum Pattern {
+    Checker { a: Color, b: Color },
+    Stripes { a: Color, b: Color },
+    Gradient { direction: DVec3, map: ColorMap },
+    Noise { map: ColorMap, octaves: u32 },
+    Marble { map: ColorMap, turbulence: f64, octaves: u32 },
+    Wood { map: ColorMap, turbulence: f64, octaves: u32 },
+    Brick {
+        brick: Color,
+        mortar: Color,
+        size: DVec3,
+        mortar_width: f64,
+    },
+    Image {
+        image: Arc<ImageData>,
+        wrap: Wrap,
+        /// Bilinear filtering (otherwise nearest texel).
+        bilinear: bool,
+    },
+}
