@@ -14,3 +14,4 @@ pub mod geometry;
 pub mod scene;
 pub mod shapes;
 pub mod span;
+pub mod textures;

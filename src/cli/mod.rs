@@ -11,7 +11,11 @@ pub const EXIT_SCENE_ERROR: u8 = 1;
 pub const EXIT_USAGE: u8 = 2;
 
 #[derive(Debug, Parser)]
-#[command(name = "sppm-lang", version, about = "A scene language and an SPPM renderer")]
+#[command(
+    name = "sppm-lang",
+    version,
+    about = "A scene language and an SPPM renderer"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,

@@ -37,3 +37,161 @@ pub struct MeshData {
     /// Three vertex indices per triangle.
     pub indices: Vec<[u32; 3]>,
 }
+
+/// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
+/// float formats (EXR, HDR) are always linear. The error is a message fit for a diagnostic.
+pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, String> {
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot open image `{}`: {e}", path.display()))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read image `{}`: {e}", path.display()))?;
+    let decoded = reader
+        .decode()
+        .map_err(|e| format!("cannot decode image `{}`: {e}", path.display()))?;
+    let is_float = matches!(
+        decoded,
+        image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+    );
+    let rgb = decoded.to_rgb32f();
+    let (width, height) = rgb.dimensions();
+    if width == 0 || height == 0 {
+        return Err(format!("image `{}` is empty", path.display()));
+    }
+    let decode = |v: f32| {
+        if is_float || space == ColorSpace::Linear {
+            v
+        } else {
+            srgb_to_linear(v)
+        }
+    };
+    let pixels = rgb
+        .pixels()
+        .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])])
+        .collect();
+    Ok(ImageData {
+        path: path.to_path_buf(),
+        width,
+        height,
+        pixels,
+    })
+}
+
+/// The sRGB transfer curve, decoded.
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Reads a Wavefront OBJ file (all models merged, faces triangulated). The error is a message
+/// fit for a diagnostic.
+pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _materials) = tobj::load_obj(path, &options)
+        .map_err(|e| format!("cannot read OBJ mesh `{}`: {e}", path.display()))?;
+    let mut mesh = MeshData {
+        path: path.to_path_buf(),
+        ..MeshData::default()
+    };
+    let all_normals = models
+        .iter()
+        .all(|m| m.mesh.normals.len() == m.mesh.positions.len());
+    let all_uvs = models
+        .iter()
+        .all(|m| m.mesh.texcoords.len() / 2 == m.mesh.positions.len() / 3);
+    for model in &models {
+        let m = &model.mesh;
+        let base = mesh.positions.len() as u32;
+        let count = (m.positions.len() / 3) as u32;
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
+        );
+        if all_normals {
+            mesh.normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
+            );
+        }
+        if all_uvs {
+            mesh.uvs.extend(
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|c| DVec2::new(c[0] as f64, c[1] as f64)),
+            );
+        }
+        for tri in m.indices.chunks_exact(3) {
+            if tri.iter().any(|&i| i >= count) {
+                return Err(format!(
+                    "OBJ mesh `{}` has a face with a vertex index out of range",
+                    path.display()
+                ));
+            }
+            mesh.indices
+                .push([base + tri[0], base + tri[1], base + tri[2]]);
+        }
+    }
+    if mesh.indices.is_empty() {
+        return Err(format!("OBJ mesh `{}` has no faces", path.display()));
+    }
+    if mesh.positions.iter().any(|p| !p.is_finite()) {
+        return Err(format!(
+            "OBJ mesh `{}` has a vertex that is not a finite number",
+            path.display()
+        ));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn obj_triangulates_quads_and_keeps_uvs() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("quad.obj");
+        std::fs::write(
+            &path,
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+        )
+        .unwrap();
+        let mesh = load_obj(&path).unwrap();
+        assert_eq!(mesh.indices.len(), 2);
+        assert_eq!(mesh.positions.len(), 4);
+        assert_eq!(mesh.uvs.len(), 4);
+        assert!(mesh.normals.is_empty());
+    }
+
+    #[test]
+    fn missing_files_are_errors_not_panics() {
+        let missing = std::path::Path::new("/nonexistent/x.obj");
+        assert!(load_obj(missing).unwrap_err().contains("cannot read OBJ"));
+        let missing = std::path::Path::new("/nonexistent/x.png");
+        assert!(load_image(missing, ColorSpace::Srgb).is_err());
+    }
+
+    #[test]
+    fn png_is_decoded_from_srgb() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gray.png");
+        image::RgbImage::from_pixel(2, 1, image::Rgb([188, 188, 188]))
+            .save(&path)
+            .unwrap();
+        let img = load_image(&path, ColorSpace::Srgb).unwrap();
+        assert_eq!((img.width, img.height), (2, 1));
+        // sRGB 188/255 is about 0.5 linear.
+        assert!((img.pixels[0][0] - 0.5029).abs() < 1e-3);
+        let lin = load_image(&path, ColorSpace::Linear).unwrap();
+        assert!((lin.pixels[0][0] - 188.0 / 255.0).abs() < 1e-6);
+    }
+}

@@ -9,7 +9,7 @@
 
 mod assets;
 
-pub use assets::{ColorSpace, ImageData, MeshData};
+pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -385,12 +385,32 @@ pub struct ColorMap(pub Vec<(f64, Color)>);
 
 #[derive(Debug, Clone)]
 pub enum Pattern {
-    Checker { a: Color, b: Color },
-    Stripes { a: Color, b: Color },
-    Gradient { direction: DVec3, map: ColorMap },
-    Noise { map: ColorMap, octaves: u32 },
-    Marble { map: ColorMap, turbulence: f64, octaves: u32 },
-    Wood { map: ColorMap, turbulence: f64, octaves: u32 },
+    Checker {
+        a: Color,
+        b: Color,
+    },
+    Stripes {
+        a: Color,
+        b: Color,
+    },
+    Gradient {
+        direction: DVec3,
+        map: ColorMap,
+    },
+    Noise {
+        map: ColorMap,
+        octaves: u32,
+    },
+    Marble {
+        map: ColorMap,
+        turbulence: f64,
+        octaves: u32,
+    },
+    Wood {
+        map: ColorMap,
+        turbulence: f64,
+        octaves: u32,
+    },
     Brick {
         brick: Color,
         mortar: Color,

@@ -33,3 +33,6 @@ pub trait Shape: Send + Sync {
     /// Shapes that cannot be sampled (infinite planes) return `None`.
     fn sample(&self, u: Vec2) -> Option<AreaSample>;
 }
+
+pub mod patch;
+pub mod revolve;
