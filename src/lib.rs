@@ -16,3 +16,4 @@ pub mod scene;
 pub mod shapes;
 pub mod span;
 pub mod textures;
+pub mod watch;

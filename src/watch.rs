@@ -1,0 +1,333 @@
+//! Watching the files a scene depends on, for `sppm-lang watch`.
+//!
+//! The watcher is told the exact set of files the last evaluation read (the scene, its includes,
+//! images, meshes). It watches each file's *parent directory*, not the file: editors that save by
+//! writing a temporary file and renaming it over the original (vim, many IDEs), or by deleting
+//! and recreating it, replace the inode a file watch would be attached to, while the directory
+//! watch sees the new file under the same name. Events for other names in those directories
+//! (backup files `file~`, `.#file`, swap files, our own output images) are ignored. A dependency
+//! whose directory does not exist yet is polled, so creating it triggers a change.
+//!
+//! Events are batched: after the first relevant event the watcher waits until the files have been
+//! quiet for [`QUIET`] or [`MAX_BATCH`] has passed since the first event, so one save (which
+//! editors often turn into several events) is one change.
+
+use std::collections::{BTreeSet, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::time::{Duration, Instant};
+
+use notify::{EventKind, RecommendedWatcher, RecursiveMode, Watcher};
+
+/// How long the files must be quiet before a batch of events is reported.
+pub const QUIET: Duration = Duration::from_millis(100);
+/// The longest a batch waits for quiet after its first event.
+pub const MAX_BATCH: Duration = Duration::from_millis(500);
+/// How often dependencies in directories that do not exist yet are looked for.
+pub const POLL: Duration = Duration::from_millis(250);
+
+/// Watches a set of files through their parent directories.
+pub struct DependencyWatcher {
+    watcher: RecommendedWatcher,
+    events: Receiver<notify::Result<notify::Event>>,
+    /// Normalised paths of the files we report changes for.
+    files: HashSet<PathBuf>,
+    /// Directories currently watched.
+    dirs: HashSet<PathBuf>,
+    /// Dependencies whose directory is missing: polled.
+    missing: BTreeSet<PathBuf>,
+}
+
+impl DependencyWatcher {
+    pub fn new() -> Result<Self, String> {
+        let (tx, events) = channel();
+        let watcher = notify::recommended_watcher(move |e| {
+            let _ = tx.send(e);
+        })
+        .map_err(|e| format!("cannot start the file watcher: {e}"))?;
+        Ok(Self {
+            watcher,
+            events,
+            files: HashSet::new(),
+            dirs: HashSet::new(),
+            missing: BTreeSet::new(),
+        })
+    }
+
+    /// Replaces the watched set by `files`: new directories are watched, directories no
+    /// dependency lives in any more are dropped.
+    pub fn set_dependencies<I, P>(&mut self, files: I) -> Result<(), String>
+    where
+        I: IntoIterator<Item = P>,
+        P: AsRef<Path>,
+    {
+        self.files.clear();
+        self.missing.clear();
+        let mut wanted = HashSet::new();
+        for file in files {
+            let path = normalize(file.as_ref());
+            match path.parent().filter(|d| d.is_dir()) {
+                Some(dir) => {
+                    wanted.insert(dir.to_path_buf());
+                }
+                None => {
+                    self.missing.insert(path.clone());
+                }
+            }
+            self.files.insert(path);
+        }
+        for dir in self.dirs.difference(&wanted).cloned().collect::<Vec<_>>() {
+            let _ = self.watcher.unwatch(&dir);
+            self.dirs.remove(&dir);
+        }
+        for dir in wanted {
+            if !self.dirs.contains(&dir) {
+                self.watcher
+                    .watch(&dir, RecursiveMode::NonRecursive)
+                    .map_err(|e| format!("cannot watch `{}`: {e}", dir.display()))?;
+                self.dirs.insert(dir);
+            }
+        }
+        Ok(())
+    }
+
+    /// The files being watched (normalised), sorted.
+    pub fn dependencies(&self) -> Vec<PathBuf> {
+        let mut v: Vec<_> = self.files.iter().cloned().collect();
+        v.sort();
+        v
+    }
+
+    /// Blocks until a batch of changes to the dependencies arrives and returns the changed
+    /// files, or returns `None` when `deadline` passes or `stop()` says so first (checked at
+    /// least every [`POLL`]).
+    pub fn wait(
+        &mut self,
+        deadline: Option<Instant>,
+        stop: &dyn Fn() -> bool,
+    ) -> Option<Vec<PathBuf>> {
+        let mut changed = BTreeSet::new();
+        let mut first: Option<Instant> = None;
+        loop {
+            if stop() {
+                return None;
+            }
+            let now = Instant::now();
+            if let Some(start) = first {
+                if now >= start + MAX_BATCH {
+                    return Some(changed.into_iter().collect());
+                }
+            } else if deadline.is_some_and(|d| now >= d) {
+                return None;
+            }
+            let timeout = match first {
+                Some(start) => QUIET.min(start + MAX_BATCH - now),
+                None => POLL,
+            };
+            match self.events.recv_timeout(timeout) {
+                Ok(Ok(event)) => {
+                    if self.is_relevant(&event) {
+                        for p in &event.paths {
+                            if self.files.contains(p) {
+                                changed.insert(p.clone());
+                            }
+                        }
+                        first.get_or_insert(Instant::now());
+                    }
+                }
+                // The watcher reports an error (e.g. a directory vanished): treat the set as
+                // changed so that the caller re-evaluates and re-watches.
+                Ok(Err(_)) => {
+                    first.get_or_insert(Instant::now());
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    if first.is_some() {
+                        // Quiet long enough.
+                        return Some(changed.into_iter().collect());
+                    }
+                    changed.extend(self.poll_missing());
+                    if !changed.is_empty() {
+                        first = Some(Instant::now());
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => return None,
+            }
+        }
+    }
+
+    fn is_relevant(&self, event: &notify::Event) -> bool {
+        !matches!(event.kind, EventKind::Access(_))
+            && event.paths.iter().any(|p| self.files.contains(p))
+    }
+
+    /// Dependencies whose directory has appeared since: watch it, and report the file if it
+    /// exists now.
+    fn poll_missing(&mut self) -> Vec<PathBuf> {
+        let mut appeared = Vec::new();
+        for path in self.missing.clone() {
+            let Some(dir) = path.parent() else { continue };
+            if dir.is_dir() {
+                if self.watcher.watch(dir, RecursiveMode::NonRecursive).is_ok() {
+                    self.dirs.insert(dir.to_path_buf());
+                    self.missing.remove(&path);
+                }
+                if path.exists() {
+                    appeared.push(path);
+                }
+            }
+        }
+        appeared
+    }
+}
+
+/// An absolute path with the directory part resolved through symlinks where it exists, so that
+/// it compares equal to the paths the OS reports in events.
+pub fn normalize(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    match (abs.parent(), abs.file_name()) {
+        (Some(dir), Some(name)) => match dir.canonicalize() {
+            Ok(dir) => dir.join(name),
+            Err(_) => abs.clone(),
+        },
+        _ => abs,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+
+    fn wait_once(w: &mut DependencyWatcher) -> Option<Vec<PathBuf>> {
+        w.wait(Some(Instant::now() + Duration::from_secs(5)), &|| false)
+    }
+
+    fn settle(w: &mut DependencyWatcher) {
+        // Drain anything left from setting up the files.
+        while w
+            .wait(Some(Instant::now() + Duration::from_millis(300)), &|| false)
+            .is_some()
+        {}
+    }
+
+    #[test]
+    fn reports_in_place_write_and_ignores_other_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("a.scn");
+        fs::write(&scene, "1").unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&scene]).unwrap();
+        settle(&mut w);
+        fs::write(dir.path().join("a.scn~"), "backup").unwrap();
+        fs::write(dir.path().join("out.png"), "x").unwrap();
+        assert_eq!(
+            w.wait(Some(Instant::now() + Duration::from_millis(600)), &|| false),
+            None,
+            "writes to other files in the folder are not changes"
+        );
+        fs::write(&scene, "2").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&scene)]));
+    }
+
+    #[test]
+    fn rename_over_and_delete_recreate_are_seen() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("b.scn");
+        fs::write(&scene, "1").unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&scene]).unwrap();
+        settle(&mut w);
+        let tmp = dir.path().join(".b.scn.swp");
+        fs::write(&tmp, "2").unwrap();
+        fs::rename(&tmp, &scene).unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&scene)]));
+        fs::remove_file(&scene).unwrap();
+        fs::write(&scene, "3").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&scene)]));
+        // And the watch still works after both.
+        fs::write(&scene, "4").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&scene)]));
+    }
+
+    #[test]
+    fn a_burst_of_saves_is_batched() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("c.scn");
+        fs::write(&scene, "0").unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&scene]).unwrap();
+        settle(&mut w);
+        let writer = {
+            let scene = scene.clone();
+            std::thread::spawn(move || {
+                for i in 0..50 {
+                    fs::write(&scene, i.to_string()).unwrap();
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+            })
+        };
+        let mut batches = 0;
+        while wait_once(&mut w).is_some() {
+            batches += 1;
+            if writer.is_finished() {
+                // One more batch may be in flight; collect it, then stop.
+                while w
+                    .wait(Some(Instant::now() + Duration::from_millis(700)), &|| false)
+                    .is_some()
+                {
+                    batches += 1;
+                }
+                break;
+            }
+        }
+        writer.join().unwrap();
+        println!("50 saves over 1 s arrived as {batches} batches");
+        // 1 s of continuous saves with batches capped at 500 ms: 2 or 3 batches, never 50.
+        assert!((1..=4).contains(&batches), "{batches} batches");
+    }
+
+    #[test]
+    fn a_missing_directory_is_polled_until_it_appears() {
+        let dir = tempfile::tempdir().unwrap();
+        let include = dir.path().join("sub").join("inc.scn");
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&include]).unwrap();
+        assert_eq!(
+            w.wait(Some(Instant::now() + Duration::from_millis(400)), &|| false),
+            None
+        );
+        fs::create_dir(dir.path().join("sub")).unwrap();
+        fs::write(&include, "x").unwrap();
+        let got = wait_once(&mut w).expect("the new file is reported");
+        assert!(got.iter().any(|p| p.ends_with("sub/inc.scn")), "{got:?}");
+    }
+
+    #[test]
+    fn dropped_dependencies_are_no_longer_reported() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.scn"), dir.path().join("b.scn"));
+        fs::write(&a, "1").unwrap();
+        fs::write(&b, "1").unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&a, &b]).unwrap();
+        w.set_dependencies([&a]).unwrap();
+        settle(&mut w);
+        fs::write(&b, "2").unwrap();
+        assert_eq!(
+            w.wait(Some(Instant::now() + Duration::from_millis(500)), &|| false),
+            None
+        );
+        fs::write(&a, "2").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&a)]));
+    }
+
+    #[test]
+    fn stop_returns_promptly() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([dir.path().join("x.scn")]).unwrap();
+        let start = Instant::now();
+        assert_eq!(w.wait(None, &|| true), None);
+        assert!(start.elapsed() < Duration::from_secs(1));
+    }
+}
