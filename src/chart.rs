@@ -1,0 +1,275 @@
+//! Charts the project draws itself (plotters): speed against accuracy, log-log.
+//!
+//! One function, [`draw`], takes named series of `(x, y)` points and writes a PNG and/or an SVG.
+//! Files are written atomically (a temporary file in the same folder, then a rename).
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// One curve: a label for the legend and its points in drawing order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Titles and axis kinds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChartSpec {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub log_x: bool,
+    pub log_y: bool,
+}
+
+/// Pixel size of PNG charts (SVGs use the same units).
+pub const SIZE: (u32, u32) = (960, 640);
+
+/// Draws `series` to `path`; the format follows the extension (`.png` or `.svg`).
+pub fn draw(spec: &ChartSpec, series: &[Series], path: &Path) -> Result<(), String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if ext != "png" && ext != "svg" {
+        return Err(format!(
+            "chart `{}`: use a .png or .svg file name",
+            path.display()
+        ));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".chart-")
+        .suffix(&format!(".{ext}"))
+        .tempfile_in(dir)
+        .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
+    {
+        let result = if ext == "png" {
+            let root = BitMapBackend::new(tmp.path(), SIZE).into_drawing_area();
+            plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
+        } else {
+            let root = SVGBackend::new(tmp.path(), SIZE).into_drawing_area();
+            plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
+        };
+        result.map_err(|e| format!("cannot draw chart `{}`: {e}", path.display()))?;
+    }
+    tmp.persist(path)
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    Ok(())
+}
+
+/// Axis range covering the finite points (positive ones only on a log axis), padded.
+fn range(values: impl Iterator<Item = f64>, log: bool) -> Result<(f64, f64), String> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && (!log || *v > 0.0))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return Err(
+            "no point can be drawn (no finite value, or none positive on a log axis)".into(),
+        );
+    }
+    Ok(if log {
+        let (lo, hi) = if hi / lo < 1.0001 {
+            (lo / 2.0, hi * 2.0)
+        } else {
+            (lo, hi)
+        };
+        (lo / 1.25, hi * 1.25)
+    } else {
+        let pad = ((hi - lo) * 0.05).max(hi.abs() * 1e-3).max(1e-12);
+        (lo - pad, hi + pad)
+    })
+}
+
+/// A tick label with at most three significant digits and no float noise.
+fn tick(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-3..=5).contains(&mag) {
+        return format!("{v:.2e}");
+    }
+    let decimals = (2 - mag).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+fn plot<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    spec: &ChartSpec,
+    series: &[Series],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(err)?;
+    let xs = range(
+        series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+        spec.log_x,
+    )?;
+    let ys = range(
+        series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
+        spec.log_y,
+    )?;
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .caption(&spec.title, ("sans-serif", 24))
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(80);
+    // The four axis kinds are four coordinate types in plotters.
+    macro_rules! body {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(&spec.x_label)
+                .y_desc(&spec.y_label)
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
+                .draw()
+                .map_err(err)?;
+            for (i, s) in series.iter().enumerate() {
+                let color = Palette99::pick(i).mix(0.9);
+                let pts: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|(x, y)| {
+                        x.is_finite()
+                            && y.is_finite()
+                            && (!spec.log_x || *x > 0.0)
+                            && (!spec.log_y || *y > 0.0)
+                    })
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                    .map_err(err)?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+                chart
+                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                    .map_err(err)?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(err)?;
+        }};
+    }
+    match (spec.log_x, spec.log_y) {
+        (true, true) => body!(
+            builder
+                .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+                .map_err(err)?
+        ),
+        (true, false) => body!(
+            builder
+                .build_cartesian_2d((xs.0..xs.1).log_scale(), ys.0..ys.1)
+                .map_err(err)?
+        ),
+        (false, true) => body!(
+            builder
+                .build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale())
+                .map_err(err)?
+        ),
+        (false, false) => body!(
+            builder
+                .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
+                .map_err(err)?
+        ),
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec() -> ChartSpec {
+        ChartSpec {
+            title: "error against time".into(),
+            x_label: "seconds".into(),
+            y_label: "RMSE".into(),
+            log_x: true,
+            log_y: true,
+        }
+    }
+
+    fn series() -> Vec<Series> {
+        vec![
+            Series {
+                label: "a".into(),
+                points: vec![(0.1, 1.0), (1.0, 0.3), (10.0, 0.1)],
+            },
+            Series {
+                label: "b".into(),
+                points: vec![(0.2, 0.5), (2.0, 0.4), (f64::NAN, 0.2)],
+            },
+        ]
+    }
+
+    #[test]
+    fn draws_png_and_svg_and_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("c.png");
+        let svg = dir.path().join("c.svg");
+        draw(&spec(), &series(), &png).unwrap();
+        draw(&spec(), &series(), &svg).unwrap();
+        let img = image::open(&png).unwrap();
+        assert_eq!((img.width(), img.height()), SIZE);
+        // Something other than the white background was drawn.
+        let rgb = img.to_rgb8();
+        let inked = rgb.pixels().filter(|p| p.0 != [255, 255, 255]).count();
+        assert!(inked > 1000, "{inked} non-white pixels");
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.contains("<svg") && text.contains("RMSE"));
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+    }
+
+    #[test]
+    fn tick_labels_have_no_float_noise() {
+        assert_eq!(tick(0.30000000000000004), "0.3");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(1234.0), "1234");
+        assert_eq!(tick(0.000123), "1.23e-4");
+        assert_eq!(tick(2.0), "2");
+    }
+
+    #[test]
+    fn nothing_drawable_is_an_error_not_a_panic() {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = vec![Series {
+            label: "neg".into(),
+            points: vec![(-1.0, -1.0), (f64::INFINITY, 0.0)],
+        }];
+        assert!(draw(&spec(), &bad, &dir.path().join("x.png")).is_err());
+        assert!(draw(&spec(), &series(), &dir.path().join("x.gif")).is_err());
+        assert!(draw(&spec(), &[], &dir.path().join("x.svg")).is_err());
+    }
+}
