@@ -7,6 +7,10 @@
 
 use std::fmt;
 
+mod report;
+
+pub use report::{ReportFiles, write_report};
+
 /// A borrowed linear RGB image, row 0 at the top.
 #[derive(Debug, Clone, Copy)]
 pub struct ImageView<'a> {
