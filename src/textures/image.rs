@@ -191,7 +191,11 @@ pub(crate) mod tests {
         let mut img = index_image(16, 8);
         for (i, p) in img.pixels.iter_mut().enumerate() {
             let t = i as f32;
-            *p = [(t * 0.37).sin().abs(), (t * 0.91).cos().abs(), (t * 0.13).fract()];
+            *p = [
+                (t * 0.37).sin().abs(),
+                (t * 0.91).cos().abs(),
+                (t * 0.13).fract(),
+            ];
         }
         let b = with(Wrap::Repeat, true);
         let mut worst = 0.0f32;

@@ -174,9 +174,15 @@ mod tests {
         assert_eq!(texel(&uv, &at([9.0, 9.0, 9.0], [0.99, 0.01])), (7.0, 3.0));
 
         let planar = image_texture(Mapping::Planar, 8, 4);
-        assert_eq!(texel(&planar, &at([0.55, 0.3, 5.0], [0.0, 0.0])), (4.0, 2.0));
+        assert_eq!(
+            texel(&planar, &at([0.55, 0.3, 5.0], [0.0, 0.0])),
+            (4.0, 2.0)
+        );
         // z is ignored by the projection.
-        assert_eq!(texel(&planar, &at([0.55, 0.3, -5.0], [0.0, 0.0])), (4.0, 2.0));
+        assert_eq!(
+            texel(&planar, &at([0.55, 0.3, -5.0], [0.0, 0.0])),
+            (4.0, 2.0)
+        );
 
         let sph = image_texture(Mapping::Spherical, 8, 4);
         // Facing -z at the equator: u = 0.5, v = 0.5 -> column 4, row 2.

@@ -5,7 +5,7 @@
 //! fixed seed, so every evaluation everywhere gives the same value: no global state, no entropy.
 
 /// The seed the permutation table is shuffled from. Changing it changes every noisy texture.
-const SEED: u64 = 0x5eed_0f_9e7a_11a5;
+const SEED: u64 = 0x5eed_0f9e_7a11_a5e7;
 
 /// splitmix64: a small, well-mixed generator for building the table.
 const fn splitmix64(state: u64) -> (u64, u64) {
@@ -102,7 +102,11 @@ pub fn perlin(x: f64, y: f64, z: f64) -> f64 {
         lerp(
             v,
             lerp(u, grad(p[aa], x, y, z), grad(p[ba], x - 1.0, y, z)),
-            lerp(u, grad(p[ab], x, y - 1.0, z), grad(p[bb], x - 1.0, y - 1.0, z)),
+            lerp(
+                u,
+                grad(p[ab], x, y - 1.0, z),
+                grad(p[bb], x - 1.0, y - 1.0, z),
+            ),
         ),
         lerp(
             v,
@@ -207,7 +211,14 @@ mod tests {
         assert!(seen.iter().all(|&s| s));
         assert_eq!(PERM[..256], PERM[256..]);
         // Not the identity: the shuffle did something.
-        assert!(PERM[..256].iter().enumerate().filter(|(i, v)| *i == **v as usize).count() < 16);
+        assert!(
+            PERM[..256]
+                .iter()
+                .enumerate()
+                .filter(|(i, v)| *i == **v as usize)
+                .count()
+                < 16
+        );
     }
 
     #[test]
@@ -221,7 +232,10 @@ mod tests {
             sum += a;
             n += 1;
         }
-        println!("perlin range [{lo:.4}, {hi:.4}], mean {:.4}", sum / n as f64);
+        println!(
+            "perlin range [{lo:.4}, {hi:.4}], mean {:.4}",
+            sum / n as f64
+        );
         assert!(lo >= -1.05 && hi <= 1.05, "range [{lo}, {hi}]");
         // It actually varies, both ways, around a mean near zero.
         assert!(lo < -0.6 && hi > 0.6, "range [{lo}, {hi}]");

@@ -195,7 +195,7 @@ mod tests {
             let x = 0.37 + i as f64 * 0.05;
             let on_x_joint = |row_shift: f64| {
                 let f = (x + row_shift).rem_euclid(4.0);
-                f < 0.1 || f > 3.9
+                !(0.1..=3.9).contains(&f)
             };
             assert_eq!(b(x, 1.0, 0.0), !on_x_joint(0.0), "x = {x}");
             assert_eq!(b(x, 3.0, 0.0), !on_x_joint(2.0), "x = {x}");
