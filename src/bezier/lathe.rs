@@ -365,9 +365,8 @@ impl Lathe {
                 }
             }
             for root in &roots {
-                let s = root.t;
-                let ds = root_uncertainty(&f, s, noise);
-                for t in frame.candidates(seg, root, ds, self.size) {
+                let ds = root_uncertainty(&f, root.t, noise);
+                for (t, s) in frame.candidates(seg, root, ds, self.size) {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
                         found = Some((t, Part::Side(i), s));
@@ -628,39 +627,101 @@ impl RayFrame {
     }
 
     /// Ray parameters (unit direction) of the hits a root `s` of `F` stands for; NaN for none.
-    /// `ds` is the uncertainty of `s` from rounding (noise / |F'|).
-    pub fn candidates(&self, seg: &Segment, root: &Root, ds: f64, size: f64) -> [f64; 2] {
+    /// `ds` is the uncertainty of `s` from rounding (see [`root_uncertainty`]).
+    ///
+    /// `F` is a product of two well-conditioned factors; squaring makes its roots lose half
+    /// their digits where the factors nearly vanish together (poles, flat rays). So the root's
+    /// bracket, widened by `ds`, is searched again for a sign change of the factor itself:
+    /// steep rays `g(s) = r(s) - |xz(t(s))|` with `t(s)` from the height; flat rays, for each
+    /// side `sigma = +-1` of the point of closest approach, `g(s) = h(s) - y(t_sigma(s))` with
+    /// `t_sigma = t_c + sigma sqrt(r^2 - rho^2) / |d_xz|`. Only where no factor changes sign (a
+    /// tangency) is the root itself used.
+    /// Returns `(t, s)` pairs.
+    pub fn candidates(&self, seg: &Segment, root: &Root, ds: f64, size: f64) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
-        let s = root.t;
-        let (rs, hs) = (seg.r.eval(s), seg.h.eval(s));
-        let mut cands = [f64::NAN; 2];
+        let lo = (root.lo - 4.0 * ds).max(0.0);
+        let hi = (root.hi + 4.0 * ds).min(1.0);
+        let mut cands = [(f64::NAN, root.t); 2];
         if self.steep {
-            cands[0] = self.t0 + (hs - oc.y) / dn.y;
+            let t_of = |s: f64| (seg.h.eval(s) - oc.y) / dn.y;
+            let g = |s: f64| {
+                let t = t_of(s);
+                let (x, z) = (oc.x + t * dn.x, oc.z + t * dn.z);
+                seg.r.eval(s) - (x * x + z * z).sqrt()
+            };
+            let s = bisect(&g, lo, hi).unwrap_or(root.t);
+            cands[0] = (self.t0 + t_of(s), s);
             return cands;
         }
-        let mut w2 = (rs * rs - self.rho2) / self.dh2;
-        if w2 < 0.0 {
-            // A simple root of F guarantees r >= rho; a cluster must show it.
-            if root.kind == RootKind::Simple || w2 > -1e-12 * size * size {
-                w2 = 0.0;
-            } else {
-                return cands;
+        let w_of = |s: f64| {
+            let r = seg.r.eval(s);
+            ((r * r - self.rho2) / self.dh2).max(0.0).sqrt()
+        };
+        let mut refined = false;
+        for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            let g = |s: f64| seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s));
+            if let Some(s) = bisect(&g, lo, hi) {
+                let r = seg.r.eval(s);
+                if r * r >= self.rho2 - 1e-12 * size * size {
+                    cands[k] = (self.t0 + sigma * w_of(s), s);
+                    refined = true;
+                }
             }
         }
-        let w = w2.sqrt();
+        if refined {
+            return cands;
+        }
+        // A tangency: no factor changes sign. Use the root itself.
+        let s = root.t;
+        let (rs, hs) = (seg.r.eval(s), seg.h.eval(s));
+        let w2 = (rs * rs - self.rho2) / self.dh2;
+        if w2 < -1e-12 * size * size {
+            return cands;
+        }
+        let w = w2.max(0.0).sqrt();
         let dh = seg.h.eval_with_derivative(s).1;
         let res = |t: f64| (oc.y + t * dn.y - hs).abs();
         let (rp, rm) = (res(w), res(-w));
-        let ds = (root.hi - root.lo) + ds;
-        let lim = rp.min(rm) + 4.0 * dh.abs() * ds + 1e-12 * size;
+        let lim = rp.min(rm) + 4.0 * dh.abs() * (ds + root.hi - root.lo) + 1e-12 * size;
         if rp <= lim {
-            cands[0] = self.t0 + w;
+            cands[0].0 = self.t0 + w;
         }
         if rm <= lim {
-            cands[1] = self.t0 - w;
+            cands[1].0 = self.t0 - w;
         }
         cands
     }
+}
+
+/// A root of `g` in `[lo, hi]` by bisection if `g` changes sign there.
+fn bisect(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> Option<f64> {
+    let (ga, gb) = (g(lo), g(hi));
+    if !(ga * gb <= 0.0) {
+        return None;
+    }
+    if ga == 0.0 {
+        return Some(lo);
+    }
+    if gb == 0.0 {
+        return Some(hi);
+    }
+    let (mut a, mut b) = (lo, hi);
+    for _ in 0..100 {
+        let m = 0.5 * (a + b);
+        if m <= a || m >= b {
+            break;
+        }
+        let gm = g(m);
+        if gm == 0.0 {
+            return Some(m);
+        }
+        if (gm < 0.0) == (ga < 0.0) {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    Some(0.5 * (a + b))
 }
 
 /// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
