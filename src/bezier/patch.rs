@@ -13,6 +13,8 @@ use glam::{DVec2, DVec3};
 
 /// Leaf size of the robust subdivision, relative to the patch size.
 pub const LEAF: f64 = 1e-7;
+/// Leaf size (relative) at which a leaf's centre is accepted when Newton's method fails there.
+pub const FINAL_LEAF: f64 = 1e-11;
 
 /// Which method intersects the patch.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,7 +98,8 @@ struct Node {
     q: [DVec3; 16],
     u: (f64, f64),
     v: (f64, f64),
-    zmin: f64,
+    lo: DVec3,
+    hi: DVec3,
 }
 
 impl Patch {
@@ -269,99 +272,100 @@ impl Patch {
         }
         let eps = 1e-12 * self.size;
         let leaf_size = leaf * self.size;
+        // Where Newton fails the robust method subdivides on to the reference's resolution.
+        let final_leaf = if polish { FINAL_LEAF.min(leaf) } else { leaf } * self.size;
         let mut best: Option<(DVec2, f64)> = None;
         let mut best_t = tmax;
-        let mut stack = vec![Node {
-            q,
-            u: (0.0, 1.0),
-            v: (0.0, 1.0),
-            zmin: f64::NEG_INFINITY,
-        }];
+        // Whether a sub-patch's bounds can hold a hit nearer than `best_t`.
+        let may_hit = |lo: DVec3, hi: DVec3, best_t: f64| {
+            lo.x <= eps
+                && hi.x >= -eps
+                && lo.y <= eps
+                && hi.y >= -eps
+                && hi.z > tmin
+                && lo.z < best_t
+        };
+        let (lo, hi) = net_bounds(&q);
+        let mut stack = Vec::with_capacity(64);
+        if may_hit(lo, hi, best_t) {
+            stack.push(Node {
+                q,
+                u: (0.0, 1.0),
+                v: (0.0, 1.0),
+                lo,
+                hi,
+            });
+        }
         while let Some(node) = stack.pop() {
-            if node.zmin >= best_t {
-                continue;
-            }
-            let (lo, hi) = net_bounds(&node.q);
-            if lo.x > eps || hi.x < -eps || lo.y > eps || hi.y < -eps {
-                continue;
-            }
-            if hi.z <= tmin || lo.z >= best_t {
+            let (lo, hi) = (node.lo, node.hi);
+            if lo.z >= best_t {
                 continue;
             }
             let ext = (hi - lo).max_element();
             let depth_exhausted = node.u.1 - node.u.0 < 1e-15 || node.v.1 - node.v.0 < 1e-15;
-            if ext <= leaf_size || depth_exhausted {
-                let c = DVec2::new(0.5 * (node.u.0 + node.u.1), 0.5 * (node.v.0 + node.v.1));
-                let mut hit = None;
-                if polish {
-                    let w = DVec2::new(node.u.1 - node.u.0, node.v.1 - node.v.0);
-                    let keep = ((c - w).max(DVec2::ZERO), (c + w).min(DVec2::ONE));
-                    hit = self.newton(o, frame, c, 8, keep);
+            let c = DVec2::new(0.5 * (node.u.0 + node.u.1), 0.5 * (node.v.0 + node.v.1));
+            if polish && ext <= leaf_size && !depth_exhausted {
+                // Newton inside (an enlarged copy of) the leaf's domain. Where it does not
+                // converge (a bound that holds the ray but a surface piece that misses it, near
+                // a tangency) keep subdividing: accepting the leaf there would report a hit that
+                // is not one, in front of the real one.
+                // Newton may also converge to a root outside the leaf: that is still a genuine
+                // hit, and it prunes everything behind it.
+                let w = DVec2::new(node.u.1 - node.u.0, node.v.1 - node.v.0);
+                let whole = (DVec2::ZERO, DVec2::ONE);
+                if let Some((uv, t)) = self.newton(o, frame, c, 12, whole) {
+                    if t > tmin && t < best_t {
+                        best_t = t;
+                        best = Some((uv, t));
+                    }
+                    if (uv - c).abs().cmple(w).all() {
+                        continue;
+                    }
                 }
-                let (uv, t) = hit.unwrap_or_else(|| {
-                    let (p, _, _) = self.eval(c.x, c.y);
-                    (c, (p - o).dot(dn))
-                });
+            }
+            if ext <= final_leaf || depth_exhausted {
+                // Below rounding of any polish: the leaf's centre is the answer.
+                let (p, _, _) = self.eval(c.x, c.y);
+                let t = (p - o).dot(dn);
                 if t > tmin && t < best_t {
                     best_t = t;
-                    best = Some((uv, t));
+                    best = Some((c, t));
                 }
                 continue;
             }
-            // Split along the parameter in which the control net is longer.
-            let (mut lu, mut lv) = (0.0, 0.0);
-            for k in 0..4 {
-                for m in 0..3 {
-                    lu += (node.q[4 * (m + 1) + k] - node.q[4 * m + k]).length();
-                    lv += (node.q[4 * k + m + 1] - node.q[4 * k + m]).length();
-                }
-            }
+            // Split along the parameter in which the control net is longer (corner edges).
+            let q = &node.q;
+            let lu = (q[12] - q[0]).length_squared() + (q[15] - q[3]).length_squared();
+            let lv = (q[3] - q[0]).length_squared() + (q[15] - q[12]).length_squared();
             let along_u = lu >= lv;
-            let (a, b) = split_net(&node.q, along_u);
-            let (na, nb) = if along_u {
+            let (a, b) = split_net(q, along_u);
+            let ((ua, va), (ub, vb)) = if along_u {
                 let mid = 0.5 * (node.u.0 + node.u.1);
-                (
-                    Node {
-                        q: a,
-                        u: (node.u.0, mid),
-                        v: node.v,
-                        zmin: 0.0,
-                    },
-                    Node {
-                        q: b,
-                        u: (mid, node.u.1),
-                        v: node.v,
-                        zmin: 0.0,
-                    },
-                )
+                (((node.u.0, mid), node.v), ((mid, node.u.1), node.v))
             } else {
                 let mid = 0.5 * (node.v.0 + node.v.1);
-                (
-                    Node {
-                        q: a,
-                        u: node.u,
-                        v: (node.v.0, mid),
-                        zmin: 0.0,
-                    },
-                    Node {
-                        q: b,
-                        u: node.u,
-                        v: (mid, node.v.1),
-                        zmin: 0.0,
-                    },
-                )
+                ((node.u, (node.v.0, mid)), (node.u, (mid, node.v.1)))
             };
-            let za = net_bounds(&na.q).0.z;
-            let zb = net_bounds(&nb.q).0.z;
-            let (na, nb) = (Node { zmin: za, ..na }, Node { zmin: zb, ..nb });
+            let (la, ha) = net_bounds(&a);
+            let (lb, hb) = net_bounds(&b);
+            let na = may_hit(la, ha, best_t).then_some(Node {
+                q: a,
+                u: ua,
+                v: va,
+                lo: la,
+                hi: ha,
+            });
+            let nb = may_hit(lb, hb, best_t).then_some(Node {
+                q: b,
+                u: ub,
+                v: vb,
+                lo: lb,
+                hi: hb,
+            });
             // Push the farther first so that the nearer is examined first.
-            if za <= zb {
-                stack.push(nb);
-                stack.push(na);
-            } else {
-                stack.push(na);
-                stack.push(nb);
-            }
+            let (first, second) = if la.z <= lb.z { (nb, na) } else { (na, nb) };
+            stack.extend(first);
+            stack.extend(second);
         }
         best
     }

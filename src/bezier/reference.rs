@@ -17,7 +17,7 @@ use super::lathe::{Lathe, Part, RayFrame, Segment};
 use super::roots::{Root, RootKind};
 
 /// Width in `s` below which the lathe reference gives up deciding.
-pub const AMBIGUOUS_WIDTH: f64 = 1e-7;
+pub const AMBIGUOUS_WIDTH: f64 = 1e-11;
 /// Leaf size of the patch reference, relative to the patch size.
 pub const PATCH_LEAF: f64 = 1e-10;
 
@@ -129,7 +129,14 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
         }
         roots.clear();
         let mut cands: Vec<(f64, f64)> = Vec::new();
-        if dn.y == 0.0 {
+        if dn.x == 0.0 && dn.z == 0.0 && o.x == 0.0 && o.z == 0.0 {
+            // Along the axis itself: only the profile's points on the axis (its poles) are hit.
+            for s in [0.0, 1.0] {
+                if seg.r.eval(s) == 0.0 {
+                    cands.push(((seg.h.eval(s) - o.y) / dn.y, s));
+                }
+            }
+        } else if dn.y == 0.0 {
             // Perpendicular to the axis: the heights h(s) = o_y, then the circle there.
             let g = |s: f64| {
                 let (h, dh) = seg.h.eval_with_derivative(s);
@@ -201,18 +208,21 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
 }
 
 /// Reference intersection with a bicubic patch: subdivision with projected bounds to leaves of
-/// [`PATCH_LEAF`] of the patch size, the leaf centre as the answer. Returns `t` for `d` as given.
-pub fn patch(
-    patch: &super::patch::Patch,
-    o: DVec3,
-    d: DVec3,
-    t_min: f64,
-    t_max: f64,
-) -> Option<f64> {
+/// [`PATCH_LEAF`] of the patch size, the leaf centre as the answer (`t` for `d` as given).
+/// A leaf fixes the hit's position to its size, so along a ray at angle `theta` to the surface
+/// it fixes `t` only to `leaf / sin(theta)`: when that exceeds 1e-7 of `t` the ray is flagged
+/// ambiguous (a near-tangent ray whose `t` no method can pin down to 1e-6).
+pub fn patch(patch: &super::patch::Patch, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHit {
     let dl = d.length();
     let dn = d / dl;
     let (e1, e2) = dn.any_orthonormal_pair();
-    patch
-        .subdivide(o, [e1, e2, dn], t_min * dl, t_max * dl, PATCH_LEAF, false)
-        .map(|(_, t)| t / dl)
+    let found = patch.subdivide(o, [e1, e2, dn], t_min * dl, t_max * dl, PATCH_LEAF, false);
+    let ambiguous = found.is_some_and(|(uv, t)| {
+        let sin = patch.normal(uv.x, uv.y).dot(dn).abs();
+        PATCH_LEAF * patch.size() > 1e-7 * t * sin
+    });
+    RefHit {
+        t: found.map(|(_, t)| t / dl),
+        ambiguous,
+    }
 }
