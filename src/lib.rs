@@ -10,6 +10,7 @@
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
 
+pub mod bezier;
 pub mod chart;
 pub mod compare;
 pub mod geometry;

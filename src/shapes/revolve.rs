@@ -1,42 +1,75 @@
 //! Surface of revolution of a Bezier profile around the y axis (scene glue).
-//! Placeholder: the robust intersector replaces this file.
+//!
+//! The numerical work (f64) is in [`crate::bezier::lathe`]; this file converts to the renderer's
+//! f32 types. Area and area sampling cover the swept side only; the flat caps of a partial sweep
+//! are not sampled (see `docs/bezier.md`).
 
-use glam::Vec2;
+use glam::{DVec3, Vec2, Vec3A};
 
 use super::{AreaSample, Shape};
+use crate::bezier::lathe::{Lathe, LatheHit, Solver};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::{IntersectMethod, Profile};
 
 pub struct Revolve {
+    lathe: Lathe,
+    solver: Solver,
     bounds: Aabb,
+    area: f64,
+}
+
+/// f32 bounds that contain the f64 box (rounded outward).
+pub(crate) fn outward_box(lo: DVec3, hi: DVec3) -> Aabb {
+    let pad = 1e-6
+        * (hi - lo)
+            .max_element()
+            .max(lo.abs().max(hi.abs()).max_element());
+    Aabb::new(
+        (lo - DVec3::splat(pad)).as_vec3a(),
+        (hi + DVec3::splat(pad)).as_vec3a(),
+    )
+}
+
+pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
+    match method {
+        IntersectMethod::Robust => Solver::Robust,
+        IntersectMethod::Newton { iterations, starts } => Solver::Newton { iterations, starts },
+    }
 }
 
 impl Revolve {
     /// Builds the renderer shape; the error is a message fit for a diagnostic.
     pub fn new(
         profile: &Profile,
-        _sweep: Option<(f64, f64)>,
-        _method: IntersectMethod,
+        sweep: Option<(f64, f64)>,
+        method: IntersectMethod,
     ) -> Result<Self, String> {
-        let r = profile
-            .segments
-            .iter()
-            .flatten()
-            .map(|p| p.x.abs())
-            .fold(0.0, f64::max) as f32;
-        let (lo, hi) = profile
-            .segments
-            .iter()
-            .flatten()
-            .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
-                (lo.min(p.y), hi.max(p.y))
-            });
+        let lathe = Lathe::new(&profile.segments, sweep)?;
+        let (lo, hi) = lathe.bounds();
+        let area = lathe.area();
         Ok(Self {
-            bounds: Aabb::new(
-                glam::Vec3A::new(-r, lo as f32, -r),
-                glam::Vec3A::new(r, hi as f32, r),
-            ),
+            lathe,
+            solver: solver_of(method),
+            bounds: outward_box(lo, hi),
+            area,
         })
+    }
+
+    /// The f64 core (for measurements and tests).
+    pub fn lathe(&self) -> &Lathe {
+        &self.lathe
+    }
+}
+
+fn to_hit(h: LatheHit) -> Hit {
+    let n = h.n.as_vec3a();
+    Hit {
+        t: h.t as f32,
+        p: h.p.as_vec3a(),
+        n,
+        ns: n,
+        uv: h.uv.as_vec2(),
+        dpdu: h.dpdu.as_vec3a(),
     }
 }
 
@@ -44,13 +77,85 @@ impl Shape for Revolve {
     fn bounds(&self) -> Aabb {
         self.bounds
     }
-    fn intersect(&self, _ray: &Ray, _t_min: f32, _t_max: f32) -> Option<Hit> {
-        None
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let h = self.lathe.intersect(
+            ray.o.as_dvec3(),
+            ray.d.as_dvec3(),
+            t_min as f64,
+            t_max as f64,
+            self.solver,
+        )?;
+        // The f32 conversion must not move the hit outside the caller's interval.
+        let hit = to_hit(h);
+        (hit.t > t_min && hit.t < t_max).then_some(hit)
     }
+
     fn area(&self) -> f32 {
-        0.0
+        self.area as f32
     }
-    fn sample(&self, _u: Vec2) -> Option<AreaSample> {
-        None
+
+    fn sample(&self, u: Vec2) -> Option<AreaSample> {
+        if !(self.area > 0.0) {
+            return None;
+        }
+        let (p, n) = self.lathe.sample(u.as_dvec2())?;
+        Some(AreaSample {
+            p: p.as_vec3a(),
+            n: Vec3A::from(n.as_vec3()),
+            pdf: (1.0 / self.area) as f32,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+
+    fn cylinder() -> Profile {
+        Profile {
+            segments: vec![vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 2.0)]],
+        }
+    }
+
+    #[test]
+    fn cylinder_hit_in_f32() {
+        let r = Revolve::new(&cylinder(), None, IntersectMethod::Robust).unwrap();
+        let ray = Ray::new(Vec3A::new(0.0, 1.0, -5.0), Vec3A::Z);
+        let h = r.intersect(&ray, 1e-4, f32::INFINITY).unwrap();
+        assert!((h.t - 4.0).abs() < 1e-6);
+        assert!((h.n - Vec3A::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        assert!((h.uv.x - 0.5).abs() < 1e-6);
+        assert!(r.intersect(&ray, 1e-4, 3.9).is_none());
+        let b = r.bounds();
+        assert!(b.min.x <= -1.0 && b.max.y >= 2.0);
+        // Side area 2 pi r h.
+        assert!((r.area() - 4.0 * std::f32::consts::PI).abs() < 1e-4);
+        let s = r.sample(Vec2::new(0.3, 0.7)).unwrap();
+        assert!((s.p.x.hypot(s.p.z) - 1.0).abs() < 1e-5 && s.n.y.abs() < 1e-5);
+    }
+
+    #[test]
+    fn bad_profiles_are_errors_not_panics() {
+        let neg = Profile {
+            segments: vec![vec![DVec2::new(-1.0, 0.0), DVec2::new(1.0, 2.0)]],
+        };
+        assert!(Revolve::new(&neg, None, IntersectMethod::Robust).is_err());
+        let nan = Profile {
+            segments: vec![vec![DVec2::new(f64::NAN, 0.0), DVec2::new(1.0, 2.0)]],
+        };
+        assert!(Revolve::new(&nan, None, IntersectMethod::Robust).is_err());
+        let empty = Profile { segments: vec![] };
+        assert!(Revolve::new(&empty, None, IntersectMethod::Robust).is_err());
+        let long = Profile {
+            segments: vec![vec![DVec2::ONE; 9]],
+        };
+        assert!(Revolve::new(&long, None, IntersectMethod::Robust).is_err());
+        assert!(Revolve::new(&cylinder(), Some((90.0, 10.0)), IntersectMethod::Robust).is_err());
+        // NaN rays are misses.
+        let r = Revolve::new(&cylinder(), None, IntersectMethod::Robust).unwrap();
+        let ray = Ray::new(Vec3A::splat(f32::NAN), Vec3A::Z);
+        assert!(r.intersect(&ray, 0.0, f32::INFINITY).is_none());
     }
 }

@@ -1,0 +1,273 @@
+//! Polynomials in the Bernstein basis on [0, 1].
+//!
+//! `p(t) = sum_i c_i * C(n, i) * t^i * (1 - t)^(n - i)`. The coefficients form a control polygon
+//! whose convex hull contains the graph of `p` (the convex-hull property the root isolator relies
+//! on). Degrees up to [`MAX_DEGREE`] are stored inline (no allocation in the hot path).
+
+/// Highest degree stored: a degree-7 profile segment squared gives degree 14.
+pub const MAX_DEGREE: usize = 15;
+
+/// A polynomial of degree `n <= MAX_DEGREE` in the Bernstein basis on [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bernstein {
+    n: usize,
+    c: [f64; MAX_DEGREE + 1],
+}
+
+fn binomial(n: usize, k: usize) -> f64 {
+    let mut b = 1.0;
+    for i in 0..k.min(n - k) {
+        b = b * (n - i) as f64 / (i + 1) as f64;
+    }
+    b.round()
+}
+
+impl Bernstein {
+    /// From coefficients `c_0..=c_n`; `None` when there are none or more than `MAX_DEGREE + 1`.
+    pub fn new(coeffs: &[f64]) -> Option<Self> {
+        if coeffs.is_empty() || coeffs.len() > MAX_DEGREE + 1 {
+            return None;
+        }
+        let mut c = [0.0; MAX_DEGREE + 1];
+        c[..coeffs.len()].copy_from_slice(coeffs);
+        Some(Self {
+            n: coeffs.len() - 1,
+            c,
+        })
+    }
+
+    /// The constant polynomial `v`.
+    pub fn constant(v: f64) -> Self {
+        let mut c = [0.0; MAX_DEGREE + 1];
+        c[0] = v;
+        Self { n: 0, c }
+    }
+
+    pub fn degree(&self) -> usize {
+        self.n
+    }
+
+    pub fn coeffs(&self) -> &[f64] {
+        &self.c[..=self.n]
+    }
+
+    /// Largest absolute coefficient: a bound on `|p|` over [0, 1].
+    pub fn max_abs(&self) -> f64 {
+        self.coeffs().iter().fold(0.0, |m, c| m.max(c.abs()))
+    }
+
+    /// Value at `t` by de Casteljau's algorithm (stable for t in [0, 1]).
+    pub fn eval(&self, t: f64) -> f64 {
+        self.eval_with_derivative(t).0
+    }
+
+    /// Value and first derivative at `t` from one de Casteljau pass.
+    pub fn eval_with_derivative(&self, t: f64) -> (f64, f64) {
+        let n = self.n;
+        if n == 0 {
+            return (self.c[0], 0.0);
+        }
+        let mut b = self.c;
+        for level in 1..n {
+            for i in 0..=n - level {
+                b[i] += t * (b[i + 1] - b[i]);
+            }
+        }
+        let v = b[0] + t * (b[1] - b[0]);
+        (v, n as f64 * (b[1] - b[0]))
+    }
+
+    /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
+    pub fn split(&self, t: f64) -> (Self, Self) {
+        let n = self.n;
+        let mut left = *self;
+        let mut right = *self;
+        let mut b = self.c;
+        left.c[0] = b[0];
+        right.c[n] = b[n];
+        for level in 1..=n {
+            for i in 0..=n - level {
+                b[i] += t * (b[i + 1] - b[i]);
+            }
+            left.c[level] = b[0];
+            right.c[n - level] = b[n - level];
+        }
+        (left, right)
+    }
+
+    /// The restriction to [a, b] reparameterised on [0, 1].
+    pub fn restrict(&self, a: f64, b: f64) -> Self {
+        if b >= 1.0 {
+            return self.split(a).1;
+        }
+        let (left, _) = self.split(b);
+        if a <= 0.0 { left } else { left.split(a / b).1 }
+    }
+
+    /// The derivative (degree n - 1; the zero constant for a constant).
+    pub fn derivative(&self) -> Self {
+        let n = self.n;
+        if n == 0 {
+            return Self::constant(0.0);
+        }
+        let mut c = [0.0; MAX_DEGREE + 1];
+        for (i, ci) in c.iter_mut().enumerate().take(n) {
+            *ci = n as f64 * (self.c[i + 1] - self.c[i]);
+        }
+        Self { n: n - 1, c }
+    }
+
+    /// The same polynomial one degree higher (`None` above `MAX_DEGREE`).
+    pub fn elevate(&self) -> Option<Self> {
+        let n = self.n;
+        if n >= MAX_DEGREE {
+            return None;
+        }
+        let mut c = [0.0; MAX_DEGREE + 1];
+        c[0] = self.c[0];
+        c[n + 1] = self.c[n];
+        for (i, ci) in c.iter_mut().enumerate().take(n + 1).skip(1) {
+            let a = i as f64 / (n + 1) as f64;
+            *ci = a * self.c[i - 1] + (1.0 - a) * self.c[i];
+        }
+        Some(Self { n: n + 1, c })
+    }
+
+    /// Elevates to degree `m >= n`.
+    pub fn elevate_to(&self, m: usize) -> Option<Self> {
+        let mut p = *self;
+        while p.n < m {
+            p = p.elevate()?;
+        }
+        Some(p)
+    }
+
+    /// `self * s`.
+    pub fn scale(&self, s: f64) -> Self {
+        let mut p = *self;
+        for c in &mut p.c[..=p.n] {
+            *c *= s;
+        }
+        p
+    }
+
+    /// `self + v` for a constant `v` (adds `v` to every coefficient: partition of unity).
+    pub fn add_constant(&self, v: f64) -> Self {
+        let mut p = *self;
+        for c in &mut p.c[..=p.n] {
+            *c += v;
+        }
+        p
+    }
+
+    /// `self + other` (the lower degree is elevated). `None` above `MAX_DEGREE`.
+    pub fn add(&self, other: &Self) -> Option<Self> {
+        let m = self.n.max(other.n);
+        let a = self.elevate_to(m)?;
+        let b = other.elevate_to(m)?;
+        let mut p = a;
+        for i in 0..=m {
+            p.c[i] = a.c[i] + b.c[i];
+        }
+        Some(p)
+    }
+
+    /// `self * other` (degree n + m). `None` above `MAX_DEGREE`.
+    pub fn mul(&self, other: &Self) -> Option<Self> {
+        let (n, m) = (self.n, other.n);
+        if n + m > MAX_DEGREE {
+            return None;
+        }
+        let mut c = [0.0; MAX_DEGREE + 1];
+        for i in 0..=n {
+            let bi = binomial(n, i) * self.c[i];
+            for j in 0..=m {
+                c[i + j] += bi * binomial(m, j) * other.c[j];
+            }
+        }
+        for (k, ck) in c.iter_mut().enumerate().take(n + m + 1) {
+            *ck /= binomial(n + m, k);
+        }
+        Some(Self { n: n + m, c })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn power_eval(p: &[f64], t: f64) -> f64 {
+        p.iter().rev().fold(0.0, |acc, c| acc * t + c)
+    }
+
+    /// (t - 0.25)(t - 0.5)(t - 0.75) in the Bernstein basis, built from products.
+    fn cubic() -> Bernstein {
+        let f = |r: f64| Bernstein::new(&[-r, 1.0 - r]).unwrap();
+        f(0.25).mul(&f(0.5)).unwrap().mul(&f(0.75)).unwrap()
+    }
+
+    #[test]
+    fn product_matches_power_basis() {
+        let p = cubic();
+        assert_eq!(p.degree(), 3);
+        for k in 0..=20 {
+            let t = k as f64 / 20.0;
+            let want = (t - 0.25) * (t - 0.5) * (t - 0.75);
+            assert!((p.eval(t) - want).abs() < 1e-15, "t={t}");
+        }
+    }
+
+    #[test]
+    fn derivative_matches_finite_difference_and_de_casteljau() {
+        let p = cubic();
+        let dp = p.derivative();
+        for k in 1..20 {
+            let t = k as f64 / 20.0;
+            // p' = 3t^2 - 3t + 0.6875 (expanded by hand)
+            let want = power_eval(&[0.6875, -3.0, 3.0], t);
+            assert!((dp.eval(t) - want).abs() < 1e-14);
+            assert!((p.eval_with_derivative(t).1 - want).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn split_and_restrict_reparameterise() {
+        let p = cubic();
+        let (l, r) = p.split(0.3);
+        let q = p.restrict(0.2, 0.7);
+        for k in 0..=10 {
+            let s = k as f64 / 10.0;
+            assert!((l.eval(s) - p.eval(0.3 * s)).abs() < 1e-15);
+            assert!((r.eval(s) - p.eval(0.3 + 0.7 * s)).abs() < 1e-15);
+            assert!((q.eval(s) - p.eval(0.2 + 0.5 * s)).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn elevation_and_sum_preserve_values() {
+        let p = cubic();
+        let e = p.elevate_to(7).unwrap();
+        let s = p.add(&Bernstein::new(&[1.0, 2.0]).unwrap()).unwrap();
+        for k in 0..=10 {
+            let t = k as f64 / 10.0;
+            assert!((e.eval(t) - p.eval(t)).abs() < 1e-15);
+            assert!((s.eval(t) - (p.eval(t) + 1.0 + t)).abs() < 1e-14);
+            assert!((p.add_constant(2.0).eval(t) - p.eval(t) - 2.0).abs() < 1e-15);
+        }
+        assert!(Bernstein::new(&[0.0; 17]).is_none());
+        assert!(e.mul(&e.elevate().unwrap().elevate().unwrap()).is_none());
+    }
+
+    #[test]
+    fn convex_hull_bounds_the_values() {
+        let p = Bernstein::new(&[0.3, -2.0, 5.0, 0.1, -0.7]).unwrap();
+        let (lo, hi) = p
+            .coeffs()
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)));
+        for k in 0..=1000 {
+            let v = p.eval(k as f64 / 1000.0);
+            assert!(v >= lo && v <= hi);
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! The numerical heart of Bezier surfaces, apart from the scene glue in `shapes`.
+//!
+//! - [`bernstein`]: polynomials in the Bernstein basis (de Casteljau, subdivision, products).
+//! - [`roots`]: a root isolator on [0, 1] that cannot miss a root, with a bracketed polish.
+//! - [`lathe`]: ray intersection with a surface of revolution of a Bezier profile (f64).
+//! - [`patch`]: ray intersection with a bicubic Bezier patch (f64).
+//! - [`reference`]: slow, obviously right intersectors used to test the two above.
+//!
+//! See `docs/bezier.md` for the mathematics.
+
+pub mod bernstein;
+pub mod lathe;
+pub mod patch;
+pub mod reference;
+pub mod roots;

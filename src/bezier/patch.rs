@@ -1,0 +1,372 @@
+//! Ray intersection with a bicubic Bezier patch (f64 core).
+//!
+//! The robust method projects the control points into a frame where the ray is the z axis
+//! (`x = (p - o).e1`, `y = (p - o).e2`, `z = (p - o).d`). By the convex-hull property a sub-patch
+//! can only be hit if the bounding box of its projected control points contains the origin in x
+//! and y and overlaps `(t_min, t_best)` in z. Sub-patches that pass are split (de Casteljau, along
+//! the parameter in which the control net is longer), nearer halves first, until they are smaller
+//! than [`LEAF`] of the patch size; a leaf is polished by Newton's method on the two projected
+//! equations inside (a slightly enlarged copy of) its parameter domain, falling back to the leaf's
+//! centre. The nearest hit found prunes all farther sub-patches.
+
+use glam::{DVec2, DVec3};
+
+/// Leaf size of the robust subdivision, relative to the patch size.
+pub const LEAF: f64 = 1e-7;
+/// Leaf size (relative) at which a leaf's centre is accepted when Newton's method fails there.
+pub const FINAL_LEAF: f64 = 1e-11;
+
+/// Which method intersects the patch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PatchSolver {
+    Robust,
+    /// Newton's method on the projected equations from a grid of about `starts` guesses.
+    Newton {
+        iterations: u32,
+        starts: u32,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PatchHit {
+    /// In units of the given ray direction.
+    pub t: f64,
+    pub p: DVec3,
+    /// `(u, v)`: the patch parameters.
+    pub uv: DVec2,
+    /// Unit normal `dpdu x dpdv` (falls back to a neighbour's at degenerate corners).
+    pub n: DVec3,
+    pub dpdu: DVec3,
+    pub dpdv: DVec3,
+}
+
+/// A bicubic patch, control points row-major (`p[4 i + j]`, `i` along u).
+#[derive(Debug, Clone)]
+pub struct Patch {
+    p: [DVec3; 16],
+    size: f64,
+}
+
+fn bern3(t: f64) -> ([f64; 4], [f64; 4]) {
+    let s = 1.0 - t;
+    (
+        [s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t],
+        [
+            -3.0 * s * s,
+            3.0 * s * s - 6.0 * t * s,
+            6.0 * t * s - 3.0 * t * t,
+            3.0 * t * t,
+        ],
+    )
+}
+
+/// Splits a cubic at 1/2.
+fn split4(c: [DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
+    let m01 = (c[0] + c[1]) * 0.5;
+    let m12 = (c[1] + c[2]) * 0.5;
+    let m23 = (c[2] + c[3]) * 0.5;
+    let a = (m01 + m12) * 0.5;
+    let b = (m12 + m23) * 0.5;
+    let mid = (a + b) * 0.5;
+    ([c[0], m01, a, mid], [mid, b, m23, c[3]])
+}
+
+/// Splits a 4x4 net at u = 1/2 (`along_u`) or v = 1/2.
+fn split_net(q: &[DVec3; 16], along_u: bool) -> ([DVec3; 16], [DVec3; 16]) {
+    let (mut l, mut r) = ([DVec3::ZERO; 16], [DVec3::ZERO; 16]);
+    for k in 0..4 {
+        let idx = |m: usize| if along_u { 4 * m + k } else { 4 * k + m };
+        let (a, b) = split4([q[idx(0)], q[idx(1)], q[idx(2)], q[idx(3)]]);
+        for m in 0..4 {
+            l[idx(m)] = a[m];
+            r[idx(m)] = b[m];
+        }
+    }
+    (l, r)
+}
+
+fn net_bounds(q: &[DVec3; 16]) -> (DVec3, DVec3) {
+    q.iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        })
+}
+
+/// A sub-patch on the work stack.
+#[derive(Clone, Copy)]
+struct Node {
+    q: [DVec3; 16],
+    u: (f64, f64),
+    v: (f64, f64),
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl Patch {
+    pub fn new(points: &[DVec3; 16]) -> Result<Self, String> {
+        if let Some(p) = points.iter().find(|p| !p.is_finite()) {
+            return Err(format!("bezier_patch control point {p} is not finite"));
+        }
+        let (lo, hi) = net_bounds(points);
+        Ok(Self {
+            p: *points,
+            size: (hi - lo).max_element().max(1e-300),
+        })
+    }
+
+    pub fn points(&self) -> &[DVec3; 16] {
+        &self.p
+    }
+
+    pub fn size(&self) -> f64 {
+        self.size
+    }
+
+    /// Bounds of the control net (contains the patch).
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        net_bounds(&self.p)
+    }
+
+    /// Point and partial derivatives at `(u, v)`.
+    pub fn eval(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+        let (bu, dbu) = bern3(u);
+        let (bv, dbv) = bern3(v);
+        let (mut p, mut pu, mut pv) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        for i in 0..4 {
+            for j in 0..4 {
+                let c = self.p[4 * i + j];
+                p += c * (bu[i] * bv[j]);
+                pu += c * (dbu[i] * bv[j]);
+                pv += c * (bu[i] * dbv[j]);
+            }
+        }
+        (p, pu, pv)
+    }
+
+    /// Unit normal at `(u, v)`, stepping inward when a partial derivative vanishes (a collapsed
+    /// edge, as at the teapot's lid and spout ends).
+    pub fn normal(&self, u: f64, v: f64) -> DVec3 {
+        for eps in [0.0, 1e-6, 1e-4, 1e-2] {
+            let uu = if u < 0.5 { u + eps } else { u - eps };
+            let vv = if v < 0.5 { v + eps } else { v - eps };
+            let (_, pu, pv) = self.eval(uu, vv);
+            let n = pu.cross(pv);
+            if n.length() > 1e-12 * self.size * self.size {
+                return n.normalize();
+            }
+        }
+        DVec3::Z
+    }
+
+    fn record(&self, o: DVec3, d: DVec3, t: f64, uv: DVec2) -> PatchHit {
+        let (_, pu, pv) = self.eval(uv.x, uv.y);
+        PatchHit {
+            t,
+            p: o + t * d,
+            uv,
+            n: self.normal(uv.x, uv.y),
+            dpdu: pu,
+            dpdv: pv,
+        }
+    }
+
+    /// Newton on the projected equations from `(u, v)`; the converged parameters and `t`
+    /// (unit direction) if the residual reached rounding level.
+    fn newton(
+        &self,
+        o: DVec3,
+        frame: [DVec3; 3],
+        mut uv: DVec2,
+        iterations: u32,
+        keep_in: (DVec2, DVec2),
+    ) -> Option<(DVec2, f64)> {
+        let [e1, e2, dn] = frame;
+        let tol = 1e-12 * self.size;
+        for _ in 0..iterations {
+            let (p, pu, pv) = self.eval(uv.x, uv.y);
+            let r = DVec2::new((p - o).dot(e1), (p - o).dot(e2));
+            if r.abs().max_element() <= tol {
+                return Some((uv, (p - o).dot(dn)));
+            }
+            let (a, b) = (pu.dot(e1), pv.dot(e1));
+            let (c, dd) = (pu.dot(e2), pv.dot(e2));
+            let det = a * dd - b * c;
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let step = DVec2::new(dd * r.x - b * r.y, a * r.y - c * r.x) / det;
+            uv -= step;
+            if uv.cmplt(keep_in.0).any() || uv.cmpgt(keep_in.1).any() {
+                return None;
+            }
+        }
+        let (p, _, _) = self.eval(uv.x, uv.y);
+        let r = DVec2::new((p - o).dot(e1), (p - o).dot(e2));
+        (r.abs().max_element() <= tol).then(|| (uv, (p - o).dot(dn)))
+    }
+
+    /// Nearest hit with `t_min < t < t_max`.
+    pub fn intersect(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        solver: PatchSolver,
+    ) -> Option<PatchHit> {
+        let dl = d.length();
+        if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
+            return None;
+        }
+        let dn = d / dl;
+        let (e1, e2) = dn.any_orthonormal_pair();
+        let frame = [e1, e2, dn];
+        let (tmin, tmax) = (t_min * dl, t_max * dl);
+        let found = match solver {
+            PatchSolver::Robust => self.subdivide(o, frame, tmin, tmax, LEAF, true),
+            PatchSolver::Newton { iterations, starts } => {
+                let k = (starts.max(1) as f64).sqrt().ceil() as u32;
+                let mut best: Option<(DVec2, f64)> = None;
+                for a in 0..k {
+                    for b in 0..k {
+                        let uv0 =
+                            DVec2::new((a as f64 + 0.5) / k as f64, (b as f64 + 0.5) / k as f64);
+                        let keep = (DVec2::splat(-0.5), DVec2::splat(1.5));
+                        if let Some((uv, t)) = self.newton(o, frame, uv0, iterations, keep)
+                            && uv.cmpge(DVec2::ZERO).all()
+                            && uv.cmple(DVec2::ONE).all()
+                            && t > tmin
+                            && t < best.map_or(tmax, |b| b.1)
+                        {
+                            best = Some((uv, t));
+                        }
+                    }
+                }
+                best
+            }
+        };
+        found.map(|(uv, t)| {
+            let mut h = self.record(o, dn, t, uv);
+            h.t = t / dl;
+            h
+        })
+    }
+
+    /// Subdivision with projected bounds. `leaf` is relative to the patch size; `polish`
+    /// applies Newton's method at leaves (the robust method), otherwise a leaf's centre is the
+    /// answer (the reference). Returns `(u, v)` and `t` for the unit direction.
+    pub(crate) fn subdivide(
+        &self,
+        o: DVec3,
+        frame: [DVec3; 3],
+        tmin: f64,
+        tmax: f64,
+        leaf: f64,
+        polish: bool,
+    ) -> Option<(DVec2, f64)> {
+        let [e1, e2, dn] = frame;
+        let mut q = [DVec3::ZERO; 16];
+        for (k, p) in self.p.iter().enumerate() {
+            let r = *p - o;
+            q[k] = DVec3::new(r.dot(e1), r.dot(e2), r.dot(dn));
+        }
+        let eps = 1e-12 * self.size;
+        let leaf_size = leaf * self.size;
+        // Where Newton fails the robust method subdivides on to the reference's resolution.
+        let final_leaf = if polish { FINAL_LEAF.min(leaf) } else { leaf } * self.size;
+        let mut best: Option<(DVec2, f64)> = None;
+        let mut best_t = tmax;
+        // Whether a sub-patch's bounds can hold a hit nearer than `best_t`.
+        let may_hit = |lo: DVec3, hi: DVec3, best_t: f64| {
+            lo.x <= eps
+                && hi.x >= -eps
+                && lo.y <= eps
+                && hi.y >= -eps
+                && hi.z > tmin
+                && lo.z < best_t
+        };
+        let (lo, hi) = net_bounds(&q);
+        let mut stack = Vec::with_capacity(64);
+        if may_hit(lo, hi, best_t) {
+            stack.push(Node {
+                q,
+                u: (0.0, 1.0),
+                v: (0.0, 1.0),
+                lo,
+                hi,
+            });
+        }
+        while let Some(node) = stack.pop() {
+            let (lo, hi) = (node.lo, node.hi);
+            if lo.z >= best_t {
+                continue;
+            }
+            let ext = (hi - lo).max_element();
+            let depth_exhausted = node.u.1 - node.u.0 < 1e-15 || node.v.1 - node.v.0 < 1e-15;
+            let c = DVec2::new(0.5 * (node.u.0 + node.u.1), 0.5 * (node.v.0 + node.v.1));
+            if polish && ext <= leaf_size && !depth_exhausted {
+                // Newton inside (an enlarged copy of) the leaf's domain. Where it does not
+                // converge (a bound that holds the ray but a surface piece that misses it, near
+                // a tangency) keep subdividing: accepting the leaf there would report a hit that
+                // is not one, in front of the real one.
+                // Newton may also converge to a root outside the leaf: that is still a genuine
+                // hit, and it prunes everything behind it.
+                let w = DVec2::new(node.u.1 - node.u.0, node.v.1 - node.v.0);
+                let whole = (DVec2::ZERO, DVec2::ONE);
+                if let Some((uv, t)) = self.newton(o, frame, c, 12, whole) {
+                    if t > tmin && t < best_t {
+                        best_t = t;
+                        best = Some((uv, t));
+                    }
+                    if (uv - c).abs().cmple(w).all() {
+                        continue;
+                    }
+                }
+            }
+            if ext <= final_leaf || depth_exhausted {
+                // Below rounding of any polish: the leaf's centre is the answer.
+                let (p, _, _) = self.eval(c.x, c.y);
+                let t = (p - o).dot(dn);
+                if t > tmin && t < best_t {
+                    best_t = t;
+                    best = Some((c, t));
+                }
+                continue;
+            }
+            // Split along the parameter in which the control net is longer (corner edges).
+            let q = &node.q;
+            let lu = (q[12] - q[0]).length_squared() + (q[15] - q[3]).length_squared();
+            let lv = (q[3] - q[0]).length_squared() + (q[15] - q[12]).length_squared();
+            let along_u = lu >= lv;
+            let (a, b) = split_net(q, along_u);
+            let ((ua, va), (ub, vb)) = if along_u {
+                let mid = 0.5 * (node.u.0 + node.u.1);
+                (((node.u.0, mid), node.v), ((mid, node.u.1), node.v))
+            } else {
+                let mid = 0.5 * (node.v.0 + node.v.1);
+                ((node.u, (node.v.0, mid)), (node.u, (mid, node.v.1)))
+            };
+            let (la, ha) = net_bounds(&a);
+            let (lb, hb) = net_bounds(&b);
+            let na = may_hit(la, ha, best_t).then_some(Node {
+                q: a,
+                u: ua,
+                v: va,
+                lo: la,
+                hi: ha,
+            });
+            let nb = may_hit(lb, hb, best_t).then_some(Node {
+                q: b,
+                u: ub,
+                v: vb,
+                lo: lb,
+                hi: hb,
+            });
+            // Push the farther first so that the nearer is examined first.
+            let (first, second) = if la.z <= lb.z { (nb, na) } else { (na, nb) };
+            stack.extend(first);
+            stack.extend(second);
+        }
+        best
+    }
+}

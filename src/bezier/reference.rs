@@ -1,0 +1,228 @@
+//! Reference intersectors: slow, simple, and obviously right, for the stress tests.
+//!
+//! They share no root finder with the production code. The lathe reference evaluates `F(s)`
+//! pointwise from the profile (never through the product polynomial) and isolates roots by
+//! coarse-to-fine subdivision with global Lipschitz bounds: an interval is dropped when
+//! `|F(mid)| > L1 * w / 2` (no root can be reached), a monotone interval (`|F'(mid)| > L2 * w / 2`)
+//! holds at most one root, found by plain bisection. An interval that is neither by the time it is
+//! [`AMBIGUOUS_WIDTH`] wide is a near-double root the reference cannot decide: the ray is flagged
+//! ambiguous and left out of the comparison (and counted). Rays exactly perpendicular to the axis
+//! take a separate route (roots of `h(s) = o_y` and the circle at that height).
+//! The patch reference is uniform quadtree subdivision with projected bounds down to leaves
+//! [`PATCH_LEAF`] of the patch size, no Newton step.
+
+use glam::{DVec2, DVec3};
+
+use super::lathe::{Lathe, Part, RayFrame, Segment};
+use super::roots::{Root, RootKind};
+
+/// Width in `s` below which the lathe reference gives up deciding.
+pub const AMBIGUOUS_WIDTH: f64 = 1e-11;
+/// Leaf size of the patch reference, relative to the patch size.
+pub const PATCH_LEAF: f64 = 1e-10;
+
+/// The reference's answer for one ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefHit {
+    /// Nearest hit `t` (in units of the given direction), if any.
+    pub t: Option<f64>,
+    /// The reference met a root it cannot decide (a near tangency): do not compare.
+    pub ambiguous: bool,
+}
+
+struct Bounds {
+    l1: f64,
+    l2: f64,
+    noise: f64,
+}
+
+fn deriv_bounds(p: &[f64]) -> (f64, f64, f64) {
+    let n = p.len() - 1;
+    let b0 = p.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let b1 = p.windows(2).fold(0.0f64, |m, w| m.max((w[1] - w[0]).abs())) * n as f64;
+    let b2 = if n >= 2 {
+        p.windows(3)
+            .fold(0.0f64, |m, w| m.max((w[2] - 2.0 * w[1] + w[0]).abs()))
+            * (n * (n - 1)) as f64
+    } else {
+        0.0
+    };
+    (b0, b1, b2)
+}
+
+fn lipschitz(frame: &RayFrame, seg: &Segment) -> Bounds {
+    let (oc, dn) = (frame.oc, frame.dn);
+    let (r0, r1, r2) = deriv_bounds(seg.r.coeffs());
+    let hs: Vec<f64> = seg.h.coeffs().iter().map(|h| h - oc.y).collect();
+    let (h0, h1, h2) = deriv_bounds(&hs);
+    let amax = (oc.x * dn.y).abs() + h0 * dn.x.abs();
+    let bmax = (oc.z * dn.y).abs() + h0 * dn.z.abs();
+    let dy2 = dn.y * dn.y;
+    let l1 = 2.0 * (amax * h1 * dn.x.abs() + bmax * h1 * dn.z.abs() + dy2 * r0 * r1);
+    let l2 = 2.0
+        * (h1 * h1 * frame.dh2
+            + amax * h2 * dn.x.abs()
+            + bmax * h2 * dn.z.abs()
+            + dy2 * (r1 * r1 + r0 * r2));
+    let noise = 64.0 * f64::EPSILON * (amax * amax + bmax * bmax + dy2 * r0 * r0);
+    Bounds { l1, l2, noise }
+}
+
+fn isolate(g: &dyn Fn(f64) -> (f64, f64), b: &Bounds, lo: f64, hi: f64, out: &mut Vec<Root>) {
+    let (m, w) = (0.5 * (lo + hi), hi - lo);
+    let (fm, dfm) = g(m);
+    if fm.abs() - b.noise > b.l1 * 0.5 * w {
+        return;
+    }
+    if dfm.abs() > b.l2 * 0.5 * w {
+        let (fa, fb) = (g(lo).0, g(hi).0);
+        if fa * fb <= 0.0 {
+            let (mut a, mut c) = (lo, hi);
+            for _ in 0..200 {
+                let mid = 0.5 * (a + c);
+                if mid <= a || mid >= c {
+                    break;
+                }
+                if (g(mid).0 < 0.0) == (fa < 0.0) && fa != 0.0 {
+                    a = mid;
+                } else {
+                    c = mid;
+                }
+            }
+            let t = 0.5 * (a + c);
+            out.push(Root {
+                t,
+                lo: a,
+                hi: c,
+                kind: RootKind::Simple,
+            });
+        }
+        return;
+    }
+    if w <= AMBIGUOUS_WIDTH {
+        out.push(Root {
+            t: m,
+            lo,
+            hi,
+            kind: RootKind::Multiple,
+        });
+        return;
+    }
+    isolate(g, b, lo, m, out);
+    isolate(g, b, m, hi, out);
+}
+
+/// Reference intersection with a lathe (side and caps).
+pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHit {
+    let dl = d.length();
+    let (lo, hi) = lathe.bounds();
+    let frame = RayFrame::new(o, d / dl, lo.y, hi.y);
+    let dn = frame.dn;
+    let (tmin, mut best) = (t_min * dl, t_max * dl);
+    let mut found: Option<(f64, Part, f64)> = None;
+    let mut ambiguous = false;
+    let size = lathe.size();
+    let mut roots = Vec::new();
+    for (i, seg) in lathe.segments().iter().enumerate() {
+        if seg.degenerate {
+            continue;
+        }
+        roots.clear();
+        let mut cands: Vec<(f64, f64)> = Vec::new();
+        if dn.x == 0.0 && dn.z == 0.0 && o.x == 0.0 && o.z == 0.0 {
+            // Along the axis itself: only the profile's points on the axis (its poles) are hit.
+            for s in [0.0, 1.0] {
+                if seg.r.eval(s) == 0.0 {
+                    cands.push(((seg.h.eval(s) - o.y) / dn.y, s));
+                }
+            }
+        } else if dn.y == 0.0 {
+            // Perpendicular to the axis: the heights h(s) = o_y, then the circle there.
+            let g = |s: f64| {
+                let (h, dh) = seg.h.eval_with_derivative(s);
+                (h - o.y, dh)
+            };
+            let hs: Vec<f64> = seg.h.coeffs().iter().map(|h| h - o.y).collect();
+            let (h0, h1, h2) = deriv_bounds(&hs);
+            let b = Bounds {
+                l1: h1,
+                l2: h2,
+                noise: 64.0 * f64::EPSILON * h0,
+            };
+            for k in 0..16 {
+                isolate(&g, &b, k as f64 / 16.0, (k + 1) as f64 / 16.0, &mut roots);
+            }
+            for root in &roots {
+                if root.kind == RootKind::Multiple {
+                    ambiguous = true;
+                    continue;
+                }
+                let r = seg.r.eval(root.t);
+                // Ray o + t dn in the plane y = o_y: |o_xz + t dn_xz|^2 = r^2.
+                let (p, q) = (DVec2::new(o.x, o.z), DVec2::new(dn.x, dn.z));
+                let (a, bq, c) = (q.dot(q), 2.0 * p.dot(q), p.dot(p) - r * r);
+                let disc = bq * bq - 4.0 * a * c;
+                if disc >= 0.0 {
+                    let sq = disc.sqrt();
+                    cands.push(((-bq - sq) / (2.0 * a), root.t));
+                    cands.push(((-bq + sq) / (2.0 * a), root.t));
+                }
+            }
+        } else {
+            let b = lipschitz(&frame, seg);
+            let g = |s: f64| frame.eval_pointwise(seg, s);
+            for k in 0..16 {
+                isolate(&g, &b, k as f64 / 16.0, (k + 1) as f64 / 16.0, &mut roots);
+            }
+            for root in &roots {
+                if root.kind == RootKind::Multiple {
+                    ambiguous = true;
+                    continue;
+                }
+                let (_, df) = g(root.t);
+                let ds = b.noise / df.abs().max(1e-300);
+                for (t, s) in frame.candidates(seg, root, ds, size) {
+                    if t.is_finite() {
+                        cands.push((t, s));
+                    }
+                }
+            }
+        }
+        for (t, s) in cands {
+            let p = o + t * dn;
+            let in_sweep = match lathe.sweep() {
+                None => true,
+                Some((a0, span)) => (p.z.atan2(p.x) - a0).rem_euclid(std::f64::consts::TAU) <= span,
+            };
+            if t > tmin && t < best && in_sweep {
+                best = t;
+                found = Some((t, Part::Side(i), s));
+            }
+        }
+    }
+    lathe.cap_hits(&frame, tmin, &mut best, &mut found);
+    RefHit {
+        t: found.map(|f| f.0 / dl),
+        ambiguous,
+    }
+}
+
+/// Reference intersection with a bicubic patch: subdivision with projected bounds to leaves of
+/// [`PATCH_LEAF`] of the patch size, the leaf centre as the answer (`t` for `d` as given).
+/// A leaf fixes the hit's position to its size, so along a ray at angle `theta` to the surface
+/// it fixes `t` only to `leaf / sin(theta)`: when that exceeds 1e-7 of `t` the ray is flagged
+/// ambiguous (a near-tangent ray whose `t` no method can pin down to 1e-6).
+pub fn patch(patch: &super::patch::Patch, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHit {
+    let dl = d.length();
+    let dn = d / dl;
+    let (e1, e2) = dn.any_orthonormal_pair();
+    let found = patch.subdivide(o, [e1, e2, dn], t_min * dl, t_max * dl, PATCH_LEAF, false);
+    let ambiguous = found.is_some_and(|(uv, t)| {
+        let sin = patch.normal(uv.x, uv.y).dot(dn).abs();
+        PATCH_LEAF * patch.size() > 1e-7 * t * sin
+    });
+    RefHit {
+        t: found.map(|(_, t)| t / dl),
+        ambiguous,
+    }
+}

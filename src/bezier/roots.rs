@@ -1,0 +1,253 @@
+//! Root isolation on [0, 1] for Bernstein polynomials that cannot miss a root.
+//!
+//! Recursive subdivision with the convex-hull property: if every Bernstein coefficient on an
+//! interval has the same strict sign beyond the rounding noise, the polynomial has no root there.
+//! If the control polygon has exactly one sign change and the end values have opposite signs,
+//! the interval holds exactly one simple root (Descartes' rule of signs for the Bernstein basis);
+//! it is polished by Newton steps safeguarded by bisection inside that bracket. Anything else is
+//! split in two. An interval that shrinks below [`LEAF_WIDTH`] while its coefficients still come
+//! within the noise of zero is a cluster (a double root: a grazing ray) and is reported as one
+//! [`RootKind::Multiple`] root at its middle. An interval whose coefficients all lie within the
+//! noise (the polynomial vanishes there) is reported whole, without further splitting.
+
+use super::bernstein::Bernstein;
+
+/// Width (in the original [0, 1] parameter) below which an unresolved interval becomes a cluster.
+pub const LEAF_WIDTH: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// How a root was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RootKind {
+    /// A sign change inside a bracket that holds exactly one root.
+    Simple,
+    /// An unresolvable cluster: a double (or higher) root, or a touch within rounding noise.
+    Multiple,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Root {
+    pub t: f64,
+    /// A bracket known to contain the root (for `Multiple`, the cluster interval).
+    pub lo: f64,
+    pub hi: f64,
+    pub kind: RootKind,
+}
+
+/// Rounding noise of a polynomial's values: a few ulps of its largest coefficient.
+pub fn noise_of(p: &Bernstein) -> f64 {
+    p.max_abs() * 64.0 * f64::EPSILON * (p.degree() as f64 + 1.0)
+}
+
+/// All roots of `p` in [0, 1], ascending, appended to `out`.
+pub fn find_roots(p: &Bernstein, out: &mut Vec<Root>) {
+    find_roots_with_noise(p, noise_of(p), out);
+}
+
+/// Like [`find_roots`] with an explicit noise level (values within `noise` of zero count as zero).
+pub fn find_roots_with_noise(p: &Bernstein, noise: f64, out: &mut Vec<Root>) {
+    isolate(p, 0.0, 1.0, noise, 0, out);
+}
+
+fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<Root>) {
+    let c = p.coeffs();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for &v in c {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(lo <= noise && hi >= -noise) {
+        // Every coefficient beyond the noise on one side (or NaN): no root by the hull property.
+        return;
+    }
+    if lo >= -noise && hi <= noise {
+        // The polynomial vanishes here within rounding: one cluster for the whole interval.
+        push(out, a, b);
+        return;
+    }
+    let (c0, cn) = (c[0], c[c.len() - 1]);
+    if c0 * cn < 0.0 && sign_changes(c) == 1 {
+        let (t, l, h) = polish(p, c0);
+        out.push(Root {
+            t: a + (b - a) * t,
+            lo: a + (b - a) * l,
+            hi: a + (b - a) * h,
+            kind: RootKind::Simple,
+        });
+        return;
+    }
+    if b - a <= LEAF_WIDTH || depth > 64 {
+        push(out, a, b);
+        return;
+    }
+    // Split at the middle unless the middle is itself (nearly) a root: then move the split so
+    // that the root lies inside one half rather than on the seam.
+    let mut tau = 0.5;
+    for cand in [0.5, 0.4375, 0.5625, 0.40625, 0.59375] {
+        if p.eval(cand).abs() > noise {
+            tau = cand;
+            break;
+        }
+    }
+    let (l, r) = p.split(tau);
+    let m = a + (b - a) * tau;
+    isolate(&l, a, m, noise, depth + 1, out);
+    isolate(&r, m, b, noise, depth + 1, out);
+}
+
+/// Appends a cluster, merging it with a cluster that ends where this one starts.
+fn push(out: &mut Vec<Root>, a: f64, b: f64) {
+    if let Some(last) = out.last_mut()
+        && last.kind == RootKind::Multiple
+        && last.hi >= a
+    {
+        last.hi = b;
+        last.t = 0.5 * (last.lo + last.hi);
+        return;
+    }
+    out.push(Root {
+        t: 0.5 * (a + b),
+        lo: a,
+        hi: b,
+        kind: RootKind::Multiple,
+    });
+}
+
+fn sign_changes(c: &[f64]) -> usize {
+    let mut n = 0;
+    let mut prev = 0.0;
+    for &v in c {
+        if v != 0.0 {
+            if prev != 0.0 && (v < 0.0) != (prev < 0.0) {
+                n += 1;
+            }
+            prev = v;
+        }
+    }
+    n
+}
+
+/// Newton iteration safeguarded by bisection in [0, 1] where `p(0)` has the sign of `c0` and
+/// `p(1)` the opposite one. Returns the root and its final bracket.
+fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64) {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    let cn = p.coeffs()[p.degree()];
+    // Regula falsi start.
+    let mut t = (c0 / (c0 - cn)).clamp(0.0, 1.0);
+    for _ in 0..200 {
+        let (v, dv) = p.eval_with_derivative(t);
+        if v == 0.0 {
+            return (t, t, t);
+        }
+        if (v < 0.0) == (c0 < 0.0) {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        if hi - lo <= f64::EPSILON * hi.max(1e-300) {
+            break;
+        }
+        let newton = t - v / dv;
+        let next = if newton > lo && newton < hi && newton.is_finite() {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if next == t {
+            break;
+        }
+        // Converged to rounding: the step no longer moves the point.
+        if (next - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1e-300) {
+            t = next;
+            break;
+        }
+        t = next;
+    }
+    (t.clamp(lo, hi), lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn from_roots(roots: &[f64]) -> Bernstein {
+        roots.iter().fold(Bernstein::constant(1.0), |p, &r| {
+            p.mul(&Bernstein::new(&[-r, 1.0 - r]).unwrap()).unwrap()
+        })
+    }
+
+    fn roots_of(p: &Bernstein) -> Vec<Root> {
+        let mut v = Vec::new();
+        find_roots(p, &mut v);
+        v
+    }
+
+    #[test]
+    fn finds_simple_roots_in_order() {
+        let want = [0.01, 0.2, 0.2001, 0.5, 0.77, 0.999];
+        let got = roots_of(&from_roots(&want));
+        assert_eq!(got.len(), want.len(), "{got:?}");
+        for (g, w) in got.iter().zip(want) {
+            assert_eq!(g.kind, RootKind::Simple);
+            assert!((g.t - w).abs() < 1e-13, "{} vs {w}", g.t);
+            assert!(g.lo <= g.t && g.t <= g.hi);
+        }
+    }
+
+    #[test]
+    fn ignores_roots_outside_the_interval() {
+        let got = roots_of(&from_roots(&[-0.5, 0.3, 1.5, 2.0]));
+        assert_eq!(got.len(), 1);
+        assert!((got[0].t - 0.3).abs() < 1e-14);
+    }
+
+    #[test]
+    fn double_root_is_one_cluster() {
+        // (t - 0.3)^2 (t - 0.8): a touch at 0.3 and a crossing at 0.8.
+        let got = roots_of(&from_roots(&[0.3, 0.3, 0.8]));
+        assert_eq!(got.len(), 2, "{got:?}");
+        assert_eq!(got[0].kind, RootKind::Multiple);
+        assert!((got[0].t - 0.3).abs() < 1e-7, "{}", got[0].t);
+        assert_eq!(got[1].kind, RootKind::Simple);
+        assert!((got[1].t - 0.8).abs() < 1e-14);
+    }
+
+    #[test]
+    fn near_double_roots_are_separated_or_clustered_but_never_lost() {
+        for k in 3..12 {
+            let gap = 10f64.powi(-k);
+            let got = roots_of(&from_roots(&[0.4, 0.4 + gap]));
+            assert!(!got.is_empty(), "gap {gap}");
+            for r in &got {
+                assert!(r.t > 0.4 - 1e-6 && r.t < 0.4 + gap + 1e-6);
+            }
+            if got.len() == 2 && got.iter().all(|r| r.kind == RootKind::Simple) {
+                // Conditioning: a coefficient error e moves a root by about e / |p'| = e / gap.
+                let e = noise_of(&from_roots(&[0.4, 0.4 + gap]));
+                assert!(
+                    (got[1].t - got[0].t - gap).abs() < 4.0 * e / gap,
+                    "{gap} {got:?}"
+                );
+            }
+        }
+        // A near miss by far more than the noise is no root.
+        let miss = from_roots(&[0.4, 0.4]).add_constant(1e-9);
+        assert!(roots_of(&miss).is_empty());
+    }
+
+    #[test]
+    fn roots_at_the_ends_and_the_middle() {
+        let got = roots_of(&from_roots(&[0.0, 0.5, 1.0]));
+        assert_eq!(got.len(), 3, "{got:?}");
+        assert!(got[0].t.abs() < 1e-9 && (got[1].t - 0.5).abs() < 1e-12);
+        assert!((got[2].t - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn zero_polynomial_is_one_cluster_and_nan_is_nothing() {
+        let got = roots_of(&Bernstein::new(&[0.0; 5]).unwrap());
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].lo, got[0].hi), (0.0, 1.0));
+        assert!(roots_of(&Bernstein::new(&[f64::NAN, 1.0, -1.0]).unwrap()).len() <= 1);
+        assert!(roots_of(&Bernstein::new(&[1.0, 2.0, 0.5]).unwrap()).is_empty());
+    }
+}

@@ -1,0 +1,282 @@
+//! Special cases of the lathe (surface of revolution) intersector, each against a closed form.
+
+use glam::{DVec2, DVec3};
+use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
+
+const R: Solver = Solver::Robust;
+
+fn lathe(segs: &[&[(f64, f64)]], sweep: Option<(f64, f64)>) -> Lathe {
+    let segs: Vec<Vec<DVec2>> = segs
+        .iter()
+        .map(|s| s.iter().map(|&(r, h)| DVec2::new(r, h)).collect())
+        .collect();
+    Lathe::new(&segs, sweep).unwrap()
+}
+
+/// y = x^2 + z^2 for r in [0, 1]: r = s, h = s^2.
+fn paraboloid() -> Lathe {
+    lathe(&[&[(0.0, 0.0), (0.5, 0.0), (1.0, 1.0)]], None)
+}
+
+fn cylinder() -> Lathe {
+    lathe(&[&[(1.0, 0.0), (1.0, 2.0)]], None)
+}
+
+fn t_of(l: &Lathe, o: DVec3, d: DVec3) -> Option<f64> {
+    l.intersect(o, d, 1e-9, f64::INFINITY, R).map(|h| h.t)
+}
+
+/// Nearest root > 1e-9 of the paraboloid y = x^2 + z^2 along o + t d, with y <= 1.
+fn paraboloid_exact(o: DVec3, d: DVec3) -> Option<f64> {
+    let a = d.x * d.x + d.z * d.z;
+    let b = 2.0 * (o.x * d.x + o.z * d.z) - d.y;
+    let c = o.x * o.x + o.z * o.z - o.y;
+    let mut ts = vec![];
+    if a == 0.0 {
+        ts.push(-c / b);
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            ts.push((-b - disc.sqrt()) / (2.0 * a));
+            ts.push((-b + disc.sqrt()) / (2.0 * a));
+        }
+    }
+    ts.into_iter()
+        .filter(|&t| t > 1e-9 && o.y + t * d.y <= 1.0)
+        .min_by(f64::total_cmp)
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * b.abs().max(1.0)
+}
+
+#[test]
+fn axis_parallel_rays() {
+    let p = paraboloid();
+    for (x, z) in [(0.3, 0.4), (0.0, 0.7), (0.99, 0.0), (1e-9, 0.0)] {
+        let o = DVec3::new(x, 5.0, z);
+        let t = t_of(&p, o, -DVec3::Y).unwrap();
+        assert!(close(t, 5.0 - (x * x + z * z)), "{x} {z}: {t}");
+        // Upward from below the bottom: same surface from the other side.
+        let t = t_of(&p, DVec3::new(x, -1.0, z), DVec3::Y).unwrap();
+        assert!(close(t, 1.0 + x * x + z * z));
+    }
+    // Inside the cylinder along its axis: never reaches the wall.
+    assert!(t_of(&cylinder(), DVec3::new(0.5, -1.0, 0.2), DVec3::Y).is_none());
+    // Outside the radius: miss.
+    assert!(t_of(&p, DVec3::new(1.01, 5.0, 0.0), -DVec3::Y).is_none());
+}
+
+#[test]
+fn rays_perpendicular_to_the_axis() {
+    let p = paraboloid();
+    for y in [0.49, 0.01, 1e-6, 0.999] {
+        let o = DVec3::new(-5.0, y, 0.0);
+        let t = t_of(&p, o, DVec3::X).unwrap();
+        assert!(close(t, 5.0 - y.sqrt()), "y={y} t={t}");
+        // Offset sideways: the chord at height y.
+        let o = DVec3::new(-5.0, y, 0.3 * y.sqrt());
+        let t = t_of(&p, o, DVec3::X).unwrap();
+        assert!(close(t, 5.0 - (y - 0.09 * y).sqrt()), "y={y} t={t}");
+        // From inside: the far wall.
+        let t = t_of(&p, DVec3::new(0.0, y, 0.0), DVec3::X).unwrap();
+        assert!(close(t, y.sqrt()));
+    }
+    // Above the top: miss.
+    assert!(t_of(&p, DVec3::new(-5.0, 1.01, 0.0), DVec3::X).is_none());
+    // Cylinder, perpendicular through the axis and off it.
+    let c = cylinder();
+    assert!(close(
+        t_of(&c, DVec3::new(0.0, 1.0, -3.0), DVec3::Z).unwrap(),
+        2.0
+    ));
+    let t = t_of(&c, DVec3::new(0.6, 1.0, -3.0), DVec3::Z).unwrap();
+    assert!(close(t, 3.0 - 0.8));
+}
+
+#[test]
+fn rays_through_the_axis_and_random_tilts_match_the_closed_form() {
+    let p = paraboloid();
+    let mut k = 0u64;
+    let mut rnd = || {
+        k = k
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (k >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut hits = 0;
+    for _ in 0..20000 {
+        let target = DVec3::new(0.0, rnd() * 1.2 - 0.1, 0.0);
+        let o = DVec3::new(rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0);
+        let d = (target - o) * (0.5 + rnd());
+        let want = paraboloid_exact(o, d);
+        let got = t_of(&p, o, d);
+        match (want, got) {
+            (Some(w), Some(g)) => {
+                hits += 1;
+                assert!((w - g).abs() <= 1e-9 * w.max(1.0), "{o} {d}: {w} vs {g}")
+            }
+            (None, None) => {}
+            _ => panic!("{o} {d}: {want:?} vs {got:?}"),
+        }
+    }
+    assert!(hits > 5000, "{hits}");
+}
+
+#[test]
+fn grazing_rays_at_the_silhouette() {
+    // y = x - 0.25 touches y = x^2 at x = 0.5 (a double root).
+    let p = paraboloid();
+    let d = DVec3::new(1.0, 1.0, 0.0).normalize();
+    let o = DVec3::new(-1.0, -1.25, 0.0);
+    let t = t_of(&p, o, d).expect("the tangent ray touches");
+    assert!((t - 1.5 * 2f64.sqrt()).abs() < 1e-6, "{t}");
+    for delta in [1e-3, 1e-5, 1e-7] {
+        // Shifted up (toward the inside): two close roots, the nearer one.
+        let o2 = o + DVec3::new(0.0, delta, 0.0);
+        let want = paraboloid_exact(o2, d).unwrap();
+        let got = t_of(&p, o2, d).unwrap();
+        assert!((got - want).abs() < 1e-6 * want, "{delta}: {got} vs {want}");
+        // Shifted down: a clean miss.
+        let o3 = o - DVec3::new(0.0, delta, 0.0);
+        assert!(t_of(&p, o3, d).is_none(), "{delta}");
+    }
+    // The cylinder's silhouette, perpendicular to the axis: x = 1 exactly touches.
+    let c = cylinder();
+    assert!(close(
+        t_of(&c, DVec3::new(1.0, 1.0, -5.0), DVec3::Z).unwrap(),
+        5.0
+    ));
+    assert!(t_of(&c, DVec3::new(1.0 + 1e-7, 1.0, -5.0), DVec3::Z).is_none());
+    let t = t_of(&c, DVec3::new(1.0 - 1e-6, 1.0, -5.0), DVec3::Z).unwrap();
+    assert!(close(t, 5.0 - (1.0 - (1.0 - 1e-6f64).powi(2)).sqrt()));
+}
+
+#[test]
+fn poles_where_the_profile_touches_the_axis() {
+    // Cone with its apex on the axis at y = 1.
+    let cone = lathe(&[&[(1.0, 0.0), (0.0, 1.0)]], None);
+    let h = cone
+        .intersect(DVec3::new(0.0, 5.0, 0.0), -DVec3::Y, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 4.0) && h.n.is_finite());
+    for e in [1e-3, 1e-7, 1e-12] {
+        let t = t_of(&cone, DVec3::new(e, 5.0, 0.0), -DVec3::Y).unwrap();
+        assert!(close(t, 4.0 + e), "{e}: {t}");
+        // Slanted rays through points near the apex.
+        let target = DVec3::new(0.0, 1.0 - e, 0.0);
+        let o = DVec3::new(2.0, 3.0, 1.0);
+        let t = t_of(&cone, o, target - o).unwrap();
+        assert!(t < 1.0 && t > 0.5, "{e}: {t}");
+    }
+    // The paraboloid's bottom pole: horizontal tangent, normal straight down (outward).
+    let p = paraboloid();
+    let h = p
+        .intersect(DVec3::new(0.0, -2.0, 0.0), DVec3::Y, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 2.0));
+    assert!(
+        (h.n - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-9,
+        "{}",
+        h.n
+    );
+}
+
+#[test]
+fn horizontal_and_vertical_tangents_give_axis_aligned_normals() {
+    let disk = lathe(&[&[(0.0, 1.0), (1.0, 1.0)]], None);
+    let h = disk
+        .intersect(DVec3::new(0.3, 4.0, 0.2), -DVec3::Y, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 3.0));
+    assert!((h.n - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
+    // The same disk hit edge-on misses (measure zero) without hanging.
+    let _ = disk.intersect(DVec3::new(-5.0, 1.0, 0.0), DVec3::X, 0.0, 1e9, R);
+    let c = cylinder();
+    let h = c
+        .intersect(DVec3::new(3.0, 0.5, 0.0), -DVec3::X, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 2.0));
+    assert!((h.n - DVec3::X).length() < 1e-12);
+    assert!((h.dpdu.normalize() - DVec3::Y).length() < 1e-12);
+    assert!((h.uv.x - 0.25).abs() < 1e-9 && h.uv.y.abs() < 1e-9);
+}
+
+#[test]
+fn degenerate_segments_with_repeated_control_points() {
+    // A cylinder as a cubic with doubled end points (P' = 0 at the ends), then a point segment.
+    let l = lathe(
+        &[
+            &[(1.0, 0.0), (1.0, 0.0), (1.0, 2.0), (1.0, 2.0)],
+            &[(1.0, 2.0), (1.0, 2.0), (1.0, 2.0)],
+            &[(1.0, 2.0), (0.0, 2.0)],
+        ],
+        None,
+    );
+    for y in [1e-9, 0.5, 1.0, 2.0 - 1e-9] {
+        let h = l
+            .intersect(DVec3::new(3.0, y, 0.0), -DVec3::X, 0.0, 1e9, R)
+            .unwrap();
+        assert!(close(h.t, 2.0), "{y}: {}", h.t);
+        assert!((h.n - DVec3::X).length() < 1e-6, "{y}: {}", h.n);
+    }
+    let h = l
+        .intersect(DVec3::new(0.2, 5.0, 0.1), -DVec3::Y, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 3.0) && (h.n - DVec3::Y).length() < 1e-12);
+    // u by arc length: the wall is 2 long, the lid 1.
+    assert!(
+        (h.uv.x - (3.0 - 0.2f64.hypot(0.1)) / 3.0).abs() < 1e-6,
+        "{}",
+        h.uv.x
+    );
+}
+
+#[test]
+fn partial_sweep_with_flat_caps() {
+    // A solid quarter cylinder: closed profile axis -> rim -> top -> axis, swept 0..90 degrees.
+    let l = lathe(
+        &[
+            &[(0.0, 0.0), (1.0, 0.0)],
+            &[(1.0, 0.0), (1.0, 1.0)],
+            &[(1.0, 1.0), (0.0, 1.0)],
+        ],
+        Some((0.0, 90.0)),
+    );
+    // Side wall at x = 0.5 from +z.
+    let h = l
+        .intersect(DVec3::new(0.5, 0.5, 5.0), -DVec3::Z, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 5.0 - 0.75f64.sqrt()) && h.part == Part::Side(1));
+    // Start cap (plane z = 0, x >= 0) from -z: outward normal -z.
+    let h = l
+        .intersect(DVec3::new(0.5, 0.5, -5.0), DVec3::Z, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 5.0) && h.part == Part::StartCap);
+    assert!((h.n + DVec3::Z).length() < 1e-12);
+    // End cap (plane x = 0, z >= 0) from -x: outward normal -x.
+    let h = l
+        .intersect(DVec3::new(-5.0, 0.5, 0.5), DVec3::X, 0.0, 1e9, R)
+        .unwrap();
+    assert!(close(h.t, 5.0) && h.part == Part::EndCap);
+    assert!((h.n + DVec3::X).length() < 1e-12);
+    // Outside the sweep: the missing three quarters are empty.
+    assert!(t_of(&l, DVec3::new(-0.5, 0.5, -5.0), DVec3::Z).is_none());
+    // Outside the profile's region on the cap plane: miss.
+    assert!(t_of(&l, DVec3::new(0.5, 1.5, -5.0), DVec3::Z).is_none());
+    let (lo, hi) = l.bounds();
+    assert!(lo.x >= -1e-12 && lo.z >= -1e-12 && hi.x >= 1.0 && hi.z >= 1.0);
+}
+
+#[test]
+fn newton_method_is_selectable_and_finds_easy_hits() {
+    let p = paraboloid();
+    let newton = Solver::Newton {
+        iterations: 20,
+        starts: 4,
+    };
+    let h = p
+        .intersect(DVec3::new(0.3, 5.0, 0.4), -DVec3::Y, 0.0, 1e9, newton)
+        .unwrap();
+    assert!(close(h.t, 4.75));
+}

@@ -1,0 +1,94 @@
+//! Property tests of the robust intersectors: hits lie on the surface, normals are perpendicular
+//! to the surface tangents, and a ray from just outside toward a sampled surface point hits it.
+
+use glam::{DVec2, DVec3};
+use proptest::prelude::*;
+use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
+use sppm_lang::bezier::patch::{Patch, PatchSolver};
+
+fn vase() -> Lathe {
+    let seg = |p: &[(f64, f64)]| p.iter().map(|&(r, h)| DVec2::new(r, h)).collect::<Vec<_>>();
+    Lathe::new(
+        &[
+            seg(&[(0.0, 0.0), (0.5, 0.0), (0.6, 0.05), (0.6, 0.2)]),
+            seg(&[(0.6, 0.2), (0.6, 0.6), (1.0, 0.8), (0.7, 1.2)]),
+            seg(&[(0.7, 1.2), (0.4, 1.6), (0.3, 1.8), (0.45, 2.0)]),
+        ],
+        Some((0.0, 270.0)),
+    )
+    .unwrap()
+}
+
+fn wavy() -> Patch {
+    let z = [
+        [0.0, 0.8, -0.6, 0.2],
+        [0.5, -1.2, 1.4, -0.3],
+        [-0.4, 1.5, -1.1, 0.6],
+        [0.3, -0.2, 0.7, 0.0],
+    ];
+    Patch::new(&std::array::from_fn(|k| {
+        DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4])
+    }))
+    .unwrap()
+}
+
+/// A direction in the hemisphere around `n`, at least ~17 degrees above the tangent plane.
+fn toward_outside(n: DVec3, a: f64, b: f64) -> DVec3 {
+    let (e1, e2) = n.any_orthonormal_pair();
+    let phi = a * std::f64::consts::TAU;
+    let cos_theta = 0.3 + 0.7 * b;
+    let sin_theta = (1.0 - cos_theta * cos_theta).sqrt();
+    n * cos_theta + (e1 * phi.cos() + e2 * phi.sin()) * sin_theta
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+
+    #[test]
+    fn lathe_hits_lie_on_the_surface_with_perpendicular_normals(
+        u in 0.0..1.0f64, v in 0.0..1.0f64, a in 0.0..1.0f64, b in 0.0..1.0f64
+    ) {
+        let l = vase();
+        let size = l.size();
+        let (p, n) = l.sample(DVec2::new(u, v)).unwrap();
+        prop_assume!(p.x.hypot(p.z) > 1e-3 * size);
+        let o = p + toward_outside(n, a, b) * 1e-3 * size;
+        let h = l.intersect(o, p - o, 1e-9, f64::INFINITY, Solver::Robust);
+        prop_assert!(h.is_some(), "no hit from {o} toward {p}");
+        let h = h.unwrap();
+        prop_assert!((h.p - p).length() < 1e-6 * size, "hit {} vs target {p}", h.p);
+        prop_assert!((h.t - 1.0).abs() < 1e-6);
+        if let Part::Side(i) = h.part {
+            let q = l.segments()[i].point(h.s);
+            let m = DVec2::new(h.p.x.hypot(h.p.z), h.p.y);
+            prop_assert!((m - q).length() < 1e-6 * size);
+            // Tangents: along the profile (dpdu) and around the axis.
+            let around = DVec3::new(-h.p.z, 0.0, h.p.x).normalize();
+            prop_assert!(h.n.dot(h.dpdu.normalize()).abs() < 1e-9);
+            prop_assert!(h.n.dot(around).abs() < 1e-9);
+            prop_assert!((h.n.length() - 1.0).abs() < 1e-12);
+            // Outward: the sampled normal and the hit's agree.
+            prop_assert!(h.n.dot(n) > 0.999);
+        }
+    }
+
+    #[test]
+    fn patch_hits_lie_on_the_surface_with_perpendicular_normals(
+        u in 0.001..0.999f64, v in 0.001..0.999f64, a in 0.0..1.0f64, b in 0.0..1.0f64
+    ) {
+        let p = wavy();
+        let size = p.size();
+        let (q, _, _) = p.eval(u, v);
+        let n = p.normal(u, v);
+        let o = q + toward_outside(n, a, b) * 1e-3 * size;
+        let h = p.intersect(o, q - o, 1e-9, f64::INFINITY, PatchSolver::Robust);
+        prop_assert!(h.is_some(), "no hit from {o} toward {q}");
+        let h = h.unwrap();
+        prop_assert!((h.p - q).length() < 1e-6 * size, "hit {} vs target {q}", h.p);
+        let (s, pu, pv) = p.eval(h.uv.x, h.uv.y);
+        prop_assert!((s - h.p).length() < 1e-6 * size);
+        prop_assert!(h.n.dot(pu.normalize()).abs() < 1e-9);
+        prop_assert!(h.n.dot(pv.normalize()).abs() < 1e-9);
+        prop_assert!((h.uv - DVec2::new(u, v)).length() < 1e-5);
+    }
+}

@@ -1,0 +1,396 @@
+//! Stress tests: the robust intersectors against the slow reference intersectors, at least one
+//! million rays per case (set `BEZIER_STRESS_RAYS` to change the count). Every case prints its
+//! counts; the robust method must show zero misses, zero false hits and a relative `t` error
+//! below 1e-6 on every ray the reference can decide. The Newton method runs on the same rays and
+//! its miss rate is printed for comparison (it is expected to miss; that is not a failure).
+
+use glam::{DVec2, DVec3};
+use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
+use sppm_lang::bezier::patch::{Patch, PatchSolver};
+use sppm_lang::bezier::reference;
+
+const REL_T: f64 = 1e-6;
+
+fn rays() -> usize {
+    std::env::var("BEZIER_STRESS_RAYS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000_000)
+}
+
+/// splitmix64: a fixed, seeded stream.
+struct Rng(u64);
+
+impl Rng {
+    fn f(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.f()
+    }
+    fn unit(&mut self) -> DVec3 {
+        loop {
+            let v = DVec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
+            let l = v.length_squared();
+            if l > 1e-6 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+#[derive(Default, Debug)]
+struct Stats {
+    rays: usize,
+    ambiguous: usize,
+    ref_hits: usize,
+    misses: usize,
+    false_hits: usize,
+    t_errors: usize,
+    max_rel: f64,
+    off_surface: usize,
+    newton_misses: usize,
+    newton_false: usize,
+    newton_wrong_t: usize,
+}
+
+impl Stats {
+    fn compare(&mut self, want: Option<f64>, got: Option<f64>) {
+        match (want, got) {
+            (Some(_), None) => self.misses += 1,
+            (None, Some(_)) => self.false_hits += 1,
+            (Some(w), Some(g)) => {
+                let rel = (g - w).abs() / w.abs().max(1e-300);
+                self.max_rel = self.max_rel.max(rel);
+                if rel >= REL_T {
+                    self.t_errors += 1;
+                }
+            }
+            (None, None) => {}
+        }
+    }
+
+    fn newton(&mut self, want: Option<f64>, got: Option<f64>) {
+        match (want, got) {
+            (Some(_), None) => self.newton_misses += 1,
+            (None, Some(_)) => self.newton_false += 1,
+            (Some(w), Some(g)) if (g - w).abs() >= REL_T * w.abs() => self.newton_wrong_t += 1,
+            _ => {}
+        }
+    }
+
+    fn report_and_check(&self, name: &str) {
+        let decided = self.rays - self.ambiguous;
+        println!(
+            "[{name}] rays {} decided {} ambiguous {} reference hits {} | robust: misses {} \
+             false hits {} t errors {} max rel t error {:.2e} off-surface {} | newton: misses {} \
+             ({:.3}% of hits) false hits {} wrong t {}",
+            self.rays,
+            decided,
+            self.ambiguous,
+            self.ref_hits,
+            self.misses,
+            self.false_hits,
+            self.t_errors,
+            self.max_rel,
+            self.off_surface,
+            self.newton_misses,
+            100.0 * self.newton_misses as f64 / self.ref_hits.max(1) as f64,
+            self.newton_false,
+            self.newton_wrong_t,
+        );
+        assert_eq!(self.misses, 0, "{name}: misses");
+        assert_eq!(self.false_hits, 0, "{name}: false hits");
+        assert_eq!(self.t_errors, 0, "{name}: t errors");
+        assert_eq!(self.off_surface, 0, "{name}: hit points off the surface");
+        assert!(self.max_rel < REL_T);
+        // At most one ray in a thousand may be undecidable for the reference.
+        assert!(
+            self.ambiguous * 1000 <= self.rays,
+            "{name}: too many ambiguous rays"
+        );
+        assert!(
+            self.ref_hits * 10 >= self.rays,
+            "{name}: the rays must mostly hit"
+        );
+    }
+}
+
+fn profile(points: &[&[(f64, f64)]]) -> Vec<Vec<DVec2>> {
+    points
+        .iter()
+        .map(|s| s.iter().map(|&(r, h)| DVec2::new(r, h)).collect())
+        .collect()
+}
+
+/// A vase: flat bottom from a pole on the axis, a bulge, a neck and a flared lip.
+fn vase(sweep: Option<(f64, f64)>) -> Lathe {
+    let p = profile(&[
+        &[(0.0, 0.0), (0.5, 0.0), (0.6, 0.05), (0.6, 0.2)],
+        &[(0.6, 0.2), (0.6, 0.6), (1.0, 0.8), (0.7, 1.2)],
+        &[(0.7, 1.2), (0.4, 1.6), (0.3, 1.8), (0.45, 2.0)],
+    ]);
+    Lathe::new(&p, sweep).unwrap()
+}
+
+/// A spindle pointed at both ends (cone tips on the axis).
+fn spindle() -> Lathe {
+    Lathe::new(
+        &profile(&[&[(0.0, 0.0), (0.8, 0.3), (0.6, 1.2), (0.0, 1.5)]]),
+        None,
+    )
+    .unwrap()
+}
+
+const NEWTON: Solver = Solver::Newton {
+    iterations: 16,
+    starts: 4,
+};
+
+fn run_lathe(
+    name: &str,
+    lathe: &Lathe,
+    seed: u64,
+    mut make_ray: impl FnMut(&mut Rng) -> (DVec3, DVec3),
+) {
+    let mut rng = Rng(seed);
+    let mut st = Stats::default();
+    let size = lathe.size();
+    for _ in 0..rays() {
+        let (o, d) = make_ray(&mut rng);
+        st.rays += 1;
+        let want = reference::lathe(lathe, o, d, 1e-9, f64::INFINITY);
+        if want.ambiguous {
+            st.ambiguous += 1;
+            continue;
+        }
+        st.ref_hits += want.t.is_some() as usize;
+        let got = lathe.intersect(o, d, 1e-9, f64::INFINITY, Solver::Robust);
+        if let Some(h) = got
+            && let Part::Side(i) = h.part
+        {
+            let q = lathe.segments()[i].point(h.s);
+            let m = DVec2::new(h.p.x.hypot(h.p.z), h.p.y);
+            if (m - q).length() > 1e-6 * size {
+                st.off_surface += 1;
+            }
+        }
+        st.compare(want.t, got.map(|h| h.t));
+        let newton = lathe.intersect(o, d, 1e-9, f64::INFINITY, NEWTON);
+        st.newton(want.t, newton.map(|h| h.t));
+    }
+    st.report_and_check(name);
+}
+
+fn random_rays(lo: DVec3, hi: DVec3) -> impl FnMut(&mut Rng) -> (DVec3, DVec3) {
+    let c = 0.5 * (lo + hi);
+    let size = (hi - lo).max_element();
+    move |rng| {
+        let o = c + rng.unit() * 3.0 * size;
+        let target = DVec3::new(
+            rng.range(lo.x, hi.x),
+            rng.range(lo.y, hi.y),
+            rng.range(lo.z, hi.z),
+        );
+        (o, (target - o) * rng.range(0.2, 2.0))
+    }
+}
+
+#[test]
+fn lathe_random_rays() {
+    let l = vase(None);
+    let (lo, hi) = l.bounds();
+    run_lathe("lathe random", &l, 1, random_rays(lo, hi));
+}
+
+#[test]
+fn lathe_random_rays_partial_sweep() {
+    let l = vase(Some((30.0, 300.0)));
+    let (lo, hi) = l.bounds();
+    run_lathe("lathe random, sweep 30..300", &l, 2, random_rays(lo, hi));
+}
+
+#[test]
+fn lathe_grazing_rays() {
+    let l = vase(None);
+    let size = l.size();
+    run_lathe("lathe grazing", &l, 3, |rng| {
+        let (p, n) = l.sample(DVec2::new(rng.f(), rng.f())).unwrap();
+        let mut t = rng.unit();
+        t -= n * t.dot(n);
+        let t = t.normalize();
+        let delta =
+            10f64.powf(rng.range(-5.0, -2.0)) * size * if rng.f() < 0.5 { 1.0 } else { -1.0 };
+        let o = p + n * delta - t * 2.0 * size;
+        (o, t)
+    });
+}
+
+#[test]
+fn lathe_axis_parallel_rays() {
+    let l = vase(None);
+    let (lo, hi) = l.bounds();
+    let rmax = hi.x;
+    run_lathe("lathe axis-parallel", &l, 4, |rng| {
+        let (x, z) = if rng.f() < 0.01 {
+            (0.0, 0.0)
+        } else {
+            let r = 1.1 * rmax * rng.f().sqrt();
+            let a = rng.range(0.0, std::f64::consts::TAU);
+            (r * a.cos(), r * a.sin())
+        };
+        if rng.f() < 0.5 {
+            (DVec3::new(x, hi.y + 1.0, z), -DVec3::Y)
+        } else {
+            (DVec3::new(x, lo.y - 1.0, z), DVec3::Y * 2.0)
+        }
+    });
+}
+
+#[test]
+fn lathe_perpendicular_rays() {
+    let l = vase(None);
+    let (lo, hi) = l.bounds();
+    let rmax = hi.x;
+    run_lathe("lathe perpendicular", &l, 5, |rng| {
+        let a = rng.range(0.0, std::f64::consts::TAU);
+        let (dir, side) = (
+            DVec3::new(a.cos(), 0.0, a.sin()),
+            DVec3::new(-a.sin(), 0.0, a.cos()),
+        );
+        let y = rng.range(lo.y - 0.1, hi.y + 0.1);
+        let b = rng.range(-1.1, 1.1) * rmax;
+        (DVec3::new(0.0, y, 0.0) - dir * 3.0 + side * b, dir)
+    });
+}
+
+#[test]
+fn lathe_near_pole_rays() {
+    let vase = vase(None);
+    let spindle = spindle();
+    let make_ray = |poles: Vec<DVec3>, size: f64| {
+        move |rng: &mut Rng| {
+            let pole = poles[(rng.f() * poles.len() as f64) as usize % poles.len()];
+            let target = pole + rng.unit() * 10f64.powf(rng.range(-6.0, -3.0)) * size;
+            let o = target + rng.unit() * 3.0 * size;
+            (o, target - o)
+        }
+    };
+    run_lathe(
+        "lathe near-pole (vase bottom)",
+        &vase,
+        6,
+        make_ray(vec![DVec3::ZERO], vase.size()),
+    );
+    run_lathe(
+        "lathe near-pole (spindle tips)",
+        &spindle,
+        7,
+        make_ray(vec![DVec3::ZERO, DVec3::new(0.0, 1.5, 0.0)], spindle.size()),
+    );
+}
+
+/// A bumpy height field over [0, 3]^2.
+fn wavy() -> Patch {
+    let z = [
+        [0.0, 0.8, -0.6, 0.2],
+        [0.5, -1.2, 1.4, -0.3],
+        [-0.4, 1.5, -1.1, 0.6],
+        [0.3, -0.2, 0.7, 0.0],
+    ];
+    Patch::new(&std::array::from_fn(|k| {
+        DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4])
+    }))
+    .unwrap()
+}
+
+/// A quarter dome whose first row collapses to its apex (as the teapot's lid).
+fn dome() -> Patch {
+    let k = 0.552_284_749_8;
+    let rows = [(0.0, 1.0), (k, 1.0), (1.0, k), (1.0, 0.0)];
+    let cols = [(1.0, 0.0), (1.0, k), (k, 1.0), (0.0, 1.0)];
+    Patch::new(&std::array::from_fn(|idx| {
+        let (r, h) = rows[idx / 4];
+        let (cx, cz) = cols[idx % 4];
+        DVec3::new(r * cx, h, r * cz)
+    }))
+    .unwrap()
+}
+
+const PATCH_NEWTON: PatchSolver = PatchSolver::Newton {
+    iterations: 16,
+    starts: 9,
+};
+
+fn run_patch(
+    name: &str,
+    patch: &Patch,
+    seed: u64,
+    mut make_ray: impl FnMut(&mut Rng) -> (DVec3, DVec3),
+) {
+    let mut rng = Rng(seed);
+    let mut st = Stats::default();
+    for _ in 0..rays() {
+        let (o, d) = make_ray(&mut rng);
+        st.rays += 1;
+        let want = reference::patch(patch, o, d, 1e-9, f64::INFINITY);
+        if want.ambiguous {
+            st.ambiguous += 1;
+            continue;
+        }
+        let want = want.t;
+        st.ref_hits += want.is_some() as usize;
+        let got = patch.intersect(o, d, 1e-9, f64::INFINITY, PatchSolver::Robust);
+        if let Some(h) = got {
+            let (q, _, _) = patch.eval(h.uv.x, h.uv.y);
+            if (q - h.p).length() > 1e-6 * patch.size() {
+                st.off_surface += 1;
+            }
+        }
+        st.compare(want, got.map(|h| h.t));
+        let newton = patch.intersect(o, d, 1e-9, f64::INFINITY, PATCH_NEWTON);
+        st.newton(want, newton.map(|h| h.t));
+    }
+    st.report_and_check(name);
+}
+
+#[test]
+fn patch_random_rays() {
+    for (name, p, seed) in [
+        ("patch random (wavy)", wavy(), 11),
+        ("patch random (dome)", dome(), 12),
+    ] {
+        let (lo, hi) = p.bounds();
+        run_patch(name, &p, seed, random_rays(lo, hi));
+    }
+}
+
+#[test]
+fn patch_grazing_rays() {
+    for (name, p, seed) in [
+        ("patch grazing (wavy)", wavy(), 13),
+        ("patch grazing (dome)", dome(), 14),
+    ] {
+        let size = p.size();
+        let pp = p.clone();
+        run_patch(name, &p, seed, move |rng| {
+            let (u, v) = (rng.range(0.02, 0.98), rng.range(0.02, 0.98));
+            let (q, pu, pv) = pp.eval(u, v);
+            let n = pp.normal(u, v);
+            let a = rng.range(0.0, std::f64::consts::TAU);
+            let t = (pu.normalize() * a.cos() + pv.normalize() * a.sin()).normalize();
+            let t = (t - n * t.dot(n)).normalize();
+            let delta =
+                10f64.powf(rng.range(-5.0, -2.0)) * size * if rng.f() < 0.5 { 1.0 } else { -1.0 };
+            (q + n * delta - t * 2.0 * size, t)
+        });
+    }
+}
