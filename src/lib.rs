@@ -10,8 +10,15 @@
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
 
+pub mod diag;
+pub mod eval;
 pub mod geometry;
 pub mod scene;
 pub mod shapes;
 pub mod span;
+pub mod syntax;
 pub mod textures;
+
+pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
+pub use eval::{EvalOptions, Loaded, load_file, load_source};
+pub use syntax::SourceMap;
