@@ -496,7 +496,8 @@ impl Evaluator {
         self.warn_unused(frame.vars);
         r.map_err(|mut ds| {
             for d in &mut ds {
-                if d.trace.len() < 8 {
+                // Recursion: one entry per distinct call site.
+                if d.trace.len() < 8 && d.trace.last().map(|t| t.0) != Some(call_span) {
                     d.trace
                         .push((call_span, format!("in macro `{}` called here", name.text)));
                 }
@@ -648,7 +649,10 @@ impl Evaluator {
                 }
                 match builtins::call(&name.text, &vals) {
                     Some(Ok(v)) => v,
-                    Some(Err((i, err))) => {
+                    Some(Err((i, mut err))) => {
+                        if err.label.is_empty() {
+                            err.label = "invalid argument".into();
+                        }
                         let span = args.get(i).map_or(e.span, |a| a.span);
                         return Err(vec![err.at(span)]);
                     }

@@ -161,6 +161,8 @@ pub struct ObjectDef {
 pub struct ProfileDef {
     pub segments: Vec<Vec<DVec2>>,
     pub span: Span,
+    /// Span of each segment's first point.
+    pub joints: Vec<Span>,
 }
 
 #[derive(Debug)]
@@ -1055,8 +1057,9 @@ impl ObjectBuilder {
         if self.corner {
             return Ok(());
         }
-        for pair in profile.segments.windows(2) {
+        for (k, pair) in profile.segments.windows(2).enumerate() {
             let (a, b) = (&pair[0], &pair[1]);
+            let at = profile.joints.get(k + 1).copied().unwrap_or(profile.span);
             let t0 = a[a.len() - 1] - a[a.len() - 2];
             let t1 = b[1] - b[0];
             if t0.length() > 0.0 && t1.length() > 0.0 {
@@ -1065,7 +1068,7 @@ impl ObjectBuilder {
                     let j = b[0];
                     ev.warn(
                         Diagnostic::warning(
-                            profile.span,
+                            at,
                             format!(
                                 "the profile has a kink at <{}, {}> ({:.1}° turn)",
                                 j.x,
@@ -1073,7 +1076,7 @@ impl ObjectBuilder {
                                 cos.clamp(-1.0, 1.0).acos().to_degrees()
                             ),
                         )
-                        .with_label("segments meet at an angle here")
+                        .with_label("the segments meet at an angle here")
                         .with_help("add `corner` to the revolve if the kink is intended"),
                     );
                 }
@@ -1945,6 +1948,12 @@ static BEZIER_PROPS: [PropSpec; 1] = [p("degree", 1, 1, "a number from 1 to 7", 
 impl ProfileBuilder {
     fn finish(self, span: Span) -> SourceResult<Value> {
         let pts: Vec<DVec2> = self.points.iter().map(|p| p.0).collect();
+        let d = if self.spline {
+            1
+        } else {
+            self.degree.map_or(3, |d| d.0) as usize
+        };
+        let joints: Vec<Span> = self.points.iter().step_by(d.max(1)).map(|p| p.1).collect();
         let segments = if self.spline {
             if pts.len() < 2 {
                 return Err(vec![
@@ -1977,7 +1986,11 @@ impl ProfileBuilder {
             }
             pts.windows(d + 1).step_by(d).map(|w| w.to_vec()).collect()
         };
-        Ok(Value::Profile(Rc::new(ProfileDef { segments, span })))
+        Ok(Value::Profile(Rc::new(ProfileDef {
+            segments,
+            span,
+            joints,
+        })))
     }
 }
 

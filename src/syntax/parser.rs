@@ -104,6 +104,15 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         }
         pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
     };
+    // Say "a directive" once instead of listing every one, and leave out the tokens that could
+    // merely continue an expression when there are other choices.
+    if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
+        expected.retain(|e| !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`"));
+        expected.push("a directive");
+    }
+    if expected.len() > 3 {
+        expected.retain(|e| !matches!(*e, "`.`" | "`[`" | "an operator"));
+    }
     expected.sort();
     expected.dedup();
     let expected_text = match expected.len() {
@@ -111,11 +120,16 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         1 => expected[0].to_string(),
         n => format!("{} or {}", expected[..n - 1].join(", "), expected[n - 1]),
     };
-    let mut d = Diagnostic::error(
-        span,
-        format!("syntax error: expected {expected_text}, found {found}"),
-    )
-    .with_label(format!("expected {expected_text}"));
+    let mut d = if expected.is_empty() {
+        Diagnostic::error(span, format!("syntax error: unexpected {found}"))
+            .with_label("not expected here")
+    } else {
+        Diagnostic::error(
+            span,
+            format!("syntax error: expected {expected_text}, found {found}"),
+        )
+        .with_label(format!("expected {expected_text}"))
+    };
     let rest = &text[pos.min(text.len())..];
     if rest.starts_with('#') {
         let word: String = rest[1..]
@@ -125,13 +139,18 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         let known = [
             "declare", "local", "if", "elif", "else", "end", "while", "for", "macro", "include",
         ];
-        if let Some(s) = crate::diag::suggest(&word, known) {
-            d = d.with_help(format!("did you mean `#{s}`?"));
-        } else if matches!(word.as_str(), "end" | "else" | "elif") {
+        if matches!(word.as_str(), "end" | "else" | "elif") {
             d = d.with_help(format!(
                 "`#{word}` without a matching `#if`, `#while`, `#for` or `#macro`"
             ));
+        } else if let Some(s) = crate::diag::suggest(&word, known) {
+            d = d.with_help(format!("did you mean `#{s}`?"));
         }
+    } else if expected_text.contains("a name") && is_keyword(&text[pos..pos + len]) {
+        d = d.with_help(format!(
+            "`{}` is a reserved word (a property keyword); choose another name",
+            &text[pos..pos + len]
+        ));
     } else if pos >= text.len() && expected_text.contains("`}`") {
         d = d.with_help("a block is not closed: add `}`");
     } else if rest.starts_with('{') {
@@ -143,6 +162,11 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         d = d.with_help("a block is not closed: add `}`");
     }
     d
+}
+
+fn is_keyword(word: &str) -> bool {
+    SceneParser::parse(Rule::keyword, word).is_ok_and(|p| p.as_str() == word)
+        || matches!(word, "rgb" | "true" | "false")
 }
 
 fn count_openers(text: &str) -> usize {
