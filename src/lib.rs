@@ -13,9 +13,16 @@
 pub mod bezier;
 pub mod chart;
 pub mod compare;
+pub mod diag;
+pub mod eval;
 pub mod geometry;
 pub mod scene;
 pub mod shapes;
 pub mod span;
+pub mod syntax;
 pub mod textures;
 pub mod watch;
+
+pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
+pub use eval::{EvalOptions, Loaded, load_file, load_source};
+pub use syntax::SourceMap;

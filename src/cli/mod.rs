@@ -1,9 +1,12 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
+mod check;
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use sppm_lang::EvalOptions;
 
 /// Scene errors (bad scene text, failed render).
 pub const EXIT_SCENE_ERROR: u8 = 1;
@@ -21,20 +24,40 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// Limits of the scene interpreter.
+#[derive(Debug, Clone, Args)]
+pub struct LimitArgs {
+    /// Most iterations a single `#while`/`#for` loop may run.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub max_iterations: u64,
+    /// Deepest macro call nesting (recursion depth).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+    pub max_depth: u64,
+}
+
+impl LimitArgs {
+    pub fn options(&self) -> EvalOptions {
+        EvalOptions {
+            max_iterations: self.max_iterations,
+            max_depth: self.max_depth as usize,
+            ..EvalOptions::default()
+        }
+    }
+}
+
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Parse and evaluate a scene; print diagnostics or a summary.
     Check {
         /// The scene file (.scn).
         scene: PathBuf,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
 }
 
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
-        Command::Check { scene } => {
-            eprintln!("check {}: the language is not built yet", scene.display());
-            ExitCode::from(EXIT_USAGE)
-        }
+        Command::Check { scene, limits } => check::run(&scene, &limits.options()),
     }
 }

@@ -1,0 +1,119 @@
+//! `sppm-lang check`: parse and evaluate a scene, print diagnostics or a summary.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::Path;
+use std::process::ExitCode;
+
+use sppm_lang::scene::{Background, Light, Scene};
+use sppm_lang::{EvalOptions, Loaded};
+
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
+
+/// Prints the diagnostics of a load to stderr: miette's fancy output on a terminal, plain text
+/// otherwise.
+pub fn print_diagnostics(loaded: &Loaded) {
+    if loaded.diagnostics.is_empty() {
+        return;
+    }
+    if std::io::stderr().is_terminal() {
+        let report = sppm_lang::to_report(&loaded.sources, &loaded.diagnostics);
+        eprintln!("{report:?}");
+    } else {
+        eprint!(
+            "{}",
+            sppm_lang::render_plain(&loaded.sources, &loaded.diagnostics, 100)
+        );
+    }
+}
+
+pub fn run(scene: &Path, options: &EvalOptions) -> ExitCode {
+    let loaded = match sppm_lang::load_file(scene, options) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("error: cannot read `{}`: {e}", scene.display());
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
+    print_diagnostics(&loaded);
+    match &loaded.scene {
+        Some(s) if !loaded.has_errors() => {
+            print!("{}", summary(s));
+            ExitCode::SUCCESS
+        }
+        _ => ExitCode::from(EXIT_SCENE_ERROR),
+    }
+}
+
+/// A one-screen description of an evaluated scene.
+pub fn summary(s: &Scene) -> String {
+    let mut out = String::new();
+    let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut emitters = 0;
+    for o in &s.objects {
+        *kinds.entry(o.shape.kind()).or_default() += 1;
+        emitters += usize::from(o.emission.is_some());
+    }
+    out.push_str(&format!("objects: {}", s.objects.len()));
+    if !kinds.is_empty() {
+        let list: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        out.push_str(&format!(" ({})", list.join(", ")));
+    }
+    out.push('\n');
+    let points = s
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Point { .. }))
+        .count();
+    let spots = s.lights.len() - points;
+    out.push_str(&format!(
+        "lights: {emitters} area, {points} point, {spots} spot\n"
+    ));
+    out.push_str(&format!(
+        "materials: {}, textures: {}\n",
+        s.materials.len(),
+        s.textures.len()
+    ));
+    let c = &s.camera;
+    out.push_str(&format!(
+        "camera: location <{}, {}, {}> look_at <{}, {}, {}> fov {}{}\n",
+        c.location.x,
+        c.location.y,
+        c.location.z,
+        c.look_at.x,
+        c.look_at.y,
+        c.look_at.z,
+        c.fov,
+        if c.aperture > 0.0 {
+            format!(" aperture {}", c.aperture)
+        } else {
+            String::new()
+        }
+    ));
+    let st = &s.settings;
+    out.push_str(&format!(
+        "settings: {}x{}, {} iterations, {} photons/iteration, radius {}, alpha {}, max_depth {}, seed {}, integrator {}\n",
+        st.resolution.0,
+        st.resolution.1,
+        st.iterations,
+        st.photons,
+        st.radius.map_or("auto".to_string(), |r| r.to_string()),
+        st.alpha,
+        st.max_depth,
+        st.seed,
+        st.integrator.name()
+    ));
+    match &s.background {
+        Background::Color(c) => {
+            out.push_str(&format!("background: rgb <{}, {}, {}>\n", c.x, c.y, c.z))
+        }
+        Background::Environment {
+            image, intensity, ..
+        } => out.push_str(&format!(
+            "background: environment {} x{intensity}\n",
+            image.path.display()
+        )),
+    }
+    out.push_str(&format!("files read: {}\n", s.dependencies.len()));
+    out
+}

@@ -1,0 +1,179 @@
+//! Diagnostics: the error and warning type of the language side, and their rendering.
+//!
+//! Modelled on typst: evaluation returns [`SourceResult`], a list of diagnostics on failure;
+//! helpers return a plain [`Error`] (message and help, no position) and the caller attaches the
+//! span late with [`At::at`]. Diagnostics are rendered only at the edge (the CLI, tests), with
+//! [`to_report`] (a miette report, one snippet of the whole file per span) or
+//! [`render_plain`] (a string without colors at a fixed width).
+
+mod render;
+
+pub use render::{render_plain, to_report};
+
+use crate::span::Span;
+
+/// Result of a step that may fail with several diagnostics.
+pub type SourceResult<T> = Result<T, Vec<Diagnostic>>;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Severity {
+    Error,
+    Warning,
+}
+
+/// One error or warning, pointing at source text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    pub message: String,
+    /// Where the problem is.
+    pub span: Span,
+    /// The label at `span` (what was found, what is wrong).
+    pub label: String,
+    /// Further spans with labels (e.g. "first declared here").
+    pub labels: Vec<(Span, String)>,
+    /// A suggested fix.
+    pub help: Option<String>,
+    /// Innermost first: where the failing code was reached from ("in macro Branch called here").
+    pub trace: Vec<(Span, String)>,
+}
+
+impl Diagnostic {
+    pub fn error(span: Span, message: impl Into<String>) -> Self {
+        Self {
+            severity: Severity::Error,
+            message: message.into(),
+            span,
+            label: String::new(),
+            labels: Vec::new(),
+            help: None,
+            trace: Vec::new(),
+        }
+    }
+
+    pub fn warning(span: Span, message: impl Into<String>) -> Self {
+        Self {
+            severity: Severity::Warning,
+            ..Self::error(span, message)
+        }
+    }
+
+    pub fn with_label(mut self, label: impl Into<String>) -> Self {
+        self.label = label.into();
+        self
+    }
+
+    pub fn with_help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn with_extra(mut self, span: Span, label: impl Into<String>) -> Self {
+        self.labels.push((span, label.into()));
+        self
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+}
+
+/// A spanless error from a helper; the caller attaches the span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Error {
+    pub message: String,
+    pub label: String,
+    pub help: Option<String>,
+}
+
+impl Error {
+    pub fn new(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            label: String::new(),
+            help: None,
+        }
+    }
+
+    pub fn label(mut self, label: impl Into<String>) -> Self {
+        self.label = label.into();
+        self
+    }
+
+    pub fn help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn at(self, span: Span) -> Diagnostic {
+        Diagnostic {
+            label: self.label,
+            help: self.help,
+            ..Diagnostic::error(span, self.message)
+        }
+    }
+}
+
+/// Attach a span to a spanless result.
+pub trait At<T> {
+    fn at(self, span: Span) -> SourceResult<T>;
+}
+
+impl<T> At<T> for Result<T, Error> {
+    fn at(self, span: Span) -> SourceResult<T> {
+        self.map_err(|e| vec![e.at(span)])
+    }
+}
+
+impl<T> At<T> for Result<T, String> {
+    fn at(self, span: Span) -> SourceResult<T> {
+        self.map_err(|e| vec![Diagnostic::error(span, e)])
+    }
+}
+
+/// The closest candidate to `name` by edit distance, if it is close enough to be a likely typo.
+pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (name.chars().count() / 3).max(1);
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|&(d, _)| d <= limit)
+        .min_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(b.1)))
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance over chars.
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    let mut cur = vec![0; b.len() + 1];
+    for (i, ca) in a.chars().enumerate() {
+        cur[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != cb);
+            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distance_basics() {
+        assert_eq!(edit_distance("sphere", "sphere"), 0);
+        assert_eq!(edit_distance("spher", "sphere"), 1);
+        assert_eq!(edit_distance("shpere", "sphere"), 2);
+        assert_eq!(edit_distance("", "abc"), 3);
+    }
+
+    #[test]
+    fn suggestion_picks_closest_and_rejects_far() {
+        let c = ["sphere", "plane", "quad"];
+        assert_eq!(suggest("spher", c), Some("sphere"));
+        assert_eq!(suggest("xyzzy", c), None);
+    }
+}

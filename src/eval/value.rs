@@ -1,0 +1,103 @@
+//! Runtime values of the scene language.
+
+use std::rc::Rc;
+
+use glam::{DVec2, DVec3};
+
+use super::objects::{EnvDef, MaterialDef, ObjectDef, ProfileDef, TextureDef};
+use crate::diag::Error;
+use crate::scene::{Camera, ColorMap, Light, Settings};
+use crate::syntax::ast::MacroDef;
+
+#[derive(Debug, Clone)]
+pub enum Value {
+    Num(f64),
+    Bool(bool),
+    Str(Rc<str>),
+    Vec2(DVec2),
+    Vec3(DVec3),
+    /// A linear RGB color (`rgb <r, g, b>`).
+    Color(DVec3),
+    Array(Rc<Vec<Value>>),
+    Object(Rc<ObjectDef>),
+    Material(Rc<MaterialDef>),
+    Texture(Rc<TextureDef>),
+    ColorMap(Rc<ColorMap>),
+    Profile(Rc<ProfileDef>),
+    Settings(Box<Settings>),
+    Camera(Box<Camera>),
+    Light(Box<Light>),
+    Environment(Rc<EnvDef>),
+    Macro(Rc<MacroDef>),
+}
+
+impl Value {
+    /// The type's name with an article, for messages ("a number").
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Num(_) => "a number",
+            Value::Bool(_) => "a boolean",
+            Value::Str(_) => "a string",
+            Value::Vec2(_) => "a 2-D vector",
+            Value::Vec3(_) => "a vector",
+            Value::Color(_) => "a color",
+            Value::Array(_) => "an array",
+            Value::Object(_) => "an object",
+            Value::Material(_) => "a material",
+            Value::Texture(_) => "a texture",
+            Value::ColorMap(_) => "a color map",
+            Value::Profile(_) => "a profile",
+            Value::Settings(_) => "a settings block",
+            Value::Camera(_) => "a camera",
+            Value::Light(_) => "a light",
+            Value::Environment(_) => "an environment",
+            Value::Macro(_) => "a macro",
+        }
+    }
+
+    fn mismatch(&self, expected: &str) -> Error {
+        Error::new(format!("expected {expected}, found {}", self.type_name()))
+            .label(format!("this is {}", self.type_name()))
+    }
+
+    pub fn num(&self) -> Result<f64, Error> {
+        match self {
+            Value::Num(n) => Ok(*n),
+            v => Err(v.mismatch("a number")),
+        }
+    }
+
+    pub fn vec3(&self) -> Result<DVec3, Error> {
+        match self {
+            Value::Vec3(v) | Value::Color(v) => Ok(*v),
+            Value::Vec2(_) => Err(self
+                .mismatch("a 3-D vector")
+                .help("give three components: `<x, y, z>`")),
+            v => Err(v.mismatch("a vector `<x, y, z>`")),
+        }
+    }
+
+    pub fn vec2(&self) -> Result<DVec2, Error> {
+        match self {
+            Value::Vec2(v) => Ok(*v),
+            v => Err(v.mismatch("a 2-D vector `<u, v>`")),
+        }
+    }
+
+    /// A color: `rgb <..>`, a plain vector, or a number (gray).
+    pub fn color(&self) -> Result<DVec3, Error> {
+        match self {
+            Value::Color(c) | Value::Vec3(c) => Ok(*c),
+            Value::Num(n) => Ok(DVec3::splat(*n)),
+            v => Err(v.mismatch("a color `rgb <r, g, b>`")),
+        }
+    }
+
+    pub fn truthy(&self) -> Result<bool, Error> {
+        match self {
+            Value::Bool(b) => Ok(*b),
+            Value::Num(n) => Ok(*n != 0.0),
+            v => Err(v.mismatch("a boolean")),
+        }
+    }
+}

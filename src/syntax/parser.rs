@@ -1,0 +1,518 @@
+//! The pest parser and the conversion of its parse tree into the [`ast`](super::ast).
+
+use std::rc::Rc;
+use std::sync::LazyLock;
+
+use pest::Parser;
+use pest::iterators::{Pair, Pairs};
+use pest::pratt_parser::{Assoc, Op, PrattParser};
+
+use super::ast::*;
+use crate::diag::{Diagnostic, SourceResult};
+use crate::span::{FileId, Span};
+
+#[derive(pest_derive::Parser)]
+#[grammar = "../grammar/scene.pest"]
+struct SceneParser;
+
+/// Deepest nesting of brackets, blocks and directives a file may have. Guards the recursive
+/// parser and evaluator against stack exhaustion on absurd input.
+pub const MAX_NESTING: usize = 200;
+
+static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
+    PrattParser::new()
+        .op(Op::infix(Rule::or, Assoc::Left))
+        .op(Op::infix(Rule::and, Assoc::Left))
+        .op(Op::infix(Rule::eq, Assoc::Left) | Op::infix(Rule::ne, Assoc::Left))
+        .op(Op::infix(Rule::lt, Assoc::Left)
+            | Op::infix(Rule::le, Assoc::Left)
+            | Op::infix(Rule::gt, Assoc::Left)
+            | Op::infix(Rule::ge, Assoc::Left))
+        .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
+        .op(Op::infix(Rule::mul, Assoc::Left) | Op::infix(Rule::div, Assoc::Left))
+        .op(Op::prefix(Rule::neg)
+            | Op::prefix(Rule::pos)
+            | Op::prefix(Rule::not)
+            | Op::prefix(Rule::rgb))
+        .op(Op::postfix(Rule::index) | Op::postfix(Rule::field))
+});
+
+/// What a grammar rule is called in messages.
+fn describe(rule: Rule) -> &'static str {
+    match rule {
+        Rule::EOI => "end of file",
+        Rule::items | Rule::item => "a statement",
+        Rule::comma => "`,`",
+        Rule::declare => "`#declare`",
+        Rule::local => "`#local`",
+        Rule::if_d => "`#if`",
+        Rule::elif_d => "`#elif`",
+        Rule::else_d => "`#else`",
+        Rule::while_d => "`#while`",
+        Rule::for_d => "`#for`",
+        Rule::macro_d => "`#macro`",
+        Rule::include_d => "`#include`",
+        Rule::params => "parameter names",
+        Rule::keyword => "a property keyword",
+        Rule::expr | Rule::vexpr => "an expression",
+        Rule::add | Rule::sub | Rule::mul | Rule::div => "an operator",
+        Rule::le | Rule::ge | Rule::eq | Rule::ne | Rule::lt | Rule::gt => "an operator",
+        Rule::and | Rule::or => "an operator",
+        Rule::neg | Rule::pos | Rule::not => "an operator",
+        Rule::rgb => "`rgb`",
+        Rule::index => "`[`",
+        Rule::field => "`.`",
+        Rule::paren => "`(`",
+        Rule::vector => "a vector `<x, y, z>`",
+        Rule::array => "an array `[a, b]`",
+        Rule::block => "a block `name { ... }`",
+        Rule::call => "a call `name(...)`",
+        Rule::number => "a number",
+        Rule::boolean => "`true` or `false`",
+        Rule::string | Rule::str_inner => "a string",
+        Rule::ident | Rule::ident_raw => "a name",
+        _ => "something else",
+    }
+}
+
+/// Parses one file. On failure returns one syntax error.
+pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
+    check_nesting(file, text)?;
+    let mut pairs =
+        SceneParser::parse(Rule::file, text).map_err(|e| vec![syntax_error(file, text, e)])?;
+    let file_pair = pairs.next().expect("file rule");
+    let items = file_pair.into_inner().next().expect("items");
+    let cx = Cx { file };
+    Ok(cx.items(items))
+}
+
+fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagnostic {
+    let pos = match e.location {
+        pest::error::InputLocation::Pos(p) => p,
+        pest::error::InputLocation::Span((s, _)) => s,
+    };
+    let found = found_at(text, pos);
+    let len = if pos >= text.len() {
+        0
+    } else {
+        found_len(text, pos)
+    };
+    let span = Span::new(file, pos as u32, (pos + len) as u32);
+    let mut expected: Vec<&str> = match &e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => {
+            positives.iter().map(|r| describe(*r)).collect()
+        }
+        pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
+    };
+    // Say "a directive" once instead of listing every one, and leave out the tokens that could
+    // merely continue an expression when there are other choices.
+    if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
+        expected.retain(|e| !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`"));
+        expected.push("a directive");
+    }
+    if expected.len() > 3 {
+        expected.retain(|e| !matches!(*e, "`.`" | "`[`" | "an operator"));
+    }
+    expected.sort();
+    expected.dedup();
+    let expected_text = match expected.len() {
+        0 => "something else".to_string(),
+        1 => expected[0].to_string(),
+        n => format!("{} or {}", expected[..n - 1].join(", "), expected[n - 1]),
+    };
+    let mut d = if expected.is_empty() {
+        Diagnostic::error(span, format!("syntax error: unexpected {found}"))
+            .with_label("not expected here")
+    } else {
+        Diagnostic::error(
+            span,
+            format!("syntax error: expected {expected_text}, found {found}"),
+        )
+        .with_label(format!("expected {expected_text}"))
+    };
+    let rest = &text[pos.min(text.len())..];
+    if rest.starts_with('#') {
+        let word: String = rest[1..]
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        let known = [
+            "declare", "local", "if", "elif", "else", "end", "while", "for", "macro", "include",
+        ];
+        if matches!(word.as_str(), "end" | "else" | "elif") {
+            d = d.with_help(format!(
+                "`#{word}` without a matching `#if`, `#while`, `#for` or `#macro`"
+            ));
+        } else if let Some(s) = crate::diag::suggest(&word, known) {
+            d = d.with_help(format!("did you mean `#{s}`?"));
+        }
+    } else if expected_text.contains("a name") && is_keyword(&text[pos..pos + len]) {
+        d = d.with_help(format!(
+            "`{}` is a reserved word (a property keyword); choose another name",
+            &text[pos..pos + len]
+        ));
+    } else if pos >= text.len() && expected_text.contains("`}`") {
+        d = d.with_help("a block is not closed: add `}`");
+    } else if rest.starts_with('{') {
+        d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`");
+    }
+    if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
+        d = d.with_help("a directive is not closed: add `#end`");
+    } else if pos >= text.len() && text.matches('{').count() > text.matches('}').count() {
+        d = d.with_help("a block is not closed: add `}`");
+    }
+    d
+}
+
+fn is_keyword(word: &str) -> bool {
+    SceneParser::parse(Rule::keyword, word).is_ok_and(|p| p.as_str() == word)
+        || matches!(word, "rgb" | "true" | "false")
+}
+
+fn count_openers(text: &str) -> usize {
+    ["#if", "#while", "#for", "#macro"]
+        .iter()
+        .map(|k| text.matches(k).count())
+        .sum()
+}
+
+fn found_len(text: &str, pos: usize) -> usize {
+    let rest = &text[pos..];
+    let word = rest
+        .char_indices()
+        .take_while(|(_, c)| c.is_ascii_alphanumeric() || *c == '_' || *c == '#')
+        .last()
+        .map(|(i, c)| i + c.len_utf8());
+    word.unwrap_or_else(|| rest.chars().next().map_or(0, char::len_utf8))
+}
+
+fn found_at(text: &str, pos: usize) -> String {
+    if pos >= text.len() {
+        return "end of file".into();
+    }
+    let len = found_len(text, pos);
+    format!("`{}`", &text[pos..pos + len])
+}
+
+/// Rejects input nested deeper than [`MAX_NESTING`] before the recursive parser sees it.
+fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut prefix_run = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        match c {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 2;
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            b'#' => {
+                let rest = &text[i..];
+                if ["#if", "#while", "#for", "#macro"]
+                    .iter()
+                    .any(|k| rest.starts_with(k))
+                {
+                    depth += 1;
+                } else if rest.starts_with("#end") {
+                    depth = depth.saturating_sub(1);
+                }
+            }
+            _ => {}
+        }
+        if matches!(c, b'-' | b'+' | b'!') {
+            prefix_run += 1;
+        } else if !c.is_ascii_whitespace() {
+            prefix_run = 0;
+        }
+        if depth > MAX_NESTING || prefix_run > MAX_NESTING {
+            let span = Span::new(file, i as u32, (i + 1) as u32);
+            return Err(vec![
+                Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
+                    .with_label("too deeply nested")
+                    .with_help("split the expression or block into declared parts"),
+            ]);
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
+struct Cx {
+    file: FileId,
+}
+
+impl Cx {
+    fn span(&self, pair: &Pair<Rule>) -> Span {
+        let s = pair.as_span();
+        Span::new(self.file, s.start() as u32, s.end() as u32)
+    }
+
+    fn name(&self, pair: Pair<Rule>) -> Name {
+        Name {
+            span: self.span(&pair),
+            text: pair.as_str().to_string(),
+        }
+    }
+
+    fn items(&self, pair: Pair<Rule>) -> Vec<Item> {
+        pair.into_inner().map(|p| self.item(p)).collect()
+    }
+
+    fn item(&self, pair: Pair<Rule>) -> Item {
+        match pair.as_rule() {
+            Rule::keyword => Item::Keyword(self.name(pair)),
+            Rule::comma => Item::Comma(self.span(&pair)),
+            Rule::expr => Item::Expr(self.expr(pair)),
+            _ => Item::Directive(self.directive(pair)),
+        }
+    }
+
+    fn directive(&self, pair: Pair<Rule>) -> Directive {
+        let span = self.span(&pair);
+        let rule = pair.as_rule();
+        let mut inner = pair.into_inner();
+        let kind = match rule {
+            Rule::declare | Rule::local => {
+                let name = self.name(inner.next().unwrap());
+                let value = self.expr(inner.next().unwrap());
+                DirectiveKind::Bind {
+                    name,
+                    value,
+                    local: rule == Rule::local,
+                }
+            }
+            Rule::if_d => {
+                let cond = self.expr(inner.next().unwrap());
+                let body = self.items(inner.next().unwrap());
+                let mut branches = vec![(cond, body)];
+                let mut otherwise = None;
+                for p in inner {
+                    match p.as_rule() {
+                        Rule::elif_d => {
+                            let mut i = p.into_inner();
+                            let c = self.expr(i.next().unwrap());
+                            let b = self.items(i.next().unwrap());
+                            branches.push((c, b));
+                        }
+                        _ => otherwise = Some(self.items(p.into_inner().next().unwrap())),
+                    }
+                }
+                DirectiveKind::If {
+                    branches,
+                    otherwise,
+                }
+            }
+            Rule::while_d => DirectiveKind::While {
+                cond: self.expr(inner.next().unwrap()),
+                body: self.items(inner.next().unwrap()),
+            },
+            Rule::for_d => {
+                let var = self.name(inner.next().unwrap());
+                let from = self.expr(inner.next().unwrap());
+                let to = self.expr(inner.next().unwrap());
+                let rest: Vec<Pair<Rule>> = inner.collect();
+                let (step, body) = if rest.len() == 2 {
+                    (
+                        Some(self.expr(rest[0].clone())),
+                        self.items(rest[1].clone()),
+                    )
+                } else {
+                    (None, self.items(rest[0].clone()))
+                };
+                DirectiveKind::For {
+                    var,
+                    from,
+                    to,
+                    step,
+                    body,
+                }
+            }
+            Rule::macro_d => {
+                let name = self.name(inner.next().unwrap());
+                let params = inner
+                    .next()
+                    .unwrap()
+                    .into_inner()
+                    .map(|p| self.name(p))
+                    .collect();
+                let body = self.items(inner.next().unwrap());
+                DirectiveKind::Macro(Rc::new(MacroDef { name, params, body }))
+            }
+            Rule::include_d => {
+                let s = inner.next().unwrap();
+                let path_span = self.span(&s);
+                DirectiveKind::Include {
+                    path: unescape(s.into_inner().next().unwrap().as_str()),
+                    path_span,
+                }
+            }
+            r => unreachable!("directive rule {r:?}"),
+        };
+        Directive { kind, span }
+    }
+
+    fn expr(&self, pair: Pair<Rule>) -> Expr {
+        self.pratt(pair.into_inner())
+    }
+
+    fn pratt(&self, pairs: Pairs<Rule>) -> Expr {
+        PRATT
+            .map_primary(|p| self.primary(p))
+            .map_prefix(|op, rhs| {
+                let span = self.span(&op).join(rhs.span);
+                let op = match op.as_rule() {
+                    Rule::neg => UnOp::Neg,
+                    Rule::pos => UnOp::Pos,
+                    Rule::not => UnOp::Not,
+                    _ => UnOp::Rgb,
+                };
+                Expr {
+                    kind: ExprKind::Unary(op, Box::new(rhs)),
+                    span,
+                }
+            })
+            .map_postfix(|lhs, op| {
+                let span = lhs.span.join(self.span(&op));
+                let kind = match op.as_rule() {
+                    Rule::index => ExprKind::Index(
+                        Box::new(lhs),
+                        Box::new(self.expr(op.into_inner().next().unwrap())),
+                    ),
+                    _ => ExprKind::Field(Box::new(lhs), self.name(op.into_inner().next().unwrap())),
+                };
+                Expr { kind, span }
+            })
+            .map_infix(|lhs, op, rhs| {
+                let span = lhs.span.join(rhs.span);
+                let op = match op.as_rule() {
+                    Rule::add => BinOp::Add,
+                    Rule::sub => BinOp::Sub,
+                    Rule::mul => BinOp::Mul,
+                    Rule::div => BinOp::Div,
+                    Rule::lt => BinOp::Lt,
+                    Rule::le => BinOp::Le,
+                    Rule::gt => BinOp::Gt,
+                    Rule::ge => BinOp::Ge,
+                    Rule::eq => BinOp::Eq,
+                    Rule::ne => BinOp::Ne,
+                    Rule::and => BinOp::And,
+                    _ => BinOp::Or,
+                };
+                Expr {
+                    kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
+                    span,
+                }
+            })
+            .parse(pairs)
+    }
+
+    fn primary(&self, pair: Pair<Rule>) -> Expr {
+        let span = self.span(&pair);
+        let kind = match pair.as_rule() {
+            Rule::number => ExprKind::Number(pair.as_str().parse().unwrap_or(f64::NAN)),
+            Rule::boolean => ExprKind::Bool(pair.as_str() == "true"),
+            Rule::string => {
+                ExprKind::Str(unescape(pair.into_inner().next().unwrap().as_str()).into())
+            }
+            Rule::ident => ExprKind::Ident(pair.as_str().to_string()),
+            Rule::paren => return self.expr(pair.into_inner().next().unwrap()),
+            Rule::vector => ExprKind::Vector(pair.into_inner().map(|p| self.expr(p)).collect()),
+            Rule::array => ExprKind::Array(pair.into_inner().map(|p| self.expr(p)).collect()),
+            Rule::block => {
+                let mut i = pair.into_inner();
+                let kind = self.name(i.next().unwrap());
+                ExprKind::Block {
+                    kind,
+                    items: Rc::new(self.items(i.next().unwrap())),
+                }
+            }
+            Rule::call => {
+                let mut i = pair.into_inner();
+                let name = self.name(i.next().unwrap());
+                ExprKind::Call {
+                    name,
+                    args: i.map(|p| self.expr(p)).collect(),
+                }
+            }
+            r => unreachable!("primary rule {r:?}"),
+        };
+        Expr { kind, span }
+    }
+}
+
+fn unescape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            match chars.next() {
+                Some('n') => out.push('\n'),
+                Some('t') => out.push('\t'),
+                Some(o) => out.push(o),
+                None => {}
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(text: &str) -> Vec<Item> {
+        parse(FileId(0), text).unwrap_or_else(|e| panic!("{e:?}"))
+    }
+
+    #[test]
+    fn precedence_mul_over_add() {
+        let items = p("1 + 2 * 3");
+        let Item::Expr(e) = &items[0] else { panic!() };
+        let ExprKind::Binary(BinOp::Add, _, rhs) = &e.kind else {
+            panic!("{e:?}")
+        };
+        assert!(matches!(rhs.kind, ExprKind::Binary(BinOp::Mul, _, _)));
+    }
+
+    #[test]
+    fn vector_then_keyword() {
+        let items = p("sphere { <0, 1, 2>, 0.5 translate <1, 0, 0> }");
+        assert_eq!(items.len(), 1);
+        let Item::Expr(Expr {
+            kind: ExprKind::Block { items, .. },
+            ..
+        }) = &items[0]
+        else {
+            panic!()
+        };
+        assert_eq!(items.len(), 5, "{items:?}");
+        assert!(matches!(&items[3], Item::Keyword(n) if n.text == "translate"));
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error() {
+        let text = format!("{}1{}", "(".repeat(1000), ")".repeat(1000));
+        assert!(parse(FileId(0), &text).is_err());
+    }
+}
