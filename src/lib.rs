@@ -15,3 +15,12 @@ pub mod scene;
 pub mod shapes;
 pub mod span;
 pub mod textures;
+
+pub mod accel;
+pub mod camera;
+pub mod film;
+pub mod integrators;
+pub mod lights;
+pub mod materials;
+pub mod render;
+pub mod sampling;
