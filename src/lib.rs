@@ -10,12 +10,20 @@
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
 
+pub mod accel;
 pub mod bezier;
+pub mod camera;
 pub mod chart;
 pub mod compare;
 pub mod diag;
 pub mod eval;
+pub mod film;
 pub mod geometry;
+pub mod integrators;
+pub mod lights;
+pub mod materials;
+pub mod render;
+pub mod sampling;
 pub mod scene;
 pub mod shapes;
 pub mod span;

@@ -34,5 +34,16 @@ pub trait Shape: Send + Sync {
     fn sample(&self, u: Vec2) -> Option<AreaSample>;
 }
 
+pub mod cuboid;
+pub mod cylinder;
+pub mod disk;
+pub mod frame;
+pub mod mesh;
 pub mod patch;
+pub mod plane;
+pub mod primitive;
+pub mod quad;
 pub mod revolve;
+pub mod sphere;
+pub mod transformed;
+pub mod triangle;

@@ -1,0 +1,311 @@
+//! Binned SAH bounding volume hierarchy over shapes, flattened depth-first.
+//! Shapes without finite bounds (infinite planes) are kept in a side list and tested always.
+
+use glam::Vec3A;
+
+use crate::geometry::{Aabb, Hit, Ray};
+use crate::shapes::Shape;
+use crate::shapes::primitive::AnyShape;
+
+const BINS: usize = 12;
+const MAX_LEAF: usize = 4;
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    bounds: Aabb,
+    /// Leaf: first primitive. Interior: index of the second child (the first follows).
+    offset: u32,
+    /// Primitives in a leaf; 0 for an interior node.
+    count: u16,
+    axis: u8,
+}
+
+/// The accelerator: owns the shapes, each tagged with a caller id (e.g. a primitive index).
+pub struct Bvh {
+    nodes: Vec<Node>,
+    shapes: Vec<AnyShape>,
+    ids: Vec<u32>,
+    unbounded: Vec<(AnyShape, u32)>,
+}
+
+struct Item {
+    bounds: Aabb,
+    centroid: Vec3A,
+    index: usize,
+}
+
+impl Bvh {
+    pub fn new(shapes: Vec<(AnyShape, u32)>) -> Self {
+        let mut bounded = Vec::new();
+        let mut unbounded = Vec::new();
+        for (s, id) in shapes {
+            let b = s.bounds();
+            if b.is_empty() || !(b.min.is_finite() && b.max.is_finite()) {
+                if !b.is_empty() {
+                    unbounded.push((s, id));
+                }
+            } else {
+                bounded.push((s, id));
+            }
+        }
+        let mut items: Vec<Item> = bounded
+            .iter()
+            .enumerate()
+            .map(|(index, (s, _))| {
+                let bounds = s.bounds().padded(1e-6);
+                Item {
+                    bounds,
+                    centroid: bounds.centroid(),
+                    index,
+                }
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * items.len().max(1));
+        if !items.is_empty() {
+            let n = items.len();
+            build(&mut items, 0, n, &mut nodes);
+        }
+        // Reorder the shapes into leaf order.
+        let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
+        let (shapes, ids) = items
+            .iter()
+            .map(|it| slots[it.index].take().expect("each shape once"))
+            .unzip();
+        Self {
+            nodes,
+            shapes,
+            ids,
+            unbounded,
+        }
+    }
+
+    /// Bounds of the bounded shapes (infinite planes excluded).
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
+    }
+
+    pub fn len(&self) -> usize {
+        self.shapes.len() + self.unbounded.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Closest hit with `t_min < t < t_max`, and the hit shape's id.
+    pub fn intersect(&self, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<(Hit, u32)> {
+        let mut best = None;
+        for (s, id) in &self.unbounded {
+            if let Some(h) = s.intersect(ray, t_min, t_max) {
+                t_max = h.t;
+                best = Some((h, *id));
+            }
+        }
+        if self.nodes.is_empty() {
+            return best;
+        }
+        let inv_d = ray.d.recip();
+        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
+        let mut stack = [0u32; 64];
+        let mut sp = 0usize;
+        let mut cur = 0usize;
+        loop {
+            let node = &self.nodes[cur];
+            if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
+                if node.count > 0 {
+                    let start = node.offset as usize;
+                    for i in start..start + node.count as usize {
+                        if let Some(h) = self.shapes[i].intersect(ray, t_min, t_max) {
+                            t_max = h.t;
+                            best = Some((h, self.ids[i]));
+                        }
+                    }
+                } else {
+                    // Visit the near child first.
+                    let (first, second) = if neg[node.axis as usize] {
+                        (node.offset as usize, cur + 1)
+                    } else {
+                        (cur + 1, node.offset as usize)
+                    };
+                    stack[sp] = second as u32;
+                    sp += 1;
+                    cur = first;
+                    continue;
+                }
+            }
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            cur = stack[sp] as usize;
+        }
+        best
+    }
+
+    /// Whether anything is hit with `t_min < t < t_max`.
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        if self
+            .unbounded
+            .iter()
+            .any(|(s, _)| s.occluded(ray, t_min, t_max))
+        {
+            return true;
+        }
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let inv_d = ray.d.recip();
+        let mut stack = [0u32; 64];
+        let mut sp = 0usize;
+        let mut cur = 0usize;
+        loop {
+            let node = &self.nodes[cur];
+            if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
+                if node.count > 0 {
+                    let start = node.offset as usize;
+                    if self.shapes[start..start + node.count as usize]
+                        .iter()
+                        .any(|s| s.occluded(ray, t_min, t_max))
+                    {
+                        return true;
+                    }
+                } else {
+                    stack[sp] = node.offset;
+                    sp += 1;
+                    cur += 1;
+                    continue;
+                }
+            }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            cur = stack[sp] as usize;
+        }
+    }
+}
+
+fn build(items: &mut [Item], start: usize, end: usize, nodes: &mut Vec<Node>) -> usize {
+    let idx = nodes.len();
+    let slice = &mut items[start..end];
+    let bounds = slice.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
+    nodes.push(Node {
+        bounds,
+        offset: start as u32,
+        count: slice.len() as u16,
+        axis: 0,
+    });
+    let n = slice.len();
+    if n <= MAX_LEAF {
+        return idx;
+    }
+    let cb = slice
+        .iter()
+        .fold(Aabb::EMPTY, |b, it| b.with_point(it.centroid));
+    let ext = cb.diagonal();
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let lo = cb.min[axis];
+    let span = ext[axis];
+    let mid = if span <= 0.0 || !span.is_finite() {
+        n / 2
+    } else {
+        // Binned SAH.
+        let bin_of = |c: f32| (((c - lo) / span * BINS as f32) as usize).min(BINS - 1);
+        let mut bin_b = [Aabb::EMPTY; BINS];
+        let mut bin_n = [0usize; BINS];
+        for it in slice.iter() {
+            let b = bin_of(it.centroid[axis]);
+            bin_b[b] = bin_b[b].union(it.bounds);
+            bin_n[b] += 1;
+        }
+        let mut best = (f32::INFINITY, 0usize);
+        for split in 1..BINS {
+            let (lb, ln) = (0..split).fold((Aabb::EMPTY, 0), |(b, c), i| {
+                (b.union(bin_b[i]), c + bin_n[i])
+            });
+            let (rb, rn) = (split..BINS).fold((Aabb::EMPTY, 0), |(b, c), i| {
+                (b.union(bin_b[i]), c + bin_n[i])
+            });
+            if ln == 0 || rn == 0 {
+                continue;
+            }
+            let cost = lb.surface_area() * ln as f32 + rb.surface_area() * rn as f32;
+            if cost < best.0 {
+                best = (cost, split);
+            }
+        }
+        let leaf_cost = bounds.surface_area() * n as f32;
+        if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
+            if best.0.is_infinite() {
+                // All centroids in one bin: split in the middle of the ordering.
+                slice.sort_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+                n / 2
+            } else {
+                return idx;
+            }
+        } else {
+            let split = best.1;
+            let mut i = 0;
+            for j in 0..n {
+                if bin_of(slice[j].centroid[axis]) < split {
+                    slice.swap(i, j);
+                    i += 1;
+                }
+            }
+            i
+        }
+    };
+    let mid = mid.clamp(1, n - 1);
+    nodes[idx].count = 0;
+    nodes[idx].axis = axis as u8;
+    build(items, start, start + mid, nodes);
+    let second = build(items, start + mid, end, nodes);
+    nodes[idx].offset = second as u32;
+    idx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Rng, uniform_sphere};
+    use crate::shapes::sphere::Sphere;
+
+    #[test]
+    fn matches_brute_force() {
+        let mut rng = Rng::new(7);
+        let spheres: Vec<Sphere> = (0..200)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
+            })
+            .collect();
+        let bvh = Bvh::new(
+            spheres
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
+                .collect(),
+        );
+        for _ in 0..500 {
+            let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+            let d = uniform_sphere(rng.vec2());
+            let ray = Ray::new(o, d);
+            let brute = spheres
+                .iter()
+                .enumerate()
+                .filter_map(|(i, s)| s.intersect(&ray, 0.0, f32::INFINITY).map(|h| (h.t, i)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let got = bvh
+                .intersect(&ray, 0.0, f32::INFINITY)
+                .map(|(h, i)| (h.t, i as usize));
+            assert_eq!(brute, got);
+            assert_eq!(brute.is_some(), bvh.occluded(&ray, 0.0, f32::INFINITY));
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! Pinhole and thin-lens cameras with a vertical field of view.
+
+use glam::{Vec2, Vec3A};
+
+use crate::geometry::Ray;
+use crate::sampling::concentric_disk;
+use crate::scene;
+
+#[derive(Debug, Clone, Copy)]
+pub struct Camera {
+    origin: Vec3A,
+    forward: Vec3A,
+    right: Vec3A,
+    up: Vec3A,
+    /// Half-extent of the image plane at distance 1.
+    half_w: f32,
+    half_h: f32,
+    lens_radius: f32,
+    focus: f32,
+    width: u32,
+    height: u32,
+}
+
+impl Camera {
+    pub fn new(c: &scene::Camera, width: u32, height: u32) -> Result<Self, String> {
+        let fwd = (c.look_at - c.location).normalize_or_zero();
+        if fwd == glam::DVec3::ZERO {
+            return Err("camera location and look_at are the same point".into());
+        }
+        let right = fwd.cross(c.up).normalize_or_zero();
+        if right == glam::DVec3::ZERO {
+            return Err("camera up is parallel to the viewing direction".into());
+        }
+        if !(c.fov > 0.0 && c.fov < 180.0) {
+            return Err(format!(
+                "camera fov must be in (0, 180) degrees, got {}",
+                c.fov
+            ));
+        }
+        if !(c.aperture >= 0.0 && c.aperture.is_finite()) {
+            return Err(format!("camera aperture must be >= 0, got {}", c.aperture));
+        }
+        let up = right.cross(fwd);
+        let half_h = (c.fov.to_radians() * 0.5).tan() as f32;
+        let half_w = half_h * width as f32 / height.max(1) as f32;
+        let focus = c
+            .focus_distance
+            .unwrap_or_else(|| (c.look_at - c.location).length());
+        if !(focus > 0.0 && focus.is_finite()) {
+            return Err(format!(
+                "camera focus distance must be positive, got {focus}"
+            ));
+        }
+        Ok(Self {
+            origin: c.location.as_vec3a(),
+            forward: fwd.as_vec3a(),
+            right: right.as_vec3a(),
+            up: up.as_vec3a(),
+            half_w,
+            half_h,
+            lens_radius: c.aperture as f32,
+            focus: focus as f32,
+            width,
+            height,
+        })
+    }
+
+    /// The ray through pixel `(x, y)` (row 0 at the top) offset by `jitter` in [0,1)^2, with lens
+    /// sample `lens` in [0,1)^2. The direction is unit length.
+    pub fn ray(&self, x: u32, y: u32, jitter: Vec2, lens: Vec2) -> Ray {
+        let sx = ((x as f32 + jitter.x) / self.width as f32) * 2.0 - 1.0;
+        let sy = 1.0 - ((y as f32 + jitter.y) / self.height as f32) * 2.0;
+        let d = (self.forward + self.right * (sx * self.half_w) + self.up * (sy * self.half_h))
+            .normalize();
+        if self.lens_radius == 0.0 {
+            return Ray::new(self.origin, d);
+        }
+        let focus_point = self.origin + d * (self.focus / d.dot(self.forward));
+        let l = concentric_disk(lens) * self.lens_radius;
+        let o = self.origin + self.right * l.x + self.up * l.y;
+        Ray::new(o, (focus_point - o).normalize())
+    }
+}

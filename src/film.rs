@@ -1,0 +1,123 @@
+//! The image: linear RGB in f64, and writing it to PNG (sRGB, exposure) or EXR (linear).
+//! Files are written atomically: a temporary file in the target directory, then a rename.
+
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use image::{ImageFormat, Rgb, Rgb32FImage, RgbImage};
+
+/// A finished (or snapshot) image: linear RGB, row 0 at the top.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f64; 3]>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width as usize * height as usize],
+        }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> [f64; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Mean over all pixels, per channel.
+    pub fn mean(&self) -> [f64; 3] {
+        let n = self.pixels.len().max(1) as f64;
+        let s = self
+            .pixels
+            .iter()
+            .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+
+    /// Writes the image; the format follows the extension (`.png`, `.exr`). `exposure`
+    /// multiplies PNG values before the sRGB curve; EXR is written linear and unscaled.
+    pub fn write(&self, path: &Path, exposure: f64) -> Result<(), String> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let mut tmp = tempfile::Builder::new()
+            .prefix(".sppm-")
+            .suffix(&format!(".{ext}"))
+            .tempfile_in(dir)
+            .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
+        {
+            let mut w = BufWriter::new(tmp.as_file_mut());
+            match ext.as_str() {
+                "png" => {
+                    let img = RgbImage::from_fn(self.width, self.height, |x, y| {
+                        let p = self.get(x, y);
+                        Rgb(p.map(|v| encode_srgb(v * exposure)))
+                    });
+                    img.write_to(&mut w, ImageFormat::Png)
+                }
+                "exr" => {
+                    let img = Rgb32FImage::from_fn(self.width, self.height, |x, y| {
+                        Rgb(self.get(x, y).map(|v| v as f32))
+                    });
+                    img.write_to(&mut w, ImageFormat::OpenExr)
+                }
+                _ => {
+                    return Err(format!(
+                        "unknown image format `.{ext}` for `{}`: use .png or .exr",
+                        path.display()
+                    ));
+                }
+            }
+            .map_err(|e| format!("cannot encode `{}`: {e}", path.display()))?;
+            w.flush()
+                .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+        }
+        tmp.persist(path)
+            .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
+        Ok(())
+    }
+}
+
+/// Linear value to an 8-bit sRGB code (NaN maps to 0).
+pub fn encode_srgb(v: f64) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    let s = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_png_and_exr_atomically() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = Image::new(3, 2);
+        img.pixels[1] = [0.5, 1.0, 2.0];
+        for name in ["a.png", "a.exr"] {
+            let p = dir.path().join(name);
+            img.write(&p, 1.0).unwrap();
+            assert!(p.exists());
+        }
+        let back = image::open(dir.path().join("a.exr")).unwrap().to_rgb32f();
+        assert_eq!(back.get_pixel(1, 0).0, [0.5, 1.0, 2.0]);
+        assert!(img.write(&dir.path().join("a.bmp"), 1.0).is_err());
+        // Only the two outputs remain: no temporary left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+        assert_eq!(encode_srgb(1.0), 255);
+        assert_eq!(encode_srgb(f64::NAN), 0);
+    }
+}

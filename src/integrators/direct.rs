@@ -1,0 +1,65 @@
+//! Direct lighting at a non-specular surface point: one light sample (lights chosen by power)
+//! and one BSDF sample, combined with the power heuristic (MIS). Delta lights use light
+//! sampling alone; a BSDF sample that escapes sees the background color.
+
+use glam::Vec3A;
+
+use crate::accel::{spawn_ray, spawn_ray_to};
+use crate::materials::{Bsdf, TransportMode};
+use crate::render::{PreparedScene, SurfaceHit};
+use crate::sampling::{Rng, power_heuristic};
+
+/// Reflected direct radiance toward `wo`.
+pub fn direct_lighting(
+    scene: &PreparedScene,
+    sh: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3A,
+    rng: &mut Rng,
+) -> Vec3A {
+    let p = sh.hit.p;
+    let n = sh.hit.n;
+    let mut l = Vec3A::ZERO;
+    // Light sampling.
+    let uc = rng.f32();
+    let ul = rng.vec2();
+    if let Some((li, pl)) = scene.light_distr.sample(uc)
+        && let Some(ls) = scene.lights[li].sample_li(p, ul)
+    {
+        let f = bsdf.f(wo, ls.wi) * ls.wi.dot(bsdf.frame.n).abs();
+        if f != Vec3A::ZERO {
+            let (ray, t_max) = spawn_ray_to(p, n, ls.p, ls.n);
+            let t_max = if ls.delta { t_max * 0.9999 } else { t_max };
+            if !scene.occluded(&ray, t_max) {
+                let w = if ls.delta {
+                    1.0
+                } else {
+                    power_heuristic(pl * ls.pdf, bsdf.pdf(wo, ls.wi))
+                };
+                l += f * ls.li * (w / (pl * ls.pdf));
+            }
+        }
+    }
+    // BSDF sampling.
+    let uc = rng.f32();
+    let ub = rng.vec2();
+    if let Some(bs) = bsdf.sample(wo, uc, ub, TransportMode::Radiance)
+        && !bs.specular
+    {
+        let ray = spawn_ray(p, n, bs.wi);
+        match scene.intersect(&ray, f32::INFINITY) {
+            Some(h2) => {
+                if let Some((li, al)) = scene.area_light(h2.prim) {
+                    let le = al.le(h2.hit.n, -bs.wi);
+                    if le != Vec3A::ZERO {
+                        let light_pdf =
+                            scene.light_distr.pdf(li) * al.pdf_li(p, h2.hit.p, h2.hit.n);
+                        l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
+                    }
+                }
+            }
+            None => l += bs.weight * scene.background(),
+        }
+    }
+    l
+}

@@ -1,0 +1,71 @@
+//! Lights: point, spot, and area lights (one per emissive shape). Each can be sampled for
+//! direct lighting at a point (`sample_li`) and for photon emission (`sample_photon`).
+
+mod area;
+mod point;
+mod spot;
+
+pub use area::AreaLight;
+pub use point::PointLight;
+pub use spot::SpotLight;
+
+use glam::{Vec2, Vec3A};
+
+/// Incident light sampled at a receiving point.
+#[derive(Debug, Clone, Copy)]
+pub struct LightSample {
+    /// Unit direction from the receiver toward the light.
+    pub wi: Vec3A,
+    /// Incident radiance (area lights) or intensity / distance^2 (delta lights).
+    pub li: Vec3A,
+    /// Solid-angle density; 1 for delta lights.
+    pub pdf: f32,
+    /// The sampled point on the light and its normal (zero normal for point/spot lights).
+    pub p: Vec3A,
+    pub n: Vec3A,
+    pub delta: bool,
+}
+
+/// A photon leaving a light: origin, normal of the emitting surface (zero for delta lights),
+/// direction and flux weight `Le |cos| / pdf`.
+#[derive(Debug, Clone, Copy)]
+pub struct PhotonSample {
+    pub p: Vec3A,
+    pub n: Vec3A,
+    pub dir: Vec3A,
+    pub beta: Vec3A,
+}
+
+pub enum Light {
+    Point(PointLight),
+    Spot(SpotLight),
+    Area(AreaLight),
+}
+
+impl Light {
+    /// Emitted power (average over channels), for choosing lights in proportion to power.
+    pub fn power(&self) -> f64 {
+        let p = match self {
+            Light::Point(l) => l.power(),
+            Light::Spot(l) => l.power(),
+            Light::Area(l) => l.power(),
+        };
+        ((p.x + p.y + p.z) / 3.0) as f64
+    }
+
+    pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Point(l) => l.sample_li(p),
+            Light::Spot(l) => l.sample_li(p),
+            Light::Area(l) => l.sample_li(p, u),
+        }
+    }
+
+    pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
+        match self {
+            Light::Point(l) => l.sample_photon(u1),
+            Light::Spot(l) => l.sample_photon(u1),
+            Light::Area(l) => l.sample_photon(u1, u2),
+        }
+    }
+}

@@ -1,0 +1,145 @@
+//! BSDFs. A material evaluated at a hit becomes a [`Bsdf`] (plain `Copy` data, no heap) in a
+//! shading frame. Directions are world-space unit vectors pointing away from the surface.
+
+mod dielectric;
+mod diffuse;
+mod glossy;
+mod mirror;
+
+use glam::{Vec2, Vec3A};
+
+use crate::shapes::frame::Frame;
+
+/// Which quantity a path carries: camera paths carry radiance, photon paths importance
+/// (pbrt's TransportMode). Refraction scales radiance by 1/eta^2 but not importance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+/// The lobes a BSDF has, in local (shading-frame) coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lobes {
+    Diffuse {
+        albedo: Vec3A,
+    },
+    Mirror {
+        tint: Vec3A,
+    },
+    /// `eta`: inside over outside index of refraction.
+    Glass {
+        eta: f32,
+        tint: Vec3A,
+    },
+    Glossy {
+        albedo: Vec3A,
+        specular: Vec3A,
+        alpha: f32,
+    },
+}
+
+/// A BSDF at a surface point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bsdf {
+    pub lobes: Lobes,
+    /// Shading frame (normal = shading normal).
+    pub frame: Frame,
+    /// Geometric normal; decides reflection vs transmission.
+    pub ng: Vec3A,
+}
+
+/// A sampled direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BsdfSample {
+    pub wi: Vec3A,
+    /// `f * |cos| / pdf`: what the path throughput is multiplied by.
+    pub weight: Vec3A,
+    /// Solid-angle density (meaningless for specular samples).
+    pub pdf: f32,
+    pub specular: bool,
+}
+
+impl Bsdf {
+    pub fn new(lobes: Lobes, ns: Vec3A, dpdu: Vec3A, ng: Vec3A) -> Self {
+        Self {
+            lobes,
+            frame: Frame::from_normal_tangent(ns, dpdu),
+            ng,
+        }
+    }
+
+    /// Purely specular (delta) BSDFs: camera paths pass through them, photons never deposit.
+    pub fn is_specular(&self) -> bool {
+        matches!(self.lobes, Lobes::Mirror { .. } | Lobes::Glass { .. })
+    }
+
+    /// BSDF value for light arriving from `wi` and leaving toward `wo`.
+    pub fn f(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
+        if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
+            return Vec3A::ZERO; // no non-specular transmission
+        }
+        let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        if o.z * i.z <= 0.0 {
+            return Vec3A::ZERO;
+        }
+        match self.lobes {
+            Lobes::Diffuse { albedo } => diffuse::f(albedo),
+            Lobes::Glossy {
+                albedo,
+                specular,
+                alpha,
+            } => glossy::f(albedo, specular, alpha, o, i),
+            Lobes::Mirror { .. } | Lobes::Glass { .. } => Vec3A::ZERO,
+        }
+    }
+
+    /// Solid-angle density of [`Bsdf::sample`] choosing `wi`.
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
+            return 0.0;
+        }
+        let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        if o.z * i.z <= 0.0 {
+            return 0.0;
+        }
+        match self.lobes {
+            Lobes::Diffuse { .. } => diffuse::pdf(i),
+            Lobes::Glossy {
+                albedo,
+                specular,
+                alpha,
+            } => glossy::pdf(albedo, specular, alpha, o, i),
+            Lobes::Mirror { .. } | Lobes::Glass { .. } => 0.0,
+        }
+    }
+
+    /// Samples an incident direction for outgoing `wo`.
+    pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let o = self.frame.to_local(wo);
+        if o.z == 0.0 {
+            return None;
+        }
+        let s = match self.lobes {
+            Lobes::Diffuse { albedo } => diffuse::sample(albedo, o, u),
+            Lobes::Mirror { tint } => mirror::sample(tint, o),
+            Lobes::Glass { eta, tint } => dielectric::sample(eta, tint, o, uc, mode),
+            Lobes::Glossy {
+                albedo,
+                specular,
+                alpha,
+            } => glossy::sample(albedo, specular, alpha, o, uc, u),
+        }?;
+        let wi = self.frame.to_world(s.wi);
+        // Reject samples whose geometric side disagrees with the local decision (shading
+        // normals): reflection must stay on wo's side, refraction must cross.
+        let reflect = s.wi.z * o.z > 0.0;
+        if (wo.dot(self.ng) * wi.dot(self.ng) > 0.0) != reflect {
+            return None;
+        }
+        if !(s.weight.is_finite() && s.pdf.is_finite()) {
+            return None;
+        }
+        Some(BsdfSample { wi, ..s })
+    }
+}

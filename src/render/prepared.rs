@@ -1,0 +1,448 @@
+//! The prepared scene: world-space shapes in a BVH, lights with a power distribution, and the
+//! per-object data shading needs. Built once per render from a plain `Scene`.
+
+use glam::{Affine3A, DMat3, DVec3, Vec3A};
+
+use super::RenderError;
+use crate::accel::Bvh;
+use crate::geometry::{Hit, Ray};
+use crate::lights::{AreaLight, Light, PointLight, SpotLight};
+use crate::materials::{Bsdf, Lobes};
+use crate::sampling::Distribution1D;
+use crate::scene::{self, ColorParam, Material, ScalarParam, Scene};
+use crate::shapes::Shape;
+use crate::shapes::cuboid::cuboid_faces;
+use crate::shapes::cylinder::Cylinder;
+use crate::shapes::disk::Disk;
+use crate::shapes::mesh::mesh_triangles;
+use crate::shapes::patch::BezierPatch;
+use crate::shapes::plane::Plane;
+use crate::shapes::primitive::AnyShape;
+use crate::shapes::quad::Quad;
+use crate::shapes::revolve::Revolve;
+use crate::shapes::sphere::Sphere;
+use crate::shapes::transformed::Transformed;
+use crate::shapes::triangle::Triangle;
+use crate::textures::{self, TexCoord};
+
+const NO_LIGHT: u32 = u32::MAX;
+
+pub struct ObjectInfo {
+    pub material: usize,
+    /// World to object space (for texture lookups).
+    pub to_object: Affine3A,
+    pub normal_to_object: glam::Mat3A,
+}
+
+pub struct PreparedScene<'a> {
+    pub scene: &'a Scene,
+    pub bvh: Bvh,
+    /// Object of each primitive id.
+    pub prim_object: Vec<u32>,
+    /// Area light of each primitive id, or `u32::MAX`.
+    pub prim_light: Vec<u32>,
+    pub objects: Vec<ObjectInfo>,
+    pub lights: Vec<Light>,
+    pub light_distr: Distribution1D,
+}
+
+/// A surface hit with the primitive it belongs to.
+#[derive(Debug, Clone, Copy)]
+pub struct SurfaceHit {
+    pub hit: Hit,
+    pub prim: u32,
+}
+
+/// Uniform scale, rotation (possibly mirrored) and translation: returns the scale.
+fn similarity_scale(m: &DMat3) -> Option<f64> {
+    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+    let s = a.length();
+    let tol = 1e-9 * s.max(1e-300);
+    let ok = (b.length() - s).abs() <= tol * 10.0
+        && (c.length() - s).abs() <= tol * 10.0
+        && a.dot(b).abs() <= tol * s * 10.0
+        && a.dot(c).abs() <= tol * s * 10.0
+        && b.dot(c).abs() <= tol * s * 10.0;
+    (ok && s > 0.0 && s.is_finite()).then_some(s)
+}
+
+fn v(p: DVec3) -> Vec3A {
+    p.as_vec3a()
+}
+
+/// World-space shapes of one object.
+fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
+    let xf = &obj.transform;
+    let m = xf.matrix3;
+    let det = m.determinant();
+    if !(det.is_finite() && det.abs() > 1e-300) {
+        return Err("the object's transform is singular (a zero scale?)".into());
+    }
+    let nmat = m.inverse().transpose();
+    let mirrored = det < 0.0;
+    let sim = similarity_scale(&m);
+    let wrap = |s: Box<dyn Shape>| -> Result<AnyShape, String> {
+        Ok(AnyShape::Other(Box::new(Transformed::new(
+            s,
+            xf.as_affine3a(),
+        )?)))
+    };
+    let quad = |o: DVec3, u: DVec3, w: DVec3| -> Result<AnyShape, String> {
+        let (u, w) = if mirrored { (w, u) } else { (u, w) };
+        let o2 = xf.transform_point3(o);
+        Ok(AnyShape::Quad(Quad::new(
+            v(o2),
+            v(xf.transform_vector3(u)),
+            v(xf.transform_vector3(w)),
+        )?))
+    };
+    Ok(match &obj.shape {
+        scene::Shape::Sphere { center, radius } => match sim {
+            Some(s) => vec![AnyShape::Sphere(Sphere::new(
+                v(xf.transform_point3(*center)),
+                (radius * s) as f32,
+            )?)],
+            None => vec![wrap(Box::new(Sphere::new(v(*center), *radius as f32)?))?],
+        },
+        scene::Shape::Plane { normal, offset } => {
+            let p0 = xf.transform_point3(*normal * *offset / normal.length_squared().max(1e-300));
+            let n = (nmat * *normal).normalize_or_zero();
+            vec![AnyShape::Plane(Plane::new(v(n), n.dot(p0) as f32)?)]
+        }
+        scene::Shape::Quad {
+            origin,
+            edge_u,
+            edge_v,
+        } => vec![quad(*origin, *edge_u, *edge_v)?],
+        scene::Shape::Box { min, max } => {
+            let to_world = |p: Vec3A| v(xf.transform_point3(p.as_dvec3()));
+            cuboid_faces(v(*min), v(*max), to_world, mirrored)?
+                .into_iter()
+                .map(AnyShape::Quad)
+                .collect()
+        }
+        scene::Shape::Disk {
+            center,
+            normal,
+            radius,
+        } => match sim {
+            Some(s) => vec![AnyShape::Disk(Disk::new(
+                v(xf.transform_point3(*center)),
+                v(nmat * *normal),
+                (radius * s) as f32,
+            )?)],
+            None => vec![wrap(Box::new(Disk::new(
+                v(*center),
+                v(*normal),
+                *radius as f32,
+            )?))?],
+        },
+        scene::Shape::Cylinder {
+            base,
+            cap,
+            radius,
+            open,
+        } => {
+            let axis = *cap - *base;
+            let parts: Vec<(DVec3, DVec3, bool)> = if *open {
+                vec![]
+            } else {
+                vec![(*base, -axis, true), (*cap, axis, true)]
+            };
+            let mut out = Vec::new();
+            match sim {
+                Some(s) => {
+                    let (b, c) = (xf.transform_point3(*base), xf.transform_point3(*cap));
+                    out.push(AnyShape::Cylinder(Cylinder::new(
+                        v(b),
+                        v(c),
+                        (radius * s) as f32,
+                    )?));
+                    for (p, n, _) in parts {
+                        out.push(AnyShape::Disk(Disk::new(
+                            v(xf.transform_point3(p)),
+                            v(nmat * n),
+                            (radius * s) as f32,
+                        )?));
+                    }
+                }
+                None => {
+                    out.push(wrap(Box::new(Cylinder::new(
+                        v(*base),
+                        v(*cap),
+                        *radius as f32,
+                    )?))?);
+                    for (p, n, _) in parts {
+                        out.push(wrap(Box::new(Disk::new(v(p), v(n), *radius as f32)?))?);
+                    }
+                }
+            }
+            out
+        }
+        scene::Shape::Triangle { vertices } => {
+            let mut p = vertices.map(|q| v(xf.transform_point3(q)));
+            if mirrored {
+                p.swap(1, 2);
+            }
+            vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
+        }
+        scene::Shape::Mesh { mesh } => {
+            let tris = mesh_triangles(mesh, xf)?;
+            if tris.is_empty() {
+                return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
+            }
+            tris.into_iter().map(AnyShape::Triangle).collect()
+        }
+        scene::Shape::Revolve {
+            profile,
+            sweep,
+            method,
+        } => vec![wrap(Box::new(Revolve::new(profile, *sweep, *method)?))?],
+        scene::Shape::BezierPatch { points, method } => {
+            vec![wrap(Box::new(BezierPatch::new(points, *method)?))?]
+        }
+    })
+}
+
+fn color3(c: DVec3) -> Vec3A {
+    c.as_vec3a()
+}
+
+impl<'a> PreparedScene<'a> {
+    pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+        let mut shapes = Vec::new();
+        let mut prim_object = Vec::new();
+        let mut prim_light = Vec::new();
+        let mut lights = Vec::new();
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            let err = |message: String| RenderError {
+                message: format!("{}: {message}", obj.shape.kind()),
+                span: Some(obj.span),
+            };
+            if obj.material.0 as usize >= scene.materials.len() {
+                return Err(err("unknown material".into()));
+            }
+            let list = build_shapes(obj).map_err(err)?;
+            let emission = obj
+                .emission
+                .filter(|e| e.radiance.is_finite() && e.radiance.max_element() > 0.0);
+            if let Some(e) = obj.emission
+                && !(e.radiance.is_finite() && e.radiance.min_element() >= 0.0)
+            {
+                return Err(err("emission must be finite and non-negative".into()));
+            }
+            let light_shapes = if emission.is_some() {
+                Some(build_shapes(obj).map_err(err)?)
+            } else {
+                None
+            };
+            let mut light_shapes = light_shapes.map(|l| l.into_iter());
+            for s in list {
+                let id = shapes.len() as u32;
+                let mut light = NO_LIGHT;
+                if let (Some(e), Some(ls)) = (emission, light_shapes.as_mut()) {
+                    let ls = ls.next().expect("same shapes twice");
+                    let area = ls.area();
+                    if !(area.is_finite() && area > 0.0) || ls.sample(glam::Vec2::ZERO).is_none() {
+                        return Err(err(
+                            "this emissive shape cannot be sampled as a light (infinite, or a \
+                             transform other than translate/rotate/uniform scale)"
+                                .into(),
+                        ));
+                    }
+                    light = lights.len() as u32;
+                    lights.push(Light::Area(AreaLight {
+                        shape: ls,
+                        radiance: color3(e.radiance),
+                        two_sided: e.two_sided,
+                        area,
+                    }));
+                }
+                shapes.push((s, id));
+                prim_object.push(oi as u32);
+                prim_light.push(light);
+            }
+            let inv = obj.transform.inverse();
+            objects.push(ObjectInfo {
+                material: obj.material.0 as usize,
+                to_object: inv.as_affine3a(),
+                normal_to_object: glam::Mat3A::from(obj.transform.matrix3.transpose().as_mat3()),
+            });
+        }
+        for l in &scene.lights {
+            match l {
+                scene::Light::Point {
+                    position,
+                    intensity,
+                    span,
+                } => {
+                    if !(position.is_finite()
+                        && intensity.is_finite()
+                        && intensity.min_element() >= 0.0)
+                    {
+                        return Err(RenderError {
+                            message: "point light: position and intensity must be finite, intensity non-negative".into(),
+                            span: Some(*span),
+                        });
+                    }
+                    lights.push(Light::Point(PointLight {
+                        position: v(*position),
+                        intensity: color3(*intensity),
+                    }))
+                }
+                scene::Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_angle,
+                    falloff_angle,
+                    span,
+                } => {
+                    if !(position.is_finite()
+                        && intensity.is_finite()
+                        && intensity.min_element() >= 0.0
+                        && direction.length() > 0.0
+                        && cone_angle.is_finite()
+                        && falloff_angle.is_finite())
+                    {
+                        return Err(RenderError {
+                            message: "spot light: invalid position, direction, intensity or angle"
+                                .into(),
+                            span: Some(*span),
+                        });
+                    }
+                    lights.push(Light::Spot(SpotLight::new(
+                        v(*position),
+                        v(*direction),
+                        color3(*intensity),
+                        *cone_angle as f32,
+                        *falloff_angle as f32,
+                    )))
+                }
+            }
+        }
+        let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
+        Ok(Self {
+            scene,
+            bvh: Bvh::new(shapes),
+            prim_object,
+            prim_light,
+            objects,
+            lights,
+            light_distr,
+        })
+    }
+
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        self.bvh
+            .intersect(ray, 0.0, t_max)
+            .map(|(hit, prim)| SurfaceHit { hit, prim })
+    }
+
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.bvh.occluded(ray, 0.0, t_max)
+    }
+
+    /// The area light a primitive belongs to.
+    #[inline]
+    pub fn area_light(&self, prim: u32) -> Option<(usize, &AreaLight)> {
+        let l = *self.prim_light.get(prim as usize)?;
+        if l == NO_LIGHT {
+            return None;
+        }
+        match &self.lights[l as usize] {
+            Light::Area(a) => Some((l as usize, a)),
+            _ => None,
+        }
+    }
+
+    pub fn material(&self, prim: u32) -> &Material {
+        let o = &self.objects[self.prim_object[prim as usize] as usize];
+        &self.scene.materials[o.material]
+    }
+
+    fn tex_coord(&self, sh: &SurfaceHit) -> TexCoord {
+        let o = &self.objects[self.prim_object[sh.prim as usize] as usize];
+        TexCoord {
+            p: o.to_object.transform_point3a(sh.hit.p),
+            n: (o.normal_to_object * sh.hit.ns).normalize_or_zero(),
+            uv: sh.hit.uv,
+        }
+    }
+
+    fn color(&self, p: &ColorParam, sh: &SurfaceHit) -> Vec3A {
+        match p {
+            ColorParam::Const(c) => color3(*c),
+            ColorParam::Texture(t) => {
+                textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh))
+            }
+        }
+    }
+
+    fn scalar(&self, p: &ScalarParam, sh: &SurfaceHit) -> f32 {
+        match p {
+            ScalarParam::Const(c) => *c as f32,
+            ScalarParam::Texture(t) => {
+                let c = textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh));
+                0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+            }
+        }
+    }
+
+    /// The BSDF at a hit.
+    pub fn bsdf(&self, sh: &SurfaceHit) -> Bsdf {
+        let clamp01 = |c: Vec3A| c.clamp(Vec3A::ZERO, Vec3A::ONE);
+        let lobes = match self.material(sh.prim) {
+            Material::Diffuse { albedo } => Lobes::Diffuse {
+                albedo: clamp01(self.color(albedo, sh)),
+            },
+            Material::Mirror { tint } => Lobes::Mirror {
+                tint: clamp01(self.color(tint, sh)),
+            },
+            Material::Glass { ior, tint, .. } => Lobes::Glass {
+                eta: if ior.is_finite() && *ior > 0.0 {
+                    *ior as f32
+                } else {
+                    1.0
+                },
+                tint: clamp01(color3(*tint)),
+            },
+            Material::Glossy {
+                albedo,
+                specular,
+                roughness,
+            } => {
+                let r = self.scalar(roughness, sh).clamp(0.0, 1.0);
+                Lobes::Glossy {
+                    albedo: clamp01(self.color(albedo, sh)),
+                    specular: clamp01(self.color(specular, sh)),
+                    alpha: (r * r).max(1e-3),
+                }
+            }
+        };
+        Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n)
+    }
+
+    /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
+    pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
+        match self.material(sh.prim) {
+            Material::Glass { absorb, .. } => {
+                let a = self.color(absorb, sh).max(Vec3A::ZERO);
+                (a != Vec3A::ZERO && a.is_finite()).then_some(a)
+            }
+            _ => None,
+        }
+    }
+
+    /// The radiance a ray that leaves the scene sees.
+    pub fn background(&self) -> Vec3A {
+        match &self.scene.background {
+            scene::Background::Color(c) => color3(*c),
+            // Environment lighting is not implemented: see docs/renderer.md.
+            scene::Background::Environment { .. } => Vec3A::ZERO,
+        }
+    }
+}

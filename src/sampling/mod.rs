@@ -1,0 +1,13 @@
+//! Random numbers and sample warps. Every stream is seeded from (seed, iteration, index), never
+//! from a thread or from entropy, so renders are identical for any thread count.
+
+mod distribution;
+mod rng;
+mod warp;
+
+pub use distribution::Distribution1D;
+pub use rng::{Rng, stream_seed};
+pub use warp::{
+    concentric_disk, cosine_hemisphere, power_heuristic, uniform_cone, uniform_cone_pdf,
+    uniform_sphere, uniform_triangle,
+};

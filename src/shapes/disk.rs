@@ -1,0 +1,88 @@
+//! Flat disk.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3A};
+
+use super::frame::Frame;
+use super::{AreaSample, Shape};
+use crate::geometry::{Aabb, Hit, Ray};
+use crate::sampling::concentric_disk;
+
+#[derive(Debug, Clone, Copy)]
+pub struct Disk {
+    center: Vec3A,
+    frame: Frame,
+    radius: f32,
+}
+
+impl Disk {
+    pub fn new(center: Vec3A, normal: Vec3A, radius: f32) -> Result<Self, String> {
+        let len = normal.length();
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(format!("disk radius must be positive, got {radius}"));
+        }
+        if !(len.is_finite() && len > 0.0) || !center.is_finite() {
+            return Err("disk normal must be a non-zero vector".into());
+        }
+        Ok(Self {
+            center,
+            frame: Frame::from_normal(normal / len),
+            radius,
+        })
+    }
+}
+
+impl Shape for Disk {
+    fn bounds(&self) -> Aabb {
+        let n = self.frame.n;
+        let e = (Vec3A::ONE - n * n).max(Vec3A::ZERO).powf(0.5) * self.radius;
+        Aabb::new(self.center - e, self.center + e)
+    }
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let n = self.frame.n;
+        let denom = n.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = n.dot(self.center - ray.o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let p = ray.at(t);
+        let l = self.frame.to_local(p - self.center);
+        let r2 = l.x * l.x + l.y * l.y;
+        if r2 > self.radius * self.radius {
+            return None;
+        }
+        let phi = l.y.atan2(l.x);
+        let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+        let dpdu = self.frame.t * l.x - self.frame.s * l.y;
+        Some(Hit {
+            t,
+            p,
+            n,
+            ns: n,
+            uv: Vec2::new(phi / (2.0 * PI), 1.0 - r2.sqrt() / self.radius),
+            dpdu: if dpdu.length_squared() > 0.0 {
+                dpdu * (2.0 * PI)
+            } else {
+                self.frame.s
+            },
+        })
+    }
+
+    fn area(&self) -> f32 {
+        PI * self.radius * self.radius
+    }
+
+    fn sample(&self, u: Vec2) -> Option<AreaSample> {
+        let d = concentric_disk(u) * self.radius;
+        Some(AreaSample {
+            p: self.center + self.frame.s * d.x + self.frame.t * d.y,
+            n: self.frame.n,
+            pdf: 1.0 / self.area(),
+        })
+    }
+}

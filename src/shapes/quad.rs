@@ -1,0 +1,84 @@
+//! Parallelogram `origin + s*edge_u + t*edge_v`.
+
+use glam::{Vec2, Vec3A};
+
+use super::{AreaSample, Shape};
+use crate::geometry::{Aabb, Hit, Ray};
+
+#[derive(Debug, Clone, Copy)]
+pub struct Quad {
+    origin: Vec3A,
+    eu: Vec3A,
+    ev: Vec3A,
+    n: Vec3A,
+    /// `cross / |cross|^2`, for the (s, t) solve.
+    w: Vec3A,
+    area: f32,
+}
+
+impl Quad {
+    pub fn new(origin: Vec3A, eu: Vec3A, ev: Vec3A) -> Result<Self, String> {
+        let c = eu.cross(ev);
+        let area = c.length();
+        if !(area.is_finite() && area > 0.0) || !origin.is_finite() {
+            return Err("quad edges are parallel or degenerate (zero area)".into());
+        }
+        Ok(Self {
+            origin,
+            eu,
+            ev,
+            n: c / area,
+            w: c / c.length_squared(),
+            area,
+        })
+    }
+}
+
+impl Shape for Quad {
+    fn bounds(&self) -> Aabb {
+        Aabb::from_points([
+            self.origin,
+            self.origin + self.eu,
+            self.origin + self.ev,
+            self.origin + self.eu + self.ev,
+        ])
+    }
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let denom = self.n.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = self.n.dot(self.origin - ray.o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let p = ray.at(t);
+        let q = p - self.origin;
+        let s = self.w.dot(q.cross(self.ev));
+        let v = self.w.dot(self.eu.cross(q));
+        if !((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&v)) {
+            return None;
+        }
+        Some(Hit {
+            t,
+            p,
+            n: self.n,
+            ns: self.n,
+            uv: Vec2::new(s, v),
+            dpdu: self.eu,
+        })
+    }
+
+    fn area(&self) -> f32 {
+        self.area
+    }
+
+    fn sample(&self, u: Vec2) -> Option<AreaSample> {
+        Some(AreaSample {
+            p: self.origin + self.eu * u.x + self.ev * u.y,
+            n: self.n,
+            pdf: 1.0 / self.area,
+        })
+    }
+}

@@ -1,0 +1,82 @@
+//! A shape under a general affine transform: rays go to object space, hits come back.
+
+use glam::{Affine3A, Mat3A, Vec2};
+
+use super::{AreaSample, Shape};
+use crate::geometry::{Aabb, Hit, Ray};
+
+pub struct Transformed {
+    inner: Box<dyn Shape>,
+    to_world: Affine3A,
+    to_object: Affine3A,
+    /// Inverse transpose of the linear part: maps normals.
+    normal_matrix: Mat3A,
+}
+
+impl Transformed {
+    pub fn new(inner: Box<dyn Shape>, to_world: Affine3A) -> Result<Self, String> {
+        let det = to_world.matrix3.determinant();
+        if !(det.is_finite() && det.abs() > 1e-12) {
+            return Err("the object's transform is singular (a zero scale?)".into());
+        }
+        let to_object = to_world.inverse();
+        Ok(Self {
+            inner,
+            to_world,
+            to_object,
+            normal_matrix: to_object.matrix3.transpose(),
+        })
+    }
+}
+
+impl Shape for Transformed {
+    fn bounds(&self) -> Aabb {
+        let b = self.inner.bounds();
+        if b.is_empty() {
+            return b;
+        }
+        Aabb::from_points((0..8).map(|i| {
+            let c = glam::Vec3A::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x },
+                if i & 2 == 0 { b.min.y } else { b.max.y },
+                if i & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            self.to_world.transform_point3a(c)
+        }))
+    }
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        // An affine map keeps the ray parameter t.
+        let r = Ray::new(
+            self.to_object.transform_point3a(ray.o),
+            self.to_object.transform_vector3a(ray.d),
+        );
+        let h = self.inner.intersect(&r, t_min, t_max)?;
+        Some(Hit {
+            t: h.t,
+            p: self.to_world.transform_point3a(h.p),
+            n: (self.normal_matrix * h.n).normalize(),
+            ns: (self.normal_matrix * h.ns).normalize(),
+            uv: h.uv,
+            dpdu: self.to_world.transform_vector3a(h.dpdu),
+        })
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        let r = Ray::new(
+            self.to_object.transform_point3a(ray.o),
+            self.to_object.transform_vector3a(ray.d),
+        );
+        self.inner.occluded(&r, t_min, t_max)
+    }
+
+    /// Not known in closed form for a general affine map: emissive objects need a transform
+    /// the renderer can bake (see `render::prepared`).
+    fn area(&self) -> f32 {
+        0.0
+    }
+
+    fn sample(&self, _u: Vec2) -> Option<AreaSample> {
+        None
+    }
+}

@@ -1,0 +1,117 @@
+//! Triangle (Möller–Trumbore), with optional per-vertex normals and uvs (mesh triangles).
+
+use glam::{Vec2, Vec3A};
+
+use super::{AreaSample, Shape};
+use crate::geometry::{Aabb, Hit, Ray};
+use crate::sampling::uniform_triangle;
+
+#[derive(Debug, Clone, Copy)]
+pub struct Triangle {
+    p: [Vec3A; 3],
+    n: Vec3A,
+    normals: Option<[Vec3A; 3]>,
+    uvs: [Vec2; 3],
+    area: f32,
+}
+
+impl Triangle {
+    pub fn new(
+        p: [Vec3A; 3],
+        normals: Option<[Vec3A; 3]>,
+        uvs: Option<[Vec2; 3]>,
+    ) -> Result<Self, String> {
+        let c = (p[1] - p[0]).cross(p[2] - p[0]);
+        let len = c.length();
+        if !(len.is_finite() && len > 0.0) {
+            return Err("triangle is degenerate (zero area)".into());
+        }
+        let normals = normals.filter(|ns| ns.iter().all(|v| v.is_finite() && v.length() > 0.0));
+        Ok(Self {
+            p,
+            n: c / len,
+            normals: normals.map(|ns| ns.map(|v| v.normalize())),
+            uvs: uvs.unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]),
+            area: 0.5 * len,
+        })
+    }
+}
+
+impl Shape for Triangle {
+    fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.p)
+    }
+
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let e1 = self.p[1] - self.p[0];
+        let e2 = self.p[2] - self.p[0];
+        let pv = ray.d.cross(e2);
+        let det = e1.dot(pv);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let tv = ray.o - self.p[0];
+        let b1 = tv.dot(pv) * inv;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let qv = tv.cross(e1);
+        let b2 = ray.d.dot(qv) * inv;
+        if b2 < 0.0 || b1 + b2 > 1.0 {
+            return None;
+        }
+        let t = e2.dot(qv) * inv;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let b0 = 1.0 - b1 - b2;
+        let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
+        let ns = match self.normals {
+            Some(ns) => {
+                let s = (ns[0] * b0 + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
+                if s == Vec3A::ZERO {
+                    self.n
+                } else if s.dot(self.n) < 0.0 {
+                    // Keep the shading normal on the geometric normal's side.
+                    (s - self.n * (2.0 * s.dot(self.n))).normalize()
+                } else {
+                    s
+                }
+            }
+            None => self.n,
+        };
+        let uv = self.uvs[0] * b0 + self.uvs[1] * b1 + self.uvs[2] * b2;
+        // dp/du from the uv parameterisation when it is not degenerate.
+        let duv1 = self.uvs[1] - self.uvs[0];
+        let duv2 = self.uvs[2] - self.uvs[0];
+        let d = duv1.x * duv2.y - duv1.y * duv2.x;
+        let dpdu = if d.abs() > 1e-12 {
+            (e1 * duv2.y - e2 * duv1.y) / d
+        } else {
+            e1
+        };
+        Some(Hit {
+            t,
+            p,
+            n: self.n,
+            ns,
+            uv,
+            dpdu,
+        })
+    }
+
+    fn area(&self) -> f32 {
+        self.area
+    }
+
+    fn sample(&self, u: Vec2) -> Option<AreaSample> {
+        let b = uniform_triangle(u);
+        Some(AreaSample {
+            p: self.p[0] * b.x + self.p[1] * b.y + self.p[2] * (1.0 - b.x - b.y),
+            n: self.n,
+            pdf: 1.0 / self.area,
+        })
+    }
+}

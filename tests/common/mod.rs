@@ -1,0 +1,233 @@
+//! Scenes built directly in Rust for the renderer tests and the benchmark.
+#![allow(dead_code)]
+
+use glam::{DAffine3, DVec3};
+use sppm_lang::scene::{
+    Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, Scene, Settings,
+    Shape,
+};
+use sppm_lang::span::Span;
+
+pub fn empty_scene(res: (u32, u32)) -> Scene {
+    Scene {
+        settings: Settings {
+            resolution: res,
+            ..Settings::default()
+        },
+        camera: Camera::default(),
+        objects: Vec::new(),
+        lights: Vec::new(),
+        materials: Vec::new(),
+        textures: Vec::new(),
+        background: Background::Color(DVec3::ZERO),
+        dependencies: Vec::new(),
+    }
+}
+
+pub fn add_material(s: &mut Scene, m: Material) -> MaterialId {
+    s.materials.push(m);
+    MaterialId(s.materials.len() as u32 - 1)
+}
+
+pub fn diffuse(s: &mut Scene, albedo: f64) -> MaterialId {
+    add_material(
+        s,
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::splat(albedo)),
+        },
+    )
+}
+
+pub fn add_object(s: &mut Scene, shape: Shape, material: MaterialId, emission: Option<Emission>) {
+    s.objects.push(Object {
+        shape,
+        transform: DAffine3::IDENTITY,
+        material,
+        emission,
+        span: Span::detached(),
+    });
+}
+
+pub fn sphere(center: DVec3, radius: f64) -> Shape {
+    Shape::Sphere { center, radius }
+}
+
+/// Camera at the center of a unit sphere, looking along +z.
+pub fn inside_camera() -> Camera {
+    Camera {
+        location: DVec3::ZERO,
+        look_at: DVec3::Z,
+        up: DVec3::Y,
+        fov: 90.0,
+        aperture: 0.0,
+        focus_distance: None,
+    }
+}
+
+/// Furnace (a): a unit sphere, diffuse albedo 0.5 inside, emitting radiance 0.5.
+pub fn furnace_emitting(res: u32) -> Scene {
+    let mut s = empty_scene((res, res));
+    let m = diffuse(&mut s, 0.5);
+    add_object(
+        &mut s,
+        sphere(DVec3::ZERO, 1.0),
+        m,
+        Some(Emission {
+            radiance: DVec3::splat(0.5),
+            two_sided: true,
+        }),
+    );
+    s.camera = inside_camera();
+    s
+}
+
+/// Furnace (b): the same sphere, not emitting, a point light of intensity pi at the center.
+pub fn furnace_point(res: u32) -> Scene {
+    let mut s = empty_scene((res, res));
+    let m = diffuse(&mut s, 0.5);
+    add_object(&mut s, sphere(DVec3::ZERO, 1.0), m, None);
+    s.lights.push(Light::Point {
+        position: DVec3::ZERO,
+        intensity: DVec3::splat(std::f64::consts::PI),
+        span: Span::detached(),
+    });
+    s.camera = inside_camera();
+    s
+}
+
+/// Furnace (c): a diffuse sphere of albedo `a` inside a black enclosure emitting radiance 1.
+pub fn furnace_enclosure(res: u32, a: f64) -> Scene {
+    let mut s = empty_scene((res, res));
+    let black = diffuse(&mut s, 0.0);
+    let grey = diffuse(&mut s, a);
+    add_object(
+        &mut s,
+        sphere(DVec3::ZERO, 10.0),
+        black,
+        Some(Emission {
+            radiance: DVec3::ONE,
+            two_sided: true,
+        }),
+    );
+    add_object(&mut s, sphere(DVec3::ZERO, 1.0), grey, None);
+    s.camera = Camera {
+        location: DVec3::new(0.0, 0.0, -5.0),
+        look_at: DVec3::ZERO,
+        up: DVec3::Y,
+        fov: 30.0,
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    s
+}
+
+fn quad(origin: DVec3, edge_u: DVec3, edge_v: DVec3) -> Shape {
+    Shape::Quad {
+        origin,
+        edge_u,
+        edge_v,
+    }
+}
+
+/// The Cornell box with a glass and a mirror sphere, exactly as
+/// /work/shared/reference/cornell-glass/README.md describes it.
+pub fn cornell_glass(res: u32) -> Scene {
+    let mut s = empty_scene((res, res));
+    let white = add_material(
+        &mut s,
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::new(0.725, 0.71, 0.68)),
+        },
+    );
+    let red = add_material(
+        &mut s,
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::new(0.63, 0.065, 0.05)),
+        },
+    );
+    let green = add_material(
+        &mut s,
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::new(0.14, 0.45, 0.091)),
+        },
+    );
+    let black = diffuse(&mut s, 0.0);
+    let glass = add_material(
+        &mut s,
+        Material::Glass {
+            ior: 1.5,
+            absorb: ColorParam::Const(DVec3::ZERO),
+            tint: DVec3::ONE,
+        },
+    );
+    let mirror = add_material(
+        &mut s,
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::ONE),
+        },
+    );
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    // Floor, ceiling, back wall, left, right (two-sided diffuse).
+    add_object(
+        &mut s,
+        quad(DVec3::new(-1.0, 0.0, -1.0), 2.0 * z, 2.0 * x),
+        white,
+        None,
+    );
+    add_object(
+        &mut s,
+        quad(DVec3::new(-1.0, 2.0, -1.0), 2.0 * x, 2.0 * z),
+        white,
+        None,
+    );
+    add_object(
+        &mut s,
+        quad(DVec3::new(-1.0, 0.0, -1.0), 2.0 * x, 2.0 * y),
+        white,
+        None,
+    );
+    add_object(
+        &mut s,
+        quad(DVec3::new(-1.0, 0.0, -1.0), 2.0 * y, 2.0 * z),
+        red,
+        None,
+    );
+    add_object(
+        &mut s,
+        quad(DVec3::new(1.0, 0.0, -1.0), 2.0 * z, 2.0 * y),
+        green,
+        None,
+    );
+    // Light: normal edge_u x edge_v = x' x z' ... choose edges so the normal is -y.
+    add_object(
+        &mut s,
+        quad(DVec3::new(-0.25, 1.98, -0.25), 0.5 * x, 0.5 * z),
+        black,
+        Some(Emission {
+            radiance: DVec3::new(17.0, 12.0, 4.0),
+            two_sided: false,
+        }),
+    );
+    add_object(
+        &mut s,
+        sphere(DVec3::new(0.42, 0.35, 0.25), 0.35),
+        glass,
+        None,
+    );
+    add_object(
+        &mut s,
+        sphere(DVec3::new(-0.45, 0.35, -0.4), 0.35),
+        mirror,
+        None,
+    );
+    s.camera = Camera {
+        location: DVec3::new(0.0, 1.0, 3.9),
+        look_at: DVec3::new(0.0, 1.0, 0.0),
+        up: DVec3::Y,
+        fov: 40.0,
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    s.settings.max_depth = 16;
+    s
+}

@@ -1,0 +1,242 @@
+//! Analytic furnace scenes (as in pbrt-v4's integrator tests), the corner bias scene, no NaN.
+
+mod common;
+
+use std::sync::atomic::AtomicBool;
+
+use common::*;
+use glam::{DVec3, Vec2};
+use sppm_lang::camera::Camera;
+use sppm_lang::film::Image;
+use sppm_lang::render::{RenderOptions, render};
+use sppm_lang::scene::{Material, Scene, Shape};
+use sppm_lang::shapes::Shape as _;
+use sppm_lang::shapes::sphere::Sphere;
+
+fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
+    let opts = RenderOptions {
+        iterations: Some(iterations),
+        photons: Some(photons),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let out = render(scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
+    assert_eq!(out.iterations_done, iterations);
+    out.image
+}
+
+fn assert_finite(img: &Image) {
+    for (i, p) in img.pixels.iter().enumerate() {
+        assert!(
+            p.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "pixel {i}: {p:?}"
+        );
+    }
+}
+
+/// Mean and worst per-pixel relative error against `expected`, over pixels `select` keeps.
+fn errors(img: &Image, expected: impl Fn(u32, u32) -> Option<f64>) -> (f64, f64, usize) {
+    let (mut sum, mut sum_e, mut worst, mut n) = (0.0, 0.0, 0.0f64, 0usize);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            if let Some(e) = expected(x, y) {
+                let p = img.get(x, y);
+                for c in p {
+                    worst = worst.max((c - e).abs() / e);
+                    sum += c;
+                    sum_e += e;
+                }
+                n += 1;
+            }
+        }
+    }
+    ((sum - sum_e).abs() / sum_e, worst, n)
+}
+
+#[test]
+fn furnace_a_emitting_sphere_converges_to_one() {
+    // On a sphere the gather disc is exact (a cap of chord r has area pi r^2): a large radius
+    // adds no bias, only lowers the noise.
+    let mut s = furnace_emitting(16);
+    s.settings.radius = Some(0.25);
+    let img = run(&s, 128, 20_000);
+    assert_finite(&img);
+    let (mean, worst, n) = errors(&img, |_, _| Some(1.0));
+    println!(
+        "furnace (a): mean {:?}, mean rel err {mean:.4}, worst pixel rel err {worst:.4} over {n} px",
+        img.mean()
+    );
+    assert!(mean < 0.01 && worst < 0.03);
+}
+
+#[test]
+fn furnace_b_point_light_converges_to_one() {
+    let mut s = furnace_point(16);
+    s.settings.radius = Some(0.25);
+    let img = run(&s, 128, 20_000);
+    assert_finite(&img);
+    let (mean, worst, n) = errors(&img, |_, _| Some(1.0));
+    println!(
+        "furnace (b): mean {:?}, mean rel err {mean:.4}, worst pixel rel err {worst:.4} over {n} px",
+        img.mean()
+    );
+    assert!(mean < 0.01 && worst < 0.03);
+}
+
+#[test]
+fn furnace_c_sphere_in_emitting_enclosure() {
+    let a = 0.6;
+    let res = 16;
+    let scene = furnace_enclosure(res, a);
+    // All light here is direct (the enclosure is black): photons carry nothing.
+    let img = run(&scene, 1024, 100);
+    assert_finite(&img);
+    // Classify pixels by whether all four corners hit the unit sphere (or none does).
+    let cam = Camera::new(&scene.camera, res, res).unwrap();
+    let sphere = Sphere::new(glam::Vec3A::ZERO, 1.0).unwrap();
+    let class = |x: u32, y: u32| {
+        let hits = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .iter()
+            .filter(|(u, v)| {
+                let r = cam.ray(x, y, Vec2::new(*u, *v), Vec2::ZERO);
+                sphere.intersect(&r, 0.0, f32::INFINITY).is_some()
+            })
+            .count();
+        match hits {
+            4 => Some(a),
+            0 => Some(1.0),
+            _ => None,
+        }
+    };
+    let (mean_s, worst_s, ns) = errors(&img, |x, y| class(x, y).filter(|&e| e == a));
+    let (mean_b, worst_b, nb) = errors(&img, |x, y| class(x, y).filter(|&e| e == 1.0));
+    println!(
+        "furnace (c): sphere mean rel err {mean_s:.4} worst {worst_s:.4} ({ns} px); enclosure mean rel err {mean_b:.4} worst {worst_b:.4} ({nb} px)"
+    );
+    assert!(ns > 40 && nb > 40);
+    assert!(mean_s < 0.01 && worst_s < 0.03);
+    assert!(mean_b < 0.01 && worst_b < 0.03);
+}
+
+/// A diffuse floor meeting a mirror wall at 90 degrees under a point light. Photons that
+/// bounce off the mirror light the floor like a mirror-image light, and only photons carry that
+/// term (max depth 2 excludes floor-mirror-floor interreflection). Near the wall the gather
+/// disc reaches past the floor, so the estimate is biased there; the bias shrinks with the
+/// radius (alpha = 1 keeps the radius fixed).
+#[test]
+fn corner_bias_shrinks_with_radius() {
+    let res = 24;
+    let mut s = empty_scene((res, res));
+    let floor_m = diffuse(&mut s, 0.5);
+    let mirror = add_material(
+        &mut s,
+        Material::Mirror {
+            tint: sppm_lang::scene::ColorParam::Const(DVec3::ONE),
+        },
+    );
+    // Floor y = 0, x in [0, 2]; mirror wall x = 0 facing +x.
+    add_object(
+        &mut s,
+        Shape::Quad {
+            origin: DVec3::new(0.0, 0.0, -1.0),
+            edge_u: DVec3::Z * 2.0,
+            edge_v: DVec3::X * 2.0,
+        },
+        floor_m,
+        None,
+    );
+    add_object(
+        &mut s,
+        Shape::Quad {
+            origin: DVec3::new(0.0, 0.0, -1.0),
+            edge_u: DVec3::Y * 2.0,
+            edge_v: DVec3::Z * 2.0,
+        },
+        mirror,
+        None,
+    );
+    let intensity = 4.0;
+    s.lights.push(sppm_lang::scene::Light::Point {
+        position: DVec3::new(1.0, 1.0, 0.0),
+        intensity: DVec3::splat(intensity),
+        span: sppm_lang::span::Span::detached(),
+    });
+    // Look straight down at the strip x in [0, 0.6].
+    s.camera = sppm_lang::scene::Camera {
+        location: DVec3::new(0.3, 3.0, 0.0),
+        look_at: DVec3::new(0.3, 0.0, 0.0),
+        up: DVec3::X,
+        fov: 11.4,
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    s.settings.max_depth = 2;
+    s.settings.alpha = 1.0;
+    let cam = Camera::new(&s.camera, res, res).unwrap();
+    // Analytic radiance: floor albedo / pi * I cos / d^2 from the real light and its image.
+    let analytic = |p: glam::Vec3A| -> f64 {
+        let p = p.as_dvec3();
+        let term = |l: DVec3| {
+            let d = l - p;
+            let d2 = d.length_squared();
+            intensity * (d.y / d2.sqrt()) / d2
+        };
+        0.5 / std::f64::consts::PI
+            * (term(DVec3::new(1.0, 1.0, 0.0)) + term(DVec3::new(-1.0, 1.0, 0.0)))
+    };
+    let floor_point = |x: u32, y: u32, u: f32, v: f32| {
+        let r = cam.ray(x, y, Vec2::new(u, v), Vec2::ZERO);
+        r.at(-r.o.y / r.d.y)
+    };
+    let expected = |x: u32, y: u32| -> (f64, f64) {
+        let mut sum = 0.0;
+        for i in 0..4 {
+            for j in 0..4 {
+                sum += analytic(floor_point(
+                    x,
+                    y,
+                    (i as f32 + 0.5) / 4.0,
+                    (j as f32 + 0.5) / 4.0,
+                ));
+            }
+        }
+        (sum / 16.0, floor_point(x, y, 0.5, 0.5).x as f64)
+    };
+    let mut edge_err = Vec::new();
+    for radius in [0.2, 0.05] {
+        s.settings.radius = Some(radius);
+        let img = run(&s, 24, 200_000);
+        assert_finite(&img);
+        let (mut err, mut n, mut far_err, mut nf) = (0.0, 0, 0.0, 0);
+        for y in 0..res {
+            for x in 0..res {
+                let (e, px) = expected(x, y);
+                let got = img.get(x, y)[0];
+                if px < 0.1 {
+                    err += (got - e) / e;
+                    n += 1;
+                } else if px > 0.3 {
+                    far_err += (got - e) / e;
+                    nf += 1;
+                }
+            }
+        }
+        let (err, far_err) = (err / n as f64, far_err / nf as f64);
+        println!(
+            "corner: radius {radius}: mean signed rel err near the wall (x < 0.1) {err:.4} ({n} px), away (x > 0.3) {far_err:.4} ({nf} px)"
+        );
+        edge_err.push(err.abs());
+    }
+    assert!(edge_err[1] < 0.5 * edge_err[0], "{edge_err:?}");
+}
+
+#[test]
+fn cornell_has_no_nan_or_inf_pixel() {
+    let img = run(&cornell_glass(32), 4, 20_000);
+    assert_finite(&img);
+    let m = img.mean();
+    println!(
+        "cornell 32x32, 4 iterations: mean {m:?} (reference 256x256 mean 0.3014 0.1930 0.0553)"
+    );
+    assert!(m[0] > 0.1 && m[0] < 0.6);
+}
