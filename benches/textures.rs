@@ -26,7 +26,7 @@ fn points() -> Vec<TexCoord> {
             TexCoord {
                 p,
                 n: p.normalize_or(Vec3A::Y),
-                uv: Vec2::new((t * 0.318).fract(), (t * 0.577).fract()),
+                uv: Vec2::new((t * 0.271).fract(), (t * 0.577).fract()),
             }
         })
         .collect()
