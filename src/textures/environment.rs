@@ -303,7 +303,7 @@ fn sample_cdf(cdf: &[f32], u: f32) -> (usize, f32) {
 
 #[cfg(test)]
 mod tests {
-    use std::path::PathBuf;
+    use std::path::{Path, PathBuf};
 
     use glam::{DMat3, DVec3};
 
@@ -524,6 +524,27 @@ mod tests {
         // The filtered integral puts 9/16 of the texel's weight in it, the rest next to it.
         assert!(hit as f64 > 0.5 * n as f64);
         assert!(near as f64 > 0.99 * n as f64);
+    }
+
+    #[test]
+    fn shipped_sky_puts_the_sun_where_the_generator_drew_it() {
+        // examples/textures/sky.hdr has a sun 35 degrees up at longitude 0.6 rad from +z.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/textures/sky.hdr");
+        let img = crate::scene::load_image(&path, crate::scene::ColorSpace::Linear).unwrap();
+        let env = EnvironmentMap::new(&img, 1.0, DAffine3::IDENTITY);
+        let (elev, phi) = (35f32.to_radians(), 0.6f32);
+        let sun = Vec3A::new(elev.cos() * phi.sin(), elev.sin(), elev.cos() * phi.cos());
+        assert!(env.radiance(sun).min_element() > 100.0);
+        assert!(env.radiance(Vec3A::Y).max_element() < 2.0);
+        let mut rng = Rng(1);
+        let n = 10_000;
+        let near = (0..n)
+            .filter(|_| {
+                env.sample(rng.vec2()).unwrap().direction.dot(sun) > 8f32.to_radians().cos()
+            })
+            .count();
+        println!("sky.hdr: {near}/{n} samples within 8 degrees of the sun");
+        assert!(near * 3 > n);
     }
 
     #[test]

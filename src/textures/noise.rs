@@ -57,30 +57,56 @@ fn lerp(t: f64, a: f64, b: f64) -> f64 {
     a + t * (b - a)
 }
 
-/// Dot product of the gradient selected by `hash` (one of the 12 cube edges, 4 repeated) with
-/// the offset `(x, y, z)`.
-#[inline]
-fn grad(hash: u8, x: f64, y: f64, z: f64) -> f64 {
-    let h = hash & 15;
-    let u = if h < 8 { x } else { y };
-    let v = if h < 4 {
-        y
-    } else if h == 12 || h == 14 {
-        x
-    } else {
-        z
-    };
-    (if h & 1 == 0 { u } else { -u }) + (if h & 2 == 0 { v } else { -v })
+/// Perlin's improved-noise gradient rule: for the low 4 bits `h` of a hash, `u` is x (h < 8)
+/// or y, `v` is y (h < 4), x (h = 12, 14) or z, and the result is `±u ± v` with the signs from
+/// bits 0 and 1. Returned as the gradient vector.
+const fn gradient_of(h: u8) -> [f64; 3] {
+    let mut g = [0.0; 3];
+    let (u, v) = (
+        if h < 8 { 0 } else { 1 },
+        if h < 4 {
+            1
+        } else if h == 12 || h == 14 {
+            0
+        } else {
+            2
+        },
+    );
+    g[u] += if h & 1 == 0 { 1.0 } else { -1.0 };
+    g[v] += if h & 2 == 0 { 1.0 } else { -1.0 };
+    g
 }
 
-/// Lattice coordinates far from the origin are folded into a range where f64 keeps the
-/// fraction; the lattice repeats every 256 units anyway.
+const fn gradient_table() -> [[f64; 3]; 16] {
+    let mut t = [[0.0; 3]; 16];
+    let mut h = 0;
+    while h < 16 {
+        t[h] = gradient_of(h as u8);
+        h += 1;
+    }
+    t
+}
+
+/// The 16 gradients (the 12 cube edges, four of them twice), looked up instead of branched on:
+/// hash bits are random, so branches on them would mispredict.
+static GRADIENTS: [[f64; 3]; 16] = gradient_table();
+
+#[inline]
+fn grad(hash: u8, x: f64, y: f64, z: f64) -> f64 {
+    let g = &GRADIENTS[(hash & 15) as usize];
+    g[0] * x + g[1] * y + g[2] * z
+}
+
+/// The lattice cell (mod 256) and the fraction within it. Coordinates that are not finite or
+/// beyond 1e15 (where f64 has no fraction left) count as 0. `floor` by integer conversion: it
+/// avoids a libm call on targets without a rounding instruction.
 #[inline]
 fn split(x: f64) -> (usize, f64) {
-    let x = if x.is_finite() { x } else { 0.0 };
-    let fl = x.floor();
-    let cell = (fl.rem_euclid(256.0)) as usize & 255;
-    (cell, x - fl)
+    let x = if x.abs() < 1e15 { x } else { 0.0 };
+    let i = x as i64;
+    let i = if (i as f64) > x { i - 1 } else { i };
+    // Two's complement keeps the low bits right for negative cells.
+    ((i & 255) as usize, x - i as f64)
 }
 
 /// Perlin gradient noise at `p`, in about [-1, 1] (exactly 0 on integer lattice points).
@@ -245,6 +271,31 @@ mod tests {
         let b = perlin(0.3, 1.7, -2.2);
         assert_eq!(a, b);
         assert_eq!(perlin(3.0, -4.0, 5.0), 0.0);
+    }
+
+    #[test]
+    fn gradient_table_follows_the_improved_noise_rule() {
+        // The reference rule, written with branches as in Perlin's paper.
+        fn reference(h: u8, x: f64, y: f64, z: f64) -> f64 {
+            let h = h & 15;
+            let u = if h < 8 { x } else { y };
+            let v = if h < 4 {
+                y
+            } else if h == 12 || h == 14 {
+                x
+            } else {
+                z
+            };
+            (if h & 1 == 0 { u } else { -u }) + (if h & 2 == 0 { v } else { -v })
+        }
+        for h in 0..=255u8 {
+            let (x, y, z) = (0.3, -0.7, 0.45);
+            assert_eq!(grad(h, x, y, z), reference(h, x, y, z), "hash {h}");
+        }
+        // Every gradient is a cube edge: two components ±1, one 0.
+        for g in GRADIENTS {
+            assert_eq!(g.iter().filter(|c| c.abs() == 1.0).count(), 2);
+        }
     }
 
     #[test]

@@ -15,13 +15,16 @@ pub const EDGE_NUDGE: f64 = 1e-5;
 
 #[inline]
 fn cell(x: f64) -> i64 {
-    let c = (x + EDGE_NUDGE).floor();
-    if c.is_finite() {
-        // The saturating cast keeps huge coordinates finite; parity is all that matters.
-        c.rem_euclid(2.0) as i64
-    } else {
-        0
-    }
+    // The saturating cast keeps huge coordinates in range (and NaN is 0); parity is all that
+    // matters, and two's complement keeps it right for negatives.
+    floor_i64(x + EDGE_NUDGE) & 1
+}
+
+/// `floor` as an integer, by conversion (no libm call); saturates for huge values, NaN is 0.
+#[inline]
+pub fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x { i - 1 } else { i }
 }
 
 /// Unit cubes alternating between `a` (the cube at the origin) and `b`. On 2-D mappings
@@ -69,13 +72,9 @@ pub fn brick(p: DVec3, brick: Color, mortar: Color, size: DVec3, mortar_width: f
     };
     let half = 0.5 * m;
     let row = (p.y / size.y).floor();
-    let odd = if row.is_finite() {
-        row.rem_euclid(2.0) >= 1.0
-    } else {
-        false
-    };
+    let odd = (row as i64) & 1 == 1;
     let within = |x: f64, s: f64| {
-        let f = x.rem_euclid(s);
+        let f = x - s * (x / s).floor();
         // NaN (non-finite input) reads as mortar-free brick.
         f < half || f > s - half
     };
@@ -136,6 +135,26 @@ mod tests {
         }
         assert!(checker(DVec3::splat(f64::NAN), A, B).is_finite());
         assert!(checker(DVec3::splat(1e300), A, B).is_finite());
+    }
+
+    #[test]
+    fn integer_floor_matches_floor() {
+        for x in [
+            -2.5,
+            -2.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            0.3,
+            1.0,
+            7.99,
+            -1e12 - 0.5,
+            4.5e15,
+        ] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+        }
+        assert_eq!(floor_i64(f64::NAN), 0);
+        assert_eq!(floor_i64(1e300), i64::MAX);
     }
 
     #[test]
