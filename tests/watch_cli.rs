@@ -1,0 +1,312 @@
+//! `sppm-lang watch` driven by real file operations on a temporary folder.
+//!
+//! Each step changes files the way an editor does and waits (with a timeout) for the watcher's
+//! plain status lines on stderr, then checks the image on disk: its colour must be the one the
+//! last valid scene asked for (the scenes differ only in their background colour), an erroneous
+//! edit must leave the previous image byte-for-byte, and no temporary file may be left behind.
+
+use std::fs;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+const STEP_TIMEOUT: Duration = Duration::from_secs(60);
+
+fn scene_text(bg: [u8; 3]) -> String {
+    scene_with(&format!("background rgb <{}, {}, {}>", bg[0], bg[1], bg[2]))
+}
+
+/// A tiny scene that sees only its background (the light keeps the renderer's light sampler
+/// non-empty; nothing is in view).
+fn scene_with(background_line: &str) -> String {
+    format!(
+        "settings {{ resolution <16, 16>  iterations 3  photons 500  seed 1 }}\n\
+         camera {{ location <0, 0, -5>  look_at <0, 0, 0>  fov 30 }}\n\
+         light {{ <0, 0, -20>  intensity rgb <1, 1, 1> }}\n\
+         {background_line}\n"
+    )
+}
+
+struct Watch {
+    child: Child,
+    lines: Receiver<String>,
+    log: Vec<String>,
+}
+
+impl Watch {
+    fn start(dir: &Path, scene: &str, out: &str) -> Watch {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+            .current_dir(dir)
+            .args(["watch", scene, "-o", out, "--no-preview", "--snapshot-every", "0"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start sppm-lang watch");
+        let stderr = child.stderr.take().unwrap();
+        let (tx, lines) = channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Watch {
+            child,
+            lines,
+            log: Vec::new(),
+        }
+    }
+
+    /// Waits for a status line containing `needle`; returns it.
+    fn expect(&mut self, needle: &str) -> String {
+        let deadline = Instant::now() + STEP_TIMEOUT;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log.push(line.clone());
+                    if line.contains(needle) {
+                        return line;
+                    }
+                }
+                Err(_) => panic!(
+                    "no line containing `{needle}` within {STEP_TIMEOUT:?}; output so far:\n{}",
+                    self.log.join("\n")
+                ),
+            }
+        }
+    }
+
+    /// Collects lines until `quiet` passes without one.
+    fn drain(&mut self, quiet: Duration) -> Vec<String> {
+        let mut got = Vec::new();
+        while let Ok(line) = self.lines.recv_timeout(quiet) {
+            self.log.push(line.clone());
+            got.push(line);
+        }
+        got
+    }
+
+    fn interrupt(mut self) -> (std::process::ExitStatus, Vec<String>) {
+        let pid = self.child.id().to_string();
+        let ok = Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill -INT failed");
+        let deadline = Instant::now() + STEP_TIMEOUT;
+        let status = loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                break s;
+            }
+            assert!(Instant::now() < deadline, "watch did not exit after Ctrl-C");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let rest = self.drain(Duration::from_millis(200));
+        (status, rest)
+    }
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The colour of the output image's centre pixel (sRGB bytes).
+fn centre(path: &Path) -> [u8; 3] {
+    let img = image::open(path).expect("output image readable").to_rgb8();
+    img.get_pixel(img.width() / 2, img.height() / 2).0
+}
+
+fn no_temporaries(dir: &Path) {
+    let names: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    let left: Vec<&String> = names.iter().filter(|n| n.starts_with(".sppm-")).collect();
+    assert!(left.is_empty(), "temporary files left behind: {left:?}");
+}
+
+fn rename_over(path: &Path, text: &str) {
+    let tmp = path.with_extension("scn.tmp~");
+    fs::write(&tmp, text).unwrap();
+    fs::rename(&tmp, path).unwrap();
+}
+
+fn latency_of(line: &str) -> Option<f64> {
+    let i = line.find(" s after the change")?;
+    line[..i].rsplit(", ").next()?.parse().ok()
+}
+
+#[test]
+fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.scn");
+    let out = dir.path().join("out.png");
+    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
+    let mut w = Watch::start(dir.path(), "scene.scn", "out.png");
+    let mut latencies = Vec::new();
+
+    w.expect("render #1 started");
+    w.expect("render #1 full finished");
+    assert_eq!(centre(&out), [255, 0, 0]);
+
+    // 1. In-place write.
+    fs::write(&scene, scene_text([0, 255, 0])).unwrap();
+    w.expect("render #2 started");
+    latencies.extend(latency_of(&w.expect("render #2 full iteration 1/")));
+    w.expect("render #2 full finished");
+    assert_eq!(centre(&out), [0, 255, 0]);
+
+    // 2. Rename over the file (vim, many IDEs).
+    rename_over(&scene, &scene_text([0, 0, 255]));
+    w.expect("render #3 started");
+    latencies.extend(latency_of(&w.expect("render #3 full iteration 1/")));
+    w.expect("render #3 full finished");
+    assert_eq!(centre(&out), [0, 0, 255]);
+
+    // 3. Delete and recreate.
+    fs::remove_file(&scene).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    fs::write(&scene, scene_text([255, 255, 0])).unwrap();
+    w.expect("render #4 started");
+    w.expect("render #4 full finished");
+    assert_eq!(centre(&out), [255, 255, 0]);
+
+    // 4. An edit with a syntax error: diagnostics, the image stays byte-for-byte.
+    let before = fs::read(&out).unwrap();
+    fs::write(&scene, "background rgb <1, 0, \n").unwrap();
+    w.expect("the scene has errors; the last image is kept");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(fs::read(&out).unwrap(), before, "the last good image changed");
+
+    // 5. The fix.
+    fs::write(&scene, scene_text([0, 255, 255])).unwrap();
+    w.expect("render #5 started");
+    w.expect("render #5 full finished");
+    assert_eq!(centre(&out), [0, 255, 255]);
+
+    // 6. A burst of 50 saves in about a second: far fewer renders, the last content wins.
+    for i in 0..50u8 {
+        fs::write(&scene, scene_text([i * 5, 0, 255 - i * 5])).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let last = [49 * 5, 0, 255 - 49 * 5];
+    let mut started = 0;
+    let mut finished_last = false;
+    let deadline = Instant::now() + STEP_TIMEOUT;
+    while Instant::now() < deadline {
+        let lines = w.drain(Duration::from_millis(1500));
+        started += lines.iter().filter(|l| l.contains(" started")).count();
+        if lines.is_empty() && fs::read(&out).is_ok() && centre(&out) == last {
+            finished_last = true;
+            break;
+        }
+    }
+    println!("50 saves in ~1 s started {started} renders");
+    assert!(finished_last, "the image never showed the last save");
+    assert!(
+        (1..=8).contains(&started),
+        "50 saves started {started} renders"
+    );
+    no_temporaries(dir.path());
+
+    println!("save-to-first-snapshot latency (s): {latencies:?}");
+    assert!(!latencies.is_empty());
+
+    // 7. Ctrl-C: exit 0.
+    let (status, _) = w.interrupt();
+    assert!(status.success(), "watch exited with {status:?} after Ctrl-C");
+    no_temporaries(dir.path());
+}
+
+#[test]
+fn watch_follows_included_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("main.scn");
+    let inc = dir.path().join("colors.scn");
+    let out = dir.path().join("main.png");
+    fs::write(&inc, "#declare Bg = rgb <255, 0, 0>;\n").unwrap();
+    fs::write(
+        &scene,
+        scene_with("#include \"colors.scn\"\nbackground Bg"),
+    )
+    .unwrap();
+    let mut w = Watch::start(dir.path(), "main.scn", "main.png");
+    w.expect("render #1 full finished");
+    assert_eq!(centre(&out), [255, 0, 0]);
+    fs::write(&inc, "#declare Bg = rgb <0, 0, 255>;\n").unwrap();
+    w.expect("render #2 full finished");
+    assert_eq!(centre(&out), [0, 0, 255]);
+    // A typo'd include that does not exist yet is polled: creating it re-renders.
+    fs::write(
+        &scene,
+        scene_with("#include \"later/extra.scn\"\nbackground Bg"),
+    )
+    .unwrap();
+    w.expect("the scene has errors; the last image is kept");
+    fs::create_dir(dir.path().join("later")).unwrap();
+    fs::write(
+        dir.path().join("later/extra.scn"),
+        "#declare Bg = rgb <0, 255, 0>;\n",
+    )
+    .unwrap();
+    w.expect("render #3 full finished");
+    assert_eq!(centre(&out), [0, 255, 0]);
+    no_temporaries(dir.path());
+}
+
+#[test]
+fn watch_rerenders_when_a_texture_image_is_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("tex.scn");
+    let tex = dir.path().join("tex.png");
+    let out = dir.path().join("tex-out.png");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([255, 0, 0]))
+        .save(&tex)
+        .unwrap();
+    // A textured quad filling the view, lit from the camera.
+    fs::write(
+        &scene,
+        "settings { resolution <16, 16>  iterations 3  photons 2000  seed 1 }\n\
+         camera { location <0, 0, -5>  look_at <0, 0, 0>  fov 30 }\n\
+         light { <0, 0, -5>  intensity rgb <30, 30, 30> }\n\
+         quad { <-5, -5, 0>, <0, 10, 0>, <10, 0, 0>\n\
+           material { diffuse texture { image \"tex.png\" } } }\n",
+    )
+    .unwrap();
+    let mut w = Watch::start(dir.path(), "tex.scn", "tex-out.png");
+    w.expect("render #1 full finished");
+    let [r, g, b] = centre(&out);
+    assert!(r > 50 && g < 10 && b < 10, "red texture gave {:?}", [r, g, b]);
+    let tmp = dir.path().join("tex.tmp.png");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([0, 0, 255]))
+        .save(&tmp)
+        .unwrap();
+    fs::rename(&tmp, &tex).unwrap();
+    w.expect("render #2 full finished");
+    let [r, g, b] = centre(&out);
+    assert!(b > 50 && r < 10 && g < 10, "blue texture gave {:?}", [r, g, b]);
+}
+
+#[test]
+fn watch_without_a_scene_file_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing: PathBuf = dir.path().join("nope.scn");
+    let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        .args(["watch", missing.to_str().unwrap()])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("does not exist"), "{err}");
+    let _ = std::io::stdout().flush();
+}
