@@ -132,7 +132,9 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     };
     let rest = &text[pos.min(text.len())..];
     if rest.starts_with('#') {
-        let word: String = rest[1..]
+        let word: String = rest
+            .strip_prefix('#')
+            .unwrap_or(rest)
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
             .collect();
@@ -282,7 +284,7 @@ impl Cx {
             Rule::keyword => Item::Keyword(self.name(pair)),
             Rule::comma => Item::Comma(self.span(&pair)),
             Rule::expr | Rule::iexpr => Item::Expr(self.expr(pair)),
-            _ => Item::Directive(self.directive(pair)),
+            _ => Item::Directive(Box::new(self.directive(pair))),
         }
     }
 
