@@ -89,7 +89,7 @@ proptest! {
             match kind {
                 0 => text.insert_str(p, TOKENS[tok]),
                 1 => { let mut e = (p + tok).min(text.len()); while !text.is_char_boundary(e) { e -= 1; } text.replace_range(p..e, ""); }
-                _ => text.insert_str(p, " "),
+                _ => text.insert(p, ' '),
             }
         }
         let loaded = load_source("mutated.scn", &text, &options());

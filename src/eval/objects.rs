@@ -440,8 +440,13 @@ impl Evaluator {
         Ok(id)
     }
 
-    fn image(&mut self, path: &PathBuf, linear: bool, span: Span) -> SourceResult<Arc<ImageData>> {
-        let key = (path.clone(), linear);
+    fn image(
+        &mut self,
+        path: &std::path::Path,
+        linear: bool,
+        span: Span,
+    ) -> SourceResult<Arc<ImageData>> {
+        let key = (path.to_path_buf(), linear);
         if let Some(img) = self.assets.images.get(&key) {
             return Ok(img.clone());
         }
@@ -459,7 +464,7 @@ impl Evaluator {
             ]
         })?;
         let img = Arc::new(img);
-        self.scene.dependencies.push(path.clone());
+        self.scene.dependencies.push(path.to_path_buf());
         self.assets.images.insert(key, img.clone());
         Ok(img)
     }
@@ -988,7 +993,7 @@ impl ObjectBuilder {
             }
             "bezier_patch" | "bezier_mesh" => {
                 let n = self.values.len();
-                if n == 0 || n % 16 != 0 || (self.kind == "bezier_patch" && n != 16) {
+                if n == 0 || !n.is_multiple_of(16) || (self.kind == "bezier_patch" && n != 16) {
                     return Err(vec![
                         Error::new(format!(
                             "{} needs {} control points, found {n}",
@@ -1028,7 +1033,7 @@ impl ObjectBuilder {
                         .at(span),
                 ]);
             }
-            t = t * DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
+            t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
         }
         if t.matrix3.determinant().abs() < 1e-300 {
             return Err(vec![Error::new("the transform is singular").at(self.span)]);
@@ -1976,7 +1981,7 @@ impl ProfileBuilder {
                 .collect()
         } else {
             let d = self.degree.map_or(3, |d| d.0) as usize;
-            if pts.len() < d + 1 || (pts.len() - 1) % d != 0 {
+            if pts.len() < d + 1 || !(pts.len() - 1).is_multiple_of(d) {
                 return Err(vec![
                     Error::new(format!("a degree-{d} Bezier profile needs {d}·k + 1 points (k segments sharing end points), found {}", pts.len()))
                         .label("wrong number of points")

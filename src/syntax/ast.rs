@@ -14,7 +14,7 @@ pub struct Name {
 /// One item of a file or of a block body.
 #[derive(Debug, Clone)]
 pub enum Item {
-    Directive(Directive),
+    Directive(Box<Directive>),
     /// A property keyword such as `translate`; its arguments are the items that follow.
     Keyword(Name),
     Comma(Span),

@@ -54,7 +54,7 @@ fn describe(rule: Rule) -> &'static str {
         Rule::include_d => "`#include`",
         Rule::params => "parameter names",
         Rule::keyword => "a property keyword",
-        Rule::expr | Rule::vexpr => "an expression",
+        Rule::expr | Rule::vexpr | Rule::iexpr => "an expression",
         Rule::add | Rule::sub | Rule::mul | Rule::div => "an operator",
         Rule::le | Rule::ge | Rule::eq | Rule::ne | Rule::lt | Rule::gt => "an operator",
         Rule::and | Rule::or => "an operator",
@@ -132,7 +132,9 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     };
     let rest = &text[pos.min(text.len())..];
     if rest.starts_with('#') {
-        let word: String = rest[1..]
+        let word: String = rest
+            .strip_prefix('#')
+            .unwrap_or(rest)
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
             .collect();
@@ -281,8 +283,8 @@ impl Cx {
         match pair.as_rule() {
             Rule::keyword => Item::Keyword(self.name(pair)),
             Rule::comma => Item::Comma(self.span(&pair)),
-            Rule::expr => Item::Expr(self.expr(pair)),
-            _ => Item::Directive(self.directive(pair)),
+            Rule::expr | Rule::iexpr => Item::Expr(self.expr(pair)),
+            _ => Item::Directive(Box::new(self.directive(pair))),
         }
     }
 

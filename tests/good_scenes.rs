@@ -1,0 +1,358 @@
+//! Good scenes: the evaluated `Scene` holds what the text says.
+
+use glam::{DAffine3, DVec2, DVec3};
+use sppm_lang::scene::*;
+use sppm_lang::{EvalOptions, Loaded, load_file, load_source};
+
+fn load(text: &str) -> Loaded {
+    let l = load_source("test.scn", text, &EvalOptions::default());
+    assert!(
+        !l.has_errors(),
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
+    );
+    l
+}
+
+fn scene(text: &str) -> Scene {
+    load(text).scene.expect("scene")
+}
+
+fn close(a: DVec3, b: DVec3) -> bool {
+    (a - b).abs().max_element() < 1e-9
+}
+
+#[test]
+fn examples_all_check() {
+    for name in ["cornell", "crystal_tree", "furnace", "smallppm"] {
+        let path = format!("examples/{name}.scn");
+        let l = load_file(path.as_ref(), &EvalOptions::default()).expect("readable");
+        assert!(!l.has_errors(), "{name}: {:?}", l.diagnostics);
+        assert!(
+            l.diagnostics.is_empty(),
+            "{name} has warnings: {:?}",
+            l.diagnostics
+        );
+    }
+}
+
+#[test]
+fn cornell_matches_reference_description() {
+    let l = load_file("examples/cornell.scn".as_ref(), &EvalOptions::default()).unwrap();
+    let s = l.scene.unwrap();
+    assert_eq!(s.objects.len(), 8);
+    assert_eq!(s.settings.resolution, (256, 256));
+    assert!(close(s.camera.location, DVec3::new(0.0, 1.0, 3.9)));
+    assert_eq!(s.camera.fov, 40.0);
+    let light: Vec<&Object> = s.objects.iter().filter(|o| o.emission.is_some()).collect();
+    assert_eq!(light.len(), 1);
+    let e = light[0].emission.unwrap();
+    assert_eq!(e.radiance, DVec3::new(17.0, 12.0, 4.0));
+    assert!(!e.two_sided);
+    let Shape::Quad {
+        origin,
+        edge_u,
+        edge_v,
+    } = light[0].shape
+    else {
+        panic!()
+    };
+    assert!(close(origin, DVec3::new(-0.25, 1.98, -0.25)));
+    assert!(edge_u.cross(edge_v).y < 0.0, "light must face down");
+    assert_eq!(
+        *s.material(light[0].material),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::ZERO)
+        }
+    );
+    let glass = s
+        .objects
+        .iter()
+        .find(|o| matches!(s.material(o.material), Material::Glass { .. }))
+        .unwrap();
+    assert!(matches!(s.material(glass.material), Material::Glass { ior, .. } if *ior == 1.5));
+    let mirror = s
+        .objects
+        .iter()
+        .find(|o| matches!(s.material(o.material), Material::Mirror { .. }))
+        .unwrap();
+    assert_eq!(
+        *s.material(mirror.material),
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::ONE)
+        }
+    );
+}
+
+#[test]
+fn defaults_are_explicit() {
+    let s = scene("sphere { <0, 0, 0>, 1 }");
+    assert_eq!(s.settings, Settings::default());
+    assert_eq!(s.camera, Camera::default());
+    assert_eq!(s.objects[0].transform, DAffine3::IDENTITY);
+    assert_eq!(
+        *s.material(s.objects[0].material),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::splat(0.5))
+        }
+    );
+    assert!(s.textures.is_empty() && s.lights.is_empty());
+    assert!(matches!(s.background, Background::Color(c) if c == DVec3::ZERO));
+}
+
+#[test]
+fn transforms_apply_in_order() {
+    let s = scene("sphere { <0, 0, 0>, 1 translate <1, 0, 0> rotate <0, 0, 90> scale 2 }");
+    let t = s.objects[0].transform;
+    // (1,0,0) translated, then rotated 90° about z to (0,1,0), then scaled to (0,2,0).
+    assert!(close(
+        t.transform_point3(DVec3::ZERO),
+        DVec3::new(0.0, 2.0, 0.0)
+    ));
+    let s = scene("sphere { <0,0,0>, 1 rotate <90, 90, 0> }");
+    // x first: y -> z; then y: z -> x.
+    assert!(close(
+        s.objects[0].transform.transform_vector3(DVec3::Y),
+        DVec3::X
+    ));
+    let s = scene("sphere { <0,0,0>, 1 matrix <1,0,0, 0,1,0, 0,0,1, 4,5,6> }");
+    assert!(close(
+        s.objects[0].transform.translation,
+        DVec3::new(4.0, 5.0, 6.0)
+    ));
+}
+
+#[test]
+fn unions_compose_and_declared_objects_instantiate() {
+    let s = scene(
+        "#declare Ball = sphere { <0, 0, 0>, 1 translate <1, 0, 0> }
+         union { Ball object { Ball translate <0, 1, 0> } translate <0, 0, 5> material { mirror } }
+         Ball",
+    );
+    assert_eq!(s.objects.len(), 3);
+    let p: Vec<DVec3> = s
+        .objects
+        .iter()
+        .map(|o| o.transform.transform_point3(DVec3::ZERO))
+        .collect();
+    assert!(close(p[0], DVec3::new(1.0, 0.0, 5.0)));
+    assert!(close(p[1], DVec3::new(1.0, 1.0, 5.0)));
+    assert!(close(p[2], DVec3::new(1.0, 0.0, 0.0)));
+    assert!(matches!(
+        s.material(s.objects[0].material),
+        Material::Mirror { .. }
+    ));
+    assert!(matches!(
+        s.material(s.objects[2].material),
+        Material::Diffuse { .. }
+    ));
+}
+
+#[test]
+fn materials_are_deduplicated_by_declaration() {
+    let s = scene(
+        "#declare W = material { diffuse rgb <0.7, 0.7, 0.7> }
+         #for (I, 0, 9) sphere { <I, 0, 0>, 0.4 material { W } } #end
+         sphere { <0, 3, 0>, 1 material { diffuse rgb <0.7, 0.7, 0.7> } }",
+    );
+    assert_eq!(s.objects.len(), 11);
+    assert_eq!(s.materials.len(), 2, "{:?}", s.materials);
+    assert!(
+        s.objects[..10]
+            .iter()
+            .all(|o| o.material == s.objects[0].material)
+    );
+}
+
+#[test]
+fn macros_recurse_and_count() {
+    let s = scene(
+        "#macro Branch(P, Dir, Len, Depth)
+           cylinder { P, P + Dir*Len, Len*0.08 }
+           #if (Depth > 0)
+             Branch(P + Dir*Len, vrotate(Dir, <0, 0, 25>), Len*0.618, Depth - 1)
+             Branch(P + Dir*Len, vrotate(Dir, <0, 0, -25>), Len*0.618, Depth - 1)
+           #end
+         #end
+         Branch(<0, 0, 0>, <0, 1, 0>, 0.5, 6)",
+    );
+    assert_eq!(s.objects.len(), 127);
+    let Shape::Cylinder { cap, radius, .. } = s.objects[0].shape else {
+        panic!()
+    };
+    assert!(close(cap, DVec3::new(0.0, 0.5, 0.0)));
+    assert!((radius - 0.04).abs() < 1e-12);
+}
+
+#[test]
+fn expressions_and_builtins() {
+    let s = scene(
+        "#declare A = 1 + 2 * 3 - 4 / 2;          // 5
+         #declare B = <1, 2, 3> * 2 + <1, 1, 1>;  // <3, 5, 7>
+         #declare C = max(1, 7, 3) + clamp(5, 0, 2) + abs(-1) + floor(2.7);  // 7+2+1+2
+         #declare D = vcross(x, y).z + vdot(<1,2,3>, <1,1,1>) + vlength(<3, 4, 0>);  // 1+6+5
+         #declare E = [1, 2, 3][1] + B.y + degrees(pi);  // 2+5+180
+         #declare F = 0;
+         #if (A == 5 && !(C < 12) || false) #declare F = 1; #elif (1) #declare F = 2; #end
+         sphere { <A, C, D>, E/1000 + F }",
+    );
+    let Shape::Sphere { center, radius } = s.objects[0].shape else {
+        panic!()
+    };
+    assert_eq!(center, DVec3::new(5.0, 12.0, 12.0));
+    assert!((radius - (0.187 + 1.0)).abs() < 1e-12);
+}
+
+#[test]
+fn loops_and_locals() {
+    let s = scene(
+        "#declare I = 0;
+         #while (I < 4) sphere { <I, 0, 0>, 0.1 } #declare I = I + 1; #end
+         #for (J, 10, 0, -5) sphere { <J, 1, 0>, 0.1 } #end",
+    );
+    assert_eq!(s.objects.len(), 7);
+    let Shape::Sphere { center, .. } = s.objects[6].shape else {
+        panic!()
+    };
+    assert_eq!(center, DVec3::new(0.0, 1.0, 0.0));
+}
+
+#[test]
+fn settings_camera_lights_background() {
+    let s = scene(
+        "settings { resolution <640, 480> iterations 8 photons 1000 radius 0.02 alpha 0.5
+                    max_depth 5 seed 9 integrator path exposure 2 time_limit 30 }
+         camera { location <1, 2, 3> look_at <0, 0, 0> fov 50 aperture 0.1 focus_distance 3 }
+         light { <0, 5, 0> intensity rgb <10, 10, 10> }
+         spotlight { <0, 5, 0> point_at <0, 0, 0> intensity 5 angle 40 falloff 30 }
+         background rgb <0.1, 0.2, 0.3>",
+    );
+    let st = &s.settings;
+    assert_eq!(st.resolution, (640, 480));
+    assert_eq!(
+        (st.iterations, st.photons, st.max_depth, st.seed),
+        (8, 1000, 5, 9)
+    );
+    assert_eq!(
+        (st.radius, st.alpha, st.exposure, st.time_limit),
+        (Some(0.02), 0.5, 2.0, Some(30.0))
+    );
+    assert_eq!(st.integrator, Integrator::Path);
+    assert_eq!(s.camera.aperture, 0.1);
+    assert_eq!(s.camera.focus_distance, Some(3.0));
+    assert_eq!(s.lights.len(), 2);
+    let Light::Spot {
+        direction,
+        cone_angle,
+        falloff_angle,
+        intensity,
+        ..
+    } = &s.lights[1]
+    else {
+        panic!()
+    };
+    assert!(close(*direction, -DVec3::Y));
+    assert_eq!((*cone_angle, *falloff_angle), (40.0, 30.0));
+    assert_eq!(*intensity, DVec3::splat(5.0));
+    assert!(matches!(s.background, Background::Color(c) if close(c, DVec3::new(0.1, 0.2, 0.3))));
+}
+
+#[test]
+fn textures_store_inverse_transform_and_unused_are_not_loaded() {
+    let l = load(
+        "#declare Unused = texture { image \"does_not_exist.png\" }
+         #declare T = texture { checker rgb <1, 1, 1>, rgb <0.1, 0.2, 0.6> scale 0.1 }
+         sphere { <0, 0, 0>, 1 material { diffuse T } }
+         sphere { <0, 3, 0>, 1 material { glossy texture { marble color_map { [0, rgb 0] [1, rgb 1] } turbulence 2 } roughness 0.3 } }",
+    );
+    let s = l.scene.as_ref().unwrap();
+    assert_eq!(s.textures.len(), 2);
+    assert!(matches!(s.textures[0].pattern, Pattern::Checker { a, .. } if a == DVec3::ONE));
+    assert_eq!(s.textures[0].mapping, Mapping::Solid);
+    assert!(close(
+        s.textures[0].transform.transform_point3(DVec3::ONE),
+        DVec3::splat(10.0)
+    ));
+    assert!(
+        matches!(&s.textures[1].pattern, Pattern::Marble { turbulence, octaves: 6, .. } if *turbulence == 2.0)
+    );
+    assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+    assert!(l.diagnostics[0].message.contains("unused texture `Unused`"));
+}
+
+#[test]
+fn revolve_and_patches() {
+    let s = scene(
+        "revolve { profile bezier { <0, 0>, <0.35, 0>, <0.4, 0.3>, <0.15, 0.6> }
+                   axis <1, 0, 0> angle 0, 270 method newton iterations 10 starts 4 }
+         revolve { profile bezier { degree 1 <0, 0>, <1, 0>, <1, 1> } corner }
+         bezier_patch { #for (I, 0, 3) #for (J, 0, 3) <I, 0, J>, #end #end }
+         bezier_mesh { #for (K, 1, 32) <K, 0, 0> #end }",
+    );
+    assert_eq!(s.objects.len(), 5);
+    let Shape::Revolve {
+        profile,
+        sweep,
+        method,
+    } = &s.objects[0].shape
+    else {
+        panic!()
+    };
+    assert_eq!(
+        profile.segments,
+        vec![vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(0.35, 0.0),
+            DVec2::new(0.4, 0.3),
+            DVec2::new(0.15, 0.6)
+        ]]
+    );
+    assert_eq!(*sweep, Some((0.0, 270.0)));
+    assert_eq!(
+        *method,
+        IntersectMethod::Newton {
+            iterations: 10,
+            starts: 4
+        }
+    );
+    // The axis maps object y onto world x.
+    assert!(close(
+        s.objects[0].transform.transform_vector3(DVec3::Y),
+        DVec3::X
+    ));
+    let Shape::Revolve { profile, .. } = &s.objects[1].shape else {
+        panic!()
+    };
+    assert_eq!(profile.segments.len(), 2);
+    let Shape::BezierPatch { points, .. } = &s.objects[2].shape else {
+        panic!()
+    };
+    assert_eq!(points[4 + 2], DVec3::new(1.0, 0.0, 2.0));
+}
+
+#[test]
+fn includes_resolve_relative_to_the_including_file() {
+    let l = load_file("tests/good/inc_main.scn".as_ref(), &EvalOptions::default()).unwrap();
+    assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    let s = l.scene.unwrap();
+    assert_eq!(s.dependencies.len(), 2);
+    let Shape::Sphere { radius, .. } = s.objects[0].shape else {
+        panic!()
+    };
+    assert_eq!(radius, 0.25);
+}
+
+#[test]
+fn area_light_over_disk_and_sphere() {
+    let s = scene(
+        "area_light { disk { <0, 2, 0>, <0, -1, 0>, 0.3 } radiance rgb <5, 5, 5> two_sided }
+         area_light { sphere { <0, 1, 0>, 0.1 } radiance 3 material { mirror } }",
+    );
+    assert_eq!(s.objects.len(), 2);
+    assert!(s.objects[0].emission.unwrap().two_sided);
+    assert_eq!(s.objects[1].emission.unwrap().radiance, DVec3::splat(3.0));
+    assert!(matches!(
+        s.material(s.objects[1].material),
+        Material::Mirror { .. }
+    ));
+}
