@@ -14,8 +14,11 @@ use std::time::{Duration, Instant};
 
 const STEP_TIMEOUT: Duration = Duration::from_secs(60);
 
+/// A scene whose background is `bg` as sRGB bytes; use only 0 and 255, which are linear 0 and 1
+/// and come back exactly.
 fn scene_text(bg: [u8; 3]) -> String {
-    scene_with(&format!("background rgb <{}, {}, {}>", bg[0], bg[1], bg[2]))
+    let [r, g, b] = bg.map(|c| f32::from(c) / 255.0);
+    scene_with(&format!("background rgb <{r}, {g}, {b}>"))
 }
 
 /// A tiny scene that sees only its background (the light keeps the renderer's light sampler
@@ -39,7 +42,15 @@ impl Watch {
     fn start(dir: &Path, scene: &str, out: &str) -> Watch {
         let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
             .current_dir(dir)
-            .args(["watch", scene, "-o", out, "--no-preview", "--snapshot-every", "0"])
+            .args([
+                "watch",
+                scene,
+                "-o",
+                out,
+                "--no-preview",
+                "--snapshot-every",
+                "0",
+            ])
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -185,7 +196,11 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     fs::write(&scene, "background rgb <1, 0, \n").unwrap();
     w.expect("the scene has errors; the last image is kept");
     std::thread::sleep(Duration::from_millis(300));
-    assert_eq!(fs::read(&out).unwrap(), before, "the last good image changed");
+    assert_eq!(
+        fs::read(&out).unwrap(),
+        before,
+        "the last good image changed"
+    );
 
     // 5. The fix.
     fs::write(&scene, scene_text([0, 255, 255])).unwrap();
@@ -194,11 +209,18 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     assert_eq!(centre(&out), [0, 255, 255]);
 
     // 6. A burst of 50 saves in about a second: far fewer renders, the last content wins.
-    for i in 0..50u8 {
-        fs::write(&scene, scene_text([i * 5, 0, 255 - i * 5])).unwrap();
+    // Cycle through the primaries, finish with white, which no earlier save used.
+    let primaries = [[255, 0, 0], [0, 255, 0], [0, 0, 255]];
+    for i in 0..50usize {
+        let bg = if i == 49 {
+            [255, 255, 255]
+        } else {
+            primaries[i % 3]
+        };
+        fs::write(&scene, scene_text(bg)).unwrap();
         std::thread::sleep(Duration::from_millis(20));
     }
-    let last = [49 * 5, 0, 255 - 49 * 5];
+    let last = [255, 255, 255];
     let mut started = 0;
     let mut finished_last = false;
     let deadline = Instant::now() + STEP_TIMEOUT;
@@ -211,7 +233,11 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
         }
     }
     println!("50 saves in ~1 s started {started} renders");
-    assert!(finished_last, "the image never showed the last save");
+    assert!(
+        finished_last,
+        "the image never showed the last save; output:\n{}",
+        w.log.join("\n")
+    );
     assert!(
         (1..=8).contains(&started),
         "50 saves started {started} renders"
@@ -223,7 +249,10 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
 
     // 7. Ctrl-C: exit 0.
     let (status, _) = w.interrupt();
-    assert!(status.success(), "watch exited with {status:?} after Ctrl-C");
+    assert!(
+        status.success(),
+        "watch exited with {status:?} after Ctrl-C"
+    );
     no_temporaries(dir.path());
 }
 
@@ -234,11 +263,7 @@ fn watch_follows_included_files() {
     let inc = dir.path().join("colors.scn");
     let out = dir.path().join("main.png");
     fs::write(&inc, "#declare Bg = rgb <255, 0, 0>;\n").unwrap();
-    fs::write(
-        &scene,
-        scene_with("#include \"colors.scn\"\nbackground Bg"),
-    )
-    .unwrap();
+    fs::write(&scene, scene_with("#include \"colors.scn\"\nbackground Bg")).unwrap();
     let mut w = Watch::start(dir.path(), "main.scn", "main.png");
     w.expect("render #1 full finished");
     assert_eq!(centre(&out), [255, 0, 0]);
@@ -285,7 +310,11 @@ fn watch_rerenders_when_a_texture_image_is_replaced() {
     let mut w = Watch::start(dir.path(), "tex.scn", "tex-out.png");
     w.expect("render #1 full finished");
     let [r, g, b] = centre(&out);
-    assert!(r > 50 && g < 10 && b < 10, "red texture gave {:?}", [r, g, b]);
+    assert!(
+        r > 50 && g < 10 && b < 10,
+        "red texture gave {:?}",
+        [r, g, b]
+    );
     let tmp = dir.path().join("tex.tmp.png");
     image::RgbImage::from_pixel(4, 4, image::Rgb([0, 0, 255]))
         .save(&tmp)
@@ -293,7 +322,11 @@ fn watch_rerenders_when_a_texture_image_is_replaced() {
     fs::rename(&tmp, &tex).unwrap();
     w.expect("render #2 full finished");
     let [r, g, b] = centre(&out);
-    assert!(b > 50 && r < 10 && g < 10, "blue texture gave {:?}", [r, g, b]);
+    assert!(
+        b > 50 && r < 10 && g < 10,
+        "blue texture gave {:?}",
+        [r, g, b]
+    );
 }
 
 #[test]

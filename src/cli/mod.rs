@@ -1,6 +1,7 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
 mod check;
+mod watch;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -54,10 +55,13 @@ pub enum Command {
         #[command(flatten)]
         limits: LimitArgs,
     },
+    /// Re-render a scene every time it or a file it reads is saved.
+    Watch(watch::WatchArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Check { scene, limits } => check::run(&scene, &limits.options()),
+        Command::Watch(args) => watch::run(&args),
     }
 }

@@ -253,7 +253,10 @@ fn start(
                         last_write = Some(Instant::now());
                         let latency = if first_snapshot {
                             first_snapshot = false;
-                            format!(", {:.3} s after the change", changed_at.elapsed().as_secs_f64())
+                            format!(
+                                ", {:.3} s after the change",
+                                changed_at.elapsed().as_secs_f64()
+                            )
                         } else {
                             String::new()
                         };
@@ -293,10 +296,7 @@ fn start(
                 Err(e) => {
                     let diag = Diagnostic::error(e.span.unwrap_or_default(), e.message.clone());
                     if e.span.is_some() {
-                        eprint!(
-                            "{}",
-                            sppm_lang::render_plain(&sources, &[diag], 100)
-                        );
+                        eprint!("{}", sppm_lang::render_plain(&sources, &[diag], 100));
                     } else {
                         status(&format!("render failed: {}", e.message));
                     }

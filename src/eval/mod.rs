@@ -46,11 +46,14 @@ impl Default for EvalOptions {
 
 /// The outcome of a load: the scene (if there were no errors), every diagnostic (errors and
 /// warnings), and the sources needed to render the diagnostics.
-#[derive(Debug)]
+#[derive(Debug, Clone, Default)]
 pub struct Loaded {
     pub scene: Option<Scene>,
     pub diagnostics: Vec<Diagnostic>,
     pub sources: SourceMap,
+    /// Every file the load read or tried to read (the scene, includes, images, meshes), also
+    /// when it failed: what `watch` watches.
+    pub dependencies: Vec<PathBuf>,
 }
 
 impl Loaded {
@@ -95,6 +98,7 @@ fn load_source_at(path: &Path, name: &str, text: String, options: &EvalOptions) 
             "evaluation failed unexpectedly",
         )],
         sources: SourceMap::new(),
+        dependencies: vec![path.to_path_buf()],
     })
 }
 
@@ -115,7 +119,10 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;
     diagnostics.extend(ev.warnings);
+    let mut seen = std::collections::HashSet::new();
+    ev.scene.dependencies.retain(|p| seen.insert(p.clone()));
     Loaded {
+        dependencies: ev.scene.dependencies.clone(),
         scene: (!has_errors).then_some(ev.scene),
         diagnostics,
         sources: ev.sources,
@@ -400,6 +407,8 @@ impl Evaluator {
                 Error::new("includes nested more than 64 deep").at(span),
             ]);
         }
+        // Recorded before the read so that `watch` also waits for a file that is missing.
+        self.scene.dependencies.push(resolved.clone());
         let text = std::fs::read_to_string(&resolved).map_err(|e| {
             vec![
                 Error::new(format!("cannot read included file `{path}`: {e}"))
@@ -411,7 +420,6 @@ impl Evaluator {
                     .at(span),
             ]
         })?;
-        self.scene.dependencies.push(resolved.clone());
         let file = self
             .sources
             .add(&resolved, resolved.display().to_string(), text.clone());

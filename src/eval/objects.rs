@@ -455,6 +455,8 @@ impl Evaluator {
         } else {
             ColorSpace::Srgb
         };
+        // Recorded before the read so that `watch` also waits for a file that is missing.
+        self.scene.dependencies.push(path.to_path_buf());
         let img = load_image(path, space).map_err(|e| {
             vec![
                 Error::new(e)
@@ -464,7 +466,6 @@ impl Evaluator {
             ]
         })?;
         let img = Arc::new(img);
-        self.scene.dependencies.push(path.to_path_buf());
         self.assets.images.insert(key, img.clone());
         Ok(img)
     }
@@ -473,6 +474,7 @@ impl Evaluator {
         if let Some(m) = self.assets.meshes.get(path) {
             return Ok(m.clone());
         }
+        self.scene.dependencies.push(path.clone());
         let m = load_obj(path).map_err(|e| {
             vec![
                 Error::new(e)
@@ -482,7 +484,6 @@ impl Evaluator {
             ]
         })?;
         let m = Arc::new(m);
-        self.scene.dependencies.push(path.clone());
         self.assets.meshes.insert(path.clone(), m.clone());
         Ok(m)
     }
