@@ -26,6 +26,24 @@ pub const MAX_BATCH: Duration = Duration::from_millis(500);
 /// How often dependencies in directories that do not exist yet are looked for.
 pub const POLL: Duration = Duration::from_millis(250);
 
+/// One batch of changes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Batch {
+    /// The changed dependencies, sorted.
+    pub files: Vec<PathBuf>,
+    /// When the first event of the batch arrived.
+    pub first_event: Instant,
+}
+
+impl Batch {
+    fn new(files: BTreeSet<PathBuf>, first_event: Instant) -> Self {
+        Self {
+            files: files.into_iter().collect(),
+            first_event,
+        }
+    }
+}
+
 /// Watches a set of files through their parent directories.
 pub struct DependencyWatcher {
     watcher: RecommendedWatcher,
@@ -106,6 +124,16 @@ impl DependencyWatcher {
         deadline: Option<Instant>,
         stop: &dyn Fn() -> bool,
     ) -> Option<Vec<PathBuf>> {
+        self.wait_batch(deadline, stop).map(|b| b.files)
+    }
+
+    /// Like [`wait`](Self::wait), also telling when the first event of the batch arrived (the
+    /// start of the save-to-picture latency).
+    pub fn wait_batch(
+        &mut self,
+        deadline: Option<Instant>,
+        stop: &dyn Fn() -> bool,
+    ) -> Option<Batch> {
         let mut changed = BTreeSet::new();
         let mut first: Option<Instant> = None;
         loop {
@@ -115,7 +143,7 @@ impl DependencyWatcher {
             let now = Instant::now();
             if let Some(start) = first {
                 if now >= start + MAX_BATCH {
-                    return Some(changed.into_iter().collect());
+                    return Some(Batch::new(changed, start));
                 }
             } else if deadline.is_some_and(|d| now >= d) {
                 return None;
@@ -141,9 +169,9 @@ impl DependencyWatcher {
                     first.get_or_insert(Instant::now());
                 }
                 Err(RecvTimeoutError::Timeout) => {
-                    if first.is_some() {
+                    if let Some(start) = first {
                         // Quiet long enough.
-                        return Some(changed.into_iter().collect());
+                        return Some(Batch::new(changed, start));
                     }
                     changed.extend(self.poll_missing());
                     if !changed.is_empty() {

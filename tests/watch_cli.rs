@@ -170,16 +170,20 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     assert_eq!(centre(&out), [255, 0, 0]);
 
     // 1. In-place write.
+    let saved = Instant::now();
     fs::write(&scene, scene_text([0, 255, 0])).unwrap();
     w.expect("render #2 started");
-    latencies.extend(latency_of(&w.expect("render #2 full iteration 1/")));
+    let line = w.expect("render #2 full iteration 1/");
+    latencies.push((saved.elapsed().as_secs_f64(), latency_of(&line)));
     w.expect("render #2 full finished");
     assert_eq!(centre(&out), [0, 255, 0]);
 
     // 2. Rename over the file (vim, many IDEs).
+    let saved = Instant::now();
     rename_over(&scene, &scene_text([0, 0, 255]));
     w.expect("render #3 started");
-    latencies.extend(latency_of(&w.expect("render #3 full iteration 1/")));
+    let line = w.expect("render #3 full iteration 1/");
+    latencies.push((saved.elapsed().as_secs_f64(), latency_of(&line)));
     w.expect("render #3 full finished");
     assert_eq!(centre(&out), [0, 0, 255]);
 
@@ -244,8 +248,16 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     );
     no_temporaries(dir.path());
 
-    println!("save-to-first-snapshot latency (s): {latencies:?}");
-    assert!(!latencies.is_empty());
+    // Seen by the test (save → status line read) and reported by the watcher (first event →
+    // snapshot written); the first includes the 100 ms batching quiet time.
+    println!(
+        "save-to-first-snapshot latency (s), test-measured vs watcher-reported: {latencies:?}"
+    );
+    for (seen, reported) in &latencies {
+        let reported = reported.expect("the watcher reports its latency");
+        // The watcher prints milliseconds, rounded: allow that half millisecond.
+        assert!(reported <= *seen + 0.0005, "reported {reported} s > seen {seen} s");
+    }
 
     // 7. Ctrl-C: exit 0.
     let (status, _) = w.interrupt();

@@ -158,8 +158,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         }
         status("waiting for changes");
         let stop = || interrupted.load(Ordering::SeqCst);
-        let changes = watcher.wait(None, &stop);
-        changed_at = Instant::now();
+        let changes = watcher.wait_batch(None, &stop);
         if let Some(j) = job.take() {
             let outcome = j.stop(changes.is_none());
             if matches!(outcome, Outcome::Cancelled) {
@@ -167,8 +166,13 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             }
         }
         match changes {
-            Some(files) => {
-                let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+            Some(batch) => {
+                changed_at = batch.first_event;
+                let names: Vec<String> = batch
+                    .files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect();
                 status(&format!("changed: {}", names.join(", ")));
             }
             None => {
