@@ -60,6 +60,7 @@ struct Stats {
     newton_misses: usize,
     newton_false: usize,
     newton_wrong_t: usize,
+    shown: usize,
 }
 
 impl Stats {
@@ -183,7 +184,15 @@ fn run_lathe(
                 st.off_surface += 1;
             }
         }
+        let before = (st.misses, st.false_hits, st.t_errors, st.off_surface);
         st.compare(want.t, got.map(|h| h.t));
+        if before != (st.misses, st.false_hits, st.t_errors, st.off_surface) && st.shown < 3 {
+            st.shown += 1;
+            println!(
+                "  [{name}] failing ray o={o:?} d={d:?}: reference {:?}, robust {:?}",
+                want.t, got
+            );
+        }
         let newton = lathe.intersect(o, d, 1e-9, f64::INFINITY, NEWTON);
         st.newton(want.t, newton.map(|h| h.t));
     }

@@ -499,7 +499,7 @@ impl Lathe {
     /// Returns the point and its unit outward normal.
     pub fn sample(&self, u: DVec2) -> Option<(DVec3, DVec3)> {
         let total = *self.area_cdf.last()?;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let target = u.x.clamp(0.0, 1.0) * total;
@@ -649,8 +649,14 @@ impl RayFrame {
                 let (x, z) = (oc.x + t * dn.x, oc.z + t * dn.z);
                 seg.r.eval(s) - (x * x + z * z).sqrt()
             };
-            let s = bisect(&g, lo, hi).unwrap_or(root.t);
-            cands[0] = (self.t0 + t_of(s), s);
+            if let Some(s) = nearest_sign_change(&g, &|s| t_of(s), lo, hi) {
+                cands[0] = (self.t0 + t_of(s), s);
+                return cands;
+            }
+            // A tangency: keep the root if the ray really reaches the surface there.
+            if g(root.t).abs() <= 1e-7 * size {
+                cands[0] = (self.t0 + t_of(root.t), root.t);
+            }
             return cands;
         }
         let w_of = |s: f64| {
@@ -659,13 +665,17 @@ impl RayFrame {
         };
         let mut refined = false;
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
-            let g = |s: f64| seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s));
-            if let Some(s) = bisect(&g, lo, hi) {
+            let g = |s: f64| {
                 let r = seg.r.eval(s);
-                if r * r >= self.rho2 - 1e-12 * size * size {
-                    cands[k] = (self.t0 + sigma * w_of(s), s);
-                    refined = true;
+                if r * r < self.rho2 - 1e-12 * size * size {
+                    // The ray does not reach radius r: no hit at this s.
+                    return f64::NAN;
                 }
+                seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
+            };
+            if let Some(s) = nearest_sign_change(&g, &|s| sigma * w_of(s), lo, hi) {
+                cands[k] = (self.t0 + sigma * w_of(s), s);
+                refined = true;
             }
         }
         if refined {
@@ -682,7 +692,8 @@ impl RayFrame {
         let dh = seg.h.eval_with_derivative(s).1;
         let res = |t: f64| (oc.y + t * dn.y - hs).abs();
         let (rp, rm) = (res(w), res(-w));
-        let lim = rp.min(rm) + 4.0 * dh.abs() * (ds + root.hi - root.lo) + 1e-12 * size;
+        let lim = (rp.min(rm) + 4.0 * dh.abs() * (ds + root.hi - root.lo) + 1e-12 * size)
+            .min(1e-7 * size);
         if rp <= lim {
             cands[0].0 = self.t0 + w;
         }
@@ -693,10 +704,33 @@ impl RayFrame {
     }
 }
 
+/// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
+/// bisected root with the smallest `t(s)`.
+fn nearest_sign_change(
+    g: &dyn Fn(f64) -> f64,
+    t: &dyn Fn(f64) -> f64,
+    lo: f64,
+    hi: f64,
+) -> Option<f64> {
+    let mut best: Option<(f64, f64)> = None;
+    let n = 16;
+    for k in 0..n {
+        let a = lo + (hi - lo) * k as f64 / n as f64;
+        let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
+        if let Some(s) = bisect(g, a, b) {
+            let ts = t(s);
+            if best.is_none_or(|(_, bt)| ts < bt) {
+                best = Some((s, ts));
+            }
+        }
+    }
+    best.map(|b| b.0)
+}
+
 /// A root of `g` in `[lo, hi]` by bisection if `g` changes sign there.
 fn bisect(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> Option<f64> {
     let (ga, gb) = (g(lo), g(hi));
-    if !(ga * gb <= 0.0) {
+    if ga * gb > 0.0 || (ga * gb).is_nan() {
         return None;
     }
     if ga == 0.0 {

@@ -98,7 +98,7 @@ impl Shape for BezierPatch {
 
     fn sample(&self, u: Vec2) -> Option<AreaSample> {
         let total = *self.cdf.last()?;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return None;
         }
         let target = (u.x as f64).clamp(0.0, 1.0) * total;

@@ -96,7 +96,7 @@ impl Shape for Revolve {
     }
 
     fn sample(&self, u: Vec2) -> Option<AreaSample> {
-        if !(self.area > 0.0) {
+        if self.area.is_nan() || self.area <= 0.0 {
             return None;
         }
         let (p, n) = self.lathe.sample(u.as_dvec2())?;
