@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod render;
+
 /// Scene errors (bad scene text, failed render).
 pub const EXIT_SCENE_ERROR: u8 = 1;
 /// Usage errors (bad arguments, unreadable input file given on the command line).
@@ -28,6 +30,8 @@ pub enum Command {
         /// The scene file (.scn).
         scene: PathBuf,
     },
+    /// Render a scene with stochastic progressive photon mapping.
+    Render(render::RenderArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -36,5 +40,6 @@ pub fn run(cli: Cli) -> ExitCode {
             eprintln!("check {}: the language is not built yet", scene.display());
             ExitCode::from(EXIT_USAGE)
         }
+        Command::Render(args) => render::run(args),
     }
 }
