@@ -5,8 +5,9 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
+use sppm_lang::render::RenderError;
 use sppm_lang::scene::{Background, Light, Scene};
-use sppm_lang::{EvalOptions, Loaded};
+use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
 
@@ -24,6 +25,21 @@ pub fn print_diagnostics(loaded: &Loaded) {
             "{}",
             sppm_lang::render_plain(&loaded.sources, &loaded.diagnostics, 100)
         );
+    }
+}
+
+/// Prints a render failure: as a diagnostic at its span when it has one.
+pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
+    match e.span {
+        Some(span) if sources.get(span.file).is_some() => {
+            let loaded = Loaded {
+                diagnostics: vec![Diagnostic::error(span, e.message.clone())],
+                sources: sources.clone(),
+                ..Loaded::default()
+            };
+            print_diagnostics(&loaded);
+        }
+        _ => eprintln!("error: {}", e.message),
     }
 }
 

@@ -1,6 +1,7 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
 mod check;
+mod render;
 mod watch;
 
 use std::path::PathBuf;
@@ -55,6 +56,8 @@ pub enum Command {
         #[command(flatten)]
         limits: LimitArgs,
     },
+    /// Render a scene with stochastic progressive photon mapping.
+    Render(render::RenderArgs),
     /// Re-render a scene every time it or a file it reads is saved.
     Watch(watch::WatchArgs),
 }
@@ -62,6 +65,7 @@ pub enum Command {
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Check { scene, limits } => check::run(&scene, &limits.options()),
+        Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
     }
 }

@@ -20,9 +20,9 @@ use clap::Args;
 use sppm_lang::render::{self, RenderOptions};
 use sppm_lang::scene::Scene;
 use sppm_lang::watch::DependencyWatcher;
-use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
+use sppm_lang::{EvalOptions, SourceMap};
 
-use super::check::print_diagnostics;
+use super::check::{print_diagnostics, print_render_error};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
 
 #[derive(Debug, Clone, Args)]
@@ -298,12 +298,8 @@ fn start(
                     ));
                 }
                 Err(e) => {
-                    let diag = Diagnostic::error(e.span.unwrap_or_default(), e.message.clone());
-                    if e.span.is_some() {
-                        eprint!("{}", sppm_lang::render_plain(&sources, &[diag], 100));
-                    } else {
-                        status(&format!("render failed: {}", e.message));
-                    }
+                    print_render_error(&sources, &e);
+                    status(&format!("render #{round} failed"));
                     return Outcome::Finished;
                 }
             }

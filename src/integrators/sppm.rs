@@ -261,14 +261,13 @@ fn attenuate_inside(scene: &PreparedScene, sh: &SurfaceHit, ray: &Ray, beta: &mu
     }
 }
 
-/// One photon path; pushes (pixel, flux) deposits.
+/// One photon path from a light chosen by power. `at_hit(depth, hit, wi, beta)` runs at every
+/// surface the photon reaches, `beta` being the photon's flux there (before the surface's BSDF).
 fn trace_photon(
     scene: &PreparedScene,
-    grid: &Grid,
-    pixels: &[Pixel],
     max_depth: u32,
     rng: &mut Rng,
-    out: &mut Vec<(u32, Vec3A)>,
+    mut at_hit: impl FnMut(u32, &SurfaceHit, Vec3A, Vec3A),
 ) {
     let Some((li, pl)) = scene.light_distr.sample(rng.f32()) else {
         return;
@@ -289,23 +288,7 @@ fn trace_photon(
         };
         attenuate_inside(scene, &sh, &ray, &mut beta);
         let wi = -ray.d;
-        if depth > 0 {
-            // Direct light is sampled by the camera pass; deposit from the first bounce on.
-            for &k in grid.candidates(sh.hit.p) {
-                let (pix, p, r2) = grid.points[k as usize];
-                if (p - sh.hit.p).length_squared() > r2 {
-                    continue;
-                }
-                let vp = pixels[pix as usize]
-                    .vp
-                    .as_ref()
-                    .expect("grid points have a vp");
-                let f = vp.bsdf.f(vp.wo, wi);
-                if f != Vec3A::ZERO {
-                    out.push((pix, beta * f));
-                }
-            }
-        }
+        at_hit(depth, &sh, wi, beta);
         let bsdf = scene.bsdf(&sh);
         let Some(s) = bsdf.sample(wi, rng.f32(), rng.vec2(), TransportMode::Importance) else {
             return;
@@ -322,6 +305,57 @@ fn trace_photon(
         }
         ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
     }
+}
+
+/// Deposits a photon's flux at every visible point around the hit (from the second surface on:
+/// direct light is sampled by the camera pass).
+#[inline]
+fn deposit(
+    grid: &Grid,
+    pixels: &[Pixel],
+    sh: &SurfaceHit,
+    wi: Vec3A,
+    beta: Vec3A,
+    out: &mut Vec<(u32, Vec3A)>,
+) {
+    for &k in grid.candidates(sh.hit.p) {
+        let (pix, p, r2) = grid.points[k as usize];
+        if (p - sh.hit.p).length_squared() > r2 {
+            continue;
+        }
+        let Some(vp) = pixels[pix as usize].vp.as_ref() else {
+            continue;
+        };
+        let f = vp.bsdf.f(vp.wo, wi);
+        if f != Vec3A::ZERO {
+            out.push((pix, beta * f));
+        }
+    }
+}
+
+/// Flux statistics of `photons` photon paths (for energy-conservation checks): the mean over
+/// photons of the flux arriving at surfaces, summed over all hits, over hits from the second on,
+/// and of the flux absorbed (`beta * (1 - albedo)` needs the albedo: the caller passes it).
+pub fn photon_flux(
+    scene: &PreparedScene,
+    photons: u64,
+    max_depth: u32,
+    seed: u64,
+    albedo: f64,
+) -> [f64; 3] {
+    let mut sums = [0.0f64; 3];
+    for i in 0..photons {
+        let mut rng = Rng::new(stream_seed(seed, 0, STREAM_PHOTON, i));
+        trace_photon(scene, max_depth, &mut rng, |depth, _, _, beta| {
+            let b = beta.as_dvec3().element_sum() / 3.0;
+            sums[0] += b;
+            if depth > 0 {
+                sums[1] += b;
+            }
+            sums[2] += b * (1.0 - albedo);
+        });
+    }
+    sums.map(|s| s / photons as f64)
 }
 
 pub fn render(
@@ -407,7 +441,16 @@ pub fn render_with_state(
                     let hi = (lo + PHOTON_CHUNK).min(settings.photons);
                     for i in lo..hi {
                         let mut rng = Rng::new(stream_seed(seed, iter, STREAM_PHOTON, i));
-                        trace_photon(scene, grid, &pixels, settings.max_depth, &mut rng, &mut out);
+                        trace_photon(
+                            scene,
+                            settings.max_depth,
+                            &mut rng,
+                            |depth, sh, wi, beta| {
+                                if depth > 0 {
+                                    deposit(grid, &pixels, sh, wi, beta, &mut out);
+                                }
+                            },
+                        );
                     }
                     out
                 })

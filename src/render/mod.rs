@@ -129,7 +129,7 @@ pub fn effective_settings(
     }
     let time_limit = o.time_limit.or(s.time_limit);
     if let Some(t) = time_limit
-        && !(t >= 0.0)
+        && (t.is_nan() || t < 0.0)
     {
         return Err(RenderError::new(format!(
             "time limit must be >= 0, got {t}"

@@ -22,7 +22,7 @@ impl Disk {
         if !(radius.is_finite() && radius > 0.0) {
             return Err(format!("disk radius must be positive, got {radius}"));
         }
-        if !(len.is_finite() && len > 0.0) || !center.is_finite() {
+        if !(len.is_finite() && len > 0.0 && center.is_finite()) {
             return Err("disk normal must be a non-zero vector".into());
         }
         Ok(Self {

@@ -16,7 +16,7 @@ pub struct Plane {
 impl Plane {
     pub fn new(normal: Vec3A, offset: f32) -> Result<Self, String> {
         let len = normal.length();
-        if !(len.is_finite() && len > 0.0) || !offset.is_finite() {
+        if !(len.is_finite() && len > 0.0 && offset.is_finite()) {
             return Err("plane normal must be a non-zero vector".into());
         }
         Ok(Self {

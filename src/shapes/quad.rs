@@ -20,7 +20,7 @@ impl Quad {
     pub fn new(origin: Vec3A, eu: Vec3A, ev: Vec3A) -> Result<Self, String> {
         let c = eu.cross(ev);
         let area = c.length();
-        if !(area.is_finite() && area > 0.0) || !origin.is_finite() {
+        if !(area.is_finite() && area > 0.0 && origin.is_finite()) {
             return Err("quad edges are parallel or degenerate (zero area)".into());
         }
         Ok(Self {

@@ -16,7 +16,7 @@ pub struct Sphere {
 
 impl Sphere {
     pub fn new(center: Vec3A, radius: f32) -> Result<Self, String> {
-        if !(radius.is_finite() && radius > 0.0) || !center.is_finite() {
+        if !(radius.is_finite() && radius > 0.0 && center.is_finite()) {
             return Err(format!(
                 "sphere radius must be positive and finite, got {radius}"
             ));

@@ -1,0 +1,119 @@
+//! Renderer throughput on the Cornell glass scene (built in Rust as the reference README says):
+//! camera paths/s, photons/s, deposits/s, BVH rays/s, each also given as a ratio against a
+//! baseline measured in the same run (brute-force ray casting over every shape without the BVH).
+//! Run: `cargo bench --bench render`.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::hint::black_box;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use glam::Vec3A;
+use sppm_lang::geometry::Ray;
+use sppm_lang::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::sampling::{Rng, uniform_sphere};
+use sppm_lang::shapes::Shape;
+use sppm_lang::shapes::quad::Quad;
+use sppm_lang::shapes::sphere::Sphere;
+
+fn rays(n: usize) -> Vec<Ray> {
+    let mut rng = Rng::new(12345);
+    (0..n)
+        .map(|_| {
+            let o = Vec3A::new(
+                rng.f32() * 1.8 - 0.9,
+                rng.f32() * 1.9 + 0.05,
+                rng.f32() * 1.8 - 0.9,
+            );
+            Ray::new(o, uniform_sphere(rng.vec2()))
+        })
+        .collect()
+}
+
+fn main() {
+    let scene = common::cornell_glass(256);
+    let prepared = PreparedScene::new(&scene).expect("cornell scene");
+    let rays = rays(1_000_000);
+
+    // Baseline: every shape tested for every ray.
+    let (x, y, z) = (Vec3A::X, Vec3A::Y, Vec3A::Z);
+    let brute: Vec<Box<dyn Shape>> = vec![
+        Box::new(Quad::new(Vec3A::new(-1.0, 0.0, -1.0), 2.0 * z, 2.0 * x).unwrap()),
+        Box::new(Quad::new(Vec3A::new(-1.0, 2.0, -1.0), 2.0 * x, 2.0 * z).unwrap()),
+        Box::new(Quad::new(Vec3A::new(-1.0, 0.0, -1.0), 2.0 * x, 2.0 * y).unwrap()),
+        Box::new(Quad::new(Vec3A::new(-1.0, 0.0, -1.0), 2.0 * y, 2.0 * z).unwrap()),
+        Box::new(Quad::new(Vec3A::new(1.0, 0.0, -1.0), 2.0 * z, 2.0 * y).unwrap()),
+        Box::new(Quad::new(Vec3A::new(-0.25, 1.98, -0.25), 0.5 * x, 0.5 * z).unwrap()),
+        Box::new(Sphere::new(Vec3A::new(0.42, 0.35, 0.25), 0.35).unwrap()),
+        Box::new(Sphere::new(Vec3A::new(-0.45, 0.35, -0.4), 0.35).unwrap()),
+    ];
+    let t = Instant::now();
+    let mut hits = 0usize;
+    for r in &rays {
+        let mut t_max = f32::INFINITY;
+        for s in &brute {
+            if let Some(h) = s.intersect(r, 0.0, t_max) {
+                t_max = h.t;
+            }
+        }
+        hits += (t_max < f32::INFINITY) as usize;
+    }
+    let base = rays.len() as f64 / t.elapsed().as_secs_f64();
+    black_box(hits);
+
+    let t = Instant::now();
+    let mut hits2 = 0usize;
+    for r in &rays {
+        hits2 += prepared.intersect(r, f32::INFINITY).is_some() as usize;
+    }
+    let bvh = rays.len() as f64 / t.elapsed().as_secs_f64();
+    assert_eq!(hits, hits2, "BVH and brute force disagree");
+
+    let cancel = AtomicBool::new(false);
+    let iters = 4;
+    let photons = 500_000u64;
+    let cam_only = RenderOptions {
+        iterations: Some(iters),
+        photons: Some(0),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let out = render(&scene, &cam_only, &cancel, &mut |_| {}).unwrap();
+    let t_cam = out.elapsed.as_secs_f64();
+    let full = RenderOptions {
+        photons: Some(photons),
+        ..cam_only.clone()
+    };
+    let out = render(&scene, &full, &cancel, &mut |_| {}).unwrap();
+    let t_photon = (out.elapsed.as_secs_f64() - t_cam).max(1e-9);
+    let cam = out.stats.camera_paths as f64 / t_cam;
+    let ph = out.stats.photons as f64 / t_photon;
+    let dep = out.stats.deposits as f64 / t_photon;
+    let threads = rayon::current_num_threads();
+    println!(
+        "cornell-glass 256x256, {iters} iterations, {photons} photons/iteration, {threads} threads"
+    );
+    println!("baseline brute-force rays/s (1 thread): {:>12.0}", base);
+    println!(
+        "BVH rays/s (1 thread):                  {:>12.0}  ({:.2}x baseline)",
+        bvh,
+        bvh / base
+    );
+    println!(
+        "camera paths/s:                         {:>12.0}  ({:.3}x baseline rays/s)",
+        cam,
+        cam / base
+    );
+    println!(
+        "photons/s:                              {:>12.0}  ({:.3}x baseline rays/s)",
+        ph,
+        ph / base
+    );
+    println!(
+        "deposits/s:                             {:>12.0}  ({:.3}x baseline rays/s)",
+        dep,
+        dep / base
+    );
+}

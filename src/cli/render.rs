@@ -1,0 +1,160 @@
+//! `sppm-lang render`: load a scene, render it with progress, write the image atomically.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use sppm_lang::SourceMap;
+use sppm_lang::render::{Progress, RenderOptions, render};
+use sppm_lang::scene::Scene;
+
+use super::check::{print_diagnostics, print_render_error};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file (.scn).
+    pub scene: PathBuf,
+    /// Output image (.png or .exr); default: the scene's name with .png.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// SPPM iterations (overrides the scene's settings).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Photons per iteration.
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Stop after this many seconds (the finished iterations are written).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
+    /// Worker threads (the image does not depend on it).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Write the current image every K iterations.
+    #[arg(long, value_name = "K")]
+    pub snapshot_every: Option<u32>,
+    #[command(flatten)]
+    pub limits: LimitArgs,
+}
+
+pub fn run(args: RenderArgs) -> ExitCode {
+    let loaded = match sppm_lang::load_file(&args.scene, &args.limits.options()) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("error: cannot read `{}`: {e}", args.scene.display());
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
+    print_diagnostics(&loaded);
+    match &loaded.scene {
+        Some(scene) if !loaded.has_errors() => render_scene(scene, &args, &loaded.sources),
+        _ => ExitCode::from(EXIT_SCENE_ERROR),
+    }
+}
+
+/// Renders an already loaded scene as `args` asks; `sources` turn render errors that carry a
+/// span into diagnostics.
+fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCode {
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| args.scene.with_extension("png"));
+    match output.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
+        _ => {
+            eprintln!(
+                "error: output `{}` must end in .png or .exr",
+                output.display()
+            );
+            return ExitCode::from(EXIT_USAGE);
+        }
+    }
+    if args.snapshot_every == Some(0) {
+        eprintln!("error: --snapshot-every must be at least 1");
+        return ExitCode::from(EXIT_USAGE);
+    }
+    let options = RenderOptions {
+        iterations: args.iterations,
+        photons: args.photons,
+        seed: args.seed,
+        time_limit: args.time_limit,
+        threads: args.threads,
+    };
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // A second handler cannot be installed (e.g. in tests); rendering works without it.
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
+    let exposure = scene.settings.exposure;
+    let total = options.iterations.unwrap_or(scene.settings.iterations);
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = ProgressBar::new(total as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{bar:30} {pos}/{len} iterations  {elapsed_precise} (ETA {eta})  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let mut snapshot_error = None;
+    let mut on_progress = |p: &Progress| {
+        if let Some(b) = &bar {
+            b.set_position(p.iteration as u64);
+            let secs = p.elapsed.as_secs_f64().max(1e-9);
+            b.set_message(format!(
+                "{:.2} M photons/s",
+                p.stats.photons as f64 / secs / 1e6
+            ));
+        }
+        if let Some(k) = args.snapshot_every
+            && p.iteration.is_multiple_of(k)
+            && p.iteration < p.iterations
+            && let Err(e) = p.image().write(&output, exposure)
+        {
+            snapshot_error = Some(e);
+        }
+    };
+    let result = render(scene, &options, &cancel, &mut on_progress);
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(e) = snapshot_error {
+        eprintln!("warning: snapshot: {e}");
+    }
+    let out = match result {
+        Ok(o) => o,
+        Err(e) => {
+            print_render_error(sources, &e);
+            return ExitCode::from(EXIT_SCENE_ERROR);
+        }
+    };
+    if let Err(e) = out.image.write(&output, exposure) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_SCENE_ERROR);
+    }
+    let secs = out.elapsed.as_secs_f64().max(1e-9);
+    eprintln!(
+        "{} {}: {} iterations{} in {:.2}s, {} photons ({:.2} M/s), {} deposits",
+        if out.cancelled {
+            "interrupted,"
+        } else {
+            "wrote"
+        },
+        output.display(),
+        out.iterations_done,
+        if out.cancelled { " (cancelled)" } else { "" },
+        secs,
+        out.stats.photons,
+        out.stats.photons as f64 / secs / 1e6,
+        out.stats.deposits,
+    );
+    ExitCode::SUCCESS
+}
