@@ -161,7 +161,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         let changes = watcher.wait_batch(None, &stop);
         if let Some(j) = job.take() {
             let outcome = j.stop(changes.is_none());
-            if matches!(outcome, Outcome::Cancelled) {
+            if matches!(outcome, Outcome::Cancelled) && changes.is_some() {
                 status(&format!("render #{round} cancelled"));
             }
         }
@@ -176,7 +176,8 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                 status(&format!("changed: {}", names.join(", ")));
             }
             None => {
-                status("interrupted; the current image is written");
+                // A render in flight has written its finished iterations (see `start`).
+                status("interrupted");
                 return ExitCode::SUCCESS;
             }
         }
