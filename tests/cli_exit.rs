@@ -1,0 +1,85 @@
+//! The command line's exit status and output for good and bad input, through the real binary:
+//! 0 ok, 1 scene errors (with a spanned diagnostic, never a panic), 2 usage errors.
+
+use std::process::{Command, Output};
+
+fn sppm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        .args(args)
+        .output()
+        .expect("run sppm-lang")
+}
+
+#[test]
+fn every_bad_scene_exits_1_with_a_located_diagnostic_and_no_panic() {
+    let mut n = 0;
+    for entry in std::fs::read_dir("tests/bad").unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if !name.ends_with(".scn") {
+            continue;
+        }
+        let out = sppm(&["check", path.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{name} panicked:\n{err}");
+        if name.starts_with("warn_") {
+            // Suspicious but legal: a warning, exit 0.
+            assert_eq!(out.status.code(), Some(0), "{name}:\n{err}");
+            assert!(
+                err.contains('⚠') || err.contains("warning"),
+                "{name}:\n{err}"
+            );
+        } else {
+            assert_eq!(out.status.code(), Some(1), "{name}:\n{err}");
+            // Plain (non-terminal) output names the file and line:column of the span.
+            assert!(
+                err.contains(".scn:"),
+                "{name}: no file:line:col in the diagnostic:\n{err}"
+            );
+        }
+        n += 1;
+    }
+    println!("{n} bad scenes checked through the binary");
+    assert!(n >= 40);
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let out = sppm(&["check", "/nonexistent/scene.scn"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = sppm(&["render", "/nonexistent/scene.scn"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = sppm(&["render", "examples/furnace.scn", "-o", "/tmp/x.gif"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = sppm(&["frobnicate"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn render_writes_an_image_and_leaves_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("furnace.exr");
+    let out = sppm(&[
+        "render",
+        "examples/furnace.scn",
+        "-o",
+        out_path.to_str().unwrap(),
+        "--iterations",
+        "2",
+        "--photons",
+        "2000",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(&out_path).unwrap().to_rgb32f();
+    assert!(img.pixels().all(|p| p.0.iter().all(|v| v.is_finite())));
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 1, "{names:?}");
+}
