@@ -358,3 +358,32 @@ fn watch_without_a_scene_file_is_a_usage_error() {
     assert!(err.contains("does not exist"), "{err}");
     let _ = std::io::stdout().flush();
 }
+
+#[test]
+fn ctrl_c_during_a_render_writes_the_finished_iterations_and_exits_0() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("long.scn");
+    let out = dir.path().join("long.png");
+    // Far more iterations than the test waits for.
+    fs::write(
+        &scene,
+        scene_text([255, 0, 0]).replace("iterations 3", "iterations 1000000"),
+    )
+    .unwrap();
+    let mut w = Watch::start(dir.path(), "long.scn", "long.png");
+    w.expect("render #1 full iteration 1/");
+    fs::remove_file(&out).unwrap();
+    let (status, rest) = w.interrupt();
+    assert!(status.success(), "exit {status:?}");
+    assert!(
+        rest.iter()
+            .any(|l| l.contains("stopped after") && l.contains("written to")),
+        "{rest:?}"
+    );
+    assert_eq!(
+        centre(&out),
+        [255, 0, 0],
+        "the interrupted render's image is on disk"
+    );
+    no_temporaries(dir.path());
+}
