@@ -64,7 +64,7 @@ fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
 fn diffuse_sphere_under_constant_environment_is_albedo_times_radiance() {
     let (a, l) = (0.5, 2.0);
     let scene = sphere_scene(32, ColorParam::Const(DVec3::splat(a)), l);
-    let img = run(&scene, 16, 20_000);
+    let img = run(&scene, 64, 2_000);
     // Centre 8x8 pixels lie on the sphere; the corners see the environment.
     let mut sum = 0.0;
     let mut worst: f64 = 0.0;
@@ -82,7 +82,8 @@ fn diffuse_sphere_under_constant_environment_is_albedo_times_radiance() {
         a * l
     );
     assert!((mean - a * l).abs() < 0.01 * a * l, "mean {mean}");
-    assert!(worst < 0.08, "worst pixel off by {worst}");
+    // Per-pixel noise of 64 iterations of one light and one BSDF sample (about 3% rms).
+    assert!(worst < 0.15, "worst pixel off by {worst}");
     for c in corner {
         assert!((c - l).abs() < 1e-4, "background {c}");
     }
@@ -132,7 +133,7 @@ fn textured_furnace_gives_albedo_per_texel() {
     let param = ColorParam::Texture(TextureId(0));
     let mut scene = sphere_scene(res, param.clone(), l);
     scene.textures.push(tex);
-    let img = run(&scene, 16, 10_000);
+    let img = run(&scene, 64, 2_000);
     let prepared = PreparedScene::new(&scene).unwrap();
     let camera = Camera::new(&scene.camera, res, res).unwrap();
     let albedo_at = |x: u32, y: u32, j: Vec2| -> Option<f32> {
@@ -145,7 +146,7 @@ fn textured_furnace_gives_albedo_per_texel() {
         };
         Some(color_param(&param, &scene.textures, &at).y)
     };
-    let (mut checked, mut worst, mut seen) = (0, 0.0f64, [false; 8]);
+    let (mut checked, mut worst, mut seen, mut sum_err) = (0, 0.0f64, [false; 8], 0.0);
     for y in 0..res {
         for x in 0..res {
             let probes = [
@@ -163,16 +164,20 @@ fn textured_furnace_gives_albedo_per_texel() {
             let want = first as f64 * l;
             let got = img.get(x, y)[1];
             worst = worst.max((got - want).abs() / want);
+            sum_err += (got - want) / want;
             checked += 1;
             if let Some(i) = albedos.iter().position(|a| (*a - first as f64).abs() < 1e-6) {
                 seen[i] = true;
             }
         }
     }
-    println!("textured furnace: {checked} pixels inside one texel, worst relative error {worst:.3}, texels seen {seen:?}");
+    println!("textured furnace: {checked} pixels inside one texel, mean relative error {:.4}, worst {worst:.3}, texels seen {seen:?}", sum_err / checked.max(1) as f64);
     assert!(checked > 300, "only {checked} pixels checked");
-    assert!(worst < 0.12, "a pixel is off its texel's albedo by {worst}");
-    assert!(seen.iter().filter(|s| **s).count() >= 6);
+    assert!((sum_err / checked as f64).abs() < 0.01, "biased: {}", sum_err / checked as f64);
+    // Per-pixel noise of 64 iterations (the darkest texel, 0.3, is the noisiest relatively).
+    assert!(worst < 0.15, "a pixel is off its texel's albedo by {worst}");
+    // The camera sees the middle half of the longitudes: 2 columns x 2 rows of texels.
+    assert!(seen.iter().filter(|s| **s).count() >= 4);
 }
 
 /// A 64x32 grey-level image, values from `f(u)`, on a sphere with `spherical` mapping, seen
