@@ -102,7 +102,11 @@ fn environment_photons_carry_the_right_power() {
         "flux arriving at the sphere per photon {:.4}, expected 4 pi^2 L = {want:.4}; after the first hit {:.2e}",
         flux[0], flux[1]
     );
-    assert!((flux[0] - want).abs() < 0.01 * want, "{} vs {want}", flux[0]);
+    assert!(
+        (flux[0] - want).abs() < 0.01 * want,
+        "{} vs {want}",
+        flux[0]
+    );
     // A convex sphere never sees itself: nothing arrives after the first hit.
     assert!(flux[1] < 1e-9);
 }
@@ -166,14 +170,24 @@ fn textured_furnace_gives_albedo_per_texel() {
             worst = worst.max((got - want).abs() / want);
             sum_err += (got - want) / want;
             checked += 1;
-            if let Some(i) = albedos.iter().position(|a| (*a - first as f64).abs() < 1e-6) {
+            if let Some(i) = albedos
+                .iter()
+                .position(|a| (*a - first as f64).abs() < 1e-6)
+            {
                 seen[i] = true;
             }
         }
     }
-    println!("textured furnace: {checked} pixels inside one texel, mean relative error {:.4}, worst {worst:.3}, texels seen {seen:?}", sum_err / checked.max(1) as f64);
+    println!(
+        "textured furnace: {checked} pixels inside one texel, mean relative error {:.4}, worst {worst:.3}, texels seen {seen:?}",
+        sum_err / checked.max(1) as f64
+    );
     assert!(checked > 300, "only {checked} pixels checked");
-    assert!((sum_err / checked as f64).abs() < 0.01, "biased: {}", sum_err / checked as f64);
+    assert!(
+        (sum_err / checked as f64).abs() < 0.01,
+        "biased: {}",
+        sum_err / checked as f64
+    );
     // Per-pixel noise of 64 iterations (the darkest texel, 0.3, is the noisiest relatively).
     assert!(worst < 0.15, "a pixel is off its texel's albedo by {worst}");
     // The camera sees the middle half of the longitudes: 2 columns x 2 rows of texels.
@@ -225,10 +239,20 @@ fn seam_steps(f: impl Fn(f64) -> f64) -> (f64, Vec<f64>) {
 fn spherical_map_has_no_seam_in_a_render() {
     let (seam, others) = seam_steps(|u| 0.5 + 0.4 * (2.0 * PI * u).sin());
     let typical = others.iter().sum::<f64>() / others.len() as f64;
-    println!("continuous texture: step across the seam {seam:.4}, next to it {others:.4?} (mean {typical:.4})");
-    assert!((seam - typical).abs() < 0.01, "seam step {seam} vs {typical} elsewhere");
+    println!(
+        "continuous texture: step across the seam {seam:.4}, next to it {others:.4?} (mean {typical:.4})"
+    );
+    assert!(
+        (seam - typical).abs() < 0.01,
+        "seam step {seam} vs {typical} elsewhere"
+    );
     let (bad, bad_others) = seam_steps(|u| u);
     let bad_typical = bad_others.iter().sum::<f64>() / bad_others.len() as f64;
-    println!("texture with a jump at u = 0: step across the seam {bad:.4}, elsewhere {bad_typical:.4}");
-    assert!((bad - bad_typical).abs() > 0.1, "the seam of a discontinuous texture must show");
+    println!(
+        "texture with a jump at u = 0: step across the seam {bad:.4}, elsewhere {bad_typical:.4}"
+    );
+    assert!(
+        (bad - bad_typical).abs() > 0.1,
+        "the seam of a discontinuous texture must show"
+    );
 }
