@@ -135,7 +135,7 @@ fn textured_furnace_gives_albedo_per_texel() {
     };
     let res = 48;
     let param = ColorParam::Texture(TextureId(0));
-    let mut scene = sphere_scene(res, param.clone(), l);
+    let mut scene = sphere_scene(res, param, l);
     scene.textures.push(tex);
     let img = run(&scene, 64, 2_000);
     let prepared = PreparedScene::new(&scene).unwrap();

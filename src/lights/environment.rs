@@ -58,7 +58,7 @@ impl EnvironmentLight {
 
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
         let s = self.map.sample(u)?;
-        if !(s.pdf > 0.0) || s.radiance == Vec3A::ZERO {
+        if s.pdf.is_nan() || s.pdf <= 0.0 || s.radiance == Vec3A::ZERO {
             return None;
         }
         // A point surely outside the scene along the direction: shadow rays stop there.
@@ -75,7 +75,7 @@ impl EnvironmentLight {
 
     pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
         let s = self.map.sample(u1)?;
-        if !(s.pdf > 0.0) {
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
         let w = s.direction;
