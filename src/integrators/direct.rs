@@ -1,6 +1,7 @@
 //! Direct lighting at a non-specular surface point: one light sample (lights chosen by power)
 //! and one BSDF sample, combined with the power heuristic (MIS). Delta lights use light
-//! sampling alone; a BSDF sample that escapes sees the background color.
+//! sampling alone; a BSDF sample that escapes sees the background color, or the environment
+//! light weighted by MIS.
 
 use glam::Vec3A;
 
@@ -58,7 +59,17 @@ pub fn direct_lighting(
                     }
                 }
             }
-            None => l += bs.weight * scene.background(),
+            None => match scene.environment_light() {
+                // The environment is a light: weigh its BSDF sample against light sampling.
+                Some((li, env)) => {
+                    let le = env.le(bs.wi);
+                    if le != Vec3A::ZERO {
+                        let light_pdf = scene.light_distr.pdf(li) * env.pdf_li(bs.wi);
+                        l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
+                    }
+                }
+                None => l += bs.weight * scene.background(),
+            },
         }
     }
     l

@@ -218,7 +218,7 @@ fn camera_path(
     for _depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             // Only reached at depth 0 or after specular bounces: nothing else samples it.
-            l += beta * scene.background();
+            l += beta * scene.background_radiance(ray.d);
             break;
         };
         let wo = -ray.d;

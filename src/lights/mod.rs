@@ -1,11 +1,13 @@
-//! Lights: point, spot, and area lights (one per emissive shape). Each can be sampled for
+//! Lights: point, spot, area lights (one per emissive shape) and the environment. Each can be sampled for
 //! direct lighting at a point (`sample_li`) and for photon emission (`sample_photon`).
 
 mod area;
+mod environment;
 mod point;
 mod spot;
 
 pub use area::AreaLight;
+pub use environment::EnvironmentLight;
 pub use point::PointLight;
 pub use spot::SpotLight;
 
@@ -40,6 +42,7 @@ pub enum Light {
     Point(PointLight),
     Spot(SpotLight),
     Area(AreaLight),
+    Environment(EnvironmentLight),
 }
 
 impl Light {
@@ -49,6 +52,7 @@ impl Light {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
             Light::Area(l) => l.power(),
+            Light::Environment(l) => l.power(),
         };
         ((p.x + p.y + p.z) / 3.0) as f64
     }
@@ -58,6 +62,7 @@ impl Light {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
             Light::Area(l) => l.sample_li(p, u),
+            Light::Environment(l) => l.sample_li(p, u),
         }
     }
 
@@ -66,6 +71,7 @@ impl Light {
             Light::Point(l) => l.sample_photon(u1),
             Light::Spot(l) => l.sample_photon(u1),
             Light::Area(l) => l.sample_photon(u1, u2),
+            Light::Environment(l) => l.sample_photon(u1, u2),
         }
     }
 }

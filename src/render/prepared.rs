@@ -6,7 +6,7 @@ use glam::{Affine3A, DMat3, DVec3, Vec3A};
 use super::RenderError;
 use crate::accel::Bvh;
 use crate::geometry::{Hit, Ray};
-use crate::lights::{AreaLight, Light, PointLight, SpotLight};
+use crate::lights::{AreaLight, EnvironmentLight, Light, PointLight, SpotLight};
 use crate::materials::{Bsdf, Lobes};
 use crate::sampling::Distribution1D;
 use crate::scene::{self, ColorParam, Material, ScalarParam, Scene};
@@ -44,6 +44,8 @@ pub struct PreparedScene<'a> {
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
     pub light_distr: Distribution1D,
+    /// Index in `lights` of the environment light, if the background is a non-black map.
+    pub environment: Option<usize>,
 }
 
 /// A surface hit with the primitive it belongs to.
@@ -322,15 +324,40 @@ impl<'a> PreparedScene<'a> {
                 }
             }
         }
+        let bvh = Bvh::new(shapes);
+        let mut environment = None;
+        if let scene::Background::Environment {
+            image,
+            intensity,
+            transform,
+        } = &scene.background
+        {
+            let map = textures::EnvironmentMap::new(image, *intensity, *transform);
+            if !map.is_black() {
+                // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite
+                // lights use for photon emission.
+                let b = bvh.bounds();
+                let (center, radius) = if b.is_empty() {
+                    (Vec3A::ZERO, 1.0)
+                } else {
+                    (b.centroid(), 0.5 * b.diagonal().length())
+                };
+                environment = Some(lights.len());
+                lights.push(Light::Environment(EnvironmentLight::new(
+                    map, center, radius,
+                )));
+            }
+        }
         let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
         Ok(Self {
             scene,
-            bvh: Bvh::new(shapes),
+            bvh,
             prim_object,
             prim_light,
             objects,
             lights,
             light_distr,
+            environment,
         })
     }
 
@@ -437,12 +464,32 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
-    /// The radiance a ray that leaves the scene sees.
+    /// The constant background color (black for an environment map: use
+    /// [`background_radiance`](Self::background_radiance) for a ray's direction).
     pub fn background(&self) -> Vec3A {
         match &self.scene.background {
             scene::Background::Color(c) => color3(*c),
-            // Environment lighting is not implemented: see docs/renderer.md.
             scene::Background::Environment { .. } => Vec3A::ZERO,
+        }
+    }
+
+    /// The radiance a ray leaving the scene in direction `dir` sees: the background color, or
+    /// the environment map.
+    #[inline]
+    pub fn background_radiance(&self, dir: Vec3A) -> Vec3A {
+        match self.environment_light() {
+            Some((_, env)) => env.le(dir),
+            None => self.background(),
+        }
+    }
+
+    /// The environment light and its index in `lights`.
+    #[inline]
+    pub fn environment_light(&self) -> Option<(usize, &EnvironmentLight)> {
+        let i = self.environment?;
+        match &self.lights[i] {
+            Light::Environment(e) => Some((i, e)),
+            _ => None,
         }
     }
 }

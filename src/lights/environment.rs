@@ -1,0 +1,93 @@
+//! Environment light: an equirectangular map at infinity around the scene (pbrt's
+//! `ImageInfiniteLight`). Direct lighting samples it by importance (`EnvironmentMap::sample`);
+//! photons start on a disk of the scene's bounding-sphere radius, perpendicular to the sampled
+//! direction and outside the scene, and travel inward.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3A};
+
+use super::{LightSample, PhotonSample};
+use crate::sampling::concentric_disk;
+use crate::shapes::frame::Frame;
+use crate::textures::EnvironmentMap;
+
+pub struct EnvironmentLight {
+    pub map: EnvironmentMap,
+    /// Bounding sphere of the scene's finite shapes.
+    pub center: Vec3A,
+    pub radius: f32,
+}
+
+impl EnvironmentLight {
+    /// `radius` is clamped to a small positive value so an empty scene still works.
+    pub fn new(map: EnvironmentMap, center: Vec3A, radius: f32) -> Self {
+        let radius = if radius.is_finite() && radius > 0.0 {
+            radius
+        } else {
+            1.0
+        };
+        let center = if center.is_finite() {
+            center
+        } else {
+            Vec3A::ZERO
+        };
+        Self {
+            map,
+            center,
+            radius,
+        }
+    }
+
+    /// Radiance arriving along a ray that leaves the scene in direction `dir`.
+    #[inline]
+    pub fn le(&self, dir: Vec3A) -> Vec3A {
+        self.map.radiance(dir)
+    }
+
+    /// Power sent into the scene: π r² ∫ L dω.
+    pub fn power(&self) -> Vec3A {
+        self.map.integrated_radiance() * (PI * self.radius * self.radius)
+    }
+
+    /// Solid-angle density of `sample_li` choosing direction `wi`.
+    #[inline]
+    pub fn pdf_li(&self, wi: Vec3A) -> f32 {
+        self.map.pdf(wi)
+    }
+
+    pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        let s = self.map.sample(u)?;
+        if s.pdf.is_nan() || s.pdf <= 0.0 || s.radiance == Vec3A::ZERO {
+            return None;
+        }
+        // A point surely outside the scene along the direction: shadow rays stop there.
+        let far = 2.0 * self.radius + (p - self.center).length();
+        Some(LightSample {
+            wi: s.direction,
+            li: s.radiance,
+            pdf: s.pdf,
+            p: p + s.direction * far,
+            n: -s.direction,
+            delta: false,
+        })
+    }
+
+    pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
+        let s = self.map.sample(u1)?;
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
+            return None;
+        }
+        let w = s.direction;
+        let frame = Frame::from_normal(w);
+        let d = concentric_disk(u2) * self.radius;
+        let p = self.center + w * self.radius + frame.to_world(Vec3A::new(d.x, d.y, 0.0));
+        let pdf_pos = 1.0 / (PI * self.radius * self.radius);
+        Some(PhotonSample {
+            p,
+            n: Vec3A::ZERO,
+            dir: -w,
+            beta: s.radiance / (s.pdf * pdf_pos),
+        })
+    }
+}
