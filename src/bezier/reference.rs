@@ -3,7 +3,7 @@
 //! They share no root finder with the production code. The lathe reference evaluates `F(s)`
 //! pointwise from the profile (never through the product polynomial) and isolates roots by
 //! coarse-to-fine subdivision with global Lipschitz bounds: an interval is dropped when
-//! `|F(mid)| > L1 * w / 2` (no root can be reached), a monotone interval (`|F'(mid)| > L2 * w / 2`)
+//! `|F(mid)| > min(L1 * w / 2, |F'(mid)| w / 2 + L2 w^2 / 8)` (no root can be reached), a monotone interval (`|F'(mid)| > L2 * w / 2`)
 //! holds at most one root, found by plain bisection. An interval that is neither by the time it is
 //! [`AMBIGUOUS_WIDTH`] wide is a near-double root the reference cannot decide: the ray is flagged
 //! ambiguous and left out of the comparison (and counted). Rays exactly perpendicular to the axis
@@ -71,7 +71,13 @@ fn lipschitz(frame: &RayFrame, seg: &Segment) -> Bounds {
 fn isolate(g: &dyn Fn(f64) -> (f64, f64), b: &Bounds, lo: f64, hi: f64, out: &mut Vec<Root>) {
     let (m, w) = (0.5 * (lo + hi), hi - lo);
     let (fm, dfm) = g(m);
-    if fm.abs() - b.noise > b.l1 * 0.5 * w {
+    // Drop the interval when no root can be reached from the midpoint, by either bound:
+    // first order (global Lipschitz bound of F) or second order (Taylor at the midpoint with the
+    // global bound of F''). The second is needed near a pole, where F' -> 0 and F grows
+    // quadratically: there the first-order bound alone cannot drop an interval wider than ~F,
+    // which pushed near-pole rays to the ambiguity width.
+    let reach2 = dfm.abs() * (1.0 + 1e-9) * 0.5 * w + b.l2 * 0.125 * w * w;
+    if fm.abs() - b.noise > (b.l1 * 0.5 * w).min(reach2) {
         return;
     }
     if dfm.abs() > b.l2 * 0.5 * w {
