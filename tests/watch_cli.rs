@@ -256,7 +256,10 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     for (seen, reported) in &latencies {
         let reported = reported.expect("the watcher reports its latency");
         // The watcher prints milliseconds, rounded: allow that half millisecond.
-        assert!(reported <= *seen + 0.0005, "reported {reported} s > seen {seen} s");
+        assert!(
+            reported <= *seen + 0.0005,
+            "reported {reported} s > seen {seen} s"
+        );
     }
 
     // 7. Ctrl-C: exit 0.
