@@ -1,6 +1,6 @@
 //! Parse + evaluate speed: a generated 100 000-object scene and the macro-heavy fractal tree.
-//! The baseline is parsing alone (pest + AST) of the same text, measured in the same run; the
-//! ratio evaluate/parse is printed at the end.
+//! Baselines measured in the same run: reading the text (counting its lines) and parsing alone
+//! (pest + AST); the ratios are printed at the end. Run with `cargo bench --bench parse`.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -9,17 +9,9 @@ use criterion::{Criterion, criterion_group};
 use sppm_lang::span::FileId;
 use sppm_lang::{EvalOptions, load_source, syntax};
 
-fn big_scene(n: usize) -> String {
-    let mut s = String::from("#declare M = material { diffuse rgb <0.7, 0.7, 0.7> }\n");
-    for i in 0..n {
-        let (x, z) = ((i % 316) as f64 * 0.1, (i / 316) as f64 * 0.1);
-        s.push_str(&format!(
-            "sphere {{ <{x:.1}, 0.05, {z:.1}>, 0.04 material {{ M }} translate <0, {}, 0> }}\n",
-            i % 7
-        ));
-    }
-    s
-}
+#[path = "support/big_scene.rs"]
+mod big_scene;
+use big_scene::big_scene;
 
 const TREE: &str = "
 #declare Glass = material { glass ior 1.5 }
@@ -49,7 +41,12 @@ fn benches(c: &mut Criterion) {
     let big = big_scene(100_000);
     let opts = EvalOptions::default();
     let mut g = c.benchmark_group("parse");
-    g.sample_size(10);
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    g.bench_function("read_text_100k", |b| {
+        b.iter(|| black_box(&big).lines().count())
+    });
     g.bench_function("parse_only_100k", |b| {
         b.iter(|| syntax::parse(FileId(0), black_box(&big)).unwrap().len())
     });
@@ -73,23 +70,34 @@ fn benches(c: &mut Criterion) {
     });
     g.finish();
 
+    let read = median(
+        || {
+            black_box(black_box(&big).lines().count());
+        },
+        3,
+    );
     let parse = median(
         || {
             black_box(syntax::parse(FileId(0), &big).unwrap());
         },
-        5,
+        3,
     );
     let full = median(
         || {
             black_box(load_source("big.scn", &big, &opts));
         },
-        5,
+        3,
     );
     let tree = median(
         || {
             black_box(load_source("tree.scn", TREE, &opts));
         },
-        5,
+        3,
+    );
+    println!(
+        "reading the 100k text (line count): {:.2} ms; pest parse + AST is {:.0} x that",
+        read.as_secs_f64() * 1e3,
+        parse.as_secs_f64() / read.as_secs_f64(),
     );
     println!(
         "100k objects: parse {:.1} ms, parse+evaluate {:.1} ms (ratio {:.2} x parse alone); tree (16383 cylinders): {:.1} ms ({:.2} x the 100k parse)",

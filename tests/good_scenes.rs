@@ -356,3 +356,19 @@ fn area_light_over_disk_and_sphere() {
         Material::Mirror { .. }
     ));
 }
+
+#[path = "../benches/support/big_scene.rs"]
+mod big_scene;
+
+/// The benchmark's generated scene evaluates to exactly the objects it writes (kinds counted).
+#[test]
+fn generated_100k_scene_has_100k_objects() {
+    let s = scene(&big_scene::big_scene(100_000));
+    assert_eq!(s.objects.len(), 100_000);
+    let count = |k: &str| s.objects.iter().filter(|o| o.shape.kind() == k).count();
+    assert_eq!(count("sphere"), 40_000);
+    assert_eq!(count("box"), 20_000);
+    assert_eq!(count("cylinder"), 20_000);
+    assert_eq!(count("disk"), 20_000);
+    assert_eq!(s.materials.len(), 3);
+}
