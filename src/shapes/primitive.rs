@@ -81,16 +81,17 @@ impl AnyShape {
             AnyShape::Triangle(s) => s.hit_at(ray, t),
             AnyShape::Plane(s) => s.hit_at(ray, t),
             // Boxed shapes always answer `Full`; recompute if ever asked otherwise.
-            AnyShape::Other(s) => s
-                .intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
-                .unwrap_or(Hit {
-                    t,
-                    p: ray.at(t),
-                    n: glam::Vec3A::Z,
-                    ns: glam::Vec3A::Z,
-                    uv: Vec2::ZERO,
-                    dpdu: glam::Vec3A::X,
-                }),
+            AnyShape::Other(s) => {
+                s.intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
+                    .unwrap_or(Hit {
+                        t,
+                        p: ray.at(t),
+                        n: glam::Vec3A::Z,
+                        ns: glam::Vec3A::Z,
+                        uv: Vec2::ZERO,
+                        dpdu: glam::Vec3A::X,
+                    })
+            }
         }
     }
 }

@@ -53,10 +53,7 @@ impl Quad {
     #[inline]
     fn st(&self, ray: &Ray, t: f32) -> (f32, f32) {
         let q = ray.at(t) - self.origin;
-        (
-            self.w.dot(q.cross(self.ev)),
-            self.w.dot(self.eu.cross(q)),
-        )
+        (self.w.dot(q.cross(self.ev)), self.w.dot(self.eu.cross(q)))
     }
 
     /// The full surface data at ray parameter `t` (a value [`Quad::hit_t`] returned).
