@@ -5,7 +5,7 @@ use glam::Vec3A;
 
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
-use crate::shapes::primitive::AnyShape;
+use crate::shapes::primitive::{AnyShape, LazyHit};
 
 const BINS: usize = 12;
 const MAX_LEAF: usize = 4;
@@ -92,13 +92,26 @@ impl Bvh {
         self.len() == 0
     }
 
-    /// Closest hit with `t_min < t < t_max`, and the hit shape's id.
-    pub fn intersect(&self, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<(Hit, u32)> {
-        let mut best = None;
+    /// Closest hit with `t_min < t < t_max`, and the hit shape's id. Candidates are tested
+    /// for `t` only; the surface data is computed once, for the closest hit.
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
+        let (lazy, shape, id) = self.intersect_lazy(ray, t_min, t_max)?;
+        Some((shape.hit_at(ray, lazy), id))
+    }
+
+    /// Closest hit as a [`LazyHit`], the shape hit and its id.
+    #[inline]
+    pub fn intersect_lazy(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        mut t_max: f32,
+    ) -> Option<(LazyHit, &AnyShape, u32)> {
+        let mut best: Option<(LazyHit, &AnyShape, u32)> = None;
         for (s, id) in &self.unbounded {
-            if let Some(h) = s.intersect(ray, t_min, t_max) {
-                t_max = h.t;
-                best = Some((h, *id));
+            if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
+                t_max = h.t();
+                best = Some((h, s, *id));
             }
         }
         if self.nodes.is_empty() {
@@ -114,10 +127,11 @@ impl Bvh {
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
                 if node.count > 0 {
                     let start = node.offset as usize;
-                    for i in start..start + node.count as usize {
-                        if let Some(h) = self.shapes[i].intersect(ray, t_min, t_max) {
-                            t_max = h.t;
-                            best = Some((h, self.ids[i]));
+                    let end = start + node.count as usize;
+                    for (s, id) in self.shapes[start..end].iter().zip(&self.ids[start..end]) {
+                        if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
+                            t_max = h.t();
+                            best = Some((h, s, *id));
                         }
                     }
                 } else {

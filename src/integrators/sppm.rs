@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use glam::{DVec3, Vec3A};
+use glam::{DVec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 use super::direct::direct_lighting;
@@ -67,8 +67,10 @@ struct Grid {
     res: [i32; 3],
     starts: Vec<u32>,
     entries: Vec<u32>,
-    /// Compact visible points: (pixel index, point, radius^2).
-    points: Vec<(u32, Vec3A, f32)>,
+    /// Compact visible points: position and radius^2 packed in 16 bytes (the photon
+    /// lookup's distance test reads only these), and the pixel each belongs to.
+    points: Vec<Vec4>,
+    pixel: Vec<u32>,
 }
 
 #[inline]
@@ -143,7 +145,8 @@ impl Grid {
             res,
             starts,
             entries,
-            points,
+            pixel: points.iter().map(|&(i, _, _)| i).collect(),
+            points: points.iter().map(|&(_, p, r2)| p.extend(r2)).collect(),
         })
     }
 
@@ -319,10 +322,11 @@ fn deposit(
     out: &mut Vec<(u32, Vec3A)>,
 ) {
     for &k in grid.candidates(sh.hit.p) {
-        let (pix, p, r2) = grid.points[k as usize];
-        if (p - sh.hit.p).length_squared() > r2 {
+        let q = grid.points[k as usize];
+        if (Vec3A::from(q.truncate()) - sh.hit.p).length_squared() > q.w {
             continue;
         }
+        let pix = grid.pixel[k as usize];
         let Some(vp) = pixels[pix as usize].vp.as_ref() else {
             continue;
         };

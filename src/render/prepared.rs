@@ -46,6 +46,11 @@ pub struct PreparedScene<'a> {
     pub light_distr: Distribution1D,
     /// Index in `lights` of the environment light, if the background is a non-black map.
     pub environment: Option<usize>,
+    /// Material index of each primitive id (saves the object indirection per hit).
+    prim_material: Vec<u32>,
+    /// The lobes of each material whose parameters are all constants (no texture), computed
+    /// once instead of at every hit.
+    const_lobes: Vec<Option<Lobes>>,
 }
 
 /// A surface hit with the primitive it belongs to.
@@ -206,6 +211,21 @@ fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
     })
 }
 
+/// Whether a material has no textured parameter.
+fn is_constant(m: &Material) -> bool {
+    let c = |p: &ColorParam| matches!(p, ColorParam::Const(_));
+    match m {
+        Material::Diffuse { albedo } => c(albedo),
+        Material::Mirror { tint } => c(tint),
+        Material::Glass { .. } => true,
+        Material::Glossy {
+            albedo,
+            specular,
+            roughness,
+        } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
+    }
+}
+
 fn color3(c: DVec3) -> Vec3A {
     c.as_vec3a()
 }
@@ -349,7 +369,11 @@ impl<'a> PreparedScene<'a> {
             }
         }
         let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
-        Ok(Self {
+        let prim_material = prim_object
+            .iter()
+            .map(|&o| objects[o as usize].material as u32)
+            .collect();
+        let mut prepared = Self {
             scene,
             bvh,
             prim_object,
@@ -358,7 +382,27 @@ impl<'a> PreparedScene<'a> {
             lights,
             light_distr,
             environment,
-        })
+            prim_material,
+            const_lobes: Vec::new(),
+        };
+        // A constant material gives the same lobes at every hit: the hit is not looked at.
+        let dummy = SurfaceHit {
+            hit: Hit {
+                t: 0.0,
+                p: Vec3A::ZERO,
+                n: Vec3A::Z,
+                ns: Vec3A::Z,
+                uv: glam::Vec2::ZERO,
+                dpdu: Vec3A::X,
+            },
+            prim: 0,
+        };
+        prepared.const_lobes = scene
+            .materials
+            .iter()
+            .map(|m| is_constant(m).then(|| prepared.lobes(m, &dummy)))
+            .collect();
+        Ok(prepared)
     }
 
     #[inline]
@@ -386,9 +430,9 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
+    #[inline]
     pub fn material(&self, prim: u32) -> &Material {
-        let o = &self.objects[self.prim_object[prim as usize] as usize];
-        &self.scene.materials[o.material]
+        &self.scene.materials[self.prim_material[prim as usize] as usize]
     }
 
     fn tex_coord(&self, sh: &SurfaceHit) -> TexCoord {
@@ -420,9 +464,20 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// The BSDF at a hit.
+    #[inline]
     pub fn bsdf(&self, sh: &SurfaceHit) -> Bsdf {
+        let m = self.prim_material[sh.prim as usize] as usize;
+        let lobes = match self.const_lobes.get(m) {
+            Some(Some(l)) => *l,
+            _ => self.lobes(&self.scene.materials[m], sh),
+        };
+        Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n)
+    }
+
+    /// The lobes of material `m` at a hit (texture lookups where the material has them).
+    fn lobes(&self, m: &Material, sh: &SurfaceHit) -> Lobes {
         let clamp01 = |c: Vec3A| c.clamp(Vec3A::ZERO, Vec3A::ONE);
-        let lobes = match self.material(sh.prim) {
+        match m {
             Material::Diffuse { albedo } => Lobes::Diffuse {
                 albedo: clamp01(self.color(albedo, sh)),
             },
@@ -449,8 +504,7 @@ impl<'a> PreparedScene<'a> {
                     alpha: (r * r).max(1e-3),
                 }
             }
-        };
-        Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n)
+        }
     }
 
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.

@@ -35,9 +35,50 @@ impl Cylinder {
         })
     }
 
+    /// The ray in the cylinder's local frame.
+    #[inline]
+    fn local(&self, ray: &Ray) -> (Vec3A, Vec3A) {
+        (
+            self.frame.to_local(ray.o - self.base),
+            self.frame.to_local(ray.d),
+        )
+    }
+
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Cylinder::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t0, t1, o, d) = self.roots(ray)?;
+        [t0, t1].into_iter().find(|&t| {
+            let z = (o + d * t).z;
+            t > t_min && t < t_max && !(z < 0.0 || z > self.height)
+        })
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Cylinder::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let (o, d) = self.local(ray);
+        let l = o + d * t;
+        let radial = Vec2::new(l.x, l.y);
+        let radial = radial * (self.radius / radial.length());
+        let phi = radial.y.atan2(radial.x);
+        let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+        let nl = Vec3A::new(radial.x, radial.y, 0.0) / self.radius;
+        let n = self.frame.to_world(nl);
+        let p = self.base + self.frame.to_world(Vec3A::new(radial.x, radial.y, l.z));
+        let dpdu = self.frame.to_world(Vec3A::new(-radial.y, radial.x, 0.0)) * (2.0 * PI);
+        Hit {
+            t,
+            p,
+            n,
+            ns: n,
+            uv: Vec2::new(phi / (2.0 * PI), l.z / self.height),
+            dpdu,
+        }
+    }
+
+    #[inline]
     fn roots(&self, ray: &Ray) -> Option<(f32, f32, Vec3A, Vec3A)> {
-        let o = self.frame.to_local(ray.o - self.base);
-        let d = self.frame.to_local(ray.d);
+        let (o, d) = self.local(ray);
         let a = d.x * d.x + d.y * d.y;
         if a == 0.0 {
             return None;
@@ -67,33 +108,12 @@ impl Shape for Cylinder {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let (t0, t1, o, d) = self.roots(ray)?;
-        for t in [t0, t1] {
-            if !(t > t_min && t < t_max) {
-                continue;
-            }
-            let l = o + d * t;
-            if l.z < 0.0 || l.z > self.height {
-                continue;
-            }
-            let radial = Vec2::new(l.x, l.y);
-            let radial = radial * (self.radius / radial.length());
-            let phi = radial.y.atan2(radial.x);
-            let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-            let nl = Vec3A::new(radial.x, radial.y, 0.0) / self.radius;
-            let n = self.frame.to_world(nl);
-            let p = self.base + self.frame.to_world(Vec3A::new(radial.x, radial.y, l.z));
-            let dpdu = self.frame.to_world(Vec3A::new(-radial.y, radial.x, 0.0)) * (2.0 * PI);
-            return Some(Hit {
-                t,
-                p,
-                n,
-                ns: n,
-                uv: Vec2::new(phi / (2.0 * PI), l.z / self.height),
-                dpdu,
-            });
-        }
-        None
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -33,14 +33,10 @@ impl Disk {
     }
 }
 
-impl Shape for Disk {
-    fn bounds(&self) -> Aabb {
-        let n = self.frame.n;
-        let e = (Vec3A::ONE - n * n).max(Vec3A::ZERO).powf(0.5) * self.radius;
-        Aabb::new(self.center - e, self.center + e)
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+impl Disk {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Disk::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         let n = self.frame.n;
         let denom = n.dot(ray.d);
         if denom == 0.0 {
@@ -50,16 +46,21 @@ impl Shape for Disk {
         if !(t > t_min && t < t_max) {
             return None;
         }
+        let l = self.frame.to_local(ray.at(t) - self.center);
+        let r2 = l.x * l.x + l.y * l.y;
+        (r2 <= self.radius * self.radius).then_some(t)
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Disk::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let n = self.frame.n;
         let p = ray.at(t);
         let l = self.frame.to_local(p - self.center);
         let r2 = l.x * l.x + l.y * l.y;
-        if r2 > self.radius * self.radius {
-            return None;
-        }
         let phi = l.y.atan2(l.x);
         let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
         let dpdu = self.frame.t * l.x - self.frame.s * l.y;
-        Some(Hit {
+        Hit {
             t,
             p,
             n,
@@ -70,7 +71,24 @@ impl Shape for Disk {
             } else {
                 self.frame.s
             },
-        })
+        }
+    }
+}
+
+impl Shape for Disk {
+    fn bounds(&self) -> Aabb {
+        let n = self.frame.n;
+        let e = (Vec3A::ONE - n * n).max(Vec3A::ZERO).powf(0.5) * self.radius;
+        Aabb::new(self.center - e, self.center + e)
+    }
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

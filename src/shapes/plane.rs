@@ -26,30 +26,46 @@ impl Plane {
     }
 }
 
-impl Shape for Plane {
-    fn bounds(&self) -> Aabb {
-        Aabb::new(Vec3A::splat(f32::NEG_INFINITY), Vec3A::splat(f32::INFINITY))
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+impl Plane {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Plane::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         let n = self.frame.n;
         let denom = n.dot(ray.d);
         if denom == 0.0 {
             return None;
         }
         let t = (self.offset - n.dot(ray.o)) / denom;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
+        (t > t_min && t < t_max).then_some(t)
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Plane::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let n = self.frame.n;
         let p = ray.at(t);
-        Some(Hit {
+        Hit {
             t,
             p,
             n,
             ns: n,
             uv: Vec2::new(p.dot(self.frame.s), p.dot(self.frame.t)),
             dpdu: self.frame.s,
-        })
+        }
+    }
+}
+
+impl Shape for Plane {
+    fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3A::splat(f32::NEG_INFINITY), Vec3A::splat(f32::INFINITY))
+    }
+
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -32,6 +32,70 @@ macro_rules! dispatch {
     };
 }
 
+/// The result of a cheap intersection test: the analytic shapes give only `t` (their surface
+/// data is computed once, for the closest hit, by [`AnyShape::hit_at`]); boxed shapes give
+/// their full hit at once.
+#[derive(Debug, Clone, Copy)]
+pub enum LazyHit {
+    T(f32),
+    Full(Hit),
+}
+
+impl LazyHit {
+    #[inline]
+    pub fn t(&self) -> f32 {
+        match self {
+            LazyHit::T(t) => *t,
+            LazyHit::Full(h) => h.t,
+        }
+    }
+}
+
+impl AnyShape {
+    /// Nearest hit with `t_min < t < t_max`, deferring the surface data where the shape can.
+    #[inline]
+    pub fn intersect_lazy(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {
+        match self {
+            AnyShape::Sphere(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Quad(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Disk(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Cylinder(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Triangle(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Plane(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
+            AnyShape::Other(s) => s.intersect(ray, t_min, t_max).map(LazyHit::Full),
+        }
+    }
+
+    /// The full hit for a [`LazyHit`] this shape returned for `ray`; identical to what
+    /// [`Shape::intersect`] gives.
+    pub fn hit_at(&self, ray: &Ray, lazy: LazyHit) -> Hit {
+        let t = match lazy {
+            LazyHit::Full(h) => return h,
+            LazyHit::T(t) => t,
+        };
+        match self {
+            AnyShape::Sphere(s) => s.hit_at(ray, t),
+            AnyShape::Quad(s) => s.hit_at(ray, t),
+            AnyShape::Disk(s) => s.hit_at(ray, t),
+            AnyShape::Cylinder(s) => s.hit_at(ray, t),
+            AnyShape::Triangle(s) => s.hit_at(ray, t),
+            AnyShape::Plane(s) => s.hit_at(ray, t),
+            // Boxed shapes always answer `Full`; recompute if ever asked otherwise.
+            AnyShape::Other(s) => {
+                s.intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
+                    .unwrap_or(Hit {
+                        t,
+                        p: ray.at(t),
+                        n: glam::Vec3A::Z,
+                        ns: glam::Vec3A::Z,
+                        uv: Vec2::ZERO,
+                        dpdu: glam::Vec3A::X,
+                    })
+            }
+        }
+    }
+}
+
 impl Shape for AnyShape {
     fn bounds(&self) -> Aabb {
         dispatch!(self, s => s.bounds())

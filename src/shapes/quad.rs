@@ -34,6 +34,42 @@ impl Quad {
     }
 }
 
+impl Quad {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Quad::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let denom = self.n.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = self.n.dot(self.origin - ray.o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let (s, v) = self.st(ray, t);
+        ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&v)).then_some(t)
+    }
+
+    #[inline]
+    fn st(&self, ray: &Ray, t: f32) -> (f32, f32) {
+        let q = ray.at(t) - self.origin;
+        (self.w.dot(q.cross(self.ev)), self.w.dot(self.eu.cross(q)))
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Quad::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let (s, v) = self.st(ray, t);
+        Hit {
+            t,
+            p: ray.at(t),
+            n: self.n,
+            ns: self.n,
+            uv: Vec2::new(s, v),
+            dpdu: self.eu,
+        }
+    }
+}
+
 impl Shape for Quad {
     fn bounds(&self) -> Aabb {
         Aabb::from_points([
@@ -45,29 +81,12 @@ impl Shape for Quad {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let denom = self.n.dot(ray.d);
-        if denom == 0.0 {
-            return None;
-        }
-        let t = self.n.dot(self.origin - ray.o) / denom;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
-        let p = ray.at(t);
-        let q = p - self.origin;
-        let s = self.w.dot(q.cross(self.ev));
-        let v = self.w.dot(self.eu.cross(q));
-        if !((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&v)) {
-            return None;
-        }
-        Some(Hit {
-            t,
-            p,
-            n: self.n,
-            ns: self.n,
-            uv: Vec2::new(s, v),
-            dpdu: self.eu,
-        })
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

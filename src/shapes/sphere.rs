@@ -24,7 +24,8 @@ impl Sphere {
         Ok(Self { center, radius })
     }
 
-    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+    /// The full surface data at ray parameter `t` (a value [`Sphere::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
         let mut rel = ray.at(t) - self.center;
         // Re-project onto the surface: removes most of the rounding error of the quadratic.
         rel *= self.radius / rel.length();
@@ -45,6 +46,20 @@ impl Sphere {
         }
     }
 
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Sphere::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t0, t1) = self.roots(ray)?;
+        if t0 > t_min && t0 < t_max {
+            Some(t0)
+        } else if t1 > t_min && t1 < t_max {
+            Some(t1)
+        } else {
+            None
+        }
+    }
+
+    #[inline]
     fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
         let oc = ray.o - self.center;
         let a = ray.d.length_squared();
@@ -73,20 +88,12 @@ impl Shape for Sphere {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let (t0, t1) = self.roots(ray)?;
-        let t = if t0 > t_min && t0 < t_max {
-            t0
-        } else if t1 > t_min && t1 < t_max {
-            t1
-        } else {
-            return None;
-        };
+        let t = self.hit_t(ray, t_min, t_max)?;
         Some(self.hit_at(ray, t))
     }
 
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.roots(ray)
-            .is_some_and(|(t0, t1)| (t0 > t_min && t0 < t_max) || (t1 > t_min && t1 < t_max))
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -37,13 +37,10 @@ impl Triangle {
     }
 }
 
-impl Shape for Triangle {
-    fn bounds(&self) -> Aabb {
-        Aabb::from_points(self.p)
-    }
-
+impl Triangle {
+    /// Möller–Trumbore: `(t, b1, b2)` when the ray crosses the triangle (any `t`).
     #[inline]
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+    fn solve(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
         let e1 = self.p[1] - self.p[0];
         let e2 = self.p[2] - self.p[0];
         let pv = ray.d.cross(e2);
@@ -62,10 +59,21 @@ impl Shape for Triangle {
         if b2 < 0.0 || b1 + b2 > 1.0 {
             return None;
         }
-        let t = e2.dot(qv) * inv;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
+        Some((e2.dot(qv) * inv, b1, b2))
+    }
+
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Triangle::hit_at`]).
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t, _, _) = self.solve(ray)?;
+        (t > t_min && t < t_max).then_some(t)
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Triangle::hit_t`] returned).
+    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let (b1, b2) = self.solve(ray).map_or((0.0, 0.0), |(_, b1, b2)| (b1, b2));
+        let e1 = self.p[1] - self.p[0];
+        let e2 = self.p[2] - self.p[0];
         let b0 = 1.0 - b1 - b2;
         let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
         let ns = match self.normals {
@@ -92,14 +100,31 @@ impl Shape for Triangle {
         } else {
             e1
         };
-        Some(Hit {
+        Hit {
             t,
             p,
             n: self.n,
             ns,
             uv,
             dpdu,
-        })
+        }
+    }
+}
+
+impl Shape for Triangle {
+    fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.p)
+    }
+
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {
