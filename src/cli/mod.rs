@@ -1,5 +1,6 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
+mod chart;
 mod check;
 mod render;
 mod watch;
@@ -60,6 +61,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Re-render a scene every time it or a file it reads is saved.
     Watch(watch::WatchArgs),
+    /// Chart error against render time for every integrator against a reference image.
+    Chart(chart::ChartArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -67,5 +70,6 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Check { scene, limits } => check::run(&scene, &limits.options()),
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
+        Command::Chart(args) => chart::run(&args),
     }
 }

@@ -2,7 +2,13 @@
 //! sampling, materials, lights and film code; `run` dispatches on the scene's choice.
 
 mod direct;
+mod kdtree;
+pub mod path;
+pub mod photon_map;
+pub mod ppm;
+mod progressive;
 pub mod sppm;
+pub mod whitted;
 
 pub use direct::direct_lighting;
 
@@ -19,9 +25,9 @@ pub fn run(
 ) -> Result<RenderOutput, RenderError> {
     match settings.integrator {
         Integrator::Sppm => Ok(sppm::render(scene, settings, cancel, on_progress)),
-        other => Err(RenderError::new(format!(
-            "the `{}` integrator is not available yet; use `sppm`",
-            other.name()
-        ))),
+        Integrator::Ppm => Ok(ppm::render(scene, settings, cancel, on_progress)),
+        Integrator::Path => Ok(path::render(scene, settings, cancel, on_progress)),
+        Integrator::Whitted => Ok(whitted::render(scene, settings, cancel, on_progress)),
+        Integrator::PhotonMap => Ok(photon_map::render(scene, settings, cancel, on_progress)),
     }
 }

@@ -35,11 +35,11 @@ const STREAM_CAMERA: u32 = 0;
 const STREAM_PHOTON: u32 = 1;
 
 #[derive(Clone, Copy)]
-struct VisiblePoint {
-    p: Vec3A,
-    wo: Vec3A,
-    bsdf: Bsdf,
-    beta: Vec3A,
+pub(crate) struct VisiblePoint {
+    pub(crate) p: Vec3A,
+    pub(crate) wo: Vec3A,
+    pub(crate) bsdf: Bsdf,
+    pub(crate) beta: Vec3A,
 }
 
 #[derive(Clone)]
@@ -163,7 +163,8 @@ impl Grid {
     }
 }
 
-fn initial_radius(scene: &PreparedScene, settings: &EffectiveSettings) -> f64 {
+/// The initial gather radius: the scene's `radius`, else 1% of the scene diagonal.
+pub fn initial_radius(scene: &PreparedScene, settings: &EffectiveSettings) -> f64 {
     if let Some(r) = settings.radius {
         return r;
     }
@@ -205,17 +206,23 @@ fn image_of(pixels: &[Pixel], width: u32, height: u32, iters: u32, photons: u64)
 }
 
 /// Camera pass for one pixel: sets its visible point and returns emitted + direct light.
-fn camera_path(
+/// `fixed_eye`: the eye ray goes through the pixel center and the lens center (PPM).
+pub(crate) fn camera_path(
     scene: &PreparedScene,
     camera: &Camera,
     settings: &EffectiveSettings,
     x: u32,
     y: u32,
     rng: &mut Rng,
+    fixed_eye: bool,
 ) -> (Vec3A, Option<VisiblePoint>) {
     let jitter = rng.vec2();
     let lens = rng.vec2();
-    let mut ray = camera.ray(x, y, jitter, lens);
+    let mut ray = if fixed_eye {
+        camera.ray(x, y, glam::Vec2::splat(0.5), glam::Vec2::splat(0.5))
+    } else {
+        camera.ray(x, y, jitter, lens)
+    };
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
     for _depth in 0..settings.max_depth {
@@ -255,7 +262,12 @@ fn camera_path(
 /// Beer–Lambert absorption along a segment that ran inside an absorbing dielectric (the ray
 /// hits the surface from its inner side).
 #[inline]
-fn attenuate_inside(scene: &PreparedScene, sh: &SurfaceHit, ray: &Ray, beta: &mut Vec3A) {
+pub(crate) fn attenuate_inside(
+    scene: &PreparedScene,
+    sh: &SurfaceHit,
+    ray: &Ray,
+    beta: &mut Vec3A,
+) {
     if ray.d.dot(sh.hit.n) > 0.0
         && let Some(sigma) = scene.absorption(sh)
     {
@@ -266,7 +278,7 @@ fn attenuate_inside(scene: &PreparedScene, sh: &SurfaceHit, ray: &Ray, beta: &mu
 
 /// One photon path from a light chosen by power. `at_hit(depth, hit, wi, beta)` runs at every
 /// surface the photon reaches, `beta` being the photon's flux there (before the surface's BSDF).
-fn trace_photon(
+pub(crate) fn trace_photon(
     scene: &PreparedScene,
     max_depth: u32,
     rng: &mut Rng,
@@ -378,6 +390,18 @@ pub fn render_with_state(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> (RenderOutput, Vec<PixelStats>) {
+    render_progressive(scene, settings, cancel, on_progress, false)
+}
+
+/// The progressive loop shared with PPM: `fixed_eye` keeps every pixel's eye ray at the pixel
+/// center and the lens center in every iteration (Hachisuka 2008: no re-jitter).
+pub(crate) fn render_progressive(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    cancel: &AtomicBool,
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+    fixed_eye: bool,
+) -> (RenderOutput, Vec<PixelStats>) {
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
     let camera = match Camera::new(&scene.scene.camera, w, h) {
@@ -422,7 +446,7 @@ pub fn render_with_state(
                 }
                 let mut rng = Rng::new(stream_seed(seed, iter, STREAM_CAMERA, i as u64));
                 let (x, y) = (i as u32 % w, i as u32 / w);
-                let (l, vp) = camera_path(scene, &camera, settings, x, y, &mut rng);
+                let (l, vp) = camera_path(scene, &camera, settings, x, y, &mut rng, fixed_eye);
                 px.vp = vp;
                 if l.is_finite() { l } else { Vec3A::ZERO }
             })

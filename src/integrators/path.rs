@@ -1,0 +1,91 @@
+//! Unidirectional path tracing with next-event estimation: at every non-specular vertex the
+//! shared [`direct_lighting`] combines one light sample and one BSDF sample with the power
+//! heuristic (MIS); the path then continues with a fresh BSDF sample and counts emission it hits
+//! only after specular bounces (direct lighting already accounted for the rest). Russian
+//! roulette from the fourth vertex on. One sample per pixel per iteration, seeded from
+//! (seed, iteration, pixel): unbiased, the reference the photon methods are checked against.
+
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3A;
+
+use super::direct::direct_lighting;
+use super::progressive;
+use super::sppm::attenuate_inside;
+use crate::accel::spawn_ray;
+use crate::camera::Camera;
+use crate::materials::TransportMode;
+use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+use crate::sampling::Rng;
+
+/// Vertices before Russian roulette may end a path.
+const RR_DEPTH: u32 = 3;
+
+pub fn render(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    cancel: &AtomicBool,
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+) -> RenderOutput {
+    progressive::render(
+        scene,
+        settings,
+        cancel,
+        on_progress,
+        |_| ((), 0),
+        |_, camera, x, y, rng| radiance(scene, camera, settings.max_depth, x, y, rng),
+    )
+}
+
+/// One path-traced radiance sample for pixel (x, y).
+fn radiance(
+    scene: &PreparedScene,
+    camera: &Camera,
+    max_depth: u32,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+) -> Vec3A {
+    let jitter = rng.vec2();
+    let lens = rng.vec2();
+    let mut ray = camera.ray(x, y, jitter, lens);
+    let mut beta = Vec3A::ONE;
+    let mut l = Vec3A::ZERO;
+    let mut specular_bounce = true;
+    for depth in 0..max_depth {
+        let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
+            // After a non-specular bounce the escaped direction was already counted by
+            // direct_lighting's BSDF sample.
+            if specular_bounce {
+                l += beta * scene.background();
+            }
+            break;
+        };
+        let wo = -ray.d;
+        attenuate_inside(scene, &sh, &ray, &mut beta);
+        if specular_bounce && let Some((_, al)) = scene.area_light(sh.prim) {
+            l += beta * al.le(sh.hit.n, wo);
+        }
+        let bsdf = scene.bsdf(&sh);
+        if !bsdf.is_specular() {
+            l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+        }
+        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
+            break;
+        };
+        specular_bounce = s.specular;
+        beta *= s.weight;
+        if depth >= RR_DEPTH {
+            let q = (1.0 - beta.max_element()).max(0.05);
+            if rng.f32() < q {
+                break;
+            }
+            beta /= 1.0 - q;
+        }
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            break;
+        }
+        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+    }
+    l
+}

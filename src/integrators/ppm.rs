@@ -1,0 +1,21 @@
+//! Progressive photon mapping (Hachisuka, Ogaki & Jensen 2008): the eye ray of every pixel is
+//! fixed (pixel center, lens center) for the whole render, so each pixel keeps one hit point
+//! while many photon passes refine its estimate with the same radius reduction as SPPM
+//! (`N += alpha M`, `r^2 *= N_new / (N + M)`). Direct light at the hit point is re-sampled every
+//! pass. Because the eye ray never moves, PPM cannot anti-alias, blur depth of field, or
+//! average a pixel over glossy/refracted directions beyond the one fixed eye ray; at glass the
+//! reflected or refracted branch is still chosen by Fresnel in each pass (one hit point per
+//! pixel and pass, instead of the paper's tree of hit points).
+
+use std::sync::atomic::AtomicBool;
+
+use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+
+pub fn render(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    cancel: &AtomicBool,
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+) -> RenderOutput {
+    super::sppm::render_progressive(scene, settings, cancel, on_progress, true).0
+}

@@ -1,0 +1,44 @@
+//! Whitted-style ray tracing: eye rays follow perfect reflection and refraction (the branch at
+//! glass is chosen by Fresnel, one per sample) up to `max_depth`; at the first non-specular
+//! surface the shared [`direct_lighting`] samples the lights with shadow rays (area lights are
+//! sampled over their surface: soft shadows), and a constant ambient term stands for all
+//! indirect light. No light ever reaches a diffuse surface through glass or a mirror: caustics
+//! stay dark (a known limitation, not a bug). One jittered sample per pixel per iteration,
+//! seeded from (seed, iteration, pixel).
+
+use std::f32::consts::PI;
+use std::sync::atomic::AtomicBool;
+
+use super::progressive;
+use super::sppm::camera_path;
+use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+
+/// Uniform ambient radiance arriving at every non-specular surface (reflected as
+/// `pi * f(wo, n) * AMBIENT`, i.e. `albedo * AMBIENT` on a diffuse surface).
+pub const AMBIENT: f32 = 0.05;
+
+pub fn render(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    cancel: &AtomicBool,
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+) -> RenderOutput {
+    progressive::render(
+        scene,
+        settings,
+        cancel,
+        on_progress,
+        |_| ((), 0),
+        |_, camera, x, y, rng| {
+            let (l, vp) = camera_path(scene, camera, settings, x, y, rng, false);
+            match vp {
+                Some(vp) => {
+                    let n = vp.bsdf.frame.n;
+                    let n = if n.dot(vp.wo) < 0.0 { -n } else { n };
+                    l + vp.beta * vp.bsdf.f(vp.wo, n) * (PI * AMBIENT)
+                }
+                None => l,
+            }
+        },
+    )
+}
