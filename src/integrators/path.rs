@@ -57,7 +57,7 @@ fn radiance(
             // After a non-specular bounce the escaped direction was already counted by
             // direct_lighting's BSDF sample.
             if specular_bounce {
-                l += beta * scene.background();
+                l += beta * scene.background_radiance(ray.d);
             }
             break;
         };

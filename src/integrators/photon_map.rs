@@ -115,7 +115,7 @@ fn estimate(
         return Vec3A::ZERO;
     }
     let r2 = map.nearest(p, k, scratch);
-    if !(r2 > 0.0) {
+    if r2.is_nan() || r2 <= 0.0 {
         return Vec3A::ZERO;
     }
     let mut sum = Vec3A::ZERO;
