@@ -41,28 +41,16 @@ pub fn draw(spec: &ChartSpec, series: &[Series], path: &Path) -> Result<(), Stri
             path.display()
         ));
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::Builder::new()
-        .prefix(".chart-")
-        .suffix(&format!(".{ext}"))
-        .tempfile_in(dir)
-        .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
-    {
+    crate::atomic_file::write_atomic(path, |tmp, _| {
         let result = if ext == "png" {
-            let root = BitMapBackend::new(tmp.path(), SIZE).into_drawing_area();
+            let root = BitMapBackend::new(tmp, SIZE).into_drawing_area();
             plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
         } else {
-            let root = SVGBackend::new(tmp.path(), SIZE).into_drawing_area();
+            let root = SVGBackend::new(tmp, SIZE).into_drawing_area();
             plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
         };
-        result.map_err(|e| format!("cannot draw chart `{}`: {e}", path.display()))?;
-    }
-    tmp.persist(path)
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    Ok(())
+        result.map_err(|e| format!("cannot draw chart `{}`: {e}", path.display()))
+    })
 }
 
 /// Axis range covering the finite points (positive ones only on a log axis), padded.
@@ -106,6 +94,42 @@ fn tick(v: f64) -> String {
     } else {
         s
     }
+}
+
+/// Tick values of a log axis over `[lo, hi]`: labelled ones (1, 2, 5 times a power of ten, or
+/// every integer multiple when fewer than four of those fall inside) and grid-only ones (every
+/// integer multiple). plotters' own log ticks leave a range that does not span a whole decade,
+/// or the part below its first power of ten, without labels.
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let mut all = Vec::new();
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi && all.len() < 1000 {
+        for m in 1..=9 {
+            let v = m as f64 * decade;
+            if v >= lo && v <= hi {
+                all.push((m, v));
+            }
+        }
+        decade *= 10.0;
+    }
+    let nice: Vec<f64> = all
+        .iter()
+        .filter(|(m, _)| matches!(m, 1 | 2 | 5))
+        .map(|&(_, v)| v)
+        .collect();
+    let every: Vec<f64> = all.iter().map(|&(_, v)| v).collect();
+    let labelled = if nice.len() >= 4 { nice } else { every.clone() };
+    (labelled, every)
+}
+
+fn log_axis(
+    (lo, hi): (f64, f64),
+) -> plotters::coord::combinators::WithKeyPoints<plotters::coord::combinators::LogCoord<f64>> {
+    let (bold, light) = log_ticks(lo, hi);
+    (lo..hi)
+        .log_scale()
+        .with_key_points(bold)
+        .with_light_points(light)
 }
 
 fn plot<DB: DrawingBackend>(
@@ -180,17 +204,17 @@ where
     match (spec.log_x, spec.log_y) {
         (true, true) => body!(
             builder
-                .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+                .build_cartesian_2d(log_axis(xs), log_axis(ys))
                 .map_err(err)?
         ),
         (true, false) => body!(
             builder
-                .build_cartesian_2d((xs.0..xs.1).log_scale(), ys.0..ys.1)
+                .build_cartesian_2d(log_axis(xs), ys.0..ys.1)
                 .map_err(err)?
         ),
         (false, true) => body!(
             builder
-                .build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale())
+                .build_cartesian_2d(xs.0..xs.1, log_axis(ys))
                 .map_err(err)?
         ),
         (false, false) => body!(
@@ -205,6 +229,19 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn log_ticks_label_ranges_that_miss_a_power_of_ten() {
+        let (bold, light) = log_ticks(0.0165, 0.44);
+        let want = [0.02, 0.05, 0.1, 0.2];
+        assert_eq!(bold.len(), want.len(), "{bold:?}");
+        assert!(bold.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12));
+        assert_eq!(light.len(), 8 + 4, "0.02..0.09 and 0.1..0.4: {light:?}");
+        // Less than a decade: every integer multiple is labelled.
+        let (bold, _) = log_ticks(0.25, 0.9);
+        assert_eq!(bold.len(), 7);
+        assert!((bold[0] - 0.3).abs() < 1e-12 && (bold[6] - 0.9).abs() < 1e-12);
+    }
 
     fn spec() -> ChartSpec {
         ChartSpec {

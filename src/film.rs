@@ -45,17 +45,8 @@ impl Image {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        let mut tmp = tempfile::Builder::new()
-            .prefix(".sppm-")
-            .suffix(&format!(".{ext}"))
-            .tempfile_in(dir)
-            .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
-        {
-            let mut w = BufWriter::new(tmp.as_file_mut());
+        crate::atomic_file::write_atomic(path, |_, file| {
+            let mut w = BufWriter::new(file);
             match ext.as_str() {
                 "png" => {
                     let img = RgbImage::from_fn(self.width, self.height, |x, y| {
@@ -79,11 +70,8 @@ impl Image {
             }
             .map_err(|e| format!("cannot encode `{}`: {e}", path.display()))?;
             w.flush()
-                .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-        }
-        tmp.persist(path)
-            .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
-        Ok(())
+                .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+        })
     }
 }
 

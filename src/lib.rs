@@ -11,6 +11,7 @@
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
 
 pub mod accel;
+pub mod atomic_file;
 pub mod bezier;
 pub mod camera;
 pub mod chart;

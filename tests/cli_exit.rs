@@ -83,3 +83,42 @@ fn render_writes_an_image_and_leaves_no_temporary_file() {
         .collect();
     assert_eq!(names.len(), 1, "{names:?}");
 }
+
+/// `--integrator` overrides the scene's setting: on the analytic furnace (every pixel 1.0) the
+/// path tracer gives 1, Whitted its known answer without indirect light (emission 0.5 + direct
+/// 0.5 * 0.5 + albedo 0.5 * ambient 0.05 = 0.775).
+#[test]
+fn integrator_flag_overrides_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, expected) in [("path", 1.0), ("whitted", 0.775)] {
+        let out_path = dir.path().join(format!("{name}.exr"));
+        let out = sppm(&[
+            "render",
+            "examples/furnace.scn",
+            "-o",
+            out_path.to_str().unwrap(),
+            "--iterations",
+            "16",
+            "--integrator",
+            name,
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = image::open(&out_path).unwrap().to_rgb32f();
+        let n = img.pixels().len() as f64;
+        let mean = img
+            .pixels()
+            .map(|p| f64::from(p.0[0] + p.0[1] + p.0[2]) / 3.0)
+            .sum::<f64>()
+            / n;
+        println!("furnace with --integrator {name}: mean {mean:.4} (expected {expected})");
+        assert!((mean - expected).abs() < 0.03, "{name}: {mean}");
+    }
+    let out = sppm(&["render", "examples/furnace.scn", "--integrator", "raytrace"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("use one of whitted"));
+}

@@ -285,3 +285,42 @@ fn path_and_sppm_agree_on_a_diffuse_only_box() {
     // Agreement within the measured noise, plus 1 % for SPPM's remaining radius bias.
     assert!(diff < 4.0 * sigma + 0.01 * pm, "{diff} vs sigma {sigma}");
 }
+
+/// Every example scene renders with every integrator (small, few iterations): finite,
+/// non-negative pixels (checked in `run`) and some light in the picture. The images of the
+/// consistent methods are compared with each other by mean.
+#[test]
+fn every_example_renders_with_every_integrator() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut names: Vec<_> = std::fs::read_dir(root.join("examples"))
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.ok()?.path();
+            (p.extension()? == "scn").then_some(p)
+        })
+        .collect();
+    names.sort();
+    assert!(names.len() >= 6, "examples missing: {names:?}");
+    for path in names {
+        let loaded = sppm_lang::load_file(&path, &sppm_lang::EvalOptions::default()).unwrap();
+        let mut scene = loaded
+            .scene
+            .unwrap_or_else(|| panic!("{} does not evaluate", path.display()));
+        let (w, h) = scene.settings.resolution;
+        scene.settings.resolution = (24, ((24 * h) / w.max(1)).max(1));
+        scene.settings.time_limit = None;
+        let mut line = format!("{:>14}:", path.file_stem().unwrap().to_string_lossy());
+        for integrator in Integrator::ALL {
+            let img = run(&scene, integrator, 2, 4_000, 1);
+            let m = mean(&img);
+            line += &format!(" {} {m:.3}", integrator.name());
+            assert!(
+                m > 0.0,
+                "{} with {} is black",
+                path.display(),
+                integrator.name()
+            );
+        }
+        println!("{line}");
+    }
+}

@@ -7,6 +7,7 @@
 //! a checkpoint spends computing errors is subtracted from the render time it reports.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
@@ -25,10 +26,14 @@ use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
 #[derive(Debug, Args)]
 pub struct ChartArgs {
     /// The scene file (.scn).
-    pub scene: PathBuf,
+    #[arg(required_unless_present = "from_csv")]
+    pub scene: Option<PathBuf>,
     /// Reference image (linear EXR) of the same resolution.
-    #[arg(long)]
-    pub reference: PathBuf,
+    #[arg(long, required_unless_present = "from_csv")]
+    pub reference: Option<PathBuf>,
+    /// Redraw the charts from a CSV this command wrote earlier, without rendering.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["scene", "reference", "window", "methods"])]
+    pub from_csv: Option<PathBuf>,
     /// Largest time budget per method, in seconds (`60` or `60s`).
     #[arg(long, default_value = "60")]
     pub budget: String,
@@ -69,6 +74,7 @@ fn methods() -> Vec<Method> {
         m("sppm-alpha0.9", Integrator::Sppm, Some(0.9), 1.0, 1.0),
         m("sppm-radius0.5x", Integrator::Sppm, None, 0.5, 1.0),
         m("sppm-radius2x", Integrator::Sppm, None, 2.0, 1.0),
+        m("sppm-radius4x", Integrator::Sppm, None, 4.0, 1.0),
         m("sppm-photons0.25x", Integrator::Sppm, None, 1.0, 0.25),
         m("sppm-photons4x", Integrator::Sppm, None, 1.0, 4.0),
         m("ppm", Integrator::Ppm, None, 1.0, 1.0),
@@ -83,8 +89,63 @@ struct Row {
     method: String,
     iterations: u32,
     seconds: f64,
-    whole: ErrorStats,
-    window: Option<ErrorStats>,
+    whole: Errors,
+    window: Option<Errors>,
+}
+
+/// The two errors the chart draws.
+#[derive(Clone, Copy)]
+struct Errors {
+    rmse: f64,
+    rel_mse: f64,
+}
+
+impl From<ErrorStats> for Errors {
+    fn from(e: ErrorStats) -> Self {
+        Self {
+            rmse: e.rmse,
+            rel_mse: e.rel_mse,
+        }
+    }
+}
+
+/// Reads the rows of a CSV written by [`write_outputs`].
+fn read_csv(path: &Path) -> Result<(Vec<Row>, bool), String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let mut rows = Vec::new();
+    let mut has_window = false;
+    for (n, line) in text.lines().enumerate().skip(1) {
+        let bad = || format!("{}:{}: not a chart row: `{line}`", path.display(), n + 1);
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 7 {
+            return Err(bad());
+        }
+        let num = |s: &str| s.parse::<f64>().map_err(|_| bad());
+        let window = if f[5].is_empty() {
+            None
+        } else {
+            has_window = true;
+            Some(Errors {
+                rmse: num(f[5])?,
+                rel_mse: num(f[6])?,
+            })
+        };
+        rows.push(Row {
+            method: f[0].to_string(),
+            iterations: f[1].parse().map_err(|_| bad())?,
+            seconds: num(f[2])?,
+            whole: Errors {
+                rmse: num(f[3])?,
+                rel_mse: num(f[4])?,
+            },
+            window,
+        });
+    }
+    if rows.is_empty() {
+        return Err(format!("`{}` has no rows", path.display()));
+    }
+    Ok((rows, has_window))
 }
 
 fn parse_budget(text: &str) -> Result<f64, String> {
@@ -121,9 +182,17 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             args.output.display()
         ));
     }
-    let reference = load_image(&args.reference, ColorSpace::Linear)?;
-    let loaded = sppm_lang::load_file(&args.scene, &args.limits.options())
-        .map_err(|e| format!("cannot read `{}`: {e}", args.scene.display()))?;
+    if let Some(csv) = &args.from_csv {
+        let (rows, has_window) = read_csv(csv)?;
+        write_outputs(args, &rows, has_window)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let (Some(scene_path), Some(reference_path)) = (&args.scene, &args.reference) else {
+        return Err("give a scene and --reference (or --from-csv)".into());
+    };
+    let reference = load_image(reference_path, ColorSpace::Linear)?;
+    let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
+        .map_err(|e| format!("cannot read `{}`: {e}", scene_path.display()))?;
     print_diagnostics(&loaded);
     let scene = match &loaded.scene {
         Some(s) if !loaded.has_errors() => s.clone(),
@@ -192,7 +261,9 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
                     ))
                 });
                 match measure {
-                    Ok((whole, win)) => measured.push((p.iteration, t, whole, win)),
+                    Ok((whole, win)) => {
+                        measured.push((p.iteration, t, Errors::from(whole), win.map(Errors::from)))
+                    }
                     Err(e) => failure = Some(e),
                 }
                 overhead += t0.elapsed().as_secs_f64();
@@ -212,7 +283,12 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             let win = window
                 .map(|win| error(v, ref_view, Some(win)))
                 .transpose()?;
-            measured.push((out.iterations_done, last_t, whole, win));
+            measured.push((
+                out.iterations_done,
+                last_t,
+                Errors::from(whole),
+                win.map(Errors::from),
+            ));
         }
         for (iterations, seconds, whole, window) in measured {
             eprintln!(
@@ -313,15 +389,8 @@ fn write_outputs(args: &ChartArgs, rows: &[Row], has_window: bool) -> Result<(),
 }
 
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::NamedTempFile::new_in(dir)
-        .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
-    std::fs::write(tmp.path(), text)
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    tmp.persist(path)
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    Ok(())
+    sppm_lang::atomic_file::write_atomic(path, |_, f| {
+        f.write_all(text.as_bytes())
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+    })
 }

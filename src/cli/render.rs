@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::SourceMap;
 use sppm_lang::render::{Progress, RenderOptions, render};
-use sppm_lang::scene::Scene;
+use sppm_lang::scene::{Integrator, Scene};
 
 use super::check::{print_diagnostics, print_render_error};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
@@ -39,6 +39,9 @@ pub struct RenderArgs {
     /// Write the current image every K iterations.
     #[arg(long, value_name = "K")]
     pub snapshot_every: Option<u32>,
+    /// Rendering method, overriding the scene's `settings { integrator ... }`.
+    #[arg(long, value_parser = parse_integrator)]
+    pub integrator: Option<Integrator>,
     #[command(flatten)]
     pub limits: LimitArgs,
 }
@@ -79,6 +82,16 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         eprintln!("error: --snapshot-every must be at least 1");
         return ExitCode::from(EXIT_USAGE);
     }
+    let overridden;
+    let scene = match args.integrator {
+        Some(integrator) => {
+            let mut s = scene.clone();
+            s.settings.integrator = integrator;
+            overridden = s;
+            &overridden
+        }
+        None => scene,
+    };
     let options = RenderOptions {
         iterations: args.iterations,
         photons: args.photons,
@@ -157,4 +170,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         out.stats.deposits,
     );
     ExitCode::SUCCESS
+}
+
+fn parse_integrator(name: &str) -> Result<Integrator, String> {
+    Integrator::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
+        format!(
+            "unknown integrator `{name}`; use one of {}",
+            names.join(", ")
+        )
+    })
 }
