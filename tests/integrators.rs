@@ -8,14 +8,12 @@ mod common;
 use std::sync::atomic::AtomicBool;
 
 use common::*;
-use glam::{DVec3, Vec2};
-use sppm_lang::camera::Camera;
+use glam::DVec3;
 use sppm_lang::film::Image;
 use sppm_lang::integrators::sppm::render_with_state;
 use sppm_lang::integrators::whitted::AMBIENT;
 use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings, render};
-use sppm_lang::scene::{ColorParam, Integrator, Light, Material, Scene, Shape};
-use sppm_lang::span::Span;
+use sppm_lang::scene::{ColorParam, Integrator, Material, Scene};
 
 fn run(scene: &Scene, integrator: Integrator, iterations: u32, photons: u64, seed: u64) -> Image {
     let mut s = scene.clone();
@@ -97,79 +95,6 @@ fn whitted_leaves_the_caustic_window_dark() {
     );
     // Whitted sees the window's direct light and ambient only; the focused caustic is missing.
     assert!(w < 0.6 * s, "whitted {w} vs sppm {s}");
-}
-
-/// A diffuse floor meeting a mirror wall at x = 0 under a point light (as in
-/// render_accuracy.rs): near the wall the density estimate's disc reaches past the floor.
-fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
-    let mut s = empty_scene((res, res));
-    let floor_m = diffuse(&mut s, 0.5);
-    let mirror = add_material(
-        &mut s,
-        Material::Mirror {
-            tint: ColorParam::Const(DVec3::ONE),
-        },
-    );
-    add_object(
-        &mut s,
-        Shape::Quad {
-            origin: DVec3::new(0.0, 0.0, -1.0),
-            edge_u: DVec3::Z * 2.0,
-            edge_v: DVec3::X * 2.0,
-        },
-        floor_m,
-        None,
-    );
-    add_object(
-        &mut s,
-        Shape::Quad {
-            origin: DVec3::new(0.0, 0.0, -1.0),
-            edge_u: DVec3::Y * 2.0,
-            edge_v: DVec3::Z * 2.0,
-        },
-        mirror,
-        None,
-    );
-    let intensity = 4.0;
-    s.lights.push(Light::Point {
-        position: DVec3::new(1.0, 1.0, 0.0),
-        intensity: DVec3::splat(intensity),
-        span: Span::detached(),
-    });
-    s.camera = sppm_lang::scene::Camera {
-        location: DVec3::new(0.3, 3.0, 0.0),
-        look_at: DVec3::new(0.3, 0.0, 0.0),
-        up: DVec3::X,
-        fov: 11.4,
-        aperture: 0.0,
-        focus_distance: None,
-    };
-    s.settings.max_depth = 2;
-    let cam = Camera::new(&s.camera, res, res).unwrap();
-    let analytic = move |p: glam::Vec3A| -> f64 {
-        let p = p.as_dvec3();
-        let term = |l: DVec3| {
-            let d = l - p;
-            let d2 = d.length_squared();
-            intensity * (d.y / d2.sqrt()) / d2
-        };
-        0.5 / std::f64::consts::PI
-            * (term(DVec3::new(1.0, 1.0, 0.0)) + term(DVec3::new(-1.0, 1.0, 0.0)))
-    };
-    let expected = move |x: u32, y: u32| -> (f64, f64) {
-        let floor_point = |u: f32, v: f32| {
-            let r = cam.ray(x, y, Vec2::new(u, v), Vec2::ZERO);
-            r.at(-r.o.y / r.d.y)
-        };
-        let mut sum = 0.0;
-        for i in 0..4 {
-            for j in 0..4 {
-                sum += analytic(floor_point((i as f32 + 0.5) / 4.0, (j as f32 + 0.5) / 4.0));
-            }
-        }
-        (sum / 16.0, floor_point(0.5, 0.5).x as f64)
-    };
-    (s, expected)
 }
 
 #[test]

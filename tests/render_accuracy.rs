@@ -5,11 +5,11 @@ mod common;
 use std::sync::atomic::AtomicBool;
 
 use common::*;
-use glam::{DVec3, Vec2};
+use glam::Vec2;
 use sppm_lang::camera::Camera;
 use sppm_lang::film::Image;
 use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{Material, Scene, Shape};
+use sppm_lang::scene::Scene;
 use sppm_lang::shapes::Shape as _;
 use sppm_lang::shapes::sphere::Sphere;
 
@@ -126,82 +126,8 @@ fn furnace_c_sphere_in_emitting_enclosure() {
 #[test]
 fn corner_bias_shrinks_with_radius() {
     let res = 24;
-    let mut s = empty_scene((res, res));
-    let floor_m = diffuse(&mut s, 0.5);
-    let mirror = add_material(
-        &mut s,
-        Material::Mirror {
-            tint: sppm_lang::scene::ColorParam::Const(DVec3::ONE),
-        },
-    );
-    // Floor y = 0, x in [0, 2]; mirror wall x = 0 facing +x.
-    add_object(
-        &mut s,
-        Shape::Quad {
-            origin: DVec3::new(0.0, 0.0, -1.0),
-            edge_u: DVec3::Z * 2.0,
-            edge_v: DVec3::X * 2.0,
-        },
-        floor_m,
-        None,
-    );
-    add_object(
-        &mut s,
-        Shape::Quad {
-            origin: DVec3::new(0.0, 0.0, -1.0),
-            edge_u: DVec3::Y * 2.0,
-            edge_v: DVec3::Z * 2.0,
-        },
-        mirror,
-        None,
-    );
-    let intensity = 4.0;
-    s.lights.push(sppm_lang::scene::Light::Point {
-        position: DVec3::new(1.0, 1.0, 0.0),
-        intensity: DVec3::splat(intensity),
-        span: sppm_lang::span::Span::detached(),
-    });
-    // Look straight down at the strip x in [0, 0.6].
-    s.camera = sppm_lang::scene::Camera {
-        location: DVec3::new(0.3, 3.0, 0.0),
-        look_at: DVec3::new(0.3, 0.0, 0.0),
-        up: DVec3::X,
-        fov: 11.4,
-        aperture: 0.0,
-        focus_distance: None,
-    };
-    s.settings.max_depth = 2;
+    let (mut s, expected) = corner_scene(res);
     s.settings.alpha = 1.0;
-    let cam = Camera::new(&s.camera, res, res).unwrap();
-    // Analytic radiance: floor albedo / pi * I cos / d^2 from the real light and its image.
-    let analytic = |p: glam::Vec3A| -> f64 {
-        let p = p.as_dvec3();
-        let term = |l: DVec3| {
-            let d = l - p;
-            let d2 = d.length_squared();
-            intensity * (d.y / d2.sqrt()) / d2
-        };
-        0.5 / std::f64::consts::PI
-            * (term(DVec3::new(1.0, 1.0, 0.0)) + term(DVec3::new(-1.0, 1.0, 0.0)))
-    };
-    let floor_point = |x: u32, y: u32, u: f32, v: f32| {
-        let r = cam.ray(x, y, Vec2::new(u, v), Vec2::ZERO);
-        r.at(-r.o.y / r.d.y)
-    };
-    let expected = |x: u32, y: u32| -> (f64, f64) {
-        let mut sum = 0.0;
-        for i in 0..4 {
-            for j in 0..4 {
-                sum += analytic(floor_point(
-                    x,
-                    y,
-                    (i as f32 + 0.5) / 4.0,
-                    (j as f32 + 0.5) / 4.0,
-                ));
-            }
-        }
-        (sum / 16.0, floor_point(x, y, 0.5, 0.5).x as f64)
-    };
     let mut edge_err = Vec::new();
     for radius in [0.2, 0.05] {
         s.settings.radius = Some(radius);

@@ -23,6 +23,7 @@ pub(crate) struct Arg {
 }
 
 /// How a property keyword takes its arguments.
+#[derive(Clone, Copy)]
 pub(crate) struct PropSpec {
     pub name: &'static str,
     pub min: u8,
@@ -658,6 +659,22 @@ const TRANSFORMS: [PropSpec; 4] = [
     ),
 ];
 
+/// `TRANSFORMS` followed by `extra` (`M` must be `N + 4`: checked when the static is built).
+const fn with_transforms<const N: usize, const M: usize>(extra: [PropSpec; N]) -> [PropSpec; M] {
+    assert!(M == N + TRANSFORMS.len());
+    let mut out = [TRANSFORMS[0]; M];
+    let mut i = 0;
+    while i < M {
+        out[i] = if i < TRANSFORMS.len() {
+            TRANSFORMS[i]
+        } else {
+            extra[i - TRANSFORMS.len()]
+        };
+        i += 1;
+    }
+    out
+}
+
 // ------------------------------------------------------------------ top level
 
 pub(crate) struct TopSink;
@@ -731,83 +748,17 @@ struct ObjectBuilder {
 }
 
 static OBJ_PROPS: [PropSpec; 4] = TRANSFORMS;
-static CYL_PROPS: [PropSpec; 5] = [
-    p("translate", 1, 1, "a vector", "<1, 0, 0>"),
-    p(
-        "rotate",
-        1,
-        1,
-        "a vector of angles in degrees",
-        "<0, 30, 0>",
-    ),
-    p("scale", 1, 1, "a number or a vector", "2"),
-    p(
-        "matrix",
-        1,
-        12,
-        "12 numbers",
-        "<1,0,0, 0,1,0, 0,0,1, 0,0,0>",
-    ),
-    p("open", 0, 0, "nothing", ""),
-];
-static AREA_PROPS: [PropSpec; 6] = [
-    p("translate", 1, 1, "a vector", "<1, 0, 0>"),
-    p(
-        "rotate",
-        1,
-        1,
-        "a vector of angles in degrees",
-        "<0, 30, 0>",
-    ),
-    p("scale", 1, 1, "a number or a vector", "2"),
-    p(
-        "matrix",
-        1,
-        12,
-        "12 numbers",
-        "<1,0,0, 0,1,0, 0,0,1, 0,0,0>",
-    ),
+static CYL_PROPS: [PropSpec; 5] = with_transforms([p("open", 0, 0, "nothing", "")]);
+static AREA_PROPS: [PropSpec; 6] = with_transforms([
     p("radiance", 1, 1, "a color", "rgb <17, 12, 4>"),
     p("two_sided", 0, 0, "nothing", ""),
-];
-static PATCH_PROPS: [PropSpec; 7] = [
-    p("translate", 1, 1, "a vector", "<1, 0, 0>"),
-    p(
-        "rotate",
-        1,
-        1,
-        "a vector of angles in degrees",
-        "<0, 30, 0>",
-    ),
-    p("scale", 1, 1, "a number or a vector", "2"),
-    p(
-        "matrix",
-        1,
-        12,
-        "12 numbers",
-        "<1,0,0, 0,1,0, 0,0,1, 0,0,0>",
-    ),
+]);
+static PATCH_PROPS: [PropSpec; 7] = with_transforms([
     w("method", "`robust` or `newton`", "newton"),
     p("iterations", 1, 1, "a number", "12"),
     p("starts", 1, 1, "a number", "8"),
-];
-static REVOLVE_PROPS: [PropSpec; 11] = [
-    p("translate", 1, 1, "a vector", "<1, 0, 0>"),
-    p(
-        "rotate",
-        1,
-        1,
-        "a vector of angles in degrees",
-        "<0, 30, 0>",
-    ),
-    p("scale", 1, 1, "a number or a vector", "2"),
-    p(
-        "matrix",
-        1,
-        12,
-        "12 numbers",
-        "<1,0,0, 0,1,0, 0,0,1, 0,0,0>",
-    ),
+]);
+static REVOLVE_PROPS: [PropSpec; 11] = with_transforms([
     w("method", "`robust` or `newton`", "newton"),
     p("iterations", 1, 1, "a number", "12"),
     p("starts", 1, 1, "a number", "8"),
@@ -821,7 +772,7 @@ static REVOLVE_PROPS: [PropSpec; 11] = [
     p("corner", 0, 0, "nothing", ""),
     p("axis", 1, 1, "a vector", "<0, 0, 1>"),
     p("angle", 2, 2, "two angles in degrees", "0, 270"),
-];
+]);
 
 /// What each primitive's positional values are: (name, kind) with kind `v` vector, `n` number,
 /// `s` string.
@@ -1387,17 +1338,7 @@ struct MaterialBuilder {
     touched: bool,
 }
 
-static MAT_PROPS: [PropSpec; 8] = [
-    p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
-    p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
-    p("glass", 0, 0, "nothing", ""),
-    p("glossy", 1, 1, "a color or texture", "rgb <0.5, 0.5, 0.5>"),
-    p("ior", 1, 1, "a number", "1.5"),
-    p("absorb", 1, 1, "a color", "rgb <0.1, 0.02, 0.02>"),
-    p("tint", 1, 1, "a color", "rgb <1, 1, 1>"),
-    p("specular", 1, 1, "a color", "rgb <0.04, 0.04, 0.04>"),
-];
-static MAT_PROPS_ALL: [PropSpec; 9] = [
+static MAT_PROPS: [PropSpec; 9] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
@@ -1517,8 +1458,7 @@ impl Sink for MaterialBuilder {
         "a material".into()
     }
     fn props(&self) -> &'static [PropSpec] {
-        let _ = &MAT_PROPS;
-        &MAT_PROPS_ALL
+        &MAT_PROPS
     }
     fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         self.touched = true;

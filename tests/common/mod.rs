@@ -231,3 +231,79 @@ pub fn cornell_glass(res: u32) -> Scene {
     s.settings.max_depth = 16;
     s
 }
+
+/// A diffuse floor (y = 0, x in [0, 2]) meeting a mirror wall at x = 0 under a point light,
+/// seen from above: near the wall the density estimate's disc reaches past the floor. Returns
+/// the scene and, per pixel, the analytic radiance (averaged over 4x4 positions in the pixel:
+/// floor albedo / pi * I cos / d^2 from the light and its mirror image) and the floor x of the
+/// pixel center.
+pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
+    let mut s = empty_scene((res, res));
+    let floor_m = diffuse(&mut s, 0.5);
+    let mirror = add_material(
+        &mut s,
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::ONE),
+        },
+    );
+    add_object(
+        &mut s,
+        Shape::Quad {
+            origin: DVec3::new(0.0, 0.0, -1.0),
+            edge_u: DVec3::Z * 2.0,
+            edge_v: DVec3::X * 2.0,
+        },
+        floor_m,
+        None,
+    );
+    add_object(
+        &mut s,
+        Shape::Quad {
+            origin: DVec3::new(0.0, 0.0, -1.0),
+            edge_u: DVec3::Y * 2.0,
+            edge_v: DVec3::Z * 2.0,
+        },
+        mirror,
+        None,
+    );
+    let intensity = 4.0;
+    s.lights.push(Light::Point {
+        position: DVec3::new(1.0, 1.0, 0.0),
+        intensity: DVec3::splat(intensity),
+        span: Span::detached(),
+    });
+    s.camera = sppm_lang::scene::Camera {
+        location: DVec3::new(0.3, 3.0, 0.0),
+        look_at: DVec3::new(0.3, 0.0, 0.0),
+        up: DVec3::X,
+        fov: 11.4,
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    s.settings.max_depth = 2;
+    let cam = sppm_lang::camera::Camera::new(&s.camera, res, res).unwrap();
+    let analytic = move |p: glam::Vec3A| -> f64 {
+        let p = p.as_dvec3();
+        let term = |l: DVec3| {
+            let d = l - p;
+            let d2 = d.length_squared();
+            intensity * (d.y / d2.sqrt()) / d2
+        };
+        0.5 / std::f64::consts::PI
+            * (term(DVec3::new(1.0, 1.0, 0.0)) + term(DVec3::new(-1.0, 1.0, 0.0)))
+    };
+    let expected = move |x: u32, y: u32| -> (f64, f64) {
+        let floor_point = |u: f32, v: f32| {
+            let r = cam.ray(x, y, glam::Vec2::new(u, v), glam::Vec2::ZERO);
+            r.at(-r.o.y / r.d.y)
+        };
+        let mut sum = 0.0;
+        for i in 0..4 {
+            for j in 0..4 {
+                sum += analytic(floor_point((i as f32 + 0.5) / 4.0, (j as f32 + 0.5) / 4.0));
+            }
+        }
+        (sum / 16.0, floor_point(0.5, 0.5).x as f64)
+    };
+    (s, expected)
+}
