@@ -1550,23 +1550,7 @@ struct TextureBuilder {
     transform: DAffine3,
 }
 
-static TEX_PROPS: [PropSpec; 19] = [
-    p("translate", 1, 1, "a vector", "<1, 0, 0>"),
-    p(
-        "rotate",
-        1,
-        1,
-        "a vector of angles in degrees",
-        "<0, 30, 0>",
-    ),
-    p("scale", 1, 1, "a number or a vector", "2"),
-    p(
-        "matrix",
-        1,
-        12,
-        "12 numbers",
-        "<1,0,0, 0,1,0, 0,0,1, 0,0,0>",
-    ),
+static TEX_PROPS: [PropSpec; 19] = with_transforms([
     p(
         "checker",
         2,
@@ -1604,7 +1588,7 @@ static TEX_PROPS: [PropSpec; 19] = [
     p("octaves", 1, 1, "a number", "6"),
     p("turbulence", 1, 1, "a number", "1"),
     p("mortar", 1, 1, "a number", "0.01"),
-];
+]);
 static TEX_PROPS_SIZE: [PropSpec; 1] = [p("size", 1, 1, "a vector", "<0.2, 0.075, 0.1>")];
 
 impl TextureBuilder {
