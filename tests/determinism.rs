@@ -73,3 +73,48 @@ fn cancel_stops_and_progress_reports_each_iteration() {
     assert_eq!(out.iterations_done, 3);
     assert_eq!(seen, vec![1, 2, 3]);
 }
+
+/// Every integrator, not only SPPM: 1, 2 and 3 threads give bit-identical pixels.
+#[test]
+fn every_integrator_is_independent_of_the_thread_count() {
+    for integrator in sppm_lang::scene::Integrator::ALL {
+        let mut scene = common::cornell_glass(16);
+        scene.settings.integrator = integrator;
+        let images: Vec<_> = [1, 2, 3]
+            .into_iter()
+            .map(|threads| {
+                let opts = RenderOptions {
+                    iterations: Some(2),
+                    photons: Some(10_000),
+                    seed: Some(9),
+                    threads: Some(threads),
+                    ..Default::default()
+                };
+                render(&scene, &opts, &AtomicBool::new(false), &mut |_| {})
+                    .unwrap()
+                    .image
+            })
+            .collect();
+        let bits = |i: usize| -> Vec<[u64; 3]> {
+            images[i]
+                .pixels
+                .iter()
+                .map(|p| p.map(f64::to_bits))
+                .collect()
+        };
+        println!("{}: mean {:?}", integrator.name(), images[0].mean());
+        assert!(images[0].mean().iter().all(|m| *m > 0.0));
+        assert_eq!(
+            bits(0),
+            bits(1),
+            "{} differs with 2 threads",
+            integrator.name()
+        );
+        assert_eq!(
+            bits(0),
+            bits(2),
+            "{} differs with 3 threads",
+            integrator.name()
+        );
+    }
+}
