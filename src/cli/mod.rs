@@ -2,6 +2,7 @@
 
 mod chart;
 mod check;
+mod output;
 mod render;
 mod watch;
 
