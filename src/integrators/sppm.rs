@@ -60,25 +60,31 @@ pub struct PixelStats {
     pub tau: [f64; 3],
 }
 
-/// Hash grid over visible points: buckets in CSR form.
+/// Hash grid over visible points: buckets in CSR form. A bucket's entries hold the point data
+/// itself (position and radius^2 in 16 bytes, then the pixel), not indices into another array,
+/// so a photon lookup reads one contiguous run of memory: the indirection through a separate
+/// point array cost a cache miss per candidate and was the largest part of the photon pass.
 struct Grid {
     bounds: Aabb,
     inv_cell: f32,
     res: [i32; 3],
+    /// log2 of the number of buckets (a power of two, at least twice the number of points).
+    bits: u32,
     starts: Vec<u32>,
-    entries: Vec<u32>,
-    /// Compact visible points: position and radius^2 packed in 16 bytes (the photon
-    /// lookup's distance test reads only these), and the pixel each belongs to.
+    /// Per entry: the visible point's position and radius^2 (the distance test reads only these).
     points: Vec<Vec4>,
+    /// Per entry: the pixel the visible point belongs to.
     pixel: Vec<u32>,
 }
 
+/// Bucket of a cell: the classic three-prime spatial hash, then a Fibonacci multiply whose top
+/// `bits` bits index the power-of-two table (no division).
 #[inline]
-fn hash(c: [i32; 3], size: usize) -> usize {
+fn hash(c: [i32; 3], bits: u32) -> usize {
     let h = (c[0] as u32).wrapping_mul(73_856_093)
         ^ (c[1] as u32).wrapping_mul(19_349_663)
         ^ (c[2] as u32).wrapping_mul(83_492_791);
-    h as usize % size
+    (h.wrapping_mul(0x9E37_79B9) >> (32 - bits)) as usize
 }
 
 impl Grid {
@@ -108,7 +114,11 @@ impl Grid {
         // Cap the resolution so that huge scenes with a tiny radius stay in range.
         let inv_cell = (1.0 / cell).min(1024.0 / diag.max_element().max(1e-30));
         let res = [0, 1, 2].map(|a| ((diag[a] * inv_cell) as i32 + 1).max(1));
-        let size = points.len();
+        let bits = (2 * points.len())
+            .next_power_of_two()
+            .trailing_zeros()
+            .max(1);
+        let size = 1usize << bits;
         let cell_of = |p: Vec3A| -> [i32; 3] {
             let c = (p - bounds.min) * inv_cell;
             [0, 1, 2].map(|a| (c[a] as i32).clamp(0, res[a] - 1))
@@ -123,13 +133,13 @@ impl Grid {
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     for x in lo[0]..=hi[0] {
-                        buckets.push(hash([x, y, z], size) as u32);
+                        buckets.push(hash([x, y, z], bits) as u32);
                     }
                 }
             }
-            // Two of the point's cells may share a bucket (the table has one bucket per point,
-            // so with few points this is likely): list the point once per bucket, or a photon
-            // in that bucket would be deposited twice.
+            // Two of the point's cells may share a bucket (likely with few points and few
+            // buckets): list the point once per bucket, or a photon in that bucket would be
+            // deposited twice.
             buckets.sort_unstable();
             buckets.dedup();
             pairs.extend(buckets.iter().map(|&h| (h, k as u32)));
@@ -141,33 +151,39 @@ impl Grid {
         for i in 0..size {
             starts[i + 1] += starts[i];
         }
+        // Fill in point order within each bucket (as before: the deposit order, and so the
+        // image, does not depend on the table layout).
         let mut fill = starts.clone();
-        let mut entries = vec![0u32; pairs.len()];
+        let mut entry_points = vec![Vec4::ZERO; pairs.len()];
+        let mut entry_pixel = vec![0u32; pairs.len()];
         for (h, k) in pairs {
-            entries[fill[h as usize] as usize] = k;
+            let e = fill[h as usize] as usize;
+            let (pix, p, r2) = points[k as usize];
+            entry_points[e] = p.extend(r2);
+            entry_pixel[e] = pix;
             fill[h as usize] += 1;
         }
         Some(Grid {
             bounds,
             inv_cell,
             res,
+            bits,
             starts,
-            entries,
-            pixel: points.iter().map(|&(i, _, _)| i).collect(),
-            points: points.iter().map(|&(_, p, r2)| p.extend(r2)).collect(),
+            points: entry_points,
+            pixel: entry_pixel,
         })
     }
 
-    /// Visible points (compact indices) whose cell contains `p`.
+    /// The entries (indices into `points` and `pixel`) of the bucket whose cell contains `p`.
     #[inline]
-    fn candidates(&self, p: Vec3A) -> &[u32] {
+    fn candidates(&self, p: Vec3A) -> std::ops::Range<usize> {
         if p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any() {
-            return &[];
+            return 0..0;
         }
         let c = (p - self.bounds.min) * self.inv_cell;
         let cell = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, self.res[a] - 1));
-        let h = hash(cell, self.points.len());
-        &self.entries[self.starts[h] as usize..self.starts[h + 1] as usize]
+        let h = hash(cell, self.bits);
+        self.starts[h] as usize..self.starts[h + 1] as usize
     }
 }
 
@@ -342,12 +358,12 @@ fn deposit(
     beta: Vec3A,
     out: &mut Vec<(u32, Vec3A)>,
 ) {
-    for &k in grid.candidates(sh.hit.p) {
-        let q = grid.points[k as usize];
+    for k in grid.candidates(sh.hit.p) {
+        let q = grid.points[k];
         if (Vec3A::from(q.truncate()) - sh.hit.p).length_squared() > q.w {
             continue;
         }
-        let pix = grid.pixel[k as usize];
+        let pix = grid.pixel[k];
         let Some(vp) = pixels[pix as usize].vp.as_ref() else {
             continue;
         };
@@ -604,14 +620,14 @@ mod tests {
         for _ in 0..10_000 {
             let u = Vec3A::new(rng.f32(), rng.f32(), rng.f32());
             let q = grid.bounds.min + u * grid.bounds.diagonal();
-            let mut c = grid.candidates(q).to_vec();
+            let mut c = grid.pixel[grid.candidates(q)].to_vec();
             let n = c.len();
             c.sort_unstable();
             c.dedup();
             assert_eq!(c.len(), n, "a visible point listed twice at {q:?}");
             cells_shared += usize::from(n > 1);
         }
-        // The table really is crowded (3 buckets for up to 8 cells per point).
+        // The table really is crowded (8 buckets for up to 8 cells per point).
         assert!(cells_shared > 0);
     }
 }
