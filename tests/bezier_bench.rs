@@ -1,7 +1,8 @@
 //! `bench::bezier` end to end on a small ray set: the measurement, its CSV and its charts.
 //! (The full run is `sppm-lang bench bezier`; its numbers are in the README.)
 
-use sppm_lang::bench::bezier::{Method, Options, Row, Surface, csv, run, write_outputs};
+use sppm_lang::bench::bezier::{Method, Options, Row, Surface, charts, csv, run, write_outputs};
+use sppm_lang::chart::SIZE;
 
 fn small() -> Options {
     Options {
@@ -10,8 +11,8 @@ fn small() -> Options {
         seed: 7,
         lathe_newton: vec![(4, 16)],
         patch_newton: vec![(9, 16)],
-        lathe_grids: vec![(2, 8), (32, 128)],
-        patch_grids: vec![(4, 4), (64, 64)],
+        lathe_grids: vec![(2, 8), (8, 32), (32, 128)],
+        patch_grids: vec![(4, 4), (16, 16), (64, 64)],
     }
 }
 
@@ -33,10 +34,17 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         let name = surface.name();
         let robust = all_row(&rows, surface, Method::Robust);
         assert_eq!(robust.rays, kinds * opts.rays);
-        assert!(robust.ref_hits * 4 >= robust.rays, "{name}: rays must mostly hit");
+        assert!(
+            robust.ref_hits * 4 >= robust.rays,
+            "{name}: rays must mostly hit"
+        );
         assert!(robust.ambiguous * 100 <= robust.rays, "{name}: {robust:?}");
         // The robust method agrees with the reference, up to the f32 t of the renderer.
-        assert_eq!((robust.misses, robust.false_hits), (0, 0), "{name}: {robust:?}");
+        assert_eq!(
+            (robust.misses, robust.false_hits),
+            (0, 0),
+            "{name}: {robust:?}"
+        );
         assert!(robust.t_err_max < 1e-6, "{name}: {robust:?}");
         assert_eq!(robust.time_vs_robust, 1.0);
         assert!(robust.ns_per_ray > 0.0 && robust.ns_per_ray.is_finite());
@@ -45,12 +53,21 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         assert_eq!(nt.rays, robust.rays);
         assert_eq!(nt.ref_hits, robust.ref_hits, "same rays, same reference");
         // A finer mesh has more triangles and follows the surface more closely.
-        let [(r0, c0), (r1, c1)] = [grids[0], grids[1]];
-        let coarse = all_row(&rows, surface, Method::Mesh { rows: r0, cols: c0 });
-        let fine = all_row(&rows, surface, Method::Mesh { rows: r1, cols: c1 });
-        assert!(fine.triangles > 10 * coarse.triangles, "{name}");
+        let meshes: Vec<&Row> = grids
+            .iter()
+            .map(|&(r, c)| all_row(&rows, surface, Method::Mesh { rows: r, cols: c }))
+            .collect();
+        for pair in meshes.windows(2) {
+            let (coarse, fine) = (pair[0], pair[1]);
+            assert!(fine.triangles > 10 * coarse.triangles, "{name}");
+            assert!(
+                fine.t_err_median < coarse.t_err_median / 4.0,
+                "{name}: fine {fine:?}\ncoarse {coarse:?}"
+            );
+        }
+        let (coarse, fine) = (meshes[0], meshes[meshes.len() - 1]);
         assert!(
-            fine.t_err_median < coarse.t_err_median / 10.0,
+            fine.misses + fine.false_hits < coarse.misses + coarse.false_hits,
             "{name}: fine {fine:?}\ncoarse {coarse:?}"
         );
         // The coarse mesh visibly misses or invents hits (grazing rays see its facets).
@@ -76,7 +93,9 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
     let columns = text.lines().next().unwrap().split(',').count();
     assert!(text.lines().all(|l| l.split(',').count() == columns));
     assert_eq!(
-        text.lines().filter(|l| l.starts_with("revolve,robust,all,")).count(),
+        text.lines()
+            .filter(|l| l.starts_with("revolve,robust,all,"))
+            .count(),
         1
     );
 
@@ -91,8 +110,86 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         .collect();
     names.sort();
     assert_eq!(names.len(), written.len(), "{names:?}");
-    for n in ["b.csv", "b.png", "b.svg", "b_revolve_miss.png", "b_patch_terr.svg"] {
+    for n in [
+        "b.csv",
+        "b.png",
+        "b.svg",
+        "b_revolve_wrong.png",
+        "b_revolve_terr.svg",
+        "b_patch_wrong.svg",
+        "b_patch_terr.png",
+    ] {
         assert!(names.iter().any(|x| x == n), "{n} missing: {names:?}");
     }
-    assert_eq!(std::fs::read_to_string(dir.path().join("b.csv")).unwrap(), text);
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("b.csv")).unwrap(),
+        text
+    );
+    // The images decode; the overview holds the four charts, two side by side.
+    for p in written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+    {
+        let img = image::open(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        let (w, h) = (img.width(), img.height());
+        if p.ends_with("b.png") {
+            assert_eq!((w, h), (2 * SIZE.0, 2 * SIZE.1));
+        } else {
+            assert_eq!((w, h), SIZE);
+        }
+    }
+    for p in written
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+    {
+        let svg = std::fs::read_to_string(p).unwrap();
+        assert!(svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert!(
+            svg.contains("robust") && svg.contains("mesh, "),
+            "{}",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn charts_draw_one_series_per_method_and_say_where_zero_goes() {
+    let rows = run(&small(), &|_| {}).unwrap();
+    let charts = charts(&rows);
+    let suffixes: Vec<&str> = charts.iter().map(|c| c.suffix.as_str()).collect();
+    assert_eq!(
+        suffixes,
+        [
+            "_revolve_wrong",
+            "_revolve_terr",
+            "_patch_wrong",
+            "_patch_terr"
+        ]
+    );
+    for c in &charts {
+        let labels: Vec<&str> = c.series.iter().map(|s| s.label.as_str()).collect();
+        assert_eq!(
+            labels.len(),
+            3,
+            "robust, one Newton start count, meshes: {labels:?}"
+        );
+        assert!(labels[1].starts_with("newton, "), "{labels:?}");
+        assert_eq!(c.series[2].points.len(), 3, "one point per mesh");
+        assert!(c.spec.log_x && c.spec.log_y);
+        assert!(
+            c.series
+                .iter()
+                .flat_map(|s| &s.points)
+                .all(|&(x, y)| x > 0.0 && y > 0.0),
+            "{c:?}"
+        );
+    }
+    // The robust method makes no wrong answer: its point sits at the floor, and says so.
+    let robust = &charts[0].series[0];
+    assert!(
+        robust.label.starts_with("robust; 0 drawn at "),
+        "{}",
+        robust.label
+    );
+    assert!(charts[0].spec.y_label.contains("0 drawn at"));
 }

@@ -15,9 +15,9 @@
 //!   production code), on the rays the reference can decide: misses (the reference hits, the
 //!   method does not) as a share of the reference's hits, false hits (the method hits, the
 //!   reference does not) as a share of the reference's misses, and the relative error of `t` on
-//!   rays both hit (median, 99th percentile, maximum; above [`FAR`] it is counted as a hit on
-//!   another part of the surface, e.g. a Newton root behind the nearest one). The renderer's `t` is f32, so about 6e-8
-//!   is the floor of every method here.
+//!   rays both hit (median, 99th percentile, maximum; above [`FAR`] it is counted as a far hit:
+//!   for an analytic method a hit on another part of the surface, e.g. a Newton root behind the
+//!   nearest one). The renderer's `t` is f32, so about 6e-8 is the floor of every method here.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -67,9 +67,15 @@ impl Surface {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Method {
     Robust,
-    Newton { starts: u32, iterations: u32 },
+    Newton {
+        starts: u32,
+        iterations: u32,
+    },
     /// A tessellation into a `rows x cols` grid (see [`crate::shapes::tessellate`]).
-    Mesh { rows: usize, cols: usize },
+    Mesh {
+        rows: usize,
+        cols: usize,
+    },
 }
 
 impl Method {
@@ -142,7 +148,8 @@ pub struct Row {
     pub false_hits: usize,
     /// Rays both hit.
     pub both: usize,
-    /// Rays both hit with a relative `t` error above [`FAR`]: another part of the surface.
+    /// Rays both hit with a relative `t` error above [`FAR`]: another part of the surface (for
+    /// an analytic method; a coarse mesh's facets alone can be that far off).
     pub far_hits: usize,
     /// Relative `t` error on rays both hit; NaN when there are none.
     pub t_err_median: f64,
@@ -190,9 +197,8 @@ struct Rng(u64);
 impl Rng {
     /// The stream of ray `i` of kind `kind`: independent of the order rays are made in.
     fn for_ray(seed: u64, kind: usize, i: usize) -> Self {
-        let mut r = Rng(seed.wrapping_mul(0xD134_2543_DE82_EF95)
-            ^ ((kind as u64) << 48)
-            ^ (i as u64));
+        let mut r =
+            Rng(seed.wrapping_mul(0xD134_2543_DE82_EF95) ^ ((kind as u64) << 48) ^ (i as u64));
         r.f();
         r
     }
@@ -361,7 +367,11 @@ fn mesh_subject(
     let mesh = tessellate();
     let tris = mesh_triangles(&mesh, &DAffine3::IDENTITY)?;
     let triangles = tris.len();
-    let bvh = Bvh::new(tris.into_iter().map(|t| (AnyShape::Triangle(t), 0)).collect());
+    let bvh = Bvh::new(
+        tris.into_iter()
+            .map(|t| (AnyShape::Triangle(t), 0))
+            .collect(),
+    );
     Ok(Subject {
         method,
         bvh,
@@ -377,7 +387,11 @@ fn newton(starts: u32, iterations: u32) -> (Method, IntersectMethod) {
     )
 }
 
-fn lathe_subjects(profile: &Profile, lathe: &Lathe, opts: &Options) -> Result<Vec<Subject>, String> {
+fn lathe_subjects(
+    profile: &Profile,
+    lathe: &Lathe,
+    opts: &Options,
+) -> Result<Vec<Subject>, String> {
     let revolve = |m| -> Result<AnyShape, String> {
         Ok(AnyShape::Other(Box::new(Revolve::new(profile, None, m)?)))
     };
@@ -393,7 +407,11 @@ fn lathe_subjects(profile: &Profile, lathe: &Lathe, opts: &Options) -> Result<Ve
     Ok(out)
 }
 
-fn patch_subjects(points: &[DVec3; 16], patch: &Patch, opts: &Options) -> Result<Vec<Subject>, String> {
+fn patch_subjects(
+    points: &[DVec3; 16],
+    patch: &Patch,
+    opts: &Options,
+) -> Result<Vec<Subject>, String> {
     let shape = |m| -> Result<AnyShape, String> {
         Ok(AnyShape::Other(Box::new(BezierPatch::new(points, m)?)))
     };
@@ -571,7 +589,10 @@ pub fn run(opts: &Options, progress: &dyn Fn(&str)) -> Result<Vec<Row>, String> 
 
     let profile = vase_profile();
     let lathe = Lathe::new(&profile.segments, None)?;
-    progress(&format!("revolve: reference for {} rays per kind", opts.rays));
+    progress(&format!(
+        "revolve: reference for {} rays per kind",
+        opts.rays
+    ));
     let kinds = lathe_kinds(&lathe, opts);
     progress("revolve: building the meshes");
     let subjects = lathe_subjects(&profile, &lathe, opts)?;
@@ -608,12 +629,18 @@ pub fn csv(rows: &[Row]) -> String {
     for r in rows {
         let (starts, iterations, grid_rows, grid_cols) = match r.method {
             Method::Robust => (String::new(), String::new(), String::new(), String::new()),
-            Method::Newton { starts, iterations } => {
-                (starts.to_string(), iterations.to_string(), String::new(), String::new())
-            }
-            Method::Mesh { rows, cols } => {
-                (String::new(), String::new(), rows.to_string(), cols.to_string())
-            }
+            Method::Newton { starts, iterations } => (
+                starts.to_string(),
+                iterations.to_string(),
+                String::new(),
+                String::new(),
+            ),
+            Method::Mesh { rows, cols } => (
+                String::new(),
+                String::new(),
+                rows.to_string(),
+                cols.to_string(),
+            ),
         };
         let _ = writeln!(
             out,
@@ -643,17 +670,18 @@ pub fn csv(rows: &[Row]) -> String {
 }
 
 /// One chart: a file-name suffix, its spec and its series.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Chart {
     pub suffix: String,
     pub spec: ChartSpec,
     pub series: Vec<Series>,
 }
 
-/// Four charts over the `all` rows: miss rate and median `t` error against ns per ray, for the
-/// revolve and the patch. One series for the robust method (a point), one per Newton start
-/// count (over its iteration counts), one for the meshes (over their triangle counts).
-/// A zero miss rate cannot be drawn on a log axis: it is drawn at half of one miss (the
-/// smallest rate the ray set can show), and the axis label says so.
+/// Four charts over the `all` rows: wrong answers (miss rate plus false-hit rate) and median
+/// `t` error against ns per ray, for the revolve and the patch. One series for the robust method
+/// (a point), one per Newton start count (over its iteration counts), one for the meshes (over
+/// their triangle counts). A log axis cannot show zero: a zero rate is drawn at half of the
+/// smallest rate the ray set can show, and the axis label and the legend say so.
 pub fn charts(rows: &[Row]) -> Vec<Chart> {
     let mut out = Vec::new();
     for surface in [Surface::Revolve, Surface::Patch] {
@@ -664,40 +692,50 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
         if all.is_empty() {
             continue;
         }
-        let hits = all.iter().map(|r| r.ref_hits).max().unwrap_or(1).max(1);
-        let floor = 0.5 / hits as f64;
-        type Pick = Box<dyn Fn(&Row) -> f64>;
-        let picks: [(&str, &str, String, Pick); 2] = [
+        let decided = |r: &Row| (r.ref_hits.max(r.rays - r.ambiguous - r.ref_hits)).max(1);
+        let floor = 0.5 / all.iter().map(|r| decided(r)).max().unwrap_or(1) as f64;
+        // The renderer's `t` is f32: a relative error of exactly 0 is drawn a decade below
+        // its rounding (about 6e-8).
+        let t_floor = 1e-9;
+        type Pick = fn(&Row) -> f64;
+        let picks: [(&str, &str, String, f64, Pick); 2] = [
             (
-                "miss",
-                "miss rate",
-                format!("miss rate (of the reference's hits; 0 drawn at {floor:.1e})"),
-                Box::new(move |r: &Row| {
-                    if r.misses == 0 {
-                        floor
-                    } else {
-                        r.miss_rate()
-                    }
-                }),
+                "wrong",
+                "miss + false-hit rate",
+                format!("miss rate + false-hit rate (0 drawn at {floor:.1e})"),
+                floor,
+                |r| r.miss_rate() + r.false_hit_rate(),
             ),
             (
                 "terr",
                 "median relative t error",
-                "median relative t error (rays both hit)".to_string(),
-                Box::new(|r: &Row| r.t_err_median),
+                format!("median relative t error, rays both hit (0 drawn at {t_floor:.1e})"),
+                t_floor,
+                |r| r.t_err_median,
             ),
         ];
-        for (suffix, what, y_label, pick) in picks {
-            let mut series = Vec::new();
+        for (suffix, what, y_label, floor, pick) in picks {
+            // A zero goes to the floor; the series that has one says so in the legend.
+            let mut series: Vec<Series> = Vec::new();
+            let mut push = |label: String, pts: Vec<(f64, f64)>| {
+                let zero = pts.iter().any(|p| p.1 == 0.0);
+                let points = pts
+                    .into_iter()
+                    .map(|(x, y)| (x, if y == 0.0 { floor } else { y }))
+                    .collect();
+                let label = if zero {
+                    format!("{label}; 0 drawn at {floor:.1e}")
+                } else {
+                    label
+                };
+                series.push(Series { label, points });
+            };
             let robust: Vec<(f64, f64)> = all
                 .iter()
                 .filter(|r| r.method == Method::Robust)
                 .map(|r| (r.ns_per_ray, pick(r)))
                 .collect();
-            series.push(Series {
-                label: "robust".into(),
-                points: robust,
-            });
+            push("robust".into(), robust);
             let mut starts: Vec<u32> = all
                 .iter()
                 .filter_map(|r| match r.method {
@@ -719,10 +757,10 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
                     .collect();
                 pts.sort_by_key(|p| p.0);
                 let its: Vec<String> = pts.iter().map(|p| p.0.to_string()).collect();
-                series.push(Series {
-                    label: format!("newton, {s} starts ({} iterations)", its.join("/")),
-                    points: pts.iter().map(|p| (p.1, p.2)).collect(),
-                });
+                push(
+                    format!("newton, {s} starts ({} iterations)", its.join("/")),
+                    pts.iter().map(|p| (p.1, p.2)).collect(),
+                );
             }
             let mut mesh: Vec<(usize, f64, f64)> = all
                 .iter()
@@ -731,10 +769,10 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
                 .collect();
             mesh.sort_by_key(|p| p.0);
             if let (Some(first), Some(last)) = (mesh.first(), mesh.last()) {
-                series.push(Series {
-                    label: format!("mesh, {} to {} triangles", first.0, last.0),
-                    points: mesh.iter().map(|p| (p.1, p.2)).collect(),
-                });
+                push(
+                    format!("mesh, {} to {} triangles", first.0, last.0),
+                    mesh.iter().map(|p| (p.1, p.2)).collect(),
+                );
             }
             series.retain(|s| !s.points.is_empty());
             out.push(Chart {
@@ -754,11 +792,14 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
 }
 
 fn sibling(path: &Path, suffix: &str, ext: &str) -> PathBuf {
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("bezier");
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("bezier");
     path.with_file_name(format!("{stem}{suffix}.{ext}"))
 }
 
-/// Writes the CSV (`<stem>.csv`), the four charts (`<stem>_<surface>_<miss|terr>.png/.svg`) and
+/// Writes the CSV (`<stem>.csv`), the four charts (`<stem>_<surface>_<wrong|terr>.png/.svg`) and
 /// all four on one page (`output` and its `.svg`), each atomically. Returns the paths written.
 pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String> {
     let mut written = Vec::new();
@@ -778,10 +819,8 @@ pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String
             written.push(p);
         }
     }
-    let panels: Vec<(ChartSpec, Vec<Series>)> = charts
-        .into_iter()
-        .map(|c| (c.spec, c.series))
-        .collect();
+    let panels: Vec<(ChartSpec, Vec<Series>)> =
+        charts.into_iter().map(|c| (c.spec, c.series)).collect();
     for ext in ["png", "svg"] {
         let p = output.with_extension(ext);
         draw_panels(&panels, 2, &p)?;

@@ -65,8 +65,16 @@ fn bezier(args: &BezierArgs) -> Result<(), String> {
     let rows = run(&opts, &|line| eprintln!("bench bezier: {line}"))?;
     println!(
         "{:<8} {:<16} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>10} {:>10}",
-        "surface", "method", "triangles", "ns/ray", "x robust", "miss", "false hit", "far",
-        "t err med", "t err max"
+        "surface",
+        "method",
+        "triangles",
+        "ns/ray",
+        "x robust",
+        "miss",
+        "false hit",
+        "far",
+        "t err med",
+        "t err max"
     );
     for r in rows.iter().filter(|r| r.kind == "all") {
         println!(
