@@ -196,6 +196,46 @@ fn log_axis(
         .with_light_points(light)
 }
 
+/// The corner of the plot the legend covers: the one with the fewest points within 45% of the
+/// axes' span (on the drawn scale) of it, the upper right on a tie.
+fn legend_corner(
+    series: &[Series],
+    xs: (f64, f64),
+    ys: (f64, f64),
+    spec: &ChartSpec,
+) -> SeriesLabelPosition {
+    let frac = |v: f64, (lo, hi): (f64, f64), log: bool| {
+        if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| &s.points)
+        .map(|&(x, y)| (frac(x, xs, spec.log_x), frac(y, ys, spec.log_y)))
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    let near = |right: bool, upper: bool| {
+        pts.iter()
+            .filter(|&&(x, y)| {
+                (if right { x > 0.55 } else { x < 0.45 })
+                    && (if upper { y > 0.55 } else { y < 0.45 })
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::UpperRight, near(true, true)),
+        (SeriesLabelPosition::UpperLeft, near(false, true)),
+        (SeriesLabelPosition::LowerLeft, near(false, false)),
+        (SeriesLabelPosition::LowerRight, near(true, false)),
+    ]
+    .into_iter()
+    .min_by_key(|c| c.1)
+    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+}
+
 fn plot<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     spec: &ChartSpec,
@@ -260,7 +300,7 @@ where
                 .configure_series_labels()
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
+                .position(legend_corner(series, xs, ys, spec))
                 .draw()
                 .map_err(err)?;
         }};
@@ -371,6 +411,34 @@ mod tests {
         assert!(inked(0, SIZE.1) > 1000);
         assert_eq!(inked(SIZE.0, SIZE.1), 0);
         assert!(draw_panels(&[], 2, &png).is_err());
+    }
+
+    #[test]
+    fn legend_goes_to_the_emptiest_corner() {
+        let at = |pts: Vec<(f64, f64)>| {
+            let series = [Series {
+                label: "a".into(),
+                points: pts,
+            }];
+            let corner = legend_corner(&series, (1.0, 1000.0), (1.0, 1000.0), &spec());
+            format!("{corner:?}")
+        };
+        // A curve falling from the upper left to the lower right leaves the other two corners
+        // free; the upper right is taken first.
+        assert_eq!(
+            at(vec![(1.5, 900.0), (30.0, 30.0), (900.0, 1.5)]),
+            "UpperRight"
+        );
+        // Points in the upper right (on the log scale) move the legend.
+        assert_eq!(
+            at(vec![
+                (100.0, 100.0),
+                (500.0, 900.0),
+                (900.0, 500.0),
+                (1.5, 1.5)
+            ]),
+            "UpperLeft"
+        );
     }
 
     #[test]

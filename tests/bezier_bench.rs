@@ -102,8 +102,8 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("b.png");
     let written = write_outputs(&rows, &out).unwrap();
-    // CSV, 4 charts in 2 formats, the overview in 2 formats; nothing else (no temporary file).
-    assert_eq!(written.len(), 1 + 8 + 2);
+    // CSV, 6 charts in 2 formats, the overview in 2 formats; nothing else (no temporary file).
+    assert_eq!(written.len(), 1 + 12 + 2);
     let mut names: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -116,6 +116,7 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         "b.svg",
         "b_revolve_wrong.png",
         "b_revolve_terr.svg",
+        "b_revolve_far.png",
         "b_patch_wrong.svg",
         "b_patch_terr.png",
     ] {
@@ -125,7 +126,7 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         std::fs::read_to_string(dir.path().join("b.csv")).unwrap(),
         text
     );
-    // The images decode; the overview holds the four charts, two side by side.
+    // The images decode; the overview holds the six charts, a surface per row.
     for p in written
         .iter()
         .filter(|p| p.extension().is_some_and(|e| e == "png"))
@@ -133,7 +134,7 @@ fn measures_every_method_against_the_reference_and_writes_csv_and_charts() {
         let img = image::open(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         let (w, h) = (img.width(), img.height());
         if p.ends_with("b.png") {
-            assert_eq!((w, h), (2 * SIZE.0, 2 * SIZE.1));
+            assert_eq!((w, h), (3 * SIZE.0, 2 * SIZE.1));
         } else {
             assert_eq!((w, h), SIZE);
         }
@@ -161,8 +162,10 @@ fn charts_draw_one_series_per_method_and_say_where_zero_goes() {
         suffixes,
         [
             "_revolve_wrong",
+            "_revolve_far",
             "_revolve_terr",
             "_patch_wrong",
+            "_patch_far",
             "_patch_terr"
         ]
     );

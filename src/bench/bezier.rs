@@ -162,6 +162,11 @@ impl Row {
         self.misses as f64 / self.ref_hits.max(1) as f64
     }
 
+    /// Far hits as a share of the rays both hit.
+    pub fn far_rate(&self) -> f64 {
+        self.far_hits as f64 / self.both.max(1) as f64
+    }
+
     pub fn false_hit_rate(&self) -> f64 {
         let ref_misses = self.rays - self.ambiguous - self.ref_hits;
         self.false_hits as f64 / ref_misses.max(1) as f64
@@ -677,8 +682,10 @@ pub struct Chart {
     pub series: Vec<Series>,
 }
 
-/// Four charts over the `all` rows: wrong answers (miss rate plus false-hit rate) and median
-/// `t` error against ns per ray, for the revolve and the patch. One series for the robust method
+/// Six charts over the `all` rows, against ns per ray, for the revolve and the patch: wrong
+/// answers (miss rate plus false-hit rate), far hits (relative `t` error above [`FAR`], as a
+/// share of the rays both hit: Newton's wrong, farther roots, or a coarse mesh's facets) and the
+/// median relative `t` error. One series for the robust method
 /// (a point), one per Newton start count (over its iteration counts), one for the meshes (over
 /// their triangle counts). A log axis cannot show zero: a zero rate is drawn at half of the
 /// smallest rate the ray set can show, and the axis label and the legend say so.
@@ -698,13 +705,21 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
         // its rounding (about 6e-8).
         let t_floor = 1e-9;
         type Pick = fn(&Row) -> f64;
-        let picks: [(&str, &str, String, f64, Pick); 2] = [
+        let far_floor = 0.5 / all.iter().map(|r| r.both).max().unwrap_or(1).max(1) as f64;
+        let picks: [(&str, &str, String, f64, Pick); 3] = [
             (
                 "wrong",
                 "miss + false-hit rate",
                 format!("miss rate + false-hit rate (0 drawn at {floor:.1e})"),
                 floor,
                 |r| r.miss_rate() + r.false_hit_rate(),
+            ),
+            (
+                "far",
+                "far hits",
+                format!("share of hits with t error > {FAR:.0e} (0 drawn at {far_floor:.1e})"),
+                far_floor,
+                |r| r.far_rate(),
             ),
             (
                 "terr",
@@ -799,8 +814,9 @@ fn sibling(path: &Path, suffix: &str, ext: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}.{ext}"))
 }
 
-/// Writes the CSV (`<stem>.csv`), the four charts (`<stem>_<surface>_<wrong|terr>.png/.svg`) and
-/// all four on one page (`output` and its `.svg`), each atomically. Returns the paths written.
+/// Writes the CSV (`<stem>.csv`), the six charts (`<stem>_<surface>_<wrong|far|terr>.png/.svg`)
+/// and all six on one page, a surface per row (`output` and its `.svg`), each atomically.
+/// Returns the paths written.
 pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String> {
     let mut written = Vec::new();
     let csv_path = output.with_extension("csv");
@@ -823,7 +839,7 @@ pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String
         charts.into_iter().map(|c| (c.spec, c.series)).collect();
     for ext in ["png", "svg"] {
         let p = output.with_extension(ext);
-        draw_panels(&panels, 2, &p)?;
+        draw_panels(&panels, 3, &p)?;
         written.push(p);
     }
     Ok(written)
