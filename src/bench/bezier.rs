@@ -116,7 +116,7 @@ impl Options {
         };
         Self {
             rays,
-            repeats: 5,
+            repeats: 3,
             seed: 1,
             lathe_newton: settings([2, 4, 8]),
             patch_newton: settings([4, 9, 16]),

@@ -29,10 +29,10 @@ pub struct BezierArgs {
     #[arg(short, long, default_value = "docs/charts/bezier.png")]
     pub output: PathBuf,
     /// Rays per ray kind (the revolve has three kinds, the patch two).
-    #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     pub rays: u64,
     /// Timed passes over the ray set; the median is reported.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub repeats: u64,
     /// Seed of the ray set.
     #[arg(long, default_value_t = 1)]
