@@ -130,7 +130,9 @@ impl Stats {
         }
     }
 
-    fn report_and_check(&self, name: &str) {
+    /// Prints the counts and asserts them. `ambiguous_per_mille`: how many rays in a thousand
+    /// the reference may leave undecided (1 everywhere but on the pointed-tip case, see there).
+    fn report_and_check(&self, name: &str, ambiguous_per_mille: usize) {
         let decided = self.rays - self.ambiguous;
         for (i, f) in &self.failing {
             println!("  [{name}] failing ray #{i}: {f}");
@@ -158,9 +160,8 @@ impl Stats {
         assert_eq!(self.t_errors, 0, "{name}: t errors");
         assert_eq!(self.off_surface, 0, "{name}: hit points off the surface");
         assert!(self.max_rel < REL_T);
-        // At most one ray in a thousand may be undecidable for the reference.
         assert!(
-            self.ambiguous * 1000 <= self.rays,
+            self.ambiguous * 1000 <= self.rays * ambiguous_per_mille,
             "{name}: too many ambiguous rays"
         );
         assert!(
@@ -207,6 +208,16 @@ fn run_lathe(
     seed: u64,
     make_ray: impl Fn(&mut Rng) -> (DVec3, DVec3) + Sync,
 ) {
+    run_lathe_allowing(name, lathe, seed, 1, make_ray);
+}
+
+fn run_lathe_allowing(
+    name: &str,
+    lathe: &Lathe,
+    seed: u64,
+    ambiguous_per_mille: usize,
+    make_ray: impl Fn(&mut Rng) -> (DVec3, DVec3) + Sync,
+) {
     let size = lathe.size();
     let start = std::time::Instant::now();
     let st = (0..rays())
@@ -215,13 +226,9 @@ fn run_lathe(
             let (o, d) = make_ray(&mut ray_rng(seed, i));
             st.rays += 1;
             let want = reference::lathe(lathe, o, d, 1e-9, f64::INFINITY);
-            if want.ambiguous {
-                st.ambiguous += 1;
-                return st;
-            }
-            st.ref_hits += want.t.is_some() as usize;
             let got = lathe.intersect(o, d, 1e-9, f64::INFINITY, Solver::Robust);
             let before = st.failures();
+            // Every robust hit, also on rays the reference cannot decide, lies on the surface.
             if let Some(h) = got
                 && let Part::Side(i) = h.part
             {
@@ -231,6 +238,11 @@ fn run_lathe(
                     st.off_surface += 1;
                 }
             }
+            if want.ambiguous {
+                st.ambiguous += 1;
+                return st;
+            }
+            st.ref_hits += want.t.is_some() as usize;
             st.compare(want.t, got.map(|h| h.t));
             if before != st.failures() && st.failing.len() < 3 {
                 let msg = format!("o={o:?} d={d:?}: reference {:?}, robust {:?}", want.t, got);
@@ -242,7 +254,7 @@ fn run_lathe(
         })
         .reduce(Stats::default, Stats::merge);
     println!("[{name}] {} rays in {:.1?}", st.rays, start.elapsed());
-    st.report_and_check(name);
+    st.report_and_check(name, ambiguous_per_mille);
 }
 
 fn random_rays(lo: DVec3, hi: DVec3) -> impl Fn(&mut Rng) -> (DVec3, DVec3) {
@@ -347,18 +359,22 @@ fn lathe_near_pole_rays() {
     );
 }
 
-/// Known failure, kept visible: rays that pass within about 1e-7 of a *pointed* tip (a cone
-/// point on the axis) at a shallow angle are reported as hits by the robust method while the
-/// reference (and an exact mpmath check of such a ray) says they miss; about 0.08% of these rays
-/// are false hits and 1.2% are undecidable for the reference. See docs/bezier.md.
+/// Rays that pass within 1e-6..1e-3 of a *pointed* tip (a cone point on the axis). This case
+/// found false hits (rays passing about 1e-7 from the tip reported as hits; the reference and an
+/// exact mpmath check said miss) and, after their fix, farther-than-nearest hits at the edge of
+/// the reachable radius; both are fixed (docs/bezier.md, "Pointed tips"). About 1.2% of these
+/// rays graze the cone so closely that the two roots of the reference's polynomial lie closer
+/// than `AMBIGUOUS_WIDTH`: the reference cannot decide them, so this case allows 15 in a thousand
+/// undecided (measured: 2 367 of 200 000), where the other cases allow 1. The robust hits on
+/// undecided rays are still checked to lie on the surface.
 #[test]
-#[ignore = "known robust false hits near pointed tips (docs/bezier.md, open)"]
 fn lathe_near_pole_rays_pointed_tips() {
     let spindle = spindle();
-    run_lathe(
+    run_lathe_allowing(
         "lathe near-pole (spindle tips)",
         &spindle,
         7,
+        15,
         near_pole_ray(vec![DVec3::ZERO, DVec3::new(0.0, 1.5, 0.0)], spindle.size()),
     );
 }
@@ -408,20 +424,21 @@ fn run_patch(
             let (o, d) = make_ray(&mut ray_rng(seed, i));
             st.rays += 1;
             let want = reference::patch(patch, o, d, 1e-9, f64::INFINITY);
-            if want.ambiguous {
-                st.ambiguous += 1;
-                return st;
-            }
-            let want = want.t;
-            st.ref_hits += want.is_some() as usize;
             let got = patch.intersect(o, d, 1e-9, f64::INFINITY, PatchSolver::Robust);
             let before = st.failures();
+            // Every robust hit, also on rays the reference cannot decide, lies on the surface.
             if let Some(h) = got {
                 let (q, _, _) = patch.eval(h.uv.x, h.uv.y);
                 if (q - h.p).length() > 1e-6 * patch.size() {
                     st.off_surface += 1;
                 }
             }
+            if want.ambiguous {
+                st.ambiguous += 1;
+                return st;
+            }
+            let want = want.t;
+            st.ref_hits += want.is_some() as usize;
             st.compare(want, got.map(|h| h.t));
             if before != st.failures() && st.failing.len() < 3 {
                 let msg = format!("o={o:?} d={d:?}: reference {want:?}, robust {got:?}");
@@ -433,7 +450,7 @@ fn run_patch(
         })
         .reduce(Stats::default, Stats::merge);
     println!("[{name}] {} rays in {:.1?}", st.rays, start.elapsed());
-    st.report_and_check(name);
+    st.report_and_check(name, 1);
 }
 
 #[test]

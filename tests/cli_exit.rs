@@ -122,3 +122,37 @@ fn integrator_flag_overrides_the_scene() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("use one of whitted"));
 }
+
+/// `sppm-lang check scene | head -1`: the reader has gone before the summary is written. The
+/// read end of the pipe is closed before the program starts, so every write fails with EPIPE;
+/// the command must still exit with its own status (0: the scene is fine) and not panic.
+#[test]
+fn a_closed_stdout_or_stderr_pipe_is_not_a_panic() {
+    use std::process::Stdio;
+    for (scene, code) in [
+        ("examples/cornell.scn", 0),
+        ("tests/bad/alpha_out_of_range.scn", 1),
+    ] {
+        let (out_r, out_w) = std::io::pipe().unwrap();
+        let (err_r, err_w) = std::io::pipe().unwrap();
+        drop(out_r);
+        // stderr: keep it readable for the cornell case (to see a panic message), closed for
+        // the bad scene (whose diagnostics go to stderr).
+        let keep_err = code == 0;
+        let err_r = if keep_err { Some(err_r) } else { None };
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+            .args(["check", scene])
+            .stdout(Stdio::from(out_w))
+            .stderr(Stdio::from(err_w))
+            .spawn()
+            .expect("run sppm-lang");
+        let mut stderr = String::new();
+        if let Some(mut r) = err_r {
+            std::io::Read::read_to_string(&mut r, &mut stderr).unwrap();
+        }
+        let status = child.wait().unwrap();
+        println!("{scene}: exit {:?}, stderr {stderr:?}", status.code());
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(status.code(), Some(code), "{scene}: {stderr}");
+    }
+}

@@ -38,6 +38,8 @@
 //! | room | 1.2e-2 | 0.23% | 1.0% |
 //! | smallppm | 2.4e-2 | 0.55% | 0.70% |
 //! | textures (HDR sky: sun shadows are noisy at 16 iterations) | 1.5e-1 | 13.9% | 1.5% |
+//! | vase (blessed 2026-11-23) | 8.9e-3 | 0.81% | 1.0% |
+//! | teapot (blessed 2026-11-23) | 1.2e-2 | 0.94% | 0.66% |
 //!
 //! Deliberate changes fail, and [`deliberate_material_and_light_changes_fail_with_a_report`]
 //! checks it on every run: the Cornell box's red wall made blue gives rel_mse 5.2e-2 (tol

@@ -653,9 +653,9 @@ impl RayFrame {
                 cands[0] = (self.t0 + t_of(s), s);
                 return cands;
             }
-            // A tangency: keep the root if the ray really reaches the surface there.
-            if g(root.t).abs() <= 1e-7 * size {
-                cands[0] = (self.t0 + t_of(root.t), root.t);
+            // A tangency: keep it only where the factor really reaches zero.
+            if let Some(s) = touch(&g, lo, hi, size) {
+                cands[0] = (self.t0 + t_of(s), s);
             }
             return cands;
         }
@@ -663,17 +663,22 @@ impl RayFrame {
             let r = seg.r.eval(s);
             ((r * r - self.rho2) / self.dh2).max(0.0).sqrt()
         };
+        // The ray reaches radius `r` only where `r >= rho`. The slack is absolute in `r` (not in
+        // `r^2`): near a pointed tip `rho` itself may be 1e-7 of the size, and a slack in `r^2`
+        // of 1e-12 size^2 would let `r` fall far below `rho` and create a false hit at `t_c`.
+        let rho = self.rho2.sqrt();
+        let reach = rho - 1e-12 * size;
+        let g = |sigma: f64, s: f64| {
+            let r = seg.r.eval(s);
+            if r < reach {
+                // The ray does not reach radius r: no hit at this s.
+                return f64::NAN;
+            }
+            seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
+        };
         let mut refined = false;
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
-            let g = |s: f64| {
-                let r = seg.r.eval(s);
-                if r * r < self.rho2 - 1e-12 * size * size {
-                    // The ray does not reach radius r: no hit at this s.
-                    return f64::NAN;
-                }
-                seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
-            };
-            if let Some(s) = nearest_sign_change(&g, &|s| sigma * w_of(s), lo, hi) {
+            if let Some(s) = nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi) {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
                 refined = true;
             }
@@ -681,27 +686,61 @@ impl RayFrame {
         if refined {
             return cands;
         }
-        // A tangency: no factor changes sign. Use the root itself.
-        let s = root.t;
-        let (rs, hs) = (seg.r.eval(s), seg.h.eval(s));
-        let w2 = (rs * rs - self.rho2) / self.dh2;
-        if w2 < -1e-12 * size * size {
-            return cands;
-        }
-        let w = w2.max(0.0).sqrt();
-        let dh = seg.h.eval_with_derivative(s).1;
-        let res = |t: f64| (oc.y + t * dn.y - hs).abs();
-        let (rp, rm) = (res(w), res(-w));
-        let lim = (rp.min(rm) + 4.0 * dh.abs() * (ds + root.hi - root.lo) + 1e-12 * size)
-            .min(1e-7 * size);
-        if rp <= lim {
-            cands[0].0 = self.t0 + w;
-        }
-        if rm <= lim {
-            cands[1].0 = self.t0 - w;
+        // A tangency: no factor changes sign between samples. Keep a side only where its
+        // factor really reaches zero (the root of `F` alone is not enough: near a pole its
+        // uncertainty in `s` is large enough to turn a ray that passes 1e-7 away into a hit).
+        for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            if let Some(s) = touch(&|s| g(sigma, s), lo, hi, size) {
+                cands[k] = (self.t0 + sigma * w_of(s), s);
+            }
         }
         cands
     }
+}
+
+/// Where a factor `g` touches zero on `[lo, hi]` without a sign change between samples (a
+/// tangency, or two roots closer than the sample spacing): the point of smallest `|g|`, found by
+/// 64 samples and a golden-section search between the best sample's neighbours, if `|g|` there is
+/// within rounding of zero (`1e-10` of the surface size; `g` is a length, computed in f64 from
+/// quantities of the size of the scene). NaN values of `g` mean "not reachable".
+fn touch(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, size: f64) -> Option<f64> {
+    let f = |s: f64| {
+        let v = g(s).abs();
+        if v.is_nan() { f64::INFINITY } else { v }
+    };
+    const N: usize = 64;
+    let x = |k: usize| lo + (hi - lo) * k as f64 / N as f64;
+    let (k, fk) = (0..=N)
+        .map(|k| (k, f(x(k))))
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    if !fk.is_finite() {
+        return None;
+    }
+    let (mut a, mut b) = (x(k.saturating_sub(1)), x((k + 1).min(N)));
+    let q = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - q * (b - a), a + q * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    let mut best = (x(k), fk);
+    for _ in 0..100 {
+        if fc < fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - q * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + q * (b - a);
+            fd = f(d);
+        }
+        for (s, v) in [(c, fc), (d, fd)] {
+            if v < best.1 {
+                best = (s, v);
+            }
+        }
+        if b - a <= f64::EPSILON * b.abs().max(1e-300) {
+            break;
+        }
+    }
+    (best.1 <= 1e-10 * size).then_some(best.0)
 }
 
 /// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
@@ -727,9 +766,32 @@ fn nearest_sign_change(
     best.map(|b| b.0)
 }
 
-/// A root of `g` in `[lo, hi]` by bisection if `g` changes sign there.
+/// A root of `g` in `[lo, hi]` by bisection if `g` changes sign there. Where one end is not
+/// reachable (NaN: the ray does not get to that radius), that end is first moved to the edge of
+/// the reachable part, where the two sides of the ray meet (`w = 0`); a sign change between the
+/// other end and that edge is a hit close to the ray's closest approach to the axis.
 fn bisect(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> Option<f64> {
-    let (ga, gb) = (g(lo), g(hi));
+    let (mut lo, mut hi) = (lo, hi);
+    let (mut ga, mut gb) = (g(lo), g(hi));
+    if ga.is_nan() != gb.is_nan() {
+        let (mut ok, mut bad) = if ga.is_nan() { (hi, lo) } else { (lo, hi) };
+        for _ in 0..200 {
+            let m = 0.5 * (ok + bad);
+            if m == ok || m == bad {
+                break;
+            }
+            if g(m).is_nan() {
+                bad = m;
+            } else {
+                ok = m;
+            }
+        }
+        if ga.is_nan() {
+            (lo, ga) = (ok, g(ok));
+        } else {
+            (hi, gb) = (ok, g(ok));
+        }
+    }
     if ga * gb > 0.0 || (ga * gb).is_nan() {
         return None;
     }

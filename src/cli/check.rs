@@ -9,6 +9,7 @@ use sppm_lang::render::RenderError;
 use sppm_lang::scene::{Background, Light, Scene};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
+use super::output::{err, out};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
 
 /// Prints the diagnostics of a load to stderr: miette's fancy output on a terminal, plain text
@@ -19,12 +20,13 @@ pub fn print_diagnostics(loaded: &Loaded) {
     }
     if std::io::stderr().is_terminal() {
         let report = sppm_lang::to_report(&loaded.sources, &loaded.diagnostics);
-        eprintln!("{report:?}");
+        err(&format!("{report:?}\n"));
     } else {
-        eprint!(
-            "{}",
-            sppm_lang::render_plain(&loaded.sources, &loaded.diagnostics, 100)
-        );
+        err(&sppm_lang::render_plain(
+            &loaded.sources,
+            &loaded.diagnostics,
+            100,
+        ));
     }
 }
 
@@ -39,7 +41,7 @@ pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
             };
             print_diagnostics(&loaded);
         }
-        _ => eprintln!("error: {}", e.message),
+        _ => err(&format!("error: {}\n", e.message)),
     }
 }
 
@@ -47,14 +49,14 @@ pub fn run(scene: &Path, options: &EvalOptions) -> ExitCode {
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
-            eprintln!("error: cannot read `{}`: {e}", scene.display());
+            err(&format!("error: cannot read `{}`: {e}\n", scene.display()));
             return ExitCode::from(EXIT_USAGE);
         }
     };
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
-            print!("{}", summary(s));
+            out(&summary(s));
             ExitCode::SUCCESS
         }
         _ => ExitCode::from(EXIT_SCENE_ERROR),

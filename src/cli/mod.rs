@@ -3,6 +3,7 @@
 mod bench;
 mod chart;
 mod check;
+mod output;
 mod render;
 mod watch;
 
