@@ -1,6 +1,7 @@
 //! `sppm-lang bench bezier`: speed against accuracy of the Bezier intersectors and of meshes of
 //! the same surfaces (a thin front for [`sppm_lang::bench::bezier`]).
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -8,6 +9,7 @@ use clap::{Args, Subcommand};
 use sppm_lang::bench::bezier::{Method, Options, run, write_outputs};
 
 use super::EXIT_USAGE;
+use super::output::{err, out};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -44,7 +46,7 @@ pub fn run_bench(args: &BenchArgs) -> ExitCode {
         Bench::Bezier(a) => match bezier(a) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("error: {e}");
+                err(&format!("error: {e}\n"));
                 ExitCode::from(EXIT_USAGE)
             }
         },
@@ -62,8 +64,10 @@ fn bezier(args: &BezierArgs) -> Result<(), String> {
     let mut opts = Options::full(args.rays as usize);
     opts.repeats = args.repeats as usize;
     opts.seed = args.seed;
-    let rows = run(&opts, &|line| eprintln!("bench bezier: {line}"))?;
-    println!(
+    let rows = run(&opts, &|line| err(&format!("bench bezier: {line}\n")))?;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
         "{:<8} {:<16} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>10} {:>10}",
         "surface",
         "method",
@@ -77,7 +81,8 @@ fn bezier(args: &BezierArgs) -> Result<(), String> {
         "t err max"
     );
     for r in rows.iter().filter(|r| r.kind == "all") {
-        println!(
+        let _ = writeln!(
+            table,
             "{:<8} {:<16} {:>9} {:>9.0} {:>8.3} {:>9.2e} {:>9.2e} {:>6} {:>10.2e} {:>10.2e}",
             r.surface.name(),
             r.method.label(),
@@ -95,8 +100,9 @@ fn bezier(args: &BezierArgs) -> Result<(), String> {
             r.t_err_max,
         );
     }
+    out(&table);
     for p in write_outputs(&rows, &args.output)? {
-        eprintln!("wrote {}", p.display());
+        err(&format!("wrote {}\n", p.display()));
     }
     Ok(())
 }
