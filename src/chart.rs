@@ -30,6 +30,68 @@ pub const SIZE: (u32, u32) = (960, 640);
 
 /// Draws `series` to `path`; the format follows the extension (`.png` or `.svg`).
 pub fn draw(spec: &ChartSpec, series: &[Series], path: &Path) -> Result<(), String> {
+    write(path, SIZE, &One { spec, series })
+}
+
+/// Draws several charts on one page, `cols` side by side, each [`SIZE`] (e.g. an overview of
+/// charts that are also written one per file). The format follows the extension.
+pub fn draw_panels(
+    panels: &[(ChartSpec, Vec<Series>)],
+    cols: usize,
+    path: &Path,
+) -> Result<(), String> {
+    if panels.is_empty() {
+        return Err(format!("chart `{}`: no chart to draw", path.display()));
+    }
+    let cols = cols.clamp(1, panels.len());
+    let rows = panels.len().div_ceil(cols);
+    let size = (SIZE.0 * cols as u32, SIZE.1 * rows as u32);
+    write(path, size, &Panels { panels, rows, cols })
+}
+
+/// Something drawn onto a drawing area of either backend.
+trait Paint {
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static;
+}
+
+struct One<'a> {
+    spec: &'a ChartSpec,
+    series: &'a [Series],
+}
+
+impl Paint for One<'_> {
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        plot(root, self.spec, self.series)
+    }
+}
+
+struct Panels<'a> {
+    panels: &'a [(ChartSpec, Vec<Series>)],
+    rows: usize,
+    cols: usize,
+}
+
+impl Paint for Panels<'_> {
+    fn paint<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let areas = root.split_evenly((self.rows, self.cols));
+        for (area, (spec, series)) in areas.iter().zip(self.panels) {
+            plot(area, spec, series)?;
+        }
+        Ok(())
+    }
+}
+
+/// Paints a PNG or SVG (by `path`'s extension) of `size` pixels and writes it atomically.
+fn write(path: &Path, size: (u32, u32), what: &impl Paint) -> Result<(), String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -43,11 +105,13 @@ pub fn draw(spec: &ChartSpec, series: &[Series], path: &Path) -> Result<(), Stri
     }
     crate::atomic_file::write_atomic(path, |tmp, _| {
         let result = if ext == "png" {
-            let root = BitMapBackend::new(tmp, SIZE).into_drawing_area();
-            plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
+            let root = BitMapBackend::new(tmp, size).into_drawing_area();
+            what.paint(&root)
+                .and_then(|_| root.present().map_err(|e| e.to_string()))
         } else {
-            let root = SVGBackend::new(tmp, SIZE).into_drawing_area();
-            plot(&root, spec, series).and_then(|_| root.present().map_err(|e| e.to_string()))
+            let root = SVGBackend::new(tmp, size).into_drawing_area();
+            what.paint(&root)
+                .and_then(|_| root.present().map_err(|e| e.to_string()))
         };
         result.map_err(|e| format!("cannot draw chart `{}`: {e}", path.display()))
     })
@@ -132,6 +196,46 @@ fn log_axis(
         .with_light_points(light)
 }
 
+/// The corner of the plot the legend covers: the one with the fewest points within 45% of the
+/// axes' span (on the drawn scale) of it, the upper right on a tie.
+fn legend_corner(
+    series: &[Series],
+    xs: (f64, f64),
+    ys: (f64, f64),
+    spec: &ChartSpec,
+) -> SeriesLabelPosition {
+    let frac = |v: f64, (lo, hi): (f64, f64), log: bool| {
+        if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| &s.points)
+        .map(|&(x, y)| (frac(x, xs, spec.log_x), frac(y, ys, spec.log_y)))
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    let near = |right: bool, upper: bool| {
+        pts.iter()
+            .filter(|&&(x, y)| {
+                (if right { x > 0.55 } else { x < 0.45 })
+                    && (if upper { y > 0.55 } else { y < 0.45 })
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::UpperRight, near(true, true)),
+        (SeriesLabelPosition::UpperLeft, near(false, true)),
+        (SeriesLabelPosition::LowerLeft, near(false, false)),
+        (SeriesLabelPosition::LowerRight, near(true, false)),
+    ]
+    .into_iter()
+    .min_by_key(|c| c.1)
+    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+}
+
 fn plot<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     spec: &ChartSpec,
@@ -196,7 +300,7 @@ where
                 .configure_series_labels()
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
+                .position(legend_corner(series, xs, ys, spec))
                 .draw()
                 .map_err(err)?;
         }};
@@ -286,6 +390,55 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names.len(), 2, "{names:?}");
+    }
+
+    #[test]
+    fn draws_panels_on_one_page() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("p.png");
+        let panels = vec![(spec(), series()); 3];
+        draw_panels(&panels, 2, &png).unwrap();
+        let img = image::open(&png).unwrap();
+        assert_eq!((img.width(), img.height()), (2 * SIZE.0, 2 * SIZE.1));
+        // The empty fourth panel stays white; the third is drawn.
+        let rgb = img.to_rgb8();
+        let inked = |x0: u32, y0: u32| {
+            (0..SIZE.1)
+                .flat_map(|y| (0..SIZE.0).map(move |x| (x, y)))
+                .filter(|&(x, y)| rgb.get_pixel(x0 + x, y0 + y).0 != [255, 255, 255])
+                .count()
+        };
+        assert!(inked(0, SIZE.1) > 1000);
+        assert_eq!(inked(SIZE.0, SIZE.1), 0);
+        assert!(draw_panels(&[], 2, &png).is_err());
+    }
+
+    #[test]
+    fn legend_goes_to_the_emptiest_corner() {
+        let at = |pts: Vec<(f64, f64)>| {
+            let series = [Series {
+                label: "a".into(),
+                points: pts,
+            }];
+            let corner = legend_corner(&series, (1.0, 1000.0), (1.0, 1000.0), &spec());
+            format!("{corner:?}")
+        };
+        // A curve falling from the upper left to the lower right leaves the other two corners
+        // free; the upper right is taken first.
+        assert_eq!(
+            at(vec![(1.5, 900.0), (30.0, 30.0), (900.0, 1.5)]),
+            "UpperRight"
+        );
+        // Points in the upper right (on the log scale) move the legend.
+        assert_eq!(
+            at(vec![
+                (100.0, 100.0),
+                (500.0, 900.0),
+                (900.0, 500.0),
+                (1.5, 1.5)
+            ]),
+            "UpperLeft"
+        );
     }
 
     #[test]

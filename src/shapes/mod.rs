@@ -45,5 +45,6 @@ pub mod primitive;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
+pub mod tessellate;
 pub mod transformed;
 pub mod triangle;

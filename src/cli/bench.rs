@@ -1,0 +1,108 @@
+//! `sppm-lang bench bezier`: speed against accuracy of the Bezier intersectors and of meshes of
+//! the same surfaces (a thin front for [`sppm_lang::bench::bezier`]).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Subcommand};
+use sppm_lang::bench::bezier::{Method, Options, run, write_outputs};
+
+use super::EXIT_USAGE;
+use super::output::{err, out};
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: Bench,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Bench {
+    /// Revolve and patch: robust, Newton settings and tessellated meshes against the reference
+    /// intersector; ns per ray against miss rate and t error (CSV and charts).
+    Bezier(BezierArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BezierArgs {
+    /// Overview chart (.png or .svg); the CSV, the single charts and the other format are
+    /// written beside it with the same stem.
+    #[arg(short, long, default_value = "docs/charts/bezier.png")]
+    pub output: PathBuf,
+    /// Rays per ray kind (the revolve has three kinds, the patch two).
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub rays: u64,
+    /// Timed passes over the ray set; the median is reported.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeats: u64,
+    /// Seed of the ray set.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+pub fn run_bench(args: &BenchArgs) -> ExitCode {
+    match &args.what {
+        Bench::Bezier(a) => match bezier(a) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                err(&format!("error: {e}\n"));
+                ExitCode::from(EXIT_USAGE)
+            }
+        },
+    }
+}
+
+fn bezier(args: &BezierArgs) -> Result<(), String> {
+    let ext = args.output.extension().and_then(|e| e.to_str());
+    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("svg")) {
+        return Err(format!(
+            "output `{}` must end in .png or .svg",
+            args.output.display()
+        ));
+    }
+    let mut opts = Options::full(args.rays as usize);
+    opts.repeats = args.repeats as usize;
+    opts.seed = args.seed;
+    let rows = run(&opts, &|line| err(&format!("bench bezier: {line}\n")))?;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
+        "{:<8} {:<16} {:>9} {:>9} {:>8} {:>9} {:>9} {:>6} {:>10} {:>10}",
+        "surface",
+        "method",
+        "triangles",
+        "ns/ray",
+        "x robust",
+        "miss",
+        "false hit",
+        "far",
+        "t err med",
+        "t err max"
+    );
+    for r in rows.iter().filter(|r| r.kind == "all") {
+        let _ = writeln!(
+            table,
+            "{:<8} {:<16} {:>9} {:>9.0} {:>8.3} {:>9.2e} {:>9.2e} {:>6} {:>10.2e} {:>10.2e}",
+            r.surface.name(),
+            r.method.label(),
+            if r.method == Method::Robust || matches!(r.method, Method::Newton { .. }) {
+                String::new()
+            } else {
+                r.triangles.to_string()
+            },
+            r.ns_per_ray,
+            r.time_vs_robust,
+            r.miss_rate(),
+            r.false_hit_rate(),
+            r.far_hits,
+            r.t_err_median,
+            r.t_err_max,
+        );
+    }
+    out(&table);
+    for p in write_outputs(&rows, &args.output)? {
+        err(&format!("wrote {}\n", p.display()));
+    }
+    Ok(())
+}
