@@ -65,8 +65,8 @@ fn describe(rule: Rule) -> &'static str {
         Rule::paren => "`(`",
         Rule::vector => "a vector `<x, y, z>`",
         Rule::array => "an array `[a, b]`",
-        Rule::block => "a block `name { ... }`",
-        Rule::call => "a call `name(...)`",
+        Rule::named => "a name",
+        Rule::args => "`(`",
         Rule::number => "a number",
         Rule::boolean => "`true` or `false`",
         Rule::string | Rule::str_inner => "a string",
@@ -98,19 +98,18 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         found_len(text, pos)
     };
     let span = Span::new(file, pos as u32, (pos + len) as u32);
-    let mut expected: Vec<&str> = match &e.variant {
-        pest::error::ErrorVariant::ParsingError { positives, .. } => {
-            positives.iter().map(|r| describe(*r)).collect()
-        }
-        pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
+    let (rules, after_operand) = match &e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => expected_rules(positives),
+        pest::error::ErrorVariant::CustomError { .. } => (Vec::new(), false),
     };
+    let mut expected: Vec<&str> = rules.into_iter().map(describe).collect();
     // Say "a directive" once instead of listing every one, and leave out the tokens that could
     // merely continue an expression when there are other choices.
     if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
         expected.retain(|e| !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`"));
         expected.push("a directive");
     }
-    if expected.len() > 3 {
+    if expected.len() > 3 || after_operand {
         expected.retain(|e| !matches!(*e, "`.`" | "`[`" | "an operator"));
     }
     expected.sort();
@@ -164,6 +163,50 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
         d = d.with_help("a block is not closed: add `}`");
     }
     d
+}
+
+/// The rules a syntax error expected, from the ones pest recorded at the error position.
+///
+/// The grammar tries some rules only where the next character allows them (see the speed notes
+/// in `grammar/scene.pest`); one rule of each place is always tried and stands for the others:
+/// `comma` for an item, `rgb` for an operand, `index` for what may follow an operand (postfix
+/// and infix operators). This puts back the rules that a place allows, so that the message lists
+/// everything that could stand there. The second value says that the position follows an
+/// operand: the message then leaves out the tokens that could merely continue the expression.
+fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
+    let mut rules: Vec<Rule> = positives
+        .iter()
+        .copied()
+        .filter(|r| *r != Rule::args)
+        .collect();
+    if positives.contains(&Rule::comma) {
+        rules.extend([
+            Rule::keyword,
+            Rule::iexpr,
+            Rule::declare,
+            Rule::local,
+            Rule::if_d,
+            Rule::while_d,
+            Rule::for_d,
+            Rule::macro_d,
+            Rule::include_d,
+        ]);
+    }
+    if positives.contains(&Rule::rgb) {
+        rules.extend([
+            Rule::neg,
+            Rule::not,
+            Rule::pos,
+            Rule::number,
+            Rule::ident,
+            Rule::vector,
+            Rule::string,
+            Rule::boolean,
+            Rule::array,
+            Rule::paren,
+        ]);
+    }
+    (rules, positives.contains(&Rule::index))
 }
 
 fn is_keyword(word: &str) -> bool {
@@ -435,24 +478,29 @@ impl Cx {
             Rule::string => {
                 ExprKind::Str(unescape(pair.into_inner().next().unwrap().as_str()).into())
             }
-            Rule::ident => ExprKind::Ident(pair.as_str().to_string()),
             Rule::paren => return self.expr(pair.into_inner().next().unwrap()),
             Rule::vector => ExprKind::Vector(pair.into_inner().map(|p| self.expr(p)).collect()),
             Rule::array => ExprKind::Array(pair.into_inner().map(|p| self.expr(p)).collect()),
-            Rule::block => {
+            Rule::named => {
+                // A plain name, a block `name { items }` or a call `name(args)`. A plain name's
+                // span is the name's own (`named` also covers the blanks after it).
                 let mut i = pair.into_inner();
-                let kind = self.name(i.next().unwrap());
-                ExprKind::Block {
-                    kind,
-                    items: Rc::new(self.items(i.next().unwrap())),
-                }
-            }
-            Rule::call => {
-                let mut i = pair.into_inner();
-                let name = self.name(i.next().unwrap());
-                ExprKind::Call {
-                    name,
-                    args: i.map(|p| self.expr(p)).collect(),
+                let name = i.next().unwrap();
+                match i.next() {
+                    None => {
+                        return Expr {
+                            span: self.span(&name),
+                            kind: ExprKind::Ident(name.as_str().to_string()),
+                        };
+                    }
+                    Some(tail) if tail.as_rule() == Rule::items => ExprKind::Block {
+                        kind: self.name(name),
+                        items: Rc::new(self.items(tail)),
+                    },
+                    Some(tail) => ExprKind::Call {
+                        name: self.name(name),
+                        args: tail.into_inner().map(|p| self.expr(p)).collect(),
+                    },
                 }
             }
             r => unreachable!("primary rule {r:?}"),
