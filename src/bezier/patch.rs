@@ -2,12 +2,14 @@
 //!
 //! The robust method projects the control points into a frame where the ray is the z axis
 //! (`x = (p - o).e1`, `y = (p - o).e2`, `z = (p - o).d`). By the convex-hull property a sub-patch
-//! can only be hit if the bounding box of its projected control points contains the origin in x
-//! and y and overlaps `(t_min, t_best)` in z. Sub-patches that pass are split (de Casteljau, along
-//! the parameter in which the control net is longer), nearer halves first, until they are smaller
-//! than [`LEAF`] of the patch size; a leaf is polished by Newton's method on the two projected
-//! equations inside (a slightly enlarged copy of) its parameter domain, falling back to the leaf's
-//! centre. The nearest hit found prunes all farther sub-patches.
+//! can only be hit if its projected control points cover the origin: their box in x and y
+//! contains it and overlaps `(t_min, t_best)` in z, and two fat lines (bands along the net's u and
+//! v directions) contain it. Sub-patches that pass are split (de Casteljau, along the parameter in
+//! which the control net is longer), nearer halves first. As soon as a sub-patch provably meets
+//! the ray at most once (its projected map is injective, see `injective`) Newton's method inside its
+//! domain finds that hit; sub-patches where the ray is tangent go on to leaves of [`LEAF`] of the
+//! patch size, polished by Newton in (a slightly enlarged copy of) their domain, falling back to
+//! the leaf's centre at [`FINAL_LEAF`]. The nearest hit found prunes all farther sub-patches.
 
 use glam::{DVec2, DVec3};
 
@@ -90,6 +92,69 @@ fn net_bounds(q: &[DVec3; 16]) -> (DVec3, DVec3) {
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(*p), hi.max(*p))
         })
+}
+
+/// Product of two intervals.
+fn imul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    let p = [a.0 * b.0, a.0 * b.1, a.1 * b.0, a.1 * b.1];
+    (
+        p.iter().copied().fold(f64::INFINITY, f64::min),
+        p.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
+/// Whether the sub-patch with projected net `q` meets the ray (the z axis) at most once.
+///
+/// The projected map `(u, v) -> (x, y)` is injective on the sub-patch's domain if every matrix
+/// whose entries lie in the ranges of the partial derivatives `x_u, x_v, y_u, y_v` over the
+/// domain is nonsingular: by the mean-value theorem `F(a) - F(b) = M (a - b)` with each row of `M`
+/// a gradient at some point of the segment, so `M` is such a matrix. The ranges come from the
+/// derivative nets (convex-hull property; the constant factor 3 does not change the sign), and
+/// the determinant of the interval matrix evaluated in interval arithmetic encloses every such
+/// matrix's determinant. If it excludes 0, the ray meets this piece of surface at most once.
+fn injective(q: &[DVec3; 16]) -> bool {
+    let range = |f: &dyn Fn(DVec3) -> f64, pairs: &mut dyn Iterator<Item = (usize, usize)>| {
+        pairs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (a, b)| {
+            let d = f(q[b] - q[a]);
+            (lo.min(d), hi.max(d))
+        })
+    };
+    // Differences along u: p[4 (i + 1) + j] - p[4 i + j]; along v: p[4 i + j + 1] - p[4 i + j].
+    let du = || (0..12).map(|k| (k, k + 4));
+    let dv = || (0..16).filter(|k| k % 4 != 3).map(|k| (k, k + 1));
+    let xu = range(&|d| d.x, &mut du());
+    let yu = range(&|d| d.y, &mut du());
+    let xv = range(&|d| d.x, &mut dv());
+    let yv = range(&|d| d.y, &mut dv());
+    let a = imul(xu, yv);
+    let b = imul(yu, xv);
+    let det = (a.0 - b.1, a.1 - b.0);
+    det.0 > 0.0 || det.1 < 0.0
+}
+
+/// Whether the projected net `q` can cover the origin, by two "fat lines" (as in Bezier
+/// clipping): for the net's mean direction along u and along v, the band of the control
+/// points' signed distances from the line through the origin in that direction must contain 0
+/// (within `eps`). By the convex-hull property the sub-patch's projection lies in both bands. A
+/// sub-patch seen edge-on projects to a thin sliver at an angle, whose axis-aligned box is far
+/// larger than the sliver: these bands are not.
+fn bands_hold_origin(q: &[DVec3; 16], eps: f64) -> bool {
+    let band = |dir: DVec2| {
+        let len = dir.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return true;
+        }
+        let n = DVec2::new(-dir.y, dir.x) / len;
+        let (lo, hi) = q
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                let d = n.x * p.x + n.y * p.y;
+                (lo.min(d), hi.max(d))
+            });
+        lo <= eps && hi >= -eps
+    };
+    let xy = |k: usize| DVec2::new(q[k].x, q[k].y);
+    band(xy(12) - xy(0) + xy(15) - xy(3)) && band(xy(3) - xy(0) + xy(15) - xy(12))
 }
 
 /// A sub-patch on the work stack.
@@ -287,7 +352,7 @@ impl Patch {
         };
         let (lo, hi) = net_bounds(&q);
         let mut stack = Vec::with_capacity(64);
-        if may_hit(lo, hi, best_t) {
+        if may_hit(lo, hi, best_t) && bands_hold_origin(&q, eps) {
             stack.push(Node {
                 q,
                 u: (0.0, 1.0),
@@ -304,7 +369,26 @@ impl Patch {
             let ext = (hi - lo).max_element();
             let depth_exhausted = node.u.1 - node.u.0 < 1e-15 || node.v.1 - node.v.0 < 1e-15;
             let c = DVec2::new(0.5 * (node.u.0 + node.u.1), 0.5 * (node.v.0 + node.v.1));
-            if polish && ext <= leaf_size && !depth_exhausted {
+            if polish && !depth_exhausted && injective(&node.q) {
+                // At most one hit in this piece: Newton's method inside its domain finds it.
+                // A root that converges inside the domain is the piece's only one, so the piece
+                // is done whatever its `t`; one outside is still a genuine hit (it prunes), but
+                // the piece must then be split on.
+                let w = DVec2::new(node.u.1 - node.u.0, node.v.1 - node.v.0);
+                let lo = DVec2::new(node.u.0, node.v.0) - 0.5 * w;
+                let hi = DVec2::new(node.u.1, node.v.1) + 0.5 * w;
+                let keep = (lo.max(DVec2::ZERO), hi.min(DVec2::ONE));
+                if let Some((uv, t)) = self.newton(o, frame, c, 12, keep) {
+                    if t > tmin && t < best_t {
+                        best_t = t;
+                        best = Some((uv, t));
+                    }
+                    if uv.x >= node.u.0 && uv.x <= node.u.1 && uv.y >= node.v.0 && uv.y <= node.v.1
+                    {
+                        continue;
+                    }
+                }
+            } else if polish && ext <= leaf_size && !depth_exhausted {
                 // Newton inside (an enlarged copy of) the leaf's domain. Where it does not
                 // converge (a bound that holds the ray but a surface piece that misses it, near
                 // a tangency) keep subdividing: accepting the leaf there would report a hit that
@@ -348,14 +432,14 @@ impl Patch {
             };
             let (la, ha) = net_bounds(&a);
             let (lb, hb) = net_bounds(&b);
-            let na = may_hit(la, ha, best_t).then_some(Node {
+            let na = (may_hit(la, ha, best_t) && bands_hold_origin(&a, eps)).then_some(Node {
                 q: a,
                 u: ua,
                 v: va,
                 lo: la,
                 hi: ha,
             });
-            let nb = may_hit(lb, hb, best_t).then_some(Node {
+            let nb = (may_hit(lb, hb, best_t) && bands_hold_origin(&b, eps)).then_some(Node {
                 q: b,
                 u: ub,
                 v: vb,
