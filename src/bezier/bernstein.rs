@@ -14,12 +14,24 @@ pub struct Bernstein {
     c: [f64; MAX_DEGREE + 1],
 }
 
-fn binomial(n: usize, k: usize) -> f64 {
-    let mut b = 1.0;
-    for i in 0..k.min(n - k) {
-        b = b * (n - i) as f64 / (i + 1) as f64;
+/// Pascal's triangle up to `MAX_DEGREE`, exact in f64 (the largest entry is 6435).
+const BINOMIAL: [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1] = {
+    let mut t = [[0.0; MAX_DEGREE + 1]; MAX_DEGREE + 1];
+    let mut n = 0;
+    while n <= MAX_DEGREE {
+        t[n][0] = 1.0;
+        let mut k = 1;
+        while k <= n {
+            t[n][k] = t[n - 1][k - 1] + t[n - 1][k];
+            k += 1;
+        }
+        n += 1;
     }
-    b.round()
+    t
+};
+
+fn binomial(n: usize, k: usize) -> f64 {
+    BINOMIAL[n][k]
 }
 
 impl Bernstein {
@@ -195,6 +207,19 @@ impl Bernstein {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn binomial_table_is_pascals_triangle() {
+        for n in 0..=MAX_DEGREE {
+            let row: f64 = (0..=n).map(|k| binomial(n, k)).sum();
+            assert_eq!(row, (1u64 << n) as f64, "row {n}");
+            for k in 0..=n {
+                assert_eq!(binomial(n, k), binomial(n, n - k));
+            }
+        }
+        assert_eq!(binomial(15, 7), 6435.0);
+        assert_eq!(binomial(6, 3), 20.0);
+    }
 
     fn power_eval(p: &[f64], t: f64) -> f64 {
         p.iter().rev().fold(0.0, |acc, c| acc * t + c)

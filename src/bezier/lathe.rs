@@ -744,7 +744,7 @@ fn touch(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, size: f64) -> Option<f64> {
 }
 
 /// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
-/// bisected root with the smallest `t(s)`.
+/// refined root with the smallest `t(s)`. Neighbouring pieces share their end samples.
 fn nearest_sign_change(
     g: &dyn Fn(f64) -> f64,
     t: &dyn Fn(f64) -> f64,
@@ -753,26 +753,33 @@ fn nearest_sign_change(
 ) -> Option<f64> {
     let mut best: Option<(f64, f64)> = None;
     let n = 16;
+    let x = |k: usize| lo + (hi - lo) * k as f64 / n as f64;
+    let (mut a, mut ga) = (x(0), g(x(0)));
     for k in 0..n {
-        let a = lo + (hi - lo) * k as f64 / n as f64;
-        let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
-        if let Some(s) = bisect(g, a, b) {
+        let b = x(k + 1);
+        let gb = g(b);
+        if let Some(s) = bracketed_root(g, a, b, ga, gb) {
             let ts = t(s);
             if best.is_none_or(|(_, bt)| ts < bt) {
                 best = Some((s, ts));
             }
         }
+        (a, ga) = (b, gb);
     }
     best.map(|b| b.0)
 }
 
-/// A root of `g` in `[lo, hi]` by bisection if `g` changes sign there. Where one end is not
-/// reachable (NaN: the ray does not get to that radius), that end is first moved to the edge of
-/// the reachable part, where the two sides of the ray meet (`w = 0`); a sign change between the
-/// other end and that edge is a hit close to the ray's closest approach to the axis.
-fn bisect(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> Option<f64> {
-    let (mut lo, mut hi) = (lo, hi);
-    let (mut ga, mut gb) = (g(lo), g(hi));
+/// A root of `g` in `[lo, hi]` (`ga`, `gb`: the values at the ends) if `g` changes sign there.
+/// Where one end is not reachable (NaN: the ray does not get to that radius), that end is first
+/// moved to the edge of the reachable part, where the two sides of the ray meet (`w = 0`); a sign
+/// change between the other end and that edge is a hit close to the ray's closest approach to
+/// the axis.
+///
+/// The root is refined to the last bit inside its bracket by false position with the Illinois
+/// modification (superlinear), every third step a bisection so that the bracket at least halves
+/// every three steps whatever `g` does; a NaN inside the bracket switches to plain bisection.
+fn bracketed_root(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) -> Option<f64> {
+    let (mut lo, mut hi, mut ga, mut gb) = (lo, hi, ga, gb);
     if ga.is_nan() != gb.is_nan() {
         let (mut ok, mut bad) = if ga.is_nan() { (hi, lo) } else { (lo, hi) };
         for _ in 0..200 {
@@ -801,20 +808,44 @@ fn bisect(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> Option<f64> {
     if gb == 0.0 {
         return Some(hi);
     }
-    let (mut a, mut b) = (lo, hi);
-    for _ in 0..100 {
-        let m = 0.5 * (a + b);
-        if m <= a || m >= b {
+    let (mut a, mut b, mut fa, mut fb) = (lo, hi, ga, gb);
+    let a_negative = ga < 0.0;
+    let mut bisect_only = false;
+    let mut last_side = 0i8;
+    for step in 0..300 {
+        let mid = 0.5 * (a + b);
+        if mid <= a || mid >= b {
             break;
         }
+        let m = if bisect_only || step % 3 == 2 {
+            mid
+        } else {
+            let m = (a * fb - b * fa) / (fb - fa);
+            if m > a && m < b { m } else { mid }
+        };
         let gm = g(m);
         if gm == 0.0 {
             return Some(m);
         }
-        if (gm < 0.0) == (ga < 0.0) {
+        if gm.is_nan() {
+            bisect_only = true;
+        }
+        // As plain bisection did: a NaN counts as the sign opposite to `a`'s when `a` is
+        // negative, the same as `a`'s otherwise.
+        if (gm < 0.0) == a_negative {
             a = m;
+            fa = gm;
+            if last_side == -1 {
+                fb *= 0.5;
+            }
+            last_side = -1;
         } else {
             b = m;
+            fb = gm;
+            if last_side == 1 {
+                fa *= 0.5;
+            }
+            last_side = 1;
         }
     }
     Some(0.5 * (a + b))
@@ -852,5 +883,92 @@ fn newton_roots(f: &Bernstein, noise: f64, iterations: u32, starts: u32, out: &m
                 kind: RootKind::Simple,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Plain bisection to the last bit, the method `bracketed_root` replaced.
+    fn bisection(g: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+        let ga = g(a);
+        loop {
+            let m = 0.5 * (a + b);
+            if m <= a || m >= b {
+                return 0.5 * (a + b);
+            }
+            let gm = g(m);
+            if gm == 0.0 {
+                return m;
+            }
+            if (gm < 0.0) == (ga < 0.0) {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+    }
+
+    /// False position stalls on one end for convex functions and crawls on flat ones; the
+    /// forced bisections bound that. Each case must land within a few ulps of bisection's root.
+    #[test]
+    fn bracketed_root_agrees_with_bisection_where_false_position_is_slow() {
+        type Case = (&'static str, Box<dyn Fn(f64) -> f64>, f64, f64);
+        let cases: Vec<Case> = vec![
+            ("linear", Box::new(|s| s - 0.3), 0.0, 1.0),
+            (
+                "steep convex",
+                Box::new(|s: f64| s.powi(20) - 1e-3),
+                0.0,
+                1.0,
+            ),
+            ("flat cubic", Box::new(|s: f64| (s - 0.7).powi(3)), 0.0, 1.0),
+            (
+                "decreasing",
+                Box::new(|s: f64| (1.0 - s).exp() - 1.5),
+                0.0,
+                1.0,
+            ),
+            (
+                "tiny bracket",
+                Box::new(|s: f64| s - 0.5),
+                0.5 - 1e-15,
+                0.5 + 1e-15,
+            ),
+            (
+                "huge slope",
+                Box::new(|s: f64| 1e12 * (s - 0.123456789)),
+                0.0,
+                1.0,
+            ),
+        ];
+        for (name, g, a, b) in &cases {
+            let got = bracketed_root(g.as_ref(), *a, *b, g(*a), g(*b)).expect(name);
+            let want = bisection(g.as_ref(), *a, *b);
+            assert!(
+                (got - want).abs() <= 4.0 * f64::EPSILON * want.abs().max(1e-300) || g(got) == 0.0,
+                "{name}: {got} vs {want}"
+            );
+        }
+        // No sign change: no root; both ends NaN: no root.
+        assert_eq!(bracketed_root(&|s| s + 1.0, 0.0, 1.0, 1.0, 2.0), None);
+        assert_eq!(
+            bracketed_root(&|_| f64::NAN, 0.0, 1.0, f64::NAN, f64::NAN),
+            None
+        );
+    }
+
+    /// One end unreachable (NaN beyond s = 0.6): the bracket is first cut back to the edge of
+    /// the reachable part, and the sign change between the other end and the edge is found.
+    #[test]
+    fn bracketed_root_finds_a_root_at_the_edge_of_reach() {
+        let g = |s: f64| if s > 0.6 { f64::NAN } else { s - 0.4 };
+        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0)).unwrap();
+        assert!((got - 0.4).abs() < 1e-15, "{got}");
+        // The sign change only at the edge itself: the root is the edge.
+        let g = |s: f64| if s > 0.6 { f64::NAN } else { s - 0.6 };
+        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0)).unwrap();
+        assert!((got - 0.6).abs() < 1e-15, "{got}");
     }
 }
