@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 use sppm_lang::bezier::reference;
+use sppm_lang::sampling::SplitMix64;
 
 const REL_T: f64 = 1e-6;
 
@@ -24,41 +25,13 @@ fn rays() -> usize {
         .unwrap_or(200_000)
 }
 
-/// splitmix64: a fixed, seeded stream.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length_squared();
-            if l > 1e-6 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-}
+/// The seeded ray streams (shared with `sppm-lang bench bezier`).
+type Rng = SplitMix64;
 
 /// The generator of ray `i` of a case: its own stream seeded from `(seed, i)`, so the ray set does
 /// not depend on the number of threads or on the order in which rays are run.
 fn ray_rng(seed: u64, i: usize) -> Rng {
-    let mut r = Rng(seed.wrapping_mul(0xD134_2543_DE82_EF95) ^ (i as u64));
-    r.f();
-    r
+    Rng::for_item(seed, 0, i)
 }
 
 #[derive(Default, Debug)]

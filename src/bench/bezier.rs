@@ -32,6 +32,7 @@ use crate::bezier::patch::Patch;
 use crate::bezier::reference::{self, RefHit};
 use crate::chart::{ChartSpec, Series, draw, draw_panels};
 use crate::geometry::Ray;
+use crate::sampling::SplitMix64;
 use crate::scene::{IntersectMethod, Profile};
 use crate::shapes::mesh::mesh_triangles;
 use crate::shapes::patch::BezierPatch;
@@ -196,48 +197,8 @@ pub fn wavy_points() -> [DVec3; 16] {
     std::array::from_fn(|k| DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4]))
 }
 
-/// splitmix64: a fixed, seeded stream.
-struct Rng(u64);
-
-impl Rng {
-    /// The stream of ray `i` of kind `kind`: independent of the order rays are made in.
-    fn for_ray(seed: u64, kind: usize, i: usize) -> Self {
-        let mut r =
-            Rng(seed.wrapping_mul(0xD134_2543_DE82_EF95) ^ ((kind as u64) << 48) ^ (i as u64));
-        r.f();
-        r
-    }
-
-    fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length_squared();
-            if l > 1e-6 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-
-    fn sign(&mut self) -> f64 {
-        if self.f() < 0.5 { 1.0 } else { -1.0 }
-    }
-}
+/// The seeded ray streams (shared with `tests/bezier_stress.rs`).
+type Rng = SplitMix64;
 
 /// A ray from a sphere of 3 sizes around the box through a uniform point inside it, with a
 /// direction length between 0.2 and 2 times the distance.
@@ -276,7 +237,7 @@ fn make_kind(
 ) -> RayKind {
     let rays: Vec<Ray> = (0..opts.rays)
         .map(|i| {
-            let (o, d) = make(&mut Rng::for_ray(opts.seed, index, i));
+            let (o, d) = make(&mut Rng::for_item(opts.seed, index, i));
             Ray::new(o.as_vec3a(), d.as_vec3a())
         })
         .collect();

@@ -3,10 +3,12 @@
 
 mod distribution;
 mod rng;
+mod splitmix;
 mod warp;
 
 pub use distribution::Distribution1D;
 pub use rng::{Rng, stream_seed};
+pub use splitmix::SplitMix64;
 pub use warp::{
     concentric_disk, cosine_hemisphere, power_heuristic, uniform_cone, uniform_cone_pdf,
     uniform_sphere, uniform_triangle,
