@@ -156,3 +156,49 @@ fn a_closed_stdout_or_stderr_pipe_is_not_a_panic() {
         assert_eq!(status.code(), Some(code), "{scene}: {stderr}");
     }
 }
+
+/// Generated absurd expressions (too long to keep in `tests/bad/`): long operator chains and
+/// prefix chains once overflowed the evaluator's stack and aborted the process. Each must be a
+/// diagnostic with exit 1.
+#[test]
+fn absurdly_long_expressions_exit_1_not_abort() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "sum",
+            format!("#declare X = 1{}\n", "+1".repeat(300_000)),
+            "expression too long",
+        ),
+        (
+            "index",
+            format!(
+                "#declare A = [1]\n#declare X = A{}\n",
+                "[0]".repeat(300_000)
+            ),
+            "expression too long",
+        ),
+        (
+            "rgb",
+            format!("#declare X = {}1\n", "rgb ".repeat(300_000)),
+            "nesting deeper",
+        ),
+        (
+            "neg",
+            format!("#declare X = {}1\n", "-".repeat(300_000)),
+            "nesting deeper",
+        ),
+    ];
+    for (name, text, want) in cases {
+        let path = dir.path().join(format!("{name}.scn"));
+        std::fs::write(&path, text).unwrap();
+        let out = sppm(&["check", path.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{name}: {}",
+            &err[..err.len().min(400)]
+        );
+        assert!(err.contains(want), "{name}: {}", &err[..err.len().min(400)]);
+    }
+}

@@ -366,7 +366,7 @@ impl Lathe {
             }
             for root in &roots {
                 let ds = root_uncertainty(&f, root.t, noise);
-                for (t, s) in frame.candidates(seg, root, ds, self.size) {
+                for (t, s) in frame.candidates(seg, root, ds, self.size, Refine::FalsePosition) {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
                         found = Some((t, Part::Side(i), s));
@@ -636,8 +636,18 @@ impl RayFrame {
     /// side `sigma = +-1` of the point of closest approach, `g(s) = h(s) - y(t_sigma(s))` with
     /// `t_sigma = t_c + sigma sqrt(r^2 - rho^2) / |d_xz|`. Only where no factor changes sign (a
     /// tangency) is the root itself used.
+    /// `refine` chooses how a sign change is refined: the production intersector uses
+    /// [`Refine::FalsePosition`], the reference [`Refine::Bisection`] (so the stress test compares
+    /// two refinements, not one with itself).
     /// Returns `(t, s)` pairs.
-    pub fn candidates(&self, seg: &Segment, root: &Root, ds: f64, size: f64) -> [(f64, f64); 2] {
+    pub fn candidates(
+        &self,
+        seg: &Segment,
+        root: &Root,
+        ds: f64,
+        size: f64,
+        refine: Refine,
+    ) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
         let lo = (root.lo - 4.0 * ds).max(0.0);
         let hi = (root.hi + 4.0 * ds).min(1.0);
@@ -649,7 +659,7 @@ impl RayFrame {
                 let (x, z) = (oc.x + t * dn.x, oc.z + t * dn.z);
                 seg.r.eval(s) - (x * x + z * z).sqrt()
             };
-            if let Some(s) = nearest_sign_change(&g, &|s| t_of(s), lo, hi) {
+            if let Some(s) = nearest_sign_change(&g, &|s| t_of(s), lo, hi, refine) {
                 cands[0] = (self.t0 + t_of(s), s);
                 return cands;
             }
@@ -678,7 +688,9 @@ impl RayFrame {
         };
         let mut refined = false;
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
-            if let Some(s) = nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi) {
+            if let Some(s) =
+                nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi, refine)
+            {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
                 refined = true;
             }
@@ -750,6 +762,7 @@ fn nearest_sign_change(
     t: &dyn Fn(f64) -> f64,
     lo: f64,
     hi: f64,
+    refine: Refine,
 ) -> Option<f64> {
     let mut best: Option<(f64, f64)> = None;
     let n = 16;
@@ -758,7 +771,7 @@ fn nearest_sign_change(
     for k in 0..n {
         let b = x(k + 1);
         let gb = g(b);
-        if let Some(s) = bracketed_root(g, a, b, ga, gb) {
+        if let Some(s) = bracketed_root(g, a, b, ga, gb, refine) {
             let ts = t(s);
             if best.is_none_or(|(_, bt)| ts < bt) {
                 best = Some((s, ts));
@@ -769,16 +782,36 @@ fn nearest_sign_change(
     best.map(|b| b.0)
 }
 
+/// How a sign change of a factor is refined to the last bit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refine {
+    /// False position with the Illinois modification, a bisection every third step (the bracket
+    /// at least halves every three steps); plain bisection from the start once a NaN is met.
+    FalsePosition,
+    /// Plain bisection (about 50 evaluations): the reference's method.
+    Bisection,
+}
+
 /// A root of `g` in `[lo, hi]` (`ga`, `gb`: the values at the ends) if `g` changes sign there.
 /// Where one end is not reachable (NaN: the ray does not get to that radius), that end is first
 /// moved to the edge of the reachable part, where the two sides of the ray meet (`w = 0`); a sign
 /// change between the other end and that edge is a hit close to the ray's closest approach to
 /// the axis.
 ///
-/// The root is refined to the last bit inside its bracket by false position with the Illinois
-/// modification (superlinear), every third step a bisection so that the bracket at least halves
-/// every three steps whatever `g` does; a NaN inside the bracket switches to plain bisection.
-fn bracketed_root(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) -> Option<f64> {
+/// With one sign change in the bracket both refinements find the same root (to the last bit).
+/// With several (roots closer than a sixteenth of the bracket of `F`'s root) each finds one of
+/// them, not necessarily the same one; neither promises the nearest. A NaN met inside the
+/// bracket sends false position back to plain bisection of the whole bracket, so that case
+/// gives bisection's answer; a NaN stretch that false position steps over is not seen, and then
+/// it may return a root where bisection returns the edge of the stretch (which is not one).
+fn bracketed_root(
+    g: &dyn Fn(f64) -> f64,
+    lo: f64,
+    hi: f64,
+    ga: f64,
+    gb: f64,
+    refine: Refine,
+) -> Option<f64> {
     let (mut lo, mut hi, mut ga, mut gb) = (lo, hi, ga, gb);
     if ga.is_nan() != gb.is_nan() {
         let (mut ok, mut bad) = if ga.is_nan() { (hi, lo) } else { (lo, hi) };
@@ -808,16 +841,47 @@ fn bracketed_root(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) ->
     if gb == 0.0 {
         return Some(hi);
     }
+    match refine {
+        Refine::Bisection => Some(bisection(g, lo, hi, ga)),
+        Refine::FalsePosition => Some(false_position(g, lo, hi, ga, gb)),
+    }
+}
+
+/// Bisection of a bracket with `g(lo) = ga` of the other sign than `g(hi)`, to the last bit. A NaN
+/// counts as the sign opposite to `ga`'s when `ga` is negative, as `ga`'s otherwise.
+fn bisection(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64) -> f64 {
+    let (mut a, mut b) = (lo, hi);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if m <= a || m >= b {
+            break;
+        }
+        let gm = g(m);
+        if gm == 0.0 {
+            return m;
+        }
+        if (gm < 0.0) == (ga < 0.0) {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// False position with the Illinois modification on a bracket with `g(lo) = ga` and
+/// `g(hi) = gb` of opposite signs, a bisection every third step; falls back to
+/// [`bisection`] of the whole bracket when it meets a NaN.
+fn false_position(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) -> f64 {
     let (mut a, mut b, mut fa, mut fb) = (lo, hi, ga, gb);
     let a_negative = ga < 0.0;
-    let mut bisect_only = false;
     let mut last_side = 0i8;
     for step in 0..300 {
         let mid = 0.5 * (a + b);
         if mid <= a || mid >= b {
             break;
         }
-        let m = if bisect_only || step % 3 == 2 {
+        let m = if step % 3 == 2 {
             mid
         } else {
             let m = (a * fb - b * fa) / (fb - fa);
@@ -825,13 +889,11 @@ fn bracketed_root(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) ->
         };
         let gm = g(m);
         if gm == 0.0 {
-            return Some(m);
+            return m;
         }
         if gm.is_nan() {
-            bisect_only = true;
+            return bisection(g, lo, hi, ga);
         }
-        // As plain bisection did: a NaN counts as the sign opposite to `a`'s when `a` is
-        // negative, the same as `a`'s otherwise.
         if (gm < 0.0) == a_negative {
             a = m;
             fa = gm;
@@ -848,7 +910,7 @@ fn bracketed_root(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ga: f64, gb: f64) ->
             last_side = 1;
         }
     }
-    Some(0.5 * (a + b))
+    0.5 * (a + b)
 }
 
 /// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
@@ -890,26 +952,6 @@ fn newton_roots(f: &Bernstein, noise: f64, iterations: u32, starts: u32, out: &m
 mod tests {
     use super::*;
 
-    /// Plain bisection to the last bit, the method `bracketed_root` replaced.
-    fn bisection(g: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
-        let ga = g(a);
-        loop {
-            let m = 0.5 * (a + b);
-            if m <= a || m >= b {
-                return 0.5 * (a + b);
-            }
-            let gm = g(m);
-            if gm == 0.0 {
-                return m;
-            }
-            if (gm < 0.0) == (ga < 0.0) {
-                a = m;
-            } else {
-                b = m;
-            }
-        }
-    }
-
     /// False position stalls on one end for convex functions and crawls on flat ones; the
     /// forced bisections bound that. Each case must land within a few ulps of bisection's root.
     #[test]
@@ -944,17 +986,29 @@ mod tests {
             ),
         ];
         for (name, g, a, b) in &cases {
-            let got = bracketed_root(g.as_ref(), *a, *b, g(*a), g(*b)).expect(name);
-            let want = bisection(g.as_ref(), *a, *b);
+            let fp = Refine::FalsePosition;
+            let got = bracketed_root(g.as_ref(), *a, *b, g(*a), g(*b), fp).expect(name);
+            let want =
+                bracketed_root(g.as_ref(), *a, *b, g(*a), g(*b), Refine::Bisection).expect(name);
             assert!(
                 (got - want).abs() <= 4.0 * f64::EPSILON * want.abs().max(1e-300) || g(got) == 0.0,
                 "{name}: {got} vs {want}"
             );
         }
         // No sign change: no root; both ends NaN: no root.
-        assert_eq!(bracketed_root(&|s| s + 1.0, 0.0, 1.0, 1.0, 2.0), None);
         assert_eq!(
-            bracketed_root(&|_| f64::NAN, 0.0, 1.0, f64::NAN, f64::NAN),
+            bracketed_root(&|s| s + 1.0, 0.0, 1.0, 1.0, 2.0, Refine::FalsePosition),
+            None
+        );
+        assert_eq!(
+            bracketed_root(
+                &|_| f64::NAN,
+                0.0,
+                1.0,
+                f64::NAN,
+                f64::NAN,
+                Refine::FalsePosition
+            ),
             None
         );
     }
@@ -964,11 +1018,38 @@ mod tests {
     #[test]
     fn bracketed_root_finds_a_root_at_the_edge_of_reach() {
         let g = |s: f64| if s > 0.6 { f64::NAN } else { s - 0.4 };
-        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0)).unwrap();
+        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0), Refine::FalsePosition).unwrap();
         assert!((got - 0.4).abs() < 1e-15, "{got}");
         // The sign change only at the edge itself: the root is the edge.
         let g = |s: f64| if s > 0.6 { f64::NAN } else { s - 0.6 };
-        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0)).unwrap();
+        let got = bracketed_root(&g, 0.0, 1.0, g(0.0), g(1.0), Refine::FalsePosition).unwrap();
         assert!((got - 0.6).abs() < 1e-15, "{got}");
+    }
+
+    /// NaN stretches inside the bracket. Where false position meets one it falls back to
+    /// bisection of the whole bracket and gives bisection's answer. Where it steps over one
+    /// (here its first step lands on the root) it returns that root, while bisection stops at
+    /// the edge of the stretch, which is not a root: the two differ, false position for the
+    /// better.
+    #[test]
+    fn nan_stretches_inside_the_bracket() {
+        let nan_between = |lo: f64, hi: f64, root: f64| {
+            move |s: f64| {
+                if s > lo && s < hi { f64::NAN } else { s - root }
+            }
+        };
+        let both = |g: &dyn Fn(f64) -> f64| {
+            (
+                bracketed_root(g, 0.0, 1.0, g(0.0), g(1.0), Refine::FalsePosition).unwrap(),
+                bracketed_root(g, 0.0, 1.0, g(0.0), g(1.0), Refine::Bisection).unwrap(),
+            )
+        };
+        let g = nan_between(0.25, 0.35, 0.3);
+        let (fp, bi) = both(&g);
+        assert_eq!(fp, bi);
+        let g = nan_between(0.45, 0.55, 0.9);
+        let (fp, bi) = both(&g);
+        assert_eq!(g(fp), 0.0, "{fp}");
+        assert!((bi - 0.45).abs() < 1e-15 && g(bi) != 0.0, "{bi}");
     }
 }

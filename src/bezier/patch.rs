@@ -129,7 +129,10 @@ fn injective(q: &[DVec3; 16]) -> bool {
     let a = imul(xu, yv);
     let b = imul(yu, xv);
     let det = (a.0 - b.1, a.1 - b.0);
-    det.0 > 0.0 || det.1 < 0.0
+    // The bounds are computed in floating point: ask for a margin of a few rounding errors of
+    // the products, so that a bound within rounding of 0 does not count as excluding it.
+    let margin = 16.0 * f64::EPSILON * (a.0.abs().max(a.1.abs()) + b.0.abs().max(b.1.abs()));
+    det.0 > margin || det.1 < -margin
 }
 
 /// Whether the projected net `q` can cover the origin, by two "fat lines" (as in Bezier
@@ -350,9 +353,12 @@ impl Patch {
                 && hi.z > tmin
                 && lo.z < best_t
         };
+        // The fat lines are the robust method's; the reference (`polish` off) keeps to the
+        // boxes, so that the stress test checks them against a method without them.
+        let bands = |q: &[DVec3; 16]| !polish || bands_hold_origin(q, eps);
         let (lo, hi) = net_bounds(&q);
         let mut stack = Vec::with_capacity(64);
-        if may_hit(lo, hi, best_t) && bands_hold_origin(&q, eps) {
+        if may_hit(lo, hi, best_t) && bands(&q) {
             stack.push(Node {
                 q,
                 u: (0.0, 1.0),
@@ -432,14 +438,14 @@ impl Patch {
             };
             let (la, ha) = net_bounds(&a);
             let (lb, hb) = net_bounds(&b);
-            let na = (may_hit(la, ha, best_t) && bands_hold_origin(&a, eps)).then_some(Node {
+            let na = (may_hit(la, ha, best_t) && bands(&a)).then_some(Node {
                 q: a,
                 u: ua,
                 v: va,
                 lo: la,
                 hi: ha,
             });
-            let nb = (may_hit(lb, hb, best_t) && bands_hold_origin(&b, eps)).then_some(Node {
+            let nb = (may_hit(lb, hb, best_t) && bands(&b)).then_some(Node {
                 q: b,
                 u: ub,
                 v: vb,

@@ -13,7 +13,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::lathe::{Lathe, Part, RayFrame, Segment};
+use super::lathe::{Lathe, Part, RayFrame, Refine, Segment};
 use super::roots::{Root, RootKind};
 
 /// Width in `s` below which the lathe reference gives up deciding.
@@ -187,7 +187,7 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
                 }
                 let (_, df) = g(root.t);
                 let ds = b.noise / df.abs().max(1e-300);
-                for (t, s) in frame.candidates(seg, root, ds, size) {
+                for (t, s) in frame.candidates(seg, root, ds, size, Refine::Bisection) {
                     if t.is_finite() {
                         cands.push((t, s));
                     }

@@ -4,5 +4,5 @@ pub mod ast;
 mod parser;
 mod source;
 
-pub use parser::{MAX_NESTING, parse};
+pub use parser::{MAX_EXPRESSION_TERMS, MAX_NESTING, parse};
 pub use source::{SourceFile, SourceMap};

@@ -1,5 +1,6 @@
 //! The pest parser and the conversion of its parse tree into the [`ast`](super::ast).
 
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::sync::LazyLock;
 
@@ -18,6 +19,11 @@ struct SceneParser;
 /// Deepest nesting of brackets, blocks and directives a file may have. Guards the recursive
 /// parser and evaluator against stack exhaustion on absurd input.
 pub const MAX_NESTING: usize = 200;
+
+/// Most terms (operands, operators) one expression may have, counting the expressions it sits
+/// in: a chain `1 + 1 + ...` builds a tree as deep as it is long, and evaluating it recurses that
+/// deep. 100 000 terms overflowed the evaluator's 80 MB stack; 10 000 leave a wide margin.
+pub const MAX_EXPRESSION_TERMS: usize = 10_000;
 
 static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
     PrattParser::new()
@@ -82,8 +88,16 @@ pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
         SceneParser::parse(Rule::file, text).map_err(|e| vec![syntax_error(file, text, e)])?;
     let file_pair = pairs.next().expect("file rule");
     let items = file_pair.into_inner().next().expect("items");
-    let cx = Cx { file };
-    Ok(cx.items(items))
+    let cx = Cx {
+        file,
+        terms: Cell::new(0),
+        too_long: RefCell::new(None),
+    };
+    let items = cx.items(items);
+    match cx.too_long.into_inner() {
+        Some(d) => Err(vec![d]),
+        None => Ok(items),
+    }
 }
 
 fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagnostic {
@@ -247,6 +261,26 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
     let mut i = 0;
     while i < bytes.len() {
         let c = bytes[i];
+        // `rgb` is a prefix operator too: a chain of them nests like `- - - 1`.
+        let ident_byte =
+            |b: Option<&u8>| b.is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_');
+        if c == b'r'
+            && bytes[i..].starts_with(b"rgb")
+            && !(i > 0 && ident_byte(bytes.get(i - 1)))
+            && !ident_byte(bytes.get(i + 3))
+        {
+            prefix_run += 1;
+            if prefix_run > MAX_NESTING {
+                let span = Span::new(file, i as u32, (i + 3) as u32);
+                return Err(vec![
+                    Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
+                        .with_label("too deeply nested")
+                        .with_help("split the expression or block into declared parts"),
+                ]);
+            }
+            i += 3;
+            continue;
+        }
         match c {
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
                 while i < bytes.len() && bytes[i] != b'\n' {
@@ -303,6 +337,11 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
 
 struct Cx {
     file: FileId,
+    /// Terms (operands and operators) of the expressions being built, summed along the current
+    /// path of nested expressions: a bound on the depth of the expression tree there.
+    terms: Cell<usize>,
+    /// The first expression that went over [`MAX_EXPRESSION_TERMS`].
+    too_long: RefCell<Option<Diagnostic>>,
 }
 
 impl Cx {
@@ -416,7 +455,32 @@ impl Cx {
     }
 
     fn expr(&self, pair: Pair<Rule>) -> Expr {
-        self.pratt(pair.into_inner())
+        // A chain of n terms makes a tree up to n deep, and evaluating (and dropping) it recurses
+        // that deep: refuse it before building it, as the nesting check refuses deep brackets.
+        let n = pair.clone().into_inner().count();
+        let terms = self.terms.get() + n;
+        if terms > MAX_EXPRESSION_TERMS {
+            let first = pair.clone().into_inner().next();
+            let span = first
+                .as_ref()
+                .map_or_else(|| self.span(&pair), |p| self.span(p));
+            self.too_long.borrow_mut().get_or_insert_with(|| {
+                Diagnostic::error(
+                    span,
+                    format!("expression too long: more than {MAX_EXPRESSION_TERMS} terms"),
+                )
+                .with_label("this expression (with the expressions around it)")
+                .with_help("split it into declared parts: `#declare A = ...` and use `A`")
+            });
+            return Expr {
+                kind: ExprKind::Number(f64::NAN),
+                span: self.span(&pair),
+            };
+        }
+        self.terms.set(terms);
+        let e = self.pratt(pair.into_inner());
+        self.terms.set(terms - n);
+        e
     }
 
     fn pratt(&self, pairs: Pairs<Rule>) -> Expr {
@@ -564,5 +628,57 @@ mod tests {
     fn deep_nesting_is_an_error() {
         let text = format!("{}1{}", "(".repeat(1000), ")".repeat(1000));
         assert!(parse(FileId(0), &text).is_err());
+    }
+
+    /// Long chains of binary and postfix operators build deep trees: an error, not an abort.
+    #[test]
+    fn long_operator_chains_are_errors_not_stack_overflows() {
+        for (head, link) in [("1", "+1"), ("1", " - 1"), ("A", "[0]"), ("<1,2,3>", ".x")] {
+            let text = format!("#declare X = {head}{}", link.repeat(300_000));
+            let err = parse(FileId(0), &text).expect_err(link);
+            assert!(
+                err[0].message.contains("expression too long"),
+                "{link}: {:?}",
+                err[0].message
+            );
+        }
+        // Along nested expressions the terms add up; side by side they do not.
+        // (`1+` is two terms: `inner` has 3 001.)
+        let inner = format!("({}1)", "1+".repeat(1_500));
+        let nested = format!("#declare X = ({}{inner})", "1+".repeat(1_500));
+        assert!(parse(FileId(0), &nested).is_ok());
+        let deeper = format!("#declare X = ({}{inner})", "1+".repeat(3_500));
+        assert!(parse(FileId(0), &deeper).is_err());
+        let side_by_side = format!("#declare X = {}", [inner.as_str(); 3].join(" + "));
+        assert!(parse(FileId(0), &side_by_side).is_ok());
+        // A long chain below the limit parses.
+        let text = format!(
+            "#declare X = 1{}",
+            "+1".repeat(MAX_EXPRESSION_TERMS / 2 - 1)
+        );
+        assert!(parse(FileId(0), &text).is_ok());
+    }
+
+    /// Chains of prefix operators nest too, `rgb` among them: 300 000 of them overflowed the
+    /// parse thread's stack (an abort, not a diagnostic) before `rgb` was counted.
+    #[test]
+    fn long_prefix_chains_are_errors_not_stack_overflows() {
+        for chain in ["rgb ", "-", "-rgb ", "! rgb + "] {
+            let text = format!("#declare X = {}1", chain.repeat(300_000));
+            let err = parse(FileId(0), &text).expect_err(chain);
+            assert!(
+                err[0].message.contains("nesting deeper"),
+                "{chain}: {:?}",
+                err[0].message
+            );
+        }
+        // Up to the limit a chain parses, and a name merely containing `rgb` is no prefix.
+        let ok = format!("#declare X = {}1", "rgb ".repeat(MAX_NESTING));
+        assert!(parse(FileId(0), &ok).is_ok());
+        let names = format!(
+            "#declare rgbx = 1 {}",
+            "#declare Y = rgbx + argb_ ".repeat(1000)
+        );
+        assert!(check_nesting(FileId(0), &names).is_ok());
     }
 }
