@@ -271,12 +271,7 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
         {
             prefix_run += 1;
             if prefix_run > MAX_NESTING {
-                let span = Span::new(file, i as u32, (i + 3) as u32);
-                return Err(vec![
-                    Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
-                        .with_label("too deeply nested")
-                        .with_help("split the expression or block into declared parts"),
-                ]);
+                return Err(vec![too_deep(Span::new(file, i as u32, (i + 3) as u32))]);
             }
             i += 3;
             continue;
@@ -323,16 +318,17 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
             prefix_run = 0;
         }
         if depth > MAX_NESTING || prefix_run > MAX_NESTING {
-            let span = Span::new(file, i as u32, (i + 1) as u32);
-            return Err(vec![
-                Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
-                    .with_label("too deeply nested")
-                    .with_help("split the expression or block into declared parts"),
-            ]);
+            return Err(vec![too_deep(Span::new(file, i as u32, (i + 1) as u32))]);
         }
         i += 1;
     }
     Ok(())
+}
+
+fn too_deep(span: Span) -> Diagnostic {
+    Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
+        .with_label("too deeply nested")
+        .with_help("split the expression or block into declared parts")
 }
 
 struct Cx {
