@@ -357,7 +357,7 @@ impl Patch {
         // boxes, so that the stress test checks them against a method without them.
         let bands = |q: &[DVec3; 16]| !polish || bands_hold_origin(q, eps);
         let (lo, hi) = net_bounds(&q);
-        let mut stack = Vec::with_capacity(64);
+        let mut stack = Vec::new();
         if may_hit(lo, hi, best_t) && bands(&q) {
             stack.push(Node {
                 q,
