@@ -2,7 +2,8 @@
 //! Criterion reports time per batch of `RAYS` rays; rays/s = RAYS / time.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::{DVec2, DVec3};
+use glam::DVec3;
+use sppm_lang::bench::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 
@@ -28,26 +29,8 @@ fn rays(lo: DVec3, hi: DVec3) -> Vec<(DVec3, DVec3)> {
 }
 
 fn bench(c: &mut Criterion) {
-    let seg = |p: &[(f64, f64)]| p.iter().map(|&(r, h)| DVec2::new(r, h)).collect::<Vec<_>>();
-    let vase = Lathe::new(
-        &[
-            seg(&[(0.0, 0.0), (0.5, 0.0), (0.6, 0.05), (0.6, 0.2)]),
-            seg(&[(0.6, 0.2), (0.6, 0.6), (1.0, 0.8), (0.7, 1.2)]),
-            seg(&[(0.7, 1.2), (0.4, 1.6), (0.3, 1.8), (0.45, 2.0)]),
-        ],
-        None,
-    )
-    .unwrap();
-    let z = [
-        [0.0, 0.8, -0.6, 0.2],
-        [0.5, -1.2, 1.4, -0.3],
-        [-0.4, 1.5, -1.1, 0.6],
-        [0.3, -0.2, 0.7, 0.0],
-    ];
-    let patch = Patch::new(&std::array::from_fn(|k| {
-        DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4])
-    }))
-    .unwrap();
+    let vase = Lathe::new(&vase_profile().segments, None).unwrap();
+    let patch = Patch::new(&wavy_points()).unwrap();
 
     let mut g = c.benchmark_group("revolve");
     g.throughput(Throughput::Elements(RAYS as u64));

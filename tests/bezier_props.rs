@@ -5,33 +5,16 @@
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
+use sppm_lang::bench::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 
 fn vase() -> Lathe {
-    let seg = |p: &[(f64, f64)]| p.iter().map(|&(r, h)| DVec2::new(r, h)).collect::<Vec<_>>();
-    Lathe::new(
-        &[
-            seg(&[(0.0, 0.0), (0.5, 0.0), (0.6, 0.05), (0.6, 0.2)]),
-            seg(&[(0.6, 0.2), (0.6, 0.6), (1.0, 0.8), (0.7, 1.2)]),
-            seg(&[(0.7, 1.2), (0.4, 1.6), (0.3, 1.8), (0.45, 2.0)]),
-        ],
-        Some((0.0, 270.0)),
-    )
-    .unwrap()
+    Lathe::new(&vase_profile().segments, Some((0.0, 270.0))).unwrap()
 }
 
 fn wavy() -> Patch {
-    let z = [
-        [0.0, 0.8, -0.6, 0.2],
-        [0.5, -1.2, 1.4, -0.3],
-        [-0.4, 1.5, -1.1, 0.6],
-        [0.3, -0.2, 0.7, 0.0],
-    ];
-    Patch::new(&std::array::from_fn(|k| {
-        DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4])
-    }))
-    .unwrap()
+    Patch::new(&wavy_points()).unwrap()
 }
 
 /// A direction in the hemisphere around `n`, at least ~17 degrees above the tangent plane.

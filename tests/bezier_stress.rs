@@ -8,6 +8,7 @@
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
+use sppm_lang::bench::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 use sppm_lang::bezier::reference;
@@ -153,12 +154,7 @@ fn profile(points: &[&[(f64, f64)]]) -> Vec<Vec<DVec2>> {
 
 /// A vase: flat bottom from a pole on the axis, a bulge, a neck and a flared lip.
 fn vase(sweep: Option<(f64, f64)>) -> Lathe {
-    let p = profile(&[
-        &[(0.0, 0.0), (0.5, 0.0), (0.6, 0.05), (0.6, 0.2)],
-        &[(0.6, 0.2), (0.6, 0.6), (1.0, 0.8), (0.7, 1.2)],
-        &[(0.7, 1.2), (0.4, 1.6), (0.3, 1.8), (0.45, 2.0)],
-    ]);
-    Lathe::new(&p, sweep).unwrap()
+    Lathe::new(&vase_profile().segments, sweep).unwrap()
 }
 
 /// A spindle pointed at both ends (cone tips on the axis).
@@ -354,16 +350,7 @@ fn lathe_near_pole_rays_pointed_tips() {
 
 /// A bumpy height field over [0, 3]^2.
 fn wavy() -> Patch {
-    let z = [
-        [0.0, 0.8, -0.6, 0.2],
-        [0.5, -1.2, 1.4, -0.3],
-        [-0.4, 1.5, -1.1, 0.6],
-        [0.3, -0.2, 0.7, 0.0],
-    ];
-    Patch::new(&std::array::from_fn(|k| {
-        DVec3::new((k / 4) as f64, (k % 4) as f64, z[k / 4][k % 4])
-    }))
-    .unwrap()
+    Patch::new(&wavy_points()).unwrap()
 }
 
 /// A quarter dome whose first row collapses to its apex (as the teapot's lid).

@@ -174,7 +174,7 @@ impl Row {
     }
 }
 
-/// The vase of `benches/bezier.rs` and `tests/bezier_stress.rs`.
+/// The test and benchmark vase (`benches/bezier.rs`, `tests/bezier_stress.rs`, `tests/bezier_props.rs`).
 pub fn vase_profile() -> Profile {
     let seg = |p: &[(f64, f64)]| p.iter().map(|&(r, h)| DVec2::new(r, h)).collect::<Vec<_>>();
     Profile {
@@ -186,7 +186,7 @@ pub fn vase_profile() -> Profile {
     }
 }
 
-/// The bumpy height field over [0, 3]^2 of `benches/bezier.rs` and `tests/bezier_stress.rs`.
+/// The test and benchmark bumpy height field over [0, 3]^2 (the same files).
 pub fn wavy_points() -> [DVec3; 16] {
     let z = [
         [0.0, 0.8, -0.6, 0.2],
