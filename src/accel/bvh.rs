@@ -122,16 +122,31 @@ impl Bvh {
         let mut stack = [0u32; 64];
         let mut sp = 0usize;
         let mut cur = 0usize;
+        // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
+        // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
+        let mut closest = usize::MAX;
+        let mut full: Option<Hit> = None;
         loop {
             let node = &self.nodes[cur];
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
                 if node.count > 0 {
                     let start = node.offset as usize;
                     let end = start + node.count as usize;
-                    for (s, id) in self.shapes[start..end].iter().zip(&self.ids[start..end]) {
-                        if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
-                            t_max = h.t();
-                            best = Some((h, s, *id));
+                    for (k, s) in self.shapes[start..end].iter().enumerate() {
+                        match s.analytic_t(ray, t_min, t_max) {
+                            Ok(Some(t)) => {
+                                t_max = t;
+                                closest = start + k;
+                                full = None;
+                            }
+                            Ok(None) => {}
+                            Err(()) => {
+                                if let Some(h) = s.intersect(ray, t_min, t_max) {
+                                    t_max = h.t;
+                                    closest = start + k;
+                                    full = Some(h);
+                                }
+                            }
                         }
                     }
                 } else {
@@ -153,7 +168,11 @@ impl Bvh {
             sp -= 1;
             cur = stack[sp] as usize;
         }
-        best
+        if closest == usize::MAX {
+            return best;
+        }
+        let lazy = full.map_or(LazyHit::T(t_max), LazyHit::Full);
+        Some((lazy, &self.shapes[closest], self.ids[closest]))
     }
 
     /// Whether anything is hit with `t_min < t < t_max`.

@@ -61,7 +61,10 @@ pub(crate) fn render<T: Sync>(
             cancelled = true;
             break;
         }
+        let t_setup = Instant::now();
         let (state, photons) = setup(iter);
+        stats.photon_time += t_setup.elapsed();
+        let t_camera = Instant::now();
         let seed = settings.seed;
         let values: Vec<Vec3A> = (0..w * h)
             .into_par_iter()
@@ -74,6 +77,7 @@ pub(crate) fn render<T: Sync>(
                 if l.is_finite() { l } else { Vec3A::ZERO }
             })
             .collect();
+        stats.camera_time += t_camera.elapsed();
         if cancel.load(Ordering::Relaxed) {
             // The unfinished pass is dropped: the image holds the finished iterations.
             cancelled = true;

@@ -63,6 +63,11 @@ pub struct RenderStats {
     pub camera_paths: u64,
     pub photons: u64,
     pub deposits: u64,
+    /// Wall time spent in the camera passes.
+    pub camera_time: Duration,
+    /// Wall time spent building photon lookup structures and tracing photons (SPPM: the grid
+    /// build, the photon pass and the merge of its deposits; photon mapping: the map builds).
+    pub photon_time: Duration,
 }
 
 /// Reported after every finished iteration.
