@@ -9,6 +9,13 @@ use crate::shapes::primitive::{AnyShape, LazyHit};
 
 const BINS: usize = 12;
 const MAX_LEAF: usize = 4;
+/// Traversal stack size: one entry per interior node on the path from the root.
+const STACK: usize = 64;
+/// From this depth on, nodes split at the object median instead of by SAH, so that no tree is
+/// deeper than `MEDIAN_DEPTH + log2(primitives)` (< `STACK` for fewer than 2^31 primitives). SAH
+/// alone can peel a few primitives off per level (e.g. exponentially spaced sizes), and a
+/// deeper tree would overflow the traversal stack.
+const MEDIAN_DEPTH: usize = 32;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
@@ -36,6 +43,10 @@ struct Item {
 
 impl Bvh {
     pub fn new(shapes: Vec<(AnyShape, u32)>) -> Self {
+        Self::with_median_depth(shapes, MEDIAN_DEPTH)
+    }
+
+    fn with_median_depth(shapes: Vec<(AnyShape, u32)>, median_depth: usize) -> Self {
         let mut bounded = Vec::new();
         let mut unbounded = Vec::new();
         for (s, id) in shapes {
@@ -63,7 +74,7 @@ impl Bvh {
         let mut nodes = Vec::with_capacity(2 * items.len().max(1));
         if !items.is_empty() {
             let n = items.len();
-            build(&mut items, 0, n, &mut nodes);
+            build(&mut items, 0, n, 0, median_depth, &mut nodes);
         }
         // Reorder the shapes into leaf order.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
@@ -119,7 +130,7 @@ impl Bvh {
         }
         let inv_d = ray.d.recip();
         let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        let mut stack = [0u32; 64];
+        let mut stack = [0u32; STACK];
         let mut sp = 0usize;
         let mut cur = 0usize;
         // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
@@ -188,7 +199,7 @@ impl Bvh {
             return false;
         }
         let inv_d = ray.d.recip();
-        let mut stack = [0u32; 64];
+        let mut stack = [0u32; STACK];
         let mut sp = 0usize;
         let mut cur = 0usize;
         loop {
@@ -218,7 +229,14 @@ impl Bvh {
     }
 }
 
-fn build(items: &mut [Item], start: usize, end: usize, nodes: &mut Vec<Node>) -> usize {
+fn build(
+    items: &mut [Item],
+    start: usize,
+    end: usize,
+    depth: usize,
+    median_depth: usize,
+    nodes: &mut Vec<Node>,
+) -> usize {
     let idx = nodes.len();
     let slice = &mut items[start..end];
     let bounds = slice.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
@@ -245,7 +263,10 @@ fn build(items: &mut [Item], start: usize, end: usize, nodes: &mut Vec<Node>) ->
     };
     let lo = cb.min[axis];
     let span = ext[axis];
-    let mid = if span <= 0.0 || !span.is_finite() {
+    let mid = if depth >= median_depth {
+        slice.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+        n / 2
+    } else if span <= 0.0 || !span.is_finite() {
         n / 2
     } else {
         // Binned SAH.
@@ -297,8 +318,8 @@ fn build(items: &mut [Item], start: usize, end: usize, nodes: &mut Vec<Node>) ->
     let mid = mid.clamp(1, n - 1);
     nodes[idx].count = 0;
     nodes[idx].axis = axis as u8;
-    build(items, start, start + mid, nodes);
-    let second = build(items, start + mid, end, nodes);
+    build(items, start, start + mid, depth + 1, median_depth, nodes);
+    let second = build(items, start + mid, end, depth + 1, median_depth, nodes);
     nodes[idx].offset = second as u32;
     idx
 }
@@ -309,26 +330,36 @@ mod tests {
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::sphere::Sphere;
 
-    #[test]
-    fn matches_brute_force() {
-        let mut rng = Rng::new(7);
-        let spheres: Vec<Sphere> = (0..200)
-            .map(|_| {
-                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
-            })
+    /// Nodes on the longest root-to-leaf path.
+    fn depth(bvh: &Bvh) -> usize {
+        fn below(n: &[Node], i: usize) -> usize {
+            if n[i].count > 0 {
+                1
+            } else {
+                1 + below(n, i + 1).max(below(n, n[i].offset as usize))
+            }
+        }
+        below(&bvh.nodes, 0)
+    }
+
+    fn spheres_bvh(spheres: &[Sphere], median_depth: usize) -> Bvh {
+        let shapes = spheres
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
             .collect();
-        let bvh = Bvh::new(
-            spheres
-                .iter()
-                .enumerate()
-                .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
-                .collect(),
-        );
+        Bvh::with_median_depth(shapes, median_depth)
+    }
+
+    fn assert_matches_brute_force(
+        spheres: &[Sphere],
+        bvh: &Bvh,
+        rng: &mut Rng,
+        ray_of: fn(&mut Rng) -> Ray,
+    ) {
+        let mut hits = 0;
         for _ in 0..500 {
-            let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-            let d = uniform_sphere(rng.vec2());
-            let ray = Ray::new(o, d);
+            let ray = ray_of(rng);
             let brute = spheres
                 .iter()
                 .enumerate()
@@ -339,6 +370,76 @@ mod tests {
                 .map(|(h, i)| (h.t, i as usize));
             assert_eq!(brute, got);
             assert_eq!(brute.is_some(), bvh.occluded(&ray, 0.0, f32::INFINITY));
+            hits += usize::from(brute.is_some());
         }
+        assert!(hits > 100, "too few rays hit ({hits} of 500)");
+    }
+
+    /// Rays in a random cube of side 10.
+    fn cloud_ray(rng: &mut Rng) -> Ray {
+        let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+        Ray::new(o, uniform_sphere(rng.vec2()))
+    }
+
+    /// Rays parallel to the x axis, within 0.05 of it, starting at x in 2^(0..100), running
+    /// either way.
+    fn chain_ray(rng: &mut Rng) -> Ray {
+        let (y, z) = (0.1 * (rng.f32() - 0.5), 0.1 * (rng.f32() - 0.5));
+        let o = Vec3A::new(2f32.powf(rng.f32() * 100.0), y, z);
+        let side = if rng.f32() < 0.5 { -1.0 } else { 1.0 };
+        Ray::new(o, Vec3A::new(side, 0.0, 0.0))
+    }
+
+    /// Below `median_depth` nodes split at the object median, which bounds the depth by
+    /// `median_depth + log2(n)`: the traversal stack cannot overflow. Checked with the limit
+    /// lowered so that median splits really happen, on spheres spaced exponentially along a
+    /// line (SAH peels a few off per level there: 28 levels for 100 of them at ratio 2).
+    #[test]
+    fn median_splits_bound_the_depth_and_keep_hits() {
+        let chain: Vec<Sphere> = (0..100)
+            .map(|k| Sphere::new(Vec3A::new(2f32.powi(k), 0.0, 0.0), 0.1).unwrap())
+            .collect();
+        let sah = depth(&spheres_bvh(&chain, usize::MAX));
+        assert!(sah > 20, "SAH alone builds a deep tree here ({sah})");
+        assert!(
+            depth(&Bvh::new(
+                chain.iter().map(|s| (AnyShape::Sphere(*s), 0)).collect()
+            )) <= STACK
+        );
+        let mut rng = Rng::new(3);
+        let cloud: Vec<Sphere> = (0..300)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
+            })
+            .collect();
+        for limit in [0, 3, 8] {
+            for (spheres, ray_of) in [
+                (&chain, chain_ray as fn(&mut Rng) -> Ray),
+                (&cloud, cloud_ray),
+            ] {
+                let bvh = spheres_bvh(spheres, limit);
+                let bound = limit + (spheres.len() as f32).log2().ceil() as usize + 1;
+                let d = depth(&bvh);
+                assert!(
+                    d <= bound,
+                    "depth {d} over {bound} with median splits from {limit}"
+                );
+                assert_matches_brute_force(spheres, &bvh, &mut rng, ray_of);
+            }
+        }
+    }
+
+    #[test]
+    fn matches_brute_force() {
+        let mut rng = Rng::new(7);
+        let spheres: Vec<Sphere> = (0..200)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
+            })
+            .collect();
+        let bvh = spheres_bvh(&spheres, MEDIAN_DEPTH);
+        assert_matches_brute_force(&spheres, &bvh, &mut rng, cloud_ray);
     }
 }
