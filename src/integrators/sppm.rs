@@ -347,81 +347,30 @@ pub(crate) fn trace_photon(
     }
 }
 
-/// A photon's arrival at a surface (from the second surface on), waiting for its deposit.
-#[derive(Clone, Copy)]
-struct PhotonHit {
-    p: Vec3A,
+/// Deposits a photon's flux at every visible point around the hit (from the second surface on:
+/// direct light is sampled by the camera pass).
+#[inline]
+fn deposit(
+    grid: &Grid,
+    pixels: &[Pixel],
+    sh: &SurfaceHit,
     wi: Vec3A,
     beta: Vec3A,
-}
-
-/// Photon hits gathered before their deposits are made together (see [`Depositor`]).
-const DEPOSIT_BATCH: usize = 256;
-
-/// Deposits photon flux at the visible points around photon hits, a batch at a time.
-///
-/// Each lookup is a few dependent reads at random places in the grid and the pixels (several
-/// MB: they miss the caches). Made one at a time in the middle of a photon path, those reads
-/// waited one after the other, and the deposits took half the photon pass. A batch is done in
-/// passes (all buckets, then all distance tests, then all BSDFs) whose reads do not depend on
-/// each other within the pass, so the processor overlaps their cache misses. The hits are
-/// handled in the order they arrived and each hit's candidates in bucket order, as one hit at a
-/// time did: the deposit lists, and so the image, are unchanged.
-struct Depositor<'a> {
-    grid: &'a Grid,
-    pixels: &'a [Pixel],
-    hits: Vec<PhotonHit>,
-    ranges: Vec<std::ops::Range<usize>>,
-    /// (hit index, pixel) of every candidate within its radius.
-    near: Vec<(u32, u32)>,
-}
-
-impl<'a> Depositor<'a> {
-    fn new(grid: &'a Grid, pixels: &'a [Pixel]) -> Self {
-        Self {
-            grid,
-            pixels,
-            hits: Vec::with_capacity(DEPOSIT_BATCH),
-            ranges: Vec::with_capacity(DEPOSIT_BATCH),
-            near: Vec::new(),
+    out: &mut Vec<(u32, Vec3A)>,
+) {
+    for k in grid.candidates(sh.hit.p) {
+        let q = grid.points[k];
+        if (Vec3A::from(q.truncate()) - sh.hit.p).length_squared() > q.w {
+            continue;
         }
-    }
-
-    /// Queues a hit; deposits the batch into `out` once it is full.
-    #[inline]
-    fn push(&mut self, hit: PhotonHit, out: &mut Vec<(u32, Vec3A)>) {
-        self.hits.push(hit);
-        if self.hits.len() == DEPOSIT_BATCH {
-            self.flush(out);
+        let pix = grid.pixel[k];
+        let Some(vp) = pixels[pix as usize].vp.as_ref() else {
+            continue;
+        };
+        let f = vp.bsdf.f(vp.wo, wi);
+        if f != Vec3A::ZERO {
+            out.push((pix, beta * f));
         }
-    }
-
-    /// Deposits every queued hit into `out`, in the order they were queued.
-    fn flush(&mut self, out: &mut Vec<(u32, Vec3A)>) {
-        let grid = self.grid;
-        self.ranges.clear();
-        self.ranges
-            .extend(self.hits.iter().map(|h| grid.candidates(h.p)));
-        self.near.clear();
-        for (i, (h, r)) in self.hits.iter().zip(&self.ranges).enumerate() {
-            for k in r.clone() {
-                let q = grid.points[k];
-                if (Vec3A::from(q.truncate()) - h.p).length_squared() <= q.w {
-                    self.near.push((i as u32, grid.pixel[k]));
-                }
-            }
-        }
-        for &(i, pix) in &self.near {
-            let Some(vp) = self.pixels[pix as usize].vp.as_ref() else {
-                continue;
-            };
-            let h = &self.hits[i as usize];
-            let f = vp.bsdf.f(vp.wo, h.wi);
-            if f != Vec3A::ZERO {
-                out.push((pix, h.beta * f));
-            }
-        }
-        self.hits.clear();
     }
 }
 
@@ -544,7 +493,6 @@ pub(crate) fn render_progressive(
                     if cancel.load(Ordering::Relaxed) {
                         return out;
                     }
-                    let mut depositor = Depositor::new(grid, &pixels);
                     let lo = c * PHOTON_CHUNK;
                     let hi = (lo + PHOTON_CHUNK).min(settings.photons);
                     for i in lo..hi {
@@ -555,17 +503,11 @@ pub(crate) fn render_progressive(
                             &mut rng,
                             |depth, sh, wi, beta| {
                                 if depth > 0 {
-                                    let hit = PhotonHit {
-                                        p: sh.hit.p,
-                                        wi,
-                                        beta,
-                                    };
-                                    depositor.push(hit, &mut out);
+                                    deposit(grid, &pixels, sh, wi, beta, &mut out);
                                 }
                             },
                         );
                     }
-                    depositor.flush(&mut out);
                     out
                 })
                 .collect(),
