@@ -1,6 +1,7 @@
 //! Binned SAH bounding volume hierarchy over shapes, flattened depth-first.
 //! Shapes without finite bounds (infinite planes) are kept in a side list and tested always.
 
+use arrayvec::ArrayVec;
 use glam::Vec3A;
 
 use crate::geometry::{Aabb, Hit, Ray};
@@ -130,8 +131,9 @@ impl Bvh {
         }
         let inv_d = ray.d.recip();
         let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
+        // An ArrayVec: a fixed array would be zeroed on every call (a tenth of a short ray's
+        // instructions).
+        let mut stack = ArrayVec::<u32, STACK>::new();
         let mut cur = 0usize;
         // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
         // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
@@ -167,17 +169,15 @@ impl Bvh {
                     } else {
                         (cur + 1, node.offset as usize)
                     };
-                    stack[sp] = second as u32;
-                    sp += 1;
+                    stack.push(second as u32);
                     cur = first;
                     continue;
                 }
             }
-            if sp == 0 {
-                break;
+            match stack.pop() {
+                Some(next) => cur = next as usize,
+                None => break,
             }
-            sp -= 1;
-            cur = stack[sp] as usize;
         }
         if closest == usize::MAX {
             return best;
@@ -199,8 +199,9 @@ impl Bvh {
             return false;
         }
         let inv_d = ray.d.recip();
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
+        // An ArrayVec: a fixed array would be zeroed on every call (a tenth of a short ray's
+        // instructions).
+        let mut stack = ArrayVec::<u32, STACK>::new();
         let mut cur = 0usize;
         loop {
             let node = &self.nodes[cur];
@@ -214,17 +215,15 @@ impl Bvh {
                         return true;
                     }
                 } else {
-                    stack[sp] = node.offset;
-                    sp += 1;
+                    stack.push(node.offset);
                     cur += 1;
                     continue;
                 }
             }
-            if sp == 0 {
-                return false;
+            match stack.pop() {
+                Some(next) => cur = next as usize,
+                None => return false,
             }
-            sp -= 1;
-            cur = stack[sp] as usize;
         }
     }
 }

@@ -1,0 +1,75 @@
+//! Fixed workloads for counting instructions, the one speed measure that does not move with
+//! the machine's load: run the binary under `valgrind --tool=callgrind` (or cachegrind) and
+//! compare the totals of two builds. Timings on the shared 2-core machines move 10-40 % between
+//! runs, which hides changes of a few percent; instruction counts repeat exactly.
+//!
+//! ```text
+//! cargo bench --bench instructions --no-run     # prints the executable's path
+//! valgrind --tool=callgrind <path> rays         # 200 000 BVH rays in the Cornell box
+//! valgrind --tool=callgrind <path> photons      # one SPPM iteration, 1 thread: camera pass
+//!                                               # (65 536 pixels) and 200 000 photons
+//! ```
+//!
+//! Without valgrind (`cargo bench --bench instructions`) both run once and print their result,
+//! so the bench stays built and working. Fewer instructions is not the same as faster (cache
+//! misses cost more than instructions in the photon lookup): this complements the timed
+//! `render` bench, it does not replace it.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3A;
+use sppm_lang::geometry::Ray;
+use sppm_lang::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::sampling::{Rng, uniform_sphere};
+
+fn rays() {
+    let scene = common::cornell_glass(256);
+    let prepared = PreparedScene::new(&scene).expect("cornell scene");
+    let mut rng = Rng::new(12345);
+    let mut hits = 0usize;
+    for _ in 0..200_000 {
+        let o = Vec3A::new(
+            rng.f32() * 1.8 - 0.9,
+            rng.f32() * 1.9 + 0.05,
+            rng.f32() * 1.8 - 0.9,
+        );
+        let ray = Ray::new(o, uniform_sphere(rng.vec2()));
+        hits += prepared.intersect(&ray, f32::INFINITY).is_some() as usize;
+    }
+    println!("rays: 200000 cast, {hits} hit");
+}
+
+fn photons() {
+    let scene = common::cornell_glass(256);
+    let options = RenderOptions {
+        iterations: Some(1),
+        photons: Some(200_000),
+        seed: Some(1),
+        threads: Some(1),
+        ..Default::default()
+    };
+    let cancel = AtomicBool::new(false);
+    let out = render(&scene, &options, &cancel, &mut |_| {}).expect("render");
+    println!(
+        "photons: {} traced, {} deposits (one 256x256 iteration, 1 thread)",
+        out.stats.photons, out.stats.deposits
+    );
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; ignore flags.
+    let what: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let all = what.is_empty();
+    if all || what.iter().any(|w| w == "rays") {
+        rays();
+    }
+    if all || what.iter().any(|w| w == "photons") {
+        photons();
+    }
+}
