@@ -20,25 +20,15 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
-use glam::Vec3A;
-use sppm_lang::geometry::Ray;
 use sppm_lang::render::{PreparedScene, RenderOptions, render};
-use sppm_lang::sampling::{Rng, uniform_sphere};
 
 fn rays() {
     let scene = common::cornell_glass(256);
     let prepared = PreparedScene::new(&scene).expect("cornell scene");
-    let mut rng = Rng::new(12345);
-    let mut hits = 0usize;
-    for _ in 0..200_000 {
-        let o = Vec3A::new(
-            rng.f32() * 1.8 - 0.9,
-            rng.f32() * 1.9 + 0.05,
-            rng.f32() * 1.8 - 0.9,
-        );
-        let ray = Ray::new(o, uniform_sphere(rng.vec2()));
-        hits += prepared.intersect(&ray, f32::INFINITY).is_some() as usize;
-    }
+    let hits = common::cornell_rays(200_000)
+        .iter()
+        .filter(|ray| prepared.intersect(ray, f32::INFINITY).is_some())
+        .count();
     println!("rays: 200000 cast, {hits} hit");
 }
 

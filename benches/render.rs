@@ -11,33 +11,17 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use glam::Vec3A;
-use sppm_lang::geometry::Ray;
 use sppm_lang::render::{PreparedScene, RenderOptions, render};
-use sppm_lang::sampling::{Rng, uniform_sphere};
 use sppm_lang::shapes::Shape;
 use sppm_lang::shapes::quad::Quad;
 use sppm_lang::shapes::sphere::Sphere;
-
-fn rays(n: usize) -> Vec<Ray> {
-    let mut rng = Rng::new(12345);
-    (0..n)
-        .map(|_| {
-            let o = Vec3A::new(
-                rng.f32() * 1.8 - 0.9,
-                rng.f32() * 1.9 + 0.05,
-                rng.f32() * 1.8 - 0.9,
-            );
-            Ray::new(o, uniform_sphere(rng.vec2()))
-        })
-        .collect()
-}
 
 const RUNS: usize = 3;
 
 fn main() {
     let scene = common::cornell_glass(256);
     let prepared = PreparedScene::new(&scene).expect("cornell scene");
-    let rays = rays(1_000_000);
+    let rays = common::cornell_rays(1_000_000);
 
     // Baseline: every shape tested for every ray.
     let (x, y, z) = (Vec3A::X, Vec3A::Y, Vec3A::Z);

@@ -1,7 +1,9 @@
 //! Scenes built directly in Rust for the renderer tests and the benchmark.
 #![allow(dead_code)]
 
-use glam::{DAffine3, DVec3};
+use glam::{DAffine3, DVec3, Vec3A};
+use sppm_lang::geometry::Ray;
+use sppm_lang::sampling::{Rng, uniform_sphere};
 use sppm_lang::scene::{
     Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, Scene, Settings,
     Shape,
@@ -131,6 +133,22 @@ fn quad(origin: DVec3, edge_u: DVec3, edge_v: DVec3) -> Shape {
 
 /// The Cornell box with a glass and a mirror sphere, exactly as
 /// /work/shared/reference/cornell-glass/README.md describes it.
+/// `n` seeded rays from random points inside the Cornell box of [`cornell_glass`] in uniformly
+/// random directions (the benchmarks' fixed ray set).
+pub fn cornell_rays(n: usize) -> Vec<Ray> {
+    let mut rng = Rng::new(12345);
+    (0..n)
+        .map(|_| {
+            let o = Vec3A::new(
+                rng.f32() * 1.8 - 0.9,
+                rng.f32() * 1.9 + 0.05,
+                rng.f32() * 1.8 - 0.9,
+            );
+            Ray::new(o, uniform_sphere(rng.vec2()))
+        })
+        .collect()
+}
+
 pub fn cornell_glass(res: u32) -> Scene {
     let mut s = empty_scene((res, res));
     let white = add_material(
