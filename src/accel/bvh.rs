@@ -374,6 +374,16 @@ mod tests {
         assert!(hits > 100, "too few rays hit ({hits} of 500)");
     }
 
+    /// `n` spheres of radius 0.1..0.6 centred in a random cube of side 10.
+    fn sphere_cloud(rng: &mut Rng, n: usize) -> Vec<Sphere> {
+        (0..n)
+            .map(|_| {
+                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
+                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
+            })
+            .collect()
+    }
+
     /// Rays in a random cube of side 10.
     fn cloud_ray(rng: &mut Rng) -> Ray {
         let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
@@ -406,12 +416,7 @@ mod tests {
             )) <= STACK
         );
         let mut rng = Rng::new(3);
-        let cloud: Vec<Sphere> = (0..300)
-            .map(|_| {
-                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
-            })
-            .collect();
+        let cloud = sphere_cloud(&mut rng, 300);
         for limit in [0, 3, 8] {
             for (spheres, ray_of) in [
                 (&chain, chain_ray as fn(&mut Rng) -> Ray),
@@ -432,12 +437,7 @@ mod tests {
     #[test]
     fn matches_brute_force() {
         let mut rng = Rng::new(7);
-        let spheres: Vec<Sphere> = (0..200)
-            .map(|_| {
-                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
-            })
-            .collect();
+        let spheres = sphere_cloud(&mut rng, 200);
         let bvh = spheres_bvh(&spheres, MEDIAN_DEPTH);
         assert_matches_brute_force(&spheres, &bvh, &mut rng, cloud_ray);
     }
