@@ -15,19 +15,22 @@ use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use glam::{DVec3, Vec3A, Vec4};
+use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 use super::direct::direct_lighting;
 use crate::accel::spawn_ray;
 use crate::camera::Camera;
 use crate::film::Image;
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::Ray;
 use crate::materials::{Bsdf, TransportMode};
 use crate::render::{
     EffectiveSettings, PreparedScene, Progress, RenderOutput, RenderStats, SurfaceHit,
 };
 use crate::sampling::{Rng, stream_seed};
+
+mod grid;
+use grid::Grid;
 
 /// Photons per deposit chunk (fixed: independent of the thread count).
 const PHOTON_CHUNK: u64 = 4096;
@@ -58,133 +61,6 @@ pub struct PixelStats {
     pub n: f64,
     pub radius: f64,
     pub tau: [f64; 3],
-}
-
-/// Hash grid over visible points: buckets in CSR form. A bucket's entries hold the point data
-/// itself (position and radius^2 in 16 bytes, then the pixel), not indices into another array,
-/// so a photon lookup reads one contiguous run of memory: the indirection through a separate
-/// point array cost a cache miss per candidate and was the largest part of the photon pass.
-struct Grid {
-    bounds: Aabb,
-    inv_cell: f32,
-    res: [i32; 3],
-    /// log2 of the number of buckets (a power of two, at least twice the number of points).
-    bits: u32,
-    starts: Vec<u32>,
-    /// Per entry: the visible point's position and radius^2 (the distance test reads only these).
-    points: Vec<Vec4>,
-    /// Per entry: the pixel the visible point belongs to.
-    pixel: Vec<u32>,
-}
-
-/// Bucket of a cell: the classic three-prime spatial hash, then a Fibonacci multiply whose top
-/// `bits` bits index the power-of-two table (no division).
-#[inline]
-fn hash(c: [i32; 3], bits: u32) -> usize {
-    let h = (c[0] as u32).wrapping_mul(73_856_093)
-        ^ (c[1] as u32).wrapping_mul(19_349_663)
-        ^ (c[2] as u32).wrapping_mul(83_492_791);
-    (h.wrapping_mul(0x9E37_79B9) >> (32 - bits)) as usize
-}
-
-impl Grid {
-    fn build(pixels: &[Pixel]) -> Option<Grid> {
-        let points: Vec<(u32, Vec3A, f32)> = pixels
-            .iter()
-            .enumerate()
-            .filter_map(|(i, px)| {
-                let vp = px.vp?;
-                let r = px.radius as f32;
-                (r > 0.0).then_some((i as u32, vp.p, r * r))
-            })
-            .collect();
-        if points.is_empty() {
-            return None;
-        }
-        let max_r = pixels.iter().map(|p| p.radius).fold(0.0, f64::max) as f32;
-        let bounds = points
-            .iter()
-            .fold(Aabb::EMPTY, |b, (_, p, _)| b.with_point(*p));
-        let bounds = Aabb::new(
-            bounds.min - Vec3A::splat(max_r),
-            bounds.max + Vec3A::splat(max_r),
-        );
-        let cell = 2.0 * max_r;
-        let diag = bounds.diagonal();
-        // Cap the resolution so that huge scenes with a tiny radius stay in range.
-        let inv_cell = (1.0 / cell).min(1024.0 / diag.max_element().max(1e-30));
-        let res = [0, 1, 2].map(|a| ((diag[a] * inv_cell) as i32 + 1).max(1));
-        let bits = (2 * points.len())
-            .next_power_of_two()
-            .trailing_zeros()
-            .max(1);
-        let size = 1usize << bits;
-        let cell_of = |p: Vec3A| -> [i32; 3] {
-            let c = (p - bounds.min) * inv_cell;
-            [0, 1, 2].map(|a| (c[a] as i32).clamp(0, res[a] - 1))
-        };
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(size * 2);
-        let mut buckets: Vec<u32> = Vec::with_capacity(8);
-        for (k, (_, p, r2)) in points.iter().enumerate() {
-            let r = r2.sqrt();
-            let lo = cell_of(*p - Vec3A::splat(r));
-            let hi = cell_of(*p + Vec3A::splat(r));
-            buckets.clear();
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        buckets.push(hash([x, y, z], bits) as u32);
-                    }
-                }
-            }
-            // Two of the point's cells may share a bucket (likely with few points and few
-            // buckets): list the point once per bucket, or a photon in that bucket would be
-            // deposited twice.
-            buckets.sort_unstable();
-            buckets.dedup();
-            pairs.extend(buckets.iter().map(|&h| (h, k as u32)));
-        }
-        let mut starts = vec![0u32; size + 1];
-        for (h, _) in &pairs {
-            starts[*h as usize + 1] += 1;
-        }
-        for i in 0..size {
-            starts[i + 1] += starts[i];
-        }
-        // Fill in point order within each bucket (as before: the deposit order, and so the
-        // image, does not depend on the table layout).
-        let mut fill = starts.clone();
-        let mut entry_points = vec![Vec4::ZERO; pairs.len()];
-        let mut entry_pixel = vec![0u32; pairs.len()];
-        for (h, k) in pairs {
-            let e = fill[h as usize] as usize;
-            let (pix, p, r2) = points[k as usize];
-            entry_points[e] = p.extend(r2);
-            entry_pixel[e] = pix;
-            fill[h as usize] += 1;
-        }
-        Some(Grid {
-            bounds,
-            inv_cell,
-            res,
-            bits,
-            starts,
-            points: entry_points,
-            pixel: entry_pixel,
-        })
-    }
-
-    /// The entries (indices into `points` and `pixel`) of the bucket whose cell contains `p`.
-    #[inline]
-    fn candidates(&self, p: Vec3A) -> std::ops::Range<usize> {
-        if p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any() {
-            return 0..0;
-        }
-        let c = (p - self.bounds.min) * self.inv_cell;
-        let cell = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, self.res[a] - 1));
-        let h = hash(cell, self.bits);
-        self.starts[h] as usize..self.starts[h + 1] as usize
-    }
 }
 
 /// The initial gather radius: the scene's `radius`, else the width of one pixel's footprint at
@@ -358,20 +234,19 @@ fn deposit(
     beta: Vec3A,
     out: &mut Vec<(u32, Vec3A)>,
 ) {
-    for k in grid.candidates(sh.hit.p) {
-        let q = grid.points[k];
-        if (Vec3A::from(q.truncate()) - sh.hit.p).length_squared() > q.w {
-            continue;
-        }
-        let pix = grid.pixel[k];
-        let Some(vp) = pixels[pix as usize].vp.as_ref() else {
-            continue;
+    grid.for_each_within(sh.hit.p, |r| {
+        let pix = r.pixel();
+        let f = match r.f(wi) {
+            Some(f) => f,
+            None => match pixels[pix as usize].vp.as_ref() {
+                Some(vp) => vp.bsdf.f(vp.wo, wi),
+                None => Vec3A::ZERO,
+            },
         };
-        let f = vp.bsdf.f(vp.wo, wi);
         if f != Vec3A::ZERO {
             out.push((pix, beta * f));
         }
-    }
+    });
 }
 
 /// Flux statistics of `photons` photon paths (for energy-conservation checks): the mean over
@@ -484,7 +359,12 @@ pub(crate) fn render_progressive(
         }
         // 2. Grid over visible points; 3. photon pass.
         let t_photon = Instant::now();
-        let grid = Grid::build(&pixels);
+        let grid = Grid::build(
+            pixels
+                .iter()
+                .enumerate()
+                .filter_map(|(i, px)| px.vp.as_ref().map(|vp| (i as u32, vp, px.radius as f32))),
+        );
         let deposits: Vec<Vec<(u32, Vec3A)>> = match &grid {
             Some(grid) if !scene.lights.is_empty() => (0..n_chunks)
                 .into_par_iter()
@@ -583,55 +463,4 @@ pub(crate) fn render_progressive(
         },
         state,
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::materials::Lobes;
-
-    fn pixel_at(p: Vec3A, radius: f64) -> Pixel {
-        Pixel {
-            ld: DVec3::ZERO,
-            tau: DVec3::ZERO,
-            n: 0.0,
-            radius,
-            vp: Some(VisiblePoint {
-                p,
-                wo: Vec3A::Y,
-                bsdf: Bsdf::new(
-                    Lobes::Diffuse { albedo: Vec3A::ONE },
-                    Vec3A::Y,
-                    Vec3A::X,
-                    Vec3A::Y,
-                ),
-                beta: Vec3A::ONE,
-            }),
-        }
-    }
-
-    /// With few visible points the hash table has few buckets, so several cells of one point's
-    /// disc often share a bucket. A point must still be listed once per bucket, or a photon is
-    /// deposited at it twice (this biased a 4x4 furnace by +10 % before it was fixed).
-    #[test]
-    fn a_point_is_a_candidate_at_most_once() {
-        let pixels: Vec<Pixel> = (0..3)
-            .map(|i| pixel_at(Vec3A::new(i as f32 * 0.37, 0.11 * i as f32, 0.0), 0.25))
-            .collect();
-        let grid = Grid::build(&pixels).unwrap();
-        let mut rng = Rng::new(1);
-        let mut cells_shared = 0;
-        for _ in 0..10_000 {
-            let u = Vec3A::new(rng.f32(), rng.f32(), rng.f32());
-            let q = grid.bounds.min + u * grid.bounds.diagonal();
-            let mut c = grid.pixel[grid.candidates(q)].to_vec();
-            let n = c.len();
-            c.sort_unstable();
-            c.dedup();
-            assert_eq!(c.len(), n, "a visible point listed twice at {q:?}");
-            cells_shared += usize::from(n > 1);
-        }
-        // The table really is crowded (8 buckets for up to 8 cells per point).
-        assert!(cells_shared > 0);
-    }
 }

@@ -94,6 +94,17 @@ impl Bsdf {
         }
     }
 
+    /// The value [`Bsdf::f`] gives for every pair of directions that passes its two side tests,
+    /// if it does not depend on the directions (Lambertian reflection): lets a caller that
+    /// evaluates one `wo` against many `wi` (SPPM's photon deposits) keep only the two normals
+    /// and this value.
+    pub fn constant_f(&self) -> Option<Vec3A> {
+        match self.lobes {
+            Lobes::Diffuse { albedo } => Some(diffuse::f(albedo)),
+            _ => None,
+        }
+    }
+
     /// Solid-angle density of [`Bsdf::sample`] choosing `wi`.
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
