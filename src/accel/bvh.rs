@@ -7,6 +7,7 @@ use glam::Vec3A;
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::primitive::{AnyShape, LazyHit};
+use crate::shapes::quad::{Quad, QuadPacket};
 
 const BINS: usize = 12;
 const MAX_LEAF: usize = 4;
@@ -26,12 +27,18 @@ struct Node {
     /// Primitives in a leaf; 0 for an interior node.
     count: u16,
     axis: u8,
+    /// Leaf: how many of its primitives (the first ones) are quads tested in packets.
+    quads: u8,
+    /// Leaf: index of its first quad packet.
+    packet: u32,
 }
 
 /// The accelerator: owns the shapes, each tagged with a caller id (e.g. a primitive index).
 pub struct Bvh {
     nodes: Vec<Node>,
     shapes: Vec<AnyShape>,
+    /// Each leaf's quads, four to a packet (the same quads are also in `shapes`).
+    packets: Vec<QuadPacket>,
     ids: Vec<u32>,
     unbounded: Vec<(AnyShape, u32)>,
 }
@@ -77,6 +84,28 @@ impl Bvh {
             let n = items.len();
             build(&mut items, 0, n, 0, median_depth, &mut nodes);
         }
+        // Leaves with two quads or more list them first and test them four at a time.
+        let is_quad = |it: &Item| matches!(bounded[it.index].0, AnyShape::Quad(_));
+        for node in nodes.iter_mut().filter(|n| n.count > 0) {
+            let leaf = &mut items[node.offset as usize..][..node.count as usize];
+            let quads = leaf.iter().filter(|it| is_quad(it)).count();
+            if quads >= 2 {
+                leaf.sort_by_key(|it| !is_quad(it));
+                node.quads = quads as u8;
+            }
+        }
+        let mut packets = Vec::new();
+        for node in nodes.iter_mut().filter(|n| n.quads > 0) {
+            node.packet = packets.len() as u32;
+            let quads: Vec<Quad> = items[node.offset as usize..][..node.quads as usize]
+                .iter()
+                .filter_map(|it| match &bounded[it.index].0 {
+                    AnyShape::Quad(q) => Some(*q),
+                    _ => None,
+                })
+                .collect();
+            packets.extend(quads.chunks(4).map(QuadPacket::new));
+        }
         // Reorder the shapes into leaf order.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
         let (shapes, ids) = items
@@ -86,9 +115,17 @@ impl Bvh {
         Self {
             nodes,
             shapes,
+            packets,
             ids,
             unbounded,
         }
+    }
+
+    /// The quad packets of a leaf (empty for interior nodes and leaves without them).
+    #[inline]
+    fn leaf_packets(&self, node: &Node) -> &[QuadPacket] {
+        let n = (node.quads as usize).div_ceil(4);
+        &self.packets[node.packet as usize..][..n]
     }
 
     /// Bounds of the bounded shapes (infinite planes excluded).
@@ -145,18 +182,27 @@ impl Bvh {
                 if node.count > 0 {
                     let start = node.offset as usize;
                     let end = start + node.count as usize;
-                    for (k, s) in self.shapes[start..end].iter().enumerate() {
+                    let quads = node.quads as usize;
+                    for (p, packet) in self.leaf_packets(node).iter().enumerate() {
+                        if let Some((lane, t)) = packet.hit_t(ray, t_min, t_max) {
+                            t_max = t;
+                            closest = start + 4 * p + lane;
+                            full = None;
+                        }
+                    }
+                    let rest = start + quads;
+                    for (k, s) in self.shapes[rest..end].iter().enumerate() {
                         match s.analytic_t(ray, t_min, t_max) {
                             Ok(Some(t)) => {
                                 t_max = t;
-                                closest = start + k;
+                                closest = rest + k;
                                 full = None;
                             }
                             Ok(None) => {}
                             Err(()) => {
                                 if let Some(h) = s.intersect(ray, t_min, t_max) {
                                     t_max = h.t;
-                                    closest = start + k;
+                                    closest = rest + k;
                                     full = Some(h);
                                 }
                             }
@@ -207,10 +253,15 @@ impl Bvh {
             let node = &self.nodes[cur];
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
                 if node.count > 0 {
-                    let start = node.offset as usize;
-                    if self.shapes[start..start + node.count as usize]
+                    let start = node.offset as usize + node.quads as usize;
+                    let end = node.offset as usize + node.count as usize;
+                    if self
+                        .leaf_packets(node)
                         .iter()
-                        .any(|s| s.occluded(ray, t_min, t_max))
+                        .any(|p| p.occluded(ray, t_min, t_max))
+                        || self.shapes[start..end]
+                            .iter()
+                            .any(|s| s.occluded(ray, t_min, t_max))
                     {
                         return true;
                     }
@@ -244,6 +295,8 @@ fn build(
         offset: start as u32,
         count: slice.len() as u16,
         axis: 0,
+        quads: 0,
+        packet: 0,
     });
     let n = slice.len();
     if n <= MAX_LEAF {
