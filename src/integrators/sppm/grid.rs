@@ -91,14 +91,23 @@ pub(super) struct Grid {
     receivers: Vec<Receiver>,
 }
 
-/// Bucket of a cell: a spatial hash of the cell's `y` and `z` (two of the classic three primes,
-/// then a Fibonacci multiply whose top `bits` bits index the power-of-two table), plus `x`, so
-/// that cells next to each other along `x` have consecutive buckets and their entries are one
-/// contiguous run: a lookup of 2x2x2 cells reads 4 runs, not 8.
+/// The bucket of the cell `(0, y, z)`: a spatial hash of `y` and `z` (two of the classic three
+/// primes, then a Fibonacci multiply whose top `bits` bits index a power-of-two range). Cell
+/// `(x, y, z)` has bucket `row(y, z) + x` (the table has `2^bits + res_x` buckets, so this never
+/// wraps): cells next to each other along `x` have consecutive buckets and their entries are one
+/// contiguous run, so a lookup of 2x2x2 cells reads at most 4 runs.
 #[inline]
-fn hash(c: [i32; 3], bits: u32) -> u32 {
-    let h = (c[1] as u32).wrapping_mul(19_349_663) ^ (c[2] as u32).wrapping_mul(83_492_791);
-    (h.wrapping_mul(0x9E37_79B9) >> (32 - bits)).wrapping_add(c[0] as u32) & ((1 << bits) - 1)
+fn row(y: i32, z: i32, bits: u32) -> u32 {
+    let h = (y as u32).wrapping_mul(19_349_663) ^ (z as u32).wrapping_mul(83_492_791);
+    h.wrapping_mul(0x9E37_79B9) >> (32 - bits)
+}
+
+/// `x.floor() as i32` for `|x| < 2^31` without a call to `floorf` (x86-64 without SSE4.1 has no
+/// rounding instruction).
+#[inline]
+fn floor_i32(x: f32) -> i32 {
+    let i = x as i32;
+    if (i as f32) > x { i - 1 } else { i }
 }
 
 impl Grid {
@@ -131,10 +140,11 @@ impl Grid {
             .next_power_of_two()
             .trailing_zeros()
             .max(1);
-        let size = 1usize << bits;
+        let size = (1usize << bits) + res[0] as usize;
         let bucket_of = |p: Vec3A| -> u32 {
             let c = (p - bounds.min) * inv_cell;
-            hash([0, 1, 2].map(|a| (c[a] as i32).clamp(0, res[a] - 1)), bits)
+            let [x, y, z] = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, res[a] - 1));
+            row(y, z, bits) + x as u32
         };
         let buckets: Vec<u32> = points.iter().map(|(_, vp, _)| bucket_of(vp.p)).collect();
         let mut starts = vec![0u32; size + 1];
@@ -173,11 +183,12 @@ impl Grid {
         })
     }
 
-    /// The entry ranges of the 2x2x2 cells nearest to `p` (fewer at the grid's border): the
-    /// cells' buckets, each once (two cells can share a bucket, and reading it twice would
-    /// deposit a photon twice), consecutive buckets merged into one range.
+    /// The entry ranges of the 2x2x2 cells nearest to `p` (fewer at the grid's border). Each
+    /// row of (at most) two cells along `x` is a run of consecutive buckets; runs that share a
+    /// bucket (two rows hashed close together) are merged, so that no entry is listed twice
+    /// (it would take the photon twice).
     #[inline]
-    fn ranges(&self, p: Vec3A) -> ArrayVec<(u32, u32), 8> {
+    fn ranges(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
         let mut out = ArrayVec::new();
         if p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any() {
             return out;
@@ -185,32 +196,40 @@ impl Grid {
         // The cube of half-width r_max around `p` is under half a cell wide, so it meets the
         // cell holding `c - 0.5` and the next one on each axis.
         let c = (p - self.bounds.min) * self.inv_cell - Vec3A::splat(0.5);
-        let lo = [0, 1, 2].map(|a| c[a].floor() as i32);
-        let mut buckets = ArrayVec::<u32, 8>::new();
-        for z in lo[2]..lo[2] + 2 {
-            for y in lo[1]..lo[1] + 2 {
-                if y < 0 || z < 0 || y >= self.res[1] || z >= self.res[2] {
-                    continue;
-                }
-                for x in lo[0]..lo[0] + 2 {
-                    if x >= 0 && x < self.res[0] {
-                        buckets.push(hash([x, y, z], self.bits));
-                    }
-                }
+        let lo = [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)];
+        let (x0, x1) = (lo[0].max(0), (lo[0] + 1).min(self.res[0] - 1));
+        if x0 > x1 {
+            return out;
+        }
+        let len = (x1 - x0 + 1) as u32;
+        // The rows' first buckets, sorted (a 4-element sorting network; unused slots stay at
+        // u32::MAX and sort last).
+        let mut first = [u32::MAX; 4];
+        let mut n = 0;
+        for z in lo[2].max(0)..=(lo[2] + 1).min(self.res[2] - 1) {
+            for y in lo[1].max(0)..=(lo[1] + 1).min(self.res[1] - 1) {
+                first[n] = row(y, z, self.bits) + x0 as u32;
+                n += 1;
             }
         }
-        buckets.sort_unstable();
-        let mut i = 0;
-        while i < buckets.len() {
-            let first = buckets[i];
-            let mut last = first;
-            i += 1;
-            while i < buckets.len() && buckets[i] <= last + 1 {
-                last = buckets[i];
-                i += 1;
-            }
-            out.push((self.starts[first as usize], self.starts[last as usize + 1]));
+        if n == 0 {
+            return out;
         }
+        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            if first[i] > first[j] {
+                first.swap(i, j);
+            }
+        }
+        let (mut lo_b, mut hi_b) = (first[0], first[0] + len);
+        for &b in &first[1..n] {
+            if b <= hi_b {
+                hi_b = hi_b.max(b + len);
+            } else {
+                out.push((self.starts[lo_b as usize], self.starts[hi_b as usize]));
+                (lo_b, hi_b) = (b, b + len);
+            }
+        }
+        out.push((self.starts[lo_b as usize], self.starts[hi_b as usize]));
         out
     }
 
