@@ -494,4 +494,72 @@ mod tests {
         let bvh = spheres_bvh(&spheres, MEDIAN_DEPTH);
         assert_matches_brute_force(&spheres, &bvh, &mut rng, cloud_ray);
     }
+    /// Leaves that mix quads, spheres, triangles and disks: the quads are reordered to the
+    /// front of the leaf and tested four at a time, the rest one by one. The nearest hit
+    /// (its `t` bit for bit, and its id) and occlusion must be those of brute force over the
+    /// shapes, including the Cornell box's single leaf of 6 quads and 2 spheres.
+    #[test]
+    fn leaves_of_mixed_shapes_match_brute_force() {
+        use crate::shapes::disk::Disk;
+        use crate::shapes::quad::Quad;
+        use crate::shapes::triangle::Triangle;
+        let mut rng = Rng::new(17);
+        let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
+        let mut packed_leaves = 0;
+        for case in 0..300 {
+            let n = 2 + case % 12;
+            let shapes: Vec<AnyShape> = (0..n)
+                .map(|k| {
+                    let c = 1.5 * v(&mut rng);
+                    match (k + case) % 5 {
+                        0 | 1 => AnyShape::Quad(Quad::new(c, v(&mut rng), v(&mut rng)).unwrap()),
+                        2 | 3 => AnyShape::Sphere(Sphere::new(c, 0.1 + 0.4 * rng.f32()).unwrap()),
+                        _ if k % 2 == 0 => AnyShape::Triangle(
+                            Triangle::new([c, c + v(&mut rng), c + v(&mut rng)], None, None)
+                                .unwrap(),
+                        ),
+                        _ => AnyShape::Disk(Disk::new(c, v(&mut rng), 0.5).unwrap()),
+                    }
+                })
+                .collect();
+            let bvh = Bvh::new(
+                shapes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| (copy_shape(s), 100 + i as u32))
+                    .collect(),
+            );
+            packed_leaves += bvh.nodes.iter().filter(|n| n.quads > 0).count();
+            for _ in 0..50 {
+                let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
+                let t_max = if rng.f32() < 0.3 { 1.0 } else { f32::INFINITY };
+                let mut brute: Option<(f32, u32)> = None;
+                let mut limit = t_max;
+                for (i, s) in shapes.iter().enumerate() {
+                    if let Some(h) = s.intersect(&ray, 0.0, limit) {
+                        limit = h.t;
+                        brute = Some((h.t, 100 + i as u32));
+                    }
+                }
+                let got = bvh.intersect(&ray, 0.0, t_max).map(|(h, id)| (h.t, id));
+                assert_eq!(
+                    got.map(|(t, id)| (t.to_bits(), id)),
+                    brute.map(|(t, id)| (t.to_bits(), id)),
+                    "case {case}"
+                );
+                assert_eq!(bvh.occluded(&ray, 0.0, t_max), brute.is_some());
+            }
+        }
+        assert!(packed_leaves > 100, "{packed_leaves} leaves with packets");
+    }
+
+    fn copy_shape(s: &AnyShape) -> AnyShape {
+        match s {
+            AnyShape::Quad(q) => AnyShape::Quad(*q),
+            AnyShape::Sphere(q) => AnyShape::Sphere(*q),
+            AnyShape::Triangle(q) => AnyShape::Triangle(*q),
+            AnyShape::Disk(q) => AnyShape::Disk(*q),
+            _ => unreachable!("only the kinds this test builds"),
+        }
+    }
 }
