@@ -505,23 +505,54 @@ mod tests {
         use crate::shapes::triangle::Triangle;
         let mut rng = Rng::new(17);
         let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
-        let mut packed_leaves = 0;
+        let (mut packed_leaves, mut two_packets) = (0, 0);
         for case in 0..300 {
             let n = 2 + case % 12;
-            let shapes: Vec<AnyShape> = (0..n)
-                .map(|k| {
-                    let c = 1.5 * v(&mut rng);
-                    match (k + case) % 5 {
-                        0 | 1 => AnyShape::Quad(Quad::new(c, v(&mut rng), v(&mut rng)).unwrap()),
-                        2 | 3 => AnyShape::Sphere(Sphere::new(c, 0.1 + 0.4 * rng.f32()).unwrap()),
-                        _ if k % 2 == 0 => AnyShape::Triangle(
-                            Triangle::new([c, c + v(&mut rng), c + v(&mut rng)], None, None)
-                                .unwrap(),
-                        ),
-                        _ => AnyShape::Disk(Disk::new(c, v(&mut rng), 0.5).unwrap()),
-                    }
-                })
-                .collect();
+            // Every tenth case is a closed box of 6 walls (random proportions) with 0-2 spheres
+            // inside: often one leaf, whose 6 quads take two packets (as in the Cornell box).
+            let walls = |rng: &mut Rng| {
+                let (x, y, z) = (Vec3A::X, Vec3A::Y, Vec3A::Z);
+                let s = Vec3A::ONE + v(rng).abs();
+                let o = -s;
+                let e = 2.0 * s;
+                [
+                    (o, e.x * x, e.z * z),
+                    (o + e.y * y, e.x * x, e.z * z),
+                    (o, e.x * x, e.y * y),
+                    (o + e.z * z, e.x * x, e.y * y),
+                    (o, e.z * z, e.y * y),
+                    (o + e.x * x, e.z * z, e.y * y),
+                ]
+                .map(|(o, a, b)| AnyShape::Quad(Quad::new(o, a, b).unwrap()))
+            };
+            let shapes: Vec<AnyShape> = if case % 10 == 0 {
+                let mut s = Vec::from(walls(&mut rng));
+                for _ in 0..case % 3 {
+                    s.push(AnyShape::Sphere(
+                        Sphere::new(0.5 * v(&mut rng), 0.3).unwrap(),
+                    ));
+                }
+                s
+            } else {
+                (0..n)
+                    .map(|k| {
+                        let c = 1.5 * v(&mut rng);
+                        match (k + case) % 5 {
+                            0 | 1 => {
+                                AnyShape::Quad(Quad::new(c, v(&mut rng), v(&mut rng)).unwrap())
+                            }
+                            2 | 3 => {
+                                AnyShape::Sphere(Sphere::new(c, 0.1 + 0.4 * rng.f32()).unwrap())
+                            }
+                            _ if k % 2 == 0 => AnyShape::Triangle(
+                                Triangle::new([c, c + v(&mut rng), c + v(&mut rng)], None, None)
+                                    .unwrap(),
+                            ),
+                            _ => AnyShape::Disk(Disk::new(c, v(&mut rng), 0.5).unwrap()),
+                        }
+                    })
+                    .collect()
+            };
             let bvh = Bvh::new(
                 shapes
                     .iter()
@@ -530,6 +561,7 @@ mod tests {
                     .collect(),
             );
             packed_leaves += bvh.nodes.iter().filter(|n| n.quads > 0).count();
+            two_packets += bvh.nodes.iter().filter(|n| n.quads > 4).count();
             for _ in 0..50 {
                 let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
                 let t_max = if rng.f32() < 0.3 { 1.0 } else { f32::INFINITY };
@@ -551,6 +583,7 @@ mod tests {
             }
         }
         assert!(packed_leaves > 100, "{packed_leaves} leaves with packets");
+        assert!(two_packets >= 10, "{two_packets} leaves with two packets");
     }
 
     fn copy_shape(s: &AnyShape) -> AnyShape {
