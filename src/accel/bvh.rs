@@ -89,9 +89,12 @@ impl Bvh {
         for node in nodes.iter_mut().filter(|n| n.count > 0) {
             let leaf = &mut items[node.offset as usize..][..node.count as usize];
             let quads = leaf.iter().filter(|it| is_quad(it)).count();
-            if quads >= 2 {
+            // (Leaves hold at most 8 shapes; the `u8` check only guards that.)
+            if let Ok(q) = u8::try_from(quads)
+                && q >= 2
+            {
                 leaf.sort_by_key(|it| !is_quad(it));
-                node.quads = quads as u8;
+                node.quads = q;
             }
         }
         let mut packets = Vec::new();
@@ -494,6 +497,7 @@ mod tests {
         let bvh = spheres_bvh(&spheres, MEDIAN_DEPTH);
         assert_matches_brute_force(&spheres, &bvh, &mut rng, cloud_ray);
     }
+
     /// Leaves that mix quads, spheres, triangles and disks: the quads are reordered to the
     /// front of the leaf and tested four at a time, the rest one by one. The nearest hit
     /// (its `t` bit for bit, and its id) and occlusion must be those of brute force over the

@@ -4,8 +4,8 @@
 //! Layout, chosen for the photon pass's memory traffic (the lookup was the largest part of it,
 //! waiting on cache misses): every visible point is stored **once**, in the cell that holds its
 //! position; the cells are `2 r_max` wide (a little more), so the points within `r_max` of a
-//! photon lie in the 2x2x2 cells nearest to it, and a lookup reads those 8 buckets. The entries
-//! of a bucket are contiguous: the position and radius^2 (16 bytes, all the distance test reads)
+//! photon lie in the 2x2x2 cells nearest to it, and a lookup reads those cells' buckets (at most
+//! 4 contiguous runs: see [`row`]). The entries of a bucket are contiguous: the position and radius^2 (16 bytes, all the distance test reads)
 //! in one array, and in a parallel array a [`Receiver`] (48 bytes: what evaluating the point's
 //! BSDF for the photon's direction needs). At 256x256 that is 4 MB per iteration, where listing
 //! each point in every cell its disc overlaps (8 copies) and reading the BSDF from the pixel took
@@ -81,7 +81,8 @@ pub(super) struct Grid {
     bounds: Aabb,
     inv_cell: f32,
     res: [i32; 3],
-    /// log2 of the number of buckets (a power of two, at least twice the number of points).
+    /// log2 of the range of [`row`] (a power of two, at least twice the number of points); the
+    /// table has `2^bits + res[0]` buckets.
     bits: u32,
     /// Bucket `b`'s entries are `starts[b]..starts[b + 1]`.
     starts: Vec<u32>,
