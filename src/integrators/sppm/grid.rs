@@ -155,24 +155,27 @@ impl Grid {
         for i in 0..size {
             starts[i + 1] += starts[i];
         }
-        // Fill in point order within each bucket.
+        // Each point's entry, in point order within each bucket (a counting sort).
         let mut fill = starts.clone();
-        let mut entry_points = vec![Vec4::ZERO; points.len()];
-        let mut receivers = vec![
-            Receiver {
-                ng: Vec4::ZERO,
-                ns: Vec4::ZERO,
-                f: [0.0; 3],
-                pixel: 0,
-            };
-            points.len()
-        ];
-        for (&b, &(pixel, vp, r)) in buckets.iter().zip(&points) {
-            let e = fill[b as usize] as usize;
-            entry_points[e] = vp.p.extend(r * r);
-            receivers[e] = Receiver::new(pixel, vp);
+        let mut order = vec![0u32; points.len()];
+        for (k, &b) in buckets.iter().enumerate() {
+            order[fill[b as usize] as usize] = k as u32;
             fill[b as usize] += 1;
         }
+        let entry_points = order
+            .iter()
+            .map(|&k| {
+                let (_, vp, r) = points[k as usize];
+                vp.p.extend(r * r)
+            })
+            .collect();
+        let receivers = order
+            .iter()
+            .map(|&k| {
+                let (pixel, vp, _) = points[k as usize];
+                Receiver::new(pixel, vp)
+            })
+            .collect();
         Some(Grid {
             bounds,
             inv_cell,
@@ -255,17 +258,19 @@ mod tests {
     use crate::materials::{Bsdf, Lobes};
     use crate::sampling::{Rng, uniform_sphere};
 
-    fn point(p: Vec3A, lobes: Lobes, n: Vec3A, wo: Vec3A) -> VisiblePoint {
+    /// A visible point at `p` seen from `wo`, with shading normal `ns` and geometric `ng`.
+    fn point(p: Vec3A, wo: Vec3A, lobes: Lobes, ns: Vec3A, ng: Vec3A) -> VisiblePoint {
         VisiblePoint {
             p,
             wo,
-            bsdf: Bsdf::new(lobes, n, n.any_orthonormal_vector(), n),
+            bsdf: Bsdf::new(lobes, ns, ns.any_orthonormal_vector(), ng),
             beta: Vec3A::ONE,
         }
     }
 
     fn diffuse_point(p: Vec3A) -> VisiblePoint {
-        point(p, Lobes::Diffuse { albedo: Vec3A::ONE }, Vec3A::Y, Vec3A::Y)
+        let white = Lobes::Diffuse { albedo: Vec3A::ONE };
+        point(p, Vec3A::Y, white, Vec3A::Y, Vec3A::Y)
     }
 
     fn random_in(rng: &mut Rng, size: f32) -> Vec3A {
@@ -344,12 +349,7 @@ mod tests {
                 }
             };
             let wo = uniform_sphere(rng.vec2());
-            let vp = VisiblePoint {
-                p: Vec3A::ZERO,
-                wo,
-                bsdf: Bsdf::new(lobes, ns, ns.any_orthonormal_vector(), ng),
-                beta: Vec3A::ONE,
-            };
+            let vp = point(Vec3A::ZERO, wo, lobes, ns, ng);
             let r = Receiver::new(7, &vp);
             assert_eq!(r.pixel(), 7);
             for _ in 0..8 {
