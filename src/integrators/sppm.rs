@@ -2,14 +2,17 @@
 //!
 //! Every iteration: (1) a camera pass traces one jittered path per pixel through specular
 //! bounces to a visible point on a non-specular surface, adding emitted and directly sampled
-//! light; (2) a hash grid is built over the visible points; (3) a photon pass traces photons from
-//! the lights (chosen by power) and, from the second surface on, deposits flux at every visible
-//! point within its radius (the BSDF at the point keeps only photons on the side it faces);
-//! (4) each pixel updates N, tau and its radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2).
+//! light; (2) a photon pass traces photons from the lights (chosen by power) and records where
+//! they arrive from the second surface on, in a hash grid whose cells are sized from the visible
+//! points' radii; every visible point then gathers the photons within its radius (the BSDF at
+//! the point keeps only photons on the side it faces); (3) each pixel updates N, tau and its
+//! radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2). The deposits are the same as
+//! pbrt-v4's (photon looks up points); only the direction of the lookup differs (`grid.rs` says
+//! why).
 //!
-//! Determinism: pixel and photon streams are seeded from (seed, iteration, index); photons are
-//! traced in fixed-size chunks whose deposit lists are merged in chunk order, so the image does
-//! not depend on the thread count or on scheduling.
+//! Determinism: pixel and photon streams are seeded from (seed, iteration, index); photon hits
+//! are filed in fixed-size chunks in photon order, and each pixel sums its own photons in that
+//! order, so the image does not depend on the thread count or on scheduling.
 
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,9 +33,11 @@ use crate::render::{
 use crate::sampling::{Rng, stream_seed};
 
 mod grid;
-use grid::Grid;
+mod receiver;
+use grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
+use receiver::Receiver;
 
-/// Photons per deposit chunk (fixed: independent of the thread count).
+/// Photons per parallel task of the photon pass.
 const PHOTON_CHUNK: u64 = 4096;
 const STREAM_CAMERA: u32 = 0;
 const STREAM_PHOTON: u32 = 1;
@@ -223,30 +228,153 @@ pub(crate) fn trace_photon(
     }
 }
 
-/// Deposits a photon's flux at every visible point around the hit (from the second surface on:
-/// direct light is sampled by the camera pass).
-#[inline]
-fn deposit(
-    grid: &Grid,
-    pixels: &[Pixel],
-    sh: &SurfaceHit,
-    wi: Vec3A,
-    beta: Vec3A,
-    out: &mut Vec<(u32, Vec3A)>,
-) {
-    grid.for_each_within(sh.hit.p, |r| {
-        let pix = r.pixel();
-        let f = match r.f(wi) {
-            Some(f) => f,
-            None => match pixels[pix as usize].vp.as_ref() {
-                Some(vp) => vp.bsdf.f(vp.wo, wi),
-                None => Vec3A::ZERO,
-            },
+/// Photon hits held before a gather (about 100 MB, and as much again in the grid): a round
+/// traces groups of photons until it holds this many hits or the iteration's photons are done.
+/// A group is sized from the hits per photon seen so far, so that it fills the round without
+/// overshooting it much even where photons bounce long (a white closed box). Every size comes
+/// from counts that do not depend on the thread count, so the rounds do not either.
+const ROUND_HITS: usize = 1 << 21;
+/// The most photons traced in parallel between two checks of [`ROUND_HITS`].
+const PHOTON_GROUP: u64 = 1 << 18;
+
+/// The photon pass of every iteration, with the buffers it reuses from round to round and
+/// from iteration to iteration (fresh pages cost a fault each).
+struct PhotonPass {
+    chunks: Vec<HitChunk>,
+    grid: PhotonGrid,
+    /// Photon hits recorded per photon traced: updated after every group; at first the most
+    /// there can be, so that even the first group cannot overfill a round by much.
+    hits_per_photon: f64,
+    round_hits: usize,
+    /// Gathers done so far.
+    rounds: u64,
+}
+
+impl PhotonPass {
+    fn new(max_depth: u32, round_hits: usize) -> Self {
+        PhotonPass {
+            chunks: Vec::new(),
+            grid: PhotonGrid::default(),
+            hits_per_photon: f64::from(max_depth),
+            round_hits,
+            rounds: 0,
+        }
+    }
+
+    /// The photons of the next group: enough for the hits a round still misses after `held`,
+    /// in whole chunks, at least one chunk and at most [`PHOTON_GROUP`].
+    fn group_size(&self, held: usize) -> u64 {
+        let missing = self.round_hits.saturating_sub(held) as f64;
+        let photons = (missing / self.hits_per_photon.max(1e-3)).min(PHOTON_GROUP as f64) as u64;
+        photons.div_ceil(PHOTON_CHUNK).max(1) * PHOTON_CHUNK
+    }
+
+    /// Traces iteration `iter`'s photons, recording their hits, and lets every visible point
+    /// gather the photons within its radius (adding to `phi` and `m`), in rounds that bound the
+    /// memory. Returns the number of deposits.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &mut self,
+        scene: &PreparedScene,
+        settings: &EffectiveSettings,
+        pixels: &[Pixel],
+        iter: u32,
+        phi: &mut [DVec3],
+        m: &mut [u64],
+        cancel: &AtomicBool,
+    ) -> u64 {
+        let cells = Cells::new(
+            pixels
+                .iter()
+                .filter_map(|px| px.vp.as_ref().map(|vp| (vp.p, px.radius as f32))),
+        );
+        let Some(cells) = cells.filter(|_| !scene.lights.is_empty()) else {
+            return 0;
         };
-        if f != Vec3A::ZERO {
-            out.push((pix, beta * f));
+        let (mut next, mut deposits) = (0, 0);
+        while next < settings.photons && !cancel.load(Ordering::Relaxed) {
+            let (mut used, mut held) = (0, 0);
+            while next < settings.photons && held < self.round_hits {
+                let hi = (next + self.group_size(held)).min(settings.photons);
+                let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
+                if self.chunks.len() < used + n {
+                    self.chunks.resize_with(used + n, HitChunk::default);
+                }
+                let group = &mut self.chunks[used..used + n];
+                trace_photons(scene, settings, &cells, iter, (next, hi), group, cancel);
+                let got = group.iter().map(HitChunk::len).sum::<usize>();
+                self.hits_per_photon = got as f64 / (hi - next) as f64;
+                (used, held, next) = (used + n, held + got, hi);
+            }
+            self.grid.build(cells, &self.chunks[..used]);
+            deposits += gather(&self.grid, pixels, phi, m);
+            self.rounds += 1;
+        }
+        deposits
+    }
+}
+
+/// Traces photons `lo..hi` of iteration `iter` in parallel tasks of [`PHOTON_CHUNK`] photons,
+/// filing their hits in `chunks` (reset first; one per task, in photon order).
+fn trace_photons(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    cells: &Cells,
+    iter: u32,
+    (lo, hi): (u64, u64),
+    chunks: &mut [HitChunk],
+    cancel: &AtomicBool,
+) {
+    chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+        chunk.reset(cells);
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        let first = lo + c as u64 * PHOTON_CHUNK;
+        for i in first..(first + PHOTON_CHUNK).min(hi) {
+            let mut rng = Rng::new(stream_seed(settings.seed, iter, STREAM_PHOTON, i));
+            trace_photon(
+                scene,
+                settings.max_depth,
+                &mut rng,
+                |depth, sh, wi, beta| {
+                    if depth > 0 {
+                        let p = sh.hit.p;
+                        chunk.push(cells, PhotonHit { p, wi, beta });
+                    }
+                },
+            );
         }
     });
+}
+
+/// Each visible point gathers the flux of the photons within its radius: adds it to `phi`
+/// (f64, in the grid's photon order) and their number to `m`. Returns the number of deposits.
+fn gather(grid: &PhotonGrid, pixels: &[Pixel], phi: &mut [DVec3], m: &mut [u64]) -> u64 {
+    pixels
+        .par_iter()
+        .zip(phi.par_iter_mut().zip(m.par_iter_mut()))
+        .map(|(px, (ph, mm))| {
+            let Some(vp) = px.vp.as_ref() else {
+                return 0;
+            };
+            let receiver = Receiver::new(vp);
+            let r = px.radius as f32;
+            let mut found = 0;
+            grid.for_each_within(vp.p, r * r, |wi, beta| {
+                let f = receiver.f(wi);
+                if f != Vec3A::ZERO {
+                    found += 1;
+                    let d = beta * f;
+                    if d.is_finite() {
+                        *ph += d.as_dvec3();
+                        *mm += 1;
+                    }
+                }
+            });
+            found
+        })
+        .sum()
 }
 
 /// Flux statistics of `photons` photon paths (for energy-conservation checks): the mean over
@@ -324,7 +452,7 @@ pub(crate) fn render_progressive(
     let mut cancelled = false;
     let mut phi = vec![DVec3::ZERO; pixels.len()];
     let mut m = vec![0u64; pixels.len()];
-    let n_chunks = settings.photons.div_ceil(PHOTON_CHUNK);
+    let mut photon_pass = PhotonPass::new(settings.max_depth, ROUND_HITS);
     for iter in 0..settings.iterations {
         if let Some(t) = settings.time_limit
             && start.elapsed().as_secs_f64() >= t
@@ -357,55 +485,12 @@ pub(crate) fn render_progressive(
             cancelled = true;
             break;
         }
-        // 2. Grid over visible points; 3. photon pass.
+        // 2. Photon pass.
         let t_photon = Instant::now();
-        let grid = Grid::build(
-            pixels
-                .iter()
-                .enumerate()
-                .filter_map(|(i, px)| px.vp.as_ref().map(|vp| (i as u32, vp, px.radius as f32))),
-        );
-        let deposits: Vec<Vec<(u32, Vec3A)>> = match &grid {
-            Some(grid) if !scene.lights.is_empty() => (0..n_chunks)
-                .into_par_iter()
-                .map(|c| {
-                    let mut out = Vec::new();
-                    if cancel.load(Ordering::Relaxed) {
-                        return out;
-                    }
-                    let lo = c * PHOTON_CHUNK;
-                    let hi = (lo + PHOTON_CHUNK).min(settings.photons);
-                    for i in lo..hi {
-                        let mut rng = Rng::new(stream_seed(seed, iter, STREAM_PHOTON, i));
-                        trace_photon(
-                            scene,
-                            settings.max_depth,
-                            &mut rng,
-                            |depth, sh, wi, beta| {
-                                if depth > 0 {
-                                    deposit(grid, &pixels, sh, wi, beta, &mut out);
-                                }
-                            },
-                        );
-                    }
-                    out
-                })
-                .collect(),
-            _ => Vec::new(),
-        };
+        stats.deposits += photon_pass.run(scene, settings, &pixels, iter, &mut phi, &mut m, cancel);
         if cancel.load(Ordering::Relaxed) {
             cancelled = true;
             break;
-        }
-        // Merge in chunk order (deterministic f64 sums).
-        for chunk in &deposits {
-            for &(pix, f) in chunk {
-                if f.is_finite() {
-                    phi[pix as usize] += f.as_dvec3();
-                    m[pix as usize] += 1;
-                }
-            }
-            stats.deposits += chunk.len() as u64;
         }
         stats.photon_time += t_photon.elapsed();
         // 4. Update the pixel statistics.
@@ -463,4 +548,75 @@ pub(crate) fn render_progressive(
         },
         state,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::{RenderOptions, effective_settings};
+    use crate::{EvalOptions, load_file};
+
+    /// Splitting the photons into rounds (to bound the memory) changes nothing but the order of
+    /// the f64 sums: the same deposits reach the same pixels. Checked on the Cornell box with
+    /// one round against rounds of about 3000 hits (the largest round a photon group cannot
+    /// overfill by much), two iterations, so that the group sizes adapt across iterations.
+    #[test]
+    fn rounds_split_the_photons_without_changing_the_sums() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+        let mut scene = load_file(&path, &EvalOptions::default())
+            .unwrap()
+            .scene
+            .unwrap();
+        scene.settings.resolution = (24, 24);
+        let options = RenderOptions {
+            photons: Some(30_000),
+            seed: Some(4),
+            ..Default::default()
+        };
+        let settings = effective_settings(&scene, &options).unwrap();
+        let prepared = PreparedScene::new(&scene).unwrap();
+        let camera = Camera::new(&scene.camera, 24, 24).unwrap();
+        let cancel = AtomicBool::new(false);
+        let mut results = Vec::new();
+        for round_hits in [usize::MAX, 3000] {
+            let mut pass = PhotonPass::new(settings.max_depth, round_hits);
+            let mut phi = vec![DVec3::ZERO; 24 * 24];
+            let mut m = vec![0u64; 24 * 24];
+            let mut deposits = 0;
+            for iter in 0..2 {
+                let pixels: Vec<Pixel> = (0..24 * 24)
+                    .map(|i| {
+                        let mut rng = Rng::new(stream_seed(4, iter, STREAM_CAMERA, i as u64));
+                        let (x, y) = (i % 24, i / 24);
+                        let vp =
+                            camera_path(&prepared, &camera, &settings, x, y, &mut rng, false).1;
+                        Pixel {
+                            ld: DVec3::ZERO,
+                            tau: DVec3::ZERO,
+                            n: 0.0,
+                            radius: 0.05,
+                            vp,
+                        }
+                    })
+                    .collect();
+                deposits += pass.run(
+                    &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
+                );
+            }
+            results.push((pass.rounds, deposits, phi, m));
+        }
+        let (one, many) = (&results[0], &results[1]);
+        println!("rounds {} and {}, deposits {}", one.0, many.0, one.1);
+        assert_eq!(one.0, 2, "one round per iteration");
+        assert!(many.0 >= 10, "{} rounds", many.0);
+        assert!(one.1 > 1000, "{} deposits", one.1);
+        assert_eq!(one.1, many.1);
+        assert_eq!(one.3, many.3);
+        for (a, b) in one.2.iter().zip(&many.2) {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-12 * a.abs().max_element(),
+                "{a} {b}"
+            );
+        }
+    }
 }

@@ -1,95 +1,45 @@
-//! The hash grid over one iteration's visible points, which the photon pass looks up at every
-//! photon hit.
+//! One gather round's photons in a hash grid whose cells are sized from the visible points.
 //!
-//! Layout, chosen for the photon pass's memory traffic (the lookup was the largest part of it,
-//! waiting on cache misses): every visible point is stored **once**, in the cell that holds its
-//! position; the cells are `2 r_max` wide (a little more), so the points within `r_max` of a
-//! photon lie in the 2x2x2 cells nearest to it, and a lookup reads those cells' buckets (at most
-//! 4 contiguous runs: see [`row`]). The entries of a bucket are contiguous: the position and radius^2 (16 bytes, all the distance test reads)
-//! in one array, and in a parallel array a [`Receiver`] (48 bytes: what evaluating the point's
-//! BSDF for the photon's direction needs). At 256x256 that is 4 MB per iteration, where listing
-//! each point in every cell its disc overlaps (8 copies) and reading the BSDF from the pixel took
-//! 10 MB of entries and 15 MB of pixels.
+//! The photon pass first traces its photons and records where they arrive; then every visible
+//! point gathers the photons within its radius. Stored this way round (photons in the grid,
+//! points looking up), a lookup reads a run of photons that its neighbours in the image read
+//! too, and each point sums its own flux: no per-deposit list to merge, and the order of every
+//! sum is fixed by the photons' indices, whatever the thread count. (Points in the grid with
+//! each photon looking them up made every photon hit a random read of the point arrays, and
+//! that lookup waited on memory for a third of the photon pass.)
+//!
+//! The cells are a little over `2 r_max` wide, so the photons within `r <= r_max` of a point
+//! lie in the 2x2x2 cells nearest to it. A photon is stored once, in the cell that holds it;
+//! the entries of a bucket are contiguous, positions (all the distance test reads) in one array
+//! and the photon's direction and flux in a parallel one.
 
 use arrayvec::ArrayVec;
-use glam::{Vec3A, Vec4};
+use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 
-use super::VisiblePoint;
 use crate::geometry::Aabb;
 
-/// Set in [`Receiver::pixel`] when the point's BSDF depends on the directions (glossy): the
-/// photon pass then evaluates the full BSDF kept in the pixel. Pixel indices stay below 2^27
-/// (the renderer's resolution limit), so the bit is free.
-const FULL_BSDF: u32 = 1 << 31;
-
-/// A visible point's BSDF reduced for the photon pass: [`crate::materials::Bsdf::f`] with its
-/// `wo` fixed. Both side tests are kept in the same form (`(wo . n) * (wi . n) <= 0` rejects),
-/// so the result is bit-identical to calling the BSDF.
+/// A photon's arrival at a surface (from the second on: direct light is sampled by the camera
+/// pass), kept until its round's gather.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Receiver {
-    /// Geometric normal, and `wo . ng` in `w`.
-    ng: Vec4,
-    /// Shading normal, and `wo . ns` in `w`.
-    ns: Vec4,
-    /// The constant BSDF value (unused with `FULL_BSDF`).
-    f: [f32; 3],
-    /// The pixel the point belongs to, with the `FULL_BSDF` flag.
-    pixel: u32,
+pub(super) struct PhotonHit {
+    pub(super) p: Vec3A,
+    /// Toward where the photon came from.
+    pub(super) wi: Vec3A,
+    /// The photon's flux.
+    pub(super) beta: Vec3A,
 }
 
-impl Receiver {
-    fn new(pixel: u32, vp: &VisiblePoint) -> Self {
-        let (ng, ns) = (vp.bsdf.ng, vp.bsdf.frame.n);
-        let (f, flag) = match vp.bsdf.constant_f() {
-            Some(f) => (f.to_array(), 0),
-            None => ([0.0; 3], FULL_BSDF),
-        };
-        Receiver {
-            ng: ng.extend(vp.wo.dot(ng)),
-            ns: ns.extend(vp.wo.dot(ns)),
-            f,
-            pixel: pixel | flag,
-        }
-    }
-
-    /// The pixel the visible point belongs to.
-    #[inline]
-    pub(super) fn pixel(&self) -> u32 {
-        self.pixel & !FULL_BSDF
-    }
-
-    /// The BSDF for light arriving from `wi` (toward the point's `wo`), or `None` when the
-    /// caller must evaluate the point's full BSDF.
-    #[inline]
-    pub(super) fn f(&self, wi: Vec3A) -> Option<Vec3A> {
-        if self.pixel & FULL_BSDF != 0 {
-            return None;
-        }
-        let (ng, ns) = (
-            Vec3A::from(self.ng.truncate()),
-            Vec3A::from(self.ns.truncate()),
-        );
-        if self.ng.w * wi.dot(ng) <= 0.0 || self.ns.w * wi.dot(ns) <= 0.0 {
-            return Some(Vec3A::ZERO);
-        }
-        Some(Vec3A::from_array(self.f))
-    }
-}
-
-pub(super) struct Grid {
-    /// The points' bounds grown by the largest radius: no photon outside finds a point.
+/// The cell geometry of one iteration, from its visible points.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Cells {
+    /// The points' bounds grown by the largest radius: no photon outside reaches a point.
     bounds: Aabb,
     inv_cell: f32,
     res: [i32; 3],
     /// log2 of the range of [`row`] (a power of two, at least twice the number of points); the
     /// table has `2^bits + res[0]` buckets.
     bits: u32,
-    /// Bucket `b`'s entries are `starts[b]..starts[b + 1]`.
-    starts: Vec<u32>,
-    /// Per entry: the visible point's position and radius^2.
-    points: Vec<Vec4>,
-    /// Per entry: the point's BSDF and pixel.
-    receivers: Vec<Receiver>,
 }
 
 /// The bucket of the cell `(0, y, z)`: a spatial hash of `y` and `z` (two of the classic three
@@ -111,88 +61,74 @@ fn floor_i32(x: f32) -> i32 {
     if (i as f32) > x { i - 1 } else { i }
 }
 
-impl Grid {
-    /// The grid over `(pixel, visible point, radius)`; `None` without a point of positive
+impl Cells {
+    /// The cells for visible points at `(position, radius)`; `None` without a point of positive
     /// radius.
-    pub(super) fn build<'a>(
-        points: impl Iterator<Item = (u32, &'a VisiblePoint, f32)>,
-    ) -> Option<Grid> {
-        let points: Vec<(u32, &VisiblePoint, f32)> = points.filter(|(_, _, r)| *r > 0.0).collect();
-        if points.is_empty() {
+    pub(super) fn new(points: impl Iterator<Item = (Vec3A, f32)>) -> Option<Cells> {
+        let (mut n, mut max_r, mut bounds) = (0usize, 0.0f32, Aabb::EMPTY);
+        for (p, r) in points.filter(|(_, r)| *r > 0.0) {
+            n += 1;
+            max_r = max_r.max(r);
+            bounds = bounds.with_point(p);
+        }
+        if n == 0 {
             return None;
         }
-        let max_r = points.iter().map(|(_, _, r)| *r).fold(0.0, f32::max);
-        let bounds = points
-            .iter()
-            .fold(Aabb::EMPTY, |b, (_, vp, _)| b.with_point(vp.p));
         let bounds = Aabb::new(
             bounds.min - Vec3A::splat(max_r),
             bounds.max + Vec3A::splat(max_r),
         );
-        // A little over 2 r_max, so that rounding never puts a point within r_max of a photon
-        // outside the photon's 2x2x2 cells.
+        // A little over 2 r_max, so that rounding never puts a photon within r_max of a point
+        // outside the point's 2x2x2 cells.
         let cell = 2.0 * max_r * 1.001;
         let diag = bounds.diagonal();
         // Cap the resolution so that huge scenes with a tiny radius stay in range (cells only
-        // grow: a lookup still finds every point within r_max).
+        // grow: a lookup still finds every photon within r_max).
         let inv_cell = (1.0 / cell).min(1024.0 / diag.max_element().max(1e-30));
         let res = [0, 1, 2].map(|a| ((diag[a] * inv_cell) as i32 + 1).max(1));
-        let bits = (2 * points.len())
-            .next_power_of_two()
-            .trailing_zeros()
-            .max(1);
-        let size = (1usize << bits) + res[0] as usize;
-        let bucket_of = |p: Vec3A| -> u32 {
-            let c = (p - bounds.min) * inv_cell;
-            let [x, y, z] = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, res[a] - 1));
-            row(y, z, bits) + x as u32
-        };
-        let buckets: Vec<u32> = points.iter().map(|(_, vp, _)| bucket_of(vp.p)).collect();
-        let mut starts = vec![0u32; size + 1];
-        for &b in &buckets {
-            starts[b as usize + 1] += 1;
-        }
-        for i in 0..size {
-            starts[i + 1] += starts[i];
-        }
-        // Each point's entry, in point order within each bucket (a counting sort).
-        let mut fill = starts.clone();
-        let mut order = vec![0u32; points.len()];
-        for (k, &b) in buckets.iter().enumerate() {
-            order[fill[b as usize] as usize] = k as u32;
-            fill[b as usize] += 1;
-        }
-        let entry_points = order
-            .iter()
-            .map(|&k| {
-                let (_, vp, r) = points[k as usize];
-                vp.p.extend(r * r)
-            })
-            .collect();
-        let receivers = order
-            .iter()
-            .map(|&k| {
-                let (pixel, vp, _) = points[k as usize];
-                Receiver::new(pixel, vp)
-            })
-            .collect();
-        Some(Grid {
+        let bits = (2 * n).next_power_of_two().trailing_zeros().max(1);
+        Some(Cells {
             bounds,
             inv_cell,
             res,
             bits,
-            starts,
-            points: entry_points,
-            receivers,
         })
     }
 
-    /// The entry ranges of the 2x2x2 cells nearest to `p` (fewer at the grid's border). Each
-    /// row of (at most) two cells along `x` is a run of consecutive buckets; runs that share a
-    /// bucket (two rows hashed close together) are merged, so that no entry is listed twice
-    /// (it would take the photon twice).
+    /// Whether a photon at `p` can be within reach of a point (photons outside are not kept).
     #[inline]
-    fn ranges(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
+    pub(super) fn contains(&self, p: Vec3A) -> bool {
+        !(p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any())
+    }
+
+    fn table_size(&self) -> usize {
+        (1usize << self.bits) + self.res[0] as usize
+    }
+
+    /// Buckets per slab.
+    fn slab_width(&self) -> u32 {
+        self.table_size().div_ceil(SLABS) as u32
+    }
+
+    /// The number of slabs (the last may be narrower).
+    fn slabs(&self) -> usize {
+        self.table_size().div_ceil(self.slab_width() as usize)
+    }
+
+    /// The bucket of the cell that holds `p`.
+    #[inline]
+    fn bucket(&self, p: Vec3A) -> u32 {
+        let c = (p - self.bounds.min) * self.inv_cell;
+        let [x, y, z] = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, self.res[a] - 1));
+        row(y, z, self.bits) + x as u32
+    }
+
+    /// The bucket runs `lo..hi` of the 2x2x2 cells nearest to `p` (fewer at the grid's border).
+    /// Each row of (at most) two cells along `x` is a run of consecutive buckets; runs that share
+    /// a bucket (two rows hashed close together) are merged, so that no entry is listed twice
+    /// (the point would take that photon twice).
+    #[inline]
+    pub(super) fn bucket_runs(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
         let mut out = ArrayVec::new();
         if p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any() {
             return out;
@@ -229,23 +165,142 @@ impl Grid {
             if b <= hi_b {
                 hi_b = hi_b.max(b + len);
             } else {
-                out.push((self.starts[lo_b as usize], self.starts[hi_b as usize]));
+                out.push((lo_b, hi_b));
                 (lo_b, hi_b) = (b, b + len);
             }
         }
-        out.push((self.starts[lo_b as usize], self.starts[hi_b as usize]));
+        out.push((lo_b, hi_b));
         out
     }
+}
 
-    /// Calls `f` with every visible point whose disc holds `p` (distance <= its radius), each
-    /// once.
+/// Slabs of buckets (at most): the photon pass files every hit under the slab of its bucket, so
+/// that the grid is built slab by slab, in parallel, each slab's writes staying within a
+/// window of the grid (the scatter of a counting sort over the whole grid waited on a cache
+/// miss per photon).
+const SLABS: usize = 64;
+
+/// A photon hit as filed: the position with its bucket, then the direction and flux.
+#[derive(Clone, Copy, Debug)]
+struct Filed {
+    p: Vec3,
+    bucket: u32,
+    wi: Vec3A,
+    beta: Vec3A,
+}
+
+/// One parallel task's photon hits, filed by slab. Kept from round to round (and iteration to
+/// iteration) so that its memory is reused: fresh pages cost a fault each.
+#[derive(Default)]
+pub(super) struct HitChunk {
+    slabs: Vec<Vec<Filed>>,
+}
+
+impl HitChunk {
+    /// Empties the chunk for a round over `cells`.
+    pub(super) fn reset(&mut self, cells: &Cells) {
+        self.slabs.resize_with(cells.slabs(), Vec::new);
+        for slab in &mut self.slabs {
+            slab.clear();
+        }
+    }
+
+    /// Files `hit`, or drops it if no visible point can be within reach.
     #[inline]
-    pub(super) fn for_each_within(&self, p: Vec3A, mut f: impl FnMut(&Receiver)) {
-        for (start, end) in self.ranges(p) {
+    pub(super) fn push(&mut self, cells: &Cells, hit: PhotonHit) {
+        if !cells.contains(hit.p) {
+            return;
+        }
+        let bucket = cells.bucket(hit.p);
+        self.slabs[(bucket / cells.slab_width()) as usize].push(Filed {
+            p: hit.p.into(),
+            bucket,
+            wi: hit.wi,
+            beta: hit.beta,
+        });
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.slabs.iter().map(Vec::len).sum()
+    }
+}
+
+/// The photons of one gather round, by cell. Its arrays are reused by the next build.
+#[derive(Default)]
+pub(super) struct PhotonGrid {
+    cells: Option<Cells>,
+    /// Bucket `b`'s entries are `starts[b]..starts[b + 1]`.
+    starts: Vec<u32>,
+    /// Per entry: the photon's position.
+    points: Vec<Vec3A>,
+    /// Per entry: the photon's `wi` and flux.
+    flux: Vec<(Vec3A, Vec3A)>,
+}
+
+impl PhotonGrid {
+    /// Rebuilds the grid over the photons filed in `chunks` under `cells`; within a bucket the
+    /// photons keep their order (chunk after chunk, then as pushed).
+    pub(super) fn build(&mut self, cells: Cells, chunks: &[HitChunk]) {
+        let (size, width) = (cells.table_size(), cells.slab_width() as usize);
+        let totals: Vec<usize> = (0..cells.slabs())
+            .map(|s| chunks.iter().map(|c| c.slabs[s].len()).sum())
+            .collect();
+        let n: usize = totals.iter().sum();
+        self.cells = Some(cells);
+        self.starts.resize(size + 1, 0);
+        self.starts[size] = n as u32;
+        // Every entry is written below: growing fills the new part only, once.
+        self.points.resize(n, Vec3A::ZERO);
+        self.flux.resize(n, (Vec3A::ZERO, Vec3A::ZERO));
+        // Each slab's part of the entry arrays.
+        let mut parts = Vec::with_capacity(totals.len());
+        let (mut points, mut flux) = (&mut self.points[..n], &mut self.flux[..n]);
+        let mut base = 0;
+        for &t in &totals {
+            let (p, rest_p) = points.split_at_mut(t);
+            let (f, rest_f) = flux.split_at_mut(t);
+            parts.push((base, p, f));
+            (points, flux, base) = (rest_p, rest_f, base + t);
+        }
+        self.starts[..size]
+            .par_chunks_mut(width)
+            .zip(parts)
+            .enumerate()
+            .for_each(|(s, (starts, (base, points, flux)))| {
+                let first = s * width;
+                let filed = || chunks.iter().flat_map(|c| &c.slabs[s]);
+                starts.fill(0);
+                for h in filed() {
+                    starts[h.bucket as usize - first] += 1;
+                }
+                let mut next = base as u32;
+                for c in starts.iter_mut() {
+                    (*c, next) = (next, next + *c);
+                }
+                let mut fill = starts.to_vec();
+                for h in filed() {
+                    let b = h.bucket as usize - first;
+                    let k = fill[b] as usize - base;
+                    fill[b] += 1;
+                    points[k] = h.p.into();
+                    flux[k] = (h.wi, h.beta);
+                }
+            });
+    }
+
+    /// Calls `f(wi, flux)` for every photon within `radius^2 = r2` of `p` (`r <= r_max`), each
+    /// once, in entry order.
+    #[inline]
+    pub(super) fn for_each_within(&self, p: Vec3A, r2: f32, mut f: impl FnMut(Vec3A, Vec3A)) {
+        let Some(cells) = &self.cells else {
+            return;
+        };
+        for (lo, hi) in cells.bucket_runs(p) {
+            let (start, end) = (self.starts[lo as usize], self.starts[hi as usize]);
             for k in start as usize..end as usize {
-                let q = self.points[k];
-                if (Vec3A::from(q.truncate()) - p).length_squared() <= q.w {
-                    f(&self.receivers[k]);
+                if (self.points[k] - p).length_squared() <= r2 {
+                    let (wi, beta) = self.flux[k];
+                    f(wi, beta);
                 }
             }
         }
@@ -255,118 +310,116 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::materials::{Bsdf, Lobes};
-    use crate::sampling::{Rng, uniform_sphere};
-
-    /// A visible point at `p` seen from `wo`, with shading normal `ns` and geometric `ng`.
-    fn point(p: Vec3A, wo: Vec3A, lobes: Lobes, ns: Vec3A, ng: Vec3A) -> VisiblePoint {
-        VisiblePoint {
-            p,
-            wo,
-            bsdf: Bsdf::new(lobes, ns, ns.any_orthonormal_vector(), ng),
-            beta: Vec3A::ONE,
-        }
-    }
-
-    fn diffuse_point(p: Vec3A) -> VisiblePoint {
-        let white = Lobes::Diffuse { albedo: Vec3A::ONE };
-        point(p, Vec3A::Y, white, Vec3A::Y, Vec3A::Y)
-    }
+    use crate::sampling::Rng;
 
     fn random_in(rng: &mut Rng, size: f32) -> Vec3A {
         Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * size
     }
 
-    /// The lookup must find every point whose disc holds the photon (the grid is only a
-    /// filter; a point it misses loses that photon's flux), and each once. Checked against
-    /// brute force over points with mixed radii, with photons everywhere (also outside the
-    /// points' bounds and on cell borders), and with few points, where the table is small and
-    /// cells often share a bucket.
+    /// A gather must find every photon within the point's radius (the grid is only a filter;
+    /// a photon it misses loses its flux there), each once, and in photon order within a
+    /// bucket (what makes the f64 sums independent of the thread count). Checked against brute
+    /// force with mixed radii, points on cell borders, photons everywhere (also outside the
+    /// points' bounds) spread over several chunks, and with few points, where the table is
+    /// small, cells often share a bucket and every slab is one bucket wide.
     #[test]
-    fn lookups_find_every_point_within_its_radius_once() {
+    fn gathers_find_every_photon_within_the_radius_once() {
         let mut rng = Rng::new(3);
         for (n_points, size) in [(3usize, 1.0f32), (40, 1.0), (2000, 4.0)] {
-            let vps: Vec<VisiblePoint> = (0..n_points)
-                .map(|_| diffuse_point(random_in(&mut rng, size)))
-                .collect();
-            let radii: Vec<f32> = (0..n_points).map(|_| 0.05 + 0.2 * rng.f32()).collect();
-            let grid = Grid::build(
-                vps.iter()
-                    .zip(&radii)
-                    .enumerate()
-                    .map(|(i, (vp, &r))| (i as u32, vp, r)),
-            )
-            .unwrap();
-            let mut found = 0;
-            for i in 0..20_000 {
-                let q = if i % 4 < 2 {
-                    // On a border between the points' cells (integer cell coordinates) or
-                    // between the lookup's choices of cells (an integer plus 0.5).
-                    let c = random_in(&mut rng, 1.0) * Vec3A::from(grid.res.map(|r| r as f32));
-                    grid.bounds.min
-                        + (c.floor() + Vec3A::splat(0.5 * (i % 4) as f32)) / grid.inv_cell
-                } else {
-                    random_in(&mut rng, size * 1.4) - Vec3A::splat(size * 0.2)
-                };
-                let mut got = Vec::new();
-                grid.for_each_within(q, |r| got.push(r.pixel()));
-                got.sort_unstable();
-                let n = got.len();
-                got.dedup();
-                assert_eq!(got.len(), n, "a point found twice at {q:?}");
-                let want: Vec<u32> = (0..n_points as u32)
-                    .filter(|&i| {
-                        let (p, r) = (vps[i as usize].p, radii[i as usize]);
-                        (p - q).length_squared() <= r * r
-                    })
-                    .collect();
-                assert_eq!(got, want, "at {q:?} ({n_points} points)");
-                found += n;
+            let mut radii: Vec<f32> = (0..n_points).map(|_| 0.05 + 0.2 * rng.f32()).collect();
+            let mut points: Vec<Vec3A> = (0..n_points).map(|_| random_in(&mut rng, size)).collect();
+            // Two corners fix the bounds and the largest radius fixes the cells' size, so that
+            // moving the other points inside the box below leaves the cells as they are.
+            (points[0], points[1], radii[0]) = (Vec3A::ZERO, Vec3A::splat(size), 0.25);
+            let pairs = |points: &[Vec3A]| -> Vec<(Vec3A, f32)> {
+                points.iter().copied().zip(radii.iter().copied()).collect()
+            };
+            let before = Cells::new(pairs(&points).into_iter()).unwrap();
+            // Every other point moves onto a border between cells (integer cell coordinates)
+            // or between a lookup's choices of cells (an integer plus 0.5).
+            for (i, p) in points.iter_mut().enumerate().skip(2).step_by(2) {
+                let c = (*p - before.bounds.min) * before.inv_cell;
+                let shift = if i % 4 == 0 { 0.0 } else { 0.5 };
+                let q = before.bounds.min + (c.floor() + Vec3A::splat(shift)) / before.inv_cell;
+                *p = q.clamp(Vec3A::ZERO, Vec3A::splat(size));
             }
-            // The photons do land in discs (the test is not vacuous).
-            assert!(found > 100, "{found} finds for {n_points} points");
+            let cells = Cells::new(pairs(&points).into_iter()).unwrap();
+            assert_eq!(
+                (cells.bounds, cells.inv_cell, cells.res, cells.bits),
+                (before.bounds, before.inv_cell, before.res, before.bits)
+            );
+            // Photon `k` carries its index in its flux.
+            let photons: Vec<PhotonHit> = (0..20_000)
+                .map(|k| {
+                    let p = if k % 3 == 0 {
+                        points[k % n_points] + (random_in(&mut rng, 0.6) - Vec3A::splat(0.3))
+                    } else {
+                        random_in(&mut rng, size * 1.4) - Vec3A::splat(size * 0.2)
+                    };
+                    PhotonHit {
+                        p,
+                        wi: Vec3A::Z,
+                        beta: Vec3A::splat(k as f32),
+                    }
+                })
+                .collect();
+            let mut chunks: Vec<HitChunk> = (0..7).map(|_| HitChunk::default()).collect();
+            for (c, chunk) in chunks.iter_mut().enumerate() {
+                chunk.reset(&cells);
+                for h in photons.iter().skip(c * 3000).take(3000) {
+                    chunk.push(&cells, *h);
+                }
+            }
+            let mut grid = PhotonGrid::default();
+            grid.build(cells, &chunks);
+            let mut found = 0;
+            for (p, r) in points.iter().zip(&radii) {
+                let mut got = Vec::new();
+                grid.for_each_within(*p, r * r, |_, beta| got.push(beta.x as usize));
+                let mut sorted = got.clone();
+                sorted.sort_unstable();
+                sorted.dedup();
+                assert_eq!(sorted.len(), got.len(), "a photon found twice at {p:?}");
+                let want: Vec<usize> = (0..photons.len())
+                    .filter(|&k| (photons[k].p - *p).length_squared() <= r * r)
+                    .collect();
+                assert_eq!(sorted, want, "at {p:?} ({n_points} points)");
+                found += got.len();
+            }
+            // The points do gather photons (the test is not vacuous).
+            assert!(found > 1000, "{found} finds for {n_points} points");
         }
     }
 
-    /// A receiver gives exactly what the BSDF gives, for every side combination (front and
-    /// back, shading normal tilted away from the geometric one) and both kinds of lobes.
+    /// Within each bucket the photons keep their order: chunk after chunk, then as pushed.
     #[test]
-    fn receivers_match_the_bsdf_bit_for_bit() {
-        let mut rng = Rng::new(5);
-        let mut nonzero = 0;
-        for i in 0..2000 {
-            let ng = uniform_sphere(rng.vec2());
-            let ns = (ng + 0.6 * uniform_sphere(rng.vec2())).normalize();
-            let lobes = if i % 2 == 0 {
-                Lobes::Diffuse {
-                    albedo: Vec3A::new(0.7, 0.5, 0.2),
-                }
-            } else {
-                Lobes::Glossy {
-                    albedo: Vec3A::splat(0.3),
-                    specular: Vec3A::splat(0.5),
-                    alpha: 0.2,
-                }
-            };
-            let wo = uniform_sphere(rng.vec2());
-            let vp = point(Vec3A::ZERO, wo, lobes, ns, ng);
-            let r = Receiver::new(7, &vp);
-            assert_eq!(r.pixel(), 7);
-            for _ in 0..8 {
-                let wi = uniform_sphere(rng.vec2());
-                let want = vp.bsdf.f(wo, wi);
-                match r.f(wi) {
-                    Some(f) => {
-                        assert_eq!(
-                            f.to_array().map(f32::to_bits),
-                            want.to_array().map(f32::to_bits)
-                        );
-                        nonzero += usize::from(f != Vec3A::ZERO);
-                    }
-                    None => assert!(matches!(lobes, Lobes::Glossy { .. })),
-                }
+    fn a_bucket_keeps_the_photons_in_order() {
+        let cells = Cells::new([(Vec3A::ZERO, 1.0)].into_iter()).unwrap();
+        let mut rng = Rng::new(9);
+        let mut chunks: Vec<HitChunk> = (0..5).map(|_| HitChunk::default()).collect();
+        let mut k = 0;
+        for chunk in &mut chunks {
+            chunk.reset(&cells);
+            for _ in 0..200 {
+                let p = random_in(&mut rng, 2.0) - Vec3A::ONE;
+                chunk.push(
+                    &cells,
+                    PhotonHit {
+                        p,
+                        wi: Vec3A::Z,
+                        beta: Vec3A::splat(k as f32),
+                    },
+                );
+                k += 1;
             }
         }
-        assert!(nonzero > 1000, "{nonzero}");
+        let mut grid = PhotonGrid::default();
+        grid.build(cells, &chunks);
+        for b in 0..cells.table_size() {
+            let run = grid.starts[b] as usize..grid.starts[b + 1] as usize;
+            let order: Vec<f32> = grid.flux[run].iter().map(|(_, beta)| beta.x).collect();
+            assert!(order.is_sorted(), "bucket {b}: {order:?}");
+        }
+        assert_eq!(grid.points.len(), 1000);
     }
 }
