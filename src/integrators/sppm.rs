@@ -11,8 +11,9 @@
 //! why).
 //!
 //! Determinism: pixel and photon streams are seeded from (seed, iteration, index); photon hits
-//! are filed in fixed-size chunks in photon order, and each pixel sums its own photons in that
-//! order, so the image does not depend on the thread count or on scheduling.
+//! are filed in fixed-size chunks in photon order, and each pixel sums its own photons in a
+//! fixed order (round by round, bucket by bucket, photon order within a bucket), so the image
+//! does not depend on the thread count or on scheduling.
 
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -228,12 +229,17 @@ pub(crate) fn trace_photon(
     }
 }
 
-/// Photon hits held before a gather (about 100 MB, and as much again in the grid): a round
-/// traces groups of photons until it holds this many hits or the iteration's photons are done.
-/// A group is sized from the hits per photon seen so far, so that it fills the round without
-/// overshooting it much even where photons bounce long (a white closed box). Every size comes
+/// Photon hits a round aims to hold before its gather (48 bytes each while filed, as much
+/// again in the grid: about 200 MB in all). A round traces groups of photons until it holds
+/// this many hits, has used [`ROUND_CHUNKS`] chunks, or the iteration's photons are done. A
+/// group is sized from the mean hits per photon of everything traced so far, so that it fills
+/// the round without overshooting it much (a statistical bound, not a hard one: the first group
+/// of a render, one chunk, can file up to `PHOTON_CHUNK * max_depth` hits). Every size comes
 /// from counts that do not depend on the thread count, so the rounds do not either.
 const ROUND_HITS: usize = 1 << 21;
+/// The most chunks in one round: bounds the per-chunk bookkeeping (a slab list each) where
+/// photons leave few hits near the visible points (an open scene, a narrow view).
+const ROUND_CHUNKS: usize = 512;
 /// The most photons traced in parallel between two checks of [`ROUND_HITS`].
 const PHOTON_GROUP: u64 = 1 << 18;
 
@@ -242,36 +248,52 @@ const PHOTON_GROUP: u64 = 1 << 18;
 struct PhotonPass {
     chunks: Vec<HitChunk>,
     grid: PhotonGrid,
-    /// Photon hits recorded per photon traced: updated after every group; at first the most
-    /// there can be, so that even the first group cannot overfill a round by much.
-    hits_per_photon: f64,
+    /// Photons traced and hits filed so far, over the whole render: their ratio sizes the
+    /// groups. Before any photon, the estimate is `max_depth` hits per photon, the most there
+    /// can be, so the first group is one chunk.
+    traced: u64,
+    filed: u64,
+    max_depth: u32,
     round_hits: usize,
+    round_chunks: usize,
     /// Gathers done so far.
     rounds: u64,
 }
 
 impl PhotonPass {
-    fn new(max_depth: u32, round_hits: usize) -> Self {
+    fn new(max_depth: u32, round_hits: usize, round_chunks: usize) -> Self {
         PhotonPass {
             chunks: Vec::new(),
             grid: PhotonGrid::default(),
-            hits_per_photon: f64::from(max_depth),
+            traced: 0,
+            filed: 0,
+            max_depth,
             round_hits,
+            round_chunks: round_chunks.max(1),
             rounds: 0,
         }
     }
 
-    /// The photons of the next group: enough for the hits a round still misses after `held`,
-    /// in whole chunks, at least one chunk and at most [`PHOTON_GROUP`].
-    fn group_size(&self, held: usize) -> u64 {
+    /// The photons of the next group of a round that holds `held` hits in `used` chunks: enough
+    /// for the hits the round still misses, in whole chunks, at least one chunk, at most
+    /// [`PHOTON_GROUP`] and at most the chunks the round has left.
+    fn group_size(&self, held: usize, used: usize) -> u64 {
+        let per_photon = if self.traced == 0 {
+            f64::from(self.max_depth.max(1))
+        } else {
+            (self.filed as f64 / self.traced as f64).max(1e-3)
+        };
         let missing = self.round_hits.saturating_sub(held) as f64;
-        let photons = (missing / self.hits_per_photon.max(1e-3)).min(PHOTON_GROUP as f64) as u64;
-        photons.div_ceil(PHOTON_CHUNK).max(1) * PHOTON_CHUNK
+        let photons = (missing / per_photon).min(PHOTON_GROUP as f64) as u64;
+        let chunks = photons
+            .div_ceil(PHOTON_CHUNK)
+            .clamp(1, self.round_chunks.saturating_sub(used).max(1) as u64);
+        chunks * PHOTON_CHUNK
     }
 
     /// Traces iteration `iter`'s photons, recording their hits, and lets every visible point
     /// gather the photons within its radius (adding to `phi` and `m`), in rounds that bound the
-    /// memory. Returns the number of deposits.
+    /// memory. Returns the number of deposits; stops without a gather when `cancel` is set.
     #[allow(clippy::too_many_arguments)]
     fn run(
         &mut self,
@@ -291,11 +313,17 @@ impl PhotonPass {
         let Some(cells) = cells.filter(|_| !scene.lights.is_empty()) else {
             return 0;
         };
+        let cancelled = || cancel.load(Ordering::Relaxed);
         let (mut next, mut deposits) = (0, 0);
-        while next < settings.photons && !cancel.load(Ordering::Relaxed) {
+        while next < settings.photons {
             let (mut used, mut held) = (0, 0);
-            while next < settings.photons && held < self.round_hits {
-                let hi = (next + self.group_size(held)).min(settings.photons);
+            while next < settings.photons && held < self.round_hits && used < self.round_chunks {
+                if cancelled() {
+                    return deposits;
+                }
+                let hi = next
+                    .saturating_add(self.group_size(held, used))
+                    .min(settings.photons);
                 let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
                 if self.chunks.len() < used + n {
                     self.chunks.resize_with(used + n, HitChunk::default);
@@ -303,8 +331,12 @@ impl PhotonPass {
                 let group = &mut self.chunks[used..used + n];
                 trace_photons(scene, settings, &cells, iter, (next, hi), group, cancel);
                 let got = group.iter().map(HitChunk::len).sum::<usize>();
-                self.hits_per_photon = got as f64 / (hi - next) as f64;
+                self.traced += hi - next;
+                self.filed += got as u64;
                 (used, held, next) = (used + n, held + got, hi);
+            }
+            if cancelled() {
+                return deposits;
             }
             self.grid.build(cells, &self.chunks[..used]);
             deposits += gather(&self.grid, pixels, phi, m);
@@ -358,8 +390,12 @@ fn gather(grid: &PhotonGrid, pixels: &[Pixel], phi: &mut [DVec3], m: &mut [u64])
             let Some(vp) = px.vp.as_ref() else {
                 return 0;
             };
-            let receiver = Receiver::new(vp);
             let r = px.radius as f32;
+            // Points without a positive radius gather nothing (they also left the cells out).
+            if r.is_nan() || r <= 0.0 {
+                return 0;
+            }
+            let receiver = Receiver::new(vp);
             let mut found = 0;
             grid.for_each_within(vp.p, r * r, |wi, beta| {
                 let f = receiver.f(wi);
@@ -452,7 +488,7 @@ pub(crate) fn render_progressive(
     let mut cancelled = false;
     let mut phi = vec![DVec3::ZERO; pixels.len()];
     let mut m = vec![0u64; pixels.len()];
-    let mut photon_pass = PhotonPass::new(settings.max_depth, ROUND_HITS);
+    let mut photon_pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
     for iter in 0..settings.iterations {
         if let Some(t) = settings.time_limit
             && start.elapsed().as_secs_f64() >= t
@@ -487,13 +523,14 @@ pub(crate) fn render_progressive(
         }
         // 2. Photon pass.
         let t_photon = Instant::now();
-        stats.deposits += photon_pass.run(scene, settings, &pixels, iter, &mut phi, &mut m, cancel);
+        let deposits = photon_pass.run(scene, settings, &pixels, iter, &mut phi, &mut m, cancel);
         if cancel.load(Ordering::Relaxed) {
             cancelled = true;
             break;
         }
+        stats.deposits += deposits;
         stats.photon_time += t_photon.elapsed();
-        // 4. Update the pixel statistics.
+        // 3. Update the pixel statistics.
         let alpha = settings.alpha;
         pixels
             .par_iter_mut()
@@ -558,8 +595,9 @@ mod tests {
 
     /// Splitting the photons into rounds (to bound the memory) changes nothing but the order of
     /// the f64 sums: the same deposits reach the same pixels. Checked on the Cornell box with
-    /// one round against rounds of about 3000 hits (the largest round a photon group cannot
-    /// overfill by much), two iterations, so that the group sizes adapt across iterations.
+    /// one round against rounds of about 3000 hits (so small that groups often overfill them)
+    /// and against rounds of at most 2 chunks, over two iterations, so that the group sizes
+    /// adapt across iterations; the chunk cap must hold.
     #[test]
     fn rounds_split_the_photons_without_changing_the_sums() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
@@ -578,8 +616,12 @@ mod tests {
         let camera = Camera::new(&scene.camera, 24, 24).unwrap();
         let cancel = AtomicBool::new(false);
         let mut results = Vec::new();
-        for round_hits in [usize::MAX, 3000] {
-            let mut pass = PhotonPass::new(settings.max_depth, round_hits);
+        for (round_hits, round_chunks) in [
+            (usize::MAX, usize::MAX),
+            (3000, usize::MAX),
+            (usize::MAX, 2),
+        ] {
+            let mut pass = PhotonPass::new(settings.max_depth, round_hits, round_chunks);
             let mut phi = vec![DVec3::ZERO; 24 * 24];
             let mut m = vec![0u64; 24 * 24];
             let mut deposits = 0;
@@ -603,20 +645,109 @@ mod tests {
                     &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
                 );
             }
+            assert!(
+                pass.chunks.len() <= round_chunks,
+                "{} chunks",
+                pass.chunks.len()
+            );
             results.push((pass.rounds, deposits, phi, m));
         }
-        let (one, many) = (&results[0], &results[1]);
-        println!("rounds {} and {}, deposits {}", one.0, many.0, one.1);
+        let one = &results[0];
         assert_eq!(one.0, 2, "one round per iteration");
-        assert!(many.0 >= 10, "{} rounds", many.0);
         assert!(one.1 > 1000, "{} deposits", one.1);
-        assert_eq!(one.1, many.1);
-        assert_eq!(one.3, many.3);
-        for (a, b) in one.2.iter().zip(&many.2) {
-            assert!(
-                (*a - *b).abs().max_element() <= 1e-12 * a.abs().max_element(),
-                "{a} {b}"
-            );
+        // Rounds of 3000 hits: many; rounds of 2 chunks: 30 000 photons are 8 chunks, so 4
+        // rounds per iteration.
+        for (many, least) in results[1..].iter().zip([10, 8]) {
+            println!("rounds {} and {}, deposits {}", one.0, many.0, one.1);
+            assert!(many.0 >= least, "{} rounds", many.0);
+            assert_eq!(one.1, many.1);
+            assert_eq!(one.3, many.3);
+            for (a, b) in one.2.iter().zip(&many.2) {
+                assert!(
+                    (*a - *b).abs().max_element() <= 1e-12 * a.abs().max_element(),
+                    "{a} {b}"
+                );
+            }
         }
+    }
+
+    /// A cancelled photon pass stops before its next group: it traces nothing more, builds no
+    /// grid and gathers nothing (watch mode cancels a render on every save, so a cancel must
+    /// not walk the rest of a large iteration). Checked with the flag set before the pass and
+    /// with a flag that is set while the first group is traced.
+    #[test]
+    fn a_cancelled_photon_pass_stops_at_once() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+        let mut scene = load_file(&path, &EvalOptions::default())
+            .unwrap()
+            .scene
+            .unwrap();
+        scene.settings.resolution = (16, 16);
+        let options = RenderOptions {
+            photons: Some(1_000_000_000),
+            seed: Some(4),
+            ..Default::default()
+        };
+        let settings = effective_settings(&scene, &options).unwrap();
+        let prepared = PreparedScene::new(&scene).unwrap();
+        let camera = Camera::new(&scene.camera, 16, 16).unwrap();
+        let pixels: Vec<Pixel> = (0..16 * 16)
+            .map(|i| {
+                let mut rng = Rng::new(stream_seed(4, 0, STREAM_CAMERA, i as u64));
+                let vp = camera_path(
+                    &prepared,
+                    &camera,
+                    &settings,
+                    i % 16,
+                    i / 16,
+                    &mut rng,
+                    false,
+                )
+                .1;
+                Pixel {
+                    ld: DVec3::ZERO,
+                    tau: DVec3::ZERO,
+                    n: 0.0,
+                    radius: 0.05,
+                    vp,
+                }
+            })
+            .collect();
+        let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+        // Set before the pass: nothing is traced.
+        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let cancel = AtomicBool::new(true);
+        let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+        assert_eq!((deposits, pass.rounds, pass.traced), (0, 0, 0));
+        assert!(pass.chunks.is_empty());
+        // Set from another thread soon after the start: the pass of 10^9 photons (minutes of
+        // work) returns within the group in flight instead of walking the rest of the
+        // iteration (it may have finished a round or two first on a slow, loaded machine).
+        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let cancel = AtomicBool::new(false);
+        let start = std::time::Instant::now();
+        let deposits = std::thread::scope(|s| {
+            s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                cancel.store(true, Ordering::Relaxed);
+            });
+            pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel)
+        });
+        println!(
+            "cancelled after {} photons, {:?}",
+            pass.traced,
+            start.elapsed()
+        );
+        assert!(pass.traced < 200_000_000, "{} photons traced", pass.traced);
+        assert!(
+            pass.chunks.len() <= ROUND_CHUNKS,
+            "{} chunks",
+            pass.chunks.len()
+        );
+        assert_eq!(
+            deposits,
+            m.iter().sum::<u64>(),
+            "a deposit count without its sums"
+        );
     }
 }

@@ -65,8 +65,9 @@ pub struct RenderStats {
     pub deposits: u64,
     /// Wall time spent in the camera passes.
     pub camera_time: Duration,
-    /// Wall time spent building photon lookup structures and tracing photons (SPPM: the grid
-    /// build, the photon pass and the merge of its deposits; photon mapping: the map builds).
+    /// Wall time spent building photon lookup structures and tracing photons (SPPM: tracing
+    /// the photons, the grid builds and the visible points' gathers; photon mapping: the map
+    /// builds).
     pub photon_time: Duration,
 }
 

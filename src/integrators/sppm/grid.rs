@@ -40,6 +40,8 @@ pub(super) struct Cells {
     /// log2 of the range of [`row`] (a power of two, at least twice the number of points); the
     /// table has `2^bits + res[0]` buckets.
     bits: u32,
+    /// Buckets per slab (kept: every filed photon needs it, and it is a division).
+    slab_width: u32,
 }
 
 /// The bucket of the cell `(0, y, z)`: a spatial hash of `y` and `z` (two of the classic three
@@ -87,11 +89,13 @@ impl Cells {
         let inv_cell = (1.0 / cell).min(1024.0 / diag.max_element().max(1e-30));
         let res = [0, 1, 2].map(|a| ((diag[a] * inv_cell) as i32 + 1).max(1));
         let bits = (2 * n).next_power_of_two().trailing_zeros().max(1);
+        let table = (1usize << bits) + res[0] as usize;
         Some(Cells {
             bounds,
             inv_cell,
             res,
             bits,
+            slab_width: table.div_ceil(SLABS) as u32,
         })
     }
 
@@ -106,8 +110,9 @@ impl Cells {
     }
 
     /// Buckets per slab.
+    #[inline]
     fn slab_width(&self) -> u32 {
-        self.table_size().div_ceil(SLABS) as u32
+        self.slab_width
     }
 
     /// The number of slabs (the last may be narrower).
@@ -246,6 +251,8 @@ impl PhotonGrid {
             .map(|s| chunks.iter().map(|c| c.slabs[s].len()).sum())
             .collect();
         let n: usize = totals.iter().sum();
+        // Rounds hold a few million hits (`ROUND_HITS`); entry indices are u32.
+        assert!(u32::try_from(n).is_ok(), "{n} photon hits in one grid");
         self.cells = Some(cells);
         self.starts.resize(size + 1, 0);
         self.starts[size] = n as u32;
