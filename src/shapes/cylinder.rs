@@ -56,12 +56,23 @@ impl Cylinder {
 
     /// The full surface data at ray parameter `t` (a value [`Cylinder::hit_t`] returned).
     pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
+    /// [`Cylinder::hit_at`], with `uv` left NaN unless `uv` is asked for (it costs an `atan2`).
+    #[inline]
+    pub fn hit_at_uv(&self, ray: &Ray, t: f32, uv: bool) -> Hit {
         let (o, d) = self.local(ray);
         let l = o + d * t;
         let radial = Vec2::new(l.x, l.y);
         let radial = radial * (self.radius / radial.length());
-        let phi = radial.y.atan2(radial.x);
-        let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+        let uv = if uv {
+            let phi = radial.y.atan2(radial.x);
+            let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+            Vec2::new(phi / (2.0 * PI), l.z / self.height)
+        } else {
+            Vec2::NAN
+        };
         let nl = Vec3A::new(radial.x, radial.y, 0.0) / self.radius;
         let n = self.frame.to_world(nl);
         let p = self.base + self.frame.to_world(Vec3A::new(radial.x, radial.y, l.z));
@@ -71,7 +82,7 @@ impl Cylinder {
             p,
             n,
             ns: n,
-            uv: Vec2::new(phi / (2.0 * PI), l.z / self.height),
+            uv,
             dpdu,
         }
     }

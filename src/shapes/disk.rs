@@ -53,19 +53,30 @@ impl Disk {
 
     /// The full surface data at ray parameter `t` (a value [`Disk::hit_t`] returned).
     pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
+    /// [`Disk::hit_at`], with `uv` left NaN unless `uv` is asked for (it costs an `atan2`).
+    #[inline]
+    pub fn hit_at_uv(&self, ray: &Ray, t: f32, uv: bool) -> Hit {
         let n = self.frame.n;
         let p = ray.at(t);
         let l = self.frame.to_local(p - self.center);
-        let r2 = l.x * l.x + l.y * l.y;
-        let phi = l.y.atan2(l.x);
-        let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+        let uv = if uv {
+            let r2 = l.x * l.x + l.y * l.y;
+            let phi = l.y.atan2(l.x);
+            let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+            Vec2::new(phi / (2.0 * PI), 1.0 - r2.sqrt() / self.radius)
+        } else {
+            Vec2::NAN
+        };
         let dpdu = self.frame.t * l.x - self.frame.s * l.y;
         Hit {
             t,
             p,
             n,
             ns: n,
-            uv: Vec2::new(phi / (2.0 * PI), 1.0 - r2.sqrt() / self.radius),
+            uv,
             dpdu: if dpdu.length_squared() > 0.0 {
                 dpdu * (2.0 * PI)
             } else {

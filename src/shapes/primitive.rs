@@ -86,15 +86,23 @@ impl AnyShape {
     /// The full hit for a [`LazyHit`] this shape returned for `ray`; identical to what
     /// [`Shape::intersect`] gives.
     pub fn hit_at(&self, ray: &Ray, lazy: LazyHit) -> Hit {
+        self.hit_at_uv(ray, lazy, true)
+    }
+
+    /// [`AnyShape::hit_at`], where `uv: false` lets the shapes whose `uv` needs trigonometry
+    /// (sphere, disk, cylinder) leave it NaN: for primitives whose material reads no texture.
+    /// Every other field is the same. Shapes whose `uv` is cheap, and boxed shapes, fill it.
+    #[inline]
+    pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
         let t = match lazy {
             LazyHit::Full(h) => return h,
             LazyHit::T(t) => t,
         };
         match self {
-            AnyShape::Sphere(s) => s.hit_at(ray, t),
+            AnyShape::Sphere(s) => s.hit_at_uv(ray, t, uv),
             AnyShape::Quad(s) => s.hit_at(ray, t),
-            AnyShape::Disk(s) => s.hit_at(ray, t),
-            AnyShape::Cylinder(s) => s.hit_at(ray, t),
+            AnyShape::Disk(s) => s.hit_at_uv(ray, t, uv),
+            AnyShape::Cylinder(s) => s.hit_at_uv(ray, t, uv),
             AnyShape::Triangle(s) => s.hit_at(ray, t),
             AnyShape::Plane(s) => s.hit_at(ray, t),
             // Boxed shapes always answer `Full`; recompute if ever asked otherwise.

@@ -26,22 +26,34 @@ impl Sphere {
 
     /// The full surface data at ray parameter `t` (a value [`Sphere::hit_t`] returned).
     pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
+    /// [`Sphere::hit_at`], with `uv` left NaN unless `uv` is asked for: it costs an `atan2` and
+    /// an `acos`, and only textures read it. Every other field is the same.
+    #[inline]
+    pub fn hit_at_uv(&self, ray: &Ray, t: f32, uv: bool) -> Hit {
         let mut rel = ray.at(t) - self.center;
         // Re-project onto the surface: removes most of the rounding error of the quadratic.
         rel *= self.radius / rel.length();
         let n = rel / self.radius;
-        let phi = {
-            let p = rel.z.atan2(rel.x);
-            if p < 0.0 { p + 2.0 * PI } else { p }
+        let uv = if uv {
+            let phi = {
+                let p = rel.z.atan2(rel.x);
+                if p < 0.0 { p + 2.0 * PI } else { p }
+            };
+            let theta = n.y.clamp(-1.0, 1.0).acos();
+            Vec2::new(phi / (2.0 * PI), theta / PI)
+        } else {
+            Vec2::NAN
         };
-        let theta = n.y.clamp(-1.0, 1.0).acos();
         let dpdu = Vec3A::new(-rel.z, 0.0, rel.x) * (2.0 * PI);
         Hit {
             t,
             p: self.center + rel,
             n,
             ns: n,
-            uv: Vec2::new(phi / (2.0 * PI), theta / PI),
+            uv,
             dpdu,
         }
     }
