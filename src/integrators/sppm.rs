@@ -591,7 +591,49 @@ pub(crate) fn render_progressive(
 mod tests {
     use super::*;
     use crate::render::{RenderOptions, effective_settings};
+    use crate::scene::Scene;
     use crate::{EvalOptions, load_file};
+
+    /// The Cornell example at `res` x `res` pixels with `photons` per iteration, seed 4.
+    fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+        let mut scene = load_file(&path, &EvalOptions::default())
+            .unwrap()
+            .scene
+            .unwrap();
+        scene.settings.resolution = (res, res);
+        let options = RenderOptions {
+            photons: Some(photons),
+            seed: Some(4),
+            ..Default::default()
+        };
+        let settings = effective_settings(&scene, &options).unwrap();
+        (scene, settings)
+    }
+
+    /// The camera pass of iteration `iter` (seed 4), every radius 0.05.
+    fn visible_points(
+        prepared: &PreparedScene,
+        settings: &EffectiveSettings,
+        iter: u32,
+    ) -> Vec<Pixel> {
+        let (w, h) = (settings.width, settings.height);
+        let camera = Camera::new(&prepared.scene.camera, w, h).unwrap();
+        (0..w * h)
+            .map(|i| {
+                let mut rng = Rng::new(stream_seed(4, iter, STREAM_CAMERA, u64::from(i)));
+                let (x, y) = (i % w, i / w);
+                let vp = camera_path(prepared, &camera, settings, x, y, &mut rng, false).1;
+                Pixel {
+                    ld: DVec3::ZERO,
+                    tau: DVec3::ZERO,
+                    n: 0.0,
+                    radius: 0.05,
+                    vp,
+                }
+            })
+            .collect()
+    }
 
     /// Splitting the photons into rounds (to bound the memory) changes nothing but the order of
     /// the f64 sums: the same deposits reach the same pixels. Checked on the Cornell box with
@@ -600,20 +642,8 @@ mod tests {
     /// adapt across iterations; the chunk cap must hold.
     #[test]
     fn rounds_split_the_photons_without_changing_the_sums() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
-        let mut scene = load_file(&path, &EvalOptions::default())
-            .unwrap()
-            .scene
-            .unwrap();
-        scene.settings.resolution = (24, 24);
-        let options = RenderOptions {
-            photons: Some(30_000),
-            seed: Some(4),
-            ..Default::default()
-        };
-        let settings = effective_settings(&scene, &options).unwrap();
+        let (scene, settings) = cornell(24, 30_000);
         let prepared = PreparedScene::new(&scene).unwrap();
-        let camera = Camera::new(&scene.camera, 24, 24).unwrap();
         let cancel = AtomicBool::new(false);
         let mut results = Vec::new();
         for (round_hits, round_chunks) in [
@@ -626,21 +656,7 @@ mod tests {
             let mut m = vec![0u64; 24 * 24];
             let mut deposits = 0;
             for iter in 0..2 {
-                let pixels: Vec<Pixel> = (0..24 * 24)
-                    .map(|i| {
-                        let mut rng = Rng::new(stream_seed(4, iter, STREAM_CAMERA, i as u64));
-                        let (x, y) = (i % 24, i / 24);
-                        let vp =
-                            camera_path(&prepared, &camera, &settings, x, y, &mut rng, false).1;
-                        Pixel {
-                            ld: DVec3::ZERO,
-                            tau: DVec3::ZERO,
-                            n: 0.0,
-                            radius: 0.05,
-                            vp,
-                        }
-                    })
-                    .collect();
+                let pixels = visible_points(&prepared, &settings, iter);
                 deposits += pass.run(
                     &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
                 );
@@ -677,42 +693,9 @@ mod tests {
     /// with a flag that is set while the first group is traced.
     #[test]
     fn a_cancelled_photon_pass_stops_at_once() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
-        let mut scene = load_file(&path, &EvalOptions::default())
-            .unwrap()
-            .scene
-            .unwrap();
-        scene.settings.resolution = (16, 16);
-        let options = RenderOptions {
-            photons: Some(1_000_000_000),
-            seed: Some(4),
-            ..Default::default()
-        };
-        let settings = effective_settings(&scene, &options).unwrap();
+        let (scene, settings) = cornell(16, 1_000_000_000);
         let prepared = PreparedScene::new(&scene).unwrap();
-        let camera = Camera::new(&scene.camera, 16, 16).unwrap();
-        let pixels: Vec<Pixel> = (0..16 * 16)
-            .map(|i| {
-                let mut rng = Rng::new(stream_seed(4, 0, STREAM_CAMERA, i as u64));
-                let vp = camera_path(
-                    &prepared,
-                    &camera,
-                    &settings,
-                    i % 16,
-                    i / 16,
-                    &mut rng,
-                    false,
-                )
-                .1;
-                Pixel {
-                    ld: DVec3::ZERO,
-                    tau: DVec3::ZERO,
-                    n: 0.0,
-                    radius: 0.05,
-                    vp,
-                }
-            })
-            .collect();
+        let pixels = visible_points(&prepared, &settings, 0);
         let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
         // Set before the pass: nothing is traced.
         let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
