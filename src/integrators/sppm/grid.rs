@@ -40,8 +40,9 @@ pub(super) struct Cells {
     /// log2 of the range of [`row`] (a power of two, at least twice the number of points); the
     /// table has `2^bits + res[0]` buckets.
     bits: u32,
-    /// Buckets per slab (kept: every filed photon needs it, and it is a division).
-    slab_width: u32,
+    /// log2 of the buckets per slab: a filed photon's slab is `bucket >> slab_shift` (a
+    /// division per photon hit cost more than the rest of the filing).
+    slab_shift: u32,
 }
 
 /// The bucket of the cell `(0, y, z)`: a spatial hash of `y` and `z` (two of the classic three
@@ -95,7 +96,8 @@ impl Cells {
             inv_cell,
             res,
             bits,
-            slab_width: table.div_ceil(SLABS) as u32,
+            // The smallest power of two that splits the table into at most `SLABS` slabs.
+            slab_shift: table.div_ceil(SLABS).next_power_of_two().trailing_zeros(),
         })
     }
 
@@ -112,7 +114,7 @@ impl Cells {
     /// Buckets per slab.
     #[inline]
     fn slab_width(&self) -> u32 {
-        self.slab_width
+        1 << self.slab_shift
     }
 
     /// The number of slabs (the last may be narrower).
@@ -217,7 +219,7 @@ impl HitChunk {
             return;
         }
         let bucket = cells.bucket(hit.p);
-        self.slabs[(bucket / cells.slab_width()) as usize].push(Filed {
+        self.slabs[(bucket >> cells.slab_shift) as usize].push(Filed {
             p: hit.p.into(),
             bucket,
             wi: hit.wi,
