@@ -51,6 +51,9 @@ pub struct PreparedScene<'a> {
     /// The lobes of each material whose parameters are all constants (no texture), computed
     /// once instead of at every hit.
     const_lobes: Vec<Option<Lobes>>,
+    /// Per material: whether any of its parameters is a texture (its lobes, or a glass's
+    /// absorption), so that hits on it need their `uv`.
+    textured: Vec<bool>,
 }
 
 /// A surface hit with the primitive it belongs to.
@@ -211,7 +214,21 @@ fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
     })
 }
 
-/// Whether a material has no textured parameter.
+/// Whether any parameter of a material is a texture: its lobes' (see [`is_constant`]) or a
+/// glass's absorption, which is looked up at every hit from inside.
+fn has_texture(m: &Material) -> bool {
+    let absorb_textured = matches!(
+        m,
+        Material::Glass {
+            absorb: ColorParam::Texture(_),
+            ..
+        }
+    );
+    absorb_textured || !is_constant(m)
+}
+
+/// Whether a material's lobes have no textured parameter (a glass's absorption is not part
+/// of its lobes).
 fn is_constant(m: &Material) -> bool {
     let c = |p: &ColorParam| matches!(p, ColorParam::Const(_));
     match m {
@@ -384,6 +401,7 @@ impl<'a> PreparedScene<'a> {
             environment,
             prim_material,
             const_lobes: Vec::new(),
+            textured: scene.materials.iter().map(has_texture).collect(),
         };
         // A constant material gives the same lobes at every hit: the hit is not looked at.
         let dummy = SurfaceHit {
@@ -415,12 +433,13 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// Whether anything may read the `uv` of a hit on `prim`: only textures do (through
-    /// [`Self::tex_coord`]), so a primitive with a constant material gets hits without it
-    /// (spheres, disks and cylinders then skip their trigonometry; `uv` is NaN).
+    /// [`Self::tex_coord`], for the lobes or a glass's absorption), so a primitive whose
+    /// material has no texture gets hits without it (spheres, disks and cylinders then skip
+    /// their trigonometry; `uv` is NaN).
     #[inline]
     fn reads_uv(&self, prim: u32) -> bool {
         let m = self.prim_material[prim as usize] as usize;
-        !matches!(self.const_lobes.get(m), Some(Some(_)))
+        self.textured.get(m).copied().unwrap_or(true)
     }
 
     #[inline]
@@ -564,28 +583,45 @@ mod tests {
     use super::*;
     use crate::camera::Camera;
     use crate::sampling::{Rng, uniform_sphere};
-    use crate::{EvalOptions, load_file};
+    use crate::{EvalOptions, load_file, load_source};
 
     /// A hit from [`PreparedScene::intersect`] is the full hit of the same shape, field for
     /// field and bit for bit, except that `uv` is NaN on spheres, disks and cylinders whose
     /// material reads no texture. Checked on the examples with textured and plain spheres,
-    /// cylinders, disks, quads and revolves, with camera rays and rays from random points in
-    /// random directions (back faces, insides); fails if `uv` is left out where a texture could
-    /// read it, or if leaving it out changed anything else.
+    /// cylinders, disks, quads and revolves, and on glass whose absorption is textured, with
+    /// camera rays and rays from random points in random directions (back faces, insides);
+    /// fails if `uv` is left out where a texture could read it, or if leaving it out changed
+    /// anything else.
     #[test]
     fn hits_leave_out_uv_only_where_no_texture_reads_it() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-        let (mut kept, mut left_out) = (0usize, 0usize);
-        for name in [
+        let (mut kept, mut left_out, mut absorbing_kept) = (0usize, 0usize, 0usize);
+        // Glass whose absorption is a uv-mapped texture reads `uv` too (its lobes do not).
+        let absorbing = r#"
+            camera { location <0, 1.2, -4>  look_at <0, 0.5, 0>  fov 60 }
+            #declare Inked = material { glass absorb texture { checker rgb 3, rgb 0 map uv scale 0.1 } }
+            #declare Clear = material { glass absorb rgb 0.5 }
+            sphere { <-1.2, 0.5, 0>, 0.5  material { Inked } }
+            cylinder { <0, 0, 0>, <0, 1, 0>, 0.4  material { Inked } }
+            disk { <1.2, 0.5, 0>, <0, 0, -1>, 0.5  material { Inked } }
+            sphere { <-1.2, 0.5, 1.5>, 0.5  material { Clear } }
+            cylinder { <0, 0, 1.5>, <0, 1, 1.5>, 0.4  material { Clear } }
+        "#;
+        let examples = [
             "textures.scn",
             "room.scn",
             "crystal_tree.scn",
             "cornell.scn",
-        ] {
-            let scene = load_file(&root.join(name), &EvalOptions::default())
-                .unwrap()
-                .scene
-                .unwrap();
+        ]
+        .map(|name| {
+            let loaded = load_file(&root.join(name), &EvalOptions::default()).unwrap();
+            (name, loaded.scene.unwrap())
+        });
+        let inline = load_source("absorbing.scn", absorbing, &EvalOptions::default());
+        for (name, scene) in examples
+            .into_iter()
+            .chain([("absorbing glass", inline.scene.unwrap())])
+        {
             let prepared = PreparedScene::new(&scene).unwrap();
             let camera = Camera::new(&scene.camera, 64, 64).unwrap();
             let bounds = prepared.bvh.bounds();
@@ -626,10 +662,17 @@ mod tests {
                     let uv_bits = |h: &Hit| h.uv.to_array().map(f32::to_bits);
                     assert_eq!(uv_bits(&full), uv_bits(&got.hit), "{name}: {ray:?}");
                     kept += usize::from(trig);
+                    if name == "absorbing glass" {
+                        absorbing_kept += usize::from(trig);
+                    }
                 }
             }
         }
-        println!("uv kept on {kept} textured trig-shape hits, left out on {left_out}");
+        println!(
+            "uv kept on {kept} textured trig-shape hits ({absorbing_kept} on glass with textured \
+             absorption), left out on {left_out}"
+        );
         assert!(kept > 1000 && left_out > 1000, "{kept} {left_out}");
+        assert!(absorbing_kept > 300, "{absorbing_kept}");
     }
 }
