@@ -16,22 +16,33 @@
 #
 # The first run installs rs_pbrt 0.9.12 into target/pbrt_compare (a few minutes on 2 cores).
 set -euo pipefail
+# EPOCHREALTIME (bash 5) prints the locale's decimal separator: keep it a point.
+export LC_ALL=C
+if [ -z "${EPOCHREALTIME:-}" ]; then
+  echo "error: this script needs bash 5 or later (for EPOCHREALTIME)" >&2
+  exit 1
+fi
 cd "$(dirname "$0")/../.."
 root=$PWD
-out=$root/target/pbrt_compare
+target=${CARGO_TARGET_DIR:-$root/target}
+out=$target/pbrt_compare
 mkdir -p "$out"
 if ! [ -x "$out/bin/rs_pbrt" ]; then
   CARGO_TARGET_DIR="$out/build" cargo install rs_pbrt --version 0.9.12 --locked --root "$out"
 fi
 cargo build --release --locked
-sppm=$root/target/release/sppm-lang
+sppm=$target/release/sppm-lang
 for photons in 100000 1100000; do
   sed "s/PHOTONS/$photons/" "$root/benches/pbrt_compare/cornell.pbrt" > "$out/cornell_$photons.pbrt"
 done
 
-seconds() { # prints the wall time of a command in seconds
+seconds() { # prints the wall time of a command in seconds; stops the script if it fails
   local start=$EPOCHREALTIME
-  "$@" > /dev/null 2>&1
+  if ! "$@" > "$out/last.log" 2>&1; then
+    echo "error: failed: $*" >&2
+    tail -n 20 "$out/last.log" >&2
+    exit 1
+  fi
   awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { print b - a }'
 }
 rate() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", 4 / (b - a) }'; }
