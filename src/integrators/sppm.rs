@@ -268,7 +268,7 @@ impl PhotonPass {
             traced: 0,
             filed: 0,
             max_depth,
-            round_hits,
+            round_hits: round_hits.max(1),
             round_chunks: round_chunks.max(1),
             rounds: 0,
         }
@@ -310,7 +310,10 @@ impl PhotonPass {
                 .iter()
                 .filter_map(|px| px.vp.as_ref().map(|vp| (vp.p, px.radius as f32))),
         );
-        let Some(cells) = cells.filter(|_| !scene.lights.is_empty()) else {
+        // Photons deposit from their second surface on: with fewer than 2 bounces there is
+        // nothing to gather, so none is traced.
+        let wanted = !scene.lights.is_empty() && settings.max_depth >= 2;
+        let Some(cells) = cells.filter(|_| wanted) else {
             return 0;
         };
         let cancelled = || cancel.load(Ordering::Relaxed);
@@ -721,6 +724,30 @@ mod tests {
         for threads in [2, 3] {
             assert!(run(threads) == one, "{threads} threads differ from 1");
         }
+    }
+
+    /// With one bounce a photon's only hit is its first, which the camera pass's direct light
+    /// already counts: nothing can be gathered, so no photon is traced.
+    #[test]
+    fn one_bounce_traces_no_photon() {
+        let (scene, mut settings) = cornell(16, 100_000);
+        settings.max_depth = 1;
+        let prepared = PreparedScene::new(&scene).unwrap();
+        let pixels = visible_points(&prepared, &settings, 0);
+        let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let cancel = AtomicBool::new(false);
+        let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+        assert_eq!((deposits, pass.traced, pass.rounds), (0, 0, 0));
+        // Two bounces do trace and gather.
+        settings.max_depth = 2;
+        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+        assert!(
+            pass.traced == 100_000 && deposits > 0,
+            "{} {deposits}",
+            pass.traced
+        );
     }
 
     /// A cancelled photon pass stops before its next group: it traces nothing more, builds no
