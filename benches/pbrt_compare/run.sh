@@ -55,6 +55,7 @@ for round in $(seq "${ROUNDS:-3}"); do
     --threads 1 --seed 1 -o "$out/sppm_100000.exr")
   s2=$(seconds "$sppm" render "$root/examples/cornell.scn" --iterations 4 --photons 1100000 \
     --threads 1 --seed 1 -o "$out/sppm_1100000.exr")
-  printf 'round %s: rs_pbrt (pbrt-v3 SPPM) %s M photons/s, sppm-lang %s M photons/s (1 thread each)\n' \
-    "$round" "$(rate "$p1" "$p2")" "$(rate "$s1" "$s2")"
+  ratio=$(awk -v p="$(rate "$p1" "$p2")" -v q="$(rate "$s1" "$s2")" 'BEGIN { printf "%.1f", q / p }')
+  printf 'round %s: rs_pbrt (pbrt-v3 SPPM) %s M photons/s, sppm-lang %s M photons/s: %sx (1 thread each)\n' \
+    "$round" "$(rate "$p1" "$p2")" "$(rate "$s1" "$s2")" "$ratio"
 done
