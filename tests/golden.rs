@@ -26,30 +26,41 @@
 //! and a change of a material or a light by more than the noise fails. The numbers are stored in
 //! `tests/golden/<scene>.noise` and printed by every run.
 //!
-//! Measured at bless time (2026-11-22; seeds 2..=6 against seed 1, the largest of the five;
-//! tolerance = 1.5x / 1.5x / 3x these, see each `.noise` file for the single seeds):
+//! Measured at bless time (2026-11-24, all scenes re-blessed; seeds 2..=6 against seed 1, the
+//! largest of the five; tolerance = 1.5x / 1.5x / 3x these, see each `.noise` file for the
+//! single seeds):
 //!
 //! | scene | rel_mse | bad_share | mean_rel |
 //! |---|---|---|---|
-//! | caustics | 4.1e-3 | 0.26% | 1.6% |
-//! | cornell | 8.2e-3 | 0.44% | 2.7% |
-//! | crystal_tree | 6.6e-3 | 0.73% | 0.70% |
-//! | furnace | 3.1e-3 | 0 | 0.31% |
-//! | room | 1.2e-2 | 0.23% | 1.0% |
-//! | smallppm | 2.4e-2 | 0.55% | 0.70% |
-//! | textures (HDR sky: sun shadows are noisy at 16 iterations) | 1.5e-1 | 13.9% | 1.5% |
-//! | vase (blessed 2026-11-23) | 8.9e-3 | 0.81% | 1.0% |
-//! | teapot (blessed 2026-11-23) | 1.2e-2 | 0.94% | 0.66% |
+//! | caustics | 7.9e-3 | 0.36% | 1.8% |
+//! | cornell | 6.1e-3 | 0.42% | 2.7% |
+//! | crystal_tree | 1.1e-2 | 0.73% | 0.68% |
+//! | furnace | 1.0e-2 | 0.02% | 0.26% |
+//! | room | 1.3e-2 | 0.23% | 0.91% |
+//! | smallppm | 2.4e-2 | 0.52% | 0.72% |
+//! | textures (HDR sky: sun shadows are noisy at 16 iterations) | 1.5e-1 | 14.0% | 1.5% |
+//! | vase | 8.9e-3 | 0.81% | 1.0% |
+//! | teapot | 1.2e-2 | 0.94% | 0.66% |
+//!
+//! Why the 2026-11-24 re-bless: the first references (2026-11-22, 08:28) were measured before
+//! the default initial radius became one pixel footprint (09:43). Where that shrank the radius
+//! at 64 px (furnace: 0.035 -> 0.018) the noise grew (furnace 3.1e-3 -> 1.0e-2), where it grew
+//! it the noise fell (cornell 8.2e-3 -> 6.1e-3), and scenes with their own radius did not move.
+//! The furnace still passed only because the test renders with its reference's seed, so their
+//! noise was mostly shared: a change that used the random numbers differently, with the same
+//! accuracy (checked against the exact answer at 8 seeds), failed it. Tolerances are only right
+//! for the settings they were measured with: re-bless after a change of the defaults.
 //!
 //! Deliberate changes fail, and [`deliberate_material_and_light_changes_fail_with_a_report`]
-//! checks it on every run: the Cornell box's red wall made blue gives rel_mse 5.2e-2 (tol
-//! 1.2e-2), bad_share 8.1% (tol 0.66%), mean_rel 20% (tol 8.0%); its light 15% dimmer gives
-//! mean_rel 14.9% (tol 8.0%); (measured once by hand) the caustics light 17% dimmer gives rel_mse
-//! 1.8e-2 (tol 6.1e-3), mean_rel 16.6% (tol 4.9%).
+//! checks it on every run: the Cornell box's red wall made blue gives rel_mse 5.1e-2 (tol
+//! 9.2e-3), bad_share 8.0% (tol 0.62%), mean_rel 20% (tol 8.0%); its light 15% dimmer gives
+//! mean_rel 15.0% (tol 8.0%); (measured once by hand, before the re-bless) the caustics light
+//! 17% dimmer gave rel_mse 1.8e-2 (tolerance now 1.2e-2), mean_rel 16.6% (now 5.4%).
 //!
 //! Because the renderer is deterministic per seed, an unchanged renderer reproduces the
-//! reference exactly (all metrics 0); a renderer change that stays within the noise (e.g. a new
-//! default radius) passes without a re-bless. [`checksum_is_unchanged`] additionally pins one small
+//! reference exactly (all metrics 0); a renderer change that stays within the noise passes
+//! without a re-bless, but a change of the defaults (radius, photons) changes the noise itself
+//! and needs one (see above). [`checksum_is_unchanged`] additionally pins one small
 //! render bit for bit, to catch *any* unintended change.
 //!
 //! On failure the test writes expected / actual / difference PNGs and an HTML report into
