@@ -249,11 +249,11 @@ struct PhotonPass {
     chunks: Vec<HitChunk>,
     grid: PhotonGrid,
     /// Photons traced and hits filed so far, over the whole render: their ratio sizes the
-    /// groups. Before any photon, the estimate is `max_depth` hits per photon, the most there
-    /// can be, so that the first group cannot overfill a round by much.
+    /// groups. Before any photon, the estimate is `max_depth` hits per photon (see
+    /// [`Self::group_size`]), the most there can be, so that the first group cannot overfill a
+    /// round by much.
     traced: u64,
     filed: u64,
-    max_depth: u32,
     round_hits: usize,
     round_chunks: usize,
     /// Gathers done so far.
@@ -261,13 +261,12 @@ struct PhotonPass {
 }
 
 impl PhotonPass {
-    fn new(max_depth: u32, round_hits: usize, round_chunks: usize) -> Self {
+    fn new(round_hits: usize, round_chunks: usize) -> Self {
         PhotonPass {
             chunks: Vec::new(),
             grid: PhotonGrid::default(),
             traced: 0,
             filed: 0,
-            max_depth,
             round_hits: round_hits.max(1),
             round_chunks: round_chunks.max(1),
             rounds: 0,
@@ -277,9 +276,9 @@ impl PhotonPass {
     /// The photons of the next group of a round that holds `held` hits in `used` chunks: enough
     /// for the hits the round still misses, in whole chunks, at least one chunk, at most
     /// [`PHOTON_GROUP`] and at most the chunks the round has left.
-    fn group_size(&self, held: usize, used: usize) -> u64 {
+    fn group_size(&self, held: usize, used: usize, max_depth: u32) -> u64 {
         let per_photon = if self.traced == 0 {
-            f64::from(self.max_depth.max(1))
+            f64::from(max_depth.max(1))
         } else {
             (self.filed as f64 / self.traced as f64).max(1e-3)
         };
@@ -305,15 +304,15 @@ impl PhotonPass {
         m: &mut [u64],
         cancel: &AtomicBool,
     ) -> u64 {
-        let cells = Cells::new(
-            pixels
-                .iter()
-                .filter_map(|px| px.vp.as_ref().map(|vp| (vp.p, px.radius as f32))),
-        );
         // Photons deposit from their second surface on: with fewer than 2 bounces there is
         // nothing to gather, so none is traced.
-        let wanted = !scene.lights.is_empty() && settings.max_depth >= 2;
-        let Some(cells) = cells.filter(|_| wanted) else {
+        if scene.lights.is_empty() || settings.max_depth < 2 {
+            return 0;
+        }
+        let points = pixels
+            .iter()
+            .filter_map(|px| px.vp.as_ref().map(|vp| (vp.p, px.radius as f32)));
+        let Some(cells) = Cells::new(points) else {
             return 0;
         };
         let cancelled = || cancel.load(Ordering::Relaxed);
@@ -325,7 +324,7 @@ impl PhotonPass {
                     return deposits;
                 }
                 let hi = next
-                    .saturating_add(self.group_size(held, used))
+                    .saturating_add(self.group_size(held, used, settings.max_depth))
                     .min(settings.photons);
                 let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
                 if self.chunks.len() < used + n {
@@ -491,7 +490,7 @@ pub(crate) fn render_progressive(
     let mut cancelled = false;
     let mut phi = vec![DVec3::ZERO; pixels.len()];
     let mut m = vec![0u64; pixels.len()];
-    let mut photon_pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+    let mut photon_pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
     for iter in 0..settings.iterations {
         if let Some(t) = settings.time_limit
             && start.elapsed().as_secs_f64() >= t
@@ -654,7 +653,7 @@ mod tests {
             (3000, usize::MAX),
             (usize::MAX, 2),
         ] {
-            let mut pass = PhotonPass::new(settings.max_depth, round_hits, round_chunks);
+            let mut pass = PhotonPass::new(round_hits, round_chunks);
             let mut phi = vec![DVec3::ZERO; 24 * 24];
             let mut m = vec![0u64; 24 * 24];
             let mut deposits = 0;
@@ -704,7 +703,7 @@ mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut pass = PhotonPass::new(settings.max_depth, 3000, 3);
+                let mut pass = PhotonPass::new(3000, 3);
                 let mut phi = vec![DVec3::ZERO; 24 * 24];
                 let mut m = vec![0u64; 24 * 24];
                 for iter in 0..2 {
@@ -735,13 +734,13 @@ mod tests {
         let prepared = PreparedScene::new(&scene).unwrap();
         let pixels = visible_points(&prepared, &settings, 0);
         let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
-        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
         let cancel = AtomicBool::new(false);
         let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
         assert_eq!((deposits, pass.traced, pass.rounds), (0, 0, 0));
         // Two bounces do trace and gather.
         settings.max_depth = 2;
-        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
         let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
         assert!(
             pass.traced == 100_000 && deposits > 0,
@@ -761,7 +760,7 @@ mod tests {
         let pixels = visible_points(&prepared, &settings, 0);
         let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
         // Set before the pass: nothing is traced.
-        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
         let cancel = AtomicBool::new(true);
         let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
         assert_eq!((deposits, pass.rounds, pass.traced), (0, 0, 0));
@@ -769,7 +768,7 @@ mod tests {
         // Set from another thread soon after the start: the pass of 10^9 photons (minutes of
         // work) returns within the group in flight instead of walking the rest of the
         // iteration (it may have finished a round or two first on a slow, loaded machine).
-        let mut pass = PhotonPass::new(settings.max_depth, ROUND_HITS, ROUND_CHUNKS);
+        let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
         let cancel = AtomicBool::new(false);
         let start = std::time::Instant::now();
         let deposits = std::thread::scope(|s| {

@@ -137,7 +137,7 @@ impl Cells {
     #[inline]
     pub(super) fn bucket_runs(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
         let mut out = ArrayVec::new();
-        if p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any() {
+        if !self.contains(p) {
             return out;
         }
         // The cube of half-width r_max around `p` is under half a cell wide, so it meets the
