@@ -24,6 +24,7 @@ pub mod geometry;
 pub mod integrators;
 pub mod lights;
 pub mod materials;
+pub mod prepare;
 pub mod render;
 pub mod sampling;
 pub mod scene;
@@ -33,6 +34,6 @@ pub mod syntax;
 pub mod textures;
 pub mod watch;
 
+pub use diag::SourceMap;
 pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
 pub use eval::{EvalOptions, Loaded, load_file, load_source};
-pub use syntax::SourceMap;

@@ -7,8 +7,10 @@
 //! [`render_plain`] (a string without colors at a fixed width).
 
 mod render;
+mod source;
 
 pub use render::{render_plain, to_report};
+pub use source::{SourceFile, SourceMap};
 
 use crate::span::Span;
 

@@ -7,9 +7,9 @@ use miette::{
     NamedSource, SourceCode, SourceSpan,
 };
 
+use super::SourceMap;
 use super::{Diagnostic, Severity};
 use crate::span::Span;
-use crate::syntax::SourceMap;
 
 /// One diagnostic in miette's shape: a snippet of the whole file, labels, help, and related
 /// reports (trace entries in other files, further errors).

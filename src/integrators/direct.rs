@@ -7,7 +7,7 @@ use glam::Vec3A;
 
 use crate::accel::{spawn_ray, spawn_ray_to};
 use crate::materials::{Bsdf, TransportMode};
-use crate::render::{PreparedScene, SurfaceHit};
+use crate::prepare::{PreparedScene, SurfaceHit};
 use crate::sampling::{Rng, power_heuristic};
 
 /// Reflected direct radiance toward `wo`.

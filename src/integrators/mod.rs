@@ -13,9 +13,53 @@ pub mod whitted;
 pub use direct::direct_lighting;
 
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderError, RenderOutput};
+use crate::film::Image;
+use crate::prepare::{EffectiveSettings, PreparedScene, RenderError};
 use crate::scene::Integrator;
+
+/// Counters over the whole render.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RenderStats {
+    pub camera_paths: u64,
+    pub photons: u64,
+    pub deposits: u64,
+    /// Wall time spent in the camera passes.
+    pub camera_time: Duration,
+    /// Wall time spent building photon lookup structures and tracing photons (SPPM: tracing
+    /// the photons, the grid builds and the visible points' gathers; photon mapping: the map
+    /// builds).
+    pub photon_time: Duration,
+}
+
+/// Reported after every finished iteration.
+pub struct Progress<'a> {
+    /// Iterations finished so far (1-based count).
+    pub iteration: u32,
+    pub iterations: u32,
+    pub elapsed: Duration,
+    pub stats: RenderStats,
+    pub(crate) snapshot: &'a dyn Fn() -> Image,
+}
+
+impl Progress<'_> {
+    /// The image as it stands after this iteration (computed on demand).
+    pub fn image(&self) -> Image {
+        (self.snapshot)()
+    }
+}
+
+/// The result of a render.
+#[derive(Debug, Clone)]
+pub struct RenderOutput {
+    pub image: Image,
+    pub iterations_done: u32,
+    /// Stopped by the cancel flag (the image holds the finished iterations).
+    pub cancelled: bool,
+    pub elapsed: Duration,
+    pub stats: RenderStats,
+}
 
 pub fn run(
     scene: &PreparedScene,

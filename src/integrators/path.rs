@@ -14,8 +14,9 @@ use super::progressive;
 use super::sppm::attenuate_inside;
 use crate::accel::spawn_ray;
 use crate::camera::Camera;
+use crate::integrators::{Progress, RenderOutput};
 use crate::materials::TransportMode;
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
 
 /// Vertices before Russian roulette may end a path.

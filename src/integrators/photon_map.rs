@@ -22,7 +22,8 @@ use rayon::prelude::*;
 use super::kdtree::KdTree;
 use super::progressive;
 use super::sppm::{camera_path, trace_photon};
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+use crate::integrators::{Progress, RenderOutput};
+use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::{Rng, stream_seed};
 
 /// Photons in each global-map estimate.

@@ -9,7 +9,8 @@
 
 use std::sync::atomic::AtomicBool;
 
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+use crate::integrators::{Progress, RenderOutput};
+use crate::prepare::{EffectiveSettings, PreparedScene};
 
 pub fn render(
     scene: &PreparedScene,

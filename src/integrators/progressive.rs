@@ -11,7 +11,8 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::film::Image;
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput, RenderStats};
+use crate::integrators::{Progress, RenderOutput, RenderStats};
+use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::{Rng, stream_seed};
 
 /// Stream kind of per-pixel camera samples (distinct from SPPM's camera/photon streams).
@@ -43,10 +44,7 @@ pub(crate) fn render<T: Sync>(
 ) -> RenderOutput {
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
-    let camera = match Camera::new(&scene.scene.camera, w, h) {
-        Ok(c) => c,
-        Err(_) => unreachable!("camera validated before rendering"),
-    };
+    let camera = scene.camera;
     let mut sums = vec![DVec3::ZERO; (w * h) as usize];
     let mut stats = RenderStats::default();
     let mut done = 0u32;

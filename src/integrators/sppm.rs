@@ -27,10 +27,9 @@ use crate::accel::spawn_ray;
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::geometry::Ray;
+use crate::integrators::{Progress, RenderOutput, RenderStats};
 use crate::materials::{Bsdf, TransportMode};
-use crate::render::{
-    EffectiveSettings, PreparedScene, Progress, RenderOutput, RenderStats, SurfaceHit,
-};
+use crate::prepare::{EffectiveSettings, PreparedScene, SurfaceHit};
 use crate::sampling::{Rng, stream_seed};
 
 mod grid;
@@ -470,10 +469,7 @@ pub(crate) fn render_progressive(
 ) -> (RenderOutput, Vec<PixelStats>) {
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
-    let camera = match Camera::new(&scene.scene.camera, w, h) {
-        Ok(c) => c,
-        Err(_) => unreachable!("camera validated before rendering"),
-    };
+    let camera = scene.camera;
     let r0 = initial_radius(scene, settings);
     let mut pixels = vec![
         Pixel {
@@ -592,7 +588,7 @@ pub(crate) fn render_progressive(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{RenderOptions, effective_settings};
+    use crate::prepare::{RenderOptions, effective_settings};
     use crate::scene::Scene;
     use crate::{EvalOptions, load_file};
 

@@ -11,7 +11,8 @@ use std::sync::atomic::AtomicBool;
 
 use super::progressive;
 use super::sppm::camera_path;
-use crate::render::{EffectiveSettings, PreparedScene, Progress, RenderOutput};
+use crate::integrators::{Progress, RenderOutput};
+use crate::prepare::{EffectiveSettings, PreparedScene};
 
 /// Uniform ambient radiance arriving at every non-specular surface (reflected as
 /// `pi * f(wo, n) * AMBIENT`, i.e. `albedo * AMBIENT` on a diffuse surface).

@@ -5,9 +5,9 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 
 use super::{LightSample, PhotonSample};
+use crate::geometry::Frame;
 use crate::sampling::cosine_hemisphere;
 use crate::shapes::Shape;
-use crate::shapes::frame::Frame;
 use crate::shapes::primitive::AnyShape;
 
 pub struct AreaLight {

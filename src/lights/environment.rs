@@ -8,8 +8,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 
 use super::{LightSample, PhotonSample};
+use crate::geometry::Frame;
 use crate::sampling::concentric_disk;
-use crate::shapes::frame::Frame;
 use crate::textures::EnvironmentMap;
 
 pub struct EnvironmentLight {

@@ -5,8 +5,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3A};
 
 use super::{LightSample, PhotonSample};
+use crate::geometry::Frame;
 use crate::sampling::{uniform_cone, uniform_cone_pdf};
-use crate::shapes::frame::Frame;
 
 pub struct SpotLight {
     pub position: Vec3A,

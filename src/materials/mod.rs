@@ -8,7 +8,7 @@ mod mirror;
 
 use glam::{Vec2, Vec3A};
 
-use crate::shapes::frame::Frame;
+use crate::geometry::Frame;
 
 /// Which quantity a path carries: camera paths carry radiance, photon paths importance
 /// (pbrt's TransportMode). Refraction scales radiance by 1/eta^2 but not importance.

@@ -5,8 +5,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 
-use super::frame::Frame;
 use super::{AreaSample, Shape};
+use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 
 #[derive(Debug, Clone, Copy)]

@@ -4,8 +4,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 
-use super::frame::Frame;
 use super::{AreaSample, Shape};
+use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::sampling::concentric_disk;
 

@@ -37,7 +37,6 @@ pub trait Shape: Send + Sync {
 pub mod cuboid;
 pub mod cylinder;
 pub mod disk;
-pub mod frame;
 pub mod mesh;
 pub mod patch;
 pub mod plane;

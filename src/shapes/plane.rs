@@ -3,8 +3,8 @@
 
 use glam::{Vec2, Vec3A};
 
-use super::frame::Frame;
 use super::{AreaSample, Shape};
+use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 
 #[derive(Debug, Clone, Copy)]

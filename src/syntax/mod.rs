@@ -2,7 +2,6 @@
 
 pub mod ast;
 mod parser;
-mod source;
 
+pub use crate::diag::{SourceFile, SourceMap};
 pub use parser::{MAX_EXPRESSION_TERMS, MAX_NESTING, parse};
-pub use source::{SourceFile, SourceMap};

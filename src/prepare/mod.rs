@@ -3,8 +3,10 @@
 
 use glam::{Affine3A, DMat3, DVec3, Vec3A};
 
-use super::RenderError;
+mod settings;
+
 use crate::accel::Bvh;
+use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light, PointLight, SpotLight};
 use crate::materials::{Bsdf, Lobes};
@@ -24,6 +26,7 @@ use crate::shapes::sphere::Sphere;
 use crate::shapes::transformed::Transformed;
 use crate::shapes::triangle::Triangle;
 use crate::textures::{self, TexCoord};
+pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
 
 const NO_LIGHT: u32 = u32::MAX;
 
@@ -36,6 +39,8 @@ pub struct ObjectInfo {
 
 pub struct PreparedScene<'a> {
     pub scene: &'a Scene,
+    /// The camera, validated, for the scene's resolution.
+    pub camera: Camera,
     pub bvh: Bvh,
     /// Object of each primitive id.
     pub prim_object: Vec<u32>,
@@ -249,6 +254,8 @@ fn color3(c: DVec3) -> Vec3A {
 
 impl<'a> PreparedScene<'a> {
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+        let (width, height) = scene.settings.resolution;
+        let camera = Camera::new(&scene.camera, width, height).map_err(RenderError::new)?;
         let mut shapes = Vec::new();
         let mut prim_object = Vec::new();
         let mut prim_light = Vec::new();
@@ -392,6 +399,7 @@ impl<'a> PreparedScene<'a> {
             .collect();
         let mut prepared = Self {
             scene,
+            camera,
             bvh,
             prim_object,
             prim_light,

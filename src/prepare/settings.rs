@@ -1,0 +1,108 @@
+//! The settings a render uses: the scene's `settings` with the command line's overrides applied,
+//! checked once here.
+
+use crate::scene::{Integrator, Scene};
+use crate::span::Span;
+
+/// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RenderOptions {
+    pub iterations: Option<u32>,
+    pub photons: Option<u64>,
+    pub seed: Option<u64>,
+    /// Seconds.
+    pub time_limit: Option<f64>,
+    /// Worker threads; `None`: rayon's default (all cores). The image does not depend on it.
+    pub threads: Option<usize>,
+}
+
+/// The settings a render actually uses (scene settings with the options applied).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EffectiveSettings {
+    pub width: u32,
+    pub height: u32,
+    pub iterations: u32,
+    pub photons: u64,
+    pub radius: Option<f64>,
+    pub alpha: f64,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub integrator: Integrator,
+    pub time_limit: Option<f64>,
+}
+
+/// A render failure; `span` points at the declaration that caused it when there is one.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct RenderError {
+    pub message: String,
+    pub span: Option<Span>,
+}
+
+impl RenderError {
+    pub fn new(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            span: None,
+        }
+    }
+}
+
+/// Largest accepted image side and pixel count.
+const MAX_SIDE: u32 = 1 << 15;
+const MAX_PIXELS: u64 = 1 << 27;
+
+pub fn effective_settings(
+    scene: &Scene,
+    o: &RenderOptions,
+) -> Result<EffectiveSettings, RenderError> {
+    let s = &scene.settings;
+    let (width, height) = s.resolution;
+    if width == 0
+        || height == 0
+        || width > MAX_SIDE
+        || height > MAX_SIDE
+        || width as u64 * height as u64 > MAX_PIXELS
+    {
+        return Err(RenderError::new(format!(
+            "resolution {width}x{height} is out of range (1..={MAX_SIDE} per side, at most {MAX_PIXELS} pixels)"
+        )));
+    }
+    let alpha = s.alpha;
+    if !(alpha > 0.0 && alpha <= 1.0) {
+        return Err(RenderError::new(format!(
+            "alpha must be in (0, 1], got {alpha}"
+        )));
+    }
+    let radius = s.radius;
+    if let Some(r) = radius
+        && !(r > 0.0 && r.is_finite())
+    {
+        return Err(RenderError::new(format!(
+            "radius must be positive, got {r}"
+        )));
+    }
+    let time_limit = o.time_limit.or(s.time_limit);
+    if let Some(t) = time_limit
+        && (t.is_nan() || t < 0.0)
+    {
+        return Err(RenderError::new(format!(
+            "time limit must be >= 0, got {t}"
+        )));
+    }
+    if o.threads == Some(0) {
+        return Err(RenderError::new("threads must be at least 1"));
+    }
+    Ok(EffectiveSettings {
+        width,
+        height,
+        iterations: o.iterations.unwrap_or(s.iterations),
+        photons: o.photons.unwrap_or(s.photons),
+        radius,
+        alpha,
+        max_depth: s.max_depth.clamp(1, 1024),
+        seed: o.seed.unwrap_or(s.seed),
+        integrator: s.integrator,
+        time_limit,
+    })
+}
