@@ -1,7 +1,7 @@
 //! Source spans: the only thing the renderer knows about source text.
 //!
 //! A [`Span`] names a file by [`FileId`] and a byte range inside it. The language side owns the
-//! table that turns a `FileId` back into a path and text (see `syntax::SourceMap`); the renderer
+//! table that turns a `FileId` back into a path and text (see `diag::SourceMap`); the renderer
 //! only carries spans so that its errors can point at the declaration that caused them.
 
 /// Index of a source file in the language side's source map.

@@ -306,11 +306,26 @@ fn a_planted_backward_import_is_found() {
     }
     // ... and these are fine: own module, allowed imports, comments, test code, `$crate`.
     let fine = [
-        ("prepare", "use crate::prepare::settings::X;\nuse crate::shapes::Shape;\n"),
-        ("integrators", "use crate::{prepare::PreparedScene, film::Image};\n"),
-        ("geometry", "// see crate::render::render\n/// [`crate::eval`]\n"),
-        ("shapes", "#[cfg(test)]\nmod tests { use crate::eval::load_source; }\n"),
-        ("sampling", "macro_rules! m { () => { $crate::sampling::Rng } }\n"),
+        (
+            "prepare",
+            "use crate::prepare::settings::X;\nuse crate::shapes::Shape;\n",
+        ),
+        (
+            "integrators",
+            "use crate::{prepare::PreparedScene, film::Image};\n",
+        ),
+        (
+            "geometry",
+            "// see crate::render::render\n/// [`crate::eval`]\n",
+        ),
+        (
+            "shapes",
+            "#[cfg(test)]\nmod tests { use crate::eval::load_source; }\n",
+        ),
+        (
+            "sampling",
+            "macro_rules! m { () => { $crate::sampling::Rng } }\n",
+        ),
     ];
     for (module, code) in fine {
         let v = violations(module, "fine.rs", code);

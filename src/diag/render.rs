@@ -65,34 +65,150 @@ impl MietteDiagnostic for Rendered {
     }
 }
 
-fn source_span(span: Span) -> SourceSpan {
-    SourceSpan::new((span.start as usize).into(), span.len())
+/// Lines longer than this are cut around the spans on them before miette sees them: miette
+/// cannot draw a label past column 65 535 (it panics), and a snippet of a megabyte-long line
+/// helps nobody.
+const MAX_LINE: usize = 1024;
+/// Characters kept on either side of the spans of a cut line.
+const CONTEXT: usize = 60;
+
+/// The text miette is shown for one diagnostic's file, with offsets into the original text
+/// mapped onto it.
+struct Excerpt {
+    source: NamedSource<String>,
+    /// `(original start, original end, start in the excerpt)` of every copied piece, in order.
+    pieces: Vec<(usize, usize, usize)>,
 }
 
-fn named_source(map: &SourceMap, span: Span) -> Option<NamedSource<String>> {
+impl Excerpt {
+    fn span(&self, span: Span) -> SourceSpan {
+        let (a, b) = (self.map(span.start as usize), self.map(span.end as usize));
+        SourceSpan::new(a.into(), b.saturating_sub(a))
+    }
+
+    fn map(&self, offset: usize) -> usize {
+        let mut last = 0;
+        for &(lo, hi, at) in &self.pieces {
+            if offset < lo {
+                return at;
+            }
+            if offset <= hi {
+                return at + (offset - lo);
+            }
+            last = at + (hi - lo);
+        }
+        last
+    }
+}
+
+fn floor_char(text: &str, mut i: usize) -> usize {
+    i = i.min(text.len());
+    while !text.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+/// The whole file, except that every line longer than [`MAX_LINE`] is cut to a window around
+/// the spans on it (or to its start), marked with `…`. Line numbers stay the same; the name says
+/// where the first span really is when its line was cut.
+fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
     let file = map.get(span.file)?;
-    Some(NamedSource::new(file.name.clone(), file.text.to_string()).with_language("scn"))
+    let text: &str = &file.text;
+    let spans: Vec<Span> = std::iter::once(span)
+        .chain(others.iter().copied().filter(|s| s.file == span.file))
+        .collect();
+    if text.split('\n').all(|l| l.len() <= MAX_LINE) {
+        return Some(Excerpt {
+            source: NamedSource::new(file.name.clone(), text.to_string()).with_language("scn"),
+            pieces: vec![(0, text.len(), 0)],
+        });
+    }
+    let mut out = String::new();
+    let mut pieces = Vec::new();
+    let mut cut_primary = false;
+    let mut start = 0;
+    while start < text.len() {
+        let end = text[start..]
+            .find('\n')
+            .map_or(text.len(), |i| start + i + 1);
+        let body_end = if text[..end].ends_with('\n') {
+            end - 1
+        } else {
+            end
+        };
+        if body_end - start <= MAX_LINE {
+            pieces.push((start, end, out.len()));
+            out.push_str(&text[start..end]);
+        } else {
+            let on_line: Vec<&Span> = spans
+                .iter()
+                .filter(|s| (s.start as usize) <= body_end && (s.end as usize) >= start)
+                .collect();
+            let (lo, hi) = match on_line.first() {
+                Some(first) => {
+                    let a = (first.start as usize).max(start);
+                    let b = on_line
+                        .iter()
+                        .map(|s| (s.end as usize).min(body_end))
+                        .max()
+                        .unwrap_or(a)
+                        .min(a + MAX_LINE);
+                    (
+                        a.saturating_sub(CONTEXT).max(start),
+                        (b + CONTEXT).min(body_end),
+                    )
+                }
+                None => (start, start + CONTEXT.min(body_end - start)),
+            };
+            let (lo, hi) = (floor_char(text, lo), floor_char(text, hi));
+            if on_line.iter().any(|s| **s == span) {
+                cut_primary = true;
+            }
+            if lo > start {
+                out.push('…');
+            }
+            pieces.push((lo, hi, out.len()));
+            out.push_str(&text[lo..hi]);
+            if hi < body_end {
+                out.push('…');
+            }
+            if end > body_end {
+                out.push('\n');
+            }
+        }
+        start = end;
+    }
+    let name = if cut_primary {
+        let (line, col) = map.line_col(span);
+        format!("{} (line {line} cut around column {col})", file.name)
+    } else {
+        file.name.clone()
+    };
+    Some(Excerpt {
+        source: NamedSource::new(name, out).with_language("scn"),
+        pieces,
+    })
 }
 
 fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
-    let source = named_source(map, d.span);
+    let others: Vec<Span> = d.labels.iter().map(|(s, _)| *s).collect();
+    let excerpt = excerpt(map, d.span, &others);
     let mut labels = Vec::new();
     let mut related = Vec::new();
-    if source.is_some() {
+    if let Some(ex) = &excerpt {
         let text = (!d.label.is_empty()).then(|| d.label.clone());
-        labels.push(LabeledSpan::new_primary_with_span(
-            text,
-            source_span(d.span),
-        ));
+        labels.push(LabeledSpan::new_primary_with_span(text, ex.span(d.span)));
     }
     for (span, label) in &d.labels {
-        if span.file == d.span.file && source.is_some() {
-            labels.push(LabeledSpan::new_with_span(
-                Some(label.clone()),
-                source_span(*span),
-            ));
-        } else {
-            related.push(note(map, *span, label));
+        match &excerpt {
+            Some(ex) if span.file == d.span.file => {
+                labels.push(LabeledSpan::new_with_span(
+                    Some(label.clone()),
+                    ex.span(*span),
+                ));
+            }
+            _ => related.push(note(map, *span, label)),
         }
     }
     for (span, label) in &d.trace {
@@ -104,7 +220,7 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
             Severity::Error => miette::Severity::Error,
             Severity::Warning => miette::Severity::Warning,
         },
-        source,
+        source: excerpt.map(|e| e.source),
         labels,
         help: d.help.clone(),
         related,
@@ -112,19 +228,18 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
 }
 
 fn note(map: &SourceMap, span: Span, label: &str) -> Rendered {
-    let source = named_source(map, span);
-    let labels = if source.is_some() {
-        vec![LabeledSpan::new_primary_with_span(
+    let excerpt = excerpt(map, span, &[]);
+    let labels = match &excerpt {
+        Some(ex) => vec![LabeledSpan::new_primary_with_span(
             Some("here".into()),
-            source_span(span),
-        )]
-    } else {
-        Vec::new()
+            ex.span(span),
+        )],
+        None => Vec::new(),
     };
     Rendered {
         message: label.to_string(),
         severity: miette::Severity::Advice,
-        source,
+        source: excerpt.map(|e| e.source),
         labels,
         help: None,
         related: Vec::new(),
@@ -177,4 +292,64 @@ pub fn render_plain(map: &SourceMap, diags: &[Diagnostic], width: usize) -> Stri
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn one_line_map(len: usize) -> (SourceMap, crate::span::FileId) {
+        let mut text = "x".repeat(len);
+        text.push_str(" oops\nsphere {}\n");
+        let mut map = SourceMap::new();
+        let id = map.add(Path::new("long.scn"), "long.scn".into(), text);
+        (map, id)
+    }
+
+    #[test]
+    fn a_span_at_column_a_million_renders_cut_around_it() {
+        let (map, id) = one_line_map(1_000_000);
+        let span = Span::new(id, 1_000_001, 1_000_005);
+        let mut d = Diagnostic::error(span, "unknown identifier `oops`");
+        d.label = "not declared".into();
+        d.labels
+            .push((Span::new(id, 1_000_007, 1_000_013), "next".into()));
+        d.trace.push((Span::new(id, 10, 11), "called here".into()));
+        let text = render_plain(&map, std::slice::from_ref(&d), 100);
+        assert!(text.contains("oops"), "{text}");
+        assert!(text.contains("not declared"), "{text}");
+        assert!(text.contains("line 1 cut around column 1000002"), "{text}");
+        assert!(
+            text.len() < 4_000,
+            "the snippet is not cut: {} bytes",
+            text.len()
+        );
+        // The terminal path (miette's own handler) must not panic either.
+        let report = to_report(&map, &[d.clone(), d]);
+        let shown = format!("{report:?}");
+        assert!(shown.contains("oops"), "{shown}");
+    }
+
+    #[test]
+    fn short_lines_are_shown_unchanged() {
+        let mut map = SourceMap::new();
+        let id = map.add(Path::new("a.scn"), "a.scn".into(), "sphere { oops }\n");
+        let d = Diagnostic::error(Span::new(id, 9, 13), "unknown identifier `oops`");
+        let text = render_plain(&map, &[d], 80);
+        assert!(text.contains("[a.scn:1:10]"), "{text}");
+        assert!(text.contains("sphere { oops }"), "{text}");
+    }
+
+    #[test]
+    fn offsets_map_into_the_excerpt() {
+        let (map, id) = one_line_map(5_000);
+        let ex = excerpt(&map, Span::new(id, 5_001, 5_005), &[]).unwrap();
+        let src = ex.source.inner();
+        let at = ex.span(Span::new(id, 5_001, 5_005));
+        assert_eq!(&src[at.offset()..at.offset() + at.len()], "oops");
+        // The next line is kept whole and maps exactly.
+        let next = ex.span(Span::new(id, 5_006, 5_012));
+        assert_eq!(&src[next.offset()..next.offset() + next.len()], "sphere");
+    }
 }
