@@ -19,6 +19,7 @@ pub mod chart;
 pub mod compare;
 pub mod diag;
 pub mod eval;
+pub mod files;
 pub mod film;
 pub mod geometry;
 pub mod integrators;

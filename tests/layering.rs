@@ -22,10 +22,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("span", &[]),
     ("diag", &["span"]),
     ("atomic_file", &[]),
+    ("files", &[]),
     // The language.
     ("syntax", &["span", "diag"]),
-    ("scene", &["span", "diag"]),
-    ("eval", &["span", "diag", "syntax", "scene"]),
+    ("scene", &["span", "diag", "files"]),
+    ("eval", &["span", "diag", "files", "syntax", "scene"]),
     // The renderer's building blocks.
     ("geometry", &[]),
     ("sampling", &["geometry"]),

@@ -7,6 +7,13 @@ use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
 
+/// Largest image side accepted (pixels).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Largest image accepted: 2^25 pixels (8192x4096); decoded to linear RGB that is 400 MB.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 25;
+/// Most memory the image decoder may allocate for one file.
+pub const MAX_IMAGE_DECODE_BYTES: u64 = 1 << 30;
+
 /// How the stored values of an image are to be read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ColorSpace {
@@ -41,11 +48,36 @@ pub struct MeshData {
 /// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
 /// float formats (EXR, HDR) are always linear. The error is a message fit for a diagnostic.
 pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, String> {
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("cannot open image `{}`: {e}", path.display()))?
-        .with_guessed_format()
-        .map_err(|e| format!("cannot read image `{}`: {e}", path.display()))?;
-    let decoded = reader
+    let bytes =
+        crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
+            crate::files::FileError::Io(e) => {
+                format!("cannot open image `{}`: {e}", path.display())
+            }
+            refused => format!("cannot open image: {refused}"),
+        })?;
+    let reader = || {
+        let mut r = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read image `{}`: {e}", path.display()))?;
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_IMAGE_SIDE);
+        limits.max_image_height = Some(MAX_IMAGE_SIDE);
+        limits.max_alloc = Some(MAX_IMAGE_DECODE_BYTES);
+        r.limits(limits);
+        Ok::<_, String>(r)
+    };
+    // The header first: a few bytes of PNG can declare a picture of gigabytes.
+    let (w, h) = reader()?
+        .into_dimensions()
+        .map_err(|e| format!("cannot decode image `{}`: {e}", path.display()))?;
+    if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
+        return Err(format!(
+            "image `{}` is {w}x{h} pixels, more than the limit of {MAX_IMAGE_PIXELS} pixels \
+             (for example 8192x4096)",
+            path.display()
+        ));
+    }
+    let decoded = reader()?
         .decode()
         .map_err(|e| format!("cannot decode image `{}`: {e}", path.display()))?;
     let is_float = matches!(
@@ -94,7 +126,18 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj(path, &options)
+    let bytes =
+        crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
+            crate::files::FileError::Io(e) => {
+                format!("cannot read OBJ mesh `{}`: {e}", path.display())
+            }
+            refused => format!("cannot read OBJ mesh: {refused}"),
+        })?;
+    // Materials (`mtllib`) are not used: the scene gives the material.
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(&bytes[..]), &options, |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })
         .map_err(|e| format!("cannot read OBJ mesh `{}`: {e}", path.display()))?;
     let mut mesh = MeshData {
         path: path.to_path_buf(),
@@ -193,5 +236,67 @@ mod tests {
         assert!((img.pixels[0][0] - 0.5029).abs() < 1e-3);
         let lin = load_image(&path, ColorSpace::Linear).unwrap();
         assert!((lin.pixels[0][0] - 188.0 / 255.0).abs() < 1e-6);
+    }
+
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 {
+                    (crc >> 1) ^ 0xEDB8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        !crc
+    }
+
+    /// A PNG file of a few dozen bytes whose header declares `w` x `h` 1-bit pixels.
+    fn png_header_only(w: u32, h: u32) -> Vec<u8> {
+        let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+        let mut chunk = |kind: &[u8], data: &[u8]| {
+            out.extend((data.len() as u32).to_be_bytes());
+            let mut body = kind.to_vec();
+            body.extend(data);
+            out.extend(&body);
+            out.extend(crc32(&body).to_be_bytes());
+        };
+        let mut ihdr = Vec::new();
+        ihdr.extend(w.to_be_bytes());
+        ihdr.extend(h.to_be_bytes());
+        ihdr.extend([1, 0, 0, 0, 0]);
+        chunk(b"IHDR", &ihdr);
+        chunk(b"IDAT", &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01]);
+        chunk(b"IEND", &[]);
+        out
+    }
+
+    #[test]
+    fn an_image_declaring_huge_dimensions_is_refused_before_decoding() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bomb.png");
+        std::fs::write(&p, png_header_only(20_000, 20_000)).unwrap();
+        let e = load_image(&p, ColorSpace::Srgb).unwrap_err();
+        assert!(e.contains("20000") || e.contains("limit"), "{e}");
+        // Within the side limit but too many pixels in all.
+        std::fs::write(&p, png_header_only(16_000, 16_000)).unwrap();
+        let e = load_image(&p, ColorSpace::Srgb).unwrap_err();
+        assert!(e.contains("more than the limit"), "{e}");
+    }
+
+    #[test]
+    fn special_files_are_not_read_as_assets() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = load_obj(dir.path()).unwrap_err();
+        assert!(e.contains("directory"), "{e}");
+        #[cfg(unix)]
+        {
+            let e = load_obj(std::path::Path::new("/dev/zero")).unwrap_err();
+            assert!(e.contains("device"), "{e}");
+            let e = load_image(std::path::Path::new("/dev/zero"), ColorSpace::Srgb).unwrap_err();
+            assert!(e.contains("device"), "{e}");
+        }
     }
 }
