@@ -202,3 +202,103 @@ fn absurdly_long_expressions_exit_1_not_abort() {
         assert!(err.contains(want), "{name}: {}", &err[..err.len().min(400)]);
     }
 }
+
+#[test]
+fn absurd_flags_are_usage_errors_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_png = dir.path().join("o.png");
+    let o = out_png.to_str().unwrap();
+    for flags in [
+        &["--iterations", "0"][..],
+        &["--threads", "100000"],
+        &["--threads", "0"],
+        &["--time-limit", "0"],
+        &["--time-limit", "1e300"],
+        &["--time-limit", "nan"],
+        &["--photons", "0"],
+        &["--photons", "1000000000000000"],
+        &["--snapshot-every", "0"],
+    ] {
+        let start = std::time::Instant::now();
+        let mut args = vec!["render", "examples/furnace.scn", "-o", o];
+        args.extend(flags);
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flags:?}:\n{err}");
+        assert!(!err.contains("panicked"), "{flags:?}:\n{err}");
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "{flags:?} took {:?}",
+            start.elapsed()
+        );
+        assert!(!out_png.exists(), "{flags:?} wrote an image");
+    }
+    for flags in [&["--snapshot-every", "1e300"][..], &["--threads", "100000"]] {
+        let mut args = vec!["watch", "examples/furnace.scn", "-o", o];
+        args.extend(flags);
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "watch {flags:?}:\n{err}");
+        assert!(!err.contains("panicked"), "watch {flags:?}:\n{err}");
+    }
+}
+
+#[test]
+fn a_render_that_finishes_no_iteration_keeps_the_previous_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.scn");
+    std::fs::write(
+        &scene,
+        "settings { resolution <8, 8> time_limit 1e-300 iterations 5 }\n\
+         light { <0, 5, 0> intensity 10 }\nsphere { <0, 0, 0> 1 }\n",
+    )
+    .unwrap();
+    let png = dir.path().join("s.png");
+    std::fs::write(&png, "previous image").unwrap();
+    let out = sppm(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("no iteration finished"), "{err}");
+    assert_eq!(std::fs::read_to_string(&png).unwrap(), "previous image");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[cfg(unix)]
+#[test]
+fn an_output_path_that_is_a_link_or_a_device_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("precious.png");
+    std::fs::write(&target, "precious").unwrap();
+    let link = dir.path().join("link.png");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let folder = dir.path().join("folder.png");
+    std::fs::create_dir(&folder).unwrap();
+    for o in [link.to_str().unwrap(), folder.to_str().unwrap()] {
+        let out = sppm(&[
+            "render",
+            "examples/furnace.scn",
+            "-o",
+            o,
+            "--iterations",
+            "1",
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{o}:\n{err}");
+        assert!(
+            err.contains("only a regular file is replaced"),
+            "{o}:\n{err}"
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "precious");
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+}

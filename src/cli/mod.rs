@@ -29,6 +29,39 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// Most iterations a render may be asked for on the command line.
+pub const MAX_ITERATIONS: u32 = 100_000_000;
+/// Most photons per iteration on the command line (memory is checked again by the render).
+pub const MAX_PHOTONS: u64 = 100_000_000_000;
+/// Most worker threads.
+pub const MAX_THREADS: usize = 1024;
+/// Longest time limit or snapshot interval in seconds (a year).
+pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
+
+/// A positive number of seconds, at most [`MAX_SECONDS`].
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds"))?;
+    if !(v > 0.0 && v <= MAX_SECONDS) {
+        return Err(format!(
+            "must be more than 0 and at most {MAX_SECONDS} seconds (a year), got {text}"
+        ));
+    }
+    Ok(v)
+}
+
+/// A thread count from 1 to [`MAX_THREADS`].
+pub fn parse_threads(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a whole number"))?;
+    if !(1..=MAX_THREADS).contains(&n) {
+        return Err(format!("must be from 1 to {MAX_THREADS}, got {n}"));
+    }
+    Ok(n)
+}
+
 /// Limits of the scene interpreter.
 #[derive(Debug, Clone, Args)]
 pub struct LimitArgs {

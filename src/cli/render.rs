@@ -23,21 +23,22 @@ pub struct RenderArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// SPPM iterations (overrides the scene's settings).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=super::MAX_ITERATIONS as i64))]
     pub iterations: Option<u32>,
     /// Photons per iteration.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=super::MAX_PHOTONS))]
     pub photons: Option<u64>,
-    /// Stop after this many seconds (the finished iterations are written).
-    #[arg(long)]
+    /// Stop after this many seconds (the finished iterations are written; a render that
+    /// finishes no iteration in time writes nothing and fails).
+    #[arg(long, value_parser = super::parse_seconds)]
     pub time_limit: Option<f64>,
     /// Worker threads (the image does not depend on it).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
     #[arg(long)]
     pub seed: Option<u64>,
     /// Write the current image every K iterations.
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
     pub snapshot_every: Option<u32>,
     /// Rendering method, overriding the scene's `settings { integrator ... }`.
     #[arg(long, value_parser = parse_integrator)]
@@ -78,8 +79,8 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             return ExitCode::from(EXIT_USAGE);
         }
     }
-    if args.snapshot_every == Some(0) {
-        eprintln!("error: --snapshot-every must be at least 1");
+    if let Err(e) = sppm_lang::atomic_file::check_target(&output) {
+        eprintln!("error: {e}");
         return ExitCode::from(EXIT_USAGE);
     }
     let overridden;
@@ -149,6 +150,16 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
+    if out.iterations_done == 0 {
+        // Nothing to show: keep whatever image is at the output path.
+        let why = if out.cancelled {
+            "interrupted before the first iteration finished"
+        } else {
+            "no iteration finished within the time limit"
+        };
+        eprintln!("error: {why}; `{}` is left as it was", output.display());
+        return ExitCode::from(EXIT_SCENE_ERROR);
+    }
     if let Err(e) = out.image.write(&output, exposure) {
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_SCENE_ERROR);

@@ -46,10 +46,10 @@ pub struct WatchArgs {
     pub no_clear: bool,
     /// Write a snapshot at most this often (seconds); the first iteration of each render and
     /// the final image are always written.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_interval)]
     pub snapshot_every: f64,
     /// Worker threads for rendering (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
     #[command(flatten)]
     pub limits: LimitArgs,
@@ -85,14 +85,6 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         );
         return ExitCode::from(EXIT_USAGE);
     }
-    if !(args.snapshot_every >= 0.0 && args.snapshot_every.is_finite()) {
-        eprintln!("error: --snapshot-every must be a number of seconds >= 0");
-        return ExitCode::from(EXIT_USAGE);
-    }
-    if args.threads == Some(0) {
-        eprintln!("error: --threads must be at least 1");
-        return ExitCode::from(EXIT_USAGE);
-    }
     let output = args
         .output
         .clone()
@@ -105,6 +97,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             "error: output `{}` must end in .png or .exr",
             output.display()
         );
+        return ExitCode::from(EXIT_USAGE);
+    }
+    if let Err(e) = sppm_lang::atomic_file::check_target(&output) {
+        eprintln!("error: {e}");
         return ExitCode::from(EXIT_USAGE);
     }
     let interrupted = Arc::new(AtomicBool::new(false));
@@ -191,7 +187,28 @@ struct Load {
     sources: SourceMap,
 }
 
+/// A number of seconds from 0 to [`super::MAX_SECONDS`] (0: write every iteration).
+fn parse_interval(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(0.0) => Ok(0.0),
+        _ => super::parse_seconds(text),
+    }
+}
+
 fn load(path: &Path, options: &EvalOptions) -> Load {
+    // Editors truncate a file before writing it: an empty scene is a save in progress (or a
+    // mistake), never a scene to render over the last image.
+    if std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() == 0) {
+        status(&format!(
+            "`{}` is empty; the last image is kept (waiting for the next save)",
+            path.display()
+        ));
+        return Load {
+            scene: None,
+            dependencies: vec![path.to_path_buf()],
+            sources: SourceMap::default(),
+        };
+    }
     match sppm_lang::load_file(path, options) {
         Ok(loaded) => {
             print_diagnostics(&loaded);
