@@ -4,9 +4,9 @@
 //! path, direct lighting, photon tracing, the progressive loop and the random streams.
 //!
 //! An interface (a trait) rather than one enum with a `render` method: each method stays a
-//! self-contained type beside its own code, the only place that lists them all is
-//! [`for_method`], and a method can be called directly (tests do); the one dynamic call per
-//! render costs nothing.
+//! self-contained type beside its own code, a new method is a new type plus one line in
+//! [`for_method`] (the only place that lists them all), and the one dynamic call per render
+//! costs nothing.
 //!
 //! An integrator cannot fail: everything that can go wrong with a scene is found while it is
 //! prepared ([`crate::prepare`]), so `render` returns its output directly.

@@ -6,7 +6,6 @@
 //! average a pixel over glossy/refracted directions beyond the one fixed eye ray; at glass the
 //! reflected or refracted branch is still chosen by Fresnel in each pass (one hit point per
 //! pixel and pass, instead of the paper's tree of hit points).
-
 //!
 //! The loop, the photon pass and the pixel update are SPPM's ([`super::sppm::render_with`]); only
 //! the eye path differs.
