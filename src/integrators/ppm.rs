@@ -7,7 +7,7 @@
 //! reflected or refracted branch is still chosen by Fresnel in each pass (one hit point per
 //! pixel and pass, instead of the paper's tree of hit points).
 //!
-//! The loop, the photon pass and the pixel update are SPPM's ([`super::sppm::render_with`]); only
+//! The loop, the photon pass and the pixel update are SPPM's (`sppm::render_with`); only
 //! the eye path differs.
 
 use std::sync::atomic::AtomicBool;

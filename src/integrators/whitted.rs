@@ -5,6 +5,8 @@
 //! indirect light. No light ever reaches a diffuse surface through glass or a mirror: caustics
 //! stay dark (a known limitation, not a bug). One jittered sample per pixel per iteration,
 //! seeded from (seed, iteration, pixel).
+//!
+//! [`direct_lighting`]: crate::integrators::direct_lighting
 
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;

@@ -12,7 +12,8 @@ use crate::sampling::{Rng, stream_seed};
 pub(crate) enum Stream {
     /// SPPM's and PPM's camera pass, indexed by pixel.
     Camera = 0,
-    /// SPPM's and PPM's photon pass, indexed by photon (also [`crate::integrators::sppm::photon_flux`]).
+    /// SPPM's and PPM's photon pass, indexed by photon (also
+    /// [`crate::integrators::sppm::photon_flux`]).
     Photon = 1,
     /// The per-pixel samples of the progressive loop (path, Whitted, photon mapping's eye rays),
     /// indexed by pixel.

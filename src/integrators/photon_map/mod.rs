@@ -12,6 +12,8 @@
 //! past the surface, are the method's known failure). Iterations are independent passes (new
 //! photons, new jittered eye rays) averaged; the bias of each pass does not go away with more
 //! iterations, only the noise does.
+//!
+//! [`direct_lighting`]: crate::integrators::direct_lighting
 
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;

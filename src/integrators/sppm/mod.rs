@@ -15,7 +15,7 @@
 //! fixed order (round by round, bucket by bucket, photon order within a bucket), so the image
 //! does not depend on the thread count or on scheduling.
 //!
-//! PPM runs the same loop with its own eye paths ([`render_with`]). Files: `pixels.rs` the
+//! PPM runs the same loop with its own eye paths (`render_with`). Files: `pixels.rs` the
 //! per-pixel state and its update, `pass.rs` the photon pass, `grid.rs` the photon grid,
 //! `receiver.rs` the BSDF at a visible point.
 
