@@ -9,12 +9,12 @@ use std::sync::atomic::AtomicBool;
 
 use glam::Vec3A;
 
-use super::direct::direct_lighting;
-use super::progressive;
-use super::sppm::attenuate_inside;
+use super::common::attenuate_inside;
+use super::common::direct::direct_lighting;
+use super::common::progressive;
+use super::{Integrator, Progress, RenderOutput};
 use crate::accel::spawn_ray;
 use crate::camera::Camera;
-use crate::integrators::{Progress, RenderOutput};
 use crate::materials::TransportMode;
 use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
@@ -22,20 +22,27 @@ use crate::sampling::Rng;
 /// Vertices before Russian roulette may end a path.
 const RR_DEPTH: u32 = 3;
 
-pub fn render(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> RenderOutput {
-    progressive::render(
-        scene,
-        settings,
-        cancel,
-        on_progress,
-        |_| ((), 0),
-        |_, camera, x, y, rng| radiance(scene, camera, settings.max_depth, x, y, rng),
-    )
+/// Path tracing with next-event estimation.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PathTracer;
+
+impl Integrator for PathTracer {
+    fn render(
+        &self,
+        scene: &PreparedScene,
+        settings: &EffectiveSettings,
+        cancel: &AtomicBool,
+        on_progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> RenderOutput {
+        progressive::render(
+            scene,
+            settings,
+            cancel,
+            on_progress,
+            |_| ((), 0),
+            |_, camera, x, y, rng| radiance(scene, camera, settings.max_depth, x, y, rng),
+        )
+    }
 }
 
 /// One path-traced radiance sample for pixel (x, y).

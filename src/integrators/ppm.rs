@@ -6,17 +6,28 @@
 //! average a pixel over glossy/refracted directions beyond the one fixed eye ray; at glass the
 //! reflected or refracted branch is still chosen by Fresnel in each pass (one hit point per
 //! pixel and pass, instead of the paper's tree of hit points).
+//!
+//! The loop, the photon pass and the pixel update are SPPM's (`sppm::render_with`); only
+//! the eye path differs.
 
 use std::sync::atomic::AtomicBool;
 
-use crate::integrators::{Progress, RenderOutput};
+use super::common::camera_path::fixed_camera_path;
+use super::{Integrator, Progress, RenderOutput, sppm};
 use crate::prepare::{EffectiveSettings, PreparedScene};
 
-pub fn render(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> RenderOutput {
-    super::sppm::render_progressive(scene, settings, cancel, on_progress, true).0
+/// Progressive photon mapping.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Ppm;
+
+impl Integrator for Ppm {
+    fn render(
+        &self,
+        scene: &PreparedScene,
+        settings: &EffectiveSettings,
+        cancel: &AtomicBool,
+        on_progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> RenderOutput {
+        sppm::render_with(scene, settings, cancel, on_progress, fixed_camera_path).0
+    }
 }

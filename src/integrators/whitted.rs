@@ -5,41 +5,50 @@
 //! indirect light. No light ever reaches a diffuse surface through glass or a mirror: caustics
 //! stay dark (a known limitation, not a bug). One jittered sample per pixel per iteration,
 //! seeded from (seed, iteration, pixel).
+//!
+//! [`direct_lighting`]: crate::integrators::direct_lighting
 
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 
-use super::progressive;
-use super::sppm::camera_path;
-use crate::integrators::{Progress, RenderOutput};
+use super::common::camera_path::camera_path;
+use super::common::progressive;
+use super::{Integrator, Progress, RenderOutput};
 use crate::prepare::{EffectiveSettings, PreparedScene};
 
 /// Uniform ambient radiance arriving at every non-specular surface (reflected as
 /// `pi * f(wo, n) * AMBIENT`, i.e. `albedo * AMBIENT` on a diffuse surface).
 pub const AMBIENT: f32 = 0.05;
 
-pub fn render(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> RenderOutput {
-    progressive::render(
-        scene,
-        settings,
-        cancel,
-        on_progress,
-        |_| ((), 0),
-        |_, camera, x, y, rng| {
-            let (l, vp) = camera_path(scene, camera, settings, x, y, rng, false);
-            match vp {
-                Some(vp) => {
-                    let n = vp.bsdf.frame.n;
-                    let n = if n.dot(vp.wo) < 0.0 { -n } else { n };
-                    l + vp.beta * vp.bsdf.f(vp.wo, n) * (PI * AMBIENT)
+/// Whitted-style ray tracing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Whitted;
+
+impl Integrator for Whitted {
+    fn render(
+        &self,
+        scene: &PreparedScene,
+        settings: &EffectiveSettings,
+        cancel: &AtomicBool,
+        on_progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> RenderOutput {
+        progressive::render(
+            scene,
+            settings,
+            cancel,
+            on_progress,
+            |_| ((), 0),
+            |_, camera, x, y, rng| {
+                let (l, vp) = camera_path(scene, camera, settings, x, y, rng);
+                match vp {
+                    Some(vp) => {
+                        let n = vp.bsdf.frame.n;
+                        let n = if n.dot(vp.wo) < 0.0 { -n } else { n };
+                        l + vp.beta * vp.bsdf.f(vp.wo, n) * (PI * AMBIENT)
+                    }
+                    None => l,
                 }
-                None => l,
-            }
-        },
-    )
+            },
+        )
+    }
 }

@@ -21,14 +21,16 @@ pub fn render(
 ) -> Result<RenderOutput, RenderError> {
     let settings = effective_settings(scene, options)?;
     let prepared = PreparedScene::new(scene)?;
+    let integrator = integrators::for_method(settings.integrator);
+    let mut run = || integrator.render(&prepared, &settings, cancel, on_progress);
     match options.threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
                 .map_err(|e| RenderError::new(format!("cannot start {n} threads: {e}")))?;
-            pool.install(|| integrators::run(&prepared, &settings, cancel, on_progress))
+            Ok(pool.install(run))
         }
-        None => integrators::run(&prepared, &settings, cancel, on_progress),
+        None => Ok(run()),
     }
 }

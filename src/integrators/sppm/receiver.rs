@@ -3,7 +3,7 @@
 
 use glam::{Vec3A, Vec4};
 
-use super::VisiblePoint;
+use crate::integrators::common::camera_path::VisiblePoint;
 
 /// [`crate::materials::Bsdf::f`] for a fixed `wo`. For a Lambertian point only the two side
 /// tests remain, kept in the same form (`(wo . n) * (wi . n) <= 0` rejects), so the result is

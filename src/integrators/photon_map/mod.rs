@@ -12,6 +12,8 @@
 //! past the surface, are the method's known failure). Iterations are independent passes (new
 //! photons, new jittered eye rays) averaged; the bias of each pass does not go away with more
 //! iterations, only the noise does.
+//!
+//! [`direct_lighting`]: crate::integrators::direct_lighting
 
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -19,19 +21,20 @@ use std::sync::atomic::AtomicBool;
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::kdtree::KdTree;
-use super::progressive;
-use super::sppm::{camera_path, trace_photon};
-use crate::integrators::{Progress, RenderOutput};
+use super::common::camera_path::camera_path;
+use super::common::photons::trace_photon;
+use super::common::progressive;
+use super::common::streams::Stream;
+use super::{Integrator, Progress, RenderOutput};
 use crate::prepare::{EffectiveSettings, PreparedScene};
-use crate::sampling::{Rng, stream_seed};
+use kdtree::KdTree;
+
+mod kdtree;
 
 /// Photons in each global-map estimate.
 pub const K_GLOBAL: usize = 50;
 /// Photons in each caustic-map estimate.
 pub const K_CAUSTIC: usize = 30;
-/// Photon stream kind (distinct from the other integrators' streams).
-const STREAM_PHOTON_MAP: u32 = 3;
 const CHUNK: u64 = 4096;
 
 /// A stored photon: incident direction (toward where it came from) and flux.
@@ -61,8 +64,7 @@ fn build_maps(scene: &PreparedScene, settings: &EffectiveSettings, iter: u32) ->
                 let lo = c * CHUNK;
                 let hi = (lo + CHUNK).min(settings.photons);
                 for i in lo..hi {
-                    let seed = stream_seed(settings.seed, iter, STREAM_PHOTON_MAP, i);
-                    let mut rng = Rng::new(seed);
+                    let mut rng = Stream::PhotonMap.rng(settings.seed, iter, i);
                     let mut all_specular = true;
                     trace_photon(
                         scene,
@@ -127,45 +129,52 @@ fn estimate(
     sum / (PI * r2 * emitted as f32)
 }
 
-pub fn render(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> RenderOutput {
-    progressive::render(
-        scene,
-        settings,
-        cancel,
-        on_progress,
-        |iter| {
-            let maps = build_maps(scene, settings, iter);
-            let n = maps.emitted;
-            (maps, n)
-        },
-        |maps, camera, x, y, rng| {
-            let (l, vp) = camera_path(scene, camera, settings, x, y, rng, false);
-            let Some(vp) = vp else { return l };
-            let mut scratch = Vec::with_capacity(K_GLOBAL);
-            let g = estimate(
-                &maps.global,
-                K_GLOBAL,
-                maps.emitted,
-                vp.p,
-                vp.wo,
-                &vp.bsdf,
-                &mut scratch,
-            );
-            let c = estimate(
-                &maps.caustic,
-                K_CAUSTIC,
-                maps.emitted,
-                vp.p,
-                vp.wo,
-                &vp.bsdf,
-                &mut scratch,
-            );
-            l + vp.beta * (g + c)
-        },
-    )
+/// Jensen's two-pass photon mapping.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PhotonMap;
+
+impl Integrator for PhotonMap {
+    fn render(
+        &self,
+        scene: &PreparedScene,
+        settings: &EffectiveSettings,
+        cancel: &AtomicBool,
+        on_progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> RenderOutput {
+        progressive::render(
+            scene,
+            settings,
+            cancel,
+            on_progress,
+            |iter| {
+                let maps = build_maps(scene, settings, iter);
+                let n = maps.emitted;
+                (maps, n)
+            },
+            |maps, camera, x, y, rng| {
+                let (l, vp) = camera_path(scene, camera, settings, x, y, rng);
+                let Some(vp) = vp else { return l };
+                let mut scratch = Vec::with_capacity(K_GLOBAL);
+                let g = estimate(
+                    &maps.global,
+                    K_GLOBAL,
+                    maps.emitted,
+                    vp.p,
+                    vp.wo,
+                    &vp.bsdf,
+                    &mut scratch,
+                );
+                let c = estimate(
+                    &maps.caustic,
+                    K_CAUSTIC,
+                    maps.emitted,
+                    vp.p,
+                    vp.wo,
+                    &vp.bsdf,
+                    &mut scratch,
+                );
+                l + vp.beta * (g + c)
+            },
+        )
+    }
 }

@@ -1,0 +1,100 @@
+//! The eye path of one pixel sample: through specular bounces to the first non-specular
+//! surface (its visible point), adding the emitted light it meets and the direct light there.
+//! SPPM, PPM, photon mapping and Whitted ray tracing all start from it.
+
+use glam::{Vec2, Vec3A};
+
+use super::attenuate_inside;
+use super::direct::direct_lighting;
+use crate::accel::spawn_ray;
+use crate::camera::Camera;
+use crate::geometry::Ray;
+use crate::materials::{Bsdf, TransportMode};
+use crate::prepare::{EffectiveSettings, PreparedScene};
+use crate::sampling::Rng;
+
+/// Where an eye path reached its first non-specular surface.
+#[derive(Clone, Copy)]
+pub(crate) struct VisiblePoint {
+    pub(crate) p: Vec3A,
+    pub(crate) wo: Vec3A,
+    pub(crate) bsdf: Bsdf,
+    /// The path's throughput up to the point.
+    pub(crate) beta: Vec3A,
+}
+
+/// A jittered eye path for pixel (x, y) (pixel position and lens position from `rng`): returns
+/// emitted + direct light and the visible point, if the path reached one.
+pub(crate) fn camera_path(
+    scene: &PreparedScene,
+    camera: &Camera,
+    settings: &EffectiveSettings,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+) -> (Vec3A, Option<VisiblePoint>) {
+    let jitter = rng.vec2();
+    let lens = rng.vec2();
+    follow_eye_ray(scene, camera.ray(x, y, jitter, lens), settings, rng)
+}
+
+/// The eye path for pixel (x, y) through the pixel center and the lens center. It draws (and
+/// ignores) the two samples [`camera_path`] uses for the jitter and the lens, so that the rest
+/// of the stream is laid out as in a jittered path.
+pub(crate) fn fixed_camera_path(
+    scene: &PreparedScene,
+    camera: &Camera,
+    settings: &EffectiveSettings,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+) -> (Vec3A, Option<VisiblePoint>) {
+    let _jitter = rng.vec2();
+    let _lens = rng.vec2();
+    let center = Vec2::splat(0.5);
+    follow_eye_ray(scene, camera.ray(x, y, center, center), settings, rng)
+}
+
+/// Follows `ray` through specular bounces (at most `max_depth` surfaces) to the first
+/// non-specular surface.
+fn follow_eye_ray(
+    scene: &PreparedScene,
+    mut ray: Ray,
+    settings: &EffectiveSettings,
+    rng: &mut Rng,
+) -> (Vec3A, Option<VisiblePoint>) {
+    let mut beta = Vec3A::ONE;
+    let mut l = Vec3A::ZERO;
+    for _depth in 0..settings.max_depth {
+        let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
+            // Only reached at depth 0 or after specular bounces: nothing else samples it.
+            l += beta * scene.background_radiance(ray.d);
+            break;
+        };
+        let wo = -ray.d;
+        attenuate_inside(scene, &sh, &ray, &mut beta);
+        if let Some((_, al)) = scene.area_light(sh.prim) {
+            l += beta * al.le(sh.hit.n, wo);
+        }
+        let bsdf = scene.bsdf(&sh);
+        if !bsdf.is_specular() {
+            l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+            let vp = VisiblePoint {
+                p: sh.hit.p,
+                wo,
+                bsdf,
+                beta,
+            };
+            return (l, Some(vp));
+        }
+        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
+            break;
+        };
+        beta *= s.weight;
+        if beta.max_element() <= 0.0 {
+            break;
+        }
+        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+    }
+    (l, None)
+}

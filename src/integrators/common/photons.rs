@@ -1,0 +1,58 @@
+//! Photon emission and tracing: a light chosen by power emits a photon, which bounces through
+//! the scene by BSDF sampling (importance transport) with Russian roulette. SPPM, PPM and photon
+//! mapping decide what to keep at each surface.
+
+use glam::Vec3A;
+
+use super::attenuate_inside;
+use crate::accel::spawn_ray;
+use crate::geometry::Ray;
+use crate::materials::TransportMode;
+use crate::prepare::{PreparedScene, SurfaceHit};
+use crate::sampling::Rng;
+
+/// One photon path from a light chosen by power. `at_hit(depth, hit, wi, beta)` runs at every
+/// surface the photon reaches, `beta` being the photon's flux there (before the surface's BSDF).
+pub(crate) fn trace_photon(
+    scene: &PreparedScene,
+    max_depth: u32,
+    rng: &mut Rng,
+    mut at_hit: impl FnMut(u32, &SurfaceHit, Vec3A, Vec3A),
+) {
+    let Some((li, pl)) = scene.light_distr.sample(rng.f32()) else {
+        return;
+    };
+    let (u1, u2) = (rng.vec2(), rng.vec2());
+    let Some(ps) = scene.lights[li].sample_photon(u1, u2) else {
+        return;
+    };
+    let mut beta = ps.beta / pl;
+    let mut ray = if ps.n == Vec3A::ZERO {
+        Ray::new(ps.p, ps.dir)
+    } else {
+        spawn_ray(ps.p, ps.n, ps.dir)
+    };
+    for depth in 0..max_depth {
+        let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
+            return;
+        };
+        attenuate_inside(scene, &sh, &ray, &mut beta);
+        let wi = -ray.d;
+        at_hit(depth, &sh, wi, beta);
+        let bsdf = scene.bsdf(&sh);
+        let Some(s) = bsdf.sample(wi, rng.f32(), rng.vec2(), TransportMode::Importance) else {
+            return;
+        };
+        let bnew = beta * s.weight;
+        // Russian roulette keeps the photon's power roughly constant.
+        let q = (1.0 - bnew.max_element() / beta.max_element()).max(0.0);
+        if rng.f32() < q {
+            return;
+        }
+        beta = bnew / (1.0 - q);
+        if !beta.is_finite() || beta.max_element() <= 0.0 {
+            return;
+        }
+        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+    }
+}

@@ -1,0 +1,55 @@
+//! The random streams of every integrator. A generator is seeded from (render seed, iteration,
+//! stream, index) by [`stream_seed`]; the stream keeps the sequences of different uses apart
+//! (SPPM's camera pass and its photons, say, draw from different sequences for the same index).
+//! The numeric values are part of every image: changing one changes the renders that use it.
+
+use crate::sampling::{Rng, stream_seed};
+
+/// One use of random numbers. The discriminants are the stream numbers given to
+/// [`stream_seed`] (the compiler rejects two variants with the same number).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u32)]
+pub(crate) enum Stream {
+    /// SPPM's and PPM's camera pass, indexed by pixel.
+    Camera = 0,
+    /// SPPM's and PPM's photon pass, indexed by photon (also
+    /// [`crate::integrators::sppm::photon_flux`]).
+    Photon = 1,
+    /// The per-pixel samples of the progressive loop (path, Whitted, photon mapping's eye rays),
+    /// indexed by pixel.
+    Pixel = 2,
+    /// Photon mapping's photons, indexed by photon.
+    PhotonMap = 3,
+}
+
+impl Stream {
+    #[cfg(test)]
+    const ALL: [Stream; 4] = [
+        Stream::Camera,
+        Stream::Photon,
+        Stream::Pixel,
+        Stream::PhotonMap,
+    ];
+
+    /// The generator of item `index` of this stream in iteration `iteration`.
+    #[inline]
+    pub(crate) fn rng(self, seed: u64, iteration: u32, index: u64) -> Rng {
+        Rng::new(stream_seed(seed, iteration, self as u32, index))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every stream has its own number, and the numbers are those the stored images were
+    /// rendered with.
+    #[test]
+    fn streams_are_distinct_and_keep_their_numbers() {
+        let ids = Stream::ALL.map(|s| s as u32);
+        for (i, a) in ids.iter().enumerate() {
+            assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
+        }
+        assert_eq!(ids, [0, 1, 2, 3]);
+    }
+}

@@ -1,0 +1,200 @@
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::DVec3;
+
+use super::*;
+use crate::prepare::{RenderOptions, effective_settings};
+use crate::scene::Scene;
+use crate::{EvalOptions, load_file};
+
+/// The Cornell example at `res` x `res` pixels with `photons` per iteration, seed 4.
+fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+    let mut scene = load_file(&path, &EvalOptions::default())
+        .unwrap()
+        .scene
+        .unwrap();
+    scene.settings.resolution = (res, res);
+    let options = RenderOptions {
+        photons: Some(photons),
+        seed: Some(4),
+        ..Default::default()
+    };
+    let settings = effective_settings(&scene, &options).unwrap();
+    (scene, settings)
+}
+
+/// The camera pass of iteration `iter` (seed 4), every radius 0.05.
+fn visible_points(prepared: &PreparedScene, settings: &EffectiveSettings, iter: u32) -> Vec<Pixel> {
+    let (w, h) = (settings.width, settings.height);
+    let camera = Camera::new(&prepared.scene.camera, w, h).unwrap();
+    (0..w * h)
+        .map(|i| {
+            let mut rng = Stream::Camera.rng(4, iter, u64::from(i));
+            let (x, y) = (i % w, i / w);
+            let vp = camera_path(prepared, &camera, settings, x, y, &mut rng).1;
+            Pixel {
+                vp,
+                ..Pixel::new(0.05)
+            }
+        })
+        .collect()
+}
+
+/// Splitting the photons into rounds (to bound the memory) changes nothing but the order of
+/// the f64 sums: the same deposits reach the same pixels. Checked on the Cornell box with
+/// one round against rounds of about 3000 hits (so small that groups often overfill them)
+/// and against rounds of at most 2 chunks, over two iterations, so that the group sizes
+/// adapt across iterations; the chunk cap must hold.
+#[test]
+fn rounds_split_the_photons_without_changing_the_sums() {
+    let (scene, settings) = cornell(24, 30_000);
+    let prepared = PreparedScene::new(&scene).unwrap();
+    let cancel = AtomicBool::new(false);
+    let mut results = Vec::new();
+    for (round_hits, round_chunks) in [
+        (usize::MAX, usize::MAX),
+        (3000, usize::MAX),
+        (usize::MAX, 2),
+    ] {
+        let mut pass = PhotonPass::new(round_hits, round_chunks);
+        let mut phi = vec![DVec3::ZERO; 24 * 24];
+        let mut m = vec![0u64; 24 * 24];
+        let mut deposits = 0;
+        for iter in 0..2 {
+            let pixels = visible_points(&prepared, &settings, iter);
+            deposits += pass.run(
+                &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
+            );
+        }
+        assert!(
+            pass.chunks.len() <= round_chunks,
+            "{} chunks",
+            pass.chunks.len()
+        );
+        results.push((pass.rounds, deposits, phi, m));
+    }
+    let one = &results[0];
+    assert_eq!(one.0, 2, "one round per iteration");
+    assert!(one.1 > 1000, "{} deposits", one.1);
+    // Rounds of 3000 hits: many; rounds of 2 chunks: 30 000 photons are 8 chunks, so 4
+    // rounds per iteration.
+    for (many, least) in results[1..].iter().zip([10, 8]) {
+        println!("rounds {} and {}, deposits {}", one.0, many.0, one.1);
+        assert!(many.0 >= least, "{} rounds", many.0);
+        assert_eq!(one.1, many.1);
+        assert_eq!(one.3, many.3);
+        for (a, b) in one.2.iter().zip(&many.2) {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-12 * a.abs().max_element(),
+                "{a} {b}"
+            );
+        }
+    }
+}
+
+/// With many rounds (small rounds, so that the group sizes adapt from round to round), the
+/// sums are bit for bit the same on 1, 2 and 3 threads: round and group boundaries come
+/// from photon counts, and each pixel adds its photons in a fixed order.
+#[test]
+fn rounds_give_the_same_sums_on_any_thread_count() {
+    let (scene, settings) = cornell(24, 30_000);
+    let prepared = PreparedScene::new(&scene).unwrap();
+    let cancel = AtomicBool::new(false);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut pass = PhotonPass::new(3000, 3);
+            let mut phi = vec![DVec3::ZERO; 24 * 24];
+            let mut m = vec![0u64; 24 * 24];
+            for iter in 0..2 {
+                let pixels = visible_points(&prepared, &settings, iter);
+                pass.run(
+                    &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
+                );
+            }
+            let bits: Vec<[u64; 3]> = phi.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+            (pass.rounds, bits, m)
+        })
+    };
+    let one = run(1);
+    assert!(one.0 >= 10, "{} rounds", one.0);
+    assert!(one.2.iter().sum::<u64>() > 1000);
+    for threads in [2, 3] {
+        assert!(run(threads) == one, "{threads} threads differ from 1");
+    }
+}
+
+/// With one bounce a photon's only hit is its first, which the camera pass's direct light
+/// already counts: nothing can be gathered, so no photon is traced.
+#[test]
+fn one_bounce_traces_no_photon() {
+    let (scene, mut settings) = cornell(16, 100_000);
+    settings.max_depth = 1;
+    let prepared = PreparedScene::new(&scene).unwrap();
+    let pixels = visible_points(&prepared, &settings, 0);
+    let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+    let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
+    let cancel = AtomicBool::new(false);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    assert_eq!((deposits, pass.traced, pass.rounds), (0, 0, 0));
+    // Two bounces do trace and gather.
+    settings.max_depth = 2;
+    let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    assert!(
+        pass.traced == 100_000 && deposits > 0,
+        "{} {deposits}",
+        pass.traced
+    );
+}
+
+/// A cancelled photon pass stops before its next group: it traces nothing more, builds no
+/// grid and gathers nothing (watch mode cancels a render on every save, so a cancel must
+/// not walk the rest of a large iteration). Checked with the flag set before the pass and
+/// with a flag that is set while the first group is traced.
+#[test]
+fn a_cancelled_photon_pass_stops_at_once() {
+    let (scene, settings) = cornell(16, 1_000_000_000);
+    let prepared = PreparedScene::new(&scene).unwrap();
+    let pixels = visible_points(&prepared, &settings, 0);
+    let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+    // Set before the pass: nothing is traced.
+    let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
+    let cancel = AtomicBool::new(true);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    assert_eq!((deposits, pass.rounds, pass.traced), (0, 0, 0));
+    assert!(pass.chunks.is_empty());
+    // Set from another thread soon after the start: the pass of 10^9 photons (minutes of
+    // work) returns within the group in flight instead of walking the rest of the
+    // iteration (it may have finished a round or two first on a slow, loaded machine).
+    let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
+    let cancel = AtomicBool::new(false);
+    let start = std::time::Instant::now();
+    let deposits = std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            cancel.store(true, Ordering::Relaxed);
+        });
+        pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel)
+    });
+    println!(
+        "cancelled after {} photons, {:?}",
+        pass.traced,
+        start.elapsed()
+    );
+    assert!(pass.traced < 200_000_000, "{} photons traced", pass.traced);
+    assert!(
+        pass.chunks.len() <= ROUND_CHUNKS,
+        "{} chunks",
+        pass.chunks.len()
+    );
+    assert_eq!(
+        deposits,
+        m.iter().sum::<u64>(),
+        "a deposit count without its sums"
+    );
+}
