@@ -51,6 +51,20 @@ pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
     Err(vec![e.at(a.span)])
 }
 
+/// A file name (a string) as written; `Evaluator::resolve_path` makes it a path.
+pub(super) fn file_name(a: &Arg) -> SourceResult<&str> {
+    match &a.value {
+        Value::Str(s) => Ok(s),
+        v => Err(vec![
+            Error::new(format!(
+                "expected a file name string, found {}",
+                v.type_name()
+            ))
+            .at(a.span),
+        ]),
+    }
+}
+
 pub(super) fn range_error(span: Span, msg: String, help: &str) -> Vec<Diagnostic> {
     vec![
         Error::new(msg)

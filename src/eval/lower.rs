@@ -13,6 +13,9 @@ use crate::scene::*;
 use crate::span::Span;
 
 /// Loaded assets and the ids given to declared materials and textures.
+///
+/// Materials and textures are keyed by address; the map holds the `Rc` too, so that an address
+/// is not reused by another definition while its id is stored.
 #[derive(Default)]
 pub(crate) struct Assets {
     materials: HashMap<*const MaterialDef, (Rc<MaterialDef>, MaterialId)>,

@@ -8,7 +8,7 @@ use glam::DAffine3;
 use super::{Sink, unexpected};
 use crate::diag::{Error, SourceResult};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, num, range_error, vec3};
+use crate::eval::args::{Arg, file_name, num, range_error, vec3};
 use crate::eval::builtins::rotation;
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{EnvDef, Value};
@@ -17,7 +17,8 @@ use crate::syntax::ast::Name;
 
 #[derive(Default)]
 pub(super) struct EnvBuilder {
-    image: Option<(String, Span)>,
+    /// The resolved image path and where it was written.
+    image: Option<(PathBuf, Span)>,
     intensity: Option<f64>,
     rotation: Option<DAffine3>,
 }
@@ -43,11 +44,10 @@ impl EnvBuilder {
                     .at(span),
             ]);
         };
-        // The file is resolved when the environment is used (by the top-level sink).
-        let dir_file = path_span;
+        // The image is loaded when the environment is used (by the top-level sink).
         Ok(Value::Environment(Rc::new(EnvDef {
-            path: PathBuf::from(path),
-            path_span: dir_file,
+            path,
+            path_span,
             intensity: self.intensity.unwrap_or(1.0),
             transform: self.rotation.unwrap_or(DAffine3::IDENTITY).inverse(),
         })))
@@ -63,21 +63,10 @@ impl Sink for EnvBuilder {
     }
     fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         match kw.text.as_str() {
-            "image" => match &args[0].value {
-                Value::Str(s) => {
-                    let resolved = ev.resolve_path(s, args[0].span);
-                    self.image = Some((resolved.to_string_lossy().into_owned(), args[0].span));
-                }
-                v => {
-                    return Err(vec![
-                        Error::new(format!(
-                            "expected a file name string, found {}",
-                            v.type_name()
-                        ))
-                        .at(args[0].span),
-                    ]);
-                }
-            },
+            "image" => {
+                let path = ev.resolve_path(file_name(&args[0])?, args[0].span);
+                self.image = Some((path, args[0].span));
+            }
             "intensity" => {
                 let k = num(&args[0])?;
                 if k < 0.0 {

@@ -20,7 +20,7 @@ pub(super) struct MaterialBuilder {
     albedo: Option<ColorDef>,
     ior: Option<(f64, Span)>,
     absorb: Option<ColorDef>,
-    tint: Option<(Color, Span)>,
+    tint: Option<Color>,
     tint_def: Option<ColorDef>,
     specular: Option<ColorDef>,
     roughness: Option<ColorDef>,
@@ -129,7 +129,7 @@ impl MaterialBuilder {
                 MatKind::Glass {
                     ior,
                     absorb: self.absorb.unwrap_or(absorb),
-                    tint: self.tint.map_or(tint, |t| t.0),
+                    tint: self.tint.unwrap_or(tint),
                 }
             }
             _ => MatKind::Glossy {
@@ -182,7 +182,7 @@ impl Sink for MaterialBuilder {
                 self.absorb = Some(c);
             }
             "tint" => {
-                self.tint = Some((color(&args[0])?, args[0].span));
+                self.tint = Some(color(&args[0])?);
                 self.tint_def = Some(ColorDef::Const(color(&args[0])?));
             }
             "specular" => self.specular = Some(color_def(&args[0])?),

@@ -24,7 +24,7 @@ use camera::CameraBuilder;
 use environment::EnvBuilder;
 use light::LightBuilder;
 use material::MaterialBuilder;
-use object::ObjectBuilder;
+use object::{OBJECT_BLOCKS, ObjectBuilder};
 use profile::ProfileBuilder;
 pub(super) use scene::TopSink;
 use settings::SettingsBuilder;
@@ -55,23 +55,8 @@ pub(super) fn unexpected(sink: &dyn Sink, v: &Value, span: Span, help: &str) -> 
     ]
 }
 
-/// Every block name, for "did you mean".
-pub(crate) const BLOCKS: &[&str] = &[
-    "sphere",
-    "plane",
-    "quad",
-    "box",
-    "cylinder",
-    "disk",
-    "triangle",
-    "mesh",
-    "revolve",
-    "bezier_patch",
-    "bezier_mesh",
-    "union",
-    "group",
-    "object",
-    "area_light",
+/// The blocks that are not objects (those are [`OBJECT_BLOCKS`]).
+const VALUE_BLOCKS: &[&str] = &[
     "material",
     "texture",
     "color_map",
@@ -84,20 +69,6 @@ pub(crate) const BLOCKS: &[&str] = &[
     "environment",
 ];
 
-pub(super) const SHAPES: &[&str] = &[
-    "sphere",
-    "plane",
-    "quad",
-    "box",
-    "cylinder",
-    "disk",
-    "triangle",
-    "mesh",
-    "revolve",
-    "bezier_patch",
-    "bezier_mesh",
-];
-
 impl Evaluator {
     pub(crate) fn eval_block(
         &mut self,
@@ -107,9 +78,7 @@ impl Evaluator {
     ) -> SourceResult<Value> {
         let k = kind.text.as_str();
         match k {
-            _ if SHAPES.contains(&k)
-                || matches!(k, "union" | "group" | "object" | "area_light") =>
-            {
+            _ if OBJECT_BLOCKS.contains(&k) => {
                 let mut b = ObjectBuilder::new(k, span);
                 self.run_items(items, &mut b)?;
                 b.finish(self).map(|o| Value::Object(Rc::new(o)))
@@ -156,7 +125,8 @@ impl Evaluator {
             }
             _ => {
                 let mut e = Error::new(format!("unknown block `{k}`")).label("not a kind of block");
-                if let Some(s) = suggest(k, BLOCKS.iter().copied()) {
+                let blocks = OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied();
+                if let Some(s) = suggest(k, blocks) {
                     e = e.help(format!("did you mean `{s}`?"));
                 }
                 Err(vec![e.at(kind.span)])

@@ -7,7 +7,7 @@ use std::rc::Rc;
 
 use glam::{DAffine3, DQuat, DVec3};
 
-use super::{BLOCKS, Sink, unexpected};
+use super::{Sink, unexpected};
 use crate::diag::{At, Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color, count, num, range_error, vec3, word};
@@ -31,7 +31,7 @@ pub(super) struct ObjectBuilder {
     corner: bool,
     axis: Option<(DVec3, Span)>,
     sweep: Option<(f64, f64)>,
-    method: Option<(String, Span)>,
+    method: Option<String>,
     iterations: u32,
     starts: u32,
 }
@@ -63,9 +63,28 @@ static REVOLVE_PROPS: [PropSpec; 11] = with_transforms([
     p("angle", 2, 2, "two angles in degrees", "0, 270"),
 ]);
 
+/// The blocks that make objects: shapes, then containers.
+pub(super) const OBJECT_BLOCKS: &[&str] = &[
+    "sphere",
+    "plane",
+    "quad",
+    "box",
+    "cylinder",
+    "disk",
+    "triangle",
+    "mesh",
+    "revolve",
+    "bezier_patch",
+    "bezier_mesh",
+    "union",
+    "group",
+    "object",
+    "area_light",
+];
+
 impl ObjectBuilder {
     pub(super) fn new(kind: &str, span: Span) -> Self {
-        let kind = BLOCKS
+        let kind = OBJECT_BLOCKS
             .iter()
             .find(|k| **k == kind)
             .copied()
@@ -106,7 +125,7 @@ impl ObjectBuilder {
 
     fn method(&self) -> IntersectMethod {
         match &self.method {
-            Some((m, _)) if m == "newton" => IntersectMethod::Newton {
+            Some(m) if m == "newton" => IntersectMethod::Newton {
                 iterations: self.iterations,
                 starts: self.starts,
             },
@@ -169,11 +188,7 @@ impl ObjectBuilder {
                         return Err(vec![
                             Error::new(format!(
                                 "an area light cannot be {} {}",
-                                if s.kind().starts_with(['a', 'e', 'i', 'o', 'u']) {
-                                    "an"
-                                } else {
-                                    "a"
-                                },
+                                article(s.kind()),
                                 s.kind()
                             ))
                             .label("unsupported emitter")
@@ -329,7 +344,7 @@ impl Sink for ObjectBuilder {
             "corner" => self.corner = true,
             "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),
             "axis" => self.axis = Some((vec3(&args[0])?, args[0].span)),
-            "method" => self.method = Some((word(&args[0], &["robust", "newton"])?, args[0].span)),
+            "method" => self.method = Some(word(&args[0], &["robust", "newton"])?),
             "iterations" => self.iterations = count(&args[0], "iterations", 1000.0)? as u32,
             "starts" => self.starts = count(&args[0], "starts", 64.0)? as u32,
             "angle" => {

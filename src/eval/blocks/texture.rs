@@ -7,7 +7,7 @@ use glam::{DAffine3, DVec3};
 use super::{Sink, unexpected};
 use crate::diag::{At, Error, SourceResult};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, color, count, num, positive, range_error, vec3, word};
+use crate::eval::args::{Arg, color, count, file_name, num, positive, range_error, vec3, word};
 use crate::eval::props::{PropSpec, p, transform_prop, w, with_transforms};
 use crate::eval::value::{PatternDef, TextureDef, Value};
 use crate::scene::{Color, ColorMap, Mapping, Pattern, Wrap};
@@ -213,18 +213,7 @@ impl Sink for TextureBuilder {
             "wood" => self.set("wood", kw.span)?,
             "image" => {
                 self.set("image", kw.span)?;
-                match &args[0].value {
-                    Value::Str(s) => self.image = Some((s.to_string(), args[0].span)),
-                    v => {
-                        return Err(vec![
-                            Error::new(format!(
-                                "expected a file name string, found {}",
-                                v.type_name()
-                            ))
-                            .at(args[0].span),
-                        ]);
-                    }
-                }
+                self.image = Some((file_name(&args[0])?.to_string(), args[0].span));
             }
             "wrap" => {
                 self.wrap = match word(&args[0], &["repeat", "clamp", "mirror"])?.as_str() {

@@ -77,35 +77,19 @@ impl ObjectBuilder {
         let mut ns = Vec::new();
         let mut strs = Vec::new();
         for ((name, k), (v, s)) in sig.iter().zip(&self.values) {
+            // "the radius of a sphere: expected a number, ..."
+            let named = |e: Error| Error {
+                message: format!(
+                    "the {name} of {} {}: {}",
+                    article(self.kind),
+                    self.kind,
+                    e.message
+                ),
+                ..e
+            };
             match k {
-                'v' => vs.push((
-                    v.vec3()
-                        .map_err(|e| Error {
-                            message: format!(
-                                "the {name} of {} {}: {}",
-                                article(self.kind),
-                                self.kind,
-                                e.message
-                            ),
-                            ..e
-                        })
-                        .at(*s)?,
-                    *s,
-                )),
-                'n' => ns.push((
-                    v.num()
-                        .map_err(|e| Error {
-                            message: format!(
-                                "the {name} of {} {}: {}",
-                                article(self.kind),
-                                self.kind,
-                                e.message
-                            ),
-                            ..e
-                        })
-                        .at(*s)?,
-                    *s,
-                )),
+                'v' => vs.push((v.vec3().map_err(named).at(*s)?, *s)),
+                'n' => ns.push((v.num().map_err(named).at(*s)?, *s)),
                 _ => match v {
                     Value::Str(p) => strs.push((p.to_string(), *s)),
                     v => {
