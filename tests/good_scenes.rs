@@ -334,8 +334,8 @@ fn revolve_and_patches() {
 fn includes_resolve_relative_to_the_including_file() {
     let l = load_file("tests/good/inc_main.scn".as_ref(), &EvalOptions::default()).unwrap();
     assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    assert_eq!(l.dependencies.len(), 2);
     let s = l.scene.unwrap();
-    assert_eq!(s.dependencies.len(), 2);
     let Shape::Sphere { radius, .. } = s.objects[0].shape else {
         panic!()
     };

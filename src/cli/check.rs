@@ -56,15 +56,15 @@ pub fn run(scene: &Path, options: &EvalOptions) -> ExitCode {
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
-            out(&summary(s));
+            out(&summary(s, loaded.dependencies.len()));
             ExitCode::SUCCESS
         }
         _ => ExitCode::from(EXIT_SCENE_ERROR),
     }
 }
 
-/// A one-screen description of an evaluated scene.
-pub fn summary(s: &Scene) -> String {
+/// A one-screen description of an evaluated scene that read `files_read` files.
+pub fn summary(s: &Scene, files_read: usize) -> String {
     let mut out = String::new();
     let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
     let mut emitters = 0;
@@ -132,6 +132,6 @@ pub fn summary(s: &Scene) -> String {
             image.path.display()
         )),
     }
-    out.push_str(&format!("files read: {}\n", s.dependencies.len()));
+    out.push_str(&format!("files read: {files_read}\n"));
     out
 }

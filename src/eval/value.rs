@@ -1,12 +1,17 @@
-//! Runtime values of the scene language.
+//! Runtime values of the scene language, and the definitions (materials, textures, objects,
+//! profiles, environments) that values hold until they are lowered into the scene.
 
 use std::rc::Rc;
 
-use glam::{DVec2, DVec3};
+use std::path::PathBuf;
 
-use super::objects::{EnvDef, MaterialDef, ObjectDef, ProfileDef, TextureDef};
+use glam::{DAffine3, DVec2, DVec3};
+
 use crate::diag::Error;
-use crate::scene::{Camera, ColorMap, Light, Settings};
+use crate::scene::{
+    Camera, Color, ColorMap, Emission, Light, Mapping, Pattern, Settings, Shape, Wrap,
+};
+use crate::span::Span;
 use crate::syntax::ast::MacroDef;
 
 #[derive(Debug, Clone)]
@@ -100,4 +105,90 @@ impl Value {
             v => Err(v.mismatch("a boolean")),
         }
     }
+}
+
+// ------------------------------------------------------------------ definitions
+
+#[derive(Debug, Clone)]
+pub enum ColorDef {
+    Const(Color),
+    Tex(Rc<TextureDef>),
+}
+
+#[derive(Debug)]
+pub struct MaterialDef {
+    pub kind: MatKind,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone)]
+pub enum MatKind {
+    Diffuse(ColorDef),
+    Mirror(ColorDef),
+    Glass {
+        ior: f64,
+        absorb: ColorDef,
+        tint: Color,
+    },
+    Glossy {
+        albedo: ColorDef,
+        specular: ColorDef,
+        roughness: ColorDef,
+    },
+}
+
+#[derive(Debug)]
+pub struct TextureDef {
+    pub pattern: PatternDef,
+    pub mapping: Mapping,
+    pub transform: DAffine3,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone)]
+pub enum PatternDef {
+    Ready(Pattern),
+    Image {
+        path: PathBuf,
+        linear: bool,
+        wrap: Wrap,
+        bilinear: bool,
+        span: Span,
+    },
+}
+
+#[derive(Debug, Clone)]
+pub enum ShapeDef {
+    Ready(Shape),
+    Mesh { path: PathBuf, span: Span },
+}
+
+#[derive(Debug, Clone)]
+pub struct Part {
+    pub shape: ShapeDef,
+    pub transform: DAffine3,
+    pub material: Option<Rc<MaterialDef>>,
+    pub emission: Option<Emission>,
+    pub span: Span,
+}
+
+#[derive(Debug)]
+pub struct ObjectDef {
+    pub parts: Vec<Part>,
+}
+
+#[derive(Debug)]
+pub struct ProfileDef {
+    pub segments: Vec<Vec<DVec2>>,
+    pub span: Span,
+    /// Span of each segment's first point.
+    pub joints: Vec<Span>,
+}
+
+#[derive(Debug)]
+pub struct EnvDef {
+    pub path: PathBuf,
+    pub path_span: Span,
+    pub intensity: f64,
+    pub transform: DAffine3,
 }

@@ -11,7 +11,6 @@ mod assets;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec2, DVec3};
@@ -42,8 +41,6 @@ pub struct Scene {
     /// Only textures some material actually uses.
     pub textures: Vec<Texture>,
     pub background: Background,
-    /// Every file the evaluation read (the scene, includes, images, meshes), for `watch`.
-    pub dependencies: Vec<PathBuf>,
 }
 
 impl Scene {

@@ -22,7 +22,6 @@ pub fn empty_scene(res: (u32, u32)) -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         background: Background::Color(DVec3::ZERO),
-        dependencies: Vec::new(),
     }
 }
 

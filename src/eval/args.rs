@@ -1,0 +1,112 @@
+//! Property arguments and their readers: each checks one argument (a number, a vector, a
+//! color, a word, a count) and reports a wrong type or an out-of-range value at its span.
+
+use glam::DVec3;
+
+use super::value::{ColorDef, Value};
+use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
+use crate::scene::Color;
+use crate::span::Span;
+
+/// One argument of a property: its value and where it was written.
+pub(crate) struct Arg {
+    pub value: Value,
+    pub span: Span,
+}
+
+pub(super) fn num(a: &Arg) -> SourceResult<f64> {
+    a.value.num().at(a.span)
+}
+
+pub(super) fn vec3(a: &Arg) -> SourceResult<DVec3> {
+    a.value.vec3().at(a.span)
+}
+
+pub(super) fn color(a: &Arg) -> SourceResult<Color> {
+    a.value.color().at(a.span)
+}
+
+pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
+    let s = match &a.value {
+        Value::Str(s) => s.to_string(),
+        v => {
+            return Err(vec![
+                Error::new(format!(
+                    "expected one of {}, found {}",
+                    choices.join(", "),
+                    v.type_name()
+                ))
+                .at(a.span),
+            ]);
+        }
+    };
+    if choices.contains(&s.as_str()) {
+        return Ok(s);
+    }
+    let mut e =
+        Error::new(format!("`{s}` is not one of {}", choices.join(", "))).label("unknown choice");
+    if let Some(c) = suggest(&s, choices.iter().copied()) {
+        e = e.help(format!("did you mean `{c}`?"));
+    }
+    Err(vec![e.at(a.span)])
+}
+
+/// A file name (a string) as written; `Evaluator::resolve_path` makes it a path.
+pub(super) fn file_name(a: &Arg) -> SourceResult<&str> {
+    match &a.value {
+        Value::Str(s) => Ok(s),
+        v => Err(vec![
+            Error::new(format!(
+                "expected a file name string, found {}",
+                v.type_name()
+            ))
+            .at(a.span),
+        ]),
+    }
+}
+
+pub(super) fn range_error(span: Span, msg: String, help: &str) -> Vec<Diagnostic> {
+    vec![
+        Error::new(msg)
+            .label("out of range")
+            .help(help.to_string())
+            .at(span),
+    ]
+}
+
+pub(super) fn positive(a: &Arg, what: &str) -> SourceResult<f64> {
+    let x = num(a)?;
+    if x <= 0.0 {
+        return Err(range_error(
+            a.span,
+            format!("{what} must be positive, found {x}"),
+            "use a number greater than 0",
+        ));
+    }
+    Ok(x)
+}
+
+pub(super) fn count(a: &Arg, what: &str, max: f64) -> SourceResult<f64> {
+    let x = num(a)?;
+    if x < 1.0 || x.fract() != 0.0 || x > max {
+        return Err(range_error(
+            a.span,
+            format!("{what} must be a whole number from 1 to {max}, found {x}"),
+            "use a whole number in range",
+        ));
+    }
+    Ok(x)
+}
+
+pub(super) fn color_def(a: &Arg) -> SourceResult<ColorDef> {
+    match &a.value {
+        Value::Texture(t) => Ok(ColorDef::Tex(t.clone())),
+        v => Ok(ColorDef::Const(
+            v.color()
+                .map_err(|e| {
+                    e.help("give a color `rgb <r, g, b>`, a number or a `texture { ... }`")
+                })
+                .at(a.span)?,
+        )),
+    }
+}

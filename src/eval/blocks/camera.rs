@@ -1,0 +1,105 @@
+//! `camera { ... }`.
+
+use super::{Sink, unexpected};
+use crate::diag::{Error, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, num, positive, range_error, vec3};
+use crate::eval::props::{PropSpec, p};
+use crate::eval::value::Value;
+use crate::scene::Camera;
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+/// Starts from the current camera: a `camera { ... }` block changes what it names.
+pub(super) struct CameraBuilder(pub(super) Camera);
+
+static CAMERA_PROPS: [PropSpec; 6] = [
+    p("location", 1, 1, "a point", "<0, 1, -5>"),
+    p("look_at", 1, 1, "a point", "<0, 1, 0>"),
+    p("up", 1, 1, "a vector", "<0, 1, 0>"),
+    p("fov", 1, 1, "an angle in degrees", "40"),
+    p("aperture", 1, 1, "a lens radius", "0.05"),
+    p("focus_distance", 1, 1, "a distance", "4"),
+];
+
+impl CameraBuilder {
+    pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
+        let c = &self.0;
+        let dir = c.look_at - c.location;
+        if dir.length_squared() == 0.0 {
+            return Err(vec![
+                Error::new("the camera looks at its own location")
+                    .label("location == look_at")
+                    .help("move `look_at` away from `location`")
+                    .at(span),
+            ]);
+        }
+        if dir.cross(c.up).length_squared()
+            < 1e-18 * dir.length_squared() * c.up.length_squared().max(1e-300)
+        {
+            return Err(vec![
+                Error::new("the camera's `up` is parallel to its view direction")
+                    .label("cannot orient the camera")
+                    .help("choose another `up`, e.g. `up <0, 0, 1>`")
+                    .at(span),
+            ]);
+        }
+        Ok(Value::Camera(Box::new(self.0)))
+    }
+}
+
+impl Sink for CameraBuilder {
+    fn kind(&self) -> String {
+        "a camera".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &CAMERA_PROPS
+    }
+    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        let c = &mut self.0;
+        match kw.text.as_str() {
+            "location" => c.location = vec3(&args[0])?,
+            "look_at" => c.look_at = vec3(&args[0])?,
+            "up" => {
+                let u = vec3(&args[0])?;
+                if u.length_squared() == 0.0 {
+                    return Err(vec![Error::new("`up` is a zero vector").at(args[0].span)]);
+                }
+                c.up = u;
+            }
+            "fov" => {
+                let f = num(&args[0])?;
+                if !(f > 0.0 && f < 180.0) {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("fov must be between 0 and 180 degrees, found {f}"),
+                        "e.g. `fov 40`",
+                    ));
+                }
+                c.fov = f;
+            }
+            "aperture" => {
+                let a = num(&args[0])?;
+                if a < 0.0 {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("aperture must not be negative, found {a}"),
+                        "0 is a pinhole",
+                    ));
+                }
+                c.aperture = a;
+            }
+            "focus_distance" => c.focus_distance = Some(positive(&args[0], "focus distance")?),
+            _ => unreachable!(),
+        }
+        Ok(())
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        Err(unexpected(
+            self,
+            &v,
+            span,
+            "a camera takes `location`, `look_at`, `up`, `fov`, `aperture`, `focus_distance`",
+        ))
+    }
+}

@@ -1,0 +1,219 @@
+//! `material { ... }`: the kind (diffuse, mirror, glass, glossy), its parameters, and
+//! materials that extend a declared one.
+
+use std::rc::Rc;
+
+use super::{Sink, unexpected};
+use crate::diag::{Error, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, color, color_def, num, range_error};
+use crate::eval::props::{PropSpec, p};
+use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
+use crate::scene::Color;
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+#[derive(Default)]
+pub(super) struct MaterialBuilder {
+    kind: Option<(&'static str, Span)>,
+    base: Option<Rc<MaterialDef>>,
+    albedo: Option<ColorDef>,
+    ior: Option<(f64, Span)>,
+    absorb: Option<ColorDef>,
+    tint: Option<Color>,
+    tint_def: Option<ColorDef>,
+    specular: Option<ColorDef>,
+    roughness: Option<ColorDef>,
+    touched: bool,
+}
+
+static MAT_PROPS: [PropSpec; 9] = [
+    p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
+    p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
+    p("glass", 0, 0, "nothing", ""),
+    p("glossy", 1, 1, "a color or texture", "rgb <0.5, 0.5, 0.5>"),
+    p("ior", 1, 1, "a number", "1.5"),
+    p("absorb", 1, 1, "a color", "rgb <0.1, 0.02, 0.02>"),
+    p("tint", 1, 1, "a color", "rgb <1, 1, 1>"),
+    p("specular", 1, 1, "a color", "rgb <0.04, 0.04, 0.04>"),
+    p("roughness", 1, 1, "a number in (0, 1]", "0.2"),
+];
+
+impl MaterialBuilder {
+    fn set_kind(&mut self, k: &'static str, span: Span) -> SourceResult<()> {
+        if let Some((old, old_span)) = self.kind {
+            return Err(vec![
+                Error::new(format!("a material is either {old} or {k}, not both"))
+                    .label("second kind")
+                    .help("use one of diffuse, mirror, glass, glossy per material")
+                    .at(span)
+                    .with_extra(old_span, "first kind here"),
+            ]);
+        }
+        self.kind = Some((k, span));
+        Ok(())
+    }
+
+    pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
+        if !self.touched
+            && let Some(base) = self.base
+        {
+            return Ok(Value::Material(base));
+        }
+        let kind_name = self.kind.map(|k| k.0).or_else(|| {
+            self.base.as_ref().map(|b| match b.kind {
+                MatKind::Diffuse(_) => "diffuse",
+                MatKind::Mirror(_) => "mirror",
+                MatKind::Glass { .. } => "glass",
+                MatKind::Glossy { .. } => "glossy",
+            })
+        });
+        let Some(kind_name) = kind_name else {
+            return Err(vec![
+                Error::new("a material needs a kind: diffuse, mirror, glass or glossy")
+                    .label("no kind given")
+                    .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
+                    .at(span),
+            ]);
+        };
+        let base = self.base.as_ref().map(|b| b.kind.clone());
+        let misplaced = |what: &str, s: Option<Span>| -> SourceResult<()> {
+            match s {
+                Some(s) => Err(vec![
+                    Error::new(format!("`{what}` does not apply to a {kind_name} material"))
+                        .label("not used by this kind")
+                        .at(s),
+                ]),
+                None => Ok(()),
+            }
+        };
+        let one = ColorDef::Const(Color::ONE);
+        let kind = match kind_name {
+            "diffuse" => {
+                misplaced("ior", self.ior.map(|i| i.1))?;
+                let base_albedo = match base {
+                    Some(MatKind::Diffuse(a)) => Some(a),
+                    _ => None,
+                };
+                MatKind::Diffuse(
+                    self.albedo
+                        .or(base_albedo)
+                        .unwrap_or(ColorDef::Const(Color::splat(0.5))),
+                )
+            }
+            "mirror" => {
+                misplaced("ior", self.ior.map(|i| i.1))?;
+                MatKind::Mirror(self.tint_def.or(self.albedo).unwrap_or(one))
+            }
+            "glass" => {
+                let (mut ior, mut absorb, mut tint) =
+                    (1.5, ColorDef::Const(Color::ZERO), Color::ONE);
+                if let Some(MatKind::Glass {
+                    ior: i,
+                    absorb: a,
+                    tint: t,
+                }) = base
+                {
+                    (ior, absorb, tint) = (i, a, t);
+                }
+                if let Some((i, s)) = self.ior {
+                    if i < 1.0 {
+                        return Err(range_error(
+                            s,
+                            format!("ior must be at least 1, found {i}"),
+                            "glass has an index of refraction ≥ 1 (1.5 for window glass)",
+                        ));
+                    }
+                    ior = i;
+                }
+                MatKind::Glass {
+                    ior,
+                    absorb: self.absorb.unwrap_or(absorb),
+                    tint: self.tint.unwrap_or(tint),
+                }
+            }
+            _ => MatKind::Glossy {
+                albedo: self.albedo.unwrap_or(ColorDef::Const(Color::splat(0.5))),
+                specular: self.specular.unwrap_or(ColorDef::Const(Color::splat(0.04))),
+                roughness: self.roughness.unwrap_or(ColorDef::Const(Color::splat(0.2))),
+            },
+        };
+        Ok(Value::Material(Rc::new(MaterialDef { kind, span })))
+    }
+}
+
+impl Sink for MaterialBuilder {
+    fn kind(&self) -> String {
+        "a material".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &MAT_PROPS
+    }
+    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        self.touched = true;
+        match kw.text.as_str() {
+            "diffuse" => {
+                self.set_kind("diffuse", kw.span)?;
+                self.albedo = Some(color_def(&args[0])?);
+            }
+            "mirror" => {
+                self.set_kind("mirror", kw.span)?;
+                if let Some(a) = args.first() {
+                    self.tint_def = Some(color_def(a)?);
+                }
+            }
+            "glass" => self.set_kind("glass", kw.span)?,
+            "glossy" => {
+                self.set_kind("glossy", kw.span)?;
+                self.albedo = Some(color_def(&args[0])?);
+            }
+            "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
+            "absorb" => {
+                let c = color_def(&args[0])?;
+                if let ColorDef::Const(c) = c
+                    && c.min_element() < 0.0
+                {
+                    return Err(range_error(
+                        args[0].span,
+                        "absorption must not be negative".into(),
+                        "use components ≥ 0",
+                    ));
+                }
+                self.absorb = Some(c);
+            }
+            "tint" => {
+                self.tint = Some(color(&args[0])?);
+                self.tint_def = Some(ColorDef::Const(color(&args[0])?));
+            }
+            "specular" => self.specular = Some(color_def(&args[0])?),
+            "roughness" => {
+                if let Value::Num(r) = args[0].value
+                    && !(r > 0.0 && r <= 1.0)
+                {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("roughness must be in (0, 1], found {r}"),
+                        "e.g. `roughness 0.2`",
+                    ));
+                }
+                self.roughness = Some(color_def(&args[0])?);
+            }
+            _ => unreachable!(),
+        }
+        Ok(())
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        match v {
+            Value::Material(m) if self.base.is_none() => {
+                self.base = Some(m);
+                Ok(())
+            }
+            v => Err(unexpected(
+                self,
+                &v,
+                span,
+                "a material takes a declared material and properties, e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`",
+            )),
+        }
+    }
+}

@@ -1,0 +1,136 @@
+//! Blocks (`sphere { ... }`, `material { ... }`, `settings { ... }`, ...): each kind has a
+//! builder that is the [`Sink`] of its body, checks its properties and builds a [`Value`].
+
+mod camera;
+mod environment;
+mod light;
+mod material;
+mod object;
+mod profile;
+mod scene;
+mod settings;
+mod texture;
+
+use std::rc::Rc;
+
+use super::Evaluator;
+use super::args::Arg;
+use super::props::PropSpec;
+use super::value::Value;
+use crate::diag::{Diagnostic, Error, SourceResult, suggest};
+use crate::span::Span;
+use crate::syntax::ast::{Item, Name};
+use camera::CameraBuilder;
+use environment::EnvBuilder;
+use light::LightBuilder;
+use material::MaterialBuilder;
+use object::{OBJECT_BLOCKS, ObjectBuilder};
+use profile::ProfileBuilder;
+pub(super) use scene::TopSink;
+use settings::SettingsBuilder;
+use texture::{ColorMapBuilder, TextureBuilder};
+
+/// Receives the items of a body.
+pub(crate) trait Sink {
+    /// The block's name with an article, for messages ("a sphere").
+    fn kind(&self) -> String;
+    fn props(&self) -> &'static [PropSpec];
+    fn prop_spec(&self, name: &str) -> Option<&'static PropSpec> {
+        self.props().iter().find(|p| p.name == name)
+    }
+    fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()>;
+    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()>;
+}
+
+pub(super) fn unexpected(sink: &dyn Sink, v: &Value, span: Span, help: &str) -> Vec<Diagnostic> {
+    vec![
+        Error::new(format!(
+            "{} does not take {} here",
+            sink.kind(),
+            v.type_name()
+        ))
+        .label("unexpected value")
+        .help(help.to_string())
+        .at(span),
+    ]
+}
+
+/// The blocks that are not objects (those are [`OBJECT_BLOCKS`]).
+const VALUE_BLOCKS: &[&str] = &[
+    "material",
+    "texture",
+    "color_map",
+    "bezier",
+    "spline",
+    "settings",
+    "camera",
+    "light",
+    "spotlight",
+    "environment",
+];
+
+impl Evaluator {
+    pub(crate) fn eval_block(
+        &mut self,
+        kind: &Name,
+        items: &Rc<Vec<Item>>,
+        span: Span,
+    ) -> SourceResult<Value> {
+        let k = kind.text.as_str();
+        match k {
+            _ if OBJECT_BLOCKS.contains(&k) => {
+                let mut b = ObjectBuilder::new(k, span);
+                self.run_items(items, &mut b)?;
+                b.finish(self).map(|o| Value::Object(Rc::new(o)))
+            }
+            "material" => {
+                let mut b = MaterialBuilder::default();
+                self.run_items(items, &mut b)?;
+                b.finish(span)
+            }
+            "texture" => {
+                let mut b = TextureBuilder::default();
+                self.run_items(items, &mut b)?;
+                b.finish(self, span)
+            }
+            "color_map" => {
+                let mut b = ColorMapBuilder::default();
+                self.run_items(items, &mut b)?;
+                b.finish(span)
+            }
+            "bezier" | "spline" => {
+                let mut b = ProfileBuilder::new(k == "spline");
+                self.run_items(items, &mut b)?;
+                b.finish(span)
+            }
+            "settings" => {
+                let mut b = SettingsBuilder(self.scene.settings.clone());
+                self.run_items(items, &mut b)?;
+                Ok(Value::Settings(Box::new(b.0)))
+            }
+            "camera" => {
+                let mut b = CameraBuilder(self.scene.camera.clone());
+                self.run_items(items, &mut b)?;
+                b.finish(span)
+            }
+            "light" | "spotlight" => {
+                let mut b = LightBuilder::new(k == "spotlight");
+                self.run_items(items, &mut b)?;
+                b.finish(self, span)
+            }
+            "environment" => {
+                let mut b = EnvBuilder::default();
+                self.run_items(items, &mut b)?;
+                b.finish(span)
+            }
+            _ => {
+                let mut e = Error::new(format!("unknown block `{k}`")).label("not a kind of block");
+                let blocks = OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied();
+                if let Some(s) = suggest(k, blocks) {
+                    e = e.help(format!("did you mean `{s}`?"));
+                }
+                Err(vec![e.at(kind.span)])
+            }
+        }
+    }
+}

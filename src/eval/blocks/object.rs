@@ -1,0 +1,417 @@
+//! Object blocks: the primitives (in [`primitive`]), `revolve`, Bezier patches, and the
+//! containers `union`, `group`, `object` and `area_light`.
+
+mod primitive;
+
+use std::rc::Rc;
+
+use glam::{DAffine3, DQuat, DVec3};
+
+use super::{Sink, unexpected};
+use crate::diag::{At, Diagnostic, Error, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, color, count, num, range_error, vec3, word};
+use crate::eval::props::{PropSpec, TRANSFORMS, p, transform_prop, w, with_transforms};
+use crate::eval::value::{MaterialDef, ObjectDef, Part, ProfileDef, ShapeDef, Value};
+use crate::scene::*;
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+pub(super) struct ObjectBuilder {
+    kind: &'static str,
+    span: Span,
+    values: Vec<(Value, Span)>,
+    parts: Vec<Part>,
+    transform: DAffine3,
+    material: Option<Rc<MaterialDef>>,
+    radiance: Option<(Color, Span)>,
+    two_sided: bool,
+    open: bool,
+    profile: Option<Rc<ProfileDef>>,
+    corner: bool,
+    axis: Option<(DVec3, Span)>,
+    sweep: Option<(f64, f64)>,
+    method: Option<String>,
+    iterations: u32,
+    starts: u32,
+}
+
+static OBJ_PROPS: [PropSpec; 4] = TRANSFORMS;
+static CYL_PROPS: [PropSpec; 5] = with_transforms([p("open", 0, 0, "nothing", "")]);
+static AREA_PROPS: [PropSpec; 6] = with_transforms([
+    p("radiance", 1, 1, "a color", "rgb <17, 12, 4>"),
+    p("two_sided", 0, 0, "nothing", ""),
+]);
+static PATCH_PROPS: [PropSpec; 7] = with_transforms([
+    w("method", "`robust` or `newton`", "newton"),
+    p("iterations", 1, 1, "a number", "12"),
+    p("starts", 1, 1, "a number", "8"),
+]);
+static REVOLVE_PROPS: [PropSpec; 11] = with_transforms([
+    w("method", "`robust` or `newton`", "newton"),
+    p("iterations", 1, 1, "a number", "12"),
+    p("starts", 1, 1, "a number", "8"),
+    p(
+        "profile",
+        1,
+        1,
+        "a `bezier { ... }` or `spline { ... }` block",
+        "bezier { <0, 0>, <0.3, 0>, <0.3, 0.5>, <0, 0.5> }",
+    ),
+    p("corner", 0, 0, "nothing", ""),
+    p("axis", 1, 1, "a vector", "<0, 0, 1>"),
+    p("angle", 2, 2, "two angles in degrees", "0, 270"),
+]);
+
+/// The blocks that make objects: shapes, then containers.
+pub(super) const OBJECT_BLOCKS: &[&str] = &[
+    "sphere",
+    "plane",
+    "quad",
+    "box",
+    "cylinder",
+    "disk",
+    "triangle",
+    "mesh",
+    "revolve",
+    "bezier_patch",
+    "bezier_mesh",
+    "union",
+    "group",
+    "object",
+    "area_light",
+];
+
+impl ObjectBuilder {
+    pub(super) fn new(kind: &str, span: Span) -> Self {
+        let kind = OBJECT_BLOCKS
+            .iter()
+            .find(|k| **k == kind)
+            .copied()
+            .unwrap_or("object");
+        Self {
+            kind,
+            span,
+            values: Vec::new(),
+            parts: Vec::new(),
+            transform: DAffine3::IDENTITY,
+            material: None,
+            radiance: None,
+            two_sided: false,
+            open: false,
+            profile: None,
+            corner: false,
+            axis: None,
+            sweep: None,
+            method: None,
+            iterations: 12,
+            starts: 8,
+        }
+    }
+
+    fn is_container(&self) -> bool {
+        matches!(self.kind, "union" | "group" | "object" | "area_light")
+    }
+
+    fn part(&self, shape: Shape) -> Part {
+        Part {
+            shape: ShapeDef::Ready(shape),
+            transform: DAffine3::IDENTITY,
+            material: None,
+            emission: None,
+            span: self.span,
+        }
+    }
+
+    fn method(&self) -> IntersectMethod {
+        match &self.method {
+            Some(m) if m == "newton" => IntersectMethod::Newton {
+                iterations: self.iterations,
+                starts: self.starts,
+            },
+            _ => IntersectMethod::Robust,
+        }
+    }
+
+    pub(super) fn finish(mut self, ev: &mut Evaluator) -> SourceResult<ObjectDef> {
+        let mut parts = match self.kind {
+            "union" | "group" | "object" => {
+                if self.parts.is_empty() {
+                    ev.warn(
+                        Diagnostic::warning(self.span, format!("empty {}", self.kind))
+                            .with_label("contains no objects"),
+                    );
+                }
+                std::mem::take(&mut self.parts)
+            }
+            "area_light" => {
+                let Some((radiance, rspan)) = self.radiance else {
+                    return Err(vec![
+                        Error::new("an area light needs `radiance`")
+                            .label("no radiance given")
+                            .help("add e.g. `radiance rgb <17, 12, 4>`")
+                            .at(self.span),
+                    ]);
+                };
+                if self.parts.len() != 1 {
+                    return Err(vec![Error::new(format!("an area light needs exactly one shape, found {}", self.parts.len())).label("here").help("write e.g. `area_light { quad { <-0.25, 1.98, -0.25>, <0.5, 0, 0>, <0, 0, 0.5> } radiance rgb <17, 12, 4> }`").at(self.span)]);
+                }
+                if radiance.max_element() <= 0.0 {
+                    ev.warn(
+                        Diagnostic::warning(rspan, "this area light emits no light")
+                            .with_label("zero radiance")
+                            .with_help("give a positive radiance, or use a plain object"),
+                    );
+                }
+                if radiance.min_element() < 0.0 {
+                    return Err(range_error(
+                        rspan,
+                        "radiance must not be negative".into(),
+                        "use components ≥ 0",
+                    ));
+                }
+                let mut parts = std::mem::take(&mut self.parts);
+                let emission = Emission {
+                    radiance,
+                    two_sided: self.two_sided,
+                };
+                for p in &mut parts {
+                    if let ShapeDef::Ready(s) = &p.shape
+                        && !matches!(
+                            s,
+                            Shape::Quad { .. }
+                                | Shape::Disk { .. }
+                                | Shape::Sphere { .. }
+                                | Shape::Triangle { .. }
+                        )
+                    {
+                        return Err(vec![
+                            Error::new(format!(
+                                "an area light cannot be {} {}",
+                                article(s.kind()),
+                                s.kind()
+                            ))
+                            .label("unsupported emitter")
+                            .help("use a quad, disk, sphere or triangle")
+                            .at(p.span),
+                        ]);
+                    }
+                    p.emission = Some(emission);
+                }
+                parts
+            }
+            "revolve" => {
+                let Some(profile) = self.profile.clone() else {
+                    return Err(vec![Error::new("a revolve needs a `profile`").label("no profile").help("add e.g. `profile bezier { <0, 0>, <0.35, 0>, <0.4, 0.3>, <0.15, 0.6> }`").at(self.span)]);
+                };
+                self.check_profile(ev, &profile)?;
+                vec![self.part(Shape::Revolve {
+                    profile: Profile {
+                        segments: profile.segments.clone(),
+                    },
+                    sweep: self.sweep,
+                    method: self.method(),
+                })]
+            }
+            "bezier_patch" | "bezier_mesh" => {
+                let n = self.values.len();
+                if n == 0 || !n.is_multiple_of(16) || (self.kind == "bezier_patch" && n != 16) {
+                    return Err(vec![
+                        Error::new(format!(
+                            "{} needs {} control points, found {n}",
+                            self.kind,
+                            if self.kind == "bezier_patch" {
+                                "16"
+                            } else {
+                                "a multiple of 16"
+                            }
+                        ))
+                        .label("wrong number of points")
+                        .help("give 4 rows of 4 points `<x, y, z>`, row by row")
+                        .at(self.span),
+                    ]);
+                }
+                let mut parts = Vec::new();
+                for chunk in self.values.chunks(16) {
+                    let mut pts = [DVec3::ZERO; 16];
+                    for (i, (v, s)) in chunk.iter().enumerate() {
+                        pts[i] = v.vec3().at(*s)?;
+                    }
+                    parts.push(self.part(Shape::BezierPatch {
+                        points: Box::new(pts),
+                        method: self.method(),
+                    }));
+                }
+                parts
+            }
+            _ => vec![self.primitive(ev)?],
+        };
+        let mut t = self.transform;
+        if let Some((axis, span)) = self.axis {
+            if axis.length_squared() == 0.0 {
+                return Err(vec![
+                    Error::new("the axis has zero length")
+                        .label("zero vector")
+                        .at(span),
+                ]);
+            }
+            t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
+        }
+        if t.matrix3.determinant().abs() < 1e-300 {
+            return Err(vec![Error::new("the transform is singular").at(self.span)]);
+        }
+        for part in &mut parts {
+            part.transform = t * part.transform;
+            if part.material.is_none() {
+                part.material = self.material.clone();
+            }
+        }
+        Ok(ObjectDef { parts })
+    }
+
+    fn check_profile(&self, ev: &mut Evaluator, profile: &ProfileDef) -> SourceResult<()> {
+        for seg in &profile.segments {
+            for p in seg {
+                if p.x < 0.0 {
+                    return Err(range_error(
+                        profile.span,
+                        format!("profile point <{}, {}> has a negative radius", p.x, p.y),
+                        "radii (the first component) must be ≥ 0",
+                    ));
+                }
+            }
+        }
+        if self.corner {
+            return Ok(());
+        }
+        for (k, pair) in profile.segments.windows(2).enumerate() {
+            let (a, b) = (&pair[0], &pair[1]);
+            let at = profile.joints.get(k + 1).copied().unwrap_or(profile.span);
+            let t0 = a[a.len() - 1] - a[a.len() - 2];
+            let t1 = b[1] - b[0];
+            if t0.length() > 0.0 && t1.length() > 0.0 {
+                let cos = t0.normalize().dot(t1.normalize());
+                if cos < 0.9998 {
+                    let j = b[0];
+                    ev.warn(
+                        Diagnostic::warning(
+                            at,
+                            format!(
+                                "the profile has a kink at <{}, {}> ({:.1}° turn)",
+                                j.x,
+                                j.y,
+                                cos.clamp(-1.0, 1.0).acos().to_degrees()
+                            ),
+                        )
+                        .with_label("the segments meet at an angle here")
+                        .with_help("add `corner` to the revolve if the kink is intended"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn article(kind: &str) -> &'static str {
+    if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    }
+}
+
+impl Sink for ObjectBuilder {
+    fn kind(&self) -> String {
+        format!("{} {}", article(self.kind), self.kind)
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        match self.kind {
+            "cylinder" => &CYL_PROPS,
+            "area_light" => &AREA_PROPS,
+            "revolve" => &REVOLVE_PROPS,
+            "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,
+            _ => &OBJ_PROPS,
+        }
+    }
+    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        if transform_prop(&kw.text, &args, &mut self.transform)? {
+            return Ok(());
+        }
+        match kw.text.as_str() {
+            "open" => self.open = true,
+            "two_sided" => self.two_sided = true,
+            "corner" => self.corner = true,
+            "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),
+            "axis" => self.axis = Some((vec3(&args[0])?, args[0].span)),
+            "method" => self.method = Some(word(&args[0], &["robust", "newton"])?),
+            "iterations" => self.iterations = count(&args[0], "iterations", 1000.0)? as u32,
+            "starts" => self.starts = count(&args[0], "starts", 64.0)? as u32,
+            "angle" => {
+                let (a, b) = (num(&args[0])?, num(&args[1])?);
+                if !(a < b && b - a <= 360.0) {
+                    return Err(range_error(
+                        args[0].span.join(args[1].span),
+                        format!(
+                            "sweep angles must satisfy start < end ≤ start + 360, found {a}, {b}"
+                        ),
+                        "e.g. `angle 0, 270`",
+                    ));
+                }
+                self.sweep = Some((a, b));
+            }
+            "profile" => match &args[0].value {
+                Value::Profile(p) => self.profile = Some(p.clone()),
+                v => {
+                    return Err(vec![
+                        Error::new(format!("expected a profile, found {}", v.type_name()))
+                            .help("write `profile bezier { <r, h>, ... }`")
+                            .at(args[0].span),
+                    ]);
+                }
+            },
+            _ => unreachable!(),
+        }
+        Ok(())
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        match v {
+            Value::Material(m) => {
+                self.material = Some(m);
+                Ok(())
+            }
+            Value::Object(o) if self.is_container() => {
+                self.parts.extend(o.parts.iter().cloned());
+                Ok(())
+            }
+            Value::Object(_) => Err(unexpected(
+                self,
+                &v,
+                span,
+                "only `union`, `group`, `object` and `area_light` contain objects",
+            )),
+            Value::Texture(_) => Err(unexpected(
+                self,
+                &v,
+                span,
+                "put the texture in a material: `material { diffuse texture { ... } }`",
+            )),
+            v if self.is_container() => Err(unexpected(
+                self,
+                &v,
+                span,
+                "this block takes objects, a material and transforms",
+            )),
+            v if self.kind == "revolve" => Err(unexpected(
+                self,
+                &v,
+                span,
+                "a revolve takes `profile bezier { ... }`",
+            )),
+            v => {
+                self.values.push((v, span));
+                Ok(())
+            }
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `disk`, `triangle`,
+//! `mesh`): their positional values and the checks on them.
+
+use glam::{DAffine3, DVec3};
+
+use super::{ObjectBuilder, article};
+use crate::diag::{At, Diagnostic, Error, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::range_error;
+use crate::eval::value::{Part, ShapeDef, Value};
+use crate::scene::Shape;
+use crate::span::Span;
+
+/// What each primitive's positional values are: (name, kind) with kind `v` vector, `n` number,
+/// `s` string.
+fn signature(kind: &str) -> &'static [(&'static str, char)] {
+    match kind {
+        "sphere" => &[("center", 'v'), ("radius", 'n')],
+        "plane" => &[("normal", 'v'), ("offset", 'n')],
+        "quad" => &[("corner", 'v'), ("first edge", 'v'), ("second edge", 'v')],
+        "box" => &[("first corner", 'v'), ("opposite corner", 'v')],
+        "cylinder" => &[("base point", 'v'), ("cap point", 'v'), ("radius", 'n')],
+        "disk" => &[("center", 'v'), ("normal", 'v'), ("radius", 'n')],
+        "triangle" => &[
+            ("first vertex", 'v'),
+            ("second vertex", 'v'),
+            ("third vertex", 'v'),
+        ],
+        "mesh" => &[("OBJ file name", 's')],
+        _ => &[],
+    }
+}
+
+fn example(kind: &str) -> &'static str {
+    match kind {
+        "sphere" => "sphere { <0, 1, 0>, 0.5 }",
+        "plane" => "plane { <0, 1, 0>, 0 }",
+        "quad" => "quad { <-1, 0, -1>, <2, 0, 0>, <0, 0, 2> }",
+        "box" => "box { <-1, 0, -1>, <1, 1, 1> }",
+        "cylinder" => "cylinder { <0, 0, 0>, <0, 1, 0>, 0.1 }",
+        "disk" => "disk { <0, 0, 0>, <0, 1, 0>, 1 }",
+        "triangle" => "triangle { <0, 0, 0>, <1, 0, 0>, <0, 1, 0> }",
+        "mesh" => "mesh { \"bunny.obj\" }",
+        _ => "",
+    }
+}
+
+impl ObjectBuilder {
+    pub(super) fn primitive(&mut self, ev: &mut Evaluator) -> SourceResult<Part> {
+        let sig = signature(self.kind);
+        let names: Vec<&str> = sig.iter().map(|(n, _)| *n).collect();
+        if self.values.len() != sig.len() {
+            let span = if self.values.len() > sig.len() {
+                self.values[sig.len()].1
+            } else {
+                self.span
+            };
+            return Err(vec![
+                Error::new(format!(
+                    "{} needs {} value{} ({}), found {}",
+                    self.kind,
+                    sig.len(),
+                    if sig.len() == 1 { "" } else { "s" },
+                    names.join(", "),
+                    self.values.len()
+                ))
+                .label(if self.values.len() > sig.len() {
+                    "one value too many"
+                } else {
+                    "missing values"
+                })
+                .help(format!("write e.g. `{}`", example(self.kind)))
+                .at(span),
+            ]);
+        }
+        let mut vs = Vec::new();
+        let mut ns = Vec::new();
+        let mut strs = Vec::new();
+        for ((name, k), (v, s)) in sig.iter().zip(&self.values) {
+            // "the radius of a sphere: expected a number, ..."
+            let named = |e: Error| Error {
+                message: format!(
+                    "the {name} of {} {}: {}",
+                    article(self.kind),
+                    self.kind,
+                    e.message
+                ),
+                ..e
+            };
+            match k {
+                'v' => vs.push((v.vec3().map_err(named).at(*s)?, *s)),
+                'n' => ns.push((v.num().map_err(named).at(*s)?, *s)),
+                _ => match v {
+                    Value::Str(p) => strs.push((p.to_string(), *s)),
+                    v => {
+                        return Err(vec![
+                            Error::new(format!(
+                                "expected a file name string, found {}",
+                                v.type_name()
+                            ))
+                            .at(*s),
+                        ]);
+                    }
+                },
+            }
+        }
+        let radius = |(r, s): (f64, Span)| -> SourceResult<f64> {
+            if r <= 0.0 {
+                return Err(range_error(
+                    s,
+                    format!("radius must be positive, found {r}"),
+                    "use a radius greater than 0",
+                ));
+            }
+            Ok(r)
+        };
+        let nonzero = |(v, s): (DVec3, Span), what: &str| -> SourceResult<DVec3> {
+            if v.length_squared() == 0.0 {
+                return Err(vec![
+                    Error::new(format!("the {what} is a zero vector"))
+                        .label("zero length")
+                        .at(s),
+                ]);
+            }
+            Ok(v)
+        };
+        let shape = match self.kind {
+            "sphere" => Shape::Sphere {
+                center: vs[0].0,
+                radius: radius(ns[0])?,
+            },
+            "plane" => Shape::Plane {
+                normal: nonzero(vs[0], "normal")?.normalize(),
+                offset: ns[0].0,
+            },
+            "quad" => {
+                let (u, v) = (
+                    nonzero(vs[1], "first edge")?,
+                    nonzero(vs[2], "second edge")?,
+                );
+                if u.cross(v).length_squared() < 1e-24 {
+                    return Err(vec![
+                        Error::new("the quad's edges are parallel (it has no area)")
+                            .label("parallel to the first edge")
+                            .at(vs[2].1),
+                    ]);
+                }
+                Shape::Quad {
+                    origin: vs[0].0,
+                    edge_u: u,
+                    edge_v: v,
+                }
+            }
+            "box" => Shape::Box {
+                min: vs[0].0.min(vs[1].0),
+                max: vs[0].0.max(vs[1].0),
+            },
+            "cylinder" => {
+                if vs[0].0 == vs[1].0 {
+                    return Err(vec![
+                        Error::new("the cylinder's base and cap are the same point")
+                            .label("zero height")
+                            .at(vs[1].1),
+                    ]);
+                }
+                Shape::Cylinder {
+                    base: vs[0].0,
+                    cap: vs[1].0,
+                    radius: radius(ns[0])?,
+                    open: self.open,
+                }
+            }
+            "disk" => Shape::Disk {
+                center: vs[0].0,
+                normal: nonzero(vs[1], "normal")?.normalize(),
+                radius: radius(ns[0])?,
+            },
+            "triangle" => {
+                let [a, b, c] = [vs[0].0, vs[1].0, vs[2].0];
+                if (b - a).cross(c - a).length_squared() < 1e-24 {
+                    ev.warn(
+                        Diagnostic::warning(self.span, "this triangle has no area")
+                            .with_label("degenerate triangle"),
+                    );
+                }
+                Shape::Triangle {
+                    vertices: [a, b, c],
+                }
+            }
+            "mesh" => {
+                let (path, span) = &strs[0];
+                let part = Part {
+                    shape: ShapeDef::Mesh {
+                        path: ev.resolve_path(path, *span),
+                        span: *span,
+                    },
+                    transform: DAffine3::IDENTITY,
+                    material: None,
+                    emission: None,
+                    span: self.span,
+                };
+                return Ok(part);
+            }
+            k => unreachable!("primitive {k}"),
+        };
+        Ok(self.part(shape))
+    }
+}

@@ -1,0 +1,60 @@
+//! The top level: the scene itself as a sink (objects, lights, camera, settings, background).
+
+use super::{Sink, unexpected};
+use crate::diag::SourceResult;
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, color};
+use crate::eval::props::{PropSpec, p};
+use crate::eval::value::Value;
+use crate::scene::Background;
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+pub(crate) struct TopSink;
+
+static TOP_PROPS: [PropSpec; 1] = [p("background", 1, 1, "a color", "rgb <0.1, 0.1, 0.2>")];
+
+impl Sink for TopSink {
+    fn kind(&self) -> String {
+        "the scene".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &TOP_PROPS
+    }
+    fn property(&mut self, ev: &mut Evaluator, _kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        ev.scene.background = Background::Color(color(&args[0])?);
+        Ok(())
+    }
+    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        match v {
+            Value::Object(o) => ev.emit(&o, span),
+            Value::Settings(s) => {
+                ev.scene.settings = *s;
+                Ok(())
+            }
+            Value::Camera(c) => {
+                ev.scene.camera = *c;
+                Ok(())
+            }
+            Value::Light(l) => {
+                ev.scene.lights.push(*l);
+                Ok(())
+            }
+            Value::Environment(e) => {
+                let image = ev.image(&e.path, true, e.path_span)?;
+                ev.scene.background = Background::Environment {
+                    image,
+                    intensity: e.intensity,
+                    transform: e.transform,
+                };
+                Ok(())
+            }
+            v => Err(unexpected(
+                self,
+                &v,
+                span,
+                "a statement is an object, a light, `camera { ... }`, `settings { ... }`, a directive or a macro call",
+            )),
+        }
+    }
+}

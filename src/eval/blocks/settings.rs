@@ -1,0 +1,110 @@
+//! `settings { ... }`: the render settings.
+
+use super::{Sink, unexpected};
+use crate::diag::{At, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, count, num, positive, range_error, word};
+use crate::eval::props::{PropSpec, p, w};
+use crate::eval::value::Value;
+use crate::scene::{Integrator, Settings};
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+pub(super) struct SettingsBuilder(pub(super) Settings);
+
+static SETTINGS_PROPS: [PropSpec; 10] = [
+    p("resolution", 1, 2, "a width and height", "<512, 512>"),
+    p("iterations", 1, 1, "a number", "64"),
+    p("photons", 1, 1, "a number", "200000"),
+    p("radius", 1, 1, "a number", "0.05"),
+    p("alpha", 1, 1, "a number in (0, 1]", "0.7"),
+    p("max_depth", 1, 1, "a number", "16"),
+    p("seed", 1, 1, "a number", "7"),
+    w(
+        "integrator",
+        "`sppm`, `ppm`, `photon_map`, `path` or `whitted`",
+        "sppm",
+    ),
+    p("exposure", 1, 1, "a number", "1"),
+    p("time_limit", 1, 1, "a number of seconds", "60"),
+];
+
+impl Sink for SettingsBuilder {
+    fn kind(&self) -> String {
+        "settings".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &SETTINGS_PROPS
+    }
+    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        let s = &mut self.0;
+        match kw.text.as_str() {
+            "resolution" => {
+                let (w, h, span) = if args.len() == 2 {
+                    (
+                        num(&args[0])?,
+                        num(&args[1])?,
+                        args[0].span.join(args[1].span),
+                    )
+                } else {
+                    let v = args[0].value.vec2().at(args[0].span)?;
+                    (v.x, v.y, args[0].span)
+                };
+                for x in [w, h] {
+                    if !(1.0..=16384.0).contains(&x) || x.fract() != 0.0 {
+                        return Err(range_error(
+                            span,
+                            format!(
+                                "resolution must be whole numbers from 1 to 16384, found {w} x {h}"
+                            ),
+                            "e.g. `resolution <512, 512>`",
+                        ));
+                    }
+                }
+                s.resolution = (w as u32, h as u32);
+            }
+            "iterations" => s.iterations = count(&args[0], "iterations", 1e7)? as u32,
+            "photons" => s.photons = count(&args[0], "photons", 1e10)? as u64,
+            "radius" => s.radius = Some(positive(&args[0], "radius")?),
+            "alpha" => {
+                let a = num(&args[0])?;
+                if !(a > 0.0 && a <= 1.0) {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("alpha must be in (0, 1], found {a}"),
+                        "SPPM uses 2/3 or 0.7",
+                    ));
+                }
+                s.alpha = a;
+            }
+            "max_depth" => s.max_depth = count(&args[0], "max_depth", 1000.0)? as u32,
+            "seed" => {
+                let x = num(&args[0])?;
+                if x < 0.0 || x.fract() != 0.0 || x > u64::MAX as f64 {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("seed must be a whole number ≥ 0, found {x}"),
+                        "e.g. `seed 7`",
+                    ));
+                }
+                s.seed = x as u64;
+            }
+            "integrator" => {
+                let names: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
+                s.integrator = Integrator::from_name(&word(&args[0], &names)?).expect("known name");
+            }
+            "exposure" => s.exposure = positive(&args[0], "exposure")?,
+            "time_limit" => s.time_limit = Some(positive(&args[0], "time limit")?),
+            _ => unreachable!(),
+        }
+        Ok(())
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        Err(unexpected(
+            self,
+            &v,
+            span,
+            "settings take properties only, e.g. `settings { iterations 64 }`",
+        ))
+    }
+}

@@ -1,0 +1,338 @@
+//! `texture { ... }` (a pattern, its mapping and transform) and `color_map { ... }`.
+
+use std::rc::Rc;
+
+use glam::{DAffine3, DVec3};
+
+use super::{Sink, unexpected};
+use crate::diag::{At, Error, SourceResult};
+use crate::eval::Evaluator;
+use crate::eval::args::{Arg, color, count, file_name, num, positive, range_error, vec3, word};
+use crate::eval::props::{PropSpec, p, transform_prop, w, with_transforms};
+use crate::eval::value::{PatternDef, TextureDef, Value};
+use crate::scene::{Color, ColorMap, Mapping, Pattern, Wrap};
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+#[derive(Default)]
+pub(super) struct TextureBuilder {
+    pattern: Option<(&'static str, Span)>,
+    a: Color,
+    b: Color,
+    direction: Option<DVec3>,
+    map: Option<Rc<ColorMap>>,
+    octaves: Option<u32>,
+    turbulence: Option<f64>,
+    mortar: Option<f64>,
+    size: Option<DVec3>,
+    image: Option<(String, Span)>,
+    wrap: Wrap,
+    bilinear: bool,
+    mapping: Option<Mapping>,
+    linear: bool,
+    transform: DAffine3,
+}
+
+static TEX_PROPS: [PropSpec; 19] = with_transforms([
+    p(
+        "checker",
+        2,
+        2,
+        "two colors",
+        "rgb <1, 1, 1>, rgb <0, 0, 0>",
+    ),
+    p(
+        "stripes",
+        2,
+        2,
+        "two colors",
+        "rgb <1, 1, 1>, rgb <0, 0, 0>",
+    ),
+    p("gradient", 0, 1, "a direction (optional)", "<0, 1, 0>"),
+    p("noise", 0, 0, "nothing", ""),
+    p("marble", 0, 0, "nothing", ""),
+    p("wood", 0, 0, "nothing", ""),
+    p(
+        "brick",
+        2,
+        2,
+        "two colors (brick, mortar)",
+        "rgb <0.6, 0.2, 0.1>, rgb <0.8, 0.8, 0.8>",
+    ),
+    p("image", 1, 1, "a file name", "\"wood.png\""),
+    w("wrap", "`repeat`, `clamp` or `mirror`", "repeat"),
+    p("interpolate", 0, 0, "nothing", ""),
+    w(
+        "map",
+        "`uv`, `planar`, `spherical`, `cylindrical` or `solid`",
+        "uv",
+    ),
+    p("linear", 0, 0, "nothing", ""),
+    p("octaves", 1, 1, "a number", "6"),
+    p("turbulence", 1, 1, "a number", "1"),
+    p("mortar", 1, 1, "a number", "0.01"),
+]);
+static TEX_PROPS_SIZE: [PropSpec; 1] = [p("size", 1, 1, "a vector", "<0.2, 0.075, 0.1>")];
+
+impl TextureBuilder {
+    fn set(&mut self, k: &'static str, span: Span) -> SourceResult<()> {
+        if let Some((old, old_span)) = self.pattern {
+            return Err(vec![
+                Error::new(format!("a texture has one pattern: {old} or {k}, not both"))
+                    .label("second pattern")
+                    .at(span)
+                    .with_extra(old_span, "first pattern here"),
+            ]);
+        }
+        self.pattern = Some((k, span));
+        Ok(())
+    }
+
+    pub(super) fn finish(self, ev: &mut Evaluator, span: Span) -> SourceResult<Value> {
+        let Some((kind, _)) = self.pattern else {
+            return Err(vec![
+                Error::new("a texture needs a pattern")
+                    .label("no pattern")
+                    .help("e.g. `texture { checker rgb <1, 1, 1>, rgb <0, 0, 0> scale 0.1 }`")
+                    .at(span),
+            ]);
+        };
+        let map = self
+            .map
+            .map(|m| (*m).clone())
+            .unwrap_or_else(|| ColorMap(vec![(0.0, Color::ZERO), (1.0, Color::ONE)]));
+        let octaves = self.octaves.unwrap_or(6);
+        let turbulence = self.turbulence.unwrap_or(1.0);
+        let pattern = match kind {
+            "checker" => PatternDef::Ready(Pattern::Checker {
+                a: self.a,
+                b: self.b,
+            }),
+            "stripes" => PatternDef::Ready(Pattern::Stripes {
+                a: self.a,
+                b: self.b,
+            }),
+            "gradient" => PatternDef::Ready(Pattern::Gradient {
+                direction: self.direction.unwrap_or(DVec3::Y),
+                map,
+            }),
+            "noise" => PatternDef::Ready(Pattern::Noise { map, octaves }),
+            "marble" => PatternDef::Ready(Pattern::Marble {
+                map,
+                turbulence,
+                octaves,
+            }),
+            "wood" => PatternDef::Ready(Pattern::Wood {
+                map,
+                turbulence,
+                octaves,
+            }),
+            "brick" => PatternDef::Ready(Pattern::Brick {
+                brick: self.a,
+                mortar: self.b,
+                size: self.size.unwrap_or(DVec3::new(0.2, 0.075, 0.1)),
+                mortar_width: self.mortar.unwrap_or(0.01),
+            }),
+            _ => {
+                let (path, pspan) = self.image.expect("image path");
+                PatternDef::Image {
+                    path: ev.resolve_path(&path, pspan),
+                    linear: self.linear,
+                    wrap: self.wrap,
+                    bilinear: self.bilinear,
+                    span: pspan,
+                }
+            }
+        };
+        let mapping = self.mapping.unwrap_or(if kind == "image" {
+            Mapping::Uv
+        } else {
+            Mapping::Solid
+        });
+        Ok(Value::Texture(Rc::new(TextureDef {
+            pattern,
+            mapping,
+            transform: self.transform.inverse(),
+            span,
+        })))
+    }
+}
+
+impl Sink for TextureBuilder {
+    fn kind(&self) -> String {
+        "a texture".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &TEX_PROPS
+    }
+    fn prop_spec(&self, name: &str) -> Option<&'static PropSpec> {
+        TEX_PROPS
+            .iter()
+            .chain(TEX_PROPS_SIZE.iter())
+            .find(|p| p.name == name)
+    }
+    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+        if transform_prop(&kw.text, &args, &mut self.transform)? {
+            return Ok(());
+        }
+        match kw.text.as_str() {
+            k @ ("checker" | "stripes" | "brick") => {
+                self.set(
+                    if k == "checker" {
+                        "checker"
+                    } else if k == "stripes" {
+                        "stripes"
+                    } else {
+                        "brick"
+                    },
+                    kw.span,
+                )?;
+                self.a = color(&args[0])?;
+                self.b = color(&args[1])?;
+            }
+            "gradient" => {
+                self.set("gradient", kw.span)?;
+                if let Some(a) = args.first() {
+                    match &a.value {
+                        Value::ColorMap(m) => self.map = Some(m.clone()),
+                        _ => {
+                            let d = vec3(a)?;
+                            if d.length_squared() == 0.0 {
+                                return Err(vec![
+                                    Error::new("the gradient direction is a zero vector")
+                                        .at(a.span),
+                                ]);
+                            }
+                            self.direction = Some(d);
+                        }
+                    }
+                }
+            }
+            "noise" => self.set("noise", kw.span)?,
+            "marble" => self.set("marble", kw.span)?,
+            "wood" => self.set("wood", kw.span)?,
+            "image" => {
+                self.set("image", kw.span)?;
+                self.image = Some((file_name(&args[0])?.to_string(), args[0].span));
+            }
+            "wrap" => {
+                self.wrap = match word(&args[0], &["repeat", "clamp", "mirror"])?.as_str() {
+                    "repeat" => Wrap::Repeat,
+                    "clamp" => Wrap::Clamp,
+                    _ => Wrap::Mirror,
+                }
+            }
+            "interpolate" => self.bilinear = true,
+            "linear" => self.linear = true,
+            "map" => {
+                self.mapping = Some(
+                    match word(
+                        &args[0],
+                        &["uv", "planar", "spherical", "cylindrical", "solid"],
+                    )?
+                    .as_str()
+                    {
+                        "uv" => Mapping::Uv,
+                        "planar" => Mapping::Planar,
+                        "spherical" => Mapping::Spherical,
+                        "cylindrical" => Mapping::Cylindrical,
+                        _ => Mapping::Solid,
+                    },
+                )
+            }
+            "octaves" => self.octaves = Some(count(&args[0], "octaves", 16.0)? as u32),
+            "turbulence" => {
+                let t = num(&args[0])?;
+                if t < 0.0 {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("turbulence must not be negative, found {t}"),
+                        "use a number ≥ 0",
+                    ));
+                }
+                self.turbulence = Some(t);
+            }
+            "mortar" => self.mortar = Some(positive(&args[0], "mortar width")?),
+            "size" => {
+                let s = vec3(&args[0])?;
+                if s.min_element() <= 0.0 {
+                    return Err(range_error(
+                        args[0].span,
+                        "brick size components must be positive".into(),
+                        "e.g. `size <0.2, 0.075, 0.1>`",
+                    ));
+                }
+                self.size = Some(s);
+            }
+            _ => unreachable!(),
+        }
+        Ok(())
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        match v {
+            Value::ColorMap(m) => {
+                self.map = Some(m);
+                Ok(())
+            }
+            v => Err(unexpected(
+                self,
+                &v,
+                span,
+                "a texture takes a pattern keyword, `color_map { ... }` and transforms",
+            )),
+        }
+    }
+}
+
+#[derive(Default)]
+pub(super) struct ColorMapBuilder(Vec<(f64, Color)>);
+
+impl ColorMapBuilder {
+    pub(super) fn finish(mut self, span: Span) -> SourceResult<Value> {
+        if self.0.len() < 2 {
+            return Err(vec![
+                Error::new("a color map needs at least two entries")
+                    .help("e.g. `color_map { [0, rgb <0, 0, 0>] [1, rgb <1, 1, 1>] }`")
+                    .at(span),
+            ]);
+        }
+        self.0.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Ok(Value::ColorMap(Rc::new(ColorMap(self.0))))
+    }
+}
+
+impl Sink for ColorMapBuilder {
+    fn kind(&self) -> String {
+        "a color map".into()
+    }
+    fn props(&self) -> &'static [PropSpec] {
+        &[]
+    }
+    fn property(&mut self, _ev: &mut Evaluator, _kw: &Name, _args: Vec<Arg>) -> SourceResult<()> {
+        unreachable!()
+    }
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        let entry = match &v {
+            Value::Array(a) if a.len() == 2 => (a[0].num(), a[1].color()),
+            _ => {
+                return Err(unexpected(
+                    self,
+                    &v,
+                    span,
+                    "entries look like `[0.5, rgb <1, 0, 0>]`",
+                ));
+            }
+        };
+        let pos = entry.0.at(span)?;
+        let c = entry.1.at(span)?;
+        if !(0.0..=1.0).contains(&pos) {
+            return Err(range_error(
+                span,
+                format!("color map positions must be in [0, 1], found {pos}"),
+                "use a position from 0 to 1",
+            ));
+        }
+        self.0.push((pos, c));
+        Ok(())
+    }
+}

@@ -1,0 +1,265 @@
+//! Expressions: literals, names, operators, indexing, and calls of built-in functions.
+
+use std::rc::Rc;
+
+use glam::{DVec2, DVec3};
+
+use super::Evaluator;
+use super::builtins::{self, FUNCTIONS};
+use super::value::Value;
+use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
+use crate::span::Span;
+use crate::syntax::ast::*;
+
+impl Evaluator {
+    pub(crate) fn eval(&mut self, e: &Expr) -> SourceResult<Value> {
+        let v = self.eval_inner(e)?;
+        match &v {
+            Value::Num(n) if !n.is_finite() => Err(vec![not_finite(e.span, "number")]),
+            Value::Vec3(a) | Value::Color(a) if !a.is_finite() => {
+                Err(vec![not_finite(e.span, "vector")])
+            }
+            Value::Vec2(a) if !a.is_finite() => Err(vec![not_finite(e.span, "vector")]),
+            _ => Ok(v),
+        }
+    }
+
+    fn eval_inner(&mut self, e: &Expr) -> SourceResult<Value> {
+        Ok(match &e.kind {
+            ExprKind::Number(n) => Value::Num(*n),
+            ExprKind::Bool(b) => Value::Bool(*b),
+            ExprKind::Str(s) => Value::Str(s.clone()),
+            ExprKind::Ident(name) => self.lookup(name, e.span)?,
+            ExprKind::Vector(parts) => {
+                let mut xs = Vec::with_capacity(parts.len());
+                for p in parts {
+                    xs.push(self.eval(p)?.num().at(p.span)?);
+                }
+                match xs.len() {
+                    2 => Value::Vec2(DVec2::new(xs[0], xs[1])),
+                    3 => Value::Vec3(DVec3::new(xs[0], xs[1], xs[2])),
+                    _ => Value::Array(Rc::new(xs.into_iter().map(Value::Num).collect())),
+                }
+            }
+            ExprKind::Array(parts) => {
+                let mut xs = Vec::with_capacity(parts.len());
+                for p in parts {
+                    xs.push(self.eval(p)?);
+                }
+                Value::Array(Rc::new(xs))
+            }
+            ExprKind::Block { kind, items } => self.eval_block(kind, items, e.span)?,
+            ExprKind::Call { name, args } => {
+                if let Some(Value::Macro(_)) = self.lookup_quiet(&name.text) {
+                    return Err(vec![
+                        Error::new(format!("macro `{}` cannot be used as a value", name.text))
+                            .label("a macro call must stand alone as a statement")
+                            .help("call it on its own, e.g. inside `union { ... }`")
+                            .at(e.span),
+                    ]);
+                }
+                let mut vals = Vec::with_capacity(args.len());
+                for a in args {
+                    vals.push(self.eval(a)?);
+                }
+                match builtins::call(&name.text, &vals) {
+                    Some(Ok(v)) => v,
+                    Some(Err((i, mut err))) => {
+                        if err.label.is_empty() {
+                            err.label = "invalid argument".into();
+                        }
+                        let span = args.get(i).map_or(e.span, |a| a.span);
+                        return Err(vec![err.at(span)]);
+                    }
+                    None => {
+                        let mut err = Error::new(format!("unknown function `{}`", name.text))
+                            .label("no built-in function or macro of this name");
+                        let mut cands: Vec<&str> = FUNCTIONS.to_vec();
+                        let macros: Vec<String> = self
+                            .globals
+                            .iter()
+                            .filter(|(_, b)| matches!(b.value, Value::Macro(_)))
+                            .map(|(n, _)| n.clone())
+                            .collect();
+                        cands.extend(macros.iter().map(String::as_str));
+                        if let Some(s) = suggest(&name.text, cands) {
+                            err = err.help(format!("did you mean `{s}`?"));
+                        }
+                        return Err(vec![err.at(name.span)]);
+                    }
+                }
+            }
+            ExprKind::Unary(op, inner) => {
+                let v = self.eval(inner)?;
+                unary(*op, v).at(e.span)?
+            }
+            ExprKind::Binary(op, a, b) => {
+                let va = self.eval(a)?;
+                // Short-circuit logic.
+                if matches!(op, BinOp::And | BinOp::Or) {
+                    let x = va.truthy().at(a.span)?;
+                    if (*op == BinOp::And && !x) || (*op == BinOp::Or && x) {
+                        return Ok(Value::Bool(x));
+                    }
+                    return Ok(Value::Bool(self.eval(b)?.truthy().at(b.span)?));
+                }
+                let vb = self.eval(b)?;
+                binary(*op, va, vb).at(e.span)?
+            }
+            ExprKind::Index(base, index) => {
+                let vb = self.eval(base)?;
+                let i = self.eval(index)?.num().at(index.span)?;
+                index_value(vb, i).at(index.span)?
+            }
+            ExprKind::Field(base, field) => {
+                let vb = self.eval(base)?;
+                field_value(vb, &field.text).at(field.span)?
+            }
+        })
+    }
+}
+
+fn not_finite(span: Span, what: &str) -> Diagnostic {
+    Error::new(format!("this {what} is not finite (NaN or infinity)"))
+        .label("not a finite value")
+        .help("check for a division by a tiny number or an overflowing power")
+        .at(span)
+}
+
+fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
+    Ok(match (op, v) {
+        (UnOp::Pos, v @ (Value::Num(_) | Value::Vec2(_) | Value::Vec3(_) | Value::Color(_))) => v,
+        (UnOp::Neg, Value::Num(n)) => Value::Num(-n),
+        (UnOp::Neg, Value::Vec2(a)) => Value::Vec2(-a),
+        (UnOp::Neg, Value::Vec3(a)) => Value::Vec3(-a),
+        (UnOp::Neg, Value::Color(a)) => Value::Color(-a),
+        (UnOp::Not, v) => Value::Bool(!v.truthy()?),
+        (UnOp::Rgb, v) => Value::Color(v.color()?),
+        (op, v) => {
+            return Err(Error::new(format!(
+                "cannot apply `{}` to {}",
+                match op {
+                    UnOp::Neg => "-",
+                    UnOp::Pos => "+",
+                    UnOp::Not => "!",
+                    UnOp::Rgb => "rgb",
+                },
+                v.type_name()
+            )));
+        }
+    })
+}
+
+fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
+    use BinOp::*;
+    use Value::*;
+    let mismatch = |a: &Value, b: &Value| {
+        Error::new(format!(
+            "cannot apply `{}` to {} and {}",
+            op.symbol(),
+            a.type_name(),
+            b.type_name()
+        ))
+        .label("type mismatch")
+    };
+    if matches!(op, Div) {
+        let zero = match &b {
+            Num(x) => *x == 0.0,
+            Vec2(v) => v.x == 0.0 || v.y == 0.0,
+            Vec3(v) | Color(v) => v.min_element() == 0.0 && v.abs().min_element() == 0.0,
+            _ => false,
+        };
+        if zero {
+            return Err(Error::new("division by zero").label("this divides by zero"));
+        }
+    }
+    let arith = |x: f64, y: f64| match op {
+        Add => x + y,
+        Sub => x - y,
+        Mul => x * y,
+        _ => x / y,
+    };
+    let arith3 = |x: DVec3, y: DVec3| match op {
+        Add => x + y,
+        Sub => x - y,
+        Mul => x * y,
+        _ => x / y,
+    };
+    let arith2 = |x: DVec2, y: DVec2| match op {
+        Add => x + y,
+        Sub => x - y,
+        Mul => x * y,
+        _ => x / y,
+    };
+    Ok(match op {
+        Add | Sub | Mul | Div => match (&a, &b) {
+            (Num(x), Num(y)) => Num(arith(*x, *y)),
+            (Vec3(x), Vec3(y)) => Vec3(arith3(*x, *y)),
+            (Color(x), Color(y) | Vec3(y)) | (Vec3(x), Color(y)) => Color(arith3(*x, *y)),
+            (Vec3(x), Num(y)) => Vec3(arith3(*x, DVec3::splat(*y))),
+            (Color(x), Num(y)) => Color(arith3(*x, DVec3::splat(*y))),
+            (Num(x), Vec3(y)) if matches!(op, Mul | Add) => Vec3(arith3(DVec3::splat(*x), *y)),
+            (Num(x), Color(y)) if matches!(op, Mul | Add) => Color(arith3(DVec3::splat(*x), *y)),
+            (Vec2(x), Vec2(y)) => Vec2(arith2(*x, *y)),
+            (Vec2(x), Num(y)) => Vec2(arith2(*x, DVec2::splat(*y))),
+            (Num(x), Vec2(y)) if matches!(op, Mul | Add) => Vec2(arith2(DVec2::splat(*x), *y)),
+            (Str(x), Str(y)) if op == Add => Str(Rc::from(format!("{x}{y}"))),
+            _ => return Err(mismatch(&a, &b)),
+        },
+        Lt | Le | Gt | Ge => match (&a, &b) {
+            (Num(x), Num(y)) => Bool(match op {
+                Lt => x < y,
+                Le => x <= y,
+                Gt => x > y,
+                _ => x >= y,
+            }),
+            _ => return Err(mismatch(&a, &b).help("only numbers can be ordered")),
+        },
+        Eq | Ne => {
+            let eq = match (&a, &b) {
+                (Num(x), Num(y)) => x == y,
+                (Bool(x), Bool(y)) => x == y,
+                (Str(x), Str(y)) => x == y,
+                (Vec2(x), Vec2(y)) => x == y,
+                (Vec3(x) | Color(x), Vec3(y) | Color(y)) => x == y,
+                _ => return Err(mismatch(&a, &b)),
+            };
+            Bool(eq == (op == Eq))
+        }
+        And | Or => unreachable!("short-circuited"),
+    })
+}
+
+fn index_value(v: Value, i: f64) -> Result<Value, Error> {
+    let len = match &v {
+        Value::Array(a) => a.len(),
+        Value::Vec2(_) => 2,
+        Value::Vec3(_) | Value::Color(_) => 3,
+        o => return Err(Error::new(format!("cannot index {}", o.type_name()))),
+    };
+    if i < 0.0 || i.fract() != 0.0 || i as usize >= len {
+        return Err(Error::new(format!("index {i} out of range (length {len})"))
+            .label("out of range")
+            .help(format!("indices run from 0 to {}", len.saturating_sub(1))));
+    }
+    let i = i as usize;
+    Ok(match v {
+        Value::Array(a) => a[i].clone(),
+        Value::Vec2(a) => Value::Num(a[i]),
+        Value::Vec3(a) | Value::Color(a) => Value::Num(a[i]),
+        _ => unreachable!(),
+    })
+}
+
+fn field_value(v: Value, f: &str) -> Result<Value, Error> {
+    let i = match f {
+        "x" | "u" | "r" | "red" => 0,
+        "y" | "v" | "g" | "green" => 1,
+        "z" | "b" | "blue" => 2,
+        _ => {
+            return Err(Error::new(format!("unknown component `.{f}`"))
+                .help("components are `.x`, `.y`, `.z` (or `.r`, `.g`, `.b`)"));
+        }
+    };
+    index_value(v, i as f64).map_err(|_| Error::new(format!("this value has no component `.{f}`")))
+}

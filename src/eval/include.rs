@@ -1,0 +1,86 @@
+//! `#include` and the resolution of file paths relative to the file that names them.
+
+use std::path::{Path, PathBuf};
+
+use super::Evaluator;
+use super::blocks::Sink;
+use crate::diag::{Error, SourceResult};
+use crate::span::Span;
+use crate::syntax::parse;
+
+impl Evaluator {
+    pub(super) fn include(
+        &mut self,
+        path: &str,
+        span: Span,
+        sink: &mut dyn Sink,
+    ) -> SourceResult<()> {
+        let resolved = self.resolve_path(path, span);
+        let canon = canonical(&resolved);
+        if let Some(pos) = self.include_stack.iter().position(|p| *p == canon) {
+            let chain: Vec<String> = self.include_stack[pos..]
+                .iter()
+                .chain(std::iter::once(&canon))
+                .map(|p| {
+                    p.file_name().map_or_else(
+                        || p.display().to_string(),
+                        |n| n.to_string_lossy().into_owned(),
+                    )
+                })
+                .collect();
+            return Err(vec![
+                Error::new(format!("cyclic include of `{path}`"))
+                    .label("this file is already being included")
+                    .help(format!("the include chain is {}", chain.join(" → ")))
+                    .at(span),
+            ]);
+        }
+        if self.include_stack.len() > 64 {
+            return Err(vec![
+                Error::new("includes nested more than 64 deep").at(span),
+            ]);
+        }
+        // Recorded before the read so that `watch` also waits for a file that is missing.
+        self.dependencies.push(resolved.clone());
+        let text = std::fs::read_to_string(&resolved).map_err(|e| {
+            vec![
+                Error::new(format!("cannot read included file `{path}`: {e}"))
+                    .label("not found")
+                    .help(format!(
+                        "the path is resolved relative to the including file: {}",
+                        resolved.display()
+                    ))
+                    .at(span),
+            ]
+        })?;
+        let file = self
+            .sources
+            .add(&resolved, resolved.display().to_string(), text.clone());
+        let items = parse(file, &text)?;
+        self.include_stack.push(canon);
+        let r = self.run_items(&items, sink);
+        self.include_stack.pop();
+        r.map_err(|mut ds| {
+            for d in &mut ds {
+                d.trace.push((span, "in the file included here".into()));
+            }
+            ds
+        })
+    }
+
+    /// A path from source text, relative to the directory of the file the span is in.
+    pub(crate) fn resolve_path(&self, path: &str, span: Span) -> PathBuf {
+        let p = Path::new(path);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        match self.sources.get(span.file).and_then(|f| f.path.parent()) {
+            Some(dir) => dir.join(p),
+            None => p.to_path_buf(),
+        }
+    }
+}
+
+pub(super) fn canonical(p: &Path) -> PathBuf {
+    std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf())
+}

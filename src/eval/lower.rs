@@ -1,0 +1,229 @@
+//! Lowering into the [`Scene`]: objects become scene objects, declared materials and
+//! textures get ids (once each), and images and meshes are loaded (once each).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use super::Evaluator;
+use super::value::{ColorDef, MatKind, MaterialDef, ObjectDef, PatternDef, ShapeDef, TextureDef};
+use crate::diag::{Error, SourceResult};
+use crate::scene::*;
+use crate::span::Span;
+
+/// Loaded assets and the ids given to declared materials and textures.
+///
+/// Materials and textures are keyed by address; the map holds the `Rc` too, so that an address
+/// is not reused by another definition while its id is stored.
+#[derive(Default)]
+pub(crate) struct Assets {
+    materials: HashMap<*const MaterialDef, (Rc<MaterialDef>, MaterialId)>,
+    textures: HashMap<*const TextureDef, (Rc<TextureDef>, TextureId)>,
+    images: HashMap<(PathBuf, bool), Arc<ImageData>>,
+    meshes: HashMap<PathBuf, Arc<MeshData>>,
+    default_material: Option<MaterialId>,
+    black_material: Option<MaterialId>,
+}
+
+pub(crate) fn empty_scene() -> Scene {
+    Scene {
+        settings: Settings::default(),
+        camera: Camera::default(),
+        objects: Vec::new(),
+        lights: Vec::new(),
+        materials: Vec::new(),
+        textures: Vec::new(),
+        background: Background::default(),
+    }
+}
+
+impl Evaluator {
+    pub(crate) fn check_object_budget(&self, span: Span) -> SourceResult<()> {
+        if self.scene.objects.len() >= self.options.max_objects {
+            return Err(vec![
+                Error::new(format!(
+                    "the scene has more than {} objects",
+                    self.options.max_objects
+                ))
+                .label("limit reached here")
+                .help("is a recursion too deep?")
+                .at(span),
+            ]);
+        }
+        Ok(())
+    }
+
+    /// Adds an object's parts to the scene.
+    pub(super) fn emit(&mut self, obj: &ObjectDef, span: Span) -> SourceResult<()> {
+        for part in &obj.parts {
+            self.check_object_budget(span)?;
+            let material = match (&part.material, part.emission) {
+                (Some(m), _) => self.material_id(m)?,
+                (None, Some(_)) => self.black_material(),
+                (None, None) => self.default_material(),
+            };
+            let shape = match &part.shape {
+                ShapeDef::Ready(s) => s.clone(),
+                ShapeDef::Mesh { path, span } => Shape::Mesh {
+                    mesh: self.mesh(path, *span)?,
+                },
+            };
+            self.scene.objects.push(Object {
+                shape,
+                transform: part.transform,
+                material,
+                emission: part.emission,
+                span: part.span,
+            });
+        }
+        Ok(())
+    }
+
+    fn push_material(&mut self, m: Material) -> MaterialId {
+        self.scene.materials.push(m);
+        MaterialId(self.scene.materials.len() as u32 - 1)
+    }
+
+    fn default_material(&mut self) -> MaterialId {
+        if let Some(id) = self.assets.default_material {
+            return id;
+        }
+        let id = self.push_material(Material::Diffuse {
+            albedo: ColorParam::Const(Color::splat(0.5)),
+        });
+        self.assets.default_material = Some(id);
+        id
+    }
+
+    fn black_material(&mut self) -> MaterialId {
+        if let Some(id) = self.assets.black_material {
+            return id;
+        }
+        let id = self.push_material(Material::Diffuse {
+            albedo: ColorParam::Const(Color::ZERO),
+        });
+        self.assets.black_material = Some(id);
+        id
+    }
+
+    fn material_id(&mut self, m: &Rc<MaterialDef>) -> SourceResult<MaterialId> {
+        let key = Rc::as_ptr(m);
+        if let Some((_, id)) = self.assets.materials.get(&key) {
+            return Ok(*id);
+        }
+        let material = match &m.kind {
+            MatKind::Diffuse(a) => Material::Diffuse {
+                albedo: self.color_param(a)?,
+            },
+            MatKind::Mirror(t) => Material::Mirror {
+                tint: self.color_param(t)?,
+            },
+            MatKind::Glass { ior, absorb, tint } => Material::Glass {
+                ior: *ior,
+                absorb: self.color_param(absorb)?,
+                tint: *tint,
+            },
+            MatKind::Glossy {
+                albedo,
+                specular,
+                roughness,
+            } => Material::Glossy {
+                albedo: self.color_param(albedo)?,
+                specular: self.color_param(specular)?,
+                roughness: match self.color_param(roughness)? {
+                    ColorParam::Const(c) => ScalarParam::Const(c.x),
+                    ColorParam::Texture(t) => ScalarParam::Texture(t),
+                },
+            },
+        };
+        let id = self.push_material(material);
+        self.assets.materials.insert(key, (m.clone(), id));
+        Ok(id)
+    }
+
+    fn color_param(&mut self, c: &ColorDef) -> SourceResult<ColorParam> {
+        Ok(match c {
+            ColorDef::Const(c) => ColorParam::Const(*c),
+            ColorDef::Tex(t) => ColorParam::Texture(self.texture_id(t)?),
+        })
+    }
+
+    fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
+        let key = Rc::as_ptr(t);
+        if let Some((_, id)) = self.assets.textures.get(&key) {
+            return Ok(*id);
+        }
+        let pattern = match &t.pattern {
+            PatternDef::Ready(p) => p.clone(),
+            PatternDef::Image {
+                path,
+                linear,
+                wrap,
+                bilinear,
+                span,
+            } => Pattern::Image {
+                image: self.image(path, *linear, *span)?,
+                wrap: *wrap,
+                bilinear: *bilinear,
+            },
+        };
+        self.scene.textures.push(Texture {
+            pattern,
+            mapping: t.mapping,
+            transform: t.transform,
+            span: t.span,
+        });
+        let id = TextureId(self.scene.textures.len() as u32 - 1);
+        self.assets.textures.insert(key, (t.clone(), id));
+        Ok(id)
+    }
+
+    pub(super) fn image(
+        &mut self,
+        path: &std::path::Path,
+        linear: bool,
+        span: Span,
+    ) -> SourceResult<Arc<ImageData>> {
+        let key = (path.to_path_buf(), linear);
+        if let Some(img) = self.assets.images.get(&key) {
+            return Ok(img.clone());
+        }
+        let space = if linear {
+            ColorSpace::Linear
+        } else {
+            ColorSpace::Srgb
+        };
+        // Recorded before the read so that `watch` also waits for a file that is missing.
+        self.dependencies.push(path.to_path_buf());
+        let img = load_image(path, space).map_err(|e| {
+            vec![
+                Error::new(e)
+                    .label("cannot load this image")
+                    .help("the path is resolved relative to the scene file")
+                    .at(span),
+            ]
+        })?;
+        let img = Arc::new(img);
+        self.assets.images.insert(key, img.clone());
+        Ok(img)
+    }
+
+    fn mesh(&mut self, path: &PathBuf, span: Span) -> SourceResult<Arc<MeshData>> {
+        if let Some(m) = self.assets.meshes.get(path) {
+            return Ok(m.clone());
+        }
+        self.dependencies.push(path.clone());
+        let m = load_obj(path).map_err(|e| {
+            vec![
+                Error::new(e)
+                    .label("cannot load this mesh")
+                    .help("the path is resolved relative to the scene file")
+                    .at(span),
+            ]
+        })?;
+        let m = Arc::new(m);
+        self.assets.meshes.insert(path.clone(), m.clone());
+        Ok(m)
+    }
+}

@@ -1,0 +1,115 @@
+//! Scopes: global and macro-local bindings, lookups with "did you mean", and the warnings for
+//! unused declarations.
+
+use std::collections::HashMap;
+
+use super::builtins::{self, CONSTANTS};
+use super::value::Value;
+use super::{Evaluator, silent};
+use crate::diag::{Diagnostic, Error, SourceResult, suggest};
+use crate::span::Span;
+use crate::syntax::ast::Name;
+
+pub(super) struct Binding {
+    pub(super) value: Value,
+    pub(super) span: Span,
+    pub(super) used: bool,
+}
+
+/// A macro call frame: its locals.
+pub(super) struct Frame {
+    pub(super) vars: HashMap<String, Binding>,
+}
+
+impl Evaluator {
+    pub(super) fn bind(&mut self, name: &Name, value: Value, global: bool) {
+        let b = Binding {
+            value,
+            span: name.span,
+            used: false,
+        };
+        let table = if global || self.frames.is_empty() {
+            &mut self.globals
+        } else {
+            &mut self.frames.last_mut().unwrap().vars
+        };
+        // Re-declaration counts the old binding as "used" for warning purposes only if it was.
+        if let Some(old) = table.insert(name.text.clone(), b)
+            && !old.used
+            && !matches!(old.value, Value::Macro(_))
+        {
+            // Rebinding (e.g. a loop counter `#declare I = I + 1`) is not an unused declaration.
+            if let Some(new) = table.get_mut(&name.text) {
+                new.used = old.span != name.span || old.used;
+            }
+        }
+        self.poisoned.remove(&name.text);
+    }
+
+    pub(super) fn mark_used(&mut self, name: &str) {
+        if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
+            b.used = true;
+        } else if let Some(b) = self.globals.get_mut(name) {
+            b.used = true;
+        }
+    }
+
+    pub(super) fn lookup_quiet(&mut self, name: &str) -> Option<Value> {
+        if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
+            b.used = true;
+            return Some(b.value.clone());
+        }
+        if let Some(b) = self.globals.get_mut(name) {
+            b.used = true;
+            return Some(b.value.clone());
+        }
+        builtins::constant(name)
+    }
+
+    pub(super) fn lookup(&mut self, name: &str, span: Span) -> SourceResult<Value> {
+        if let Some(v) = self.lookup_quiet(name) {
+            return Ok(v);
+        }
+        if self.poisoned.contains(name) {
+            return Err(silent());
+        }
+        let mut known: Vec<&str> = self.globals.keys().map(String::as_str).collect();
+        if let Some(f) = self.frames.last() {
+            known.extend(f.vars.keys().map(String::as_str));
+        }
+        known.extend(CONSTANTS);
+        let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
+        if let Some(s) = suggest(name, known) {
+            e = e.help(format!("did you mean `{s}`?"));
+        } else {
+            e = e.help(format!("declare it first: `#declare {name} = ...`"));
+        }
+        Err(vec![e.at(span)])
+    }
+
+    pub(super) fn warn_unused(&mut self, vars: HashMap<String, Binding>) {
+        let mut unused: Vec<(String, Binding)> = vars
+            .into_iter()
+            .filter(|(n, b)| !b.used && !n.starts_with('_') && !b.span.is_detached())
+            .collect();
+        unused.sort_by_key(|(_, b)| (b.span.file.0, b.span.start));
+        for (name, b) in unused {
+            let what = match b.value {
+                Value::Macro(_) => "macro",
+                Value::Texture(_) => "texture",
+                Value::Material(_) => "material",
+                _ => "declaration",
+            };
+            self.warn(
+                Diagnostic::warning(b.span, format!("unused {what} `{name}`"))
+                    .with_label("declared here but never used")
+                    .with_help("remove it, or start its name with `_` to keep it quietly"),
+            );
+        }
+    }
+
+    pub(super) fn finish_warnings(&mut self) {
+        let globals = std::mem::take(&mut self.globals);
+        self.warn_unused(globals);
+    }
+}
