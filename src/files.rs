@@ -33,6 +33,8 @@ impl std::fmt::Display for FileError {
     }
 }
 
+impl std::error::Error for FileError {}
+
 impl FileError {
     /// The message with the path: `cannot read `p`: ...` for an OS error, the refusal as it is.
     pub fn with_path(&self, path: &Path) -> String {

@@ -42,17 +42,22 @@ impl Evaluator {
         }
         // Recorded before the read so that `watch` also waits for a file that is missing.
         self.dependencies.push(resolved.clone());
-        let text = std::fs::read_to_string(&resolved).map_err(|e| {
-            vec![
-                Error::new(format!("cannot read included file `{path}`: {e}"))
-                    .label("not found")
-                    .help(format!(
-                        "the path is resolved relative to the including file: {}",
-                        resolved.display()
-                    ))
-                    .at(span),
-            ]
-        })?;
+        let text =
+            crate::files::read_text(&resolved, crate::files::MAX_SOURCE_BYTES).map_err(|e| {
+                let label = match e {
+                    crate::files::FileError::Io(_) => "not found",
+                    crate::files::FileError::Refused(_) => "not a readable scene file",
+                };
+                vec![
+                    Error::new(format!("cannot read included file `{path}`: {e}"))
+                        .label(label)
+                        .help(format!(
+                            "the path is resolved relative to the including file: {}",
+                            resolved.display()
+                        ))
+                        .at(span),
+                ]
+            })?;
         let file = self
             .sources
             .add(&resolved, resolved.display().to_string(), text.clone());

@@ -80,9 +80,10 @@ impl Loaded {
     }
 }
 
-/// Reads, parses and evaluates a scene file. `Err` only when the file itself cannot be read.
-pub fn load_file(path: &Path, options: &EvalOptions) -> std::io::Result<Loaded> {
-    let text = std::fs::read_to_string(path)?;
+/// Reads, parses and evaluates a scene file. `Err` only when the file itself cannot be read
+/// (missing, not a regular file, larger than [`crate::files::MAX_SOURCE_BYTES`], not UTF-8).
+pub fn load_file(path: &Path, options: &EvalOptions) -> Result<Loaded, crate::files::FileError> {
+    let text = crate::files::read_text(path, crate::files::MAX_SOURCE_BYTES)?;
     Ok(load_source_at(
         path,
         &path.display().to_string(),
