@@ -66,6 +66,7 @@ fn options() -> EvalOptions {
         max_iterations: 200,
         max_depth: 32,
         max_objects: 10_000,
+        max_steps: 1_000_000,
     }
 }
 

@@ -71,6 +71,9 @@ pub struct LimitArgs {
     /// Deepest macro call nesting (recursion depth).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     pub max_depth: u64,
+    /// Most evaluation steps in all (statements, loop iterations, macro calls).
+    #[arg(long, default_value_t = EvalOptions::default().max_steps, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_steps: u64,
 }
 
 impl LimitArgs {
@@ -78,6 +81,7 @@ impl LimitArgs {
         EvalOptions {
             max_iterations: self.max_iterations,
             max_depth: self.max_depth as usize,
+            max_steps: self.max_steps,
             ..EvalOptions::default()
         }
     }

@@ -51,6 +51,7 @@ impl Evaluator {
                     if n > self.options.max_iterations {
                         return Err(vec![self.loop_error(d.span)]);
                     }
+                    self.tick(d.span)?;
                     self.run_items(body, sink)?;
                 }
                 Ok(())
@@ -83,6 +84,7 @@ impl Evaluator {
                     if n > self.options.max_iterations {
                         return Err(vec![self.loop_error(d.span)]);
                     }
+                    self.tick(d.span)?;
                     self.bind(var, Value::Num(x), false);
                     self.mark_used(&var.text);
                     self.run_items(body, sink)?;
@@ -143,6 +145,7 @@ impl Evaluator {
                 .at(call_span),
             ]);
         }
+        self.check_nesting(call_span)?;
         let mut vars = HashMap::new();
         for (p, a) in m.params.iter().zip(args) {
             let v = self.eval(a)?;

@@ -203,7 +203,16 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
             (Vec2(x), Vec2(y)) => Vec2(arith2(*x, *y)),
             (Vec2(x), Num(y)) => Vec2(arith2(*x, DVec2::splat(*y))),
             (Num(x), Vec2(y)) if matches!(op, Mul | Add) => Vec2(arith2(DVec2::splat(*x), *y)),
-            (Str(x), Str(y)) if op == Add => Str(Rc::from(format!("{x}{y}"))),
+            (Str(x), Str(y)) if op == Add => {
+                if x.len() + y.len() > super::MAX_STRING_BYTES {
+                    return Err(Error::new(format!(
+                        "the joined string would be {} bytes, more than the limit of {} bytes",
+                        x.len() + y.len(),
+                        super::MAX_STRING_BYTES
+                    )));
+                }
+                Str(Rc::from(format!("{x}{y}")))
+            }
             _ => return Err(mismatch(&a, &b)),
         },
         Lt | Le | Gt | Ge => match (&a, &b) {

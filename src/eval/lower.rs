@@ -54,6 +54,30 @@ impl Evaluator {
         Ok(())
     }
 
+    /// Counts `adding` parts copied into a container that holds `holding` already: one
+    /// container may hold at most `max_objects` parts, and all containers together may copy at
+    /// most twice that many in one load (a union copied into itself each iteration doubles).
+    pub(crate) fn count_parts(
+        &mut self,
+        holding: usize,
+        adding: usize,
+        span: Span,
+    ) -> SourceResult<()> {
+        self.parts_copied = self.parts_copied.saturating_add(adding);
+        let max = self.options.max_objects;
+        if holding.saturating_add(adding) > max || self.parts_copied > max.saturating_mul(2) {
+            return Err(vec![
+                Error::new(format!(
+                    "objects copied into unions and groups passed the limit of {max} parts"
+                ))
+                .label("limit reached here")
+                .help("is a union copied into itself, or a recursion too deep?")
+                .at(span),
+            ]);
+        }
+        Ok(())
+    }
+
     /// Adds an object's parts to the scene.
     pub(super) fn emit(&mut self, obj: &ObjectDef, span: Span) -> SourceResult<()> {
         for part in &obj.parts {

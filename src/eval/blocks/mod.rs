@@ -76,6 +76,19 @@ impl Evaluator {
         items: &Rc<Vec<Item>>,
         span: Span,
     ) -> SourceResult<Value> {
+        self.check_nesting(kind.span)?;
+        self.block_depth += 1;
+        let r = self.eval_block_body(kind, items, span);
+        self.block_depth -= 1;
+        r
+    }
+
+    fn eval_block_body(
+        &mut self,
+        kind: &Name,
+        items: &Rc<Vec<Item>>,
+        span: Span,
+    ) -> SourceResult<Value> {
         let k = kind.text.as_str();
         match k {
             _ if OBJECT_BLOCKS.contains(&k) => {

@@ -374,13 +374,14 @@ impl Sink for ObjectBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
             Value::Material(m) => {
                 self.material = Some(m);
                 Ok(())
             }
             Value::Object(o) if self.is_container() => {
+                ev.count_parts(self.parts.len(), o.parts.len(), span)?;
                 self.parts.extend(o.parts.iter().cloned());
                 Ok(())
             }
