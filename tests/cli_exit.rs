@@ -302,3 +302,32 @@ fn an_output_path_that_is_a_link_or_a_device_is_refused() {
             .is_symlink()
     );
 }
+
+#[test]
+fn the_time_limit_stops_an_iteration_in_flight() {
+    // 10^10 photons per iteration would take hours (and photon mapping would store them all);
+    // the deadline abandons the first iteration, nothing finished, nothing written.
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("c.png");
+    for method in ["sppm", "photon_map", "ppm"] {
+        let start = std::time::Instant::now();
+        let out = sppm(&[
+            "render",
+            "examples/cornell.scn",
+            "-o",
+            png.to_str().unwrap(),
+            "--integrator",
+            method,
+            "--photons",
+            "10000000000",
+            "--time-limit",
+            "0.5",
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        let took = start.elapsed().as_secs_f64();
+        assert_eq!(out.status.code(), Some(1), "{method}:\n{err}");
+        assert!(err.contains("no iteration finished"), "{method}:\n{err}");
+        assert!(took < 15.0, "{method}: a 0.5 s limit took {took:.1} s");
+        assert!(!png.exists());
+    }
+}

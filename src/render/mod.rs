@@ -1,12 +1,17 @@
-//! The render API used by the CLI (and later by `watch`): prepare a `Scene`, run its integrator
-//! with overridable settings, report progress per iteration, stop promptly on cancel.
+//! The render API used by the CLI and `watch`: prepare a `Scene`, run its integrator with
+//! overridable settings, report progress per iteration, stop promptly on cancel.
+//!
+//! A time limit is a deadline: when it passes, the iteration in flight is abandoned like a
+//! cancelled one (its partial work is dropped) and the output holds the iterations finished
+//! before it; `cancelled` in the output says only whether the caller cancelled.
 
 pub use crate::integrators::{Progress, RenderOutput, RenderStats};
 pub use crate::prepare::{
     EffectiveSettings, PreparedScene, RenderError, RenderOptions, SurfaceHit, effective_settings,
 };
 
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use crate::integrators;
 use crate::scene::Scene;
@@ -22,15 +27,42 @@ pub fn render(
     let settings = effective_settings(scene, options)?;
     let prepared = PreparedScene::new(scene)?;
     let integrator = integrators::for_method(settings.integrator);
-    let mut run = || integrator.render(&prepared, &settings, cancel, on_progress);
-    match options.threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new()
+    let deadline = settings
+        .time_limit
+        .and_then(|t| Duration::try_from_secs_f64(t).ok())
+        .and_then(|t| Instant::now().checked_add(t));
+    let stop = AtomicBool::new(false);
+    let finished = AtomicBool::new(false);
+    let flag = if deadline.is_some() { &stop } else { cancel };
+    let mut run = || integrator.render(&prepared, &settings, flag, on_progress);
+    let out = std::thread::scope(|s| {
+        if let Some(end) = deadline {
+            // The watchdog: raises the integrator's flag at the deadline or on the caller's
+            // cancel, and ends with the render.
+            let (stop, finished) = (&stop, &finished);
+            s.spawn(move || {
+                while !finished.load(Ordering::Relaxed) {
+                    let now = Instant::now();
+                    if now >= end || cancel.load(Ordering::Relaxed) {
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                    std::thread::sleep((end - now).min(Duration::from_millis(5)));
+                }
+            });
+        }
+        let out = match options.threads {
+            Some(n) => rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
-                .map_err(|e| RenderError::new(format!("cannot start {n} threads: {e}")))?;
-            Ok(pool.install(run))
-        }
-        None => Ok(run()),
-    }
+                .map(|pool| pool.install(&mut run))
+                .map_err(|e| RenderError::new(format!("cannot start {n} threads: {e}"))),
+            None => Ok(run()),
+        };
+        finished.store(true, Ordering::Relaxed);
+        out
+    });
+    let mut out = out?;
+    out.cancelled = cancel.load(Ordering::Relaxed);
+    Ok(out)
 }

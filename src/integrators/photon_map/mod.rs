@@ -51,7 +51,12 @@ struct Maps {
     emitted: u64,
 }
 
-fn build_maps(scene: &PreparedScene, settings: &EffectiveSettings, iter: u32) -> Maps {
+fn build_maps(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    iter: u32,
+    cancel: &AtomicBool,
+) -> Maps {
     let n_chunks = settings.photons.div_ceil(CHUNK);
     type Stored = Vec<(Vec3A, Photon)>;
     let chunks: Vec<(Stored, Stored)> = if scene.lights.is_empty() {
@@ -61,6 +66,11 @@ fn build_maps(scene: &PreparedScene, settings: &EffectiveSettings, iter: u32) ->
             .into_par_iter()
             .map(|c| {
                 let (mut global, mut caustic) = (Vec::new(), Vec::new());
+                // A cancelled pass (or a passed deadline) stores nothing more; the camera pass
+                // that follows sees the same flag and drops the iteration.
+                if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+                    return (global, caustic);
+                }
                 let lo = c * CHUNK;
                 let hi = (lo + CHUNK).min(settings.photons);
                 for i in lo..hi {
@@ -89,6 +99,14 @@ fn build_maps(scene: &PreparedScene, settings: &EffectiveSettings, iter: u32) ->
             .collect()
     };
     let (mut global, mut caustic) = (Vec::new(), Vec::new());
+    if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+        // The iteration is dropped: no trees to build.
+        return Maps {
+            global: KdTree::new(global),
+            caustic: KdTree::new(caustic),
+            emitted: 0,
+        };
+    }
     for (g, c) in chunks {
         global.extend(g);
         caustic.extend(c);
@@ -147,7 +165,7 @@ impl Integrator for PhotonMap {
             cancel,
             on_progress,
             |iter| {
-                let maps = build_maps(scene, settings, iter);
+                let maps = build_maps(scene, settings, iter, cancel);
                 let n = maps.emitted;
                 (maps, n)
             },
