@@ -74,6 +74,9 @@ pub struct Settings {
     pub exposure: f64,
     /// Stop after this many seconds even if iterations remain.
     pub time_limit: Option<f64>,
+    /// The last `settings` block (detached when the file gave none): where errors about the
+    /// settings point.
+    pub span: Span,
 }
 
 impl Default for Settings {
@@ -89,6 +92,7 @@ impl Default for Settings {
             integrator: Integrator::Sppm,
             exposure: 1.0,
             time_limit: None,
+            span: Span::detached(),
         }
     }
 }
@@ -140,6 +144,8 @@ pub struct Camera {
     pub aperture: f64,
     /// Distance to the plane in focus; `None`: the distance to `look_at`.
     pub focus_distance: Option<f64>,
+    /// The last `camera` block (detached when the file gave none).
+    pub span: Span,
 }
 
 impl Default for Camera {
@@ -151,6 +157,7 @@ impl Default for Camera {
             fov: 40.0,
             aperture: 0.0,
             focus_distance: None,
+            span: Span::detached(),
         }
     }
 }

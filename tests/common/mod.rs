@@ -62,6 +62,7 @@ pub fn inside_camera() -> Camera {
         fov: 90.0,
         aperture: 0.0,
         focus_distance: None,
+        span: sppm_lang::span::Span::detached(),
     }
 }
 
@@ -118,6 +119,7 @@ pub fn furnace_enclosure(res: u32, a: f64) -> Scene {
         fov: 30.0,
         aperture: 0.0,
         focus_distance: None,
+        span: sppm_lang::span::Span::detached(),
     };
     s
 }
@@ -244,6 +246,7 @@ pub fn cornell_glass(res: u32) -> Scene {
         fov: 40.0,
         aperture: 0.0,
         focus_distance: None,
+        span: sppm_lang::span::Span::detached(),
     };
     s.settings.max_depth = 16;
     s
@@ -296,6 +299,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         fov: 11.4,
         aperture: 0.0,
         focus_distance: None,
+        span: sppm_lang::span::Span::detached(),
     };
     s.settings.max_depth = 2;
     let cam = sppm_lang::camera::Camera::new(&s.camera, res, res).unwrap();
