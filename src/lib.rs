@@ -12,7 +12,6 @@
 
 pub mod accel;
 pub mod atomic_file;
-pub mod bench;
 pub mod bezier;
 pub mod camera;
 pub mod chart;

@@ -53,7 +53,7 @@ pub struct Segment {
     /// Cumulative `integral r |P'| ds` at the same parameters.
     area_table: Vec<f64>,
     /// All control points coincide: the segment is a point (or circle) of zero area.
-    pub(crate) degenerate: bool,
+    pub degenerate: bool,
 }
 
 impl Segment {
@@ -539,12 +539,12 @@ impl Lathe {
 pub struct RayFrame {
     pub o: DVec3,
     pub dn: DVec3,
-    pub(crate) dh2: f64,
+    pub dh2: f64,
     /// `|d_y| >= |d_xz|`: `t` is recovered from the height, otherwise from the radius.
     steep: bool,
     pub(crate) t0: f64,
     /// `o + t0 dn`: the point of closest approach to the axis (flat rays) or at mid-height.
-    pub(crate) oc: DVec3,
+    pub oc: DVec3,
     pub(crate) rho2: f64,
     line_rho2: f64,
 }

@@ -4,12 +4,13 @@
 //! - [`roots`]: a root isolator on [0, 1] that cannot miss a root, with a bracketed polish.
 //! - [`lathe`]: ray intersection with a surface of revolution of a Bezier profile (f64).
 //! - [`patch`]: ray intersection with a bicubic Bezier patch (f64).
-//! - [`reference`]: slow, obviously right intersectors used to test the two above.
+//!
+//! The slow reference intersectors that test the two above live in `tools/measure`
+//! (`sppm_measure::reference`), outside the product library.
 //!
 //! See `docs/bezier.md` for the mathematics.
 
 pub mod bernstein;
 pub mod lathe;
 pub mod patch;
-pub mod reference;
 pub mod roots;

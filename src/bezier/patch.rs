@@ -323,7 +323,7 @@ impl Patch {
     /// Subdivision with projected bounds. `leaf` is relative to the patch size; `polish`
     /// applies Newton's method at leaves (the robust method), otherwise a leaf's centre is the
     /// answer (the reference). Returns `(u, v)` and `t` for the unit direction.
-    pub(crate) fn subdivide(
+    pub fn subdivide(
         &self,
         o: DVec3,
         frame: [DVec3; 3],

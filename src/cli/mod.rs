@@ -1,6 +1,5 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
-mod bench;
 mod chart;
 mod check;
 mod output;
@@ -102,8 +101,6 @@ pub enum Command {
     Watch(watch::WatchArgs),
     /// Chart error against render time for every integrator against a reference image.
     Chart(chart::ChartArgs),
-    /// Measurements of the renderer's own parts (speed against accuracy).
-    Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -112,6 +109,5 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
         Command::Chart(args) => chart::run(&args),
-        Command::Bench(args) => bench::run_bench(&args),
     }
 }

@@ -1,5 +1,5 @@
 //! splitmix64 as an f64 stream: the seeded generator of test and benchmark ray sets (the
-//! Bezier stress test and `sppm-lang bench bezier` draw the same rays from it). Renders use
+//! Bezier stress test and `sppm-measure bezier` draw the same rays from it). Renders use
 //! [`super::Rng`].
 
 use glam::DVec3;

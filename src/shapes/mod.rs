@@ -44,6 +44,5 @@ pub mod primitive;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
-pub mod tessellate;
 pub mod transformed;
 pub mod triangle;

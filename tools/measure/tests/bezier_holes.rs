@@ -3,7 +3,7 @@
 //! Every pixel's primary ray (through the pixel centre; the lens centre when the camera has an
 //! aperture) goes through the renderer's whole pipeline: BVH, object transform (f32, as in
 //! rendering), the robust f64 intersector and the conversion back to the f32 hit. The answer is
-//! then checked against the slow reference intersectors (`bezier::reference`) on the very same
+//! then checked against the slow reference intersectors (`sppm_measure::reference`) on the very same
 //! object-space ray that the shape received:
 //!
 //! - a **hole** is a pixel where the reference finds a Bezier surface nearer than what the
@@ -26,7 +26,7 @@ use glam::{Affine3A, Vec2};
 use rayon::prelude::*;
 use sppm_lang::bezier::lathe::Lathe;
 use sppm_lang::bezier::patch::Patch;
-use sppm_lang::bezier::reference::{self, RefHit};
+use sppm_measure::reference::{self, RefHit};
 use sppm_lang::camera::Camera;
 use sppm_lang::eval::Loaded;
 use sppm_lang::geometry::Ray;
@@ -123,7 +123,7 @@ impl Counts {
 
 fn example_path(name: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
+        .join("../../examples")
         .join(format!("{name}.scn"))
 }
 

@@ -5,7 +5,7 @@
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
-use sppm_lang::bench::bezier::{vase_profile, wavy_points};
+use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 

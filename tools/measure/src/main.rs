@@ -1,17 +1,23 @@
-//! `sppm-lang bench bezier`: speed against accuracy of the Bezier intersectors and of meshes of
-//! the same surfaces (a thin front for [`sppm_lang::bench::bezier`]).
+//! `sppm-measure bezier`: speed against accuracy of the Bezier intersectors and of meshes of
+//! the same surfaces (a thin front for [`sppm_measure::bezier`]). Run from the repository root:
+//! `cargo run --release -p sppm-measure -- bezier`. Exit status: 0 ok, 2 usage errors.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Subcommand};
-use sppm_lang::bench::bezier::{Method, Options, run, write_outputs};
+use clap::{Args, Parser, Subcommand};
+use sppm_measure::bezier::{Method, Options, run, write_outputs};
 
-use super::EXIT_USAGE;
-use super::output::{err, out};
+/// Usage errors (bad arguments, unwritable output), as in `sppm-lang`.
+const EXIT_USAGE: u8 = 2;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Parser)]
+#[command(
+    name = "sppm-measure",
+    about = "Measurements of sppm-lang's own parts (speed against accuracy)"
+)]
 pub struct BenchArgs {
     #[command(subcommand)]
     pub what: Bench,
@@ -41,7 +47,22 @@ pub struct BezierArgs {
     pub seed: u64,
 }
 
-pub fn run_bench(args: &BenchArgs) -> ExitCode {
+fn main() -> ExitCode {
+    run_bench(&BenchArgs::parse())
+}
+
+/// Writes `text` to stdout; a closed pipe or any other write error is ignored.
+fn out(text: &str) {
+    let mut s = std::io::stdout().lock();
+    let _ = s.write_all(text.as_bytes()).and_then(|()| s.flush());
+}
+
+/// Writes `text` to stderr; a closed pipe or any other write error is ignored.
+fn err(text: &str) {
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
+}
+
+fn run_bench(args: &BenchArgs) -> ExitCode {
     match &args.what {
         Bench::Bezier(a) => match bezier(a) {
             Ok(()) => ExitCode::SUCCESS,

@@ -8,10 +8,10 @@
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use sppm_lang::bench::bezier::{vase_profile, wavy_points};
+use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
-use sppm_lang::bezier::reference;
+use sppm_measure::reference;
 use sppm_lang::sampling::SplitMix64;
 
 const REL_T: f64 = 1e-6;
@@ -26,7 +26,7 @@ fn rays() -> usize {
         .unwrap_or(200_000)
 }
 
-/// The seeded ray streams (shared with `sppm-lang bench bezier`).
+/// The seeded ray streams (shared with `sppm-measure bezier`).
 type Rng = SplitMix64;
 
 /// The generator of ray `i` of a case: its own stream seeded from `(seed, i)`, so the ray set does

@@ -1,7 +1,7 @@
-//! `bench::bezier` end to end on a small ray set: the measurement, its CSV and its charts.
-//! (The full run is `sppm-lang bench bezier`; its numbers are in the README.)
+//! `sppm_measure::bezier` end to end on a small ray set: the measurement, its CSV and its charts.
+//! (The full run is `cargo run --release -p sppm-measure -- bezier`; its numbers are in the README.)
 
-use sppm_lang::bench::bezier::{Method, Options, Row, Surface, charts, csv, run, write_outputs};
+use sppm_measure::bezier::{Method, Options, Row, Surface, charts, csv, run, write_outputs};
 use sppm_lang::chart::SIZE;
 
 fn small() -> Options {

@@ -3,7 +3,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
-use sppm_lang::bench::bezier::{vase_profile, wavy_points};
+use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
 

@@ -1,6 +1,6 @@
 //! Speed against accuracy of the Bezier surfaces: the robust and the Newton intersectors, and
 //! tessellated meshes of the same surface at several triangle counts, on one fixed, seeded ray
-//! set per surface (`sppm-lang bench bezier`).
+//! set per surface (`cargo run --release -p sppm-measure -- bezier`).
 //!
 //! Every method runs through the renderer's own path: a [`Bvh`] over the renderer's shapes
 //! ([`Revolve`] / [`BezierPatch`] for the analytic methods, one shape; the mesh's triangles
@@ -26,19 +26,20 @@ use std::time::Instant;
 use glam::{DAffine3, DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::accel::Bvh;
-use crate::bezier::lathe::Lathe;
-use crate::bezier::patch::Patch;
-use crate::bezier::reference::{self, RefHit};
-use crate::chart::{ChartSpec, Series, draw, draw_panels};
-use crate::geometry::Ray;
-use crate::sampling::SplitMix64;
-use crate::scene::{IntersectMethod, Profile};
-use crate::shapes::mesh::mesh_triangles;
-use crate::shapes::patch::BezierPatch;
-use crate::shapes::primitive::AnyShape;
-use crate::shapes::revolve::Revolve;
-use crate::shapes::tessellate::{lathe_mesh, patch_mesh};
+use sppm_lang::accel::Bvh;
+use sppm_lang::bezier::lathe::Lathe;
+use sppm_lang::bezier::patch::Patch;
+use sppm_lang::chart::{ChartSpec, Series, draw, draw_panels};
+use sppm_lang::geometry::Ray;
+use sppm_lang::sampling::SplitMix64;
+use sppm_lang::scene::{IntersectMethod, Profile};
+use sppm_lang::shapes::mesh::mesh_triangles;
+use sppm_lang::shapes::patch::BezierPatch;
+use sppm_lang::shapes::primitive::AnyShape;
+use sppm_lang::shapes::revolve::Revolve;
+
+use crate::reference::{self, RefHit};
+use crate::tessellate::{lathe_mesh, patch_mesh};
 
 /// A relative `t` error above this is counted as a hit on another part of the surface.
 pub const FAR: f64 = 1e-3;
@@ -72,7 +73,7 @@ pub enum Method {
         starts: u32,
         iterations: u32,
     },
-    /// A tessellation into a `rows x cols` grid (see [`crate::shapes::tessellate`]).
+    /// A tessellation into a `rows x cols` grid (see [`crate::tessellate`]).
     Mesh {
         rows: usize,
         cols: usize,
@@ -327,7 +328,7 @@ fn analytic(method: Method, shape: AnyShape) -> Subject {
 
 fn mesh_subject(
     method: Method,
-    tessellate: impl FnOnce() -> crate::scene::MeshData,
+    tessellate: impl FnOnce() -> sppm_lang::scene::MeshData,
 ) -> Result<Subject, String> {
     let start = Instant::now();
     let mesh = tessellate();
@@ -782,7 +783,7 @@ pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String
     let mut written = Vec::new();
     let csv_path = output.with_extension("csv");
     let text = csv(rows);
-    crate::atomic_file::write_atomic(&csv_path, |_, f| {
+    sppm_lang::atomic_file::write_atomic(&csv_path, |_, f| {
         use std::io::Write as _;
         f.write_all(text.as_bytes())
             .map_err(|e| format!("cannot write `{}`: {e}", csv_path.display()))

@@ -1,0 +1,12 @@
+//! Measurements sppm-lang makes of itself, outside the product library (`sppm-lang` does not
+//! depend on this crate; `cargo run --release -p sppm-measure -- bezier` runs the study).
+//!
+//! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
+//!   tessellated meshes of the same surfaces.
+//! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
+//!   the study and of the stress tests.
+//! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
+
+pub mod bezier;
+pub mod reference;
+pub mod tessellate;
