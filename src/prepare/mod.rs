@@ -10,9 +10,9 @@ use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light, PointLight, SpotLight};
-use crate::materials::{Bsdf, Lobes};
+use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::Distribution1D;
-use crate::scene::{self, ColorParam, Material, ScalarParam, Scene};
+use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::{self, TexCoord};
 pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
@@ -56,35 +56,6 @@ pub struct PreparedScene<'a> {
 pub struct SurfaceHit {
     pub hit: Hit,
     pub prim: u32,
-}
-
-/// Whether any parameter of a material is a texture: its lobes' (see [`is_constant`]) or a
-/// glass's absorption, which is looked up at every hit from inside.
-fn has_texture(m: &Material) -> bool {
-    let absorb_textured = matches!(
-        m,
-        Material::Glass {
-            absorb: ColorParam::Texture(_),
-            ..
-        }
-    );
-    absorb_textured || !is_constant(m)
-}
-
-/// Whether a material's lobes have no textured parameter (a glass's absorption is not part
-/// of its lobes).
-fn is_constant(m: &Material) -> bool {
-    let c = |p: &ColorParam| matches!(p, ColorParam::Const(_));
-    match m {
-        Material::Diffuse { albedo } => c(albedo),
-        Material::Mirror { tint } => c(tint),
-        Material::Glass { .. } => true,
-        Material::Glossy {
-            albedo,
-            specular,
-            roughness,
-        } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
-    }
 }
 
 fn color3(c: DVec3) -> Vec3A {
@@ -248,7 +219,7 @@ impl<'a> PreparedScene<'a> {
             environment,
             prim_material,
             const_lobes: Vec::new(),
-            textured: scene.materials.iter().map(has_texture).collect(),
+            textured: scene.materials.iter().map(eval::has_texture).collect(),
         };
         // A constant material gives the same lobes at every hit: the hit is not looked at.
         let dummy = SurfaceHit {
@@ -265,7 +236,7 @@ impl<'a> PreparedScene<'a> {
         prepared.const_lobes = scene
             .materials
             .iter()
-            .map(|m| is_constant(m).then(|| prepared.lobes(m, &dummy)))
+            .map(|m| eval::is_constant(m).then(|| prepared.lobes(m, &dummy)))
             .collect();
         Ok(prepared)
     }
@@ -321,25 +292,6 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
-    fn color(&self, p: &ColorParam, sh: &SurfaceHit) -> Vec3A {
-        match p {
-            ColorParam::Const(c) => color3(*c),
-            ColorParam::Texture(t) => {
-                textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh))
-            }
-        }
-    }
-
-    fn scalar(&self, p: &ScalarParam, sh: &SurfaceHit) -> f32 {
-        match p {
-            ScalarParam::Const(c) => *c as f32,
-            ScalarParam::Texture(t) => {
-                let c = textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh));
-                0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-            }
-        }
-    }
-
     /// The BSDF at a hit.
     #[inline]
     pub fn bsdf(&self, sh: &SurfaceHit) -> Bsdf {
@@ -353,42 +305,14 @@ impl<'a> PreparedScene<'a> {
 
     /// The lobes of material `m` at a hit (texture lookups where the material has them).
     fn lobes(&self, m: &Material, sh: &SurfaceHit) -> Lobes {
-        let clamp01 = |c: Vec3A| c.clamp(Vec3A::ZERO, Vec3A::ONE);
-        match m {
-            Material::Diffuse { albedo } => Lobes::Diffuse {
-                albedo: clamp01(self.color(albedo, sh)),
-            },
-            Material::Mirror { tint } => Lobes::Mirror {
-                tint: clamp01(self.color(tint, sh)),
-            },
-            Material::Glass { ior, tint, .. } => Lobes::Glass {
-                eta: if ior.is_finite() && *ior > 0.0 {
-                    *ior as f32
-                } else {
-                    1.0
-                },
-                tint: clamp01(color3(*tint)),
-            },
-            Material::Glossy {
-                albedo,
-                specular,
-                roughness,
-            } => {
-                let r = self.scalar(roughness, sh).clamp(0.0, 1.0);
-                Lobes::Glossy {
-                    albedo: clamp01(self.color(albedo, sh)),
-                    specular: clamp01(self.color(specular, sh)),
-                    alpha: (r * r).max(1e-3),
-                }
-            }
-        }
+        eval::lobes(m, self.scene, || self.tex_coord(sh))
     }
 
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
     pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
         match self.material(sh.prim) {
             Material::Glass { absorb, .. } => {
-                let a = self.color(absorb, sh).max(Vec3A::ZERO);
+                let a = eval::color(absorb, self.scene, || self.tex_coord(sh)).max(Vec3A::ZERO);
                 (a != Vec3A::ZERO && a.is_finite()).then_some(a)
             }
             _ => None,
