@@ -3,20 +3,21 @@
 
 use glam::{Affine3A, DVec3, Vec3A};
 
+mod lights;
 mod settings;
 mod shapes;
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
-use crate::lights::{AreaLight, EnvironmentLight, Light, PointLight, SpotLight};
+use crate::lights::{AreaLight, EnvironmentLight, Light};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::Distribution1D;
 use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
-use crate::textures::{self, TexCoord};
+use crate::textures::TexCoord;
 pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
-use shapes::{build_shapes, v};
+use shapes::build_shapes;
 
 const NO_LIGHT: u32 = u32::MAX;
 
@@ -126,82 +127,9 @@ impl<'a> PreparedScene<'a> {
                 normal_to_object: glam::Mat3A::from(obj.transform.matrix3.transpose().as_mat3()),
             });
         }
-        for l in &scene.lights {
-            match l {
-                scene::Light::Point {
-                    position,
-                    intensity,
-                    span,
-                } => {
-                    if !(position.is_finite()
-                        && intensity.is_finite()
-                        && intensity.min_element() >= 0.0)
-                    {
-                        return Err(RenderError {
-                            message: "point light: position and intensity must be finite, intensity non-negative".into(),
-                            span: Some(*span),
-                        });
-                    }
-                    lights.push(Light::Point(PointLight {
-                        position: v(*position),
-                        intensity: color3(*intensity),
-                    }))
-                }
-                scene::Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    cone_angle,
-                    falloff_angle,
-                    span,
-                } => {
-                    if !(position.is_finite()
-                        && intensity.is_finite()
-                        && intensity.min_element() >= 0.0
-                        && direction.length() > 0.0
-                        && cone_angle.is_finite()
-                        && falloff_angle.is_finite())
-                    {
-                        return Err(RenderError {
-                            message: "spot light: invalid position, direction, intensity or angle"
-                                .into(),
-                            span: Some(*span),
-                        });
-                    }
-                    lights.push(Light::Spot(SpotLight::new(
-                        v(*position),
-                        v(*direction),
-                        color3(*intensity),
-                        *cone_angle as f32,
-                        *falloff_angle as f32,
-                    )))
-                }
-            }
-        }
+        lights::push_scene_lights(scene, &mut lights)?;
         let bvh = Bvh::new(shapes);
-        let mut environment = None;
-        if let scene::Background::Environment {
-            image,
-            intensity,
-            transform,
-        } = &scene.background
-        {
-            let map = textures::EnvironmentMap::new(image, *intensity, *transform);
-            if !map.is_black() {
-                // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite
-                // lights use for photon emission.
-                let b = bvh.bounds();
-                let (center, radius) = if b.is_empty() {
-                    (Vec3A::ZERO, 1.0)
-                } else {
-                    (b.centroid(), 0.5 * b.diagonal().length())
-                };
-                environment = Some(lights.len());
-                lights.push(Light::Environment(EnvironmentLight::new(
-                    map, center, radius,
-                )));
-            }
-        }
+        let environment = lights::push_environment(scene, &bvh, &mut lights);
         let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
         let prim_material = prim_object
             .iter()
