@@ -3,6 +3,7 @@
 
 mod dielectric;
 mod diffuse;
+pub mod eval;
 mod glossy;
 mod mirror;
 

@@ -1,32 +1,23 @@
 //! The prepared scene: world-space shapes in a BVH, lights with a power distribution, and the
 //! per-object data shading needs. Built once per render from a plain `Scene`.
 
-use glam::{Affine3A, DMat3, DVec3, Vec3A};
+use glam::{Affine3A, DVec3, Vec3A};
 
+mod lights;
 mod settings;
+mod shapes;
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
-use crate::lights::{AreaLight, EnvironmentLight, Light, PointLight, SpotLight};
-use crate::materials::{Bsdf, Lobes};
+use crate::lights::{AreaLight, EnvironmentLight, Light};
+use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::Distribution1D;
-use crate::scene::{self, ColorParam, Material, ScalarParam, Scene};
+use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
-use crate::shapes::cuboid::cuboid_faces;
-use crate::shapes::cylinder::Cylinder;
-use crate::shapes::disk::Disk;
-use crate::shapes::mesh::mesh_triangles;
-use crate::shapes::patch::BezierPatch;
-use crate::shapes::plane::Plane;
-use crate::shapes::primitive::AnyShape;
-use crate::shapes::quad::Quad;
-use crate::shapes::revolve::Revolve;
-use crate::shapes::sphere::Sphere;
-use crate::shapes::transformed::Transformed;
-use crate::shapes::triangle::Triangle;
-use crate::textures::{self, TexCoord};
+use crate::textures::TexCoord;
 pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
+use shapes::build_shapes;
 
 const NO_LIGHT: u32 = u32::MAX;
 
@@ -66,186 +57,6 @@ pub struct PreparedScene<'a> {
 pub struct SurfaceHit {
     pub hit: Hit,
     pub prim: u32,
-}
-
-/// Uniform scale, rotation (possibly mirrored) and translation: returns the scale.
-fn similarity_scale(m: &DMat3) -> Option<f64> {
-    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
-    let s = a.length();
-    let tol = 1e-9 * s.max(1e-300);
-    let ok = (b.length() - s).abs() <= tol * 10.0
-        && (c.length() - s).abs() <= tol * 10.0
-        && a.dot(b).abs() <= tol * s * 10.0
-        && a.dot(c).abs() <= tol * s * 10.0
-        && b.dot(c).abs() <= tol * s * 10.0;
-    (ok && s > 0.0 && s.is_finite()).then_some(s)
-}
-
-fn v(p: DVec3) -> Vec3A {
-    p.as_vec3a()
-}
-
-/// World-space shapes of one object.
-fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
-    let xf = &obj.transform;
-    let m = xf.matrix3;
-    let det = m.determinant();
-    if !(det.is_finite() && det.abs() > 1e-300) {
-        return Err("the object's transform is singular (a zero scale?)".into());
-    }
-    let nmat = m.inverse().transpose();
-    let mirrored = det < 0.0;
-    let sim = similarity_scale(&m);
-    let wrap = |s: Box<dyn Shape>| -> Result<AnyShape, String> {
-        Ok(AnyShape::Other(Box::new(Transformed::new(
-            s,
-            xf.as_affine3a(),
-        )?)))
-    };
-    let quad = |o: DVec3, u: DVec3, w: DVec3| -> Result<AnyShape, String> {
-        let (u, w) = if mirrored { (w, u) } else { (u, w) };
-        let o2 = xf.transform_point3(o);
-        Ok(AnyShape::Quad(Quad::new(
-            v(o2),
-            v(xf.transform_vector3(u)),
-            v(xf.transform_vector3(w)),
-        )?))
-    };
-    Ok(match &obj.shape {
-        scene::Shape::Sphere { center, radius } => match sim {
-            Some(s) => vec![AnyShape::Sphere(Sphere::new(
-                v(xf.transform_point3(*center)),
-                (radius * s) as f32,
-            )?)],
-            None => vec![wrap(Box::new(Sphere::new(v(*center), *radius as f32)?))?],
-        },
-        scene::Shape::Plane { normal, offset } => {
-            let p0 = xf.transform_point3(*normal * *offset / normal.length_squared().max(1e-300));
-            let n = (nmat * *normal).normalize_or_zero();
-            vec![AnyShape::Plane(Plane::new(v(n), n.dot(p0) as f32)?)]
-        }
-        scene::Shape::Quad {
-            origin,
-            edge_u,
-            edge_v,
-        } => vec![quad(*origin, *edge_u, *edge_v)?],
-        scene::Shape::Box { min, max } => {
-            let to_world = |p: Vec3A| v(xf.transform_point3(p.as_dvec3()));
-            cuboid_faces(v(*min), v(*max), to_world, mirrored)?
-                .into_iter()
-                .map(AnyShape::Quad)
-                .collect()
-        }
-        scene::Shape::Disk {
-            center,
-            normal,
-            radius,
-        } => match sim {
-            Some(s) => vec![AnyShape::Disk(Disk::new(
-                v(xf.transform_point3(*center)),
-                v(nmat * *normal),
-                (radius * s) as f32,
-            )?)],
-            None => vec![wrap(Box::new(Disk::new(
-                v(*center),
-                v(*normal),
-                *radius as f32,
-            )?))?],
-        },
-        scene::Shape::Cylinder {
-            base,
-            cap,
-            radius,
-            open,
-        } => {
-            let axis = *cap - *base;
-            let parts: Vec<(DVec3, DVec3, bool)> = if *open {
-                vec![]
-            } else {
-                vec![(*base, -axis, true), (*cap, axis, true)]
-            };
-            let mut out = Vec::new();
-            match sim {
-                Some(s) => {
-                    let (b, c) = (xf.transform_point3(*base), xf.transform_point3(*cap));
-                    out.push(AnyShape::Cylinder(Cylinder::new(
-                        v(b),
-                        v(c),
-                        (radius * s) as f32,
-                    )?));
-                    for (p, n, _) in parts {
-                        out.push(AnyShape::Disk(Disk::new(
-                            v(xf.transform_point3(p)),
-                            v(nmat * n),
-                            (radius * s) as f32,
-                        )?));
-                    }
-                }
-                None => {
-                    out.push(wrap(Box::new(Cylinder::new(
-                        v(*base),
-                        v(*cap),
-                        *radius as f32,
-                    )?))?);
-                    for (p, n, _) in parts {
-                        out.push(wrap(Box::new(Disk::new(v(p), v(n), *radius as f32)?))?);
-                    }
-                }
-            }
-            out
-        }
-        scene::Shape::Triangle { vertices } => {
-            let mut p = vertices.map(|q| v(xf.transform_point3(q)));
-            if mirrored {
-                p.swap(1, 2);
-            }
-            vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
-        }
-        scene::Shape::Mesh { mesh } => {
-            let tris = mesh_triangles(mesh, xf)?;
-            if tris.is_empty() {
-                return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
-            }
-            tris.into_iter().map(AnyShape::Triangle).collect()
-        }
-        scene::Shape::Revolve {
-            profile,
-            sweep,
-            method,
-        } => vec![wrap(Box::new(Revolve::new(profile, *sweep, *method)?))?],
-        scene::Shape::BezierPatch { points, method } => {
-            vec![wrap(Box::new(BezierPatch::new(points, *method)?))?]
-        }
-    })
-}
-
-/// Whether any parameter of a material is a texture: its lobes' (see [`is_constant`]) or a
-/// glass's absorption, which is looked up at every hit from inside.
-fn has_texture(m: &Material) -> bool {
-    let absorb_textured = matches!(
-        m,
-        Material::Glass {
-            absorb: ColorParam::Texture(_),
-            ..
-        }
-    );
-    absorb_textured || !is_constant(m)
-}
-
-/// Whether a material's lobes have no textured parameter (a glass's absorption is not part
-/// of its lobes).
-fn is_constant(m: &Material) -> bool {
-    let c = |p: &ColorParam| matches!(p, ColorParam::Const(_));
-    match m {
-        Material::Diffuse { albedo } => c(albedo),
-        Material::Mirror { tint } => c(tint),
-        Material::Glass { .. } => true,
-        Material::Glossy {
-            albedo,
-            specular,
-            roughness,
-        } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
-    }
 }
 
 fn color3(c: DVec3) -> Vec3A {
@@ -316,82 +127,9 @@ impl<'a> PreparedScene<'a> {
                 normal_to_object: glam::Mat3A::from(obj.transform.matrix3.transpose().as_mat3()),
             });
         }
-        for l in &scene.lights {
-            match l {
-                scene::Light::Point {
-                    position,
-                    intensity,
-                    span,
-                } => {
-                    if !(position.is_finite()
-                        && intensity.is_finite()
-                        && intensity.min_element() >= 0.0)
-                    {
-                        return Err(RenderError {
-                            message: "point light: position and intensity must be finite, intensity non-negative".into(),
-                            span: Some(*span),
-                        });
-                    }
-                    lights.push(Light::Point(PointLight {
-                        position: v(*position),
-                        intensity: color3(*intensity),
-                    }))
-                }
-                scene::Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    cone_angle,
-                    falloff_angle,
-                    span,
-                } => {
-                    if !(position.is_finite()
-                        && intensity.is_finite()
-                        && intensity.min_element() >= 0.0
-                        && direction.length() > 0.0
-                        && cone_angle.is_finite()
-                        && falloff_angle.is_finite())
-                    {
-                        return Err(RenderError {
-                            message: "spot light: invalid position, direction, intensity or angle"
-                                .into(),
-                            span: Some(*span),
-                        });
-                    }
-                    lights.push(Light::Spot(SpotLight::new(
-                        v(*position),
-                        v(*direction),
-                        color3(*intensity),
-                        *cone_angle as f32,
-                        *falloff_angle as f32,
-                    )))
-                }
-            }
-        }
+        lights::push_scene_lights(scene, &mut lights)?;
         let bvh = Bvh::new(shapes);
-        let mut environment = None;
-        if let scene::Background::Environment {
-            image,
-            intensity,
-            transform,
-        } = &scene.background
-        {
-            let map = textures::EnvironmentMap::new(image, *intensity, *transform);
-            if !map.is_black() {
-                // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite
-                // lights use for photon emission.
-                let b = bvh.bounds();
-                let (center, radius) = if b.is_empty() {
-                    (Vec3A::ZERO, 1.0)
-                } else {
-                    (b.centroid(), 0.5 * b.diagonal().length())
-                };
-                environment = Some(lights.len());
-                lights.push(Light::Environment(EnvironmentLight::new(
-                    map, center, radius,
-                )));
-            }
-        }
+        let environment = lights::push_environment(scene, &bvh, &mut lights);
         let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
         let prim_material = prim_object
             .iter()
@@ -409,7 +147,7 @@ impl<'a> PreparedScene<'a> {
             environment,
             prim_material,
             const_lobes: Vec::new(),
-            textured: scene.materials.iter().map(has_texture).collect(),
+            textured: scene.materials.iter().map(eval::has_texture).collect(),
         };
         // A constant material gives the same lobes at every hit: the hit is not looked at.
         let dummy = SurfaceHit {
@@ -426,7 +164,7 @@ impl<'a> PreparedScene<'a> {
         prepared.const_lobes = scene
             .materials
             .iter()
-            .map(|m| is_constant(m).then(|| prepared.lobes(m, &dummy)))
+            .map(|m| eval::is_constant(m).then(|| prepared.lobes(m, &dummy)))
             .collect();
         Ok(prepared)
     }
@@ -482,25 +220,6 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
-    fn color(&self, p: &ColorParam, sh: &SurfaceHit) -> Vec3A {
-        match p {
-            ColorParam::Const(c) => color3(*c),
-            ColorParam::Texture(t) => {
-                textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh))
-            }
-        }
-    }
-
-    fn scalar(&self, p: &ScalarParam, sh: &SurfaceHit) -> f32 {
-        match p {
-            ScalarParam::Const(c) => *c as f32,
-            ScalarParam::Texture(t) => {
-                let c = textures::evaluate(self.scene.texture(*t), &self.tex_coord(sh));
-                0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-            }
-        }
-    }
-
     /// The BSDF at a hit.
     #[inline]
     pub fn bsdf(&self, sh: &SurfaceHit) -> Bsdf {
@@ -514,42 +233,14 @@ impl<'a> PreparedScene<'a> {
 
     /// The lobes of material `m` at a hit (texture lookups where the material has them).
     fn lobes(&self, m: &Material, sh: &SurfaceHit) -> Lobes {
-        let clamp01 = |c: Vec3A| c.clamp(Vec3A::ZERO, Vec3A::ONE);
-        match m {
-            Material::Diffuse { albedo } => Lobes::Diffuse {
-                albedo: clamp01(self.color(albedo, sh)),
-            },
-            Material::Mirror { tint } => Lobes::Mirror {
-                tint: clamp01(self.color(tint, sh)),
-            },
-            Material::Glass { ior, tint, .. } => Lobes::Glass {
-                eta: if ior.is_finite() && *ior > 0.0 {
-                    *ior as f32
-                } else {
-                    1.0
-                },
-                tint: clamp01(color3(*tint)),
-            },
-            Material::Glossy {
-                albedo,
-                specular,
-                roughness,
-            } => {
-                let r = self.scalar(roughness, sh).clamp(0.0, 1.0);
-                Lobes::Glossy {
-                    albedo: clamp01(self.color(albedo, sh)),
-                    specular: clamp01(self.color(specular, sh)),
-                    alpha: (r * r).max(1e-3),
-                }
-            }
-        }
+        eval::lobes(m, self.scene, || self.tex_coord(sh))
     }
 
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
     pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
         match self.material(sh.prim) {
             Material::Glass { absorb, .. } => {
-                let a = self.color(absorb, sh).max(Vec3A::ZERO);
+                let a = eval::color(absorb, self.scene, || self.tex_coord(sh)).max(Vec3A::ZERO);
                 (a != Vec3A::ZERO && a.is_finite()).then_some(a)
             }
             _ => None,
@@ -591,6 +282,7 @@ mod tests {
     use super::*;
     use crate::camera::Camera;
     use crate::sampling::{Rng, uniform_sphere};
+    use crate::shapes::primitive::AnyShape;
     use crate::{EvalOptions, load_file, load_source};
 
     /// A hit from [`PreparedScene::intersect`] is the full hit of the same shape, field for

@@ -1,0 +1,97 @@
+//! Building the lights of a prepared scene that are not emissive shapes: point and spot
+//! lights, validated, and the environment light of a non-black background map.
+
+use glam::Vec3A;
+
+use super::RenderError;
+use super::shapes::v;
+use crate::accel::Bvh;
+use crate::lights::{EnvironmentLight, Light, PointLight, SpotLight};
+use crate::scene::{self, Scene};
+use crate::textures;
+
+/// Appends the scene's point and spot lights to `lights`.
+pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Result<(), RenderError> {
+    let color3 = |c: glam::DVec3| c.as_vec3a();
+    for l in &scene.lights {
+        match l {
+            scene::Light::Point {
+                position,
+                intensity,
+                span,
+            } => {
+                if !(position.is_finite()
+                    && intensity.is_finite()
+                    && intensity.min_element() >= 0.0)
+                {
+                    return Err(RenderError {
+                        message: "point light: position and intensity must be finite, intensity non-negative".into(),
+                        span: Some(*span),
+                    });
+                }
+                lights.push(Light::Point(PointLight {
+                    position: v(*position),
+                    intensity: color3(*intensity),
+                }))
+            }
+            scene::Light::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                falloff_angle,
+                span,
+            } => {
+                if !(position.is_finite()
+                    && intensity.is_finite()
+                    && intensity.min_element() >= 0.0
+                    && direction.length() > 0.0
+                    && cone_angle.is_finite()
+                    && falloff_angle.is_finite())
+                {
+                    return Err(RenderError {
+                        message: "spot light: invalid position, direction, intensity or angle"
+                            .into(),
+                        span: Some(*span),
+                    });
+                }
+                lights.push(Light::Spot(SpotLight::new(
+                    v(*position),
+                    v(*direction),
+                    color3(*intensity),
+                    *cone_angle as f32,
+                    *falloff_angle as f32,
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Appends the environment light of a non-black background map; returns its index.
+pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>) -> Option<usize> {
+    let mut environment = None;
+    if let scene::Background::Environment {
+        image,
+        intensity,
+        transform,
+    } = &scene.background
+    {
+        let map = textures::EnvironmentMap::new(image, *intensity, *transform);
+        if !map.is_black() {
+            // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite
+            // lights use for photon emission.
+            let b = bvh.bounds();
+            let (center, radius) = if b.is_empty() {
+                (Vec3A::ZERO, 1.0)
+            } else {
+                (b.centroid(), 0.5 * b.diagonal().length())
+            };
+            environment = Some(lights.len());
+            lights.push(Light::Environment(EnvironmentLight::new(
+                map, center, radius,
+            )));
+        }
+    }
+    environment
+}

@@ -1,0 +1,171 @@
+//! Baking a scene object into world-space shapes: shapes whose transform is a similarity
+//! (translate, rotate, uniform scale) are transformed exactly into their own kind; any other
+//! transform wraps the object-space shape in a [`Transformed`].
+
+use glam::{DMat3, DVec3, Vec3A};
+
+use crate::scene;
+use crate::shapes::Shape;
+use crate::shapes::cuboid::cuboid_faces;
+use crate::shapes::cylinder::Cylinder;
+use crate::shapes::disk::Disk;
+use crate::shapes::mesh::mesh_triangles;
+use crate::shapes::patch::BezierPatch;
+use crate::shapes::plane::Plane;
+use crate::shapes::primitive::AnyShape;
+use crate::shapes::quad::Quad;
+use crate::shapes::revolve::Revolve;
+use crate::shapes::sphere::Sphere;
+use crate::shapes::transformed::Transformed;
+use crate::shapes::triangle::Triangle;
+
+/// Uniform scale, rotation (possibly mirrored) and translation: returns the scale.
+fn similarity_scale(m: &DMat3) -> Option<f64> {
+    let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
+    let s = a.length();
+    let tol = 1e-9 * s.max(1e-300);
+    let ok = (b.length() - s).abs() <= tol * 10.0
+        && (c.length() - s).abs() <= tol * 10.0
+        && a.dot(b).abs() <= tol * s * 10.0
+        && a.dot(c).abs() <= tol * s * 10.0
+        && b.dot(c).abs() <= tol * s * 10.0;
+    (ok && s > 0.0 && s.is_finite()).then_some(s)
+}
+
+pub(super) fn v(p: DVec3) -> Vec3A {
+    p.as_vec3a()
+}
+
+/// World-space shapes of one object.
+pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
+    let xf = &obj.transform;
+    let m = xf.matrix3;
+    let det = m.determinant();
+    if !(det.is_finite() && det.abs() > 1e-300) {
+        return Err("the object's transform is singular (a zero scale?)".into());
+    }
+    let nmat = m.inverse().transpose();
+    let mirrored = det < 0.0;
+    let sim = similarity_scale(&m);
+    let wrap = |s: Box<dyn Shape>| -> Result<AnyShape, String> {
+        Ok(AnyShape::Other(Box::new(Transformed::new(
+            s,
+            xf.as_affine3a(),
+        )?)))
+    };
+    let quad = |o: DVec3, u: DVec3, w: DVec3| -> Result<AnyShape, String> {
+        let (u, w) = if mirrored { (w, u) } else { (u, w) };
+        let o2 = xf.transform_point3(o);
+        Ok(AnyShape::Quad(Quad::new(
+            v(o2),
+            v(xf.transform_vector3(u)),
+            v(xf.transform_vector3(w)),
+        )?))
+    };
+    Ok(match &obj.shape {
+        scene::Shape::Sphere { center, radius } => match sim {
+            Some(s) => vec![AnyShape::Sphere(Sphere::new(
+                v(xf.transform_point3(*center)),
+                (radius * s) as f32,
+            )?)],
+            None => vec![wrap(Box::new(Sphere::new(v(*center), *radius as f32)?))?],
+        },
+        scene::Shape::Plane { normal, offset } => {
+            let p0 = xf.transform_point3(*normal * *offset / normal.length_squared().max(1e-300));
+            let n = (nmat * *normal).normalize_or_zero();
+            vec![AnyShape::Plane(Plane::new(v(n), n.dot(p0) as f32)?)]
+        }
+        scene::Shape::Quad {
+            origin,
+            edge_u,
+            edge_v,
+        } => vec![quad(*origin, *edge_u, *edge_v)?],
+        scene::Shape::Box { min, max } => {
+            let to_world = |p: Vec3A| v(xf.transform_point3(p.as_dvec3()));
+            cuboid_faces(v(*min), v(*max), to_world, mirrored)?
+                .into_iter()
+                .map(AnyShape::Quad)
+                .collect()
+        }
+        scene::Shape::Disk {
+            center,
+            normal,
+            radius,
+        } => match sim {
+            Some(s) => vec![AnyShape::Disk(Disk::new(
+                v(xf.transform_point3(*center)),
+                v(nmat * *normal),
+                (radius * s) as f32,
+            )?)],
+            None => vec![wrap(Box::new(Disk::new(
+                v(*center),
+                v(*normal),
+                *radius as f32,
+            )?))?],
+        },
+        scene::Shape::Cylinder {
+            base,
+            cap,
+            radius,
+            open,
+        } => {
+            let axis = *cap - *base;
+            let parts: Vec<(DVec3, DVec3, bool)> = if *open {
+                vec![]
+            } else {
+                vec![(*base, -axis, true), (*cap, axis, true)]
+            };
+            let mut out = Vec::new();
+            match sim {
+                Some(s) => {
+                    let (b, c) = (xf.transform_point3(*base), xf.transform_point3(*cap));
+                    out.push(AnyShape::Cylinder(Cylinder::new(
+                        v(b),
+                        v(c),
+                        (radius * s) as f32,
+                    )?));
+                    for (p, n, _) in parts {
+                        out.push(AnyShape::Disk(Disk::new(
+                            v(xf.transform_point3(p)),
+                            v(nmat * n),
+                            (radius * s) as f32,
+                        )?));
+                    }
+                }
+                None => {
+                    out.push(wrap(Box::new(Cylinder::new(
+                        v(*base),
+                        v(*cap),
+                        *radius as f32,
+                    )?))?);
+                    for (p, n, _) in parts {
+                        out.push(wrap(Box::new(Disk::new(v(p), v(n), *radius as f32)?))?);
+                    }
+                }
+            }
+            out
+        }
+        scene::Shape::Triangle { vertices } => {
+            let mut p = vertices.map(|q| v(xf.transform_point3(q)));
+            if mirrored {
+                p.swap(1, 2);
+            }
+            vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
+        }
+        scene::Shape::Mesh { mesh } => {
+            let tris = mesh_triangles(mesh, xf)?;
+            if tris.is_empty() {
+                return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
+            }
+            tris.into_iter().map(AnyShape::Triangle).collect()
+        }
+        scene::Shape::Revolve {
+            profile,
+            sweep,
+            method,
+        } => vec![wrap(Box::new(Revolve::new(profile, *sweep, *method)?))?],
+        scene::Shape::BezierPatch { points, method } => {
+            vec![wrap(Box::new(BezierPatch::new(points, *method)?))?]
+        }
+    })
+}
