@@ -322,6 +322,10 @@ fn the_time_limit_stops_an_iteration_in_flight() {
             "10000000000",
             "--time-limit",
             "0.5",
+            // Past the memory estimate of photon mapping's 10^10 stored photons on purpose:
+            // the deadline is what is tested here.
+            "--memory-limit",
+            "100T",
         ]);
         let err = String::from_utf8_lossy(&out.stderr);
         let took = start.elapsed().as_secs_f64();

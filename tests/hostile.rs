@@ -192,8 +192,9 @@ fn generated_cases(dir: &Path) -> Vec<Case> {
     add(
         "binary_garbage.scn",
         garbage,
-        Expect::Exit(1),
-        Expect::Exit(1),
+        // Not text: refused as an unreadable input file (usage error), with the byte offset.
+        Expect::Exit(2),
+        Expect::Exit(2),
     );
     // One line over 70 KB, its error at the very end.
     let mut line = String::from(header).replace('\n', " ");
@@ -471,7 +472,8 @@ fn hostile_flags_are_refused_or_bounded() {
         (
             "--time-limit 1e300",
             vec!["render", scene, "-o", png_s, "--time-limit", "1e300"],
-            &[0],
+            // Longer than a year is refused as a usage error.
+            &[2],
         ),
         (
             "scene is a directory",

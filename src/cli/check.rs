@@ -5,7 +5,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use sppm_lang::render::RenderError;
+use sppm_lang::render::{RenderError, RenderOptions};
 use sppm_lang::scene::{Background, Light, Scene};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
@@ -34,18 +34,31 @@ pub fn print_diagnostics(loaded: &Loaded) {
 pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
     match e.span {
         Some(span) if sources.get(span.file).is_some() => {
+            let mut d = Diagnostic::error(span, e.message.clone());
+            d.label = e.label.clone();
+            d.help = e.help.clone();
             let loaded = Loaded {
-                diagnostics: vec![Diagnostic::error(span, e.message.clone())],
+                diagnostics: vec![d],
                 sources: sources.clone(),
                 ..Loaded::default()
             };
             print_diagnostics(&loaded);
         }
-        _ => err(&format!("error: {}\n", e.message)),
+        _ => {
+            // No declaration to point at (e.g. a default the file never wrote): name the file.
+            let file = sources.files().first().map(|f| f.name.as_str());
+            match file {
+                Some(f) => err(&format!("error: {f}: {}\n", e.message)),
+                None => err(&format!("error: {}\n", e.message)),
+            }
+            if let Some(h) = &e.help {
+                err(&format!("  help: {h}\n"));
+            }
+        }
     }
 }
 
-pub fn run(scene: &Path, options: &EvalOptions) -> ExitCode {
+pub fn run(scene: &Path, options: &EvalOptions, render_options: &RenderOptions) -> ExitCode {
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
@@ -56,6 +69,11 @@ pub fn run(scene: &Path, options: &EvalOptions) -> ExitCode {
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
+            // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
+            if let Err(e) = sppm_lang::render::prepare(s, render_options) {
+                print_render_error(&loaded.sources, &e);
+                return ExitCode::from(EXIT_SCENE_ERROR);
+            }
             out(&summary(s, loaded.dependencies.len()));
             ExitCode::SUCCESS
         }

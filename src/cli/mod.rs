@@ -50,6 +50,32 @@ pub fn parse_seconds(text: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// A byte count with an optional binary suffix: `1500000`, `512K`, `512M`, `4G`.
+pub fn parse_bytes(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let (digits, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
+        Some((i, _)) => (&t[..i], &t[i..]),
+        None => (t, ""),
+    };
+    let shift = match unit.to_ascii_uppercase().as_str() {
+        "" | "B" => 0,
+        "K" | "KB" | "KIB" => 10,
+        "M" | "MB" | "MIB" => 20,
+        "G" | "GB" | "GIB" => 30,
+        "T" | "TB" | "TIB" => 40,
+        _ => return Err(format!("unknown unit `{unit}`; use K, M, G or T")),
+    };
+    let n: f64 = digits
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size such as 512M or 4G"))?;
+    let bytes = n * (1u64 << shift) as f64;
+    if !(1.0..1.8e19).contains(&bytes) {
+        return Err(format!("`{text}` is out of range"));
+    }
+    Ok(bytes as u64)
+}
+
 /// A thread count from 1 to [`MAX_THREADS`].
 pub fn parse_threads(text: &str) -> Result<usize, String> {
     let n: usize = text
@@ -70,6 +96,10 @@ pub struct LimitArgs {
     /// Deepest macro call nesting (recursion depth).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     pub max_depth: u64,
+    /// Most memory a render may need (e.g. `4G`, `512M`; default: 2 GiB or half the machine's
+    /// memory, whichever is less). Checked against an estimate before rendering starts.
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    pub memory_limit: Option<u64>,
     /// Most evaluation steps in all (statements, loop iterations, macro calls).
     #[arg(long, default_value_t = EvalOptions::default().max_steps, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_steps: u64,
@@ -105,7 +135,13 @@ pub enum Command {
 
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
-        Command::Check { scene, limits } => check::run(&scene, &limits.options()),
+        Command::Check { scene, limits } => {
+            let render_options = sppm_lang::render::RenderOptions {
+                memory_limit: limits.memory_limit,
+                ..Default::default()
+            };
+            check::run(&scene, &limits.options(), &render_options)
+        }
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
         Command::Chart(args) => chart::run(&args),

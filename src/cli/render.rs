@@ -99,6 +99,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         seed: args.seed,
         time_limit: args.time_limit,
         threads: args.threads,
+        memory_limit: args.limits.memory_limit,
     };
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -157,7 +158,13 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         } else {
             "no iteration finished within the time limit"
         };
-        eprintln!("error: {why}; `{}` is left as it was", output.display());
+        let message = format!("{why}; `{}` is left as it was", output.display());
+        let mut e = sppm_lang::render::RenderError::new(message);
+        if !out.cancelled && args.time_limit.is_none() {
+            // The limit came from the scene's settings: point at them.
+            e = e.at(scene.settings.span);
+        }
+        print_render_error(sources, &e);
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
     if let Err(e) = out.image.write(&output, exposure) {

@@ -250,6 +250,7 @@ fn start(
     let (flag, keep_image) = (cancel.clone(), keep.clone());
     let snapshot_every = Duration::from_secs_f64(args.snapshot_every);
     let threads = args.threads;
+    let memory_limit = args.limits.memory_limit;
     let handle = std::thread::spawn(move || {
         let mut stages = Vec::new();
         if preview {
@@ -260,6 +261,7 @@ fn start(
         for (stage, scene) in stages {
             let options = RenderOptions {
                 threads,
+                memory_limit,
                 ..RenderOptions::default()
             };
             let exposure = scene.settings.exposure;

@@ -14,6 +14,26 @@ pub use source::{SourceFile, SourceMap};
 
 use crate::span::Span;
 
+/// A number as a person would write it in a message: shortest round-trip form, rounded to 6
+/// significant digits when that form is long (`-0.09999999999999998` is `-0.1`), and in
+/// exponent form when very large or small (`1e300`, not 301 digits).
+pub fn short_number(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let shortest = format!("{x}");
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    let a = rounded.abs();
+    if a != 0.0 && !(1e-5..1e15).contains(&a) {
+        return format!("{rounded:e}");
+    }
+    if shortest.len() <= 12 {
+        shortest
+    } else {
+        format!("{rounded}")
+    }
+}
+
 /// Result of a step that may fail with several diagnostics.
 pub type SourceResult<T> = Result<T, Vec<Diagnostic>>;
 
@@ -163,6 +183,18 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_are_shown_as_written() {
+        assert_eq!(short_number(-0.09999999999999998), "-0.1");
+        assert_eq!(short_number(0.5), "0.5");
+        assert_eq!(short_number(3.0), "3");
+        assert_eq!(short_number(1e300), "1e300");
+        assert_eq!(short_number(4e38), "4e38");
+        assert_eq!(short_number(1.23456789e-7), "1.23457e-7");
+        assert_eq!(short_number(123456.789), "123456.789");
+        assert_eq!(short_number(f64::NAN), "NaN");
+    }
 
     #[test]
     fn edit_distance_basics() {

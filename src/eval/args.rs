@@ -22,8 +22,49 @@ pub(super) fn vec3(a: &Arg) -> SourceResult<DVec3> {
     a.value.vec3().at(a.span)
 }
 
+/// Largest colour component accepted anywhere (reflectance, radiance, intensity): products
+/// with areas, powers and photon counts stay far inside f32 and f64.
+pub const MAX_COLOR: f64 = 1e9;
+
 pub(super) fn color(a: &Arg) -> SourceResult<Color> {
-    a.value.color().at(a.span)
+    let c = a.value.color().at(a.span)?;
+    check_magnitude(c, a.span)?;
+    Ok(c)
+}
+
+fn check_magnitude(c: Color, span: Span) -> SourceResult<()> {
+    if c.abs().max_element() > MAX_COLOR || !c.is_finite() {
+        return Err(range_error(
+            span,
+            format!(
+                "color component {} is out of range",
+                crate::diag::short_number(c.abs().max_element())
+            ),
+            "use components of at most 1e9 (scale the light or the exposure instead)",
+        ));
+    }
+    Ok(())
+}
+
+/// A colour a surface reflects or a texture shows: within range and not negative.
+pub(super) fn surface_color(a: &Arg) -> SourceResult<Color> {
+    let c = color(a)?;
+    check_surface(c, a.span)?;
+    Ok(c)
+}
+
+fn check_surface(c: Color, span: Span) -> SourceResult<()> {
+    if c.min_element() < 0.0 {
+        return Err(range_error(
+            span,
+            format!(
+                "a surface color must not be negative, found {}",
+                crate::diag::short_number(c.min_element())
+            ),
+            "use components >= 0",
+        ));
+    }
+    Ok(())
 }
 
 pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
@@ -101,12 +142,16 @@ pub(super) fn count(a: &Arg, what: &str, max: f64) -> SourceResult<f64> {
 pub(super) fn color_def(a: &Arg) -> SourceResult<ColorDef> {
     match &a.value {
         Value::Texture(t) => Ok(ColorDef::Tex(t.clone())),
-        v => Ok(ColorDef::Const(
-            v.color()
+        v => {
+            let c = v
+                .color()
                 .map_err(|e| {
                     e.help("give a color `rgb <r, g, b>`, a number or a `texture { ... }`")
                 })
-                .at(a.span)?,
-        )),
+                .at(a.span)?;
+            check_magnitude(c, a.span)?;
+            check_surface(c, a.span)?;
+            Ok(ColorDef::Const(c))
+        }
     }
 }

@@ -70,7 +70,7 @@ impl Default for EvalOptions {
         Self {
             max_iterations: 1_000_000,
             max_depth: 256,
-            max_objects: 5_000_000,
+            max_objects: 1_000_000,
             max_steps: 50_000_000,
         }
     }

@@ -27,6 +27,8 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                     return Err(RenderError {
                         message: "point light: position and intensity must be finite, intensity non-negative".into(),
                         span: Some(*span),
+                        label: String::new(),
+                        help: None,
                     });
                 }
                 lights.push(Light::Point(PointLight {
@@ -53,6 +55,8 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                         message: "spot light: invalid position, direction, intensity or angle"
                             .into(),
                         span: Some(*span),
+                        label: String::new(),
+                        help: None,
                     });
                 }
                 lights.push(Light::Spot(SpotLight::new(

@@ -3,6 +3,7 @@
 
 use glam::{Affine3A, DVec3, Vec3A};
 
+mod budget;
 mod lights;
 mod settings;
 mod shapes;
@@ -16,6 +17,7 @@ use crate::sampling::Distribution1D;
 use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
+pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
 pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
 use shapes::build_shapes;
 
@@ -63,10 +65,27 @@ fn color3(c: DVec3) -> Vec3A {
     c.as_vec3a()
 }
 
+/// The prepare stage in one call: the settings with `options` applied, the memory estimate
+/// against `options.memory_limit` (default: [`default_memory_limit`]), then the validated,
+/// prepared scene. `check` and `render` both go through here, so they accept the same scenes.
+pub fn prepare<'a>(
+    scene: &'a Scene,
+    options: &RenderOptions,
+) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
+    scene.validate()?;
+    let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
+    let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
+    check_memory(scene, &settings, limit).map_err(|e| e.at(scene.settings.span))?;
+    let prepared = PreparedScene::new(scene)?;
+    Ok((settings, prepared))
+}
+
 impl<'a> PreparedScene<'a> {
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+        scene.validate()?;
         let (width, height) = scene.settings.resolution;
-        let camera = Camera::new(&scene.camera, width, height).map_err(RenderError::new)?;
+        let camera = Camera::new(&scene.camera, width, height)
+            .map_err(|e| RenderError::new(e).at(scene.camera.span))?;
         let mut shapes = Vec::new();
         let mut prim_object = Vec::new();
         let mut prim_light = Vec::new();
@@ -76,6 +95,8 @@ impl<'a> PreparedScene<'a> {
             let err = |message: String| RenderError {
                 message: format!("{}: {message}", obj.shape.kind()),
                 span: Some(obj.span),
+                label: String::new(),
+                help: None,
             };
             if obj.material.0 as usize >= scene.materials.len() {
                 return Err(err("unknown material".into()));

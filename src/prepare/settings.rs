@@ -14,6 +14,8 @@ pub struct RenderOptions {
     pub time_limit: Option<f64>,
     /// Worker threads; `None`: rayon's default (all cores). The image does not depend on it.
     pub threads: Option<usize>,
+    /// Most memory the render may need, in bytes; `None`: [`super::default_memory_limit`].
+    pub memory_limit: Option<u64>,
 }
 
 /// The settings a render actually uses (scene settings with the options applied).
@@ -37,6 +39,10 @@ pub struct EffectiveSettings {
 pub struct RenderError {
     pub message: String,
     pub span: Option<Span>,
+    /// What the span's label says (empty: none).
+    pub label: String,
+    /// A suggested fix.
+    pub help: Option<String>,
 }
 
 impl RenderError {
@@ -44,6 +50,24 @@ impl RenderError {
         Self {
             message: message.into(),
             span: None,
+            label: String::new(),
+            help: None,
+        }
+    }
+
+    /// The error at `span` (none when it is detached).
+    pub fn at(mut self, span: Span) -> Self {
+        self.span = (!span.is_detached()).then_some(span);
+        self
+    }
+}
+
+impl From<crate::scene::Invalid> for RenderError {
+    fn from(e: crate::scene::Invalid) -> Self {
+        Self {
+            label: e.label,
+            help: Some(e.help),
+            ..RenderError::new(e.message).at(e.span)
         }
     }
 }

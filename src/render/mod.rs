@@ -8,6 +8,7 @@
 pub use crate::integrators::{Progress, RenderOutput, RenderStats};
 pub use crate::prepare::{
     EffectiveSettings, PreparedScene, RenderError, RenderOptions, SurfaceHit, effective_settings,
+    prepare,
 };
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -24,8 +25,7 @@ pub fn render(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<RenderOutput, RenderError> {
-    let settings = effective_settings(scene, options)?;
-    let prepared = PreparedScene::new(scene)?;
+    let (settings, prepared) = prepare(scene, options)?;
     let integrator = integrators::for_method(settings.integrator);
     let deadline = settings
         .time_limit

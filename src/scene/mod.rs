@@ -8,8 +8,10 @@
 //! Colors are linear RGB.
 
 mod assets;
+mod validate;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
+pub use validate::{Invalid, MAX_COORD, MIN_SIZE};
 
 use std::sync::Arc;
 

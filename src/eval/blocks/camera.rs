@@ -24,24 +24,10 @@ static CAMERA_PROPS: [PropSpec; 6] = [
 
 impl CameraBuilder {
     pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
-        let c = &self.0;
-        let dir = c.look_at - c.location;
-        if dir.length_squared() == 0.0 {
+        // The scene's own check (the one `prepare` runs), reported here at the block.
+        if let Err(e) = self.0.validate() {
             return Err(vec![
-                Error::new("the camera looks at its own location")
-                    .label("location == look_at")
-                    .help("move `look_at` away from `location`")
-                    .at(span),
-            ]);
-        }
-        if dir.cross(c.up).length_squared()
-            < 1e-18 * dir.length_squared() * c.up.length_squared().max(1e-300)
-        {
-            return Err(vec![
-                Error::new("the camera's `up` is parallel to its view direction")
-                    .label("cannot orient the camera")
-                    .help("choose another `up`, e.g. `up <0, 0, 1>`")
-                    .at(span),
+                Error::new(e.message).label(e.label).help(e.help).at(span),
             ]);
         }
         Ok(Value::Camera(Box::new(self.0)))

@@ -76,6 +76,13 @@ impl Sink for EnvBuilder {
                         "e.g. `intensity 1`",
                     ));
                 }
+                if k > 1e9 || k.is_nan() {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("intensity {} is out of range", crate::diag::short_number(k)),
+                        "use an intensity of at most 1e9",
+                    ));
+                }
                 self.intensity = Some(k);
             }
             "rotate" => {

@@ -27,6 +27,9 @@ pub(super) struct MaterialBuilder {
     touched: bool,
 }
 
+/// Smallest glossy roughness: below it the lobe's width underflows (use `mirror` instead).
+const MIN_ROUGHNESS: f64 = 1e-3;
+
 static MAT_PROPS: [PropSpec; 9] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
@@ -124,6 +127,14 @@ impl MaterialBuilder {
                             "glass has an index of refraction ≥ 1 (1.5 for window glass)",
                         ));
                     }
+                    if i > 100.0 || i.is_nan() {
+                        return Err(range_error(
+                            s,
+                            format!("ior {} is out of range", crate::diag::short_number(i)),
+                            "real materials have an index of refraction from 1 to about 4 \
+                             (at most 100 is accepted)",
+                        ));
+                    }
                     ior = i;
                 }
                 MatKind::Glass {
@@ -188,11 +199,14 @@ impl Sink for MaterialBuilder {
             "specular" => self.specular = Some(color_def(&args[0])?),
             "roughness" => {
                 if let Value::Num(r) = args[0].value
-                    && !(r > 0.0 && r <= 1.0)
+                    && !(MIN_ROUGHNESS..=1.0).contains(&r)
                 {
                     return Err(range_error(
                         args[0].span,
-                        format!("roughness must be in (0, 1], found {r}"),
+                        format!(
+                            "roughness must be from 0.001 to 1, found {}",
+                            crate::diag::short_number(r)
+                        ),
                         "e.g. `roughness 0.2`",
                     ));
                 }

@@ -3,7 +3,7 @@
 use super::{Sink, unexpected};
 use crate::diag::SourceResult;
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, color};
+use crate::eval::args::{Arg, surface_color};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::Value;
 use crate::scene::Background;
@@ -22,7 +22,7 @@ impl Sink for TopSink {
         &TOP_PROPS
     }
     fn property(&mut self, ev: &mut Evaluator, _kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
-        ev.scene.background = Background::Color(color(&args[0])?);
+        ev.scene.background = Background::Color(surface_color(&args[0])?);
         Ok(())
     }
     fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {

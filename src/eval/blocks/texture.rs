@@ -7,7 +7,9 @@ use glam::{DAffine3, DVec3};
 use super::{Sink, unexpected};
 use crate::diag::{At, Error, SourceResult};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, color, count, file_name, num, positive, range_error, vec3, word};
+use crate::eval::args::{
+    Arg, count, file_name, num, positive, range_error, surface_color, vec3, word,
+};
 use crate::eval::props::{PropSpec, p, transform_prop, w, with_transforms};
 use crate::eval::value::{PatternDef, TextureDef, Value};
 use crate::scene::{Color, ColorMap, Mapping, Pattern, Wrap};
@@ -187,8 +189,8 @@ impl Sink for TextureBuilder {
                     },
                     kw.span,
                 )?;
-                self.a = color(&args[0])?;
-                self.b = color(&args[1])?;
+                self.a = surface_color(&args[0])?;
+                self.b = surface_color(&args[1])?;
             }
             "gradient" => {
                 self.set("gradient", kw.span)?;
@@ -325,6 +327,10 @@ impl Sink for ColorMapBuilder {
         };
         let pos = entry.0.at(span)?;
         let c = entry.1.at(span)?;
+        let c = surface_color(&Arg {
+            value: Value::Color(c),
+            span,
+        })?;
         if !(0.0..=1.0).contains(&pos) {
             return Err(range_error(
                 span,

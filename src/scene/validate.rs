@@ -1,0 +1,292 @@
+//! The one validation of an evaluated [`Scene`]: what the renderer relies on and the language
+//! cannot see value by value (where a transformed object ends up, whether the camera can be
+//! oriented, whether sizes and positions stay inside what f32 rendering can represent).
+//!
+//! `prepare` runs it before building anything, so `check` (which prepares the scene) and
+//! `render` accept exactly the same scenes, and a `Scene` built by hand through the library API
+//! is refused with a message instead of rendering NaN or panicking. The evaluator calls
+//! [`Camera::validate`] too, to report a bad camera at its block as soon as it is written.
+
+use glam::{DAffine3, DVec3};
+
+use super::{Background, Camera, Light, Scene, Settings, Shape};
+use crate::span::Span;
+
+/// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
+/// f32, the renderer's precision along rays.
+pub const MAX_COORD: f64 = 1e12;
+/// Smallest radius, length or side in world space.
+pub const MIN_SIZE: f64 = 1e-9;
+
+/// Why a scene cannot be rendered, with where it comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Invalid {
+    pub message: String,
+    /// The declaration at fault (detached when the scene was built by hand).
+    pub span: Span,
+    pub label: String,
+    pub help: String,
+}
+
+fn invalid(span: Span, message: String, label: &str, help: &str) -> Invalid {
+    Invalid {
+        message,
+        span,
+        label: label.into(),
+        help: help.into(),
+    }
+}
+
+fn fmt(x: f64) -> String {
+    crate::diag::short_number(x)
+}
+
+/// A point or vector that must be finite and within [`MAX_COORD`].
+fn point(p: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
+    let m = p.abs().max_element();
+    if m.is_nan() || m > MAX_COORD {
+        return Err(invalid(
+            span,
+            format!("{what} is out of range ({} from the origin)", fmt(m)),
+            "too far away",
+            "keep coordinates within 1e12 of the origin (scale the whole scene down)",
+        ));
+    }
+    Ok(())
+}
+
+/// A world-space size that must lie in [`MIN_SIZE`, `MAX_COORD`].
+fn size(x: f64, what: &str, span: Span) -> Result<(), Invalid> {
+    if x.is_nan() || x > MAX_COORD {
+        return Err(invalid(
+            span,
+            format!("{what} is {} in world space, too large", fmt(x)),
+            "too large",
+            "keep sizes (after every scale) at most 1e12",
+        ));
+    }
+    if x.is_nan() || x < MIN_SIZE {
+        return Err(invalid(
+            span,
+            format!("{what} is {} in world space, too small to render", fmt(x)),
+            "too small",
+            "keep sizes (after every scale) at least 1e-9",
+        ));
+    }
+    Ok(())
+}
+
+impl Camera {
+    /// Whether the camera can be built: finite, in range, oriented.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let span = self.span;
+        point(self.location, "the camera's location", span)?;
+        point(self.look_at, "the camera's look_at", span)?;
+        if !(self.up.is_finite() && self.up.length_squared() > 0.0) {
+            return Err(invalid(
+                span,
+                "the camera's `up` must be a finite, non-zero vector".into(),
+                "cannot orient the camera",
+                "e.g. `up <0, 1, 0>`",
+            ));
+        }
+        let dir = self.look_at - self.location;
+        if dir.length_squared() == 0.0 {
+            return Err(invalid(
+                span,
+                "the camera looks at its own location".into(),
+                "location == look_at",
+                "move `look_at` away from `location`",
+            ));
+        }
+        if dir.cross(self.up).length_squared()
+            < 1e-18 * dir.length_squared() * self.up.length_squared().max(1e-300)
+        {
+            return Err(invalid(
+                span,
+                "the camera's `up` is parallel to its view direction".into(),
+                "cannot orient the camera",
+                "choose another `up`, e.g. `up <0, 0, 1>`",
+            ));
+        }
+        if !(self.fov > 0.0 && self.fov < 180.0) {
+            return Err(invalid(
+                span,
+                format!(
+                    "fov must be between 0 and 180 degrees, found {}",
+                    fmt(self.fov)
+                ),
+                "out of range",
+                "e.g. `fov 40`",
+            ));
+        }
+        if !(self.aperture >= 0.0 && self.aperture <= MAX_COORD) {
+            return Err(invalid(
+                span,
+                format!("the aperture {} is out of range", fmt(self.aperture)),
+                "out of range",
+                "use a lens radius from 0 (pinhole) to 1e12",
+            ));
+        }
+        if let Some(f) = self.focus_distance {
+            size(f, "the focus distance", span)?;
+        }
+        Ok(())
+    }
+}
+
+impl Settings {
+    /// The numbers a render computes with; the resolution and counts are checked by `prepare`
+    /// against the limits of the run.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let span = self.span;
+        if let Some(r) = self.radius {
+            size(r, "the initial radius", span)?;
+        }
+        if !(self.exposure > 0.0 && self.exposure <= 1e9) {
+            return Err(invalid(
+                span,
+                format!("exposure {} is out of range", fmt(self.exposure)),
+                "out of range",
+                "use an exposure above 0 and at most 1e9",
+            ));
+        }
+        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
+            return Err(invalid(
+                span,
+                format!("alpha must be in (0, 1], got {}", fmt(self.alpha)),
+                "out of range",
+                "the usual value is 2/3",
+            ));
+        }
+        if let Some(t) = self.time_limit
+            && !(t > 0.0 && t.is_finite())
+        {
+            return Err(invalid(
+                span,
+                format!(
+                    "time limit must be a positive number of seconds, got {}",
+                    fmt(t)
+                ),
+                "out of range",
+                "e.g. `time_limit 30`",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Largest column norm of the linear part: how much the transform can stretch a length.
+fn stretch(t: &DAffine3) -> f64 {
+    let m = t.matrix3;
+    m.x_axis
+        .length()
+        .max(m.y_axis.length())
+        .max(m.z_axis.length())
+}
+
+/// Smallest column norm: how much it can shrink one.
+fn shrink(t: &DAffine3) -> f64 {
+    let m = t.matrix3;
+    m.x_axis
+        .length()
+        .min(m.y_axis.length())
+        .min(m.z_axis.length())
+}
+
+impl Scene {
+    /// Checks the whole scene; the first problem found.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        self.camera.validate()?;
+        self.settings.validate()?;
+        for obj in &self.objects {
+            let span = obj.span;
+            let t = &obj.transform;
+            let kind = obj.shape.kind();
+            if !(t.matrix3.is_finite() && t.translation.is_finite()) {
+                return Err(invalid(
+                    span,
+                    format!("the {kind}'s transform is not finite"),
+                    "transforms overflow",
+                    "check the chain of scale, translate and matrix applied to it",
+                ));
+            }
+            let (hi, lo) = (stretch(t), shrink(t));
+            let at = |p: DVec3| point(t.transform_point3(p), &format!("this {kind}"), span);
+            let len = |x: f64, what: &str| {
+                size(x * hi, &format!("the {kind}'s {what}"), span)?;
+                size(x * lo, &format!("the {kind}'s {what}"), span)
+            };
+            match &obj.shape {
+                Shape::Sphere { center, radius } => {
+                    at(*center)?;
+                    len(*radius, "radius")?;
+                }
+                Shape::Plane { normal, offset } => at(*normal * *offset)?,
+                Shape::Quad {
+                    origin,
+                    edge_u,
+                    edge_v,
+                } => {
+                    at(*origin)?;
+                    at(*origin + *edge_u + *edge_v)?;
+                }
+                Shape::Box { min, max } => {
+                    at(*min)?;
+                    at(*max)?;
+                }
+                Shape::Cylinder {
+                    base, cap, radius, ..
+                } => {
+                    at(*base)?;
+                    at(*cap)?;
+                    len(*radius, "radius")?;
+                    len((*cap - *base).length(), "length")?;
+                }
+                Shape::Disk { center, radius, .. } => {
+                    at(*center)?;
+                    len(*radius, "radius")?;
+                }
+                Shape::Triangle { vertices } => {
+                    for v in vertices {
+                        at(*v)?;
+                    }
+                }
+                Shape::Mesh { mesh } => {
+                    for v in &mesh.positions {
+                        at(*v)?;
+                    }
+                }
+                Shape::Revolve { profile, .. } => {
+                    for p in profile.segments.iter().flatten() {
+                        at(DVec3::new(p.x, p.y, p.x))?;
+                    }
+                }
+                Shape::BezierPatch { points, .. } => {
+                    for p in points.iter() {
+                        at(*p)?;
+                    }
+                }
+            }
+        }
+        for light in &self.lights {
+            let (position, span) = match light {
+                Light::Point { position, span, .. } | Light::Spot { position, span, .. } => {
+                    (*position, *span)
+                }
+            };
+            point(position, "the light's position", span)?;
+        }
+        if let Background::Environment { intensity, .. } = &self.background
+            && !(*intensity >= 0.0 && *intensity <= 1e9)
+        {
+            return Err(invalid(
+                Span::detached(),
+                format!("environment intensity {} is out of range", fmt(*intensity)),
+                "out of range",
+                "use an intensity from 0 to 1e9",
+            ));
+        }
+        Ok(())
+    }
+}
