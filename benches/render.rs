@@ -1,4 +1,4 @@
-//! Renderer throughput on the Cornell glass scene (built in Rust as the reference README says):
+//! Renderer throughput on the Cornell glass scene (built in Rust; the same scene as `examples/cornell.scn`):
 //! camera paths/s, photons/s, deposits/s, BVH rays/s, each also given as a ratio against a
 //! baseline measured in the same run (brute-force ray casting over every shape without the BVH).
 //! Run: `cargo bench --bench render`.

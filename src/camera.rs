@@ -22,35 +22,18 @@ pub struct Camera {
 }
 
 impl Camera {
-    pub fn new(c: &scene::Camera, width: u32, height: u32) -> Result<Self, String> {
-        let fwd = (c.look_at - c.location).normalize_or_zero();
-        if fwd == glam::DVec3::ZERO {
-            return Err("camera location and look_at are the same point".into());
-        }
-        let right = fwd.cross(c.up).normalize_or_zero();
-        if right == glam::DVec3::ZERO {
-            return Err("camera up is parallel to the viewing direction".into());
-        }
-        if !(c.fov > 0.0 && c.fov < 180.0) {
-            return Err(format!(
-                "camera fov must be in (0, 180) degrees, got {}",
-                c.fov
-            ));
-        }
-        if !(c.aperture >= 0.0 && c.aperture.is_finite()) {
-            return Err(format!("camera aperture must be >= 0, got {}", c.aperture));
-        }
+    /// The camera of a scene, for an image of `width` x `height` pixels. The checks are the
+    /// scene's own ([`scene::Camera::validate`]): the one place a camera is validated.
+    pub fn new(c: &scene::Camera, width: u32, height: u32) -> Result<Self, scene::Invalid> {
+        c.validate()?;
+        let fwd = (c.look_at - c.location).normalize();
+        let right = fwd.cross(c.up).normalize();
         let up = right.cross(fwd);
         let half_h = (c.fov.to_radians() * 0.5).tan() as f32;
         let half_w = half_h * width as f32 / height.max(1) as f32;
         let focus = c
             .focus_distance
             .unwrap_or_else(|| (c.look_at - c.location).length());
-        if !(focus > 0.0 && focus.is_finite()) {
-            return Err(format!(
-                "camera focus distance must be positive, got {focus}"
-            ));
-        }
         Ok(Self {
             origin: c.location.as_vec3a(),
             forward: fwd.as_vec3a(),

@@ -1,4 +1,4 @@
-//! Environment lighting (issue 5): furnace tests under a constant environment, the photon power
+//! Environment lighting: furnace tests under a constant environment, the photon power
 //! an environment emits, and a render-level check that a spherical image map shows no seam.
 
 mod common;
@@ -231,7 +231,7 @@ fn seam_steps(f: impl Fn(f64) -> f64) -> (f64, Vec<f64>) {
     (step(31), [27, 28, 29, 33, 34, 35].map(step).to_vec())
 }
 
-/// Issue 5: no visible seam line in a render. The texture `0.5 + 0.4 sin(2 pi u)` is continuous
+/// No visible seam line in a render. The texture `0.5 + 0.4 sin(2 pi u)` is continuous
 /// across u = 0 = 1 with a slope there; the step between the two pixel columns either side of
 /// the seam must equal the steps next to it. A texture that jumps at the seam (`u` itself) shows
 /// a step 50 times larger, so the comparison can fail.

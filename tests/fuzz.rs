@@ -1,6 +1,9 @@
 //! Random and mutated scene text never panics, hangs or overflows the stack.
 
 use proptest::prelude::*;
+use std::sync::atomic::AtomicBool;
+
+use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::{EvalOptions, load_source};
 
 const SEED_SCENE: &str = include_str!("../examples/cornell.scn");
@@ -97,6 +100,25 @@ proptest! {
         prop_assert!(loaded.scene.is_some() || loaded.has_errors());
         // Rendering diagnostics never panics either.
         let _ = sppm_lang::render_plain(&loaded.sources, &loaded.diagnostics, 80);
+        // An accepted mutant renders (tiny), or prepare refuses it with a message: no panic,
+        // no NaN in the image.
+        if let Some(mut scene) = loaded.scene.filter(|_| !loaded.diagnostics.iter().any(|d| d.is_error())) {
+            scene.settings.resolution = (16, 16);
+            let options = RenderOptions {
+                iterations: Some(1),
+                photons: Some(500),
+                threads: Some(1),
+                ..RenderOptions::default()
+            };
+            let cancel = AtomicBool::new(false);
+            match render(&scene, &options, &cancel, &mut |_| {}) {
+                Ok(out) => prop_assert!(
+                    out.image.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
+                    "non-finite pixel in a render of:\n{}", text
+                ),
+                Err(e) => prop_assert!(!e.message.is_empty()),
+            }
+        }
     }
 }
 

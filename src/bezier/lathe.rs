@@ -921,7 +921,7 @@ pub fn root_uncertainty(f: &Bernstein, s: f64, noise: f64) -> f64 {
     (noise / d1.max(1e-300)).min((2.0 * noise / d2.max(1e-300)).sqrt())
 }
 
-/// The seed reports' approach: Newton iteration on `F` from evenly spaced starting guesses,
+/// The classic approach: Newton iteration on `F` from evenly spaced starting guesses,
 /// keeping what converges into [0, 1]. It can miss roots (that is what it is kept for).
 fn newton_roots(f: &Bernstein, noise: f64, iterations: u32, starts: u32, out: &mut Vec<Root>) {
     let starts = starts.max(1);

@@ -84,8 +84,7 @@ impl<'a> PreparedScene<'a> {
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
         scene.validate()?;
         let (width, height) = scene.settings.resolution;
-        let camera = Camera::new(&scene.camera, width, height)
-            .map_err(|e| RenderError::new(e).at(scene.camera.span))?;
+        let camera = Camera::new(&scene.camera, width, height)?;
         let mut shapes = Vec::new();
         let mut prim_object = Vec::new();
         let mut prim_light = Vec::new();

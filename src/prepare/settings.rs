@@ -92,23 +92,10 @@ pub fn effective_settings(
             "resolution {width}x{height} is out of range (1..={MAX_SIDE} per side, at most {MAX_PIXELS} pixels)"
         )));
     }
-    let alpha = s.alpha;
-    if !(alpha > 0.0 && alpha <= 1.0) {
-        return Err(RenderError::new(format!(
-            "alpha must be in (0, 1], got {alpha}"
-        )));
-    }
-    let radius = s.radius;
-    if let Some(r) = radius
-        && !(r > 0.0 && r.is_finite())
-    {
-        return Err(RenderError::new(format!(
-            "radius must be positive, got {r}"
-        )));
-    }
+    // The scene's own numbers are checked by `Scene::validate`; here only the overrides.
     let time_limit = o.time_limit.or(s.time_limit);
-    if let Some(t) = time_limit
-        && (t.is_nan() || t < 0.0)
+    if let Some(t) = o.time_limit
+        && !(t > 0.0 && t.is_finite())
     {
         return Err(RenderError::new(format!(
             "time limit must be >= 0, got {t}"
@@ -122,8 +109,8 @@ pub fn effective_settings(
         height,
         iterations: o.iterations.unwrap_or(s.iterations),
         photons: o.photons.unwrap_or(s.photons),
-        radius,
-        alpha,
+        radius: s.radius,
+        alpha: s.alpha,
         max_depth: s.max_depth.clamp(1, 1024),
         seed: o.seed.unwrap_or(s.seed),
         integrator: s.integrator,

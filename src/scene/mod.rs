@@ -290,7 +290,7 @@ pub enum IntersectMethod {
     /// Root isolation that cannot miss a root (the default).
     #[default]
     Robust,
-    /// The seed reports' Newton iteration from several starting guesses (for comparison only).
+    /// Newton iteration from several starting guesses (for comparison with the robust method only).
     Newton { iterations: u32, starts: u32 },
 }
 

@@ -133,7 +133,8 @@ fn quad(origin: DVec3, edge_u: DVec3, edge_v: DVec3) -> Shape {
 }
 
 /// The Cornell box with a glass and a mirror sphere, exactly as
-/// /work/shared/reference/cornell-glass/README.md describes it.
+/// the independent reference in `../shared/reference/cornell-glass/` describes it (the same scene
+/// as `examples/cornell.scn`).
 /// `n` seeded rays from random points inside the Cornell box of [`cornell_glass`] in uniformly
 /// random directions (the benchmarks' fixed ray set).
 pub fn cornell_rays(n: usize) -> Vec<Ray> {

@@ -17,7 +17,7 @@ use sppm_measure::reference;
 const REL_T: f64 = 1e-6;
 
 /// Rays per case. The default fits CI (about 3 minutes for all cases on 2 shared cores);
-/// `BEZIER_STRESS_RAYS=1000000` runs the full million per case (about 16 minutes here,
+/// `BEZIER_STRESS_RAYS=1000000` runs a million rays per case (about 16 minutes here,
 /// dominated by the partial-sweep and patch-grazing references). The count used is printed.
 fn rays() -> usize {
     std::env::var("BEZIER_STRESS_RAYS")
