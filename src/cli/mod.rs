@@ -76,6 +76,26 @@ pub fn parse_bytes(text: &str) -> Result<u64, String> {
     Ok(bytes as u64)
 }
 
+/// The image a command writes: `-o`, or the scene's name with `.png`; a `.png` or `.exr` that
+/// is absent or a regular file (never a link, folder or device).
+pub fn output_path(
+    output: Option<&std::path::Path>,
+    scene: &std::path::Path,
+) -> Result<PathBuf, String> {
+    let output = output.map_or_else(|| scene.with_extension("png"), |o| o.to_path_buf());
+    match output.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
+        _ => {
+            return Err(format!(
+                "output `{}` must end in .png or .exr",
+                output.display()
+            ));
+        }
+    }
+    sppm_lang::atomic_file::check_target(&output)?;
+    Ok(output)
+}
+
 /// A thread count from 1 to [`MAX_THREADS`].
 pub fn parse_threads(text: &str) -> Result<usize, String> {
     let n: usize = text

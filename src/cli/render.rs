@@ -65,24 +65,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
 /// Renders an already loaded scene as `args` asks; `sources` turn render errors that carry a
 /// span into diagnostics.
 fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCode {
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| args.scene.with_extension("png"));
-    match output.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
-        _ => {
-            eprintln!(
-                "error: output `{}` must end in .png or .exr",
-                output.display()
-            );
+    let output = match super::output_path(args.output.as_deref(), &args.scene) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
             return ExitCode::from(EXIT_USAGE);
         }
-    }
-    if let Err(e) = sppm_lang::atomic_file::check_target(&output) {
-        eprintln!("error: {e}");
-        return ExitCode::from(EXIT_USAGE);
-    }
+    };
     let overridden;
     let scene = match args.integrator {
         Some(integrator) => {

@@ -85,24 +85,13 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         );
         return ExitCode::from(EXIT_USAGE);
     }
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| args.scene.with_extension("png"));
-    if !matches!(
-        output.extension().and_then(|e| e.to_str()),
-        Some("png" | "exr")
-    ) {
-        eprintln!(
-            "error: output `{}` must end in .png or .exr",
-            output.display()
-        );
-        return ExitCode::from(EXIT_USAGE);
-    }
-    if let Err(e) = sppm_lang::atomic_file::check_target(&output) {
-        eprintln!("error: {e}");
-        return ExitCode::from(EXIT_USAGE);
-    }
+    let output = match super::output_path(args.output.as_deref(), &args.scene) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
     let interrupted = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupted.clone();
