@@ -387,3 +387,23 @@ fn ctrl_c_during_a_render_writes_the_finished_iterations_and_exits_0() {
     );
     no_temporaries(dir.path());
 }
+
+#[test]
+fn an_empty_save_keeps_the_last_image_and_the_next_save_renders() {
+    // Editors truncate a file before writing it; the empty scene is not rendered over the image.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.scn");
+    let out = dir.path().join("out.png");
+    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
+    let mut w = Watch::start(dir.path(), "scene.scn", "out.png");
+    w.expect("render #1 full finished");
+    let before = fs::read(&out).unwrap();
+    fs::write(&scene, "").unwrap();
+    w.expect("is empty; the last image is kept");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
+    fs::write(&scene, scene_text([0, 0, 255])).unwrap();
+    w.expect("render #2 full finished");
+    assert_eq!(centre(&out), [0, 0, 255]);
+    no_temporaries(dir.path());
+}
