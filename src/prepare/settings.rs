@@ -72,9 +72,7 @@ impl From<crate::scene::Invalid> for RenderError {
     }
 }
 
-/// Largest accepted image side and pixel count.
-const MAX_SIDE: u32 = 1 << 15;
-const MAX_PIXELS: u64 = 1 << 27;
+use crate::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE as MAX_SIDE};
 
 pub fn effective_settings(
     scene: &Scene,

@@ -11,7 +11,7 @@ mod assets;
 mod validate;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
-pub use validate::{Invalid, MAX_COORD, MIN_SIZE};
+pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
 
 use std::sync::Arc;
 

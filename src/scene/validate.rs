@@ -15,6 +15,11 @@ use crate::span::Span;
 /// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
 /// f32, the renderer's precision along rays.
 pub const MAX_COORD: f64 = 1e12;
+/// Largest image side in pixels (the evaluator and `prepare` use the same bound).
+pub const MAX_RESOLUTION_SIDE: u32 = 16_384;
+/// Largest image in pixels.
+pub const MAX_PIXELS: u64 = 1 << 27;
+
 /// Smallest radius, length or side in world space.
 pub const MIN_SIZE: f64 = 1e-9;
 

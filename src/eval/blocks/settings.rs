@@ -6,7 +6,7 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
 use crate::eval::value::Value;
-use crate::scene::{Integrator, Settings};
+use crate::scene::{Integrator, MAX_RESOLUTION_SIDE, Settings};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -51,11 +51,11 @@ impl Sink for SettingsBuilder {
                     (v.x, v.y, args[0].span)
                 };
                 for x in [w, h] {
-                    if !(1.0..=16384.0).contains(&x) || x.fract() != 0.0 {
+                    if !(1.0..=f64::from(MAX_RESOLUTION_SIDE)).contains(&x) || x.fract() != 0.0 {
                         return Err(range_error(
                             span,
                             format!(
-                                "resolution must be whole numbers from 1 to 16384, found {w} x {h}"
+                                "resolution must be whole numbers from 1 to {MAX_RESOLUTION_SIDE}, found {w} x {h}"
                             ),
                             "e.g. `resolution <512, 512>`",
                         ));
