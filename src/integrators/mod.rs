@@ -69,17 +69,19 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
+/// One render's inputs: the prepared scene, the settings (iterations, photons, time limit...),
+/// the cancel flag (checked inside every pass) and the callback that runs after every finished
+/// iteration.
+pub struct Job<'j, 'a> {
+    pub scene: &'j PreparedScene<'a>,
+    pub settings: &'j EffectiveSettings,
+    pub cancel: &'j AtomicBool,
+    pub on_progress: &'j mut (dyn FnMut(&Progress) + Send),
+}
+
 /// A light-transport method.
 pub trait Integrator: Send + Sync {
-    /// Renders `scene` with `settings` (iterations, photons, time limit...). `cancel` is
-    /// checked inside every pass; `on_progress` runs after every finished iteration.
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput;
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput;
 }
 
 /// The integrator of `method` (the settings' `integrator`).

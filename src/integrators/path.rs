@@ -5,18 +5,18 @@
 //! roulette from the fourth vertex on. One sample per pixel per iteration, seeded from
 //! (seed, iteration, pixel): unbiased, the reference the photon methods are checked against.
 
-use std::sync::atomic::AtomicBool;
+use crate::integrators::Job;
 
 use glam::Vec3A;
 
 use super::common::attenuate_inside;
 use super::common::direct::direct_lighting;
 use super::common::progressive;
-use super::{Integrator, Progress, RenderOutput};
+use super::{Integrator, RenderOutput};
 use crate::accel::spawn_ray;
 use crate::camera::Camera;
 use crate::materials::TransportMode;
-use crate::prepare::{EffectiveSettings, PreparedScene};
+use crate::prepare::PreparedScene;
 use crate::sampling::Rng;
 
 /// Vertices before Russian roulette may end a path.
@@ -27,18 +27,10 @@ const RR_DEPTH: u32 = 3;
 pub struct PathTracer;
 
 impl Integrator for PathTracer {
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput {
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput {
+        let (scene, settings, _cancel) = (job.scene, job.settings, job.cancel);
         progressive::render(
-            scene,
-            settings,
-            cancel,
-            on_progress,
+            job,
             |_| ((), 0),
             |_, camera, x, y, rng| radiance(scene, camera, settings.max_depth, x, y, rng),
         )

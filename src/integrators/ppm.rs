@@ -10,24 +10,17 @@
 //! The loop, the photon pass and the pixel update are SPPM's (`sppm::render_with`); only
 //! the eye path differs.
 
-use std::sync::atomic::AtomicBool;
+use crate::integrators::Job;
 
 use super::common::camera_path::fixed_camera_path;
-use super::{Integrator, Progress, RenderOutput, sppm};
-use crate::prepare::{EffectiveSettings, PreparedScene};
+use super::{Integrator, RenderOutput, sppm};
 
 /// Progressive photon mapping.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Ppm;
 
 impl Integrator for Ppm {
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput {
-        sppm::render_with(scene, settings, cancel, on_progress, fixed_camera_path).0
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput {
+        sppm::render_with(job, fixed_camera_path).0
     }
 }

@@ -8,13 +8,12 @@
 //!
 //! [`direct_lighting`]: crate::integrators::direct_lighting
 
+use crate::integrators::Job;
 use std::f32::consts::PI;
-use std::sync::atomic::AtomicBool;
 
 use super::common::camera_path::camera_path;
 use super::common::progressive;
-use super::{Integrator, Progress, RenderOutput};
-use crate::prepare::{EffectiveSettings, PreparedScene};
+use super::{Integrator, RenderOutput};
 
 /// Uniform ambient radiance arriving at every non-specular surface (reflected as
 /// `pi * f(wo, n) * AMBIENT`, i.e. `albedo * AMBIENT` on a diffuse surface).
@@ -25,18 +24,10 @@ pub const AMBIENT: f32 = 0.05;
 pub struct Whitted;
 
 impl Integrator for Whitted {
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput {
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput {
+        let (scene, settings, _cancel) = (job.scene, job.settings, job.cancel);
         progressive::render(
-            scene,
-            settings,
-            cancel,
-            on_progress,
+            job,
             |_| ((), 0),
             |_, camera, x, y, rng| {
                 let (l, vp) = camera_path(scene, camera, settings, x, y, rng);

@@ -34,7 +34,14 @@ pub fn render(
     let stop = AtomicBool::new(false);
     let finished = AtomicBool::new(false);
     let flag = if deadline.is_some() { &stop } else { cancel };
-    let mut run = || integrator.render(&prepared, &settings, flag, on_progress);
+    let mut run = || {
+        integrator.render(integrators::Job {
+            scene: &prepared,
+            settings: &settings,
+            cancel: flag,
+            on_progress: &mut *on_progress,
+        })
+    };
     let out = std::thread::scope(|s| {
         if let Some(end) = deadline {
             // The watchdog: raises the integrator's flag at the deadline or on the caller's

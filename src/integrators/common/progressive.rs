@@ -7,6 +7,7 @@
 //! iteration (path tracing, Whitted ray tracing, photon mapping), with pixel streams seeded from
 //! (seed, iteration, pixel); SPPM and PPM run [`iterate`] with their own pass and pixel state.
 
+use crate::integrators::Job;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -17,7 +18,7 @@ use super::streams::Stream;
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::integrators::{Progress, RenderOutput, RenderStats};
-use crate::prepare::{EffectiveSettings, PreparedScene};
+use crate::prepare::EffectiveSettings;
 use crate::sampling::Rng;
 
 /// What a finished iteration adds to the statistics besides its camera paths.
@@ -97,13 +98,16 @@ fn image_of(sums: &[DVec3], width: u32, height: u32, k: u32) -> Image {
 /// iteration; the image is the mean of the pixel values. `setup` returns the photons it traced
 /// (for the statistics) with its state.
 pub(crate) fn render<T: Sync>(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
+    job: Job<'_, '_>,
     mut setup: impl FnMut(u32) -> (T, u64),
     pixel: impl Fn(&T, &Camera, u32, u32, &mut Rng) -> Vec3A + Sync,
 ) -> RenderOutput {
+    let Job {
+        scene,
+        settings,
+        cancel,
+        on_progress,
+    } = job;
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera;
     let sums = vec![DVec3::ZERO; (w * h) as usize];

@@ -15,6 +15,7 @@
 //!
 //! [`direct_lighting`]: crate::integrators::direct_lighting
 
+use crate::integrators::Job;
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 
@@ -25,7 +26,7 @@ use super::common::camera_path::camera_path;
 use super::common::photons::trace_photon;
 use super::common::progressive;
 use super::common::streams::Stream;
-use super::{Integrator, Progress, RenderOutput};
+use super::{Integrator, RenderOutput};
 use crate::prepare::{EffectiveSettings, PreparedScene};
 use kdtree::KdTree;
 
@@ -152,18 +153,10 @@ fn estimate(
 pub struct PhotonMap;
 
 impl Integrator for PhotonMap {
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput {
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput {
+        let (scene, settings, cancel) = (job.scene, job.settings, job.cancel);
         progressive::render(
-            scene,
-            settings,
-            cancel,
-            on_progress,
+            job,
             |iter| {
                 let maps = build_maps(scene, settings, iter, cancel);
                 let n = maps.emitted;

@@ -19,6 +19,7 @@
 //! per-pixel state and its update, `pass.rs` the photon pass, `grid.rs` the photon grid,
 //! `receiver.rs` the BSDF at a visible point.
 
+use crate::integrators::Job;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -49,14 +50,8 @@ use pixels::{Pixel, image_of, update};
 pub struct Sppm;
 
 impl Integrator for Sppm {
-    fn render(
-        &self,
-        scene: &PreparedScene,
-        settings: &EffectiveSettings,
-        cancel: &AtomicBool,
-        on_progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> RenderOutput {
-        render_with_state(scene, settings, cancel, on_progress).0
+    fn render(&self, job: Job<'_, '_>) -> RenderOutput {
+        render_with(job, camera_path).0
     }
 }
 
@@ -95,7 +90,13 @@ pub fn render_with_state(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> (RenderOutput, Vec<PixelStats>) {
-    render_with(scene, settings, cancel, on_progress, camera_path)
+    let job = Job {
+        scene,
+        settings,
+        cancel,
+        on_progress,
+    };
+    render_with(job, camera_path)
 }
 
 /// The eye path of one pixel in an iteration's camera pass: emitted + direct light and the
@@ -111,13 +112,13 @@ pub(crate) type EyePath = fn(
 
 /// The SPPM loop with `eye_path` for the camera pass (SPPM: a jittered path per iteration; PPM:
 /// the same fixed eye ray in every iteration).
-pub(crate) fn render_with(
-    scene: &PreparedScene,
-    settings: &EffectiveSettings,
-    cancel: &AtomicBool,
-    on_progress: &mut (dyn FnMut(&Progress) + Send),
-    eye_path: EyePath,
-) -> (RenderOutput, Vec<PixelStats>) {
+pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput, Vec<PixelStats>) {
+    let Job {
+        scene,
+        settings,
+        cancel,
+        on_progress,
+    } = job;
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera;
     let pixels = vec![Pixel::new(initial_radius(scene, settings)); (w * h) as usize];
