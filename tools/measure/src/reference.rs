@@ -218,7 +218,13 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
 /// A leaf fixes the hit's position to its size, so along a ray at angle `theta` to the surface
 /// it fixes `t` only to `leaf / sin(theta)`: when that exceeds 1e-7 of `t` the ray is flagged
 /// ambiguous (a near-tangent ray whose `t` no method can pin down to 1e-6).
-pub fn patch(patch: &sppm_lang::bezier::patch::Patch, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHit {
+pub fn patch(
+    patch: &sppm_lang::bezier::patch::Patch,
+    o: DVec3,
+    d: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> RefHit {
     let dl = d.length();
     let dn = d / dl;
     let (e1, e2) = dn.any_orthonormal_pair();

@@ -138,8 +138,8 @@ pub fn patch_mesh(patch: &Patch, rows: usize, cols: usize) -> MeshData {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sppm_lang::shapes::mesh::mesh_triangles;
     use glam::DAffine3;
+    use sppm_lang::shapes::mesh::mesh_triangles;
 
     fn cylinder() -> Lathe {
         Lathe::new(&[vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 2.0)]], None).unwrap()

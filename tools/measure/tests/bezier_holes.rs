@@ -26,13 +26,13 @@ use glam::{Affine3A, Vec2};
 use rayon::prelude::*;
 use sppm_lang::bezier::lathe::Lathe;
 use sppm_lang::bezier::patch::Patch;
-use sppm_measure::reference::{self, RefHit};
 use sppm_lang::camera::Camera;
 use sppm_lang::eval::Loaded;
 use sppm_lang::geometry::Ray;
 use sppm_lang::render::PreparedScene;
 use sppm_lang::scene::{Scene, Shape};
 use sppm_lang::{EvalOptions, load_file, load_source};
+use sppm_measure::reference::{self, RefHit};
 
 const SIZE: u32 = 1024;
 /// Relative `t` agreement between the renderer's f32 hit and the f64 reference.

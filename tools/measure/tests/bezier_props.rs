@@ -5,9 +5,9 @@
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
-use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
+use sppm_measure::bezier::{vase_profile, wavy_points};
 
 fn vase() -> Lathe {
     Lathe::new(&vase_profile().segments, Some((0.0, 270.0))).unwrap()

@@ -8,11 +8,11 @@
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
 use sppm_lang::bezier::patch::{Patch, PatchSolver};
-use sppm_measure::reference;
 use sppm_lang::sampling::SplitMix64;
+use sppm_measure::bezier::{vase_profile, wavy_points};
+use sppm_measure::reference;
 
 const REL_T: f64 = 1e-6;
 
