@@ -18,6 +18,7 @@ use std::f64::consts::TAU;
 
 use glam::{DVec2, DVec3};
 
+use super::Solver;
 use super::bernstein::Bernstein;
 use super::roots::{Root, RootKind, find_roots, find_roots_with_noise};
 
@@ -169,17 +170,6 @@ pub struct LatheHit {
     pub part: Part,
     /// Profile parameter within the segment (0 on caps).
     pub s: f64,
-}
-
-/// Which root finder the side surface uses.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Solver {
-    Robust,
-    /// Newton iteration on `F(s)` from `starts` evenly spaced guesses per segment.
-    Newton {
-        iterations: u32,
-        starts: u32,
-    },
 }
 
 /// A surface of revolution, ready for intersection.

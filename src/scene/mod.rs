@@ -288,7 +288,8 @@ pub enum IntersectMethod {
     /// Root isolation that cannot miss a root (the default).
     #[default]
     Robust,
-    /// The seed reports' Newton iteration from several starting guesses (for comparison only).
+    /// Newton's method from several starting guesses; it can miss roots (for comparison only).
+    /// The renderer maps this enum to `bezier::Solver`.
     Newton { iterations: u32, starts: u32 },
 }
 

@@ -6,7 +6,9 @@
 
 use glam::{Vec2, Vec3A};
 
+use crate::bezier::Solver;
 use crate::geometry::{Aabb, Hit, Ray};
+use crate::scene::IntersectMethod;
 
 /// A point sampled uniformly by area on a shape.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,6 +81,14 @@ impl<S: SplitShape> Shape for S {
     #[inline]
     fn sample(&self, u: Vec2) -> Option<AreaSample> {
         SplitShape::sample(self, u)
+    }
+}
+
+/// The root finder of the curved shapes for the scene's choice of method.
+pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
+    match method {
+        IntersectMethod::Robust => Solver::Robust,
+        IntersectMethod::Newton { iterations, starts } => Solver::Newton { iterations, starts },
     }
 }
 
