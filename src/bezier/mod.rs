@@ -1,7 +1,8 @@
 //! The numerical heart of Bezier surfaces, apart from the scene glue in `shapes`.
 //!
 //! - [`bernstein`]: polynomials in the Bernstein basis (de Casteljau, subdivision, products).
-//! - [`roots`]: a root isolator on [0, 1] that cannot miss a root, with a bracketed polish.
+//! - [`roots`]: a root isolator on [0, 1] that cannot miss a root, with a bracketed polish;
+//!   [`roots::bracket`] refines a sign change of a general function (the lathe's factors).
 //! - [`lathe`]: ray intersection with a surface of revolution of a Bezier profile (f64).
 //! - [`patch`]: ray intersection with a bicubic Bezier patch (f64).
 //!
