@@ -12,7 +12,7 @@ use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light};
 use crate::materials::{Bsdf, Lobes, eval};
-use crate::sampling::Distribution1D;
+use crate::sampling::PiecewiseConstant1D as Distribution1D;
 use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
