@@ -1,7 +1,8 @@
 //! Special cases of the lathe (surface of revolution) intersector, each against a closed form.
 
 use glam::{DVec2, DVec3};
-use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
+use sppm_lang::bezier::Solver;
+use sppm_lang::bezier::lathe::{Lathe, Part};
 
 const R: Solver = Solver::Robust;
 

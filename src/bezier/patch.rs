@@ -13,21 +13,12 @@
 
 use glam::{DVec2, DVec3};
 
+use super::Solver;
+
 /// Leaf size of the robust subdivision, relative to the patch size.
 pub const LEAF: f64 = 1e-7;
 /// Leaf size (relative) at which a leaf's centre is accepted when Newton's method fails there.
 pub const FINAL_LEAF: f64 = 1e-11;
-
-/// Which method intersects the patch.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PatchSolver {
-    Robust,
-    /// Newton's method on the projected equations from a grid of about `starts` guesses.
-    Newton {
-        iterations: u32,
-        starts: u32,
-    },
-}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PatchHit {
@@ -280,7 +271,7 @@ impl Patch {
         d: DVec3,
         t_min: f64,
         t_max: f64,
-        solver: PatchSolver,
+        solver: Solver,
     ) -> Option<PatchHit> {
         let dl = d.length();
         if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
@@ -291,8 +282,8 @@ impl Patch {
         let frame = [e1, e2, dn];
         let (tmin, tmax) = (t_min * dl, t_max * dl);
         let found = match solver {
-            PatchSolver::Robust => self.subdivide(o, frame, tmin, tmax, LEAF, true),
-            PatchSolver::Newton { iterations, starts } => {
+            Solver::Robust => self.subdivide(o, frame, tmin, tmax, LEAF, true),
+            Solver::Newton { iterations, starts } => {
                 let k = (starts.max(1) as f64).sqrt().ceil() as u32;
                 let mut best: Option<(DVec2, f64)> = None;
                 for a in 0..k {

@@ -13,7 +13,7 @@ use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light};
 use crate::materials::{Bsdf, Lobes, eval};
-use crate::sampling::Distribution1D;
+use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
@@ -41,7 +41,7 @@ pub struct PreparedScene<'a> {
     pub prim_light: Vec<u32>,
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
-    pub light_distr: Distribution1D,
+    pub light_distr: PiecewiseConstant1D,
     /// Index in `lights` of the environment light, if the background is a non-black map.
     pub environment: Option<usize>,
     /// Material index of each primitive id (saves the object indirection per hit).
@@ -150,7 +150,8 @@ impl<'a> PreparedScene<'a> {
         lights::push_scene_lights(scene, &mut lights)?;
         let bvh = Bvh::new(shapes);
         let environment = lights::push_environment(scene, &bvh, &mut lights);
-        let light_distr = Distribution1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
+        let light_distr =
+            PiecewiseConstant1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
         let prim_material = prim_object
             .iter()
             .map(|&o| objects[o as usize].material as u32)

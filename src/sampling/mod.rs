@@ -6,7 +6,7 @@ mod rng;
 mod splitmix;
 mod warp;
 
-pub use distribution::Distribution1D;
+pub use distribution::{PiecewiseConstant1D, PiecewiseConstant2D};
 pub use rng::{Rng, stream_seed};
 pub use splitmix::SplitMix64;
 pub use warp::{

@@ -290,7 +290,8 @@ pub enum IntersectMethod {
     /// Root isolation that cannot miss a root (the default).
     #[default]
     Robust,
-    /// Newton iteration from several starting guesses (for comparison with the robust method only).
+    /// Newton's method from several starting guesses; it can miss roots (for comparison only).
+    /// The renderer maps this enum to `bezier::Solver`.
     Newton { iterations: u32, starts: u32 },
 }
 

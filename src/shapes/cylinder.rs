@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 
@@ -42,21 +42,6 @@ impl Cylinder {
             self.frame.to_local(ray.o - self.base),
             self.frame.to_local(ray.d),
         )
-    }
-
-    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Cylinder::hit_at`]).
-    #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        let (t0, t1, o, d) = self.roots(ray)?;
-        [t0, t1].into_iter().find(|&t| {
-            let z = (o + d * t).z;
-            t > t_min && t < t_max && !(z < 0.0 || z > self.height)
-        })
-    }
-
-    /// The full surface data at ray parameter `t` (a value [`Cylinder::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        self.hit_at_uv(ray, t, true)
     }
 
     /// [`Cylinder::hit_at`], with `uv` left NaN unless `uv` is asked for (it costs an `atan2`).
@@ -110,21 +95,27 @@ impl Cylinder {
     }
 }
 
-impl Shape for Cylinder {
+impl SplitShape for Cylinder {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Cylinder::hit_at`]).
+    #[inline]
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t0, t1, o, d) = self.roots(ray)?;
+        [t0, t1].into_iter().find(|&t| {
+            let z = (o + d * t).z;
+            t > t_min && t < t_max && !(z < 0.0 || z > self.height)
+        })
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Cylinder::hit_t`] returned).
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
     fn bounds(&self) -> Aabb {
         let top = self.base + self.frame.n * self.height;
         let n = self.frame.n;
         let e = (Vec3A::ONE - n * n).max(Vec3A::ZERO).powf(0.5) * self.radius;
         Aabb::from_points([self.base - e, self.base + e, top - e, top + e])
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

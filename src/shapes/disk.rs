@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::sampling::concentric_disk;
@@ -34,28 +34,6 @@ impl Disk {
 }
 
 impl Disk {
-    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Disk::hit_at`]).
-    #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        let n = self.frame.n;
-        let denom = n.dot(ray.d);
-        if denom == 0.0 {
-            return None;
-        }
-        let t = n.dot(self.center - ray.o) / denom;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
-        let l = self.frame.to_local(ray.at(t) - self.center);
-        let r2 = l.x * l.x + l.y * l.y;
-        (r2 <= self.radius * self.radius).then_some(t)
-    }
-
-    /// The full surface data at ray parameter `t` (a value [`Disk::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        self.hit_at_uv(ray, t, true)
-    }
-
     /// [`Disk::hit_at`], with `uv` left NaN unless `uv` is asked for (it costs an `atan2`).
     #[inline]
     pub fn hit_at_uv(&self, ray: &Ray, t: f32, uv: bool) -> Hit {
@@ -86,20 +64,33 @@ impl Disk {
     }
 }
 
-impl Shape for Disk {
+impl SplitShape for Disk {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Disk::hit_at`]).
+    #[inline]
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let n = self.frame.n;
+        let denom = n.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = n.dot(self.center - ray.o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let l = self.frame.to_local(ray.at(t) - self.center);
+        let r2 = l.x * l.x + l.y * l.y;
+        (r2 <= self.radius * self.radius).then_some(t)
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Disk::hit_t`] returned).
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
     fn bounds(&self) -> Aabb {
         let n = self.frame.n;
         let e = (Vec3A::ONE - n * n).max(Vec3A::ZERO).powf(0.5) * self.radius;
         Aabb::new(self.center - e, self.center + e)
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

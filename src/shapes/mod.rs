@@ -6,7 +6,9 @@
 
 use glam::{Vec2, Vec3A};
 
+use crate::bezier::Solver;
 use crate::geometry::{Aabb, Hit, Ray};
+use crate::scene::IntersectMethod;
 
 /// A point sampled uniformly by area on a shape.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,6 +34,62 @@ pub trait Shape: Send + Sync {
     /// A uniformly distributed point on the surface, from `u` in [0,1)^2.
     /// Shapes that cannot be sampled (infinite planes) return `None`.
     fn sample(&self, u: Vec2) -> Option<AreaSample>;
+}
+
+/// A shape whose intersection splits into a cheap search for the hit distance ([`hit_t`]) and
+/// the surface data at that distance ([`hit_at`]). Every `SplitShape` is a [`Shape`]: the
+/// intersection is `hit_t` followed by `hit_at`, and a shadow ray needs only `hit_t`. The BVH
+/// uses the split to build the surface data once, for the nearest hit only.
+///
+/// [`hit_t`]: SplitShape::hit_t
+/// [`hit_at`]: SplitShape::hit_at
+pub trait SplitShape: Send + Sync {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data.
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32>;
+    /// The full surface data at ray parameter `t` (a value [`SplitShape::hit_t`] returned).
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit;
+    /// See [`Shape::bounds`].
+    fn bounds(&self) -> Aabb;
+    /// See [`Shape::area`].
+    fn area(&self) -> f32;
+    /// See [`Shape::sample`].
+    fn sample(&self, u: Vec2) -> Option<AreaSample>;
+}
+
+impl<S: SplitShape> Shape for S {
+    #[inline]
+    fn bounds(&self) -> Aabb {
+        SplitShape::bounds(self)
+    }
+
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.hit_at(ray, t))
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hit_t(ray, t_min, t_max).is_some()
+    }
+
+    #[inline]
+    fn area(&self) -> f32 {
+        SplitShape::area(self)
+    }
+
+    #[inline]
+    fn sample(&self, u: Vec2) -> Option<AreaSample> {
+        SplitShape::sample(self, u)
+    }
+}
+
+/// The root finder of the curved shapes for the scene's choice of method.
+pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
+    match method {
+        IntersectMethod::Robust => Solver::Robust,
+        IntersectMethod::Newton { iterations, starts } => Solver::Newton { iterations, starts },
+    }
 }
 
 pub mod cuboid;

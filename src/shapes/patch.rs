@@ -8,8 +8,9 @@
 use glam::{DVec2, DVec3, Vec2};
 
 use super::revolve::outward_box;
-use super::{AreaSample, Shape};
-use crate::bezier::patch::{Patch, PatchSolver};
+use super::{AreaSample, Shape, solver_of};
+use crate::bezier::Solver;
+use crate::bezier::patch::Patch;
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::IntersectMethod;
 
@@ -18,7 +19,7 @@ const CELLS: usize = 16;
 
 pub struct BezierPatch {
     patch: Patch,
-    solver: PatchSolver,
+    solver: Solver,
     bounds: Aabb,
     /// Cumulative area over the `CELLS x CELLS` cells, row-major in u.
     cdf: Vec<f64>,
@@ -29,12 +30,7 @@ impl BezierPatch {
     pub fn new(points: &[DVec3; 16], method: IntersectMethod) -> Result<Self, String> {
         let patch = Patch::new(points)?;
         let (lo, hi) = patch.bounds();
-        let solver = match method {
-            IntersectMethod::Robust => PatchSolver::Robust,
-            IntersectMethod::Newton { iterations, starts } => {
-                PatchSolver::Newton { iterations, starts }
-            }
-        };
+        let solver = solver_of(method);
         const X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
         const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
         let h = 0.5 / CELLS as f64;

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::Frame;
 use crate::geometry::{Aabb, Hit, Ray};
 
@@ -26,10 +26,12 @@ impl Plane {
     }
 }
 
-impl Plane {
+impl Plane {}
+
+impl SplitShape for Plane {
     /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Plane::hit_at`]).
     #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         let n = self.frame.n;
         let denom = n.dot(ray.d);
         if denom == 0.0 {
@@ -40,7 +42,7 @@ impl Plane {
     }
 
     /// The full surface data at ray parameter `t` (a value [`Plane::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
         let n = self.frame.n;
         let p = ray.at(t);
         Hit {
@@ -52,20 +54,9 @@ impl Plane {
             dpdu: self.frame.s,
         }
     }
-}
 
-impl Shape for Plane {
     fn bounds(&self) -> Aabb {
         Aabb::new(Vec3A::splat(f32::NEG_INFINITY), Vec3A::splat(f32::INFINITY))
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -55,6 +55,7 @@ impl AnyShape {
     /// Nearest hit with `t_min < t < t_max`, deferring the surface data where the shape can.
     #[inline]
     pub fn intersect_lazy(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {
+        use super::SplitShape;
         match self {
             AnyShape::Sphere(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Quad(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
@@ -72,6 +73,7 @@ impl AnyShape {
     /// `Option<LazyHit>` moved a whole `Hit` at every test.
     #[inline(always)]
     pub(crate) fn analytic_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Result<Option<f32>, ()> {
+        use super::SplitShape;
         Ok(match self {
             AnyShape::Sphere(s) => s.hit_t(ray, t_min, t_max),
             AnyShape::Quad(s) => s.hit_t(ray, t_min, t_max),
@@ -94,6 +96,7 @@ impl AnyShape {
     /// Every other field is the same. Shapes whose `uv` is cheap, and boxed shapes, fill it.
     #[inline]
     pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
+        use super::SplitShape;
         let t = match lazy {
             LazyHit::Full(h) => return h,
             LazyHit::T(t) => t,

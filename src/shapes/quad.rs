@@ -2,7 +2,7 @@
 
 use glam::{BVec4A, Vec2, Vec3A, Vec4};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::{Aabb, Hit, Ray};
 
 #[derive(Debug, Clone, Copy)]
@@ -41,38 +41,10 @@ impl Quad {
 }
 
 impl Quad {
-    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Quad::hit_at`]).
-    #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        let denom = self.n.dot(ray.d);
-        if denom == 0.0 {
-            return None;
-        }
-        let t = self.n.dot(self.origin - ray.o) / denom;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
-        let (s, v) = self.st(ray, t);
-        ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&v)).then_some(t)
-    }
-
     #[inline]
     fn st(&self, ray: &Ray, t: f32) -> (f32, f32) {
         let q = ray.at(t) - self.origin;
         (q.dot(self.du), q.dot(self.dv))
-    }
-
-    /// The full surface data at ray parameter `t` (a value [`Quad::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        let (s, v) = self.st(ray, t);
-        Hit {
-            t,
-            p: ray.at(t),
-            n: self.n,
-            ns: self.n,
-            uv: Vec2::new(s, v),
-            dpdu: self.eu,
-        }
     }
 }
 
@@ -158,7 +130,35 @@ impl QuadPacket {
     }
 }
 
-impl Shape for Quad {
+impl SplitShape for Quad {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Quad::hit_at`]).
+    #[inline]
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let denom = self.n.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = self.n.dot(self.origin - ray.o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let (s, v) = self.st(ray, t);
+        ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&v)).then_some(t)
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Quad::hit_t`] returned).
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        let (s, v) = self.st(ray, t);
+        Hit {
+            t,
+            p: ray.at(t),
+            n: self.n,
+            ns: self.n,
+            uv: Vec2::new(s, v),
+            dpdu: self.eu,
+        }
+    }
+
     fn bounds(&self) -> Aabb {
         Aabb::from_points([
             self.origin,
@@ -166,15 +166,6 @@ impl Shape for Quad {
             self.origin + self.ev,
             self.origin + self.eu + self.ev,
         ])
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -6,8 +6,9 @@
 
 use glam::{DVec3, Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
-use crate::bezier::lathe::{Lathe, LatheHit, Solver};
+use super::{AreaSample, Shape, solver_of};
+use crate::bezier::Solver;
+use crate::bezier::lathe::{Lathe, LatheHit};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::{IntersectMethod, Profile};
 
@@ -28,13 +29,6 @@ pub(crate) fn outward_box(lo: DVec3, hi: DVec3) -> Aabb {
         (lo - DVec3::splat(pad)).as_vec3a(),
         (hi + DVec3::splat(pad)).as_vec3a(),
     )
-}
-
-pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
-    match method {
-        IntersectMethod::Robust => Solver::Robust,
-        IntersectMethod::Newton { iterations, starts } => Solver::Newton { iterations, starts },
-    }
 }
 
 impl Revolve {

@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::sampling::uniform_sphere;
 
@@ -22,11 +22,6 @@ impl Sphere {
             ));
         }
         Ok(Self { center, radius })
-    }
-
-    /// The full surface data at ray parameter `t` (a value [`Sphere::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
-        self.hit_at_uv(ray, t, true)
     }
 
     /// [`Sphere::hit_at`], with `uv` left NaN unless `uv` is asked for: it costs an `atan2` and
@@ -58,19 +53,6 @@ impl Sphere {
         }
     }
 
-    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Sphere::hit_at`]).
-    #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        let (t0, t1) = self.roots(ray)?;
-        if t0 > t_min && t0 < t_max {
-            Some(t0)
-        } else if t1 > t_min && t1 < t_max {
-            Some(t1)
-        } else {
-            None
-        }
-    }
-
     #[inline]
     fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
         let oc = ray.o - self.center;
@@ -91,21 +73,30 @@ impl Sphere {
     }
 }
 
-impl Shape for Sphere {
+impl SplitShape for Sphere {
+    /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Sphere::hit_at`]).
+    #[inline]
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t0, t1) = self.roots(ray)?;
+        if t0 > t_min && t0 < t_max {
+            Some(t0)
+        } else if t1 > t_min && t1 < t_max {
+            Some(t1)
+        } else {
+            None
+        }
+    }
+
+    /// The full surface data at ray parameter `t` (a value [`Sphere::hit_t`] returned).
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+        self.hit_at_uv(ray, t, true)
+    }
+
     fn bounds(&self) -> Aabb {
         Aabb::new(
             self.center - Vec3A::splat(self.radius),
             self.center + Vec3A::splat(self.radius),
         )
-    }
-
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {
@@ -125,6 +116,7 @@ impl Shape for Sphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shapes::Shape;
 
     #[test]
     fn hits_from_outside_and_inside() {

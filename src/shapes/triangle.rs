@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3A};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, SplitShape};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::sampling::uniform_triangle;
 
@@ -61,16 +61,18 @@ impl Triangle {
         }
         Some((e2.dot(qv) * inv, b1, b2))
     }
+}
 
+impl SplitShape for Triangle {
     /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Triangle::hit_at`]).
     #[inline]
-    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         let (t, _, _) = self.solve(ray)?;
         (t > t_min && t < t_max).then_some(t)
     }
 
     /// The full surface data at ray parameter `t` (a value [`Triangle::hit_t`] returned).
-    pub fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
+    fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
         let (b1, b2) = self.solve(ray).map_or((0.0, 0.0), |(_, b1, b2)| (b1, b2));
         let e1 = self.p[1] - self.p[0];
         let e2 = self.p[2] - self.p[0];
@@ -109,22 +111,9 @@ impl Triangle {
             dpdu,
         }
     }
-}
 
-impl Shape for Triangle {
     fn bounds(&self) -> Aabb {
         Aabb::from_points(self.p)
-    }
-
-    #[inline]
-    fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let t = self.hit_t(ray, t_min, t_max)?;
-        Some(self.hit_at(ray, t))
-    }
-
-    #[inline]
-    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        self.hit_t(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

@@ -22,6 +22,7 @@ use glam::{DAffine3, Mat3A, Vec2, Vec3A};
 
 use super::image::{Lookup, lookup};
 use super::luminance;
+use crate::sampling::PiecewiseConstant2D;
 use crate::scene::{ImageData, Wrap};
 
 const FILTERED: Lookup = Lookup {
@@ -49,15 +50,9 @@ pub struct EnvironmentMap {
     image: ImageData,
     world_to_env: Mat3A,
     env_to_world: Mat3A,
-    /// Sampling weight per texel, row-major.
-    func: Vec<f32>,
-    /// Per row, the cumulative distribution over its columns (`width + 1` entries each).
-    conditional_cdf: Vec<f32>,
-    /// Mean of `func` over each row.
-    row_integral: Vec<f32>,
-    /// Cumulative distribution over rows (`height + 1` entries).
-    marginal_cdf: Vec<f32>,
-    /// Mean of `func` over the whole image; 0 for a black map.
+    /// Sampling weight per texel.
+    distribution: PiecewiseConstant2D,
+    /// Mean of the sampling weights over the whole image; 0 for a black map.
     integral: f32,
     /// `∫ L dω` over the sphere, per channel (texel values times texel solid angles).
     integrated_radiance: Vec3A,
@@ -102,10 +97,7 @@ impl EnvironmentMap {
             .map(|&p| luminance(Vec3A::from(p)) as f64)
             .collect();
         let at = |row: usize, col: isize| lum[row * w + col.rem_euclid(w as isize) as usize];
-        let mut func = vec![0.0f32; w * h];
-        let mut conditional_cdf = vec![0.0f32; h * (w + 1)];
-        let mut row_integral = vec![0.0f32; h];
-        let mut row_sums = vec![0.0f64; h];
+        let mut func = vec![0.0f64; w * h];
         let mut integrated_radiance = glam::DVec3::ZERO;
         for row in 0..h {
             let rows = [row.saturating_sub(1), row, (row + 1).min(h - 1)];
@@ -114,8 +106,6 @@ impl EnvironmentMap {
             let theta0 = PI as f64 * row as f64 / h as f64;
             let theta1 = PI as f64 * (row + 1) as f64 / h as f64;
             let texel_solid_angle = 2.0 * PI as f64 / w as f64 * (theta0.cos() - theta1.cos());
-            let mut sum = 0.0f64;
-            let cdf = &mut conditional_cdf[row * (w + 1)..(row + 1) * (w + 1)];
             for col in 0..w {
                 let c = col as isize;
                 let mut filtered = 0.0;
@@ -123,40 +113,14 @@ impl EnvironmentMap {
                     filtered +=
                         wy * (0.125 * at(*ry, c - 1) + 0.75 * at(*ry, c) + 0.125 * at(*ry, c + 1));
                 }
-                let f = filtered * sin_theta;
-                func[row * w + col] = f as f32;
-                sum += f;
-                cdf[col + 1] = sum as f32;
+                func[row * w + col] = filtered * sin_theta;
                 let p = pixels[row * w + col];
                 integrated_radiance +=
                     glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * texel_solid_angle;
             }
-            if sum > 0.0 {
-                for c in cdf.iter_mut() {
-                    *c = (*c as f64 / sum) as f32;
-                }
-                cdf[w] = 1.0;
-            } else {
-                for (i, c) in cdf.iter_mut().enumerate() {
-                    *c = i as f32 / w as f32;
-                }
-            }
-            row_sums[row] = sum;
-            row_integral[row] = (sum / w as f64) as f32;
         }
-        let total: f64 = row_sums.iter().sum();
-        let mut marginal_cdf = vec![0.0f32; h + 1];
-        let mut acc = 0.0f64;
-        for row in 0..h {
-            acc += row_sums[row];
-            marginal_cdf[row + 1] = if total > 0.0 {
-                (acc / total) as f32
-            } else {
-                (row + 1) as f32 / h as f32
-            };
-        }
-        marginal_cdf[h] = 1.0;
-        let integral = (total / (w * h) as f64) as f32;
+        let distribution = PiecewiseConstant2D::new(&func, w, h);
+        let integral = distribution.mean() as f32;
 
         Self {
             image: ImageData {
@@ -167,10 +131,7 @@ impl EnvironmentMap {
             },
             world_to_env,
             env_to_world,
-            func,
-            conditional_cdf,
-            row_integral,
-            marginal_cdf,
+            distribution,
             integral,
             integrated_radiance: integrated_radiance.as_vec3a(),
         }
@@ -223,7 +184,7 @@ impl EnvironmentMap {
         let (w, h) = (self.image.width as usize, self.image.height as usize);
         let col = ((u * w as f32) as usize).min(w - 1);
         let row = (((1.0 - v) * h as f32) as usize).min(h - 1);
-        self.func[row * w + col] / self.integral / (2.0 * PI * PI * sin_theta)
+        self.distribution.func(col, row) / self.integral / (2.0 * PI * PI * sin_theta)
     }
 
     /// Draws a direction with density proportional to luminance × sin θ per texel, from two
@@ -234,11 +195,10 @@ impl EnvironmentMap {
             return None;
         }
         let (w, h) = (self.image.width as usize, self.image.height as usize);
-        let (row, dv) = sample_cdf(&self.marginal_cdf, rnd.y);
-        let cdf = &self.conditional_cdf[row * (w + 1)..(row + 1) * (w + 1)];
-        let (col, du) = sample_cdf(cdf, rnd.x);
-        let f = self.func[row * w + col];
-        if f <= 0.0 || self.row_integral[row] <= 0.0 {
+        let ((col, row), frac) = self.distribution.sample(rnd);
+        let (du, dv) = (frac.x, frac.y);
+        let f = self.distribution.func(col, row);
+        if f <= 0.0 {
             return None;
         }
         let s = (col as f32 + du) / w as f32;
@@ -273,32 +233,6 @@ impl EnvironmentMap {
     pub fn is_black(&self) -> bool {
         self.integral <= 0.0
     }
-}
-
-/// Index `i` with `cdf[i] <= u < cdf[i + 1]` and the fraction of `u` within it. `cdf` has
-/// `n + 1` non-decreasing entries from 0 to 1; an entry of zero width is never chosen.
-#[inline]
-fn sample_cdf(cdf: &[f32], u: f32) -> (usize, f32) {
-    let n = cdf.len() - 1;
-    let u = if u.is_finite() {
-        u.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let i = cdf.partition_point(|&c| c <= u).saturating_sub(1);
-    // u = 1 (or a last run of zero-width entries) lands past the end: step back to the last
-    // entry with width.
-    let mut i = i.min(n - 1);
-    while i > 0 && cdf[i + 1] <= cdf[i] {
-        i -= 1;
-    }
-    let width = cdf[i + 1] - cdf[i];
-    let frac = if width > 0.0 {
-        ((u - cdf[i]) / width).clamp(0.0, 1.0 - f32::EPSILON)
-    } else {
-        0.5
-    };
-    (i, frac)
 }
 
 #[cfg(test)]
@@ -586,15 +520,5 @@ mod tests {
         }
         assert_eq!(ok.radiance(Vec3A::ZERO), Vec3A::ZERO);
         assert!(ok.radiance(Vec3A::splat(f32::NAN)).is_finite());
-    }
-
-    #[test]
-    fn sample_cdf_skips_empty_entries() {
-        let cdf = [0.0, 0.0, 0.5, 0.5, 1.0, 1.0];
-        assert_eq!(sample_cdf(&cdf, 0.0).0, 1);
-        assert_eq!(sample_cdf(&cdf, 0.25), (1, 0.5));
-        assert_eq!(sample_cdf(&cdf, 0.5).0, 3);
-        assert_eq!(sample_cdf(&cdf, 0.75), (3, 0.5));
-        assert_eq!(sample_cdf(&cdf, 1.0).0, 3);
     }
 }

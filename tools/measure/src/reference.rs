@@ -13,7 +13,8 @@
 
 use glam::{DVec2, DVec3};
 
-use sppm_lang::bezier::lathe::{Lathe, Part, RayFrame, Refine, Segment};
+use sppm_lang::bezier::lathe::{Lathe, Part, RayFrame, Segment};
+use sppm_lang::bezier::roots::bracket::Refine;
 use sppm_lang::bezier::roots::{Root, RootKind};
 
 /// Width in `s` below which the lathe reference gives up deciding.

@@ -8,8 +8,9 @@
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use sppm_lang::bezier::lathe::{Lathe, Part, Solver};
-use sppm_lang::bezier::patch::{Patch, PatchSolver};
+use sppm_lang::bezier::lathe::{Lathe, Part};
+use sppm_lang::bezier::patch::Patch;
+use sppm_lang::bezier::{Solver, Solver as PatchSolver};
 use sppm_lang::sampling::SplitMix64;
 use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_measure::reference;

@@ -12,6 +12,8 @@
 
 use super::bernstein::Bernstein;
 
+pub mod bracket;
+
 /// Width (in the original [0, 1] parameter) below which an unresolved interval becomes a cluster.
 pub const LEAF_WIDTH: f64 = 1.0 / (1u64 << 40) as f64;
 
@@ -163,6 +165,42 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64) {
         t = next;
     }
     (t.clamp(lo, hi), lo, hi)
+}
+
+/// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
+/// `noise / |f'|` near a simple root, `sqrt(2 noise / |f''|)` near a double one.
+pub fn root_uncertainty(f: &Bernstein, s: f64, noise: f64) -> f64 {
+    let d1 = f.eval_with_derivative(s).1.abs();
+    let d2 = f.derivative().eval_with_derivative(s).1.abs();
+    (noise / d1.max(1e-300)).min((2.0 * noise / d2.max(1e-300)).sqrt())
+}
+
+/// Newton iteration on `f` from `starts` evenly spaced starting guesses, keeping what converges
+/// into [0, 1] (within `1e3 noise` of zero). It can miss roots: it is kept for comparison
+/// ([`super::Solver::Newton`]).
+pub fn newton_roots(f: &Bernstein, noise: f64, iterations: u32, starts: u32, out: &mut Vec<Root>) {
+    let starts = starts.max(1);
+    for k in 0..starts {
+        let mut s = (k as f64 + 0.5) / starts as f64;
+        for _ in 0..iterations {
+            let (v, dv) = f.eval_with_derivative(s);
+            if dv == 0.0 || !dv.is_finite() {
+                break;
+            }
+            s -= v / dv;
+            if !(-0.5..=1.5).contains(&s) {
+                break;
+            }
+        }
+        if (0.0..=1.0).contains(&s) && f.eval(s).abs() <= 1e3 * noise {
+            out.push(Root {
+                t: s,
+                lo: s,
+                hi: s,
+                kind: RootKind::Simple,
+            });
+        }
+    }
 }
 
 #[cfg(test)]

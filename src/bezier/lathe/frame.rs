@@ -1,0 +1,257 @@
+//! A ray prepared for one lathe, and the recovery of the ray parameter from a root of `F`.
+
+use glam::DVec3;
+
+use super::segment::Segment;
+use crate::bezier::bernstein::Bernstein;
+use crate::bezier::roots::Root;
+use crate::bezier::roots::bracket::{Refine, bracketed_root};
+
+/// A ray prepared for one lathe: unit direction and an origin shifted near the surface.
+#[derive(Debug, Clone, Copy)]
+pub struct RayFrame {
+    pub o: DVec3,
+    pub dn: DVec3,
+    pub dh2: f64,
+    /// `|d_y| >= |d_xz|`: `t` is recovered from the height, otherwise from the radius.
+    steep: bool,
+    pub(crate) t0: f64,
+    /// `o + t0 dn`: the point of closest approach to the axis (flat rays) or at mid-height.
+    pub oc: DVec3,
+    pub(crate) rho2: f64,
+    line_rho2: f64,
+}
+
+impl RayFrame {
+    /// `dn` must be unit length.
+    pub fn new(o: DVec3, dn: DVec3, hmin: f64, hmax: f64) -> Self {
+        let dh2 = dn.x * dn.x + dn.z * dn.z;
+        let steep = dn.y.abs() >= dh2.sqrt();
+        // Shift the origin near the surface so that the polynomial's terms do not cancel.
+        let t0 = if steep {
+            (0.5 * (hmin + hmax) - o.y) / dn.y
+        } else {
+            -(o.x * dn.x + o.z * dn.z) / dh2
+        };
+        let oc = o + t0 * dn;
+        let rho2 = oc.x * oc.x + oc.z * oc.z;
+        let line_rho2 = if dh2 > 0.0 {
+            let tc = -(oc.x * dn.x + oc.z * dn.z) / dh2;
+            let q = oc + tc * dn;
+            q.x * q.x + q.z * q.z
+        } else {
+            rho2
+        };
+        Self {
+            o,
+            dn,
+            dh2,
+            steep,
+            t0,
+            oc,
+            rho2,
+            line_rho2,
+        }
+    }
+
+    /// Cheap culling: the ray's line passes outside the segment's bounding cylinder or its
+    /// height range lies outside `(tmin, tmax)`.
+    pub fn may_hit(&self, seg: &Segment, tmin: f64, tmax: f64, size: f64) -> bool {
+        let (o, dn) = (self.o, self.dn);
+        if seg.degenerate || self.line_rho2 > seg.rmax * seg.rmax * (1.0 + 1e-12) {
+            return false;
+        }
+        if dn.y != 0.0 {
+            let ta = (seg.hmin - o.y) / dn.y;
+            let tb = (seg.hmax - o.y) / dn.y;
+            let (ta, tb) = (ta.min(tb), ta.max(tb));
+            let slack = 1e-9 * size;
+            !(tb < tmin - slack || ta > tmax + slack)
+        } else {
+            o.y >= seg.hmin - 1e-12 * size && o.y <= seg.hmax + 1e-12 * size
+        }
+    }
+
+    /// The polynomial `F(s)` of the segment (see the module docs) and its rounding noise.
+    pub fn polynomial(&self, seg: &Segment) -> (Bernstein, f64) {
+        let (oc, dn) = (self.oc, self.dn);
+        let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
+        let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
+        let rr = seg.r.mul(&seg.r).expect("degree <= 14");
+        let f = a
+            .mul(&a)
+            .and_then(|aa| aa.add(&b.mul(&b)?))
+            .and_then(|s| s.add(&rr.scale(-dn.y * dn.y)))
+            .expect("degree <= 14");
+        let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * rr.max_abs();
+        (f, scale * 64.0 * f64::EPSILON * (f.degree() as f64 + 1.0))
+    }
+
+    /// `F(s)` evaluated pointwise from the profile (no product polynomial), for the reference.
+    pub fn eval_pointwise(&self, seg: &Segment, s: f64) -> (f64, f64) {
+        let (oc, dn) = (self.oc, self.dn);
+        let (r, dr) = seg.r.eval_with_derivative(s);
+        let (h, dh) = seg.h.eval_with_derivative(s);
+        let a = oc.x * dn.y + (h - oc.y) * dn.x;
+        let b = oc.z * dn.y + (h - oc.y) * dn.z;
+        let v = a * a + b * b - dn.y * dn.y * r * r;
+        let dv = 2.0 * (a * dh * dn.x + b * dh * dn.z - dn.y * dn.y * r * dr);
+        (v, dv)
+    }
+
+    /// Ray parameters (unit direction) of the hits a root `s` of `F` stands for; NaN for none.
+    /// `ds` is the uncertainty of `s` from rounding (see
+    /// [`root_uncertainty`](crate::bezier::roots::root_uncertainty)).
+    ///
+    /// `F` is a product of two well-conditioned factors; squaring makes its roots lose half
+    /// their digits where the factors nearly vanish together (poles, flat rays). So the root's
+    /// bracket, widened by `ds`, is searched again for a sign change of the factor itself:
+    /// steep rays `g(s) = r(s) - |xz(t(s))|` with `t(s)` from the height; flat rays, for each
+    /// side `sigma = +-1` of the point of closest approach, `g(s) = h(s) - y(t_sigma(s))` with
+    /// `t_sigma = t_c + sigma sqrt(r^2 - rho^2) / |d_xz|`. Only where no factor changes sign (a
+    /// tangency) is the root itself used.
+    /// `refine` chooses how a sign change is refined: the production intersector uses
+    /// [`Refine::FalsePosition`], the reference [`Refine::Bisection`] (so the stress test compares
+    /// two refinements, not one with itself).
+    /// Returns `(t, s)` pairs.
+    pub fn candidates(
+        &self,
+        seg: &Segment,
+        root: &Root,
+        ds: f64,
+        size: f64,
+        refine: Refine,
+    ) -> [(f64, f64); 2] {
+        let (oc, dn) = (self.oc, self.dn);
+        let lo = (root.lo - 4.0 * ds).max(0.0);
+        let hi = (root.hi + 4.0 * ds).min(1.0);
+        let mut cands = [(f64::NAN, root.t); 2];
+        if self.steep {
+            let t_of = |s: f64| (seg.h.eval(s) - oc.y) / dn.y;
+            let g = |s: f64| {
+                let t = t_of(s);
+                let (x, z) = (oc.x + t * dn.x, oc.z + t * dn.z);
+                seg.r.eval(s) - (x * x + z * z).sqrt()
+            };
+            if let Some(s) = nearest_sign_change(&g, &|s| t_of(s), lo, hi, refine) {
+                cands[0] = (self.t0 + t_of(s), s);
+                return cands;
+            }
+            // A tangency: keep it only where the factor really reaches zero.
+            if let Some(s) = touch(&g, lo, hi, size) {
+                cands[0] = (self.t0 + t_of(s), s);
+            }
+            return cands;
+        }
+        let w_of = |s: f64| {
+            let r = seg.r.eval(s);
+            ((r * r - self.rho2) / self.dh2).max(0.0).sqrt()
+        };
+        // The ray reaches radius `r` only where `r >= rho`. The slack is absolute in `r` (not in
+        // `r^2`): near a pointed tip `rho` itself may be 1e-7 of the size, and a slack in `r^2`
+        // of 1e-12 size^2 would let `r` fall far below `rho` and create a false hit at `t_c`.
+        let rho = self.rho2.sqrt();
+        let reach = rho - 1e-12 * size;
+        let g = |sigma: f64, s: f64| {
+            let r = seg.r.eval(s);
+            if r < reach {
+                // The ray does not reach radius r: no hit at this s.
+                return f64::NAN;
+            }
+            seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
+        };
+        let mut refined = false;
+        for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            if let Some(s) =
+                nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi, refine)
+            {
+                cands[k] = (self.t0 + sigma * w_of(s), s);
+                refined = true;
+            }
+        }
+        if refined {
+            return cands;
+        }
+        // A tangency: no factor changes sign between samples. Keep a side only where its
+        // factor really reaches zero (the root of `F` alone is not enough: near a pole its
+        // uncertainty in `s` is large enough to turn a ray that passes 1e-7 away into a hit).
+        for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            if let Some(s) = touch(&|s| g(sigma, s), lo, hi, size) {
+                cands[k] = (self.t0 + sigma * w_of(s), s);
+            }
+        }
+        cands
+    }
+}
+
+/// Where a factor `g` touches zero on `[lo, hi]` without a sign change between samples (a
+/// tangency, or two roots closer than the sample spacing): the point of smallest `|g|`, found by
+/// 64 samples and a golden-section search between the best sample's neighbours, if `|g|` there is
+/// within rounding of zero (`1e-10` of the surface size; `g` is a length, computed in f64 from
+/// quantities of the size of the scene). NaN values of `g` mean "not reachable".
+fn touch(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, size: f64) -> Option<f64> {
+    let f = |s: f64| {
+        let v = g(s).abs();
+        if v.is_nan() { f64::INFINITY } else { v }
+    };
+    const N: usize = 64;
+    let x = |k: usize| lo + (hi - lo) * k as f64 / N as f64;
+    let (k, fk) = (0..=N)
+        .map(|k| (k, f(x(k))))
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    if !fk.is_finite() {
+        return None;
+    }
+    let (mut a, mut b) = (x(k.saturating_sub(1)), x((k + 1).min(N)));
+    let q = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - q * (b - a), a + q * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    let mut best = (x(k), fk);
+    for _ in 0..100 {
+        if fc < fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - q * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + q * (b - a);
+            fd = f(d);
+        }
+        for (s, v) in [(c, fc), (d, fd)] {
+            if v < best.1 {
+                best = (s, v);
+            }
+        }
+        if b - a <= f64::EPSILON * b.abs().max(1e-300) {
+            break;
+        }
+    }
+    (best.1 <= 1e-10 * size).then_some(best.0)
+}
+
+/// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
+/// refined root with the smallest `t(s)`. Neighbouring pieces share their end samples.
+fn nearest_sign_change(
+    g: &dyn Fn(f64) -> f64,
+    t: &dyn Fn(f64) -> f64,
+    lo: f64,
+    hi: f64,
+    refine: Refine,
+) -> Option<f64> {
+    let mut best: Option<(f64, f64)> = None;
+    let n = 16;
+    let x = |k: usize| lo + (hi - lo) * k as f64 / n as f64;
+    let (mut a, mut ga) = (x(0), g(x(0)));
+    for k in 0..n {
+        let b = x(k + 1);
+        let gb = g(b);
+        if let Some(s) = bracketed_root(g, a, b, ga, gb, refine) {
+            let ts = t(s);
+            if best.is_none_or(|(_, bt)| ts < bt) {
+                best = Some((s, ts));
+            }
+        }
+        (a, ga) = (b, gb);
+    }
+    best.map(|b| b.0)
+}

@@ -1,0 +1,409 @@
+//! Ray intersection with a surface of revolution of a piecewise Bezier profile (f64 core).
+//!
+//! The profile `(r(s), h(s))`, `s` in [0, 1] per segment, is swept around the y axis:
+//! `P(s, phi) = (r cos phi, h, r sin phi)`, `phi = atan2(z, x)` in [0, 2 pi).
+//!
+//! A ray `o + t d` (unit `d`) meets the surface where its height is `h(s)` and its distance from
+//! the axis is `r(s)`. Eliminating `t = (h(s) - o_y) / d_y` gives one polynomial of degree `2n`:
+//!
+//! `F(s) = (o_x d_y + (h - o_y) d_x)^2 + (o_z d_y + (h - o_y) d_z)^2 - d_y^2 r^2`,
+//!
+//! formed exactly in the Bernstein basis (products of the profile's coordinate polynomials), and
+//! its roots in [0, 1] are isolated by [`super::roots`]. How `t` is recovered from `s` depends on
+//! the ray: for steep rays (`|d_y| >= |d_xz|`) from the height, for flat rays from the distance to
+//! the axis (`t = t_c +- sqrt(r^2 - rho^2) / |d_xz|` around the point of closest approach), which
+//! stays well conditioned as `d_y -> 0` where the roots of `F` merge into double roots.
+//!
+//! [`Segment`] (`segment.rs`) holds one profile segment and its tables; [`RayFrame`] (`frame.rs`)
+//! forms `F` for a ray and turns its roots into ray parameters.
+
+use std::f64::consts::TAU;
+
+use glam::{DVec2, DVec3};
+
+mod frame;
+mod segment;
+
+pub use frame::RayFrame;
+pub use segment::Segment;
+use segment::TABLE_STEPS;
+
+use super::Solver;
+use super::roots::bracket::Refine;
+use super::roots::{RootKind, find_roots, find_roots_with_noise, newton_roots, root_uncertainty};
+/// Which part of the surface was hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    /// The swept profile (segment index).
+    Side(usize),
+    /// The flat cap at the start angle of a partial sweep.
+    StartCap,
+    /// The flat cap at the end angle.
+    EndCap,
+}
+
+/// A hit in the lathe's own space, `t` in units of the ray direction given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LatheHit {
+    pub t: f64,
+    pub p: DVec3,
+    /// Unit outward geometric normal (outward is to the right of the profile's direction).
+    pub n: DVec3,
+    pub uv: DVec2,
+    pub dpdu: DVec3,
+    pub part: Part,
+    /// Profile parameter within the segment (0 on caps).
+    pub s: f64,
+}
+
+/// A surface of revolution, ready for intersection.
+#[derive(Debug, Clone)]
+pub struct Lathe {
+    segs: Vec<Segment>,
+    /// Partial sweep: start angle in [0, 2 pi) and span in (0, 2 pi), radians.
+    sweep: Option<(f64, f64)>,
+    rmax: f64,
+    hmin: f64,
+    hmax: f64,
+    size: f64,
+    /// Arc length before each segment, and in total.
+    len_before: Vec<f64>,
+    total_len: f64,
+    /// Cumulative side area over all segments' table steps (for sampling).
+    area_cdf: Vec<f64>,
+}
+
+impl Lathe {
+    /// Validates the profile. `sweep` is `(start, end)` in degrees.
+    pub fn new(segments: &[Vec<DVec2>], sweep: Option<(f64, f64)>) -> Result<Self, String> {
+        if segments.is_empty() {
+            return Err("a revolve profile needs at least one segment".into());
+        }
+        for (i, seg) in segments.iter().enumerate() {
+            if seg.len() < 2 || seg.len() > 8 {
+                return Err(format!(
+                    "profile segment {} has {} control points; a Bezier segment needs 2 to 8 \
+                     (degree 1 to 7)",
+                    i + 1,
+                    seg.len()
+                ));
+            }
+            if let Some(p) = seg.iter().find(|p| !p.is_finite()) {
+                return Err(format!(
+                    "profile segment {} has a non-finite control point <{}, {}>",
+                    i + 1,
+                    p.x,
+                    p.y
+                ));
+            }
+            if let Some(p) = seg.iter().find(|p| p.x < 0.0) {
+                return Err(format!(
+                    "profile segment {} has a negative radius at <{}, {}>; radii must be >= 0 \
+                     (the profile is swept around the axis)",
+                    i + 1,
+                    p.x,
+                    p.y
+                ));
+            }
+        }
+        let sweep = match sweep {
+            None => None,
+            Some((a0, a1)) => {
+                if !a0.is_finite() || !a1.is_finite() {
+                    return Err("the sweep angles must be finite".into());
+                }
+                let span = a1 - a0;
+                if span <= 0.0 {
+                    return Err(format!(
+                        "the sweep `angle {a0}, {a1}` is empty; the end angle must exceed the start"
+                    ));
+                }
+                if span >= 360.0 {
+                    None
+                } else {
+                    Some((a0.to_radians().rem_euclid(TAU), span.to_radians()))
+                }
+            }
+        };
+        let segs: Vec<Segment> = segments.iter().map(|s| Segment::new(s)).collect();
+        let rmax = segs.iter().map(|s| s.rmax).fold(0.0, f64::max);
+        let hmin = segs.iter().map(|s| s.hmin).fold(f64::INFINITY, f64::min);
+        let hmax = segs
+            .iter()
+            .map(|s| s.hmax)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let size = rmax.max(hmax - hmin).max(1e-300);
+        let mut len_before = Vec::new();
+        let mut total_len = 0.0;
+        for s in &segs {
+            len_before.push(total_len);
+            total_len += s.length();
+        }
+        let mut area_cdf = vec![0.0];
+        for s in &segs {
+            let base = *area_cdf.last().unwrap_or(&0.0);
+            area_cdf.extend(s.area_table[1..].iter().map(|a| base + a));
+        }
+        Ok(Self {
+            segs,
+            sweep,
+            rmax,
+            hmin,
+            hmax,
+            size,
+            len_before,
+            total_len,
+            area_cdf,
+        })
+    }
+
+    /// Object-space bounds `(min, max)`: the control polygon's, limited to the swept sector.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        let r = self.rmax;
+        let (mut lo, mut hi) = (
+            DVec3::new(0.0, self.hmin, 0.0),
+            DVec3::new(0.0, self.hmax, 0.0),
+        );
+        let mut add = |a: f64| {
+            let p = DVec3::new(r * a.cos(), 0.0, r * a.sin());
+            lo = lo.min(p);
+            hi = hi.max(p);
+        };
+        match self.sweep {
+            None => {
+                lo = DVec3::new(-r, self.hmin, -r);
+                hi = DVec3::new(r, self.hmax, r);
+            }
+            Some((a0, span)) => {
+                add(a0);
+                add(a0 + span);
+                for k in 0..8 {
+                    let a = k as f64 * TAU / 4.0;
+                    if (a - a0).rem_euclid(TAU) <= span {
+                        add(a);
+                    }
+                }
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The size used for relative tolerances (largest of radius and height).
+    pub fn size(&self) -> f64 {
+        self.size
+    }
+
+    pub fn segments(&self) -> &[Segment] {
+        &self.segs
+    }
+
+    pub fn sweep(&self) -> Option<(f64, f64)> {
+        self.sweep
+    }
+
+    fn in_sweep(&self, p: DVec3) -> bool {
+        match self.sweep {
+            None => true,
+            Some((a0, span)) => (p.z.atan2(p.x) - a0).rem_euclid(TAU) <= span,
+        }
+    }
+
+    /// Nearest hit with `t_min < t < t_max`.
+    pub fn intersect(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        solver: Solver,
+    ) -> Option<LatheHit> {
+        let dl = d.length();
+        if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
+            return None;
+        }
+        let frame = RayFrame::new(o, d / dl, self.hmin, self.hmax);
+        let dn = frame.dn;
+        let (tmin, mut best) = (t_min * dl, t_max * dl);
+        let mut found: Option<(f64, Part, f64)> = None;
+        let mut roots = Vec::new();
+        for (i, seg) in self.segs.iter().enumerate() {
+            if !frame.may_hit(seg, tmin, best, self.size) {
+                continue;
+            }
+            let (f, noise) = frame.polynomial(seg);
+            roots.clear();
+            match solver {
+                Solver::Robust => find_roots_with_noise(&f, noise, &mut roots),
+                Solver::Newton { iterations, starts } => {
+                    newton_roots(&f, noise, iterations, starts, &mut roots)
+                }
+            }
+            for root in &roots {
+                let ds = root_uncertainty(&f, root.t, noise);
+                for (t, s) in frame.candidates(seg, root, ds, self.size, Refine::FalsePosition) {
+                    if t > tmin && t < best && self.in_sweep(o + t * dn) {
+                        best = t;
+                        found = Some((t, Part::Side(i), s));
+                    }
+                }
+            }
+        }
+        self.cap_hits(&frame, tmin, &mut best, &mut found);
+        let (t, part, s) = found?;
+        Some(self.hit_record(o + t * dn, t / dl, part, s))
+    }
+
+    /// The nearer of the two side caps of a partial sweep, if nearer than `best`.
+    pub fn cap_hits(
+        &self,
+        frame: &RayFrame,
+        tmin: f64,
+        best: &mut f64,
+        found: &mut Option<(f64, Part, f64)>,
+    ) {
+        let (o, dn) = (frame.o, frame.dn);
+        if let Some((a0, span)) = self.sweep {
+            for (angle, part) in [(a0, Part::StartCap), (a0 + span, Part::EndCap)] {
+                let e = DVec3::new(angle.cos(), 0.0, angle.sin());
+                let m = DVec3::new(-angle.sin(), 0.0, angle.cos());
+                let den = dn.dot(m);
+                if den == 0.0 {
+                    continue;
+                }
+                let t = -o.dot(m) / den;
+                if !(t > tmin && t < *best) {
+                    continue;
+                }
+                let p = o + t * dn;
+                let rp = p.dot(e);
+                if rp >= 0.0 && self.inside_profile(rp, p.y) {
+                    *best = t;
+                    *found = Some((t, part, 0.0));
+                }
+            }
+        }
+    }
+
+    /// Whether `(r, y)` of the meridian half-plane lies inside the region the profile encloses
+    /// together with the axis (even-odd rule along a ray toward `+r`).
+    pub fn inside_profile(&self, r: f64, y: f64) -> bool {
+        let mut crossings = 0;
+        let mut roots = Vec::new();
+        let last = self.segs.len() - 1;
+        for (i, seg) in self.segs.iter().enumerate() {
+            if y < seg.hmin || y > seg.hmax {
+                continue;
+            }
+            roots.clear();
+            find_roots(&seg.h.add_constant(-y), &mut roots);
+            for root in &roots {
+                // A shared end point belongs to the next segment only.
+                if root.kind == RootKind::Simple
+                    && (i == last || root.t < 1.0 - 1e-12)
+                    && seg.r.eval(root.t) > r
+                {
+                    crossings += 1;
+                }
+            }
+        }
+        crossings % 2 == 1
+    }
+
+    pub fn hit_record(&self, p: DVec3, t: f64, part: Part, s: f64) -> LatheHit {
+        let (a0, span) = self.sweep.unwrap_or((0.0, TAU));
+        match part {
+            Part::Side(i) => {
+                let seg = &self.segs[i];
+                let rxz = (p.x * p.x + p.z * p.z).sqrt();
+                let phi = p.z.atan2(p.x);
+                let (c, sn) = if rxz > 0.0 {
+                    (p.x / rxz, p.z / rxz)
+                } else {
+                    (phi.cos(), phi.sin())
+                };
+                let tan = seg.tangent(s, self.size);
+                let n = DVec3::new(tan.y * c, -tan.x, tan.y * sn).normalize();
+                let dpdu = DVec3::new(tan.x * c, tan.y, tan.x * sn) * self.total_len.max(1e-300);
+                let u = (self.len_before[i] + seg.arc(s)) / self.total_len.max(1e-300);
+                let v = (phi - a0).rem_euclid(TAU) / span;
+                LatheHit {
+                    t,
+                    p,
+                    n,
+                    uv: DVec2::new(u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)),
+                    dpdu,
+                    part,
+                    s,
+                }
+            }
+            Part::StartCap | Part::EndCap => {
+                let angle = if part == Part::StartCap {
+                    a0
+                } else {
+                    a0 + span
+                };
+                let e = DVec3::new(angle.cos(), 0.0, angle.sin());
+                let m = DVec3::new(-angle.sin(), 0.0, angle.cos());
+                let n = if part == Part::StartCap { -m } else { m };
+                let h = (self.hmax - self.hmin).max(1e-300);
+                LatheHit {
+                    t,
+                    p,
+                    n,
+                    uv: DVec2::new(
+                        (p.dot(e) / self.rmax.max(1e-300)).clamp(0.0, 1.0),
+                        ((p.y - self.hmin) / h).clamp(0.0, 1.0),
+                    ),
+                    dpdu: e * self.rmax,
+                    part,
+                    s: 0.0,
+                }
+            }
+        }
+    }
+
+    /// Area of the swept side (caps excluded), from the tabulated `integral r |P'| ds`.
+    pub fn area(&self) -> f64 {
+        let span = self.sweep.map_or(TAU, |s| s.1);
+        span * self.area_cdf.last().copied().unwrap_or(0.0)
+    }
+
+    /// A point on the side, distributed by area up to the table's piecewise-uniform
+    /// approximation within each of the `TABLE_STEPS` parameter steps of a segment.
+    /// Returns the point and its unit outward normal.
+    pub fn sample(&self, u: DVec2) -> Option<(DVec3, DVec3)> {
+        let total = *self.area_cdf.last()?;
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let target = u.x.clamp(0.0, 1.0) * total;
+        let k = self
+            .area_cdf
+            .partition_point(|&a| a <= target)
+            .clamp(1, self.area_cdf.len() - 1)
+            - 1;
+        let (lo, hi) = (self.area_cdf[k], self.area_cdf[k + 1]);
+        let frac = if hi > lo {
+            (target - lo) / (hi - lo)
+        } else {
+            0.5
+        };
+        let seg_i = k / TABLE_STEPS;
+        let step = k % TABLE_STEPS;
+        let s = (step as f64 + frac.clamp(0.0, 1.0)) / TABLE_STEPS as f64;
+        let (a0, span) = self.sweep.unwrap_or((0.0, TAU));
+        let phi = a0 + u.y.clamp(0.0, 1.0) * span;
+        let seg = &self.segs[seg_i];
+        let q = seg.point(s);
+        let p = DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin());
+        let tan = seg.tangent(s, self.size);
+        let n = DVec3::new(tan.y * phi.cos(), -tan.x, tan.y * phi.sin()).normalize();
+        Some((p, n))
+    }
+
+    /// The surface point of segment `i` at `(s, phi)`.
+    pub fn surface_point(&self, i: usize, s: f64, phi: f64) -> DVec3 {
+        let q = self.segs[i].point(s);
+        DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
+    }
+}
