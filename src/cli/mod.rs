@@ -53,7 +53,13 @@ pub fn parse_seconds(text: &str) -> Result<f64, String> {
 /// A byte count with an optional binary suffix: `1500000`, `512K`, `512M`, `4G`.
 pub fn parse_bytes(text: &str) -> Result<u64, String> {
     let t = text.trim();
-    let (digits, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
+    // A plain number (`1500000`, `1e9`) is bytes; otherwise digits then a unit.
+    let split = if t.parse::<f64>().is_ok() {
+        None
+    } else {
+        t.char_indices().find(|(_, c)| c.is_ascii_alphabetic())
+    };
+    let (digits, unit) = match split {
         Some((i, _)) => (&t[..i], &t[i..]),
         None => (t, ""),
     };

@@ -139,6 +139,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                     loaded.sources,
                 ));
             }
+            None if loaded.empty => {}
             None => status("the scene has errors; the last image is kept"),
         }
         status("waiting for changes");
@@ -171,6 +172,8 @@ pub fn run(args: &WatchArgs) -> ExitCode {
 
 /// What one load gives the watch loop.
 struct Load {
+    /// The file was empty (already reported).
+    empty: bool,
     scene: Option<Scene>,
     dependencies: Vec<PathBuf>,
     sources: SourceMap,
@@ -193,6 +196,7 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
             path.display()
         ));
         return Load {
+            empty: true,
             scene: None,
             dependencies: vec![path.to_path_buf()],
             sources: SourceMap::default(),
@@ -207,6 +211,7 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
                 loaded.scene
             };
             Load {
+                empty: false,
                 scene,
                 dependencies: loaded.dependencies,
                 sources: loaded.sources,
@@ -216,6 +221,7 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
             // Deleted between saves (delete-and-recreate): keep watching the path.
             status(&format!("cannot read `{}`: {e}", path.display()));
             Load {
+                empty: false,
                 scene: None,
                 dependencies: vec![path.to_path_buf()],
                 sources: SourceMap::default(),
@@ -255,6 +261,7 @@ fn start(
             };
             let exposure = scene.settings.exposure;
             let mut last_write: Option<Instant> = None;
+            let mut written = 0u32;
             let mut on_progress = |p: &render::Progress| {
                 let due = last_write.is_none_or(|t| t.elapsed() >= snapshot_every)
                     || p.iteration == p.iterations;
@@ -264,6 +271,7 @@ fn start(
                 match p.image().write(&output, exposure) {
                     Ok(()) => {
                         last_write = Some(Instant::now());
+                        written = p.iteration;
                         let latency = if first_snapshot {
                             first_snapshot = false;
                             format!(
@@ -300,6 +308,12 @@ fn start(
                     return Outcome::Cancelled;
                 }
                 Ok(out) => {
+                    // Stopped early by a time limit: the last iterations may not be on disk yet.
+                    if out.iterations_done > written
+                        && let Err(e) = out.image.write(&output, exposure)
+                    {
+                        status(&format!("cannot write the image: {e}"));
+                    }
                     status(&format!(
                         "render #{round} {stage} finished: {} iterations in {:.2} s",
                         out.iterations_done,

@@ -42,22 +42,39 @@ impl Evaluator {
         }
         // Recorded before the read so that `watch` also waits for a file that is missing.
         self.dependencies.push(resolved.clone());
-        let text =
-            crate::files::read_text(&resolved, crate::files::MAX_SOURCE_BYTES).map_err(|e| {
-                let label = match e {
-                    crate::files::FileError::Io(_) => "not found",
-                    crate::files::FileError::Refused(_) => "not a readable scene file",
-                };
-                vec![
-                    Error::new(format!("cannot read included file `{path}`: {e}"))
-                        .label(label)
-                        .help(format!(
-                            "the path is resolved relative to the including file: {}",
-                            resolved.display()
-                        ))
-                        .at(span),
-                ]
-            })?;
+        // All the text one load reads (the scene and every include, also the same file included
+        // again in a loop) is bounded by one file's limit.
+        let budget = crate::files::MAX_SOURCE_BYTES.saturating_sub(self.source_bytes);
+        if budget == 0 {
+            return Err(vec![
+                Error::new(format!(
+                    "the scene and its includes read more than {} bytes in all",
+                    crate::files::MAX_SOURCE_BYTES
+                ))
+                .label("one include too many")
+                .help("is a file included inside a loop? declare what it defines once instead")
+                .at(span),
+            ]);
+        }
+        let text = crate::files::read_text(&resolved, budget).map_err(|e| {
+            let label = match &e {
+                crate::files::FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+                    "not found"
+                }
+                crate::files::FileError::Io(_) => "cannot be read",
+                crate::files::FileError::Refused(_) => "not a readable scene file",
+            };
+            vec![
+                Error::new(format!("cannot read included file `{path}`: {e}"))
+                    .label(label)
+                    .help(format!(
+                        "the path is resolved relative to the including file: {}",
+                        resolved.display()
+                    ))
+                    .at(span),
+            ]
+        })?;
+        self.source_bytes += text.len() as u64;
         let file = self
             .sources
             .add(&resolved, resolved.display().to_string(), text.clone());

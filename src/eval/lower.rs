@@ -67,9 +67,15 @@ impl Evaluator {
         let max = self.options.max_objects;
         if holding.saturating_add(adding) > max || self.parts_copied > max.saturating_mul(2) {
             return Err(vec![
-                Error::new(format!(
-                    "objects copied into unions and groups passed the limit of {max} parts"
-                ))
+                Error::new(if holding.saturating_add(adding) > max {
+                    format!("a union or group would hold more than {max} parts")
+                } else {
+                    format!(
+                        "unions and groups copied more than {} parts in all (twice the object \
+                         limit)",
+                        max.saturating_mul(2)
+                    )
+                })
                 .label("limit reached here")
                 .help("is a union copied into itself, or a recursion too deep?")
                 .at(span),

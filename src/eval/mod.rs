@@ -135,6 +135,7 @@ fn load_source_at(path: &Path, name: &str, text: String, options: &EvalOptions) 
 
 fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     let mut ev = Evaluator::new(options.clone());
+    ev.source_bytes = text.len() as u64;
     let file = ev.sources.add(path, name.to_string(), text.clone());
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
@@ -183,6 +184,8 @@ pub(crate) struct Evaluator {
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
     parts_copied: usize,
+    /// Bytes of scene text read so far (the scene and every include).
+    pub(crate) source_bytes: u64,
 }
 
 /// A silent error: its cause was already reported.
@@ -209,6 +212,7 @@ impl Evaluator {
             exhausted: false,
             block_depth: 0,
             parts_copied: 0,
+            source_bytes: 0,
         }
     }
 

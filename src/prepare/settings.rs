@@ -96,7 +96,7 @@ pub fn effective_settings(
         && !(t > 0.0 && t.is_finite())
     {
         return Err(RenderError::new(format!(
-            "time limit must be >= 0, got {t}"
+            "time limit must be a positive number of seconds, got {t}"
         )));
     }
     if o.threads == Some(0) {

@@ -58,16 +58,23 @@ pub fn render(
                 }
             });
         }
-        let out = match options.threads {
+        // Ends the watchdog however the render ends, a panic included (the scope would
+        // otherwise wait for the watchdog until the deadline).
+        struct Finish<'f>(&'f AtomicBool);
+        impl Drop for Finish<'_> {
+            fn drop(&mut self) {
+                self.0.store(true, Ordering::Relaxed);
+            }
+        }
+        let _finish = Finish(&finished);
+        match options.threads {
             Some(n) => rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
                 .map(|pool| pool.install(&mut run))
                 .map_err(|e| RenderError::new(format!("cannot start {n} threads: {e}"))),
             None => Ok(run()),
-        };
-        finished.store(true, Ordering::Relaxed);
-        out
+        }
     });
     let mut out = out?;
     out.cancelled = cancel.load(Ordering::Relaxed);

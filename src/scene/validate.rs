@@ -227,18 +227,37 @@ impl Scene {
                     at(*center)?;
                     len(*radius, "radius")?;
                 }
-                Shape::Plane { normal, offset } => at(*normal * *offset)?,
+                Shape::Plane { normal, offset } => {
+                    // Only the distance from the origin matters: a plane moved along itself is
+                    // the same plane.
+                    let n = t.matrix3.inverse().transpose() * *normal;
+                    let p = t.transform_point3(*normal * *offset);
+                    let d = if n.length_squared() > 0.0 {
+                        n.normalize().dot(p)
+                    } else {
+                        f64::NAN
+                    };
+                    point(DVec3::splat(d), &format!("this {kind}"), span)?;
+                }
                 Shape::Quad {
                     origin,
                     edge_u,
                     edge_v,
                 } => {
-                    at(*origin)?;
+                    for p in [*origin, *origin + *edge_u, *origin + *edge_v] {
+                        at(p)?;
+                    }
                     at(*origin + *edge_u + *edge_v)?;
                 }
                 Shape::Box { min, max } => {
-                    at(*min)?;
-                    at(*max)?;
+                    for i in 0..8 {
+                        let pick = |bit: i32, a: f64, b: f64| if i & bit == 0 { a } else { b };
+                        at(DVec3::new(
+                            pick(1, min.x, max.x),
+                            pick(2, min.y, max.y),
+                            pick(4, min.z, max.z),
+                        ))?;
+                    }
                 }
                 Shape::Cylinder {
                     base, cap, radius, ..
@@ -249,8 +268,9 @@ impl Scene {
                     len((*cap - *base).length(), "length")?;
                 }
                 Shape::Disk { center, radius, .. } => {
+                    // A disk may be squashed along its own normal: only its largest stretch.
                     at(*center)?;
-                    len(*radius, "radius")?;
+                    size(*radius * hi, &format!("the {kind}'s radius"), span)?;
                 }
                 Shape::Triangle { vertices } => {
                     for v in vertices {
