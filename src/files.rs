@@ -87,7 +87,8 @@ pub fn open_regular(path: &Path, max_bytes: u64) -> Result<File, FileError> {
         )));
     }
     let file = File::open(path).map_err(FileError::Io)?;
-    // The path may have been replaced between the two looks: check what was opened.
+    // The path may have been replaced between the two looks: check what was opened (a FIFO
+    // swapped in at that moment would block the open itself; that race is not closed here).
     let meta = file.metadata().map_err(FileError::Io)?;
     if let Some(kind) = not_regular(&meta) {
         return Err(refuse(kind));
