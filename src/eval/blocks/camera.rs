@@ -1,6 +1,6 @@
 //! `camera { ... }`.
 
-use super::{Sink, unexpected};
+use super::Sink;
 use crate::diag::{Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, num, positive, range_error, vec3};
@@ -80,12 +80,7 @@ impl Sink for CameraBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
-        Err(unexpected(
-            self,
-            &v,
-            span,
-            "a camera takes `location`, `look_at`, `up`, `fov`, `aperture`, `focus_distance`",
-        ))
+    fn positional_help(&self) -> &'static str {
+        "a camera takes `location`, `look_at`, `up`, `fov`, `aperture`, `focus_distance`"
     }
 }

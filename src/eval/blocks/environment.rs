@@ -5,7 +5,7 @@ use std::rc::Rc;
 
 use glam::DAffine3;
 
-use super::{Sink, unexpected};
+use super::Sink;
 use crate::diag::{Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, file_name, num, range_error, vec3};
@@ -93,12 +93,7 @@ impl Sink for EnvBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
-        Err(unexpected(
-            self,
-            &v,
-            span,
-            "an environment takes `image`, `intensity` and `rotate`",
-        ))
+    fn positional_help(&self) -> &'static str {
+        "an environment takes `image`, `intensity` and `rotate`"
     }
 }

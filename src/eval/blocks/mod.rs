@@ -39,10 +39,22 @@ pub(crate) trait Sink {
         self.props().iter().find(|p| p.name == name)
     }
     fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()>;
-    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()>;
+    /// A value written without a property name; refused unless the block takes one.
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        Err(unexpected(self, &v, span, self.positional_help()))
+    }
+    /// The help of the default [`Sink::positional`] refusal: what the block takes instead.
+    fn positional_help(&self) -> &'static str {
+        "this block takes properties only"
+    }
 }
 
-pub(super) fn unexpected(sink: &dyn Sink, v: &Value, span: Span, help: &str) -> Vec<Diagnostic> {
+pub(super) fn unexpected<S: Sink + ?Sized>(
+    sink: &S,
+    v: &Value,
+    span: Span,
+    help: &str,
+) -> Vec<Diagnostic> {
     vec![
         Error::new(format!(
             "{} does not take {} here",

@@ -1,13 +1,11 @@
 //! `settings { ... }`: the render settings.
 
-use super::{Sink, unexpected};
+use super::Sink;
 use crate::diag::{At, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
-use crate::eval::value::Value;
 use crate::scene::{Integrator, MAX_RESOLUTION_SIDE, Settings};
-use crate::span::Span;
 use crate::syntax::ast::Name;
 
 pub(super) struct SettingsBuilder(pub(super) Settings);
@@ -99,12 +97,7 @@ impl Sink for SettingsBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
-        Err(unexpected(
-            self,
-            &v,
-            span,
-            "settings take properties only, e.g. `settings { iterations 64 }`",
-        ))
+    fn positional_help(&self) -> &'static str {
+        "settings take properties only, e.g. `settings { iterations 64 }`"
     }
 }
