@@ -72,7 +72,7 @@ pub fn prepare<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
 ) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
-    scene.validate()?;
+    // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit).map_err(|e| e.at(scene.settings.span))?;
