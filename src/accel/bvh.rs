@@ -140,6 +140,17 @@ impl Bvh {
         self.shapes.len() + self.unbounded.len()
     }
 
+    /// Bytes held by the hierarchy: its nodes, shapes, quad packets and ids (what a scale
+    /// benchmark reports per primitive; a boxed shape's own heap data is not followed).
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.nodes.capacity() * size_of::<Node>()
+            + self.shapes.capacity() * size_of::<AnyShape>()
+            + self.packets.capacity() * size_of::<QuadPacket>()
+            + self.ids.capacity() * size_of::<u32>()
+            + self.unbounded.capacity() * size_of::<(AnyShape, u32)>()
+    }
+
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -1,6 +1,7 @@
 //! Ray-query acceleration and robust ray spawning.
 
 mod bvh;
+mod instance;
 
 pub use bvh::Bvh;
 

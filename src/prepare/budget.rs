@@ -8,8 +8,10 @@
 //! thread stacks, small tables) are left out. The figure is meant to be within a factor of about
 //! two of the peak, which is what a limit needs to stop a 30 GB allocation before it starts.
 
+use std::collections::HashSet;
 use std::mem::size_of;
 
+use super::instances::{shared_key, shared_meshes};
 use super::{EffectiveSettings, RenderError};
 use crate::scene::{Background, Integrator, Pattern, Scene, Shape};
 
@@ -54,13 +56,25 @@ const PER_PRIMITIVE: u64 = 64 + 3 * 4 + 64;
 pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> {
     let pixels = settings.width as u64 * settings.height as u64;
     let shape_bytes = size_of::<crate::shapes::primitive::AnyShape>() as u64;
+    let shared = shared_meshes(scene);
+    let mut stored = HashSet::new();
     let prims: u64 = scene
         .objects
         .iter()
-        .map(|o| {
+        .map(|o| match shared_key(o, &shared) {
+            // A mesh placed several times: one primitive per placement, its triangles once.
+            Some(id) => {
+                1 + if stored.insert(id) {
+                    primitives(&o.shape)
+                } else {
+                    0
+                }
+            }
             // An emissive object is built twice: as geometry and as a light.
-            let copies = if o.emission.is_some() { 2 } else { 1 };
-            primitives(&o.shape).saturating_mul(copies)
+            None => {
+                let copies = if o.emission.is_some() { 2 } else { 1 };
+                primitives(&o.shape).saturating_mul(copies)
+            }
         })
         .fold(0u64, u64::saturating_add);
     let mut items = vec![MemoryItem {

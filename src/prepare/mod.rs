@@ -4,6 +4,7 @@
 use glam::{Affine3A, DVec3, Vec3A};
 
 mod budget;
+mod instances;
 mod lights;
 mod settings;
 mod shapes;
@@ -90,6 +91,7 @@ impl<'a> PreparedScene<'a> {
         let mut prim_light = Vec::new();
         let mut lights = Vec::new();
         let mut objects = Vec::with_capacity(scene.objects.len());
+        let mut instancer = instances::Instancer::new(scene);
         for (oi, obj) in scene.objects.iter().enumerate() {
             let err = |message: String| RenderError {
                 message: format!("{}: {message}", obj.shape.kind()),
@@ -100,7 +102,10 @@ impl<'a> PreparedScene<'a> {
             if obj.material.0 as usize >= scene.materials.len() {
                 return Err(err("unknown material".into()));
             }
-            let list = build_shapes(obj).map_err(err)?;
+            let list = match instancer.placement(obj).map_err(err)? {
+                Some(placed) => vec![placed],
+                None => build_shapes(obj).map_err(err)?,
+            };
             let emission = obj
                 .emission
                 .filter(|e| e.radiance.is_finite() && e.radiance.max_element() > 0.0);

@@ -2,6 +2,8 @@
 //! (translate, rotate, uniform scale) are transformed exactly into their own kind; any other
 //! transform wraps the object-space shape in a [`Transformed`].
 
+use std::sync::Arc;
+
 use glam::{DMat3, DVec3, Vec3A};
 
 use crate::scene;
@@ -47,7 +49,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
     let nmat = m.inverse().transpose();
     let mirrored = det < 0.0;
     let sim = similarity_scale(&m);
-    let wrap = |s: Box<dyn Shape>| -> Result<AnyShape, String> {
+    let wrap = |s: Arc<dyn Shape>| -> Result<AnyShape, String> {
         Ok(AnyShape::Other(Box::new(Transformed::new(
             s,
             xf.as_affine3a(),
@@ -68,7 +70,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
                 v(xf.transform_point3(*center)),
                 (radius * s) as f32,
             )?)],
-            None => vec![wrap(Box::new(Sphere::new(v(*center), *radius as f32)?))?],
+            None => vec![wrap(Arc::new(Sphere::new(v(*center), *radius as f32)?))?],
         },
         scene::Shape::Plane { normal, offset } => {
             let p0 = xf.transform_point3(*normal * *offset / normal.length_squared().max(1e-300));
@@ -97,7 +99,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
                 v(nmat * *normal),
                 (radius * s) as f32,
             )?)],
-            None => vec![wrap(Box::new(Disk::new(
+            None => vec![wrap(Arc::new(Disk::new(
                 v(*center),
                 v(*normal),
                 *radius as f32,
@@ -133,13 +135,13 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
                     }
                 }
                 None => {
-                    out.push(wrap(Box::new(Cylinder::new(
+                    out.push(wrap(Arc::new(Cylinder::new(
                         v(*base),
                         v(*cap),
                         *radius as f32,
                     )?))?);
                     for (p, n, _) in parts {
-                        out.push(wrap(Box::new(Disk::new(v(p), v(n), *radius as f32)?))?);
+                        out.push(wrap(Arc::new(Disk::new(v(p), v(n), *radius as f32)?))?);
                     }
                 }
             }
@@ -163,9 +165,9 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             profile,
             sweep,
             method,
-        } => vec![wrap(Box::new(Revolve::new(profile, *sweep, *method)?))?],
+        } => vec![wrap(Arc::new(Revolve::new(profile, *sweep, *method)?))?],
         scene::Shape::BezierPatch { points, method } => {
-            vec![wrap(Box::new(BezierPatch::new(points, *method)?))?]
+            vec![wrap(Arc::new(BezierPatch::new(points, *method)?))?]
         }
     })
 }

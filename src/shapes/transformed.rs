@@ -1,4 +1,7 @@
-//! A shape under a general affine transform: rays go to object space, hits come back.
+//! A shape under a general affine transform: rays go to object space, hits come back. The
+//! inner shape is shared, so one object-space shape (a mesh's own BVH) can be placed many times.
+
+use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A, Vec2};
 
@@ -6,7 +9,7 @@ use super::{AreaSample, Shape};
 use crate::geometry::{Aabb, Hit, Ray};
 
 pub struct Transformed {
-    inner: Box<dyn Shape>,
+    inner: Arc<dyn Shape>,
     to_world: Affine3A,
     to_object: Affine3A,
     /// Inverse transpose of the linear part: maps normals.
@@ -14,7 +17,7 @@ pub struct Transformed {
 }
 
 impl Transformed {
-    pub fn new(inner: Box<dyn Shape>, to_world: Affine3A) -> Result<Self, String> {
+    pub fn new(inner: Arc<dyn Shape>, to_world: Affine3A) -> Result<Self, String> {
         let det = to_world.matrix3.determinant();
         if !(det.is_finite() && det.abs() > 1e-12) {
             return Err("the object's transform is singular (a zero scale?)".into());
