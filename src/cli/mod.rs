@@ -2,6 +2,7 @@
 
 mod chart;
 mod check;
+mod live;
 mod output;
 mod render;
 mod watch;
@@ -111,6 +112,95 @@ pub fn parse_threads(text: &str) -> Result<usize, String> {
         return Err(format!("must be from 1 to {MAX_THREADS}, got {n}"));
     }
     Ok(n)
+}
+
+/// Largest `--scale` factor (the result is range-checked again by the render).
+pub const MAX_SCALE: f64 = 64.0;
+
+/// `WxH`, or one side with the other left out (`640x`, `x480`) to keep the scene's aspect ratio.
+pub fn parse_resolution(text: &str) -> Result<Resolution, String> {
+    let usage = || format!("`{text}` is not a resolution such as 640x480, 640x or x480");
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(usage)?;
+    let side = |s: &str| -> Result<Option<u32>, String> {
+        if s.is_empty() {
+            return Ok(None);
+        }
+        match s.parse::<u32>() {
+            Ok(n) if (1..=sppm_lang::scene::MAX_RESOLUTION_SIDE).contains(&n) => Ok(Some(n)),
+            Ok(n) => Err(format!(
+                "each side must be from 1 to {}, got {n}",
+                sppm_lang::scene::MAX_RESOLUTION_SIDE
+            )),
+            Err(_) => Err(usage()),
+        }
+    };
+    match (side(w)?, side(h)?) {
+        (None, None) => Err(usage()),
+        (w, h) => Ok(Resolution {
+            width: w,
+            height: h,
+        }),
+    }
+}
+
+/// A scale factor for the scene's resolution: more than 0, at most [`MAX_SCALE`].
+pub fn parse_scale(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if !(v > 0.0 && v <= MAX_SCALE) {
+        return Err(format!(
+            "must be more than 0 and at most {MAX_SCALE}, got {text}"
+        ));
+    }
+    Ok(v)
+}
+
+/// A resolution from the command line; a side left out follows the scene's aspect ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Resolution {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+}
+
+/// The image size, overriding the scene's `settings { resolution }`.
+#[derive(Debug, Clone, Args)]
+pub struct SizeArgs {
+    /// Image size `WxH` (e.g. 320x240); `320x` or `x240` keeps the scene's aspect ratio.
+    /// Settings derived from the pixel size (the default initial radius) follow it.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<Resolution>,
+    /// Scale the scene's resolution by F (e.g. 0.25 for a quick preview), keeping its aspect
+    /// ratio.
+    #[arg(long, value_name = "F", value_parser = parse_scale, conflicts_with = "resolution")]
+    pub scale: Option<f64>,
+}
+
+impl SizeArgs {
+    pub fn is_set(&self) -> bool {
+        self.resolution.is_some() || self.scale.is_some()
+    }
+
+    /// The resolution a scene of `scene_size` renders at with these flags.
+    pub fn apply(&self, (w, h): (u32, u32)) -> (u32, u32) {
+        let aspect = f64::from(w.max(1)) / f64::from(h.max(1));
+        let side = |v: f64| v.round().clamp(1.0, f64::from(u32::MAX)) as u32;
+        match (self.resolution, self.scale) {
+            (Some(r), _) => match (r.width, r.height) {
+                (Some(w), Some(h)) => (w, h),
+                (Some(w), None) => (w, side(f64::from(w) / aspect)),
+                (None, Some(h)) => (side(f64::from(h) * aspect), h),
+                (None, None) => (w, h),
+            },
+            (None, Some(f)) => (side(f64::from(w) * f), side(f64::from(h) * f)),
+            (None, None) => (w, h),
+        }
+    }
+
+    /// Sets `scene`'s resolution as the flags ask.
+    pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) {
+        scene.settings.resolution = self.apply(scene.settings.resolution);
+    }
 }
 
 /// Limits of the scene interpreter.

@@ -13,7 +13,7 @@ use sppm_lang::render::{Progress, RenderOptions, render};
 use sppm_lang::scene::{Integrator, Scene};
 
 use super::check::{print_diagnostics, print_render_error};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -44,6 +44,8 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
     #[command(flatten)]
+    pub size: SizeArgs,
+    #[command(flatten)]
     pub limits: LimitArgs,
 }
 
@@ -72,16 +74,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             return ExitCode::from(EXIT_USAGE);
         }
     };
-    let overridden;
-    let scene = match args.integrator {
-        Some(integrator) => {
-            let mut s = scene.clone();
-            s.settings.integrator = integrator;
-            overridden = s;
-            &overridden
-        }
-        None => scene,
-    };
+    let mut scene = std::borrow::Cow::Borrowed(scene);
+    if let Some(integrator) = args.integrator {
+        scene.to_mut().settings.integrator = integrator;
+    }
+    if args.size.is_set() {
+        args.size.apply_to(scene.to_mut());
+    }
+    let scene = scene.as_ref();
     let options = RenderOptions {
         iterations: args.iterations,
         photons: args.photons,
