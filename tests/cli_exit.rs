@@ -335,3 +335,57 @@ fn the_time_limit_stops_an_iteration_in_flight() {
         assert!(!png.exists());
     }
 }
+
+/// `--resolution` and `--scale` set the image size; a side left out keeps the scene's aspect
+/// ratio (examples/furnace.scn is 64x64).
+#[test]
+fn resolution_and_scale_flags_set_the_image_size() {
+    let dir = tempfile::tempdir().unwrap();
+    for (flags, size) in [
+        (&["--scale", "0.5"][..], (32, 32)),
+        (&["--scale", "1.5"][..], (96, 96)),
+        (&["--resolution", "20x10"][..], (20, 10)),
+        (&["--resolution", "40x"][..], (40, 40)),
+        (&["--resolution", "x12"][..], (12, 12)),
+    ] {
+        let out_path = dir.path().join("sized.png");
+        let mut args = vec![
+            "render",
+            "examples/furnace.scn",
+            "-o",
+            out_path.to_str().unwrap(),
+            "--iterations",
+            "1",
+            "--photons",
+            "1000",
+        ];
+        args.extend_from_slice(flags);
+        let out = sppm(&args);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{flags:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = image::open(&out_path).unwrap();
+        assert_eq!((img.width(), img.height()), size, "{flags:?}");
+    }
+    for bad in [
+        &["--scale", "0"][..],
+        &["--scale", "-1"],
+        &["--scale", "100"],
+        &["--scale", "NaN"],
+        &["--resolution", "x"],
+        &["--resolution", "0x10"],
+        &["--resolution", "10x99999"],
+        &["--resolution", "ten"],
+        &["--resolution", "10x10", "--scale", "2"],
+    ] {
+        let mut args = vec!["render", "examples/furnace.scn"];
+        args.extend_from_slice(bad);
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {err}");
+        assert!(!err.contains("panicked"), "{bad:?}: {err}");
+    }
+}

@@ -263,3 +263,26 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Chart(args) => chart::run(&args),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_side_left_out_keeps_the_aspect_ratio() {
+        let size = |r: &str| SizeArgs {
+            resolution: Some(parse_resolution(r).unwrap()),
+            scale: None,
+        };
+        assert_eq!(size("320x").apply((640, 480)), (320, 240));
+        assert_eq!(size("x100").apply((640, 480)), (133, 100));
+        assert_eq!(size("50x50").apply((640, 480)), (50, 50));
+        let scale = SizeArgs {
+            resolution: None,
+            scale: Some(0.25),
+        };
+        assert_eq!(scale.apply((640, 480)), (160, 120));
+        // Never below one pixel.
+        assert_eq!(scale.apply((2, 1)), (1, 1));
+    }
+}
