@@ -389,3 +389,104 @@ fn resolution_and_scale_flags_set_the_image_size() {
         assert!(!err.contains("panicked"), "{bad:?}: {err}");
     }
 }
+
+/// A scene with nothing that emits light warns (check and render); `check` tells the mesh's
+/// triangle count, the focus distance and the initial radius, which follows the pixel size.
+#[test]
+fn check_tells_what_prepare_decided_and_warns_of_a_scene_without_light() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("quad.obj"),
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let scene = dir.path().join("dark.scn");
+    std::fs::write(
+        &scene,
+        "settings { resolution <32, 32>  iterations 1  photons 1000 }\n\
+         camera { location <0, 0, -5>  look_at <0, 0, 0>  fov 30  aperture 0.1  focus_distance 4 }\n\
+         mesh { \"quad.obj\"  material { diffuse rgb <0.5, 0.5, 0.5> } }\n",
+    )
+    .unwrap();
+    let out = sppm(&["check", scene.to_str().unwrap()]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("dark.scn: the scene has no light"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("help: add a `light"), "{stderr}");
+    assert!(stdout.contains("quad.obj (2 triangles)"), "{stdout}");
+    assert!(stdout.contains("focus distance: 4\n"), "{stdout}");
+    let png = dir.path().join("dark.png");
+    let out = sppm(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("the scene has no light"), "{stderr}");
+
+    // A lit scene: no warning; the default radius is one pixel's footprint, so half the
+    // resolution doubles it.
+    let radius = |extra: &[&str]| -> f64 {
+        let mut args = vec!["check", "examples/cornell.scn"];
+        args.extend_from_slice(extra);
+        let out = sppm(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(!String::from_utf8_lossy(&out.stderr).contains("no light"));
+        assert!(stdout.contains("focus distance: 3.9 (pinhole"), "{stdout}");
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with("initial radius: "))
+            .unwrap_or_else(|| panic!("{stdout}"));
+        line["initial radius: ".len()..]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let (full, half) = (radius(&[]), radius(&["--scale", "0.5"]));
+    assert!((half / full - 2.0).abs() < 1e-4, "{full} then {half}");
+}
+
+/// The closing line gives only the figures the method has: photons for the photon methods,
+/// deposits for SPPM and PPM, neither for the path tracer and Whitted.
+#[test]
+fn render_prints_the_statistics_of_its_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("c.png");
+    for (method, photons, deposits) in [
+        ("sppm", true, true),
+        ("ppm", true, true),
+        ("photon_map", true, false),
+        ("path", false, false),
+        ("whitted", false, false),
+    ] {
+        let out = sppm(&[
+            "render",
+            "examples/cornell.scn",
+            "-o",
+            png.to_str().unwrap(),
+            "--integrator",
+            method,
+            "--iterations",
+            "1",
+            "--photons",
+            "2000",
+            "--scale",
+            "0.125",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{method}: {stderr}");
+        assert_eq!(stderr.contains("photons"), photons, "{method}: {stderr}");
+        assert_eq!(stderr.contains("deposits"), deposits, "{method}: {stderr}");
+        assert!(!stderr.contains("no light"), "{method}: {stderr}");
+    }
+}

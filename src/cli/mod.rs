@@ -239,6 +239,8 @@ pub enum Command {
         /// The scene file (.scn).
         scene: PathBuf,
         #[command(flatten)]
+        size: SizeArgs,
+        #[command(flatten)]
         limits: LimitArgs,
     },
     /// Render a scene with stochastic progressive photon mapping.
@@ -251,12 +253,16 @@ pub enum Command {
 
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
-        Command::Check { scene, limits } => {
+        Command::Check {
+            scene,
+            size,
+            limits,
+        } => {
             let render_options = sppm_lang::render::RenderOptions {
                 memory_limit: limits.memory_limit,
                 ..Default::default()
             };
-            check::run(&scene, &limits.options(), &render_options)
+            check::run(&scene, &limits.options(), &render_options, &size)
         }
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),

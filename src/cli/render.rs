@@ -9,10 +9,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::SourceMap;
-use sppm_lang::render::{Progress, RenderOptions, render};
+use sppm_lang::render::{Progress, RenderOptions, RenderStats, render_with_warnings};
 use sppm_lang::scene::{Integrator, Scene};
 
-use super::check::{print_diagnostics, print_render_error};
+use super::check::{print_diagnostics, print_render_error, print_render_warning};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -113,10 +113,12 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         if let Some(b) = &bar {
             b.set_position(p.iteration as u64);
             let secs = p.elapsed.as_secs_f64().max(1e-9);
-            b.set_message(format!(
-                "{:.2} M photons/s",
-                p.stats.photons as f64 / secs / 1e6
-            ));
+            if p.stats.photons > 0 {
+                b.set_message(format!(
+                    "{:.2} M photons/s",
+                    p.stats.photons as f64 / secs / 1e6
+                ));
+            }
         }
         if let Some(k) = args.snapshot_every
             && p.iteration.is_multiple_of(k)
@@ -126,7 +128,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             snapshot_error = Some(e);
         }
     };
-    let result = render(scene, &options, &cancel, &mut on_progress);
+    let mut on_warning = |w: &sppm_lang::render::RenderError| {
+        if let Some(b) = &bar {
+            b.suspend(|| print_render_warning(sources, w));
+        } else {
+            print_render_warning(sources, w);
+        }
+    };
+    let result = render_with_warnings(scene, &options, &cancel, &mut on_warning, &mut on_progress);
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -162,7 +171,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
     }
     let secs = out.elapsed.as_secs_f64().max(1e-9);
     eprintln!(
-        "{} {}: {} iterations{} in {:.2}s, {} photons ({:.2} M/s), {} deposits",
+        "{} {}: {} iterations{} in {:.2}s{}",
         if out.cancelled {
             "interrupted,"
         } else {
@@ -172,11 +181,29 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         out.iterations_done,
         if out.cancelled { " (cancelled)" } else { "" },
         secs,
-        out.stats.photons,
-        out.stats.photons as f64 / secs / 1e6,
-        out.stats.deposits,
+        method_statistics(scene.settings.integrator, &out.stats, secs),
     );
     ExitCode::SUCCESS
+}
+
+/// The figures that mean something for `method`: photons and their rate for the photon
+/// methods, deposits (photons kept at visible points) for SPPM and PPM; nothing more for the
+/// methods without photons.
+fn method_statistics(method: Integrator, stats: &RenderStats, secs: f64) -> String {
+    let photons = || {
+        format!(
+            ", {} photons ({:.2} M/s)",
+            stats.photons,
+            stats.photons as f64 / secs.max(1e-9) / 1e6
+        )
+    };
+    match method {
+        Integrator::Sppm | Integrator::Ppm => {
+            format!("{}, {} deposits", photons(), stats.deposits)
+        }
+        Integrator::PhotonMap => photons(),
+        Integrator::Path | Integrator::Whitted => String::new(),
+    }
 }
 
 fn parse_integrator(name: &str) -> Result<Integrator, String> {

@@ -11,7 +11,7 @@ use sppm_lang::film::Image;
 use sppm_lang::render::{self, RenderOptions};
 use sppm_lang::scene::Scene;
 
-use super::super::check::print_render_error;
+use super::super::check::{print_render_error, print_render_warning};
 use super::super::live::{self, Hub};
 use super::{Job, Outcome, status};
 
@@ -120,7 +120,28 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                 Err(e) => status(&format!("cannot write the image: {e}")),
             }
         };
-        match render::render(&scene, &options, cancel, &mut on_progress) {
+        // Warnings of the prepared scene: once per round (the preview's), to the terminal and
+        // the page.
+        let mut on_warning = |w: &render::RenderError| {
+            if stage == "full" && r.preview {
+                return;
+            }
+            print_render_warning(&r.sources, w);
+            if let Some(hub) = &r.hub {
+                let mut view = live::diagnostics_view(&r.sources, &[render_error_diagnostic(w)]);
+                for v in &mut view {
+                    v.error = false;
+                }
+                hub.update(|s| s.diagnostics.extend(view));
+            }
+        };
+        match render::render_with_warnings(
+            &scene,
+            &options,
+            cancel,
+            &mut on_warning,
+            &mut on_progress,
+        ) {
             Ok(out) if out.cancelled => {
                 if keep_image.load(Ordering::SeqCst) && out.iterations_done > 0 {
                     match publish(&out.image, exposure, &|_| {}) {
