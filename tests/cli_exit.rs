@@ -490,3 +490,102 @@ fn render_prints_the_statistics_of_its_method() {
         assert!(!stderr.contains("no light"), "{method}: {stderr}");
     }
 }
+
+/// `reference` writes the image, its noise image and the JSON summary; `chart` reads the
+/// noise as its error floor and keeps each method within its budget: a method renders past
+/// the budget by less than one iteration (a tolerance of two mean iterations, for timing
+/// noise), and the whole command takes about the methods' budgets.
+#[test]
+fn reference_and_chart_respect_their_time_budgets() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("ref.exr");
+    let start = std::time::Instant::now();
+    let out = sppm(&[
+        "reference",
+        "examples/cornell.scn",
+        "--time",
+        "1",
+        "--resolution",
+        "48x",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    let took = start.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    println!("reference --time 1 took {took:.2} s: {stderr}");
+    assert!(took < 1.1 * 1.0 + 1.0, "reference --time 1 took {took} s");
+    let json = std::fs::read_to_string(dir.path().join("ref.noise.json")).unwrap();
+    let noise: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(noise["rmse"].as_f64().unwrap() > 0.0, "{json}");
+    let noise_img = image::open(dir.path().join("ref.noise.exr")).unwrap();
+    assert_eq!((noise_img.width(), noise_img.height()), (48, 48));
+
+    let chart = dir.path().join("chart.png");
+    let budget = 1.0;
+    let start = std::time::Instant::now();
+    let out = sppm(&[
+        "chart",
+        "examples/cornell.scn",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--resolution",
+        "48x",
+        "--budget",
+        "1",
+        "--methods",
+        "sppm,path",
+        "-o",
+        chart.to_str().unwrap(),
+    ]);
+    let took = start.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("the reference's noise: RMSE"), "{stderr}");
+    assert!(image::open(&chart).is_ok());
+    let csv = std::fs::read_to_string(dir.path().join("chart.csv")).unwrap();
+    assert!(csv.contains("\nreference-noise,0,"), "{csv}");
+    let mut slack = 0.0;
+    for method in ["sppm", "path"] {
+        let rows: Vec<(f64, f64)> = csv
+            .lines()
+            .filter(|l| l.starts_with(&format!("{method},")))
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                (f[1].parse().unwrap(), f[2].parse().unwrap())
+            })
+            .collect();
+        let &(iterations, seconds) = rows.last().unwrap();
+        let per_iteration = seconds / iterations;
+        println!(
+            "{method}: {iterations} iterations, {seconds:.3} s (budget {budget} s, {per_iteration:.3} s per iteration)"
+        );
+        assert!(seconds >= budget, "{method} stopped early: {seconds}");
+        assert!(
+            seconds <= budget + 2.0 * per_iteration,
+            "{method} ran {seconds} s for a {budget} s budget ({per_iteration} s per iteration)"
+        );
+        slack += 2.0 * per_iteration;
+    }
+    // Loading, the reference, the error measurements: well under a second at 48x48.
+    println!("chart took {took:.2} s in all");
+    assert!(
+        took <= 1.1 * (2.0 * budget + slack) + 1.0,
+        "chart with two 1 s budgets took {took} s"
+    );
+}
+
+#[test]
+fn chart_lists_the_reference_as_required() {
+    let out = sppm(&["chart", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        help.contains("Usage: sppm-lang chart <SCENE> --reference"),
+        "{help}"
+    );
+    let required = help.split("Required:").nth(1).unwrap_or("");
+    assert!(required.contains("--reference"), "{help}");
+    let out = sppm(&["chart", "examples/cornell.scn", "-o", "/tmp/never.png"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--reference"));
+}

@@ -4,6 +4,7 @@ mod chart;
 mod check;
 mod live;
 mod output;
+mod reference;
 mod render;
 mod watch;
 
@@ -249,6 +250,9 @@ pub enum Command {
     Watch(watch::WatchArgs),
     /// Chart error against render time for every integrator against a reference image.
     Chart(chart::ChartArgs),
+    /// Render a reference image for `chart` with the path tracer, in two independent halves
+    /// whose difference estimates its noise (written beside it).
+    Reference(reference::ReferenceArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -267,6 +271,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
         Command::Chart(args) => chart::run(&args),
+        Command::Reference(args) => reference::run(&args),
     }
 }
 
