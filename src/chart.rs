@@ -254,8 +254,10 @@ where
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
-    let width = root.dim_in_pixel().0;
-    let (area, legend) = root.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+    // The title spans the plot and the legend column.
+    let below = root.titled(&spec.title, ("sans-serif", 20)).map_err(err)?;
+    let width = below.dim_in_pixel().0;
+    let (area, legend) = below.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
     let floor = spec
         .floor
         .as_ref()
@@ -273,7 +275,6 @@ where
     )?;
     let mut builder = ChartBuilder::on(&area);
     builder
-        .caption(&spec.title, ("sans-serif", 22))
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(80);
@@ -373,7 +374,7 @@ fn draw_legend<DB: DrawingBackend>(
     floor: Option<&Floor>,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let row = 22;
-    let top = 56;
+    let top = 24;
     let font = ("sans-serif", 15).into_font();
     let mut entries: Vec<(String, RGBColor, Dash, bool)> = series
         .iter()

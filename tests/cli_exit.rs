@@ -10,6 +10,14 @@ fn sppm(args: &[&str]) -> Output {
         .expect("run sppm-lang")
 }
 
+/// `args` exit 2 (a usage error) without a panic.
+fn usage_error(args: &[&str]) {
+    let out = sppm(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}:\n{err}");
+    assert!(!err.contains("panicked"), "{args:?}:\n{err}");
+}
+
 #[test]
 fn every_bad_scene_exits_1_with_a_located_diagnostic_and_no_panic() {
     let mut n = 0;
@@ -236,10 +244,7 @@ fn absurd_flags_are_usage_errors_at_once() {
     for flags in [&["--snapshot-every", "1e300"][..], &["--threads", "100000"]] {
         let mut args = vec!["watch", "examples/furnace.scn", "-o", o];
         args.extend(flags);
-        let out = sppm(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "watch {flags:?}:\n{err}");
-        assert!(!err.contains("panicked"), "watch {flags:?}:\n{err}");
+        usage_error(&args);
     }
 }
 
@@ -383,10 +388,7 @@ fn resolution_and_scale_flags_set_the_image_size() {
     ] {
         let mut args = vec!["render", "examples/furnace.scn"];
         args.extend_from_slice(bad);
-        let out = sppm(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{bad:?}: {err}");
-        assert!(!err.contains("panicked"), "{bad:?}: {err}");
+        usage_error(&args);
     }
 }
 

@@ -62,6 +62,22 @@ fn print_unplaced(sources: &SourceMap, kind: &str, e: &RenderError) {
     }
 }
 
+/// Loads a scene named on the command line and prints its diagnostics: the scene (free of
+/// errors) and its sources, or the exit status (usage error: the file cannot be read; scene
+/// error: it has errors).
+pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<(Scene, SourceMap), ExitCode> {
+    let loaded = sppm_lang::load_file(path, options).map_err(|e| {
+        err(&format!("error: cannot read `{}`: {e}\n", path.display()));
+        ExitCode::from(EXIT_USAGE)
+    })?;
+    print_diagnostics(&loaded);
+    let has_errors = loaded.has_errors();
+    match loaded.scene {
+        Some(scene) if !has_errors => Ok((scene, loaded.sources)),
+        _ => Err(ExitCode::from(EXIT_SCENE_ERROR)),
+    }
+}
+
 /// Prints a warning the prepare stage found (it has no span: it is about the whole scene).
 pub fn print_render_warning(sources: &SourceMap, w: &RenderError) {
     print_unplaced(sources, "warning", w);

@@ -1,13 +1,16 @@
 //! `sppm-lang reference`: a reference image for `chart`, with its own noise estimate.
 //!
 //! The scene is rendered with the path tracer (unbiased: its only error is noise) in two
-//! independent halves with different seeds: the first half runs for half the time, the second
-//! for the same number of iterations. The output is their average, `ref.exr`, and beside it
+//! independent halves with different seeds, each with a deadline: the first at half the time,
+//! the second at the end of the time (so the whole takes the time given, whatever else the
+//! machine runs). With `a` and `b` iterations, the output is their weighted average
+//! `M = (a A + b B) / (a + b)`, `ref.exr`, and beside it
 //!
-//! - `ref.noise.exr`: the per-pixel half difference `(A - B) / 2`. Its RMS over any region
-//!   estimates the RMSE of the average against the converged image there (the two halves'
-//!   errors are independent with equal variance, so `E[(A - B)^2] / 4` is the variance of
-//!   `(A + B) / 2`). `chart` reads it to draw the reference's error floor, also for a window;
+//! - `ref.noise.exr`: the scaled difference `D = (A - B) sqrt(a b) / (a + b)`. Its RMS over any
+//!   region estimates the RMSE of `M` against the converged image there: an iteration's noise
+//!   has some variance `s^2`, so `E[(A - B)^2] = s^2 (1/a + 1/b)` and the variance of `M` is
+//!   `s^2 / (a + b)`, which is `E[D^2]` (for `a = b`, `D = (A - B) / 2`). `chart` reads it to
+//!   draw the reference's error floor, also for a window;
 //! - `ref.noise.json`: the same estimate over the whole image, with how it was made.
 
 use std::io::Write as _;
@@ -22,7 +25,7 @@ use sppm_lang::film::Image;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::Integrator;
 
-use super::check::{print_diagnostics, print_render_error};
+use super::check::{load_scene, print_render_error};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -89,17 +92,9 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
             return ExitCode::from(EXIT_USAGE);
         }
     }
-    let loaded = match sppm_lang::load_file(&args.scene, &args.limits.options()) {
-        Ok(l) => l,
-        Err(e) => {
-            eprintln!("error: cannot read `{}`: {e}", args.scene.display());
-            return ExitCode::from(EXIT_USAGE);
-        }
-    };
-    print_diagnostics(&loaded);
-    let mut scene = match loaded.scene {
-        Some(s) if !loaded.diagnostics.iter().any(|d| d.is_error()) => s,
-        _ => return ExitCode::from(EXIT_SCENE_ERROR),
+    let (mut scene, sources) = match load_scene(&args.scene, &args.limits.options()) {
+        Ok(loaded) => loaded,
+        Err(code) => return code,
     };
     scene.settings.integrator = Integrator::Path;
     args.size.apply_to(&mut scene);
@@ -126,19 +121,26 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
         Err(e) => {
-            print_render_error(&loaded.sources, &e);
+            print_render_error(&sources, &e);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
-    let n = a.iterations_done;
-    let b = match half(seed.wrapping_add(1), Some(n), None) {
-        Ok(out) => out,
+    let left = (args.time - start.elapsed().as_secs_f64()).max(0.001);
+    let b = match half(seed.wrapping_add(1), None, Some(left)) {
+        Ok(out) if out.iterations_done > 0 => out,
+        Ok(_) => {
+            eprintln!(
+                "error: no iteration of the second half finished in {left:.3} s; give more --time"
+            );
+            return ExitCode::from(EXIT_SCENE_ERROR);
+        }
         Err(e) => {
-            print_render_error(&loaded.sources, &e);
+            print_render_error(&sources, &e);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
-    let (mean, noise) = average_and_noise(&a.image, &b.image);
+    let (na, nb) = (a.iterations_done, b.iterations_done);
+    let (mean, noise) = average_and_noise(&a.image, na, &b.image, nb);
     let estimate = match floor_of(&mean, &noise) {
         Ok(e) => e,
         Err(e) => {
@@ -149,7 +151,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     let seconds = start.elapsed().as_secs_f64();
     let json = format!(
         "{{\n  \"scene\": {:?},\n  \"integrator\": \"path\",\n  \"seeds\": [{seed}, {}],\n  \
-         \"iterations_per_half\": {n},\n  \"seconds\": {seconds:.3},\n  \"rmse\": {:e},\n  \
+         \"iterations\": [{na}, {nb}],\n  \"seconds\": {seconds:.3},\n  \"rmse\": {:e},\n  \
          \"rel_mse\": {:e}\n}}\n",
         args.scene.display().to_string(),
         seed.wrapping_add(1),
@@ -170,10 +172,10 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
     eprintln!(
-        "wrote {} ({} path-traced iterations in two halves of {n}, {seconds:.1} s); its noise: \
+        "wrote {} ({} path-traced iterations in two halves of {na} and {nb}, {seconds:.1} s); its noise: \
          RMSE {:.3e}, relative MSE {:.3e} (in {} and {})",
         args.output.display(),
-        2 * n,
+        na + nb,
         estimate.rmse,
         estimate.rel_mse,
         noise_exr.display(),
@@ -182,13 +184,17 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The average of two independent renders and their half difference.
-pub fn average_and_noise(a: &Image, b: &Image) -> (Image, Image) {
+/// The weighted average of two independent renders of `na` and `nb` iterations, and their
+/// scaled difference (see the module's documentation).
+pub fn average_and_noise(a: &Image, na: u32, b: &Image, nb: u32) -> (Image, Image) {
+    let (na, nb) = (f64::from(na.max(1)), f64::from(nb.max(1)));
+    let (wa, wb) = (na / (na + nb), nb / (na + nb));
+    let scale = (na * nb).sqrt() / (na + nb);
     let mut mean = Image::new(a.width, a.height);
     let mut noise = Image::new(a.width, a.height);
     for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
-        mean.pixels[i] = [0, 1, 2].map(|c| 0.5 * (p[c] + q[c]));
-        noise.pixels[i] = [0, 1, 2].map(|c| 0.5 * (p[c] - q[c]));
+        mean.pixels[i] = [0, 1, 2].map(|c| wa * p[c] + wb * q[c]);
+        noise.pixels[i] = [0, 1, 2].map(|c| scale * (p[c] - q[c]));
     }
     (mean, noise)
 }
@@ -232,10 +238,11 @@ pub fn to_f32(img: &Image) -> Vec<[f32; 3]> {
 mod tests {
     use super::*;
 
-    /// Two renders of a constant 1 with independent noise of standard deviation s: the
-    /// estimate of the average's RMSE is s / sqrt(2), which the half difference recovers.
+    /// Two renders of a constant 1 of 4 and 12 iterations, each iteration with independent
+    /// noise of standard deviation s: the weighted average has an RMSE of s / sqrt(16), which
+    /// the scaled difference recovers (equal weights would misjudge both).
     #[test]
-    fn the_half_difference_estimates_the_noise_of_the_average() {
+    fn the_scaled_difference_estimates_the_noise_of_the_average() {
         let (w, h) = (200, 200);
         let s = 0.1;
         let mut state = 12345u64;
@@ -253,11 +260,12 @@ mod tests {
         };
         let mut a = Image::new(w, h);
         let mut b = Image::new(w, h);
+        let (na, nb) = (4u32, 12u32);
         for i in 0..a.pixels.len() {
-            a.pixels[i] = [0, 1, 2].map(|_| 1.0 + s * noise());
-            b.pixels[i] = [0, 1, 2].map(|_| 1.0 + s * noise());
+            a.pixels[i] = [0, 1, 2].map(|_| 1.0 + s / f64::from(na).sqrt() * noise());
+            b.pixels[i] = [0, 1, 2].map(|_| 1.0 + s / f64::from(nb).sqrt() * noise());
         }
-        let (mean, half) = average_and_noise(&a, &b);
+        let (mean, half) = average_and_noise(&a, na, &b, nb);
         let estimate = floor_of(&mean, &half).unwrap().rmse;
         let truth = mean
             .pixels
@@ -266,7 +274,7 @@ mod tests {
             .sum::<f64>()
             / (3 * w * h) as f64;
         let truth = truth.sqrt();
-        let expected = s / 2f64.sqrt();
+        let expected = s / f64::from(na + nb).sqrt();
         assert!(
             (estimate / expected - 1.0).abs() < 0.02,
             "{estimate} vs {expected}"

@@ -12,7 +12,7 @@ use sppm_lang::SourceMap;
 use sppm_lang::render::{Progress, RenderOptions, RenderStats, render_with_warnings};
 use sppm_lang::scene::{Integrator, Scene};
 
-use super::check::{print_diagnostics, print_render_error, print_render_warning};
+use super::check::{load_scene, print_render_error, print_render_warning};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -50,17 +50,9 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
-    let loaded = match sppm_lang::load_file(&args.scene, &args.limits.options()) {
-        Ok(l) => l,
-        Err(e) => {
-            eprintln!("error: cannot read `{}`: {e}", args.scene.display());
-            return ExitCode::from(EXIT_USAGE);
-        }
-    };
-    print_diagnostics(&loaded);
-    match &loaded.scene {
-        Some(scene) if !loaded.has_errors() => render_scene(scene, &args, &loaded.sources),
-        _ => ExitCode::from(EXIT_SCENE_ERROR),
+    match load_scene(&args.scene, &args.limits.options()) {
+        Ok((scene, sources)) => render_scene(&scene, &args, &sources),
+        Err(code) => code,
     }
 }
 

@@ -119,6 +119,14 @@ fn methods() -> Vec<Method> {
     ]
 }
 
+/// Where the method labelled `label` comes in [`methods`] (others after them).
+fn rank_of(label: &str) -> usize {
+    methods()
+        .iter()
+        .position(|m| m.label == label)
+        .unwrap_or(usize::MAX)
+}
+
 /// The colour and line style of the method labelled `label` (`None`: not one of ours).
 fn style_of(label: &str) -> Option<(usize, Dash)> {
     methods()

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use sppm_lang::chart::{ChartSpec, Floor, Series, draw};
 
-use super::{Errors, Row, style_of};
+use super::{Errors, Row, rank_of, style_of};
 
 /// The CSV row that holds the reference's noise floor.
 pub const FLOOR_ROW: &str = "reference-noise";
@@ -163,12 +163,15 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
             rel,
         ));
     }
+    // The methods in the table's order (the integrators, then SPPM's variations), then any
+    // others in the order met.
     let mut labels: Vec<&str> = Vec::new();
     for r in &table.rows {
         if !labels.contains(&r.method.as_str()) {
             labels.push(&r.method);
         }
     }
+    labels.sort_by_key(|l| rank_of(l));
     for (suffix, title, y_label, in_window, pick) in charts {
         let errors = |r: &Row| if in_window { r.window } else { Some(r.whole) };
         let series: Vec<Series> = labels
@@ -195,11 +198,19 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
         } else {
             table.floors.whole
         };
+        let mut names = Vec::new();
+        if !table.scene.is_empty() {
+            names.push(table.scene.clone());
+        }
+        if !table.reference.is_empty() {
+            names.push(format!("reference {}", table.reference));
+        }
         let spec = ChartSpec {
-            title: format!(
-                "{title} against time: {}, reference {}",
-                table.scene, table.reference
-            ),
+            title: if names.is_empty() {
+                format!("{title} against time")
+            } else {
+                format!("{title} against time: {}", names.join(", "))
+            },
             x_label: "seconds of rendering".into(),
             y_label: y_label.into(),
             log_x: true,
