@@ -494,9 +494,9 @@ fn render_prints_the_statistics_of_its_method() {
 }
 
 /// `reference` writes the image, its noise image and the JSON summary; `chart` reads the
-/// noise as its error floor and keeps each method within its budget: a method renders past
-/// the budget by less than one iteration (a tolerance of two mean iterations, for timing
-/// noise), and the whole command takes about the methods' budgets.
+/// noise as its error floor and keeps each method within its budget: within 10 %, or past it
+/// by the last iteration only (a tolerance of two mean iterations, for timing noise), and the
+/// whole command takes about the methods' budgets.
 #[test]
 fn reference_and_chart_respect_their_time_budgets() {
     let dir = tempfile::tempdir().unwrap();
@@ -563,11 +563,15 @@ fn reference_and_chart_respect_their_time_budgets() {
             "{method}: {iterations} iterations, {seconds:.3} s (budget {budget} s, {per_iteration:.3} s per iteration)"
         );
         assert!(seconds >= budget, "{method} stopped early: {seconds}");
+        // The promise: within 10 % of the budget, or past it by the last iteration only (two
+        // mean iterations allow for one slow one). With millisecond iterations the 10 % is what
+        // holds: one of them may take a few times the mean on a loaded machine.
+        let allowed = budget + (0.1 * budget).max(2.0 * per_iteration);
         assert!(
-            seconds <= budget + 2.0 * per_iteration,
+            seconds <= allowed,
             "{method} ran {seconds} s for a {budget} s budget ({per_iteration} s per iteration)"
         );
-        slack += 2.0 * per_iteration;
+        slack += allowed - budget;
     }
     // Loading, the reference, the error measurements: well under a second at 48x48.
     println!("chart took {took:.2} s in all");
