@@ -274,3 +274,45 @@ fn stream_events(mut out: Box<dyn Write + Send>, hub: &Hub) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Latest wins: a reader that missed several updates gets the newest status and image
+    /// once, and nothing is kept of the older ones.
+    #[test]
+    fn a_late_reader_sees_only_the_latest() {
+        let hub = Hub::new("s.scn".into());
+        for i in 1..=3u32 {
+            let mut img = Image::new(2, 1);
+            img.pixels[0] = [f64::from(i), 0.0, 0.0];
+            hub.publish(&img, (4, 2), |s| s.iteration = i);
+        }
+        let (seq, json) = hub.wait_newer(0, Duration::from_millis(10)).unwrap();
+        assert!(json.contains("\"iteration\":3"), "{json}");
+        let (image_seq, bytes) = hub.frame().unwrap();
+        assert_eq!(image_seq, seq);
+        assert!(json.contains(&format!("\"image\":{image_seq}")), "{json}");
+        // Header: 2x1 shown at 4x2; then the first pixel's red is the third image's.
+        let word = |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+        assert_eq!([word(0), word(1), word(2), word(3)], [2, 1, 4, 2]);
+        assert_eq!(f32::from_le_bytes(bytes[16..20].try_into().unwrap()), 3.0);
+        assert_eq!(bytes.len(), 16 + 2 * 12);
+        // Nothing newer: the reader waits (then sends a keep-alive).
+        assert!(hub.wait_newer(seq, Duration::from_millis(10)).is_none());
+    }
+
+    #[test]
+    fn a_port_in_use_is_a_clear_error() {
+        let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = taken.local_addr().unwrap().port();
+        let Err(e) = Server::start(port, Hub::new("s.scn".into())) else {
+            panic!("bound a port in use");
+        };
+        assert!(
+            e.contains("the port is in use") && e.contains("--port"),
+            "{e}"
+        );
+    }
+}
