@@ -50,6 +50,11 @@ impl Camera {
 
     /// The ray through pixel `(x, y)` (row 0 at the top) offset by `jitter` in [0,1)^2, with lens
     /// sample `lens` in [0,1)^2. The direction is unit length.
+    /// The distance in focus (the scene's `focus_distance`, else the look-at distance).
+    pub fn focus_distance(&self) -> f64 {
+        f64::from(self.focus)
+    }
+
     pub fn ray(&self, x: u32, y: u32, jitter: Vec2, lens: Vec2) -> Ray {
         let sx = ((x as f32 + jitter.x) / self.width as f32) * 2.0 - 1.0;
         let sy = 1.0 - ((y as f32 + jitter.y) / self.height as f32) * 2.0;

@@ -2,6 +2,11 @@
 //!
 //! One function, [`draw`], takes named series of `(x, y)` points and writes a PNG and/or an SVG.
 //! Files are written atomically (a temporary file in the same folder, then a rename).
+//!
+//! Series are told apart by colour (a qualitative palette, [`PALETTE`]) and by line style
+//! ([`Dash`]); the legend stands to the right of the plot, never over the curves. A chart may
+//! mark a floor: a horizontal line below which its values cannot go (e.g. the noise of the
+//! reference the errors were measured against).
 
 use std::path::Path;
 
@@ -9,24 +14,67 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 /// One curve: a label for the legend and its points in drawing order.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
+    /// Index in [`PALETTE`] (modulo its length); `None`: the series' own index.
+    pub colour: Option<usize>,
+    pub dash: Dash,
+}
+
+/// A line style.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Dash {
+    #[default]
+    Solid,
+    /// Long dashes.
+    Dashed,
+    /// Short dashes.
+    Dotted,
+}
+
+/// A horizontal line marking a value the curves cannot go below, with its legend label.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Floor {
+    pub value: f64,
+    pub label: String,
 }
 
 /// Titles and axis kinds.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct ChartSpec {
     pub title: String,
     pub x_label: String,
     pub y_label: String,
     pub log_x: bool,
     pub log_y: bool,
+    pub floor: Option<Floor>,
 }
 
-/// Pixel size of PNG charts (SVGs use the same units).
-pub const SIZE: (u32, u32) = (960, 640);
+/// Pixel size of PNG charts (SVGs use the same units), the legend column included.
+pub const SIZE: (u32, u32) = (1120, 640);
+/// Width of the legend column right of the plot.
+const LEGEND_WIDTH: u32 = 230;
+
+/// A qualitative palette (Tableau 10, its yellow darkened to read on white): neighbours
+/// differ in hue, none is pale.
+pub const PALETTE: [RGBColor; 10] = [
+    RGBColor(0x4e, 0x79, 0xa7),
+    RGBColor(0xf2, 0x8e, 0x2b),
+    RGBColor(0xe1, 0x57, 0x59),
+    RGBColor(0x59, 0xa1, 0x4f),
+    RGBColor(0x76, 0xb7, 0xb2),
+    RGBColor(0xb0, 0x7a, 0xa1),
+    RGBColor(0x9c, 0x75, 0x5f),
+    RGBColor(0xb8, 0x98, 0x1c),
+    RGBColor(0xff, 0x6f, 0x91),
+    RGBColor(0x55, 0x55, 0x55),
+];
+
+fn colour_of(i: usize, s: &Series) -> RGBColor {
+    PALETTE[s.colour.unwrap_or(i) % PALETTE.len()]
+}
 
 /// Draws `series` to `path`; the format follows the extension (`.png` or `.svg`).
 pub fn draw(spec: &ChartSpec, series: &[Series], path: &Path) -> Result<(), String> {
@@ -196,46 +244,6 @@ fn log_axis(
         .with_light_points(light)
 }
 
-/// The corner of the plot the legend covers: the one with the fewest points within 45% of the
-/// axes' span (on the drawn scale) of it, the upper right on a tie.
-fn legend_corner(
-    series: &[Series],
-    xs: (f64, f64),
-    ys: (f64, f64),
-    spec: &ChartSpec,
-) -> SeriesLabelPosition {
-    let frac = |v: f64, (lo, hi): (f64, f64), log: bool| {
-        if log {
-            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
-        } else {
-            (v - lo) / (hi - lo)
-        }
-    };
-    let pts: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| &s.points)
-        .map(|&(x, y)| (frac(x, xs, spec.log_x), frac(y, ys, spec.log_y)))
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-        .collect();
-    let near = |right: bool, upper: bool| {
-        pts.iter()
-            .filter(|&&(x, y)| {
-                (if right { x > 0.55 } else { x < 0.45 })
-                    && (if upper { y > 0.55 } else { y < 0.45 })
-            })
-            .count()
-    };
-    [
-        (SeriesLabelPosition::UpperRight, near(true, true)),
-        (SeriesLabelPosition::UpperLeft, near(false, true)),
-        (SeriesLabelPosition::LowerLeft, near(false, false)),
-        (SeriesLabelPosition::LowerRight, near(true, false)),
-    ]
-    .into_iter()
-    .min_by_key(|c| c.1)
-    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
-}
-
 fn plot<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     spec: &ChartSpec,
@@ -246,17 +254,27 @@ where
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
+    // The title spans the plot and the legend column.
+    let below = root.titled(&spec.title, ("sans-serif", 20)).map_err(err)?;
+    let width = below.dim_in_pixel().0;
+    let (area, legend) = below.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+    let floor = spec
+        .floor
+        .as_ref()
+        .filter(|f| f.value.is_finite() && (!spec.log_y || f.value > 0.0));
     let xs = range(
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         spec.log_x,
     )?;
     let ys = range(
-        series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .chain(floor.map(|f| f.value)),
         spec.log_y,
     )?;
-    let mut builder = ChartBuilder::on(root);
+    let mut builder = ChartBuilder::on(&area);
     builder
-        .caption(&spec.title, ("sans-serif", 24))
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(80);
@@ -272,8 +290,19 @@ where
                 .y_label_formatter(&|v| tick(*v))
                 .draw()
                 .map_err(err)?;
+            if let Some(f) = floor {
+                let line = vec![(xs.0, f.value), (xs.1, f.value)];
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        line,
+                        6,
+                        6,
+                        FLOOR_COLOUR.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+            }
             for (i, s) in series.iter().enumerate() {
-                let color = Palette99::pick(i).mix(0.9);
+                let color = colour_of(i, s);
                 let pts: Vec<(f64, f64)> = s
                     .points
                     .iter()
@@ -285,24 +314,20 @@ where
                             && (!spec.log_y || *y > 0.0)
                     })
                     .collect();
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                    .map_err(err)?
-                    .label(s.label.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
+                let style = color.stroke_width(2);
+                match dash_pattern(s.dash) {
+                    None => chart
+                        .draw_series(LineSeries::new(pts.clone(), style))
+                        .map(|_| ()),
+                    Some((on, off)) => chart
+                        .draw_series(DashedLineSeries::new(pts.clone(), on, off, style))
+                        .map(|_| ()),
+                }
+                .map_err(err)?;
                 chart
                     .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
                     .map_err(err)?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(legend_corner(series, xs, ys, spec))
-                .draw()
-                .map_err(err)?;
         }};
     }
     match (spec.log_x, spec.log_y) {
@@ -326,6 +351,62 @@ where
                 .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
                 .map_err(err)?
         ),
+    }
+    draw_legend(&legend, series, floor).map_err(err)
+}
+
+/// The colour of the floor line.
+const FLOOR_COLOUR: RGBColor = RGBColor(0x88, 0x88, 0x88);
+
+/// Dash and gap lengths in pixels (`None`: a solid line).
+fn dash_pattern(dash: Dash) -> Option<(u32, u32)> {
+    match dash {
+        Dash::Solid => None,
+        Dash::Dashed => Some((10, 5)),
+        Dash::Dotted => Some((3, 4)),
+    }
+}
+
+/// The legend column: a sample of each line (its colour, style and marker) and its label.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    series: &[Series],
+    floor: Option<&Floor>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let row = 22;
+    let top = 24;
+    let font = ("sans-serif", 15).into_font();
+    let mut entries: Vec<(String, RGBColor, Dash, bool)> = series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.label.clone(), colour_of(i, s), s.dash, true))
+        .collect();
+    if let Some(f) = floor {
+        entries.push((f.label.clone(), FLOOR_COLOUR, Dash::Dashed, false));
+    }
+    for (k, (label, color, dash, marker)) in entries.into_iter().enumerate() {
+        let y = top + row * k as i32;
+        let (x0, x1) = (8, 44);
+        let style = color.stroke_width(2);
+        match dash_pattern(dash) {
+            None => area.draw(&PathElement::new(vec![(x0, y), (x1, y)], style))?,
+            Some((on, off)) => {
+                let mut x = x0;
+                while x < x1 {
+                    let end = (x + on as i32).min(x1);
+                    area.draw(&PathElement::new(vec![(x, y), (end, y)], style))?;
+                    x = end + off as i32;
+                }
+            }
+        }
+        if marker {
+            area.draw(&Circle::new(((x0 + x1) / 2, y), 3, color.filled()))?;
+        }
+        area.draw(&Text::new(
+            label,
+            (x1 + 8, y - 8),
+            font.clone().color(&BLACK),
+        ))?;
     }
     Ok(())
 }
@@ -354,6 +435,7 @@ mod tests {
             y_label: "RMSE".into(),
             log_x: true,
             log_y: true,
+            floor: None,
         }
     }
 
@@ -362,10 +444,13 @@ mod tests {
             Series {
                 label: "a".into(),
                 points: vec![(0.1, 1.0), (1.0, 0.3), (10.0, 0.1)],
+                ..Series::default()
             },
             Series {
                 label: "b".into(),
                 points: vec![(0.2, 0.5), (2.0, 0.4), (f64::NAN, 0.2)],
+                dash: Dash::Dashed,
+                ..Series::default()
             },
         ]
     }
@@ -414,34 +499,6 @@ mod tests {
     }
 
     #[test]
-    fn legend_goes_to_the_emptiest_corner() {
-        let at = |pts: Vec<(f64, f64)>| {
-            let series = [Series {
-                label: "a".into(),
-                points: pts,
-            }];
-            let corner = legend_corner(&series, (1.0, 1000.0), (1.0, 1000.0), &spec());
-            format!("{corner:?}")
-        };
-        // A curve falling from the upper left to the lower right leaves the other two corners
-        // free; the upper right is taken first.
-        assert_eq!(
-            at(vec![(1.5, 900.0), (30.0, 30.0), (900.0, 1.5)]),
-            "UpperRight"
-        );
-        // Points in the upper right (on the log scale) move the legend.
-        assert_eq!(
-            at(vec![
-                (100.0, 100.0),
-                (500.0, 900.0),
-                (900.0, 500.0),
-                (1.5, 1.5)
-            ]),
-            "UpperLeft"
-        );
-    }
-
-    #[test]
     fn tick_labels_have_no_float_noise() {
         assert_eq!(tick(0.30000000000000004), "0.3");
         assert_eq!(tick(0.1 + 0.2), "0.3");
@@ -457,6 +514,7 @@ mod tests {
         let bad = vec![Series {
             label: "neg".into(),
             points: vec![(-1.0, -1.0), (f64::INFINITY, 0.0)],
+            ..Series::default()
         }];
         assert!(draw(&spec(), &bad, &dir.path().join("x.png")).is_err());
         assert!(draw(&spec(), &series(), &dir.path().join("x.gif")).is_err());

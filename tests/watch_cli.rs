@@ -40,17 +40,16 @@ struct Watch {
 
 impl Watch {
     fn start(dir: &Path, scene: &str, out: &str) -> Watch {
+        Watch::start_with(dir, &[scene, "-o", out, "--no-preview"])
+    }
+
+    /// `watch` with `args`, writing every snapshot.
+    fn start_with(dir: &Path, args: &[&str]) -> Watch {
         let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
             .current_dir(dir)
-            .args([
-                "watch",
-                scene,
-                "-o",
-                out,
-                "--no-preview",
-                "--snapshot-every",
-                "0",
-            ])
+            .arg("watch")
+            .args(args)
+            .args(["--snapshot-every", "0"])
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -406,4 +405,70 @@ fn an_empty_save_keeps_the_last_image_and_the_next_save_renders() {
     w.expect("render #2 full finished");
     assert_eq!(centre(&out), [0, 0, 255]);
     no_temporaries(dir.path());
+}
+
+/// The preview is written at the full size (a viewer never sees the size change), `--scale`
+/// sets that size, and "waiting for changes" is said only once nothing renders.
+#[test]
+fn the_preview_is_written_at_full_size_and_status_lines_are_true() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("wide.scn");
+    let out = dir.path().join("wide.png");
+    let text = scene_text([255, 0, 0])
+        .replace("resolution <16, 16>", "resolution <256, 128>")
+        .replace("iterations 3", "iterations 6");
+    fs::write(&scene, &text).unwrap();
+    let mut w = Watch::start_with(
+        dir.path(),
+        &["wide.scn", "-o", "wide.png", "--scale", "0.5"],
+    );
+    w.expect("render #1 started");
+    let mut sizes = Vec::new();
+    loop {
+        let line = w.expect("render #1");
+        assert!(
+            !w.log.iter().any(|l| l.contains("waiting for changes")),
+            "`waiting for changes` while rendering: {:?}",
+            w.log
+        );
+        if line.contains("written to") {
+            let img = image::open(&out).unwrap();
+            sizes.push((line.contains("preview"), img.width(), img.height()));
+        }
+        if line.contains("full finished") {
+            break;
+        }
+    }
+    w.expect("waiting for changes");
+    assert!(
+        sizes.iter().any(|s| s.0),
+        "no preview was written: {sizes:?}"
+    );
+    assert!(
+        sizes.iter().all(|&(_, w, h)| (w, h) == (128, 64)),
+        "every image is the full size of the scaled scene: {sizes:?}"
+    );
+    // A scene with errors: nothing renders, so the watcher waits.
+    fs::write(&scene, "sphere {").unwrap();
+    w.expect("the scene has errors");
+    w.expect("waiting for changes");
+}
+
+#[test]
+fn serve_on_a_port_in_use_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.scn");
+    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        .args(["watch", scene.to_str().unwrap(), "--serve", "--port", &port])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("the port is in use"), "{err}");
+    assert!(err.contains("--port"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
 }

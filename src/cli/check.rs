@@ -5,12 +5,13 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use sppm_lang::render::{RenderError, RenderOptions};
-use sppm_lang::scene::{Background, Light, Scene};
+use sppm_lang::diag::short_number;
+use sppm_lang::render::{EffectiveSettings, PreparedScene, RenderError, RenderOptions};
+use sppm_lang::scene::{Background, Integrator, Light, Scene, Shape};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
 use super::output::{err, out};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, SizeArgs};
 
 /// Prints the diagnostics of a load to stderr: miette's fancy output on a terminal, plain text
 /// otherwise.
@@ -44,21 +45,97 @@ pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
             };
             print_diagnostics(&loaded);
         }
-        _ => {
-            // No declaration to point at (e.g. a default the file never wrote): name the file.
-            let file = sources.files().first().map(|f| f.name.as_str());
-            match file {
-                Some(f) => err(&format!("error: {f}: {}\n", e.message)),
-                None => err(&format!("error: {}\n", e.message)),
-            }
-            if let Some(h) = &e.help {
-                err(&format!("  help: {h}\n"));
-            }
-        }
+        // No declaration to point at (e.g. a default the file never wrote): name the file.
+        _ => print_unplaced(sources, "error", e),
     }
 }
 
-pub fn run(scene: &Path, options: &EvalOptions, render_options: &RenderOptions) -> ExitCode {
+/// A message about the whole scene: `kind: file: message`, then its help.
+fn print_unplaced(sources: &SourceMap, kind: &str, e: &RenderError) {
+    let file = sources.files().first().map(|f| f.name.as_str());
+    match file {
+        Some(f) => err(&format!("{kind}: {f}: {}\n", e.message)),
+        None => err(&format!("{kind}: {}\n", e.message)),
+    }
+    if let Some(h) = &e.help {
+        err(&format!("  help: {h}\n"));
+    }
+}
+
+/// Loads a scene named on the command line and prints its diagnostics: the scene (free of
+/// errors) and its sources, or the exit status (usage error: the file cannot be read; scene
+/// error: it has errors).
+pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<(Scene, SourceMap), ExitCode> {
+    let loaded = sppm_lang::load_file(path, options).map_err(|e| {
+        err(&format!("error: cannot read `{}`: {e}\n", path.display()));
+        ExitCode::from(EXIT_USAGE)
+    })?;
+    print_diagnostics(&loaded);
+    let has_errors = loaded.has_errors();
+    match loaded.scene {
+        Some(scene) if !has_errors => Ok((scene, loaded.sources)),
+        _ => Err(ExitCode::from(EXIT_SCENE_ERROR)),
+    }
+}
+
+/// Prints a warning the prepare stage found (it has no span: it is about the whole scene).
+pub fn print_render_warning(sources: &SourceMap, w: &RenderError) {
+    print_unplaced(sources, "warning", w);
+}
+
+/// What the prepare stage decided: mesh sizes, the focus distance, the initial radius.
+fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> String {
+    let mut out = String::new();
+    let meshes: Vec<String> = prepared
+        .scene
+        .objects
+        .iter()
+        .filter_map(|o| match &o.shape {
+            Shape::Mesh { mesh } => Some(format!(
+                "{} ({} triangle{})",
+                mesh.path.display(),
+                mesh.indices.len(),
+                if mesh.indices.len() == 1 { "" } else { "s" }
+            )),
+            _ => None,
+        })
+        .collect();
+    if !meshes.is_empty() {
+        out.push_str(&format!("meshes: {}\n", meshes.join(", ")));
+    }
+    out.push_str(&format!(
+        "focus distance: {}{}\n",
+        short_number(prepared.camera.focus_distance()),
+        if prepared.scene.camera.aperture > 0.0 {
+            ""
+        } else {
+            " (pinhole camera: everything is sharp)"
+        }
+    ));
+    match settings.integrator {
+        Integrator::Sppm | Integrator::Ppm => {
+            let radius = sppm_lang::integrators::sppm::initial_radius(prepared, settings);
+            out.push_str(&format!(
+                "initial radius: {}{}\n",
+                short_number(radius),
+                if settings.radius.is_some() {
+                    " (from settings)"
+                } else {
+                    " (default, from the pixel footprint)"
+                }
+            ));
+        }
+        other => out.push_str(&format!("initial radius: not used by {}\n", other.name())),
+    }
+    out
+}
+
+pub fn run(
+    scene: &Path,
+    options: &EvalOptions,
+    render_options: &RenderOptions,
+    size: &SizeArgs,
+) -> ExitCode {
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
@@ -69,12 +146,22 @@ pub fn run(scene: &Path, options: &EvalOptions, render_options: &RenderOptions) 
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
+            let mut s = s.clone();
+            size.apply_to(&mut s);
             // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
-            if let Err(e) = sppm_lang::render::prepare(s, render_options) {
-                print_render_error(&loaded.sources, &e);
-                return ExitCode::from(EXIT_SCENE_ERROR);
+            let (settings, prepared) = match sppm_lang::render::prepare(&s, render_options) {
+                Ok(p) => p,
+                Err(e) => {
+                    print_render_error(&loaded.sources, &e);
+                    return ExitCode::from(EXIT_SCENE_ERROR);
+                }
+            };
+            for w in prepared.warnings() {
+                print_render_warning(&loaded.sources, &w);
             }
-            out(&summary(s, loaded.dependencies.len()));
+            let mut text = summary(&s, loaded.dependencies.len());
+            text.push_str(&render_summary(&prepared, &settings));
+            out(&text);
             ExitCode::SUCCESS
         }
         _ => ExitCode::from(EXIT_SCENE_ERROR),

@@ -2,7 +2,9 @@
 
 mod chart;
 mod check;
+mod live;
 mod output;
+mod reference;
 mod render;
 mod watch;
 
@@ -113,6 +115,95 @@ pub fn parse_threads(text: &str) -> Result<usize, String> {
     Ok(n)
 }
 
+/// Largest `--scale` factor (the result is range-checked again by the render).
+pub const MAX_SCALE: f64 = 64.0;
+
+/// `WxH`, or one side with the other left out (`640x`, `x480`) to keep the scene's aspect ratio.
+pub fn parse_resolution(text: &str) -> Result<Resolution, String> {
+    let usage = || format!("`{text}` is not a resolution such as 640x480, 640x or x480");
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(usage)?;
+    let side = |s: &str| -> Result<Option<u32>, String> {
+        if s.is_empty() {
+            return Ok(None);
+        }
+        match s.parse::<u32>() {
+            Ok(n) if (1..=sppm_lang::scene::MAX_RESOLUTION_SIDE).contains(&n) => Ok(Some(n)),
+            Ok(n) => Err(format!(
+                "each side must be from 1 to {}, got {n}",
+                sppm_lang::scene::MAX_RESOLUTION_SIDE
+            )),
+            Err(_) => Err(usage()),
+        }
+    };
+    match (side(w)?, side(h)?) {
+        (None, None) => Err(usage()),
+        (w, h) => Ok(Resolution {
+            width: w,
+            height: h,
+        }),
+    }
+}
+
+/// A scale factor for the scene's resolution: more than 0, at most [`MAX_SCALE`].
+pub fn parse_scale(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if !(v > 0.0 && v <= MAX_SCALE) {
+        return Err(format!(
+            "must be more than 0 and at most {MAX_SCALE}, got {text}"
+        ));
+    }
+    Ok(v)
+}
+
+/// A resolution from the command line; a side left out follows the scene's aspect ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Resolution {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+}
+
+/// The image size, overriding the scene's `settings { resolution }`.
+#[derive(Debug, Clone, Args)]
+pub struct SizeArgs {
+    /// Image size `WxH` (e.g. 320x240); `320x` or `x240` keeps the scene's aspect ratio.
+    /// Settings derived from the pixel size (the default initial radius) follow it.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    pub resolution: Option<Resolution>,
+    /// Scale the scene's resolution by F (e.g. 0.25 for a quick preview), keeping its aspect
+    /// ratio.
+    #[arg(long, value_name = "F", value_parser = parse_scale, conflicts_with = "resolution")]
+    pub scale: Option<f64>,
+}
+
+impl SizeArgs {
+    pub fn is_set(&self) -> bool {
+        self.resolution.is_some() || self.scale.is_some()
+    }
+
+    /// The resolution a scene of `scene_size` renders at with these flags.
+    pub fn apply(&self, (w, h): (u32, u32)) -> (u32, u32) {
+        let aspect = f64::from(w.max(1)) / f64::from(h.max(1));
+        let side = |v: f64| v.round().clamp(1.0, f64::from(u32::MAX)) as u32;
+        match (self.resolution, self.scale) {
+            (Some(r), _) => match (r.width, r.height) {
+                (Some(w), Some(h)) => (w, h),
+                (Some(w), None) => (w, side(f64::from(w) / aspect)),
+                (None, Some(h)) => (side(f64::from(h) * aspect), h),
+                (None, None) => (w, h),
+            },
+            (None, Some(f)) => (side(f64::from(w) * f), side(f64::from(h) * f)),
+            (None, None) => (w, h),
+        }
+    }
+
+    /// Sets `scene`'s resolution as the flags ask.
+    pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) {
+        scene.settings.resolution = self.apply(scene.settings.resolution);
+    }
+}
+
 /// Limits of the scene interpreter.
 #[derive(Debug, Clone, Args)]
 pub struct LimitArgs {
@@ -149,6 +240,8 @@ pub enum Command {
         /// The scene file (.scn).
         scene: PathBuf,
         #[command(flatten)]
+        size: SizeArgs,
+        #[command(flatten)]
         limits: LimitArgs,
     },
     /// Render a scene with stochastic progressive photon mapping.
@@ -157,19 +250,50 @@ pub enum Command {
     Watch(watch::WatchArgs),
     /// Chart error against render time for every integrator against a reference image.
     Chart(chart::ChartArgs),
+    /// Render a reference image for `chart` with the path tracer, in two independent halves
+    /// whose difference estimates its noise (written beside it).
+    Reference(reference::ReferenceArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
     match cli.command {
-        Command::Check { scene, limits } => {
+        Command::Check {
+            scene,
+            size,
+            limits,
+        } => {
             let render_options = sppm_lang::render::RenderOptions {
                 memory_limit: limits.memory_limit,
                 ..Default::default()
             };
-            check::run(&scene, &limits.options(), &render_options)
+            check::run(&scene, &limits.options(), &render_options, &size)
         }
         Command::Render(args) => render::run(args),
         Command::Watch(args) => watch::run(&args),
         Command::Chart(args) => chart::run(&args),
+        Command::Reference(args) => reference::run(&args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_side_left_out_keeps_the_aspect_ratio() {
+        let size = |r: &str| SizeArgs {
+            resolution: Some(parse_resolution(r).unwrap()),
+            scale: None,
+        };
+        assert_eq!(size("320x").apply((640, 480)), (320, 240));
+        assert_eq!(size("x100").apply((640, 480)), (133, 100));
+        assert_eq!(size("50x50").apply((640, 480)), (50, 50));
+        let scale = SizeArgs {
+            resolution: None,
+            scale: Some(0.25),
+        };
+        assert_eq!(scale.apply((640, 480)), (160, 120));
+        // Never below one pixel.
+        assert_eq!(scale.apply((2, 1)), (1, 1));
     }
 }

@@ -9,11 +9,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::SourceMap;
-use sppm_lang::render::{Progress, RenderOptions, render};
+use sppm_lang::render::{Progress, RenderOptions, RenderStats, render_with_warnings};
 use sppm_lang::scene::{Integrator, Scene};
 
-use super::check::{print_diagnostics, print_render_error};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
+use super::check::{load_scene, print_render_error, print_render_warning};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -44,21 +44,15 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
     #[command(flatten)]
+    pub size: SizeArgs,
+    #[command(flatten)]
     pub limits: LimitArgs,
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
-    let loaded = match sppm_lang::load_file(&args.scene, &args.limits.options()) {
-        Ok(l) => l,
-        Err(e) => {
-            eprintln!("error: cannot read `{}`: {e}", args.scene.display());
-            return ExitCode::from(EXIT_USAGE);
-        }
-    };
-    print_diagnostics(&loaded);
-    match &loaded.scene {
-        Some(scene) if !loaded.has_errors() => render_scene(scene, &args, &loaded.sources),
-        _ => ExitCode::from(EXIT_SCENE_ERROR),
+    match load_scene(&args.scene, &args.limits.options()) {
+        Ok((scene, sources)) => render_scene(&scene, &args, &sources),
+        Err(code) => code,
     }
 }
 
@@ -72,16 +66,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             return ExitCode::from(EXIT_USAGE);
         }
     };
-    let overridden;
-    let scene = match args.integrator {
-        Some(integrator) => {
-            let mut s = scene.clone();
-            s.settings.integrator = integrator;
-            overridden = s;
-            &overridden
-        }
-        None => scene,
-    };
+    let mut scene = std::borrow::Cow::Borrowed(scene);
+    if let Some(integrator) = args.integrator {
+        scene.to_mut().settings.integrator = integrator;
+    }
+    if args.size.is_set() {
+        args.size.apply_to(scene.to_mut());
+    }
+    let scene = scene.as_ref();
     let options = RenderOptions {
         iterations: args.iterations,
         photons: args.photons,
@@ -113,10 +105,12 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         if let Some(b) = &bar {
             b.set_position(p.iteration as u64);
             let secs = p.elapsed.as_secs_f64().max(1e-9);
-            b.set_message(format!(
-                "{:.2} M photons/s",
-                p.stats.photons as f64 / secs / 1e6
-            ));
+            if p.stats.photons > 0 {
+                b.set_message(format!(
+                    "{:.2} M photons/s",
+                    p.stats.photons as f64 / secs / 1e6
+                ));
+            }
         }
         if let Some(k) = args.snapshot_every
             && p.iteration.is_multiple_of(k)
@@ -126,7 +120,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             snapshot_error = Some(e);
         }
     };
-    let result = render(scene, &options, &cancel, &mut on_progress);
+    let mut on_warning = |w: &sppm_lang::render::RenderError| {
+        if let Some(b) = &bar {
+            b.suspend(|| print_render_warning(sources, w));
+        } else {
+            print_render_warning(sources, w);
+        }
+    };
+    let result = render_with_warnings(scene, &options, &cancel, &mut on_warning, &mut on_progress);
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -162,7 +163,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
     }
     let secs = out.elapsed.as_secs_f64().max(1e-9);
     eprintln!(
-        "{} {}: {} iterations{} in {:.2}s, {} photons ({:.2} M/s), {} deposits",
+        "{} {}: {} iterations{} in {:.2}s{}",
         if out.cancelled {
             "interrupted,"
         } else {
@@ -172,11 +173,29 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         out.iterations_done,
         if out.cancelled { " (cancelled)" } else { "" },
         secs,
-        out.stats.photons,
-        out.stats.photons as f64 / secs / 1e6,
-        out.stats.deposits,
+        method_statistics(scene.settings.integrator, &out.stats, secs),
     );
     ExitCode::SUCCESS
+}
+
+/// The figures that mean something for `method`: photons and their rate for the photon
+/// methods, deposits (photons kept at visible points) for SPPM and PPM; nothing more for the
+/// methods without photons.
+fn method_statistics(method: Integrator, stats: &RenderStats, secs: f64) -> String {
+    let photons = || {
+        format!(
+            ", {} photons ({:.2} M/s)",
+            stats.photons,
+            stats.photons as f64 / secs.max(1e-9) / 1e6
+        )
+    };
+    match method {
+        Integrator::Sppm | Integrator::Ppm => {
+            format!("{}, {} deposits", photons(), stats.deposits)
+        }
+        Integrator::PhotonMap => photons(),
+        Integrator::Path | Integrator::Whitted => String::new(),
+    }
 }
 
 fn parse_integrator(name: &str) -> Result<Integrator, String> {

@@ -82,6 +82,27 @@ pub fn prepare<'a>(
 }
 
 impl<'a> PreparedScene<'a> {
+    /// What is legal but probably not what the author meant, as render errors used as
+    /// warnings (message and help): a scene with nothing that emits light.
+    pub fn warnings(&self) -> Vec<RenderError> {
+        let mut out = Vec::new();
+        if self.lights.is_empty() {
+            out.push(RenderError {
+                help: Some(
+                    "add a `light { <position> intensity <color> }`, an `area_light { ... }` \
+                     or an `environment { image \"sky.hdr\" }`"
+                        .into(),
+                ),
+                ..RenderError::new(
+                    "the scene has no light: no light source, no emitting object and no \
+                     environment map, so it renders black (except a background colour seen \
+                     directly)",
+                )
+            });
+        }
+        out
+    }
+
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
         scene.validate()?;
         let (width, height) = scene.settings.resolution;

@@ -25,7 +25,22 @@ pub fn render(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<RenderOutput, RenderError> {
+    render_with_warnings(scene, options, cancel, &mut |_| {}, on_progress)
+}
+
+/// [`render`], telling `on_warning` the prepared scene's [warnings](PreparedScene::warnings)
+/// before the first iteration.
+pub fn render_with_warnings(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &AtomicBool,
+    on_warning: &mut dyn FnMut(&RenderError),
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<RenderOutput, RenderError> {
     let (settings, prepared) = prepare(scene, options)?;
+    for w in prepared.warnings() {
+        on_warning(&w);
+    }
     let integrator = integrators::for_method(settings.integrator);
     let deadline = settings
         .time_limit

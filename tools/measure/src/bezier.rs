@@ -705,7 +705,11 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
                 } else {
                     label
                 };
-                series.push(Series { label, points });
+                series.push(Series {
+                    label,
+                    points,
+                    ..Series::default()
+                });
             };
             let robust: Vec<(f64, f64)> = all
                 .iter()
@@ -760,6 +764,7 @@ pub fn charts(rows: &[Row]) -> Vec<Chart> {
                     y_label,
                     log_x: true,
                     log_y: true,
+                    floor: None,
                 },
                 series,
             });

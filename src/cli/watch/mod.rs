@@ -5,8 +5,12 @@
 //! atomically, and wait for the next change. A change cancels the render in flight. A scene
 //! with errors prints its diagnostics and leaves the last good image untouched.
 //!
+//! With `--serve`, the same events also go to a local web page (see `super::live`).
+//!
 //! Status lines go to stderr. When stderr is not a terminal they are plain lines starting with
 //! `[watch]`, one per event, which the integration tests read.
+
+mod round;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -14,16 +18,17 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use clap::Args;
-use sppm_lang::render::{self, RenderOptions};
 use sppm_lang::scene::Scene;
 use sppm_lang::watch::DependencyWatcher;
-use sppm_lang::{EvalOptions, SourceMap};
+use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
 
-use super::check::{print_diagnostics, print_render_error};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs};
+use super::check::print_diagnostics;
+use super::live::{self, Hub};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use round::{Round, start};
 
 #[derive(Debug, Clone, Args)]
 pub struct WatchArgs {
@@ -51,9 +56,21 @@ pub struct WatchArgs {
     /// Worker threads for rendering (default: all cores).
     #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
+    /// Also show the render on a local web page (http://127.0.0.1:PORT/, printed at start),
+    /// updated at every snapshot.
+    #[arg(long)]
+    pub serve: bool,
+    /// The page's port (0: any free port).
+    #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
+    pub port: u16,
+    #[command(flatten)]
+    pub size: SizeArgs,
     #[command(flatten)]
     pub limits: LimitArgs,
 }
+
+/// The port `--serve` listens on unless told otherwise.
+pub const DEFAULT_PORT: u16 = 8421;
 
 /// How a render round ended.
 enum Outcome {
@@ -107,6 +124,23 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
+    let hub = if args.serve {
+        let name = args.scene.file_name().map_or_else(
+            || args.scene.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let hub = Hub::new(name);
+        match live::Server::start(args.port, hub.clone()) {
+            Ok(server) => status(&format!("serving the live view on {}", server.url)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_USAGE);
+            }
+        }
+        Some(hub)
+    } else {
+        None
+    };
     let terminal = std::io::stderr().is_terminal();
     let clear = terminal && !args.no_clear;
     let preview = !args.no_preview;
@@ -114,6 +148,8 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     let mut job: Option<Job> = None;
     let mut round = 0u32;
     let mut changed_at = Instant::now();
+    // The first round follows no save.
+    let mut saved_at = None;
     loop {
         if clear {
             eprint!("\x1b[2J\x1b[H");
@@ -122,27 +158,60 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         if let Err(e) = watcher.set_dependencies(&loaded.dependencies) {
             status(&format!("cannot watch the scene's files: {e}"));
         }
+        let diagnostics = live::diagnostics_view(&loaded.sources, &loaded.diagnostics);
         match loaded.scene {
-            Some(scene) => {
+            Some(mut scene) => {
                 round += 1;
+                args.size.apply_to(&mut scene);
                 status(&format!(
                     "render #{round} started ({})",
                     args.scene.display()
                 ));
-                job = Some(start(
-                    round,
+                if let Some(hub) = &hub {
+                    hub.update(|s| {
+                        s.state = "rendering";
+                        s.message = format!("render #{round} started");
+                        s.round = round;
+                        s.stage = "";
+                        (s.iteration, s.iterations, s.elapsed) = (0, 0, 0.0);
+                        s.photons_per_second = 0.0;
+                        s.saved_at = saved_at;
+                        s.exposure = scene.settings.exposure;
+                        s.diagnostics = diagnostics;
+                    });
+                }
+                job = Some(start(Round {
+                    number: round,
                     scene,
-                    output.clone(),
+                    output: output.clone(),
                     preview,
-                    args,
+                    snapshot_every: args.snapshot_every,
+                    threads: args.threads,
+                    memory_limit: args.limits.memory_limit,
                     changed_at,
-                    loaded.sources,
-                ));
+                    sources: loaded.sources,
+                    hub: hub.clone(),
+                }));
             }
-            None if loaded.empty => {}
-            None => status("the scene has errors; the last image is kept"),
+            None => {
+                let (state, message) = if loaded.empty {
+                    ("empty", "the scene file is empty; the last image is kept")
+                } else {
+                    status("the scene has errors; the last image is kept");
+                    ("errors", "the scene has errors; the last image is kept")
+                };
+                if let Some(hub) = &hub {
+                    hub.update(|s| {
+                        s.state = state;
+                        s.message = message.to_string();
+                        s.saved_at = saved_at;
+                        s.diagnostics = diagnostics;
+                    });
+                }
+                // Nothing renders until the next save.
+                status("waiting for changes");
+            }
         }
-        status("waiting for changes");
         let stop = || interrupted.load(Ordering::SeqCst);
         let changes = watcher.wait_batch(None, &stop);
         if let Some(j) = job.take() {
@@ -154,6 +223,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         match changes {
             Some(batch) => {
                 changed_at = batch.first_event;
+                saved_at = Some(batch.first_event);
                 let names: Vec<String> = batch
                     .files
                     .iter()
@@ -177,6 +247,7 @@ struct Load {
     scene: Option<Scene>,
     dependencies: Vec<PathBuf>,
     sources: SourceMap,
+    diagnostics: Vec<Diagnostic>,
 }
 
 /// A number of seconds from 0 to [`super::MAX_SECONDS`] (0: write every iteration).
@@ -200,6 +271,7 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
             scene: None,
             dependencies: vec![path.to_path_buf()],
             sources: SourceMap::default(),
+            diagnostics: Vec::new(),
         };
     }
     match sppm_lang::load_file(path, options) {
@@ -215,142 +287,28 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
                 scene,
                 dependencies: loaded.dependencies,
                 sources: loaded.sources,
+                diagnostics: loaded.diagnostics,
             }
         }
         Err(e) => {
             // Deleted between saves (delete-and-recreate): keep watching the path.
-            status(&format!("cannot read `{}`: {e}", path.display()));
+            let message = format!("cannot read `{}`: {e}", path.display());
+            status(&message);
             Load {
                 empty: false,
                 scene: None,
                 dependencies: vec![path.to_path_buf()],
                 sources: SourceMap::default(),
+                diagnostics: vec![Diagnostic::error(
+                    sppm_lang::span::Span::detached(),
+                    message,
+                )],
             }
         }
     }
 }
 
-/// Starts a render round on a worker thread: an optional preview, then the full render.
-fn start(
-    round: u32,
-    scene: Scene,
-    output: PathBuf,
-    preview: bool,
-    args: &WatchArgs,
-    changed_at: Instant,
-    sources: SourceMap,
-) -> Job {
-    let cancel = Arc::new(AtomicBool::new(false));
-    let keep = Arc::new(AtomicBool::new(false));
-    let (flag, keep_image) = (cancel.clone(), keep.clone());
-    let snapshot_every = Duration::from_secs_f64(args.snapshot_every);
-    let threads = args.threads;
-    let memory_limit = args.limits.memory_limit;
-    let handle = std::thread::spawn(move || {
-        let mut stages = Vec::new();
-        if preview {
-            stages.push(("preview", preview_of(&scene)));
-        }
-        stages.push(("full", scene));
-        let mut first_snapshot = true;
-        for (stage, scene) in stages {
-            let options = RenderOptions {
-                threads,
-                memory_limit,
-                ..RenderOptions::default()
-            };
-            let exposure = scene.settings.exposure;
-            let mut last_write: Option<Instant> = None;
-            let mut written = 0u32;
-            let mut on_progress = |p: &render::Progress| {
-                let due = last_write.is_none_or(|t| t.elapsed() >= snapshot_every)
-                    || p.iteration == p.iterations;
-                if !due {
-                    return;
-                }
-                match p.image().write(&output, exposure) {
-                    Ok(()) => {
-                        last_write = Some(Instant::now());
-                        written = p.iteration;
-                        let latency = if first_snapshot {
-                            first_snapshot = false;
-                            format!(
-                                ", {:.3} s after the change",
-                                changed_at.elapsed().as_secs_f64()
-                            )
-                        } else {
-                            String::new()
-                        };
-                        let rate = p.stats.photons as f64 / p.elapsed.as_secs_f64().max(1e-9);
-                        status(&format!(
-                            "render #{round} {stage} iteration {}/{} written to {}{latency} ({:.2} Mphotons/s)",
-                            p.iteration,
-                            p.iterations,
-                            output.display(),
-                            rate / 1e6
-                        ));
-                    }
-                    Err(e) => status(&format!("cannot write the image: {e}")),
-                }
-            };
-            match render::render(&scene, &options, &flag, &mut on_progress) {
-                Ok(out) if out.cancelled => {
-                    if keep_image.load(Ordering::SeqCst) && out.iterations_done > 0 {
-                        match out.image.write(&output, exposure) {
-                            Ok(()) => status(&format!(
-                                "render #{round} {stage} stopped after {} iterations, written to {}",
-                                out.iterations_done,
-                                output.display()
-                            )),
-                            Err(e) => status(&format!("cannot write the image: {e}")),
-                        }
-                    }
-                    return Outcome::Cancelled;
-                }
-                Ok(out) => {
-                    // Stopped early by a time limit: the last iterations may not be on disk yet.
-                    if out.iterations_done > written
-                        && let Err(e) = out.image.write(&output, exposure)
-                    {
-                        status(&format!("cannot write the image: {e}"));
-                    }
-                    status(&format!(
-                        "render #{round} {stage} finished: {} iterations in {:.2} s",
-                        out.iterations_done,
-                        out.elapsed.as_secs_f64()
-                    ));
-                }
-                Err(e) => {
-                    print_render_error(&sources, &e);
-                    status(&format!("render #{round} failed"));
-                    return Outcome::Finished;
-                }
-            }
-        }
-        Outcome::Finished
-    });
-    Job {
-        cancel,
-        keep,
-        handle,
-    }
-}
-
-/// The quick first picture: a quarter of the resolution (at least 32 pixels on the short
-/// side), a tenth of the photons, at most 4 iterations.
-pub fn preview_of(scene: &Scene) -> Scene {
-    let mut s = scene.clone();
-    let (w, h) = s.settings.resolution;
-    let short = w.min(h).max(1);
-    let factor = (short / 32).clamp(1, 4);
-    s.settings.resolution = ((w / factor).max(1), (h / factor).max(1));
-    s.settings.photons = (s.settings.photons / 10).max(1000);
-    s.settings.iterations = s.settings.iterations.min(4);
-    s.settings.time_limit = None;
-    s
-}
-
-fn status(message: &str) {
+pub(super) fn status(message: &str) {
     let mut err = std::io::stderr().lock();
     let _ = writeln!(err, "[watch] {message}");
 }

@@ -1,0 +1,471 @@
+//! `sppm-lang chart`: render a scene with every integrator and chosen SPPM variations under a
+//! growing time budget, measure the error against a reference (whole image and an optional
+//! window), and draw error against time (log-log, PNG + SVG) with a CSV table.
+//!
+//! Each method renders once; the image is measured at geometric checkpoints (budget / 32,
+//! / 16, ..., budget) from the progress callback, and the render is stopped at the first
+//! iteration that ends past the budget: a method renders past its budget by less than one
+//! iteration. The time a checkpoint spends computing errors is subtracted from the render time
+//! it reports.
+//!
+//! The reference's own noise bounds the error a method can show: a method at least as good
+//! as the reference measures the reference's noise. When the reference comes from
+//! `sppm-lang reference`, its noise image beside it gives that floor (for the whole image and
+//! the window); the chart draws it and warns of methods that reach it.
+
+mod outputs;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use clap::Args;
+use sppm_lang::chart::Dash;
+use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
+use sppm_lang::film::Image;
+use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings, render};
+use sppm_lang::scene::{ColorSpace, Integrator, Scene, load_image};
+
+use super::check::print_diagnostics;
+use super::reference::{floor_in, noise_paths, to_f32};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use outputs::{Floors, read_csv, write_outputs};
+
+/// A method whose error ends within this factor of the reference's noise is "at the floor":
+/// its own error is at most about the reference's (sqrt(1.5^2 - 1) = 1.1 times it).
+const AT_FLOOR: f64 = 1.5;
+
+#[derive(Debug, Args)]
+#[command(
+    override_usage = "sppm-lang chart <SCENE> --reference <REF.exr> -o <CHART.png> [OPTIONS]\n       \
+                  sppm-lang chart --from-csv <CSV> -o <CHART.png>"
+)]
+pub struct ChartArgs {
+    /// The scene file (.scn).
+    #[arg(required_unless_present = "from_csv")]
+    pub scene: Option<PathBuf>,
+    /// Reference image (linear EXR) of the same resolution, e.g. made by `sppm-lang reference`
+    /// (whose noise estimate beside it marks the error floor). Required unless --from-csv.
+    #[arg(
+        long,
+        value_name = "REF.exr",
+        required_unless_present = "from_csv",
+        help_heading = "Required"
+    )]
+    pub reference: Option<PathBuf>,
+    /// Redraw the charts from a CSV this command wrote earlier, without rendering.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["scene", "reference", "window", "methods"])]
+    pub from_csv: Option<PathBuf>,
+    /// Largest time budget per method, in seconds (`60` or `60s`).
+    #[arg(long, default_value = "60")]
+    pub budget: String,
+    /// Pixel window x0,y0,x1,y1 (columns then rows, half-open) also measured on its own.
+    #[arg(long)]
+    pub window: Option<String>,
+    /// Output chart (.png); an .svg and a .csv with the same stem are written beside it.
+    #[arg(short, long, value_name = "CHART.png", help_heading = "Required")]
+    pub output: PathBuf,
+    /// Only these methods (comma-separated labels, see the CSV); default: all.
+    #[arg(long)]
+    pub methods: Option<String>,
+    #[command(flatten)]
+    pub size: SizeArgs,
+    #[command(flatten)]
+    pub limits: LimitArgs,
+}
+
+/// A method on the chart: an integrator and its parameter changes, and how it is drawn.
+struct Method {
+    label: String,
+    integrator: Integrator,
+    alpha: Option<f64>,
+    radius_factor: f64,
+    photon_factor: f64,
+    /// Index in the chart's palette.
+    colour: usize,
+    dash: Dash,
+}
+
+/// The methods: the integrators as they are (solid lines, one colour each), then SPPM's
+/// variations (one line style per parameter; the colour says lower, middle or higher).
+fn methods() -> Vec<Method> {
+    let m = |label: &str, integrator, alpha, radius_factor, photon_factor, colour, dash| Method {
+        label: label.into(),
+        integrator,
+        alpha,
+        radius_factor,
+        photon_factor,
+        colour,
+        dash,
+    };
+    use Dash::{Dashed, Dotted, Solid};
+    use Integrator::{Path, PhotonMap, Ppm, Sppm, Whitted};
+    // Palette: 0 blue, 1 orange, 2 red, 3 green, 4 teal, 5 purple, 6 brown, 7 gold, 8 pink.
+    vec![
+        m("sppm", Sppm, None, 1.0, 1.0, 0, Solid),
+        m("ppm", Ppm, None, 1.0, 1.0, 1, Solid),
+        m("photon_map", PhotonMap, None, 1.0, 1.0, 2, Solid),
+        m("path", Path, None, 1.0, 1.0, 3, Solid),
+        m("whitted", Whitted, None, 1.0, 1.0, 6, Solid),
+        m("sppm-alpha0.5", Sppm, Some(0.5), 1.0, 1.0, 4, Dashed),
+        m("sppm-alpha0.7", Sppm, Some(0.7), 1.0, 1.0, 5, Dashed),
+        m("sppm-alpha0.9", Sppm, Some(0.9), 1.0, 1.0, 8, Dashed),
+        m("sppm-radius0.5x", Sppm, None, 0.5, 1.0, 4, Dotted),
+        m("sppm-radius2x", Sppm, None, 2.0, 1.0, 5, Dotted),
+        m("sppm-radius4x", Sppm, None, 4.0, 1.0, 8, Dotted),
+        m("sppm-photons0.25x", Sppm, None, 1.0, 0.25, 7, Dashed),
+        m("sppm-photons4x", Sppm, None, 1.0, 4.0, 7, Dotted),
+    ]
+}
+
+/// Where the method labelled `label` comes in [`methods`] (others after them).
+fn rank_of(label: &str) -> usize {
+    methods()
+        .iter()
+        .position(|m| m.label == label)
+        .unwrap_or(usize::MAX)
+}
+
+/// The colour and line style of the method labelled `label` (`None`: not one of ours).
+fn style_of(label: &str) -> Option<(usize, Dash)> {
+    methods()
+        .into_iter()
+        .find(|m| m.label == label)
+        .map(|m| (m.colour, m.dash))
+}
+
+/// One measurement.
+pub struct Row {
+    method: String,
+    iterations: u32,
+    seconds: f64,
+    whole: Errors,
+    window: Option<Errors>,
+}
+
+/// The two errors the chart draws.
+#[derive(Clone, Copy)]
+pub struct Errors {
+    rmse: f64,
+    rel_mse: f64,
+}
+
+impl From<ErrorStats> for Errors {
+    fn from(e: ErrorStats) -> Self {
+        Self {
+            rmse: e.rmse,
+            rel_mse: e.rel_mse,
+        }
+    }
+}
+
+fn parse_budget(text: &str) -> Result<f64, String> {
+    let t = text.trim().trim_end_matches('s');
+    match t.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "--budget `{text}`: expected a positive number of seconds"
+        )),
+    }
+}
+
+pub fn run(args: &ChartArgs) -> ExitCode {
+    match chart(args) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_USAGE)
+        }
+    }
+}
+
+fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
+    let budget = parse_budget(&args.budget)?;
+    let window = args.window.as_deref().map(Window::parse).transpose()?;
+    let ext = args.output.extension().and_then(|e| e.to_str());
+    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        return Err(format!(
+            "output `{}` must end in .png",
+            args.output.display()
+        ));
+    }
+    if let Some(csv) = &args.from_csv {
+        let table = read_csv(csv)?;
+        write_outputs(&args.output, &table)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let (Some(scene_path), Some(reference_path)) = (&args.scene, &args.reference) else {
+        return Err("give a scene and --reference (or --from-csv)".into());
+    };
+    let reference = load_image(reference_path, ColorSpace::Linear)?;
+    let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
+        .map_err(|e| format!("cannot read `{}`: {e}", scene_path.display()))?;
+    print_diagnostics(&loaded);
+    let mut scene = match &loaded.scene {
+        Some(s) if !loaded.has_errors() => s.clone(),
+        _ => return Ok(ExitCode::from(EXIT_SCENE_ERROR)),
+    };
+    args.size.apply_to(&mut scene);
+    let (w, h) = scene.settings.resolution;
+    if (w, h) != (reference.width, reference.height) {
+        return Err(format!(
+            "the scene renders {w}x{h} but the reference is {}x{}",
+            reference.width, reference.height
+        ));
+    }
+    let ref_view = ImageView::new(reference.width, reference.height, &reference.pixels)?;
+    if let Some(win) = window {
+        // Validate the window once, before rendering anything.
+        error(ref_view, ref_view, Some(win))?;
+    }
+    let floors = reference_floors(reference_path, ref_view, window)?;
+    let base_radius = {
+        let settings =
+            effective_settings(&scene, &RenderOptions::default()).map_err(|e| e.message)?;
+        let prepared = PreparedScene::new(&scene).map_err(|e| e.message)?;
+        sppm_lang::integrators::sppm::initial_radius(&prepared, &settings)
+    };
+    let wanted: Option<Vec<String>> = args
+        .methods
+        .as_deref()
+        .map(|m| m.split(',').map(|s| s.trim().to_string()).collect());
+    let mut rows = Vec::new();
+    for m in methods() {
+        if wanted.as_ref().is_some_and(|w| !w.contains(&m.label)) {
+            continue;
+        }
+        eprintln!("chart: {} ({budget} s)", m.label);
+        let mut s: Scene = scene.clone();
+        s.settings.integrator = m.integrator;
+        if let Some(a) = m.alpha {
+            s.settings.alpha = a;
+        }
+        s.settings.radius = Some(base_radius * m.radius_factor);
+        s.settings.photons = ((s.settings.photons as f64 * m.photon_factor) as u64).max(1);
+        let measured = measure(&s, budget, ref_view, window)?;
+        if measured.is_empty() {
+            eprintln!("warning: chart: {} finished no iteration", m.label);
+        }
+        for (iterations, seconds, whole, window) in measured {
+            eprintln!(
+                "  {iterations:>6} it {seconds:>8.2} s  rmse {:.5}  relmse {:.5}{}",
+                whole.rmse,
+                whole.rel_mse,
+                window.map_or(String::new(), |w| format!(
+                    "  window rmse {:.5} relmse {:.5}",
+                    w.rmse, w.rel_mse
+                ))
+            );
+            rows.push(Row {
+                method: m.label.clone(),
+                iterations,
+                seconds,
+                whole,
+                window,
+            });
+        }
+    }
+    warn_at_floor(&rows, &floors);
+    let name = |p: &std::path::Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    };
+    let table = outputs::Table {
+        scene: name(scene_path),
+        reference: name(reference_path),
+        rows,
+        floors,
+        has_window: window.is_some(),
+    };
+    write_outputs(&args.output, &table)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One measurement: iterations, seconds of rendering, errors on the whole image and window.
+type Measured = (u32, f64, Errors, Option<Errors>);
+
+/// Renders `scene` until the first iteration that ends past `budget` seconds, measuring the
+/// error at the checkpoints and at the last iteration.
+fn measure(
+    scene: &Scene,
+    budget: f64,
+    ref_view: ImageView<'_>,
+    window: Option<Window>,
+) -> Result<Vec<Measured>, String> {
+    let opts = RenderOptions {
+        iterations: Some(u32::MAX),
+        ..Default::default()
+    };
+    let checkpoints: Vec<f64> = (0..6).rev().map(|k| budget / f64::from(1 << k)).collect();
+    let errors = |img: &Image| -> Result<(Errors, Option<Errors>), String> {
+        let pix = to_f32(img);
+        let v = ImageView::new(img.width, img.height, &pix)?;
+        let whole = error(v, ref_view, None)?;
+        let win = window.map(|w| error(v, ref_view, Some(w))).transpose()?;
+        Ok((whole.into(), win.map(Errors::from)))
+    };
+    let stop = AtomicBool::new(false);
+    let mut next = 0usize;
+    let mut overhead = 0.0f64;
+    let mut measured = Vec::new();
+    let mut failure = None;
+    let mut on_progress = |p: &sppm_lang::render::Progress| {
+        let t = p.elapsed.as_secs_f64() - overhead;
+        if next < checkpoints.len() && t >= checkpoints[next] {
+            let t0 = Instant::now();
+            while next < checkpoints.len() && t >= checkpoints[next] {
+                next += 1;
+            }
+            match errors(&p.image()) {
+                Ok((whole, win)) => measured.push((p.iteration, t, whole, win)),
+                Err(e) => failure = Some(e),
+            }
+            overhead += t0.elapsed().as_secs_f64();
+        }
+        if t >= budget {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    let out = render(scene, &opts, &stop, &mut on_progress).map_err(|e| e.message)?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    // The last iteration is always measured (the render may stop between checkpoints).
+    if measured.last().is_none_or(|r| r.0 != out.iterations_done) && out.iterations_done > 0 {
+        let (whole, win) = errors(&out.image)?;
+        let t = out.elapsed.as_secs_f64() - overhead;
+        measured.push((out.iterations_done, t, whole, win));
+    }
+    Ok(measured)
+}
+
+/// The reference's noise floors (whole image, window) from the noise image beside it.
+fn reference_floors(
+    reference_path: &std::path::Path,
+    ref_view: ImageView<'_>,
+    window: Option<Window>,
+) -> Result<Floors, String> {
+    let (noise_path, _) = noise_paths(reference_path);
+    if !noise_path.is_file() {
+        eprintln!(
+            "warning: chart: no noise estimate `{}` beside the reference, so the chart cannot \
+             mark the error floor and a method better than the reference cannot be told from \
+             it; make the reference with `sppm-lang reference`",
+            noise_path.display()
+        );
+        return Ok(Floors::default());
+    }
+    let noise = load_image(&noise_path, ColorSpace::Linear)?;
+    let noise_view = ImageView::new(noise.width, noise.height, &noise.pixels)?;
+    let whole = floor_in(ref_view, noise_view, None)?;
+    let win = window
+        .map(|w| floor_in(ref_view, noise_view, Some(w)))
+        .transpose()?;
+    eprintln!(
+        "chart: the reference's noise: RMSE {:.3e}, relative MSE {:.3e}{}",
+        whole.rmse,
+        whole.rel_mse,
+        win.map_or(String::new(), |w| format!(
+            "; in the window RMSE {:.3e}, relative MSE {:.3e}",
+            w.rmse, w.rel_mse
+        ))
+    );
+    Ok(Floors {
+        whole: Some(whole.into()),
+        window: win.map(Errors::from),
+    })
+}
+
+/// Warns of each method whose last error is at the reference's noise floor.
+fn warn_at_floor(rows: &[Row], floors: &Floors) {
+    for w in at_floor(rows, floors) {
+        eprintln!("warning: chart: {w}");
+    }
+}
+
+/// The methods whose last error is at the reference's noise floor: the chart cannot rank
+/// them, however good they are.
+fn at_floor(rows: &[Row], floors: &Floors) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut seen: Vec<&str> = Vec::new();
+    for r in rows.iter().rev() {
+        if seen.contains(&r.method.as_str()) {
+            continue;
+        }
+        seen.push(&r.method);
+        let checks = [
+            ("whole image", Some(r.whole), floors.whole),
+            ("window", r.window, floors.window),
+        ];
+        for (what, e, floor) in checks {
+            if let (Some(e), Some(f)) = (e, floor)
+                && e.rmse < AT_FLOOR * f.rmse
+            {
+                out.push(format!(
+                    "{}'s error on the {what} (RMSE {:.3e}) is at the reference's noise floor \
+                     ({:.3e}): the reference cannot rank it; render a longer reference",
+                    r.method, e.rmse, f.rmse
+                ));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &str, seconds: f64, rmse: f64) -> Row {
+        let e = Errors { rmse, rel_mse: 0.0 };
+        Row {
+            method: method.into(),
+            iterations: 1,
+            seconds,
+            whole: e,
+            window: None,
+        }
+    }
+
+    #[test]
+    fn only_a_last_error_near_the_floor_is_reported() {
+        let floors = Floors {
+            whole: Some(Errors {
+                rmse: 0.01,
+                rel_mse: 0.0,
+            }),
+            window: None,
+        };
+        let rows = [
+            row("a", 1.0, 0.012),
+            row("a", 2.0, 0.05),
+            row("b", 1.0, 0.05),
+            row("b", 2.0, 0.014),
+        ];
+        let got = at_floor(&rows, &floors);
+        assert_eq!(got.len(), 1, "{got:?}");
+        assert!(
+            got[0].starts_with("b's error on the whole image"),
+            "{got:?}"
+        );
+        assert!(at_floor(&rows, &Floors::default()).is_empty());
+    }
+
+    #[test]
+    fn every_method_has_its_own_colour_and_style() {
+        let all = methods();
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
+                assert!(
+                    (a.colour, a.dash) != (b.colour, b.dash),
+                    "{} and {} look the same",
+                    a.label,
+                    b.label
+                );
+            }
+        }
+    }
+}

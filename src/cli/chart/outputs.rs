@@ -1,0 +1,235 @@
+//! The chart's files: the CSV table (also read back by `--from-csv`) and the charts drawn
+//! from it (PNG and SVG).
+//!
+//! The CSV has one row per measurement, `method,iterations,seconds,rmse,rel_mse,window_rmse,
+//! window_rel_mse`, after `# scene: NAME` and `# reference: NAME` comment lines; the
+//! reference's noise floor, when known, is a row named [`FLOOR_ROW`] (iterations and seconds 0).
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use sppm_lang::chart::{ChartSpec, Floor, Series, draw};
+
+use super::{Errors, Row, rank_of, style_of};
+
+/// The CSV row that holds the reference's noise floor.
+pub const FLOOR_ROW: &str = "reference-noise";
+
+/// The reference's noise floor on the whole image and the window, when known.
+#[derive(Default, Clone, Copy)]
+pub struct Floors {
+    pub whole: Option<Errors>,
+    pub window: Option<Errors>,
+}
+
+/// Everything a chart is drawn from.
+pub struct Table {
+    pub scene: String,
+    pub reference: String,
+    pub rows: Vec<Row>,
+    pub floors: Floors,
+    pub has_window: bool,
+}
+
+/// Reads a CSV written by [`write_outputs`].
+pub fn read_csv(path: &Path) -> Result<Table, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    let mut table = Table {
+        scene: String::new(),
+        reference: String::new(),
+        rows: Vec::new(),
+        floors: Floors::default(),
+        has_window: false,
+    };
+    for (n, line) in text.lines().enumerate().skip(1) {
+        if let Some(comment) = line.strip_prefix('#') {
+            let comment = comment.trim();
+            if let Some(v) = comment.strip_prefix("scene:") {
+                table.scene = v.trim().to_string();
+            } else if let Some(v) = comment.strip_prefix("reference:") {
+                table.reference = v.trim().to_string();
+            }
+            continue;
+        }
+        let bad = || format!("{}:{}: not a chart row: `{line}`", path.display(), n + 1);
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 7 {
+            return Err(bad());
+        }
+        let num = |s: &str| s.parse::<f64>().map_err(|_| bad());
+        let window = if f[5].is_empty() {
+            None
+        } else {
+            table.has_window = true;
+            Some(Errors {
+                rmse: num(f[5])?,
+                rel_mse: num(f[6])?,
+            })
+        };
+        let whole = Errors {
+            rmse: num(f[3])?,
+            rel_mse: num(f[4])?,
+        };
+        if f[0] == FLOOR_ROW {
+            table.floors = Floors {
+                whole: Some(whole),
+                window,
+            };
+            continue;
+        }
+        table.rows.push(Row {
+            method: f[0].to_string(),
+            iterations: f[1].parse().map_err(|_| bad())?,
+            seconds: num(f[2])?,
+            whole,
+            window,
+        });
+    }
+    if table.rows.is_empty() {
+        return Err(format!("`{}` has no rows", path.display()));
+    }
+    Ok(table)
+}
+
+fn sibling(path: &Path, suffix: &str, ext: &str) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("chart");
+    path.with_file_name(format!("{stem}{suffix}.{ext}"))
+}
+
+fn csv_line(
+    csv: &mut String,
+    method: &str,
+    iterations: u32,
+    seconds: f64,
+    whole: Errors,
+    window: Option<Errors>,
+) {
+    let (wr, wm) = window.map_or((String::new(), String::new()), |w| {
+        (format!("{:.6e}", w.rmse), format!("{:.6e}", w.rel_mse))
+    });
+    let _ = writeln!(
+        csv,
+        "{method},{iterations},{seconds:.3},{:.6e},{:.6e},{wr},{wm}",
+        whole.rmse, whole.rel_mse
+    );
+}
+
+/// Writes the CSV beside `output` and the charts: RMSE and relative MSE, on the whole image
+/// and (when measured) the window.
+pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
+    let mut csv =
+        String::from("method,iterations,seconds,rmse,rel_mse,window_rmse,window_rel_mse\n");
+    // Commas would split the comment's field in a spreadsheet; they are not in file names we
+    // write, and a name with one still reads back (the comment is one line).
+    let _ = writeln!(csv, "# scene: {}", table.scene);
+    let _ = writeln!(csv, "# reference: {}", table.reference);
+    if let Some(f) = table.floors.whole {
+        csv_line(&mut csv, FLOOR_ROW, 0, 0.0, f, table.floors.window);
+    }
+    for r in &table.rows {
+        csv_line(
+            &mut csv,
+            &r.method,
+            r.iterations,
+            r.seconds,
+            r.whole,
+            r.window,
+        );
+    }
+    let csv_path = output.with_extension("csv");
+    write_atomic(&csv_path, &csv)?;
+    type Pick = fn(&Errors) -> f64;
+    let rmse: Pick = |e| e.rmse;
+    let rel: Pick = |e| e.rel_mse;
+    let mut charts: Vec<(&str, &str, &str, bool, Pick)> = vec![
+        ("", "RMSE (whole image)", "RMSE", false, rmse),
+        (
+            "_relmse",
+            "relative MSE (whole image)",
+            "relative MSE",
+            false,
+            rel,
+        ),
+    ];
+    if table.has_window {
+        charts.push(("_window", "RMSE (window)", "RMSE", true, rmse));
+        charts.push((
+            "_window_relmse",
+            "relative MSE (window)",
+            "relative MSE",
+            true,
+            rel,
+        ));
+    }
+    // The methods in the table's order (the integrators, then SPPM's variations), then any
+    // others in the order met.
+    let mut labels: Vec<&str> = Vec::new();
+    for r in &table.rows {
+        if !labels.contains(&r.method.as_str()) {
+            labels.push(&r.method);
+        }
+    }
+    labels.sort_by_key(|l| rank_of(l));
+    for (suffix, title, y_label, in_window, pick) in charts {
+        let errors = |r: &Row| if in_window { r.window } else { Some(r.whole) };
+        let series: Vec<Series> = labels
+            .iter()
+            .map(|l| {
+                let (colour, dash) = style_of(l).unzip();
+                Series {
+                    label: (*l).to_string(),
+                    points: table
+                        .rows
+                        .iter()
+                        .filter(|r| r.method == *l)
+                        .filter_map(|r| errors(r).map(|e| (r.seconds, pick(&e))))
+                        .filter(|(t, v)| *t > 0.0 && *v > 0.0)
+                        .collect(),
+                    colour,
+                    dash: dash.unwrap_or_default(),
+                }
+            })
+            .filter(|s| !s.points.is_empty())
+            .collect();
+        let floor = if in_window {
+            table.floors.window
+        } else {
+            table.floors.whole
+        };
+        let mut names = Vec::new();
+        if !table.scene.is_empty() {
+            names.push(table.scene.clone());
+        }
+        if !table.reference.is_empty() {
+            names.push(format!("reference {}", table.reference));
+        }
+        let spec = ChartSpec {
+            title: if names.is_empty() {
+                format!("{title} against time")
+            } else {
+                format!("{title} against time: {}", names.join(", "))
+            },
+            x_label: "seconds of rendering".into(),
+            y_label: y_label.into(),
+            log_x: true,
+            log_y: true,
+            floor: floor.map(|f| Floor {
+                value: pick(&f),
+                label: "reference noise".into(),
+            }),
+        };
+        for ext in ["png", "svg"] {
+            draw(&spec, &series, &sibling(output, suffix, ext))?;
+        }
+    }
+    Ok(())
+}
+
+fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
+    sppm_lang::atomic_file::write_atomic(path, |_, f| {
+        f.write_all(text.as_bytes())
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+    })
+}
