@@ -34,7 +34,7 @@ use std::time::Instant;
 
 use glam::Vec3A;
 use sppm_lang::accel::Bvh;
-use sppm_lang::chart::{ChartSpec, Series, draw_panels};
+use sppm_lang::chart::{ChartSpec, Dash, Series, draw_panels};
 use sppm_lang::geometry::Ray;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::shapes::primitive::AnyShape;
@@ -536,8 +536,10 @@ fn main() {
 }
 
 fn chart(path: &Path, rows: &[Row]) {
-    let series = |label: &str, f: &dyn Fn(&Row) -> Option<f64>| Series {
+    let series = |label: &str, colour: usize, dash: Dash, f: &dyn Fn(&Row) -> Option<f64>| Series {
         label: label.into(),
+        colour: Some(colour),
+        dash,
         points: rows
             .iter()
             .filter_map(|r| Some((r.triangles as f64, f(r)?)))
@@ -550,23 +552,32 @@ fn chart(path: &Path, rows: &[Row]) {
         y_label: y.into(),
         log_x: true,
         log_y: true,
+        floor: None,
     };
     let mut rays = Vec::new();
-    for key in ["camera/closest/1", "bounce/closest/1", "bounce/any/1"] {
-        rays.push(series(&format!("sppm-lang {key}"), &|c| {
+    for (k, key) in ["camera/closest/1", "bounce/closest/1", "bounce/any/1"]
+        .into_iter()
+        .enumerate()
+    {
+        rays.push(series(&format!("sppm-lang {key}"), k, Dash::Solid, &|c| {
             c.ours.get(key).map(|v| v * 1e-6)
         }));
-        rays.push(series(&format!("Embree {key} (loop cost out)"), &|c| {
-            c.embree.as_ref()?.get_net(key).map(|v| v * 1e-6)
-        }));
+        rays.push(series(
+            &format!("Embree {key} (loop cost out)"),
+            k,
+            Dash::Dashed,
+            &|c| c.embree.as_ref()?.get_net(key).map(|v| v * 1e-6),
+        ));
     }
     let panels = vec![
         (spec("Rays per second, 1 thread", "M rays/s"), rays),
         (
             spec("BVH build", "seconds"),
             vec![
-                series("sppm-lang (1 thread)", &|c| Some(c.ours.build_wall)),
-                series("Embree (all cores)", &|c| {
+                series("sppm-lang (1 thread)", 0, Dash::Solid, &|c| {
+                    Some(c.ours.build_wall)
+                }),
+                series("Embree (all cores)", 0, Dash::Dashed, &|c| {
                     Some(c.embree.as_ref()?.build_wall)
                 }),
             ],
@@ -574,15 +585,21 @@ fn chart(path: &Path, rows: &[Row]) {
         (
             spec("Memory", "bytes per triangle"),
             vec![
-                series("sppm-lang", &|c| Some(c.ours.bytes_per_triangle)),
-                series("Embree", &|c| Some(c.embree.as_ref()?.bytes_per_triangle)),
+                series("sppm-lang", 0, Dash::Solid, &|c| {
+                    Some(c.ours.bytes_per_triangle)
+                }),
+                series("Embree", 0, Dash::Dashed, &|c| {
+                    Some(c.embree.as_ref()?.bytes_per_triangle)
+                }),
             ],
         ),
         (
             spec("SPPM render of the mesh", "M photons/s; s to first image"),
             vec![
-                series("M photons/s", &|c| Some(c.render.0 * 1e-6)),
-                series("seconds to first image", &|c| Some(c.render.1)),
+                series("M photons/s", 0, Dash::Solid, &|c| Some(c.render.0 * 1e-6)),
+                series("seconds to first image", 1, Dash::Solid, &|c| {
+                    Some(c.render.1)
+                }),
             ],
         ),
     ];
