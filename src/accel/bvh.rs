@@ -148,7 +148,7 @@ impl Bvh {
     /// for `t` only; the surface data is computed once, for the closest hit.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
         let (lazy, shape, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((shape.hit_at(ray, lazy), id))
+        Some((shape.hit_at(ray, lazy), lazy.part().unwrap_or(id)))
     }
 
     /// Closest hit as a [`LazyHit`], the shape hit and its id.
@@ -178,7 +178,7 @@ impl Bvh {
         // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
         // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
         let mut closest = usize::MAX;
-        let mut full: Option<Hit> = None;
+        let mut full: Option<LazyHit> = None;
         loop {
             let node = &self.nodes[cur];
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
@@ -203,8 +203,8 @@ impl Bvh {
                             }
                             Ok(None) => {}
                             Err(()) => {
-                                if let Some(h) = s.intersect(ray, t_min, t_max) {
-                                    t_max = h.t;
+                                if let Some(h) = s.intersect_full(ray, t_min, t_max) {
+                                    t_max = h.t();
                                     closest = rest + k;
                                     full = Some(h);
                                 }
@@ -231,7 +231,7 @@ impl Bvh {
         if closest == usize::MAX {
             return best;
         }
-        let lazy = full.map_or(LazyHit::T(t_max), LazyHit::Full);
+        let lazy = full.unwrap_or(LazyHit::T(t_max));
         Some((lazy, &self.shapes[closest], self.ids[closest]))
     }
 
