@@ -59,9 +59,21 @@ impl Rand {
 
 /// The oracle's own tree: world transforms applied to points by hand.
 enum Tree {
-    Sphere { c: DVec3, r: f64, id: usize },
-    Box { lo: DVec3, hi: DVec3, id: usize },
-    Op { op: CsgOp, kids: Vec<Tree>, to_world: DAffine3 },
+    Sphere {
+        c: DVec3,
+        r: f64,
+        id: usize,
+    },
+    Box {
+        lo: DVec3,
+        hi: DVec3,
+        id: usize,
+    },
+    Op {
+        op: CsgOp,
+        kids: Vec<Tree>,
+        to_world: DAffine3,
+    },
 }
 
 fn inside(t: &Tree, p: DVec3) -> bool {
@@ -108,7 +120,11 @@ fn surfaces(t: &Tree, to_world: DAffine3, p: DVec3, out: &mut Vec<(usize, f64, D
             }
             out.push((*id, best.0, rot(best.1)));
         }
-        Tree::Op { kids, to_world: own, .. } => {
+        Tree::Op {
+            kids,
+            to_world: own,
+            ..
+        } => {
             for k in kids {
                 surfaces(k, to_world * *own, p, out);
             }
@@ -133,7 +149,14 @@ fn random_tree(rng: &mut Rand, depth: u32, next_id: &mut usize) -> (Tree, Object
             let r = rng.range(0.2, 0.8);
             (
                 Tree::Sphere { c, r, id },
-                object(Shape::Sphere { center: c, radius: r }, DAffine3::IDENTITY, id),
+                object(
+                    Shape::Sphere {
+                        center: c,
+                        radius: r,
+                    },
+                    DAffine3::IDENTITY,
+                    id,
+                ),
             )
         } else {
             let h = rng.v(0.15, 0.7);
@@ -287,7 +310,14 @@ fn random_trees_match_a_point_membership_oracle() {
          {slivers} slivers thinner than the oracle's step, {} failures",
         failures.len()
     );
-    assert!(failures.is_empty(), "{}", failures[..failures.len().min(20)].join("\n"));
-    assert!(hits > 4000 && misses > 1000 && normals > 4000, "{hits} {misses} {normals}");
+    assert!(
+        failures.is_empty(),
+        "{}",
+        failures[..failures.len().min(20)].join("\n")
+    );
+    assert!(
+        hits > 4000 && misses > 1000 && normals > 4000,
+        "{hits} {misses} {normals}"
+    );
     assert!(slivers * 100 < hits, "too many slivers: {slivers}");
 }

@@ -118,14 +118,30 @@ impl Evaluator {
             ShapeDef::Mesh { path, span } => Shape::Mesh {
                 mesh: self.mesh(path, *span)?,
             },
-            ShapeDef::Csg(c) => Shape::Csg(Csg {
-                op: c.op,
-                children: c
-                    .children
-                    .iter()
-                    .map(|child| self.lower_part(child, own))
-                    .collect::<SourceResult<_>>()?,
-            }),
+            ShapeDef::Csg(c) => {
+                let mut children = Vec::with_capacity(c.children.len());
+                for child in &c.children {
+                    let object = self.lower_part(child, own)?;
+                    // Meshes are known only now: is this one closed?
+                    if let Some(why) = why_open(&object.shape) {
+                        return Err(vec![
+                            Error::new(format!(
+                                "this {} has no inside, so it cannot be part of {}: {why}",
+                                object.shape.kind(),
+                                c.op.a_name()
+                            ))
+                            .label("not a closed shape")
+                            .help(
+                                "close the mesh in a modeller, or use `union`, which needs no \
+                                 inside",
+                            )
+                            .at(object.span),
+                        ]);
+                    }
+                    children.push(object);
+                }
+                Shape::Csg(Csg { op: c.op, children })
+            }
         };
         Ok(Object {
             shape,

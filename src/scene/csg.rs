@@ -40,6 +40,17 @@ impl CsgOp {
             CsgOp::Inverse => "inverse",
         }
     }
+
+    /// The name with its article, for messages ("an intersection").
+    pub fn a_name(self) -> &'static str {
+        match self {
+            CsgOp::Union => "a union",
+            CsgOp::Merge => "a merge",
+            CsgOp::Intersection => "an intersection",
+            CsgOp::Difference => "a difference",
+            CsgOp::Inverse => "an inverse",
+        }
+    }
 }
 
 /// One CSG operation over its children (objects: shapes or further operations).
@@ -125,13 +136,18 @@ fn mesh_why_open(mesh: &MeshData) -> Option<String> {
             *edges.entry((a, b)).or_default() += 1;
         }
     }
-    let bad = edges
+    // The first bad edge in file order (a message that does not change from run to run).
+    let bad = mesh
+        .indices
         .iter()
-        .find(|&(&(a, b), &n)| n != 1 || edges.get(&(b, a)) != Some(&1));
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .filter(|&(a, b)| a != b)
+        .map(|e| (e, edges[&e]))
+        .find(|&((a, b), n)| n != 1 || edges.get(&(b, a)) != Some(&1));
     match bad {
         None if !edges.is_empty() => None,
         None => Some(format!("mesh `{}` has no triangles", mesh.path.display())),
-        Some((&(a, b), _)) => Some(format!(
+        Some(((a, b), _)) => Some(format!(
             "mesh `{}` is not watertight: its edge between vertices {} and {} is not shared by \
              exactly two consistently oriented triangles",
             mesh.path.display(),

@@ -213,11 +213,7 @@ impl Scene {
                 if obj.emission.is_some() {
                     return Err(invalid(
                         obj.span,
-                        format!(
-                            "{} {} cannot emit light",
-                            article(csg.op.name()),
-                            csg.op.name()
-                        ),
+                        format!("{} cannot emit light", csg.op.a_name()),
                         "emissive",
                         "place an area light beside the CSG object",
                     ));
@@ -369,7 +365,6 @@ fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
 
 /// The children of a CSG node: closed, not emissive, each valid under `t`.
 fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
-    let op = csg.op.name();
     if csg.op == CsgOp::Inverse && csg.children.len() != 1 {
         return Err(invalid(
             span,
@@ -383,10 +378,10 @@ fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
             return Err(invalid(
                 child.span,
                 format!(
-                    "{} {} has no inside, so it cannot be part of {} {op}: {why}",
+                    "{} {} has no inside, so it cannot be part of {}: {why}",
                     article(child.shape.kind()),
                     child.shape.kind(),
-                    article(op)
+                    csg.op.a_name()
                 ),
                 "not a closed shape",
                 "use closed shapes (sphere, box, cylinder without `open`, a revolve whose \
@@ -397,7 +392,7 @@ fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
         if child.emission.is_some() {
             return Err(invalid(
                 child.span,
-                format!("an area light cannot be part of {} {op}", article(op)),
+                format!("an area light cannot be part of {}", csg.op.a_name()),
                 "emissive",
                 "place the area light beside the CSG object",
             ));

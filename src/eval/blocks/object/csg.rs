@@ -90,13 +90,8 @@ fn child(parts: &[Part], op: CsgOp, span: Span) -> SourceResult<Part> {
         if let Some(why) = open {
             return Err(vec![
                 Error::new(format!(
-                    "this shape has no inside, so it cannot be part of {} {}: {why}",
-                    if op == CsgOp::Intersection || op == CsgOp::Inverse {
-                        "an"
-                    } else {
-                        "a"
-                    },
-                    op.name()
+                    "this shape has no inside, so it cannot be part of {}: {why}",
+                    op.a_name()
                 ))
                 .label("not a closed shape")
                 .help(
