@@ -178,7 +178,10 @@ impl Bvh {
         // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
         // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
         let mut closest = usize::MAX;
-        let mut full: Option<LazyHit> = None;
+        let mut full: Option<Hit> = None;
+        // The CSG part of `full`, if it came from a CSG tree (`u32::MAX`: none). Kept apart so
+        // that the loop moves no more than it did before CSG existed.
+        let mut part = u32::MAX;
         loop {
             let node = &self.nodes[cur];
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
@@ -203,8 +206,9 @@ impl Bvh {
                             }
                             Ok(None) => {}
                             Err(()) => {
-                                if let Some(h) = s.intersect_full(ray, t_min, t_max) {
-                                    t_max = h.t();
+                                if let Some((h, p)) = s.intersect_full(ray, t_min, t_max) {
+                                    t_max = h.t;
+                                    part = p.unwrap_or(u32::MAX);
                                     closest = rest + k;
                                     full = Some(h);
                                 }
@@ -231,7 +235,11 @@ impl Bvh {
         if closest == usize::MAX {
             return best;
         }
-        let lazy = full.unwrap_or(LazyHit::T(t_max));
+        let lazy = match full {
+            None => LazyHit::T(t_max),
+            Some(h) if part != u32::MAX => LazyHit::Part(h, part),
+            Some(h) => LazyHit::Full(h),
+        };
         Some((lazy, &self.shapes[closest], self.ids[closest]))
     }
 

@@ -76,19 +76,30 @@ impl AnyShape {
             AnyShape::Cylinder(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Triangle(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Plane(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
-            AnyShape::Other(_) | AnyShape::Csg(_) => self.intersect_full(ray, t_min, t_max),
+            AnyShape::Other(_) | AnyShape::Csg(_) => {
+                self.intersect_full(ray, t_min, t_max)
+                    .map(|(h, part)| match part {
+                        Some(id) => LazyHit::Part(h, id),
+                        None => LazyHit::Full(h),
+                    })
+            }
         }
     }
 
     /// The full hit of a shape that has no split intersection (boxed shapes, CSG trees), with
     /// the part hit for a CSG tree.
     #[inline]
-    pub(crate) fn intersect_full(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {
+    pub(crate) fn intersect_full(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(Hit, Option<u32>)> {
         match self {
             AnyShape::Csg(c) => c
                 .intersect_part(ray, t_min, t_max)
-                .map(|(h, id)| LazyHit::Part(h, id)),
-            s => s.intersect(ray, t_min, t_max).map(LazyHit::Full),
+                .map(|(h, id)| (h, Some(id))),
+            s => s.intersect(ray, t_min, t_max).map(|h| (h, None)),
         }
     }
 
