@@ -84,13 +84,8 @@ fn rays_through_a_merge_alternate_and_never_meet_inner_surfaces() {
             (DVec3::new(0.3, 0.6, 0.1), 0.45),
         ];
         let mut bad = 0;
-        let mut state = 0x1234_5678_u64;
-        let mut f = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = sppm_lang::sampling::Rng::new(0x1234_5678);
+        let mut f = || f64::from(rng.f32()) * 2.0 - 1.0;
         for _ in 0..4000 {
             let o = DVec3::new(f() * 2.0, 0.6 + f() * 1.5, -2.0 + f() * 0.2);
             let target = DVec3::new(f() * 0.8, 0.6 + f() * 0.5, f() * 0.5);

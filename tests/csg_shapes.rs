@@ -59,13 +59,8 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         for op in ["merge", "intersection"] {
             let both = load(dir.path(), &format!("{op} {{ {shape} {shape} }}"));
             let pb = PreparedScene::new(&both).unwrap();
-            let mut state = 7u64;
-            let mut f = || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 40) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
-            };
+            let mut rng = sppm_lang::sampling::Rng::new(7);
+            let mut f = || rng.f32() * 2.0 - 1.0;
             let (mut hits, mut inside) = (0, 0);
             for _ in 0..3000 {
                 let o = Vec3A::new(f(), f(), f()) * 1.5;

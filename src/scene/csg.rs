@@ -15,6 +15,11 @@ pub const MAX_CSG_DEPTH: usize = 64;
 /// meets, so a wide tree costs every such ray.
 pub const MAX_CSG_LEAVES: usize = 4096;
 
+/// The help of every "not closed" diagnostic.
+pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, cylinder without `open`, a revolve \
+     whose profile starts and ends on the axis, a watertight mesh, a plane), or `union`, which \
+     needs no inside";
+
 /// The operations, with POV-Ray's meaning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CsgOp {

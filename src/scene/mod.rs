@@ -12,7 +12,7 @@ mod csg;
 mod validate;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
-pub use csg::{Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
+pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
 
 use std::sync::Arc;

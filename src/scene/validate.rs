@@ -10,8 +10,8 @@
 use glam::{DAffine3, DVec3};
 
 use super::{
-    Background, Camera, Csg, CsgOp, Light, MAX_CSG_DEPTH, MAX_CSG_LEAVES, Object, Scene, Settings,
-    Shape, why_open,
+    Background, CLOSED_HELP, Camera, Csg, CsgOp, Light, MAX_CSG_DEPTH, MAX_CSG_LEAVES, Object,
+    Scene, Settings, Shape, why_open,
 };
 use crate::span::Span;
 
@@ -378,15 +378,12 @@ fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
             return Err(invalid(
                 child.span,
                 format!(
-                    "{} {} has no inside, so it cannot be part of {}: {why}",
-                    article(child.shape.kind()),
+                    "this {} has no inside, so it cannot be part of {}: {why}",
                     child.shape.kind(),
                     csg.op.a_name()
                 ),
                 "not a closed shape",
-                "use closed shapes (sphere, box, cylinder without `open`, a revolve whose \
-                 profile starts and ends on the axis, a watertight mesh, a plane), or `union`, \
-                 which needs no inside",
+                CLOSED_HELP,
             ));
         }
         if child.emission.is_some() {
@@ -400,12 +397,4 @@ fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
         validate_object(child, t)?;
     }
     Ok(())
-}
-
-fn article(word: &str) -> &'static str {
-    if word.starts_with(['a', 'e', 'i', 'o', 'u']) {
-        "an"
-    } else {
-        "a"
-    }
 }

@@ -146,7 +146,7 @@ impl AnyShape {
             AnyShape::Plane(s) => s.hit_at(ray, t),
             // Boxed shapes always answer `Full`, CSG trees `Part`; recompute if ever asked
             // otherwise.
-            AnyShape::Csg(c) => c
+            AnyShape::Other(_) | AnyShape::Csg(_) => self
                 .intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
                 .unwrap_or(Hit {
                     t,
@@ -156,17 +156,6 @@ impl AnyShape {
                     uv: Vec2::ZERO,
                     dpdu: glam::Vec3A::X,
                 }),
-            AnyShape::Other(s) => {
-                s.intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
-                    .unwrap_or(Hit {
-                        t,
-                        p: ray.at(t),
-                        n: glam::Vec3A::Z,
-                        ns: glam::Vec3A::Z,
-                        uv: Vec2::ZERO,
-                        dpdu: glam::Vec3A::X,
-                    })
-            }
         }
     }
 }

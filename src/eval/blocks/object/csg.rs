@@ -10,7 +10,7 @@ use super::ObjectBuilder;
 use crate::diag::{Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::value::{CsgDef, ObjectDef, Part, ShapeDef};
-use crate::scene::{CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
+use crate::scene::{CLOSED_HELP, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 use crate::span::Span;
 
 /// The blocks that are CSG operations.
@@ -94,11 +94,7 @@ fn child(parts: &[Part], op: CsgOp, span: Span) -> SourceResult<Part> {
                     op.a_name()
                 ))
                 .label("not a closed shape")
-                .help(
-                    "use closed shapes (sphere, box, cylinder without `open`, a revolve whose \
-                     profile starts and ends on the axis, a watertight mesh, a plane), or \
-                     `union`, which needs no inside",
-                )
+                .help(CLOSED_HELP)
                 .at(p.span),
             ]);
         }
