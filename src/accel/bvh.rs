@@ -159,7 +159,7 @@ impl Bvh {
     /// for `t` only; the surface data is computed once, for the closest hit.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
         let (lazy, shape, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((shape.hit_at(ray, lazy), id))
+        Some((shape.hit_at(ray, lazy), lazy.part().unwrap_or(id)))
     }
 
     /// Closest hit as a [`LazyHit`], the shape hit and its id.
@@ -190,6 +190,9 @@ impl Bvh {
         // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
         let mut closest = usize::MAX;
         let mut full: Option<Hit> = None;
+        // The CSG part of `full`, if it came from a CSG tree (`u32::MAX`: none). Kept apart so
+        // that the loop moves no more than it did before CSG existed.
+        let mut part = u32::MAX;
         loop {
             let node = &self.nodes[cur];
             if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
@@ -214,8 +217,9 @@ impl Bvh {
                             }
                             Ok(None) => {}
                             Err(()) => {
-                                if let Some(h) = s.intersect(ray, t_min, t_max) {
+                                if let Some((h, p)) = s.intersect_full(ray, t_min, t_max) {
                                     t_max = h.t;
+                                    part = p.unwrap_or(u32::MAX);
                                     closest = rest + k;
                                     full = Some(h);
                                 }
@@ -242,7 +246,11 @@ impl Bvh {
         if closest == usize::MAX {
             return best;
         }
-        let lazy = full.map_or(LazyHit::T(t_max), LazyHit::Full);
+        let lazy = match full {
+            None => LazyHit::T(t_max),
+            Some(h) if part != u32::MAX => LazyHit::Part(h, part),
+            Some(h) => LazyHit::Full(h),
+        };
         Some((lazy, &self.shapes[closest], self.ids[closest]))
     }
 

@@ -7,7 +7,9 @@ use std::rc::Rc;
 use std::sync::Arc;
 
 use super::Evaluator;
-use super::value::{ColorDef, MatKind, MaterialDef, ObjectDef, PatternDef, ShapeDef, TextureDef};
+use super::value::{
+    ColorDef, MatKind, MaterialDef, ObjectDef, Part, PatternDef, ShapeDef, TextureDef,
+};
 use crate::diag::{Error, SourceResult};
 use crate::scene::*;
 use crate::span::Span;
@@ -88,26 +90,66 @@ impl Evaluator {
     pub(super) fn emit(&mut self, obj: &ObjectDef, span: Span) -> SourceResult<()> {
         for part in &obj.parts {
             self.check_object_budget(span)?;
-            let material = match (&part.material, part.emission) {
-                (Some(m), _) => self.material_id(m)?,
-                (None, Some(_)) => self.black_material(),
-                (None, None) => self.default_material(),
-            };
-            let shape = match &part.shape {
-                ShapeDef::Ready(s) => s.clone(),
-                ShapeDef::Mesh { path, span } => Shape::Mesh {
-                    mesh: self.mesh(path, *span)?,
-                },
-            };
-            self.scene.objects.push(Object {
-                shape,
-                transform: part.transform,
-                material,
-                emission: part.emission,
-                span: part.span,
-            });
+            if let ShapeDef::Csg(c) = &part.shape {
+                // The shapes of a CSG count against the copies of all containers.
+                self.count_parts(0, c.leaves, span)?;
+            }
+            let object = self.lower_part(part, None)?;
+            self.scene.objects.push(object);
         }
         Ok(())
+    }
+
+    /// A part as a scene object; `inherited`: the material of the nearest enclosing CSG node
+    /// that has one (for the shapes of a CSG without their own).
+    fn lower_part(
+        &mut self,
+        part: &Part,
+        inherited: Option<&Rc<MaterialDef>>,
+    ) -> SourceResult<Object> {
+        let own = part.material.as_ref().or(inherited);
+        let material = match (own, part.emission) {
+            (Some(m), _) => self.material_id(m)?,
+            (None, Some(_)) => self.black_material(),
+            (None, None) => self.default_material(),
+        };
+        let shape = match &part.shape {
+            ShapeDef::Ready(s) => s.clone(),
+            ShapeDef::Mesh { path, span } => Shape::Mesh {
+                mesh: self.mesh(path, *span)?,
+            },
+            ShapeDef::Csg(c) => {
+                let mut children = Vec::with_capacity(c.children.len());
+                for child in &c.children {
+                    let object = self.lower_part(child, own)?;
+                    // Meshes are known only now: is this one closed?
+                    if let Some(why) = why_open(&object.shape) {
+                        return Err(vec![
+                            Error::new(format!(
+                                "this {} has no inside, so it cannot be part of {}: {why}",
+                                object.shape.kind(),
+                                c.op.a_name()
+                            ))
+                            .label("not a closed shape")
+                            .help(
+                                "close the mesh in a modeller, or use `union`, which needs no \
+                                 inside",
+                            )
+                            .at(object.span),
+                        ]);
+                    }
+                    children.push(object);
+                }
+                Shape::Csg(Csg { op: c.op, children })
+            }
+        };
+        Ok(Object {
+            shape,
+            transform: part.transform,
+            material,
+            emission: part.emission,
+            span: part.span,
+        })
     }
 
     fn push_material(&mut self, m: Material) -> MaterialId {

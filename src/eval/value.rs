@@ -9,7 +9,7 @@ use glam::{DAffine3, DVec2, DVec3};
 
 use crate::diag::Error;
 use crate::scene::{
-    Camera, Color, ColorMap, Emission, Light, Mapping, Pattern, Settings, Shape, Wrap,
+    Camera, Color, ColorMap, CsgOp, Emission, Light, Mapping, Pattern, Settings, Shape, Wrap,
 };
 use crate::span::Span;
 use crate::syntax::ast::MacroDef;
@@ -161,6 +161,19 @@ pub enum PatternDef {
 pub enum ShapeDef {
     Ready(Shape),
     Mesh { path: PathBuf, span: Span },
+    Csg(Rc<CsgDef>),
+}
+
+/// A CSG operation over its children, each one closed object (a child union is one part
+/// holding a `Union` node).
+#[derive(Debug)]
+pub struct CsgDef {
+    pub op: CsgOp,
+    pub children: Vec<Part>,
+    /// Shapes in the whole tree.
+    pub leaves: usize,
+    /// Nesting of operations (1: its children are shapes).
+    pub depth: usize,
 }
 
 #[derive(Debug, Clone)]

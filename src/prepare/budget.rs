@@ -43,6 +43,12 @@ fn primitives(shape: &Shape) -> u64 {
         Shape::Box { .. } => 6,
         // Body and two caps.
         Shape::Cylinder { .. } => 3,
+        // Its shapes live in the one CSG primitive (an overestimate by one).
+        Shape::Csg(csg) => csg
+            .leaves()
+            .iter()
+            .map(|o| primitives(&o.shape))
+            .fold(1u64, u64::saturating_add),
         _ => 1,
     }
 }

@@ -4,6 +4,7 @@
 use glam::{Affine3A, DVec3, Vec3A};
 
 mod budget;
+mod csg;
 mod instances;
 mod lights;
 mod settings;
@@ -31,12 +32,23 @@ pub struct ObjectInfo {
     pub normal_to_object: glam::Mat3A,
 }
 
+impl ObjectInfo {
+    fn new(material: scene::MaterialId, to_world: &glam::DAffine3) -> Self {
+        Self {
+            material: material.0 as usize,
+            to_object: to_world.inverse().as_affine3a(),
+            normal_to_object: glam::Mat3A::from(to_world.matrix3.transpose().as_mat3()),
+        }
+    }
+}
+
 pub struct PreparedScene<'a> {
     pub scene: &'a Scene,
     /// The camera, validated, for the scene's resolution.
     pub camera: Camera,
     pub bvh: Bvh,
-    /// Object of each primitive id.
+    /// Object of each primitive id (the parts of CSG objects, whose ids the BVH does not hold
+    /// but their hits report, have objects after the scene's).
     pub prim_object: Vec<u32>,
     /// Area light of each primitive id, or `u32::MAX`.
     pub prim_light: Vec<u32>,
@@ -113,6 +125,8 @@ impl<'a> PreparedScene<'a> {
         let mut lights = Vec::new();
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instancer = instances::Instancer::new(scene);
+        // The parts of CSG objects, after the scene's objects.
+        let mut csg_parts = Vec::new();
         for (oi, obj) in scene.objects.iter().enumerate() {
             let err = |message: String| RenderError {
                 message: format!("{}: {message}", obj.shape.kind()),
@@ -122,6 +136,24 @@ impl<'a> PreparedScene<'a> {
             };
             if obj.material.0 as usize >= scene.materials.len() {
                 return Err(err("unknown material".into()));
+            }
+            objects.push(ObjectInfo::new(obj.material, &obj.transform));
+            if let scene::Shape::Csg(_) = &obj.shape {
+                // One primitive; its leaves have ids (and objects) of their own.
+                let id = prim_object.len() as u32;
+                let (shape, parts) = csg::build_csg(obj, id + 1).map_err(err)?;
+                shapes.push((shape, id));
+                prim_object.push(oi as u32);
+                prim_light.push(NO_LIGHT);
+                for part in parts {
+                    if part.material.0 as usize >= scene.materials.len() {
+                        return Err(err("unknown material".into()));
+                    }
+                    prim_object.push((scene.objects.len() + csg_parts.len()) as u32);
+                    prim_light.push(NO_LIGHT);
+                    csg_parts.push(ObjectInfo::new(part.material, &part.transform));
+                }
+                continue;
             }
             let list = match instancer.placement(obj).map_err(err)? {
                 Some(placed) => vec![placed],
@@ -142,7 +174,7 @@ impl<'a> PreparedScene<'a> {
             };
             let mut light_shapes = light_shapes.map(|l| l.into_iter());
             for s in list {
-                let id = shapes.len() as u32;
+                let id = prim_object.len() as u32;
                 let mut light = NO_LIGHT;
                 if let (Some(e), Some(ls)) = (emission, light_shapes.as_mut()) {
                     let ls = ls.next().expect("same shapes twice");
@@ -166,13 +198,8 @@ impl<'a> PreparedScene<'a> {
                 prim_object.push(oi as u32);
                 prim_light.push(light);
             }
-            let inv = obj.transform.inverse();
-            objects.push(ObjectInfo {
-                material: obj.material.0 as usize,
-                to_object: inv.as_affine3a(),
-                normal_to_object: glam::Mat3A::from(obj.transform.matrix3.transpose().as_mat3()),
-            });
         }
+        objects.extend(csg_parts);
         lights::push_scene_lights(scene, &mut lights)?;
         let bvh = Bvh::new(shapes);
         let environment = lights::push_environment(scene, &bvh, &mut lights);
@@ -221,6 +248,8 @@ impl<'a> PreparedScene<'a> {
     #[inline(never)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
         let (lazy, shape, prim) = self.bvh.intersect_lazy(ray, 0.0, t_max)?;
+        // A CSG tree names the part hit: its material and texture space are that part's.
+        let prim = lazy.part().unwrap_or(prim);
         let hit = shape.hit_at_uv(ray, lazy, self.reads_uv(prim));
         Some(SurfaceHit { hit, prim })
     }

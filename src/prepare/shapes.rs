@@ -169,5 +169,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         scene::Shape::BezierPatch { points, method } => {
             vec![wrap(Arc::new(BezierPatch::new(points, *method)?))?]
         }
+        // Built whole by `csg::build_csg`, which gives its parts their own ids.
+        scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })
 }

@@ -8,9 +8,11 @@
 //! Colors are linear RGB.
 
 mod assets;
+mod csg;
 mod validate;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
+pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
 
 use std::sync::Arc;
@@ -35,7 +37,8 @@ pub struct TextureId(pub u32);
 pub struct Scene {
     pub settings: Settings,
     pub camera: Camera,
-    /// Every object, flattened (groups and unions resolved, transforms composed).
+    /// Every object, flattened (groups and unions resolved, transforms composed); a CSG
+    /// operation is one object holding its children.
     pub objects: Vec<Object>,
     /// Lights that are not shapes (point, spot). Emissive objects are lights too.
     pub lights: Vec<Light>,
@@ -256,6 +259,8 @@ pub enum Shape {
         points: Box<[DVec3; 16]>,
         method: IntersectMethod,
     },
+    /// Constructive solid geometry over closed child objects (see [`Csg`]).
+    Csg(Csg),
 }
 
 impl Shape {
@@ -272,6 +277,7 @@ impl Shape {
             Shape::Mesh { .. } => "mesh",
             Shape::Revolve { .. } => "revolve",
             Shape::BezierPatch { .. } => "bezier_patch",
+            Shape::Csg(c) => c.op.name(),
         }
     }
 }

@@ -9,7 +9,10 @@
 
 use glam::{DAffine3, DVec3};
 
-use super::{Background, Camera, Light, Scene, Settings, Shape};
+use super::{
+    Background, CLOSED_HELP, Camera, Csg, CsgOp, Light, MAX_CSG_DEPTH, MAX_CSG_LEAVES, Object,
+    Scene, Settings, Shape, why_open,
+};
 use crate::span::Span;
 
 /// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
@@ -205,94 +208,18 @@ impl Scene {
         self.camera.validate()?;
         self.settings.validate()?;
         for obj in &self.objects {
-            let span = obj.span;
-            let t = &obj.transform;
-            let kind = obj.shape.kind();
-            if !(t.matrix3.is_finite() && t.translation.is_finite()) {
-                return Err(invalid(
-                    span,
-                    format!("the {kind}'s transform is not finite"),
-                    "transforms overflow",
-                    "check the chain of scale, translate and matrix applied to it",
-                ));
-            }
-            let (hi, lo) = (stretch(t), shrink(t));
-            let at = |p: DVec3| point(t.transform_point3(p), &format!("this {kind}"), span);
-            let len = |x: f64, what: &str| {
-                size(x * hi, &format!("the {kind}'s {what}"), span)?;
-                size(x * lo, &format!("the {kind}'s {what}"), span)
-            };
-            match &obj.shape {
-                Shape::Sphere { center, radius } => {
-                    at(*center)?;
-                    len(*radius, "radius")?;
-                }
-                Shape::Plane { normal, offset } => {
-                    // Only the distance from the origin matters: a plane moved along itself is
-                    // the same plane.
-                    let n = t.matrix3.inverse().transpose() * *normal;
-                    let p = t.transform_point3(*normal * *offset);
-                    let d = if n.length_squared() > 0.0 {
-                        n.normalize().dot(p)
-                    } else {
-                        f64::NAN
-                    };
-                    point(DVec3::splat(d), &format!("this {kind}"), span)?;
-                }
-                Shape::Quad {
-                    origin,
-                    edge_u,
-                    edge_v,
-                } => {
-                    for p in [*origin, *origin + *edge_u, *origin + *edge_v] {
-                        at(p)?;
-                    }
-                    at(*origin + *edge_u + *edge_v)?;
-                }
-                Shape::Box { min, max } => {
-                    for i in 0..8 {
-                        let pick = |bit: i32, a: f64, b: f64| if i & bit == 0 { a } else { b };
-                        at(DVec3::new(
-                            pick(1, min.x, max.x),
-                            pick(2, min.y, max.y),
-                            pick(4, min.z, max.z),
-                        ))?;
-                    }
-                }
-                Shape::Cylinder {
-                    base, cap, radius, ..
-                } => {
-                    at(*base)?;
-                    at(*cap)?;
-                    len(*radius, "radius")?;
-                    len((*cap - *base).length(), "length")?;
-                }
-                Shape::Disk { center, radius, .. } => {
-                    // A disk may be squashed along its own normal: only its largest stretch.
-                    at(*center)?;
-                    size(*radius * hi, &format!("the {kind}'s radius"), span)?;
-                }
-                Shape::Triangle { vertices } => {
-                    for v in vertices {
-                        at(*v)?;
-                    }
-                }
-                Shape::Mesh { mesh } => {
-                    for v in &mesh.positions {
-                        at(*v)?;
-                    }
-                }
-                Shape::Revolve { profile, .. } => {
-                    for p in profile.segments.iter().flatten() {
-                        at(DVec3::new(p.x, p.y, p.x))?;
-                    }
-                }
-                Shape::BezierPatch { points, .. } => {
-                    for p in points.iter() {
-                        at(*p)?;
-                    }
+            if let Shape::Csg(csg) = &obj.shape {
+                csg_limits(csg, obj.span)?;
+                if obj.emission.is_some() {
+                    return Err(invalid(
+                        obj.span,
+                        format!("{} cannot emit light", csg.op.a_name()),
+                        "emissive",
+                        "place an area light beside the CSG object",
+                    ));
                 }
             }
+            validate_object(obj, &DAffine3::IDENTITY)?;
         }
         for light in &self.lights {
             let (position, span) = match light {
@@ -314,4 +241,160 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// One object under its parent's transform (identity at the top level).
+fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
+    let span = obj.span;
+    let t = &(*parent * obj.transform);
+    let kind = obj.shape.kind();
+    if !(t.matrix3.is_finite() && t.translation.is_finite()) {
+        return Err(invalid(
+            span,
+            format!("the {kind}'s transform is not finite"),
+            "transforms overflow",
+            "check the chain of scale, translate and matrix applied to it",
+        ));
+    }
+    let (hi, lo) = (stretch(t), shrink(t));
+    let at = |p: DVec3| point(t.transform_point3(p), &format!("this {kind}"), span);
+    let len = |x: f64, what: &str| {
+        size(x * hi, &format!("the {kind}'s {what}"), span)?;
+        size(x * lo, &format!("the {kind}'s {what}"), span)
+    };
+    match &obj.shape {
+        Shape::Sphere { center, radius } => {
+            at(*center)?;
+            len(*radius, "radius")?;
+        }
+        Shape::Plane { normal, offset } => {
+            // Only the distance from the origin matters: a plane moved along itself is
+            // the same plane.
+            let n = t.matrix3.inverse().transpose() * *normal;
+            let p = t.transform_point3(*normal * *offset);
+            let d = if n.length_squared() > 0.0 {
+                n.normalize().dot(p)
+            } else {
+                f64::NAN
+            };
+            point(DVec3::splat(d), &format!("this {kind}"), span)?;
+        }
+        Shape::Quad {
+            origin,
+            edge_u,
+            edge_v,
+        } => {
+            for p in [*origin, *origin + *edge_u, *origin + *edge_v] {
+                at(p)?;
+            }
+            at(*origin + *edge_u + *edge_v)?;
+        }
+        Shape::Box { min, max } => {
+            for i in 0..8 {
+                let pick = |bit: i32, a: f64, b: f64| if i & bit == 0 { a } else { b };
+                at(DVec3::new(
+                    pick(1, min.x, max.x),
+                    pick(2, min.y, max.y),
+                    pick(4, min.z, max.z),
+                ))?;
+            }
+        }
+        Shape::Cylinder {
+            base, cap, radius, ..
+        } => {
+            at(*base)?;
+            at(*cap)?;
+            len(*radius, "radius")?;
+            len((*cap - *base).length(), "length")?;
+        }
+        Shape::Disk { center, radius, .. } => {
+            // A disk may be squashed along its own normal: only its largest stretch.
+            at(*center)?;
+            size(*radius * hi, &format!("the {kind}'s radius"), span)?;
+        }
+        Shape::Triangle { vertices } => {
+            for v in vertices {
+                at(*v)?;
+            }
+        }
+        Shape::Mesh { mesh } => {
+            for v in &mesh.positions {
+                at(*v)?;
+            }
+        }
+        Shape::Revolve { profile, .. } => {
+            for p in profile.segments.iter().flatten() {
+                at(DVec3::new(p.x, p.y, p.x))?;
+            }
+        }
+        Shape::BezierPatch { points, .. } => {
+            for p in points.iter() {
+                at(*p)?;
+            }
+        }
+        Shape::Csg(csg) => validate_csg(csg, t, span)?,
+    }
+    Ok(())
+}
+
+/// The size of a CSG tree; checked before anything walks it recursively.
+fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
+    if csg.depth(MAX_CSG_DEPTH) > MAX_CSG_DEPTH {
+        return Err(invalid(
+            span,
+            format!("CSG operations are nested more than {MAX_CSG_DEPTH} deep"),
+            "too deep",
+            "flatten the tree: a merge, union or intersection takes any number of children",
+        ));
+    }
+    let n = csg.leaves().len();
+    if n > MAX_CSG_LEAVES {
+        return Err(invalid(
+            span,
+            format!(
+                "this {} holds {n} shapes, more than {MAX_CSG_LEAVES}",
+                csg.op.name()
+            ),
+            "too many shapes",
+            "every ray into a CSG tests its shapes one by one: split it, or use `union` \
+             (flattened into the scene) where inner surfaces may stay",
+        ));
+    }
+    Ok(())
+}
+
+/// The children of a CSG node: closed, not emissive, each valid under `t`.
+fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
+    if csg.op == CsgOp::Inverse && csg.children.len() != 1 {
+        return Err(invalid(
+            span,
+            format!("inverse takes one object, found {}", csg.children.len()),
+            "not one object",
+            "write `inverse` inside the object to turn inside out",
+        ));
+    }
+    for child in &csg.children {
+        if let Some(why) = why_open(&child.shape) {
+            return Err(invalid(
+                child.span,
+                format!(
+                    "this {} has no inside, so it cannot be part of {}: {why}",
+                    child.shape.kind(),
+                    csg.op.a_name()
+                ),
+                "not a closed shape",
+                CLOSED_HELP,
+            ));
+        }
+        if child.emission.is_some() {
+            return Err(invalid(
+                child.span,
+                format!("an area light cannot be part of {}", csg.op.a_name()),
+                "emissive",
+                "place the area light beside the CSG object",
+            ));
+        }
+        validate_object(child, t)?;
+    }
+    Ok(())
 }

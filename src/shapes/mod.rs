@@ -92,6 +92,7 @@ pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
     }
 }
 
+pub mod csg;
 pub mod cuboid;
 pub mod cylinder;
 pub mod disk;

@@ -26,7 +26,14 @@ impl Plane {
     }
 }
 
-impl Plane {}
+impl Plane {
+    /// Whether `p` lies in the plane's half-space, the side opposite its normal (POV-Ray's
+    /// inside of a plane).
+    #[inline]
+    pub fn contains(&self, p: Vec3A) -> bool {
+        self.frame.n.dot(p) < self.offset
+    }
+}
 
 impl SplitShape for Plane {
     /// Nearest `t` with `t_min < t < t_max`, without the surface data (see [`Plane::hit_at`]).

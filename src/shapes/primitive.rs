@@ -3,8 +3,8 @@
 use glam::Vec2;
 
 use super::{
-    AreaSample, Shape, cylinder::Cylinder, disk::Disk, plane::Plane, quad::Quad, sphere::Sphere,
-    triangle::Triangle,
+    AreaSample, Shape, csg::Csg, cylinder::Cylinder, disk::Disk, plane::Plane, quad::Quad,
+    sphere::Sphere, triangle::Triangle,
 };
 use crate::geometry::{Aabb, Hit, Ray};
 
@@ -16,6 +16,8 @@ pub enum AnyShape {
     Triangle(Triangle),
     Plane(Plane),
     Other(Box<dyn Shape>),
+    /// A CSG tree: its hits name the part (leaf) they are on.
+    Csg(Box<Csg>),
 }
 
 macro_rules! dispatch {
@@ -28,17 +30,19 @@ macro_rules! dispatch {
             AnyShape::Triangle($s) => $e,
             AnyShape::Plane($s) => $e,
             AnyShape::Other($s) => $e,
+            AnyShape::Csg($s) => $e,
         }
     };
 }
 
 /// The result of a cheap intersection test: the analytic shapes give only `t` (their surface
 /// data is computed once, for the closest hit, by [`AnyShape::hit_at`]); boxed shapes give
-/// their full hit at once.
+/// their full hit at once, and a CSG tree its full hit with the id of the part hit.
 #[derive(Debug, Clone, Copy)]
 pub enum LazyHit {
     T(f32),
     Full(Hit),
+    Part(Hit, u32),
 }
 
 impl LazyHit {
@@ -46,7 +50,16 @@ impl LazyHit {
     pub fn t(&self) -> f32 {
         match self {
             LazyHit::T(t) => *t,
-            LazyHit::Full(h) => h.t,
+            LazyHit::Full(h) | LazyHit::Part(h, _) => h.t,
+        }
+    }
+
+    /// The id of the CSG part hit (its primitive id in the prepared scene).
+    #[inline]
+    pub fn part(&self) -> Option<u32> {
+        match self {
+            LazyHit::Part(_, id) => Some(*id),
+            _ => None,
         }
     }
 }
@@ -63,7 +76,30 @@ impl AnyShape {
             AnyShape::Cylinder(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Triangle(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Plane(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
-            AnyShape::Other(s) => s.intersect(ray, t_min, t_max).map(LazyHit::Full),
+            AnyShape::Other(_) | AnyShape::Csg(_) => {
+                self.intersect_full(ray, t_min, t_max)
+                    .map(|(h, part)| match part {
+                        Some(id) => LazyHit::Part(h, id),
+                        None => LazyHit::Full(h),
+                    })
+            }
+        }
+    }
+
+    /// The full hit of a shape that has no split intersection (boxed shapes, CSG trees), with
+    /// the part hit for a CSG tree.
+    #[inline]
+    pub(crate) fn intersect_full(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(Hit, Option<u32>)> {
+        match self {
+            AnyShape::Csg(c) => c
+                .intersect_part(ray, t_min, t_max)
+                .map(|(h, id)| (h, Some(id))),
+            s => s.intersect(ray, t_min, t_max).map(|h| (h, None)),
         }
     }
 
@@ -81,7 +117,7 @@ impl AnyShape {
             AnyShape::Cylinder(s) => s.hit_t(ray, t_min, t_max),
             AnyShape::Triangle(s) => s.hit_t(ray, t_min, t_max),
             AnyShape::Plane(s) => s.hit_t(ray, t_min, t_max),
-            AnyShape::Other(_) => return Err(()),
+            AnyShape::Other(_) | AnyShape::Csg(_) => return Err(()),
         })
     }
 
@@ -98,7 +134,7 @@ impl AnyShape {
     pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
         use super::SplitShape;
         let t = match lazy {
-            LazyHit::Full(h) => return h,
+            LazyHit::Full(h) | LazyHit::Part(h, _) => return h,
             LazyHit::T(t) => t,
         };
         match self {
@@ -108,18 +144,18 @@ impl AnyShape {
             AnyShape::Cylinder(s) => s.hit_at_uv(ray, t, uv),
             AnyShape::Triangle(s) => s.hit_at(ray, t),
             AnyShape::Plane(s) => s.hit_at(ray, t),
-            // Boxed shapes always answer `Full`; recompute if ever asked otherwise.
-            AnyShape::Other(s) => {
-                s.intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
-                    .unwrap_or(Hit {
-                        t,
-                        p: ray.at(t),
-                        n: glam::Vec3A::Z,
-                        ns: glam::Vec3A::Z,
-                        uv: Vec2::ZERO,
-                        dpdu: glam::Vec3A::X,
-                    })
-            }
+            // Boxed shapes always answer `Full`, CSG trees `Part`; recompute if ever asked
+            // otherwise.
+            AnyShape::Other(_) | AnyShape::Csg(_) => self
+                .intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
+                .unwrap_or(Hit {
+                    t,
+                    p: ray.at(t),
+                    n: glam::Vec3A::Z,
+                    ns: glam::Vec3A::Z,
+                    uv: Vec2::ZERO,
+                    dpdu: glam::Vec3A::X,
+                }),
         }
     }
 }

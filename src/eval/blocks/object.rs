@@ -1,6 +1,7 @@
-//! Object blocks: the primitives (in [`primitive`]), `revolve`, Bezier patches, and the
-//! containers `union`, `group`, `object` and `area_light`.
+//! Object blocks: the primitives (in [`primitive`]), `revolve`, Bezier patches, the
+//! containers `union`, `group`, `object` and `area_light`, and the CSG operations (in [`csg`]).
 
+mod csg;
 mod primitive;
 
 use std::rc::Rc;
@@ -11,7 +12,7 @@ use super::{Sink, unexpected};
 use crate::diag::{At, Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color, count, num, range_error, vec3, word};
-use crate::eval::props::{PropSpec, TRANSFORMS, p, transform_prop, w, with_transforms};
+use crate::eval::props::{PropSpec, p, transform_prop, w, with_transforms};
 use crate::eval::value::{MaterialDef, ObjectDef, Part, ProfileDef, ShapeDef, Value};
 use crate::scene::*;
 use crate::span::Span;
@@ -34,20 +35,24 @@ pub(super) struct ObjectBuilder {
     method: Option<String>,
     iterations: u32,
     starts: u32,
+    inverse: bool,
 }
 
-static OBJ_PROPS: [PropSpec; 4] = TRANSFORMS;
-static CYL_PROPS: [PropSpec; 5] = with_transforms([p("open", 0, 0, "nothing", "")]);
+const INVERSE: PropSpec = p("inverse", 0, 0, "nothing", "");
+static OBJ_PROPS: [PropSpec; 5] = with_transforms([INVERSE]);
+static CYL_PROPS: [PropSpec; 6] = with_transforms([p("open", 0, 0, "nothing", ""), INVERSE]);
 static AREA_PROPS: [PropSpec; 6] = with_transforms([
     p("radiance", 1, 1, "a color", "rgb <17, 12, 4>"),
     p("two_sided", 0, 0, "nothing", ""),
 ]);
-static PATCH_PROPS: [PropSpec; 7] = with_transforms([
+static PATCH_PROPS: [PropSpec; 8] = with_transforms([
+    INVERSE,
     w("method", "`robust` or `newton`", "newton"),
     p("iterations", 1, 1, "a number", "12"),
     p("starts", 1, 1, "a number", "8"),
 ]);
-static REVOLVE_PROPS: [PropSpec; 11] = with_transforms([
+static REVOLVE_PROPS: [PropSpec; 12] = with_transforms([
+    INVERSE,
     w("method", "`robust` or `newton`", "newton"),
     p("iterations", 1, 1, "a number", "12"),
     p("starts", 1, 1, "a number", "8"),
@@ -80,6 +85,9 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "group",
     "object",
     "area_light",
+    "merge",
+    "intersection",
+    "difference",
 ];
 
 impl ObjectBuilder {
@@ -106,11 +114,16 @@ impl ObjectBuilder {
             method: None,
             iterations: 12,
             starts: 8,
+            inverse: false,
         }
     }
 
     fn is_container(&self) -> bool {
-        matches!(self.kind, "union" | "group" | "object" | "area_light")
+        matches!(self.kind, "union" | "group" | "object" | "area_light") || self.csg().is_some()
+    }
+
+    fn csg(&self) -> Option<CsgOp> {
+        csg::csg_op(self.kind)
     }
 
     fn part(&self, shape: Shape) -> Part {
@@ -244,8 +257,12 @@ impl ObjectBuilder {
                 }
                 parts
             }
+            k if csg::csg_op(k).is_some() => self.csg_finish(ev, csg::csg_op(k).unwrap())?,
             _ => vec![self.primitive(ev)?],
         };
+        if self.inverse {
+            parts = self.inverted(parts)?;
+        }
         let mut t = self.transform;
         if let Some((axis, span)) = self.axis {
             if axis.length_squared() == 0.0 {
@@ -340,6 +357,7 @@ impl Sink for ObjectBuilder {
         }
         match kw.text.as_str() {
             "open" => self.open = true,
+            "inverse" => self.inverse = true,
             "two_sided" => self.two_sided = true,
             "corner" => self.corner = true,
             "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),
@@ -380,6 +398,7 @@ impl Sink for ObjectBuilder {
                 self.material = Some(m);
                 Ok(())
             }
+            Value::Object(o) if let Some(op) = self.csg() => self.csg_child(ev, op, &o, span),
             Value::Object(o) if self.is_container() => {
                 ev.count_parts(self.parts.len(), o.parts.len(), span)?;
                 self.parts.extend(o.parts.iter().cloned());
@@ -389,7 +408,8 @@ impl Sink for ObjectBuilder {
                 self,
                 &v,
                 span,
-                "only `union`, `group`, `object` and `area_light` contain objects",
+                "only `union`, `group`, `object`, `area_light` and the CSG operations (`merge`, \
+                 `intersection`, `difference`) contain objects",
             )),
             Value::Texture(_) => Err(unexpected(
                 self,

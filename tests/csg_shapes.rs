@@ -1,0 +1,98 @@
+//! Every closed shape knows its inside: a `merge` or `intersection` of a shape with itself has
+//! the shape's hits (same distance; normals out of the solid, so reversed where the shape's own
+//! normals point in: a mesh wound inward, a revolve profile run clockwise), for rays from
+//! outside and from inside. A wrong inside makes the copies hide each other's hits.
+
+use glam::Vec3A;
+use sppm_lang::EvalOptions;
+use sppm_lang::geometry::Ray;
+use sppm_lang::render::PreparedScene;
+use sppm_lang::scene::Scene;
+
+const CUBE: &str = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
+
+fn load(dir: &std::path::Path, objects: &str) -> Scene {
+    let path = dir.join("s.scn");
+    std::fs::write(&path, objects).unwrap();
+    let l = sppm_lang::load_file(&path, &EvalOptions::default()).unwrap();
+    assert!(!l.has_errors(), "{objects}: {:?}", l.diagnostics);
+    l.scene.unwrap()
+}
+
+#[test]
+fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cube.obj"), CUBE).unwrap();
+    // The same cube wound the other way: every face reversed.
+    let inward: String = CUBE
+        .lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(f) => format!("f {}\n", f.split(' ').rev().collect::<Vec<_>>().join(" ")),
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(dir.path().join("inward.obj"), inward).unwrap();
+    // (shape, whether its own normals point into it)
+    let shapes = [
+        ("cylinder { <0, -0.8, 0>, <0.3, 0.8, 0.2>, 0.6 }", false),
+        (
+            "box { <-0.7, -0.5, -0.6>, <0.8, 0.6, 0.5> scale <1, 2, 0.5> rotate <20, 30, 0> }",
+            false,
+        ),
+        ("sphere { <0, 0, 0>, 0.8 scale <1, 0.5, 1.2> }", false),
+        ("plane { <0.2, 1, 0.1>, 0.3 }", false),
+        ("mesh { \"cube.obj\" scale 0.7 }", false),
+        ("mesh { \"inward.obj\" scale 0.7 }", true),
+        (
+            "revolve { profile bezier { <0, -0.6>, <0.9, -0.6>, <0.9, 0.6>, <0, 0.6> } }",
+            false,
+        ),
+        (
+            "revolve { profile bezier { <0, 0.6>, <0.9, 0.6>, <0.9, -0.6>, <0, -0.6> } }",
+            true,
+        ),
+    ];
+    for (shape, inward) in shapes {
+        let alone = load(dir.path(), shape);
+        let pa = PreparedScene::new(&alone).unwrap();
+        for op in ["merge", "intersection"] {
+            let both = load(dir.path(), &format!("{op} {{ {shape} {shape} }}"));
+            let pb = PreparedScene::new(&both).unwrap();
+            let mut rng = sppm_lang::sampling::Rng::new(7);
+            let mut f = || rng.f32() * 2.0 - 1.0;
+            let (mut hits, mut inside) = (0, 0);
+            for _ in 0..3000 {
+                let o = Vec3A::new(f(), f(), f()) * 1.5;
+                let d = Vec3A::new(f(), f(), f()).normalize_or(Vec3A::X);
+                let ray = Ray::new(o, d);
+                let a = pa.intersect(&ray, f32::INFINITY);
+                let b = pb.intersect(&ray, f32::INFINITY);
+                let (Some(a), Some(b)) = (a, b) else {
+                    assert!(a.is_none() && b.is_none(), "{op} of {shape}: {ray:?}");
+                    continue;
+                };
+                hits += 1;
+                assert!(
+                    (a.hit.t - b.hit.t).abs() <= 1e-5 * a.hit.t.max(1.0),
+                    "{op} of {shape}: {ray:?}: {} vs {}",
+                    a.hit.t,
+                    b.hit.t
+                );
+                let want = if inward { -a.hit.n } else { a.hit.n };
+                assert!(
+                    want.dot(b.hit.n) > 0.9999,
+                    "{op} of {shape}: {ray:?}: normal {} vs {}",
+                    want,
+                    b.hit.n
+                );
+                // Leaving the solid: the ray started inside.
+                inside += usize::from(b.hit.n.dot(d) > 0.0);
+            }
+            assert!(
+                hits > 300 && inside > 100,
+                "{op} of {shape}: {hits} hits, {inside} from inside"
+            );
+        }
+    }
+}
