@@ -20,6 +20,60 @@ pub struct AreaSample {
     pub pdf: f32,
 }
 
+/// A point on a shape sampled for a receiver by the directions it subtends there
+/// ([`sphere::Sphere::sample_toward`], [`quad::Quad::sample_toward`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolidAngleSample {
+    pub p: Vec3A,
+    /// Unit geometric normal at `p` (outward side).
+    pub n: Vec3A,
+    /// Unit direction from the receiver to `p`.
+    pub wi: Vec3A,
+    /// Probability density with respect to solid angle at the receiver.
+    pub pdf: f32,
+}
+
+/// The uniform-area density `1 / area` at the point `pl` (normal `nl`) as a density per solid
+/// angle at `p`; 0 where the conversion is undefined (grazing or coincident points).
+#[inline]
+pub(crate) fn area_pdf_to_solid_angle(p: Vec3A, pl: Vec3A, nl: Vec3A, area: f32) -> f32 {
+    let d = pl - p;
+    let d2 = d.length_squared();
+    let cos = nl.dot(d).abs() / d2.sqrt();
+    if !(cos > 0.0 && d2 > 0.0) {
+        return 0.0;
+    }
+    d2 / (cos * area)
+}
+
+/// An area sample `pl` (normal `nl`, uniform over `area`) seen from `p`, with its density per
+/// solid angle; `None` where it is undefined.
+#[inline]
+pub(crate) fn area_to_solid_angle(
+    p: Vec3A,
+    pl: Vec3A,
+    nl: Vec3A,
+    area: f32,
+) -> Option<SolidAngleSample> {
+    let d = pl - p;
+    let d2 = d.length_squared();
+    if d2.is_nan() || d2 <= 0.0 {
+        return None;
+    }
+    let wi = d / d2.sqrt();
+    let cos = nl.dot(wi).abs();
+    if cos.is_nan() || cos <= 0.0 {
+        return None;
+    }
+    let pdf = d2 / (cos * area);
+    pdf.is_finite().then_some(SolidAngleSample {
+        p: pl,
+        n: nl,
+        wi,
+        pdf,
+    })
+}
+
 pub trait Shape: Send + Sync {
     /// Bounds in the same space as the rays it is given.
     fn bounds(&self) -> Aabb;
