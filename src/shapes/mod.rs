@@ -138,6 +138,58 @@ impl<S: SplitShape> Shape for S {
     }
 }
 
+/// Helpers of the shapes' sampling tests.
+#[cfg(test)]
+pub(crate) mod sampling_tests {
+    use super::Shape;
+    use crate::geometry::Ray;
+    use crate::sampling::{Rng, uniform_sphere};
+    use glam::Vec3A;
+
+    /// Mean and standard error of `n` draws of `f`, in f64.
+    pub(crate) fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
+        let (mut s, mut s2) = (0.0, 0.0);
+        for _ in 0..n {
+            let v = f();
+            s += v;
+            s2 += v * v;
+        }
+        let mean = s / n as f64;
+        let var = (s2 / n as f64 - mean * mean).max(0.0);
+        (mean, (var / n as f64).sqrt())
+    }
+
+    /// Asserts a Monte Carlo mean `got` (standard error `se`) is `want` within five standard
+    /// errors plus `rel` of `want` (f32 rounding).
+    pub(crate) fn assert_estimate(what: &str, (got, se): (f64, f64), want: f64, rel: f64) {
+        let tol = 5.0 * se + rel * want;
+        assert!(
+            (got - want).abs() <= tol,
+            "{what}: {got} vs {want} (tolerance {tol})"
+        );
+    }
+
+    /// Asserts that `pdf(p, hit point, hit normal)` integrates to one over the directions from
+    /// `p` that hit `shape` (uniform directions, 400 000 of them): a normalized density, as MIS
+    /// needs when a BSDF sample hits the light.
+    pub(crate) fn assert_density_integrates_to_one(
+        shape: &dyn Shape,
+        p: Vec3A,
+        pdf: impl Fn(Vec3A, Vec3A, Vec3A) -> f32,
+        rng: &mut Rng,
+    ) {
+        let (got, se) = mean_se(400_000, || {
+            let d = uniform_sphere(rng.vec2());
+            shape
+                .intersect(&Ray::new(p, d), 0.0, f32::INFINITY)
+                .map_or(0.0, |h| {
+                    f64::from(pdf(p, h.p, h.n) * 4.0 * std::f32::consts::PI)
+                })
+        });
+        assert!((got - 1.0).abs() <= 5.0 * se + 1e-3, "{p}: {got} (se {se})");
+    }
+}
+
 /// The root finder of the curved shapes for the scene's choice of method.
 pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
     match method {

@@ -317,7 +317,9 @@ impl SplitShape for Quad {
 mod tests {
     use super::*;
     use crate::sampling::{Rng, uniform_sphere};
-    use crate::shapes::Shape;
+    use crate::shapes::sampling_tests::{
+        assert_density_integrates_to_one, assert_estimate, mean_se,
+    };
     use glam::DVec3;
 
     /// `int max(0, m . w) dw` over the polygon `corners` seen from `p`, all of it above the
@@ -335,20 +337,6 @@ mod tests {
             sum += a.dot(b).clamp(-1.0, 1.0).acos() * m.dot(c / c.length());
         }
         0.5 * sum.abs()
-    }
-
-    fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
-        let (mut s, mut s2) = (0.0, 0.0);
-        for _ in 0..n {
-            let v = f();
-            s += v;
-            s2 += v * v;
-        }
-        let mean = s / n as f64;
-        (
-            (mean),
-            ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-        )
     }
 
     /// Solid-angle sampling of a quad averages to the analytic irradiance from every side and
@@ -398,7 +386,7 @@ mod tests {
                 -quad.n
             };
             let want = polygon_irradiance(p, m, &corners);
-            let (got, se) = mean_se(100_000, || {
+            let estimate = mean_se(100_000, || {
                 let Some(s) = quad.sample_toward(p, rng.vec2()) else {
                     return 0.0;
                 };
@@ -416,11 +404,7 @@ mod tests {
                 );
                 (m.dot(s.wi).max(0.0) / s.pdf) as f64
             });
-            let tol = 5.0 * se + 1e-4 * want;
-            assert!(
-                (got - want).abs() <= tol,
-                "{what}: {got} vs {want} (tolerance {tol})"
-            );
+            assert_estimate(what, estimate, want, 1e-4);
         }
     }
 
@@ -436,12 +420,12 @@ mod tests {
             Vec3A::new(0.3, 0.49, 0.2),
             Vec3A::new(3.0, 1.5, 0.0),
         ] {
-            let (got, se) = mean_se(400_000, || {
-                let d = uniform_sphere(rng.vec2());
-                quad.intersect(&Ray::new(p, d), 0.0, f32::INFINITY)
-                    .map_or(0.0, |h| (quad.pdf_toward(p, h.p, h.n) * 4.0 * PI) as f64)
-            });
-            assert!((got - 1.0).abs() <= 5.0 * se + 1e-3, "{p}: {got} (se {se})");
+            assert_density_integrates_to_one(
+                &quad,
+                p,
+                |p, pl, nl| quad.pdf_toward(p, pl, nl),
+                &mut rng,
+            );
         }
     }
 

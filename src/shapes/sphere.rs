@@ -211,19 +211,9 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
     use crate::shapes::Shape;
-
-    /// Mean and standard error of `n` draws of `f`, in f64.
-    fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
-        let (mut s, mut s2) = (0.0, 0.0);
-        for _ in 0..n {
-            let v = f();
-            s += v;
-            s2 += v * v;
-        }
-        let mean = s / n as f64;
-        let var = (s2 / n as f64 - mean * mean).max(0.0);
-        (mean, (var / n as f64).sqrt())
-    }
+    use crate::shapes::sampling_tests::{
+        assert_density_integrates_to_one, assert_estimate, mean_se,
+    };
 
     /// Irradiance (per unit radiance) at `p` with normal `m` from a sphere seen whole above
     /// the horizon is `pi sin^2(theta_max) cos(beta)`. Cone sampling must average to it from
@@ -246,7 +236,7 @@ mod tests {
                 let tilt = Frame::from_normal(axis).s;
                 let m = (axis * beta.cos() as f32 + tilt * beta.sin() as f32).normalize();
                 let want = std::f64::consts::PI * sin2 * beta.cos();
-                let (got, se) = mean_se(40_000, || {
+                let estimate = mean_se(40_000, || {
                     let s = sphere
                         .sample_toward(p, rng.vec2())
                         .expect("outside: a sample");
@@ -254,11 +244,7 @@ mod tests {
                     assert!(s.n.dot(s.wi) <= 1e-3, "{rel}: the sample faces away");
                     (m.dot(s.wi).max(0.0) / s.pdf) as f64
                 });
-                let tol = 5.0 * se + 2e-5 * want;
-                assert!(
-                    (got - want).abs() <= tol,
-                    "d/r {rel}, beta {beta}: {got} vs {want} (tolerance {tol})"
-                );
+                assert_estimate(&format!("d/r {rel}, beta {beta}"), estimate, want, 2e-5);
             }
         }
     }
@@ -276,15 +262,16 @@ mod tests {
             (Vec3A::new(1.99999, 0.0, 0.0), -Vec3A::X),
         ] {
             let p = sphere.center + offset;
-            let (got, se) = mean_se(200_000, || {
+            let estimate = mean_se(200_000, || {
                 sphere
                     .sample_toward(p, rng.vec2())
                     .map_or(0.0, |s| (m.dot(s.wi).max(0.0) / s.pdf) as f64)
             });
-            let want = std::f64::consts::PI;
-            assert!(
-                (got - want).abs() <= 5.0 * se + 1e-4,
-                "{offset}: {got} vs pi (se {se})"
+            assert_estimate(
+                &format!("inside, {offset}"),
+                estimate,
+                std::f64::consts::PI,
+                3e-5,
             );
         }
     }
@@ -312,13 +299,12 @@ mod tests {
                     s.pdf
                 );
             }
-            let (got, se) = mean_se(400_000, || {
-                let d = uniform_sphere(rng.vec2());
-                sphere
-                    .intersect(&Ray::new(p, d), 0.0, f32::INFINITY)
-                    .map_or(0.0, |h| (sphere.pdf_toward(p, h.p, h.n) * 4.0 * PI) as f64)
-            });
-            assert!((got - 1.0).abs() <= 5.0 * se + 1e-3, "{p}: {got} (se {se})");
+            assert_density_integrates_to_one(
+                &sphere,
+                p,
+                |p, pl, nl| sphere.pdf_toward(p, pl, nl),
+                &mut rng,
+            );
         }
     }
 
