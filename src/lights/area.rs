@@ -61,6 +61,13 @@ impl AreaLight {
     /// subtend (by area from inside), rectangles by the spherical rectangle they subtend, other
     /// shapes uniformly by area. The density is per solid angle.
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        // Behind a one-sided rectangle nothing arrives: skip the sampling.
+        if let AnyShape::Quad(q) = &self.shape
+            && !self.two_sided
+            && q.height_above(p) <= 0.0
+        {
+            return None;
+        }
         let s = match (&self.shape, self.sampling) {
             (AnyShape::Sphere(s), LightSampling::SolidAngle) => s.sample_toward(p, u),
             (AnyShape::Quad(q), LightSampling::SolidAngle) => q.sample_toward(p, u),
