@@ -1,4 +1,6 @@
 //! Diffuse area light on one shape: uniform radiance on the side the normal faces, or on both.
+//! Direct lighting samples spheres and rectangles by the solid angle they subtend (their
+//! shapes' `sample_toward`), other shapes by area; photons leave uniformly by area.
 
 use std::f32::consts::PI;
 
@@ -7,14 +9,26 @@ use glam::{Vec2, Vec3A};
 use super::{LightSample, PhotonSample};
 use crate::geometry::Frame;
 use crate::sampling::cosine_hemisphere;
-use crate::shapes::Shape;
 use crate::shapes::primitive::AnyShape;
+use crate::shapes::{Shape, area_pdf_to_solid_angle, area_to_solid_angle};
+
+/// How direct lighting picks points on an area light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LightSampling {
+    /// Spheres and rectangles by the solid angle they subtend, other shapes by area (the
+    /// renderer's choice for every light).
+    #[default]
+    SolidAngle,
+    /// Every shape uniformly by area (kept for measurements against the solid-angle samplers).
+    Area,
+}
 
 pub struct AreaLight {
     pub shape: AnyShape,
     pub radiance: Vec3A,
     pub two_sided: bool,
     pub area: f32,
+    pub sampling: LightSampling,
 }
 
 impl AreaLight {
@@ -32,34 +46,44 @@ impl AreaLight {
         self.radiance * (PI * self.area * if self.two_sided { 2.0 } else { 1.0 })
     }
 
-    /// Solid-angle density of `sample_li` from `p` choosing the light point `pl` (normal `nl`).
+    /// Solid-angle density of `sample_li` from `p` choosing the light point `pl` (normal `nl`),
+    /// for weighing a BSDF sample that hit the light (MIS): the same density the light sampler
+    /// used, per solid angle.
     pub fn pdf_li(&self, p: Vec3A, pl: Vec3A, nl: Vec3A) -> f32 {
-        let d = pl - p;
-        let d2 = d.length_squared();
-        let cos = nl.dot(d).abs() / d2.sqrt();
-        if cos == 0.0 {
-            return 0.0;
+        match (&self.shape, self.sampling) {
+            (AnyShape::Sphere(s), LightSampling::SolidAngle) => s.pdf_toward(p, pl, nl),
+            (AnyShape::Quad(q), LightSampling::SolidAngle) => q.pdf_toward(p, pl, nl),
+            _ => area_pdf_to_solid_angle(p, pl, nl, self.area),
         }
-        d2 / (cos * self.area)
     }
 
+    /// A point of the light for direct lighting at `p`: spheres by the cone of directions they
+    /// subtend (by area from inside), rectangles by the spherical rectangle they subtend, other
+    /// shapes uniformly by area. The density is per solid angle.
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
-        let s = self.shape.sample(u)?;
-        let d = s.p - p;
-        let d2 = d.length_squared();
-        if d2 == 0.0 {
+        // Behind a one-sided rectangle nothing arrives: skip the sampling.
+        if let AnyShape::Quad(q) = &self.shape
+            && !self.two_sided
+            && q.height_above(p) <= 0.0
+        {
             return None;
         }
-        let wi = d / d2.sqrt();
-        let li = self.le(s.n, -wi);
-        let cos = s.n.dot(wi).abs();
-        if cos == 0.0 || li == Vec3A::ZERO {
+        let s = match (&self.shape, self.sampling) {
+            (AnyShape::Sphere(s), LightSampling::SolidAngle) => s.sample_toward(p, u),
+            (AnyShape::Quad(q), LightSampling::SolidAngle) => q.sample_toward(p, u),
+            (shape, _) => {
+                let s = shape.sample(u)?;
+                area_to_solid_angle(p, s.p, s.n, self.area)
+            }
+        }?;
+        let li = self.le(s.n, -s.wi);
+        if li == Vec3A::ZERO {
             return None;
         }
         Some(LightSample {
-            wi,
+            wi: s.wi,
             li,
-            pdf: d2 / (cos * self.area),
+            pdf: s.pdf,
             p: s.p,
             n: s.n,
             delta: false,

@@ -6,7 +6,7 @@ mod environment;
 mod point;
 mod spot;
 
-pub use area::AreaLight;
+pub use area::{AreaLight, LightSampling};
 pub use environment::EnvironmentLight;
 pub use point::PointLight;
 pub use spot::SpotLight;

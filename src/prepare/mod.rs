@@ -192,6 +192,7 @@ impl<'a> PreparedScene<'a> {
                         radiance: color3(e.radiance),
                         two_sided: e.two_sided,
                         area,
+                        sampling: Default::default(),
                     }));
                 }
                 shapes.push((s, id));

@@ -20,6 +20,60 @@ pub struct AreaSample {
     pub pdf: f32,
 }
 
+/// A point on a shape sampled for a receiver by the directions it subtends there
+/// ([`sphere::Sphere::sample_toward`], [`quad::Quad::sample_toward`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolidAngleSample {
+    pub p: Vec3A,
+    /// Unit geometric normal at `p` (outward side).
+    pub n: Vec3A,
+    /// Unit direction from the receiver to `p`.
+    pub wi: Vec3A,
+    /// Probability density with respect to solid angle at the receiver.
+    pub pdf: f32,
+}
+
+/// The uniform-area density `1 / area` at the point `pl` (normal `nl`) as a density per solid
+/// angle at `p`; 0 where the conversion is undefined (grazing or coincident points).
+#[inline]
+pub(crate) fn area_pdf_to_solid_angle(p: Vec3A, pl: Vec3A, nl: Vec3A, area: f32) -> f32 {
+    let d = pl - p;
+    let d2 = d.length_squared();
+    let cos = nl.dot(d).abs() / d2.sqrt();
+    if !(cos > 0.0 && d2 > 0.0) {
+        return 0.0;
+    }
+    d2 / (cos * area)
+}
+
+/// An area sample `pl` (normal `nl`, uniform over `area`) seen from `p`, with its density per
+/// solid angle; `None` where it is undefined.
+#[inline]
+pub(crate) fn area_to_solid_angle(
+    p: Vec3A,
+    pl: Vec3A,
+    nl: Vec3A,
+    area: f32,
+) -> Option<SolidAngleSample> {
+    let d = pl - p;
+    let d2 = d.length_squared();
+    if d2.is_nan() || d2 <= 0.0 {
+        return None;
+    }
+    let wi = d / d2.sqrt();
+    let cos = nl.dot(wi).abs();
+    if cos.is_nan() || cos <= 0.0 {
+        return None;
+    }
+    let pdf = d2 / (cos * area);
+    pdf.is_finite().then_some(SolidAngleSample {
+        p: pl,
+        n: nl,
+        wi,
+        pdf,
+    })
+}
+
 pub trait Shape: Send + Sync {
     /// Bounds in the same space as the rays it is given.
     fn bounds(&self) -> Aabb;
@@ -81,6 +135,58 @@ impl<S: SplitShape> Shape for S {
     #[inline]
     fn sample(&self, u: Vec2) -> Option<AreaSample> {
         SplitShape::sample(self, u)
+    }
+}
+
+/// Helpers of the shapes' sampling tests.
+#[cfg(test)]
+pub(crate) mod sampling_tests {
+    use super::Shape;
+    use crate::geometry::Ray;
+    use crate::sampling::{Rng, uniform_sphere};
+    use glam::Vec3A;
+
+    /// Mean and standard error of `n` draws of `f`, in f64.
+    pub(crate) fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
+        let (mut s, mut s2) = (0.0, 0.0);
+        for _ in 0..n {
+            let v = f();
+            s += v;
+            s2 += v * v;
+        }
+        let mean = s / n as f64;
+        let var = (s2 / n as f64 - mean * mean).max(0.0);
+        (mean, (var / n as f64).sqrt())
+    }
+
+    /// Asserts a Monte Carlo mean `got` (standard error `se`) is `want` within five standard
+    /// errors plus `rel` of `want` (f32 rounding).
+    pub(crate) fn assert_estimate(what: &str, (got, se): (f64, f64), want: f64, rel: f64) {
+        let tol = 5.0 * se + rel * want;
+        assert!(
+            (got - want).abs() <= tol,
+            "{what}: {got} vs {want} (tolerance {tol})"
+        );
+    }
+
+    /// Asserts that `pdf(p, hit point, hit normal)` integrates to one over the directions from
+    /// `p` that hit `shape` (uniform directions, 400 000 of them): a normalized density, as MIS
+    /// needs when a BSDF sample hits the light.
+    pub(crate) fn assert_density_integrates_to_one(
+        shape: &dyn Shape,
+        p: Vec3A,
+        pdf: impl Fn(Vec3A, Vec3A, Vec3A) -> f32,
+        rng: &mut Rng,
+    ) {
+        let (got, se) = mean_se(400_000, || {
+            let d = uniform_sphere(rng.vec2());
+            shape
+                .intersect(&Ray::new(p, d), 0.0, f32::INFINITY)
+                .map_or(0.0, |h| {
+                    f64::from(pdf(p, h.p, h.n) * 4.0 * std::f32::consts::PI)
+                })
+        });
+        assert!((got - 1.0).abs() <= 5.0 * se + 1e-3, "{p}: {got} (se {se})");
     }
 }
 

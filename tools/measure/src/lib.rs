@@ -3,10 +3,13 @@
 //!
 //! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
 //!   tessellated meshes of the same surfaces.
+//! - [`lights`]: direct-light noise of area lights sampled by area and by solid angle, at
+//!   equal time (`cargo run --release -p sppm-measure -- lights`).
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
 
 pub mod bezier;
+pub mod lights;
 pub mod reference;
 pub mod tessellate;

@@ -1,6 +1,9 @@
 //! `sppm-measure bezier`: speed against accuracy of the Bezier intersectors and of meshes of
-//! the same surfaces (a thin front for [`sppm_measure::bezier`]). Run from the repository root:
-//! `cargo run --release -p sppm-measure -- bezier`. Exit status: 0 ok, 2 usage errors.
+//! the same surfaces (a thin front for [`sppm_measure::bezier`]); `sppm-measure lights`:
+//! direct-light noise of area lights sampled by area and by solid angle
+//! ([`sppm_measure::lights`]). Run from the repository root:
+//! `cargo run --release -p sppm-measure -- bezier` (or `lights`). Exit status: 0 ok, 2 usage
+//! errors.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -28,6 +31,23 @@ pub enum Bench {
     /// Revolve and patch: robust, Newton settings and tessellated meshes against the reference
     /// intersector; ns per ray against miss rate and t error (CSV and charts).
     Bezier(BezierArgs),
+    /// Sphere and square lights over a plane: per-point variance of direct light sampled by
+    /// area and by solid angle, wall and CPU time per estimate, and the variance ratio at
+    /// equal CPU time.
+    Lights(LightsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct LightsArgs {
+    /// Points per side of the grid on the plane.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(2..=2048))]
+    pub size: u32,
+    /// Rounds (each sampler once per round, alternating which goes first).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub rounds: u32,
+    /// Estimates per point, sampler and round.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    pub per_round: u32,
 }
 
 #[derive(Debug, Args)]
@@ -63,15 +83,49 @@ fn err(text: &str) {
 }
 
 fn run_bench(args: &BenchArgs) -> ExitCode {
-    match &args.what {
-        Bench::Bezier(a) => match bezier(a) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                err(&format!("error: {e}\n"));
-                ExitCode::from(EXIT_USAGE)
-            }
-        },
+    let result = match &args.what {
+        Bench::Bezier(a) => bezier(a),
+        Bench::Lights(a) => lights(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            err(&format!("error: {e}\n"));
+            ExitCode::from(EXIT_USAGE)
+        }
     }
+}
+
+fn lights(args: &LightsArgs) -> Result<(), String> {
+    use sppm_lang::lights::LightSampling;
+    let rows = sppm_measure::lights::run(args.size, args.rounds, args.per_round, &|line| {
+        err(&format!("lights: {line}\n"))
+    })?;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
+        "{:<7} {:<12} {:>12} {:>10} {:>10} {:>10} {:>12}",
+        "scene", "sampling", "variance", "mean", "wall ns", "cpu ns", "x at equal t"
+    );
+    for r in &rows {
+        let area = rows
+            .iter()
+            .find(|a| a.scene == r.scene && a.sampling == LightSampling::Area)
+            .map_or(f64::NAN, |a| a.variance_times_time());
+        let _ = writeln!(
+            table,
+            "{:<7} {:<12} {:>12.4e} {:>10.5} {:>10.0} {:>10.0} {:>12.2}",
+            r.scene,
+            format!("{:?}", r.sampling),
+            r.variance,
+            r.mean,
+            r.wall_per_estimate * 1e9,
+            r.cpu_per_estimate * 1e9,
+            area / r.variance_times_time(),
+        );
+    }
+    out(&table);
+    Ok(())
 }
 
 fn bezier(args: &BezierArgs) -> Result<(), String> {
