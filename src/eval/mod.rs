@@ -60,6 +60,9 @@ pub struct EvalOptions {
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
 /// build); the thread gets [`EVAL_STACK`], three times what this many levels need.
 pub const MAX_EVAL_NESTING: usize = 100_000;
+/// Most `#debug` messages one load keeps (a loop printing each iteration stays readable and
+/// bounded); the ones past it are counted in a last message.
+pub const MAX_MESSAGES: usize = 1000;
 /// Longest string a scene may build (bytes).
 pub const MAX_STRING_BYTES: usize = 1 << 24;
 /// Stack of the evaluation thread. Reserved, not touched: only what the nesting uses is paid.
@@ -177,9 +180,16 @@ pub(crate) struct Evaluator {
     dependencies: Vec<PathBuf>,
     /// Steps taken so far (see [`EvalOptions::max_steps`]).
     steps: u64,
-    /// Set once the step budget ran out: every later step fails silently, so the evaluation
-    /// unwinds at once with the one error already reported.
+    /// Set once the step budget ran out or an `#error` stopped the load: every later step fails
+    /// silently, so the evaluation unwinds at once with the one error already reported.
     exhausted: bool,
+    /// `#switch`es and loops around the current item that a `#break` may leave (within one
+    /// block body or macro body: blocks and macro calls start again at 0).
+    pub(crate) break_targets: usize,
+    /// Set by `#break` until the `#switch` or loop it leaves has seen it.
+    breaking: bool,
+    /// `#debug` messages kept so far (see [`MAX_MESSAGES`]).
+    messages: usize,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
@@ -210,6 +220,9 @@ impl Evaluator {
             dependencies: Vec::new(),
             steps: 0,
             exhausted: false,
+            break_targets: 0,
+            breaking: false,
+            messages: 0,
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,
@@ -236,7 +249,7 @@ impl Evaluator {
     /// Runs a block body or directive body.
     pub(crate) fn run_items(&mut self, items: &[Item], sink: &mut dyn Sink) -> SourceResult<()> {
         let mut i = 0;
-        while i < items.len() {
+        while i < items.len() && !self.breaking {
             self.step(items, &mut i, sink)?;
         }
         Ok(())

@@ -46,6 +46,17 @@ impl Evaluator {
         self.poisoned.remove(&name.text);
     }
 
+    /// Removes a binding (the innermost: the current macro's, else the global one); `false`
+    /// when there was none.
+    pub(super) fn unbind(&mut self, name: &str) -> bool {
+        if let Some(f) = self.frames.last_mut()
+            && f.vars.remove(name).is_some()
+        {
+            return true;
+        }
+        self.globals.remove(name).is_some()
+    }
+
     pub(super) fn mark_used(&mut self, name: &str) {
         if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
             b.used = true;

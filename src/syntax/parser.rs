@@ -58,6 +58,16 @@ fn describe(rule: Rule) -> &'static str {
         Rule::for_d => "`#for`",
         Rule::macro_d => "`#macro`",
         Rule::include_d => "`#include`",
+        Rule::ifdef_d => "`#ifdef`",
+        Rule::ifndef_d => "`#ifndef`",
+        Rule::undef_d => "`#undef`",
+        Rule::switch_d => "`#switch`",
+        Rule::case_d => "`#case`",
+        Rule::range_d => "`#range`",
+        Rule::break_d => "`#break`",
+        Rule::debug_d => "`#debug`",
+        Rule::warning_d => "`#warning`",
+        Rule::error_d => "`#error`",
         Rule::params => "parameter names",
         Rule::keyword => "a property keyword",
         Rule::expr | Rule::vexpr | Rule::iexpr => "an expression",
@@ -120,7 +130,9 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     // Say "a directive" once instead of listing every one, and leave out the tokens that could
     // merely continue an expression when there are other choices.
     if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
-        expected.retain(|e| !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`"));
+        expected.retain(|e| {
+            !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`" | "`#case`" | "`#range`")
+        });
         expected.push("a directive");
     }
     if expected.len() > 3 || after_operand {
@@ -153,10 +165,17 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
             .collect();
         let known = [
             "declare", "local", "if", "elif", "else", "end", "while", "for", "macro", "include",
+            "ifdef", "ifndef", "undef", "switch", "case", "range", "break", "debug", "warning",
+            "error",
         ];
         if matches!(word.as_str(), "end" | "else" | "elif") {
             d = d.with_help(format!(
-                "`#{word}` without a matching `#if`, `#while`, `#for` or `#macro`"
+                "`#{word}` without a matching `#if`, `#ifdef`, `#switch`, `#while`, `#for` or \
+                 `#macro`"
+            ));
+        } else if matches!(word.as_str(), "case" | "range") {
+            d = d.with_help(format!(
+                "`#{word}` stands only directly inside `#switch (value) ... #end`"
             ));
         } else if let Some(s) = crate::diag::suggest(&word, known) {
             d = d.with_help(format!("did you mean `#{s}`?"));
@@ -204,6 +223,14 @@ fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
             Rule::for_d,
             Rule::macro_d,
             Rule::include_d,
+            Rule::ifdef_d,
+            Rule::ifndef_d,
+            Rule::switch_d,
+            Rule::break_d,
+            Rule::undef_d,
+            Rule::debug_d,
+            Rule::warning_d,
+            Rule::error_d,
         ]);
     }
     if positives.contains(&Rule::rgb) {
@@ -229,7 +256,7 @@ fn is_keyword(word: &str) -> bool {
 }
 
 fn count_openers(text: &str) -> usize {
-    ["#if", "#while", "#for", "#macro"]
+    ["#if", "#switch", "#while", "#for", "#macro"]
         .iter()
         .map(|k| text.matches(k).count())
         .sum()
@@ -301,7 +328,7 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
             b')' | b']' | b'}' => depth = depth.saturating_sub(1),
             b'#' => {
                 let rest = &text[i..];
-                if ["#if", "#while", "#for", "#macro"]
+                if ["#if", "#switch", "#while", "#for", "#macro"]
                     .iter()
                     .any(|k| rest.starts_with(k))
                 {
@@ -445,7 +472,68 @@ impl Cx {
                     path_span,
                 }
             }
+            Rule::ifdef_d | Rule::ifndef_d => {
+                let name = self.name(inner.next().unwrap());
+                let body = self.items(inner.next().unwrap());
+                let otherwise = inner
+                    .next()
+                    .map(|p| self.items(p.into_inner().next().unwrap()));
+                DirectiveKind::IfDef {
+                    name,
+                    negate: rule == Rule::ifndef_d,
+                    body,
+                    otherwise,
+                }
+            }
+            Rule::undef_d => DirectiveKind::Undef(self.name(inner.next().unwrap())),
+            Rule::switch_d => {
+                let value = self.expr(inner.next().unwrap());
+                let mut clauses = Vec::new();
+                let mut otherwise = None;
+                for p in inner {
+                    let r = p.as_rule();
+                    let mut i = p.into_inner();
+                    match r {
+                        Rule::case_d => {
+                            let test = ClauseTest::Case(self.expr(i.next().unwrap()));
+                            let body = self.items(i.next().unwrap());
+                            clauses.push(Clause { test, body });
+                        }
+                        Rule::range_d => {
+                            let lo = self.expr(i.next().unwrap());
+                            let hi = self.expr(i.next().unwrap());
+                            let body = self.items(i.next().unwrap());
+                            clauses.push(Clause {
+                                test: ClauseTest::Range(lo, hi),
+                                body,
+                            });
+                        }
+                        _ => otherwise = Some(self.items(i.next().unwrap())),
+                    }
+                }
+                DirectiveKind::Switch {
+                    value,
+                    clauses,
+                    otherwise,
+                }
+            }
+            Rule::break_d => DirectiveKind::Break,
+            Rule::debug_d | Rule::warning_d | Rule::error_d => DirectiveKind::Message {
+                kind: match rule {
+                    Rule::debug_d => MessageKind::Debug,
+                    Rule::warning_d => MessageKind::Warning,
+                    _ => MessageKind::Error,
+                },
+                value: self.expr(inner.next().unwrap()),
+            },
             r => unreachable!("directive rule {r:?}"),
+        };
+        // A message's span ends with its text (not the blanks that the optional `;` skipped).
+        let span = match &kind {
+            DirectiveKind::Message { value, .. } => {
+                Span::new(self.file, span.start, value.span.end)
+            }
+            _ => span,
         };
         Directive { kind, span }
     }

@@ -90,7 +90,10 @@ impl Evaluator {
     ) -> SourceResult<Value> {
         self.check_nesting(kind.span)?;
         self.block_depth += 1;
+        // A `#break` in the body cannot leave a `#switch` or loop around the block.
+        let outer = std::mem::take(&mut self.break_targets);
         let r = self.eval_block_body(kind, items, span);
+        self.break_targets = outer;
         self.block_depth -= 1;
         r
     }
