@@ -486,3 +486,48 @@ fn debug_messages_are_bounded() {
     assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_MESSAGES + 1);
     assert!(l.diagnostics.last().unwrap().message.contains("not shown"));
 }
+
+/// The standard library is built in: its colours and materials are the documented values, and
+/// its unused declarations give no warnings.
+#[test]
+fn standard_library_colors_and_materials() {
+    let l = load(
+        "#include \"std/colors.scn\"
+         #include \"std/materials.scn\"
+         sphere { <0,0,0>, 1 material { diffuse Orange } }
+         sphere { <1,0,0>, 1 material { Glass_Crown } }
+         sphere { <2,0,0>, 1 material { Metal_Gold } }
+         sphere { <3,0,0>, 1 material { Diffuse_FreshSnow } }
+         background Gray50",
+    );
+    assert!(l.diagnostics.is_empty(), "{:?}", l.diagnostics);
+    let s = l.scene.unwrap();
+    let m = |i: usize| s.material(s.objects[i].material).clone();
+    assert_eq!(
+        m(0),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::new(1.0, 0.5, 0.0))
+        }
+    );
+    assert!(matches!(m(1), Material::Glass { ior, .. } if ior == 1.5168));
+    assert_eq!(
+        m(2),
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::new(1.0, 0.766, 0.336))
+        }
+    );
+    assert_eq!(
+        m(3),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::splat(0.8))
+        }
+    );
+    assert!(matches!(s.background, Background::Color(c) if c == DVec3::splat(0.5)));
+    // Only what is placed is stored: 4 materials, not the whole library.
+    assert_eq!(s.materials.len(), 4);
+    assert!(
+        l.dependencies
+            .iter()
+            .all(|p| !p.to_string_lossy().contains("std/"))
+    );
+}

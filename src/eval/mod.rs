@@ -9,7 +9,7 @@
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
 //! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
-//!   calls; `include`: `#include` and path resolution;
+//!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
@@ -22,6 +22,7 @@ mod include;
 mod lower;
 mod props;
 mod scope;
+mod stdlib;
 mod value;
 
 use std::collections::{HashMap, HashSet};
@@ -190,6 +191,8 @@ pub(crate) struct Evaluator {
     breaking: bool,
     /// `#debug` messages kept so far (see [`MAX_MESSAGES`]).
     messages: usize,
+    /// Files of the standard library read by this load: their unused declarations are quiet.
+    std_files: HashSet<crate::span::FileId>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
@@ -223,6 +226,7 @@ impl Evaluator {
             break_targets: 0,
             breaking: false,
             messages: 0,
+            std_files: HashSet::new(),
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,

@@ -90,7 +90,11 @@ impl Evaluator {
         }
         known.extend(CONSTANTS);
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if let Some(s) = suggest(name, known) {
+        if let Some(file) = super::stdlib::declaring(name) {
+            e = e.help(format!(
+                "`{name}` is declared in the standard library: add `#include \"{file}\"`"
+            ));
+        } else if let Some(s) = suggest(name, known) {
             e = e.help(format!("did you mean `{s}`?"));
         } else {
             e = e.help(format!("declare it first: `#declare {name} = ...`"));
@@ -101,7 +105,12 @@ impl Evaluator {
     pub(super) fn warn_unused(&mut self, vars: HashMap<String, Binding>) {
         let mut unused: Vec<(String, Binding)> = vars
             .into_iter()
-            .filter(|(n, b)| !b.used && !n.starts_with('_') && !b.span.is_detached())
+            .filter(|(n, b)| {
+                !b.used
+                    && !n.starts_with('_')
+                    && !b.span.is_detached()
+                    && !self.std_files.contains(&b.span.file)
+            })
             .collect();
         unused.sort_by_key(|(_, b)| (b.span.file.0, b.span.start));
         for (name, b) in unused {
