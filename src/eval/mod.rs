@@ -201,6 +201,35 @@ pub(crate) struct Evaluator {
     pub(crate) source_bytes: u64,
 }
 
+/// "`word` is not a property of a material", with the POV-Ray spelling's counterpart or the
+/// nearest property names.
+fn not_a_property(sink: &dyn Sink, word: &str, span: Span) -> Diagnostic {
+    let kind = sink.kind();
+    let names: Vec<&str> = sink.props().iter().map(|p| p.name).collect();
+    let e = Error::new(format!("`{word}` is not a property of {kind}")).label("unknown property");
+    let near = crate::diag::suggest_all(word, names.iter().copied(), 3);
+    let e = if let Some(hint) = crate::syntax::povray_hint(word, &kind) {
+        e.help(hint)
+    } else if !near.is_empty() {
+        let near: Vec<String> = near.iter().map(|n| format!("`{n}`")).collect();
+        e.help(format!("did you mean {}?", or_list(&near)))
+    } else if names.is_empty() {
+        e.help(format!("{kind} takes no properties"))
+    } else {
+        e.help(format!("{kind} accepts: {}", names.join(", ")))
+    };
+    e.at(span)
+}
+
+/// `a`, `a or b`, `a, b or c`.
+fn or_list(xs: &[String]) -> String {
+    match xs {
+        [] => String::new(),
+        [a] => a.clone(),
+        [init @ .., last] => format!("{} or {last}", init.join(", ")),
+    }
+}
+
 /// A silent error: its cause was already reported.
 fn silent() -> Vec<Diagnostic> {
     Vec::new()
@@ -307,25 +336,11 @@ impl Evaluator {
             Item::Directive(d) => self.directive(d, sink),
             Item::Keyword(kw) => {
                 let Some(spec) = sink.prop_spec(&kw.text) else {
-                    let names: Vec<&str> = sink.props().iter().map(|p| p.name).collect();
-                    let mut e = Error::new(format!(
-                        "`{}` is not a property of {}",
-                        kw.text,
-                        sink.kind()
-                    ))
-                    .label("unknown property");
-                    if let Some(s) = suggest(&kw.text, names.iter().copied()) {
-                        e = e.help(format!("did you mean `{s}`?"));
-                    } else if names.is_empty() {
-                        e = e.help(format!("{} takes no properties", sink.kind()));
-                    } else {
-                        e = e.help(format!("{} accepts: {}", sink.kind(), names.join(", ")));
-                    }
                     // Skip the keyword's would-be arguments.
                     while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
                         *i += 1;
                     }
-                    return Err(vec![e.at(kw.span)]);
+                    return Err(vec![not_a_property(sink, &kw.text, kw.span)]);
                 };
                 let mut args: Vec<Arg> = Vec::new();
                 let mut j = *i;
@@ -371,6 +386,20 @@ impl Evaluator {
                 sink.property(self, kw, args)
             }
             Item::Expr(e) => {
+                // An undeclared name followed by a value reads as a misspelt property
+                // (`difuse 0.5`, POV-Ray's `right x*4/3`): say so, with the nearest properties.
+                if let ExprKind::Ident(name) = &e.kind
+                    && matches!(items.get(*i), Some(Item::Expr(_)))
+                    && self.lookup_quiet(name).is_none()
+                    && !self.poisoned.contains(name)
+                    && (crate::syntax::povray_hint(name, &sink.kind()).is_some()
+                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some())
+                {
+                    while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
+                        *i += 1;
+                    }
+                    return Err(vec![not_a_property(sink, name, e.span)]);
+                }
                 if let ExprKind::Call { name, args } = &e.kind
                     && let Some(Value::Macro(m)) = self.lookup_quiet(&name.text)
                 {

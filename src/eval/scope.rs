@@ -90,7 +90,9 @@ impl Evaluator {
         }
         known.extend(CONSTANTS);
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if let Some(file) = super::stdlib::declaring(name) {
+        if let Some(hint) = crate::syntax::povray_hint(name, "") {
+            e = e.help(hint);
+        } else if let Some(file) = super::stdlib::declaring(name) {
             e = e.help(format!(
                 "`{name}` is declared in the standard library: add `#include \"{file}\"`"
             ));

@@ -168,7 +168,13 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
             "ifdef", "ifndef", "undef", "switch", "case", "range", "break", "debug", "warning",
             "error",
         ];
-        if matches!(word.as_str(), "end" | "else" | "elif") {
+        if let Some(hint) = super::povray_hint(&format!("#{word}"), "") {
+            d = d.with_help(hint);
+            if expected_text == "something else" {
+                d.message = format!("syntax error: unexpected {found}");
+                d.label = "a POV-Ray directive".into();
+            }
+        } else if matches!(word.as_str(), "end" | "else" | "elif") {
             d = d.with_help(format!(
                 "`#{word}` without a matching `#if`, `#ifdef`, `#switch`, `#while`, `#for` or \
                  `#macro`"
@@ -188,14 +194,96 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     } else if pos >= text.len() && expected_text.contains("`}`") {
         d = d.with_help("a block is not closed: add `}`");
     } else if rest.starts_with('{') {
-        d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`");
+        match super::povray_hint(word_before(text, pos), "") {
+            Some(hint) => d = d.with_help(hint),
+            None => d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`"),
+        }
+    } else if rest.starts_with('=') && !rest.starts_with("==") {
+        d = d.with_help(
+            "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
+        );
     }
     if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
         d = d.with_help("a directive is not closed: add `#end`");
-    } else if pos >= text.len() && text.matches('{').count() > text.matches('}').count() {
-        d = d.with_help("a block is not closed: add `}`");
+    } else if pos >= text.len()
+        && let Some(open) = unclosed_brace(text)
+    {
+        return never_closed(file, text, open);
     }
     d
+}
+
+/// The name before position `pos`, skipping blanks and one `[...]` (`array[3] {`): what a
+/// misplaced `{` was probably meant to open.
+fn word_before(text: &str, pos: usize) -> &str {
+    let mut head = text[..pos.min(text.len())].trim_end();
+    if head.ends_with(']')
+        && let Some(open) = head.rfind('[')
+    {
+        head = head[..open].trim_end();
+    }
+    let start = head
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |i| i + 1);
+    &head[start..]
+}
+
+/// The innermost `{` still open at the end of the text (comments and strings skipped).
+fn unclosed_brace(text: &str) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut open = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'{' => open.push(i),
+            b'}' => {
+                open.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    open.pop()
+}
+
+/// "this `{` is never closed", at the brace, with the end of the file as a second label.
+fn never_closed(file: FileId, text: &str, open: usize) -> Diagnostic {
+    let name = word_before(text, open);
+    let block = if name.is_empty() {
+        "a block".to_string()
+    } else {
+        format!("`{name} {{ ... }}`")
+    };
+    let end = text.trim_end().len();
+    let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
+    Diagnostic::error(
+        Span::new(file, open as u32, open as u32 + 1),
+        format!("syntax error: {block} is never closed"),
+    )
+    .with_label("this `{` is never closed")
+    .with_extra(
+        Span::new(file, (end - last) as u32, end as u32),
+        "the file ends here, inside the block",
+    )
+    .with_help("add `}` where the block ends")
 }
 
 /// The rules a syntax error expected, from the ones pest recorded at the error position.

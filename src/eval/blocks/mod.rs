@@ -156,7 +156,9 @@ impl Evaluator {
             _ => {
                 let mut e = Error::new(format!("unknown block `{k}`")).label("not a kind of block");
                 let blocks = OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied();
-                if let Some(s) = suggest(k, blocks) {
+                if let Some(hint) = crate::syntax::povray_hint(k, "") {
+                    e = e.help(hint);
+                } else if let Some(s) = suggest(k, blocks) {
                     e = e.help(format!("did you mean `{s}`?"));
                 }
                 Err(vec![e.at(kind.span)])
