@@ -9,52 +9,8 @@ use std::fmt::Write;
 use sppm_lang::span::FileId;
 use sppm_lang::{SourceMap, render_plain, syntax};
 
-const TOKENS: &[&str] = &[
-    "{",
-    "}",
-    "<",
-    ">",
-    ",",
-    "(",
-    ")",
-    "[",
-    "]",
-    "#declare X = ",
-    "#end",
-    "#if (1)",
-    "#switch (1)",
-    "#case (1)",
-    "#break",
-    "#debug \"a\"",
-    "=",
-    "1",
-    "-2.5",
-    ".5",
-    "1e3",
-    "rgb",
-    "x",
-    "X",
-    "sphere",
-    "material",
-    "translate",
-    "+",
-    "*",
-    "-",
-    "/",
-    "==",
-    "<=",
-    "&&",
-    "!",
-    "\"s\"",
-    "// c\n",
-    "/* c */",
-    " ",
-    "\n",
-    "true",
-    "A[0]",
-    "B.x",
-    "f(1, 2)",
-];
+/// Tokens a mutation inserts, separated by `|`.
+const TOKENS: &str = "{|}|<|>|,|(|)|[|]|#declare X = |#end|#if (1)|#switch (1)|#case (1)|#break|#debug \"a\"|=|1|-2.5|.5|1e3|rgb|x|X|sphere|material|translate|+|*|-|/|==|<=|&&|!|\"s\"|// c\n|/* c */| |\n|true|A[0]|B.x|f(1, 2)";
 
 fn inputs() -> Vec<String> {
     let mut files = Vec::new();
@@ -99,7 +55,8 @@ fn parse_dump() {
                     t.drain(at.min(end)..end);
                 }
                 1 => {
-                    let tok = TOKENS[next(TOKENS.len())];
+                    let tokens: Vec<&str> = TOKENS.split('|').collect();
+                    let tok = tokens[next(tokens.len())];
                     t.splice(at..at, tok.chars());
                 }
                 _ => {
