@@ -203,12 +203,13 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
             "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
         );
     }
-    if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
-        d = d.with_help("a directive is not closed: add `#end`");
-    } else if pos >= text.len()
-        && let Some(open) = unclosed_brace(text)
+    if pos >= text.len()
+        && let Some(open) = unclosed(text)
     {
         return never_closed(file, text, open);
+    }
+    if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
+        d = d.with_help("a directive is not closed: add `#end`");
     }
     d
 }
@@ -228,10 +229,11 @@ fn word_before(text: &str, pos: usize) -> &str {
     &head[start..]
 }
 
-/// The innermost `{` still open at the end of the text (comments and strings skipped).
-fn unclosed_brace(text: &str) -> Option<usize> {
+/// The innermost `{` or block directive (`#if`, `#switch`, `#while`, ...: what `#end` closes)
+/// still open at the end of the text, as its start and length (comments and strings skipped).
+fn unclosed(text: &str) -> Option<(usize, usize)> {
     let bytes = text.as_bytes();
-    let mut open = Vec::new();
+    let mut open: Vec<(usize, usize)> = Vec::new();
     let mut i = 0;
     while i < bytes.len() {
         match bytes[i] {
@@ -253,9 +255,28 @@ fn unclosed_brace(text: &str) -> Option<usize> {
                     i += if bytes[i] == b'\\' { 2 } else { 1 };
                 }
             }
-            b'{' => open.push(i),
+            b'{' => open.push((i, 1)),
             b'}' => {
-                open.pop();
+                if let Some(k) = open.iter().rposition(|o| o.1 == 1) {
+                    open.truncate(k);
+                }
+            }
+            b'#' => {
+                let word = text[i + 1..]
+                    .split(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+                    .next()
+                    .unwrap_or("");
+                match word {
+                    "if" | "ifdef" | "ifndef" | "switch" | "while" | "for" | "macro" => {
+                        open.push((i, word.len() + 1));
+                    }
+                    "end" => {
+                        if let Some(k) = open.iter().rposition(|o| o.1 > 1) {
+                            open.truncate(k);
+                        }
+                    }
+                    _ => {}
+                }
             }
             _ => {}
         }
@@ -264,26 +285,33 @@ fn unclosed_brace(text: &str) -> Option<usize> {
     open.pop()
 }
 
-/// "this `{` is never closed", at the brace, with the end of the file as a second label.
-fn never_closed(file: FileId, text: &str, open: usize) -> Diagnostic {
-    let name = word_before(text, open);
-    let block = if name.is_empty() {
-        "a block".to_string()
+/// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a
+/// second label.
+fn never_closed(file: FileId, text: &str, (open, len): (usize, usize)) -> Diagnostic {
+    let opener = &text[open..open + len];
+    let (what, help) = if opener == "{" {
+        let name = word_before(text, open);
+        let block = if name.is_empty() {
+            "a block".to_string()
+        } else {
+            format!("`{name} {{ ... }}`")
+        };
+        (block, "add `}` where the block ends")
     } else {
-        format!("`{name} {{ ... }}`")
+        (format!("`{opener}`"), "add `#end` where it ends")
     };
     let end = text.trim_end().len();
     let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
     Diagnostic::error(
-        Span::new(file, open as u32, open as u32 + 1),
-        format!("syntax error: {block} is never closed"),
+        Span::new(file, open as u32, (open + len) as u32),
+        format!("syntax error: {what} is never closed"),
     )
-    .with_label("this `{` is never closed")
+    .with_label(format!("this `{opener}` is never closed"))
     .with_extra(
         Span::new(file, (end - last) as u32, end as u32),
-        "the file ends here, inside the block",
+        "the file ends here, inside it",
     )
-    .with_help("add `}` where the block ends")
+    .with_help(help)
 }
 
 /// The rules a syntax error expected, from the ones pest recorded at the error position.
