@@ -479,12 +479,17 @@ fn debug_and_warning_messages() {
     );
 }
 
-/// A loop of `#debug` keeps the first messages and says how many were left out: bounded.
+/// A loop of `#debug` or `#warning` keeps the first messages and says the rest were left out:
+/// bounded.
 #[test]
 fn debug_messages_are_bounded() {
-    let l = load("#for (I, 1, 5000) #debug str(I) #end sphere { <0,0,0>, 1 }");
-    assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_MESSAGES + 1);
-    assert!(l.diagnostics.last().unwrap().message.contains("not shown"));
+    for kind in ["#debug", "#warning"] {
+        let l = load(&format!(
+            "#for (I, 1, 5000) {kind} str(I) #end sphere {{ <0,0,0>, 1 }}"
+        ));
+        assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_MESSAGES + 1);
+        assert!(l.diagnostics.last().unwrap().message.contains("not shown"));
+    }
 }
 
 /// The standard library is built in: its colours and materials are the documented values, and

@@ -220,27 +220,33 @@ impl Evaluator {
             }
         };
         match kind {
-            MessageKind::Debug => {
+            MessageKind::Debug | MessageKind::Warning => {
+                // `#debug` and `#warning` together: at most MAX_MESSAGES per load.
                 self.messages += 1;
+                let d = if kind == MessageKind::Debug {
+                    Diagnostic::note(span, text).with_label("`#debug`")
+                } else {
+                    Diagnostic::warning(span, text).with_label("`#warning`")
+                };
                 if self.messages <= super::MAX_MESSAGES {
-                    self.warnings
-                        .push(Diagnostic::note(span, text).with_label("`#debug`"));
+                    if kind == MessageKind::Debug {
+                        self.warnings.push(d);
+                    } else {
+                        self.warn(d);
+                    }
                 } else if self.messages == super::MAX_MESSAGES + 1 {
                     self.warnings.push(
                         Diagnostic::note(
                             span,
                             format!(
-                                "more than {} `#debug` messages: the rest are not shown",
+                                "more than {} `#debug` and `#warning` messages: the rest are not \
+                                 shown",
                                 super::MAX_MESSAGES
                             ),
                         )
-                        .with_label("`#debug`"),
+                        .with_label("this one and the later ones"),
                     );
                 }
-                Ok(())
-            }
-            MessageKind::Warning => {
-                self.warn(Diagnostic::warning(span, text).with_label("`#warning`"));
                 Ok(())
             }
             MessageKind::Error => {

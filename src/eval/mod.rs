@@ -61,8 +61,8 @@ pub struct EvalOptions {
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
 /// build); the thread gets [`EVAL_STACK`], three times what this many levels need.
 pub const MAX_EVAL_NESTING: usize = 100_000;
-/// Most `#debug` messages one load keeps (a loop printing each iteration stays readable and
-/// bounded); the ones past it are counted in a last message.
+/// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
+/// readable and bounded); past it, one last note says the rest were left out.
 pub const MAX_MESSAGES: usize = 1000;
 /// Longest string a scene may build (bytes).
 pub const MAX_STRING_BYTES: usize = 1 << 24;
@@ -189,7 +189,7 @@ pub(crate) struct Evaluator {
     pub(crate) break_targets: usize,
     /// Set by `#break` until the `#switch` or loop it leaves has seen it.
     breaking: bool,
-    /// `#debug` messages kept so far (see [`MAX_MESSAGES`]).
+    /// `#debug` and `#warning` messages so far (see [`MAX_MESSAGES`]).
     messages: usize,
     /// Files of the standard library read by this load: their unused declarations are quiet.
     std_files: HashSet<crate::span::FileId>,
