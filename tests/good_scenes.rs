@@ -2,7 +2,7 @@
 
 use glam::{DAffine3, DVec2, DVec3};
 use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, Loaded, load_file, load_source};
+use sppm_lang::{EvalOptions, Loaded, Severity, load_file, load_source};
 
 fn load(text: &str) -> Loaded {
     let l = load_source("test.scn", text, &EvalOptions::default());
@@ -371,4 +371,168 @@ fn generated_100k_scene_has_100k_objects() {
     assert_eq!(count("cylinder"), 20_000);
     assert_eq!(count("disk"), 20_000);
     assert_eq!(s.materials.len(), 3);
+}
+
+/// The x coordinates of the sphere centres, in scene order.
+fn sphere_xs(s: &Scene) -> Vec<f64> {
+    s.objects
+        .iter()
+        .map(|o| match o.shape {
+            Shape::Sphere { center, .. } => o.transform.transform_point3(center).x,
+            _ => panic!("not a sphere: {:?}", o.shape),
+        })
+        .collect()
+}
+
+/// `#switch`: `#case` by equality, `#range` inclusive at both ends, fall-through to the next
+/// clause's test without `#break`, `#else` when the clause before it did not match.
+#[test]
+fn switch_case_range_break_else() {
+    let run = |v: &str| {
+        sphere_xs(&scene(&format!(
+            "#declare V = {v};
+             #switch (V)
+               #case (1) sphere {{ <1,0,0>, 1 }} #break
+               #case (2) sphere {{ <2,0,0>, 1 }}
+               #range (2, 3) sphere {{ <3,0,0>, 1 }}
+                 #if (V == 3) #break #end
+               #case (3) sphere {{ <4,0,0>, 1 }}
+               #else sphere {{ <9,0,0>, 1 }}
+             #end"
+        )))
+    };
+    assert_eq!(run("1"), [1.0]);
+    // Falls through from `#case (2)` into the test of `#range (2, 3)`, which holds 2 too.
+    assert_eq!(run("2"), [2.0, 3.0, 9.0]);
+    // `#range` is inclusive; the `#break` inside an `#if` leaves the switch.
+    assert_eq!(run("3"), [3.0]);
+    assert_eq!(run("2.5"), [3.0, 9.0]);
+    assert_eq!(run("0.1 + 0.2 + 0.7"), [1.0], "equal within 1e-10");
+    assert_eq!(run("7"), [9.0]);
+    // `#else` right after a matching clause does not run.
+    let s = scene(
+        "#switch (1) #case (1) sphere { <1,0,0>, 1 } #else sphere { <9,0,0>, 1 } #end
+         #switch (5) #else sphere { <5,0,0>, 1 } #end",
+    );
+    assert_eq!(sphere_xs(&s), [1.0, 5.0]);
+}
+
+/// `#break` leaves the innermost loop; inside a block or a macro body it refers to that body.
+#[test]
+fn break_leaves_loops() {
+    let s = scene(
+        "#for (I, 0, 10) #if (I > 2) #break #end sphere { <I,0,0>, 1 } #end
+         #declare J = 10;
+         #while (true) #declare J = J + 1; #if (J > 12) #break #end sphere { <J,0,0>, 1 } #end
+         #for (K, 0, 1) union { #for (L, 0, 5) #if (L > 0) #break #end sphere { <20+K,0,0>, 1 } #end } #end",
+    );
+    assert_eq!(sphere_xs(&s), [0.0, 1.0, 2.0, 11.0, 12.0, 20.0, 21.0]);
+}
+
+/// `#ifdef`, `#ifndef` and `#undef`, with locals of a macro and globals.
+#[test]
+fn ifdef_ifndef_undef() {
+    let s = scene(
+        "#declare A = 1;
+         #ifdef (A) sphere { <1,0,0>, 1 } #else sphere { <9,0,0>, 1 } #end
+         #ifndef (B) sphere { <2,0,0>, 1 } #end
+         #undef A
+         #ifdef (A) sphere { <9,0,0>, 1 } #else sphere { <3,0,0>, 1 } #end
+         #macro M(P) #ifdef (P) sphere { <P,0,0>, 1 } #end #undef P #ifndef (P) sphere { <5,0,0>, 1 } #end #end
+         M(4)
+         #ifdef (pi) sphere { <6,0,0>, 1 } #end",
+    );
+    assert_eq!(sphere_xs(&s), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+}
+
+/// `#debug` and `#warning` reach the caller as diagnostics at the directive, in order, the
+/// scene still loads; numbers are shown as written.
+#[test]
+fn debug_and_warning_messages() {
+    let l = load(
+        "#declare S = 0.1 + 0.2;
+         #for (I, 1, 2) #debug \"step \" + str(I) #end
+         #warning \"check this\"
+         #debug <S, 1, 2>
+         sphere { <0,0,0>, 1 }",
+    );
+    assert!(l.scene.is_some());
+    let shown: Vec<(Severity, &str)> = l
+        .diagnostics
+        .iter()
+        .map(|d| (d.severity, d.message.as_str()))
+        .collect();
+    assert_eq!(
+        shown,
+        [
+            (Severity::Note, "step 1"),
+            (Severity::Note, "step 2"),
+            (Severity::Warning, "check this"),
+            (Severity::Note, "<0.3, 1, 2>"),
+        ]
+    );
+    let text = &l.sources.get(l.diagnostics[2].span.file).unwrap().text;
+    let d = &l.diagnostics[2];
+    assert_eq!(
+        &text[d.span.start as usize..d.span.end as usize],
+        "#warning \"check this\""
+    );
+}
+
+/// A loop of `#debug` or `#warning` keeps the first messages and says the rest were left out:
+/// bounded.
+#[test]
+fn debug_messages_are_bounded() {
+    for kind in ["#debug", "#warning"] {
+        let l = load(&format!(
+            "#for (I, 1, 5000) {kind} str(I) #end sphere {{ <0,0,0>, 1 }}"
+        ));
+        assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_MESSAGES + 1);
+        assert!(l.diagnostics.last().unwrap().message.contains("not shown"));
+    }
+}
+
+/// The standard library is built in: its colours and materials are the documented values, and
+/// its unused declarations give no warnings.
+#[test]
+fn standard_library_colors_and_materials() {
+    let l = load(
+        "#include \"std/colors.scn\"
+         #include \"std/materials.scn\"
+         sphere { <0,0,0>, 1 material { diffuse Orange } }
+         sphere { <1,0,0>, 1 material { Glass_Crown } }
+         sphere { <2,0,0>, 1 material { Metal_Gold } }
+         sphere { <3,0,0>, 1 material { Diffuse_FreshSnow } }
+         background Gray50",
+    );
+    assert!(l.diagnostics.is_empty(), "{:?}", l.diagnostics);
+    let s = l.scene.unwrap();
+    let m = |i: usize| s.material(s.objects[i].material).clone();
+    assert_eq!(
+        m(0),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::new(1.0, 0.5, 0.0))
+        }
+    );
+    assert!(matches!(m(1), Material::Glass { ior, .. } if ior == 1.5168));
+    assert_eq!(
+        m(2),
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::new(1.0, 0.766, 0.336))
+        }
+    );
+    assert_eq!(
+        m(3),
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::splat(0.8))
+        }
+    );
+    assert!(matches!(s.background, Background::Color(c) if c == DVec3::splat(0.5)));
+    // Only what is placed is stored: 4 materials, not the whole library.
+    assert_eq!(s.materials.len(), 4);
+    assert!(
+        l.dependencies
+            .iter()
+            .all(|p| !p.to_string_lossy().contains("std/"))
+    );
 }

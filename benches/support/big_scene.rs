@@ -6,12 +6,32 @@ use std::fmt::Write;
 /// A scene of `n` objects: three declared materials, a camera, and a repeating mix of spheres,
 /// boxes, cylinders and disks with `rotate`, `translate` and `scale` transforms.
 pub fn big_scene(n: usize) -> String {
-    let mut s = String::from(
+    scene_text(n, false)
+}
+
+/// The same scene in POV-Ray 3.7's language (for the comparison with POV-Ray's parser): the
+/// same objects, transforms and declared materials, with POV-Ray's spelling of the materials
+/// and the camera, and `disc` for `disk`.
+#[allow(dead_code)]
+pub fn big_scene_pov(n: usize) -> String {
+    scene_text(n, true)
+}
+
+fn scene_text(n: usize, pov: bool) -> String {
+    let mut s = String::from(if pov {
+        "#version 3.7;\n\
+         global_settings { assumed_gamma 1 }\n\
+         #declare M = material { texture { pigment { color rgb <0.7, 0.7, 0.7> } } }\n\
+         #declare G = material { texture { pigment { color rgbf <1, 1, 1, 1> } } interior { ior 1.5 } }\n\
+         #declare Red = material { texture { pigment { color rgb <0.8, 0.1, 0.1> } } }\n\
+         camera { location <0, 5, -20> look_at <0, 0, 0> angle 40 }\n"
+    } else {
         "#declare M = material { diffuse rgb <0.7, 0.7, 0.7> }\n\
          #declare G = material { glass ior 1.5 }\n\
          #declare Red = material { diffuse rgb <0.8, 0.1, 0.1> }\n\
-         camera { location <0, 5, -20> look_at <0, 0, 0> fov 40 }\n",
-    );
+         camera { location <0, 5, -20> look_at <0, 0, 0> fov 40 }\n"
+    });
+    let disk = if pov { "disc" } else { "disk" };
     let mats = ["M", "G", "Red"];
     for i in 0..n {
         let (x, y, z) = (
@@ -42,7 +62,7 @@ pub fn big_scene(n: usize) -> String {
             ),
             _ => writeln!(
                 s,
-                "disk {{ <{x:.1}, 0, {z:.1}>, <0, 1, 0>, 0.03 material {{ {m} }} }}"
+                "{disk} {{ <{x:.1}, 0, {z:.1}>, <0, 1, 0>, 0.03 material {{ {m} }} }}"
             ),
         };
     }

@@ -41,6 +41,8 @@ pub type SourceResult<T> = Result<T, Vec<Diagnostic>>;
 pub enum Severity {
     Error,
     Warning,
+    /// A message the scene asked for (`#debug`): neither an error nor a warning.
+    Note,
 }
 
 /// One error or warning, pointing at source text.
@@ -76,6 +78,13 @@ impl Diagnostic {
     pub fn warning(span: Span, message: impl Into<String>) -> Self {
         Self {
             severity: Severity::Warning,
+            ..Self::error(span, message)
+        }
+    }
+
+    pub fn note(span: Span, message: impl Into<String>) -> Self {
+        Self {
+            severity: Severity::Note,
             ..Self::error(span, message)
         }
     }
@@ -155,29 +164,30 @@ impl<T> At<T> for Result<T, String> {
 
 /// The closest candidate to `name` by edit distance, if it is close enough to be a likely typo.
 pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    suggest_all(name, candidates, 1).into_iter().next()
+}
+
+/// Up to `n` candidates close enough to `name` to be likely typos, closest first (ties by name).
+pub fn suggest_all<'a>(
+    name: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+    n: usize,
+) -> Vec<&'a str> {
     let limit = (name.chars().count() / 3).max(1);
-    candidates
+    let mut close: Vec<(usize, &str)> = candidates
         .into_iter()
         .map(|c| (edit_distance(name, c), c))
         .filter(|&(d, _)| d <= limit)
-        .min_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(b.1)))
-        .map(|(_, c)| c)
+        .collect();
+    close.sort();
+    close.dedup();
+    close.into_iter().take(n).map(|(_, c)| c).collect()
 }
 
-/// Levenshtein distance over chars.
+/// Edit distance over chars where swapping two neighbours counts as one edit (`ligth` is one
+/// edit from `light`): optimal string alignment, from strsim.
 pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    let mut cur = vec![0; b.len() + 1];
-    for (i, ca) in a.chars().enumerate() {
-        cur[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let sub = prev[j] + usize::from(ca != cb);
-            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
-        }
-        std::mem::swap(&mut prev, &mut cur);
-    }
-    prev[b.len()]
+    strsim::osa_distance(a, b)
 }
 
 #[cfg(test)]
@@ -200,7 +210,8 @@ mod tests {
     fn edit_distance_basics() {
         assert_eq!(edit_distance("sphere", "sphere"), 0);
         assert_eq!(edit_distance("spher", "sphere"), 1);
-        assert_eq!(edit_distance("shpere", "sphere"), 2);
+        assert_eq!(edit_distance("shpere", "sphere"), 1);
+        assert_eq!(edit_distance("ligth", "light"), 1);
         assert_eq!(edit_distance("", "abc"), 3);
     }
 
@@ -209,5 +220,7 @@ mod tests {
         let c = ["sphere", "plane", "quad"];
         assert_eq!(suggest("spher", c), Some("sphere"));
         assert_eq!(suggest("xyzzy", c), None);
+        assert_eq!(suggest("ligth", ["light", "spotlight"]), Some("light"));
+        assert_eq!(suggest("difuse", ["diffuse", "mirror"]), Some("diffuse"));
     }
 }

@@ -219,6 +219,7 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
         severity: match d.severity {
             Severity::Error => miette::Severity::Error,
             Severity::Warning => miette::Severity::Warning,
+            Severity::Note => miette::Severity::Advice,
         },
         source: excerpt.map(|e| e.source),
         labels,
@@ -252,19 +253,26 @@ pub fn to_report(map: &SourceMap, diags: &[Diagnostic]) -> miette::Report {
     if diags.len() == 1 {
         return miette::Report::new(convert(map, &diags[0]));
     }
-    let errors = diags.iter().filter(|d| d.is_error()).count();
-    let warnings = diags.len() - errors;
-    let message = match (errors, warnings) {
-        (0, w) => format!("{w} warnings"),
-        (e, 0) => format!("{e} errors"),
-        (e, w) => format!("{e} error{}, {w} warning{}", plural(e), plural(w)),
-    };
+    let count = |s: Severity| diags.iter().filter(|d| d.severity == s).count();
+    let (errors, warnings, notes) = (
+        count(Severity::Error),
+        count(Severity::Warning),
+        count(Severity::Note),
+    );
+    let message = [(errors, "error"), (warnings, "warning"), (notes, "message")]
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, what)| format!("{n} {what}{}", plural(*n)))
+        .collect::<Vec<_>>()
+        .join(", ");
     miette::Report::new(Rendered {
         message,
         severity: if errors > 0 {
             miette::Severity::Error
-        } else {
+        } else if warnings > 0 {
             miette::Severity::Warning
+        } else {
+            miette::Severity::Advice
         },
         source: None,
         labels: Vec::new(),

@@ -1,5 +1,6 @@
 //! Built-in functions and constants.
 
+use crate::diag::short_number;
 use std::f64::consts::PI;
 use std::rc::Rc;
 
@@ -112,7 +113,10 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         "sqrt" => {
             let x = n(args, 0)?;
             if x < 0.0 {
-                return Err((0, Error::new(format!("`sqrt` of a negative number ({x})"))));
+                return Err((
+                    0,
+                    Error::new(format!("`sqrt` of a negative number ({})", short_number(x))),
+                ));
             }
             num(x.sqrt())
         }
@@ -155,7 +159,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if lo > hi {
                 return Err((
                     1,
-                    Error::new(format!("`clamp` bounds are reversed ({lo} > {hi})")),
+                    Error::new(format!(
+                        "`clamp` bounds are reversed ({} > {})",
+                        short_number(lo),
+                        short_number(hi)
+                    )),
                 ));
             }
             num(x.clamp(lo, hi))

@@ -1,4 +1,5 @@
-//! Directives (`#declare`, `#local`, `#macro`, `#if`, `#while`, `#for`, `#include`) and macro
+//! Directives (`#declare`, `#local`, `#undef`, `#macro`, `#if`, `#ifdef`, `#ifndef`,
+//! `#switch`, `#while`, `#for`, `#break`, `#include`, `#debug`, `#warning`, `#error`) and macro
 //! calls.
 
 use std::collections::HashMap;
@@ -8,7 +9,7 @@ use super::Evaluator;
 use super::blocks::Sink;
 use super::scope::{Binding, Frame};
 use super::value::Value;
-use crate::diag::{At, Diagnostic, Error, SourceResult};
+use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
 use crate::span::Span;
 use crate::syntax::ast::*;
 
@@ -44,6 +45,58 @@ impl Evaluator {
                 }
                 Ok(())
             }
+            DirectiveKind::IfDef {
+                name,
+                negate,
+                body,
+                otherwise,
+            } => {
+                if self.lookup_quiet(&name.text).is_some() != *negate {
+                    self.run_items(body, sink)
+                } else if let Some(body) = otherwise {
+                    self.run_items(body, sink)
+                } else {
+                    Ok(())
+                }
+            }
+            DirectiveKind::Undef(name) => {
+                if !self.unbind(&name.text) {
+                    let help = match suggest(&name.text, self.globals.keys().map(String::as_str)) {
+                        Some(s) => format!("did you mean `{s}`?"),
+                        None => "remove the `#undef`, or check the spelling of the name".into(),
+                    };
+                    self.warn(
+                        Diagnostic::warning(
+                            name.span,
+                            format!("`#undef` of `{}`, which is not declared", name.text),
+                        )
+                        .with_label("not declared here")
+                        .with_help(help),
+                    );
+                }
+                Ok(())
+            }
+            DirectiveKind::Switch {
+                value,
+                clauses,
+                otherwise,
+            } => self.switch(value, clauses, otherwise.as_deref(), sink),
+            DirectiveKind::Break => {
+                if self.break_targets == 0 {
+                    return Err(vec![
+                        Error::new("`#break` outside a `#switch` or loop")
+                            .label("nothing to leave here")
+                            .help(
+                                "`#break` ends the innermost `#switch`, `#while` or `#for` of the \
+                                 same block or macro body; remove it or use `#if` instead",
+                            )
+                            .at(d.span),
+                    ]);
+                }
+                self.breaking = true;
+                Ok(())
+            }
+            DirectiveKind::Message { kind, value } => self.message(*kind, value, d.span),
             DirectiveKind::While { cond, body } => {
                 let mut n = 0u64;
                 while self.eval(cond)?.truthy().at(cond.span)? {
@@ -52,7 +105,9 @@ impl Evaluator {
                         return Err(vec![self.loop_error(d.span)]);
                     }
                     self.tick(d.span)?;
-                    self.run_items(body, sink)?;
+                    if self.run_breakable(body, sink)? {
+                        break;
+                    }
                 }
                 Ok(())
             }
@@ -87,12 +142,120 @@ impl Evaluator {
                     self.tick(d.span)?;
                     self.bind(var, Value::Num(x), false);
                     self.mark_used(&var.text);
-                    self.run_items(body, sink)?;
+                    if self.run_breakable(body, sink)? {
+                        break;
+                    }
                     x = a + n as f64 * s;
                 }
                 Ok(())
             }
             DirectiveKind::Include { path, path_span } => self.include(path, *path_span, sink),
+        }
+    }
+
+    /// Runs the body of a `#switch` clause or loop iteration; `true` when a `#break` ended it.
+    fn run_breakable(&mut self, body: &[Item], sink: &mut dyn Sink) -> SourceResult<bool> {
+        self.break_targets += 1;
+        let r = self.run_items(body, sink);
+        self.break_targets -= 1;
+        r?;
+        Ok(std::mem::take(&mut self.breaking))
+    }
+
+    /// Runs `body` as the body of a block or macro: a `#break` there cannot leave a `#switch`
+    /// or loop around the block or call.
+    pub(crate) fn run_body(&mut self, body: &[Item], sink: &mut dyn Sink) -> SourceResult<()> {
+        let outer = std::mem::take(&mut self.break_targets);
+        let r = self.run_items(body, sink);
+        self.break_targets = outer;
+        r
+    }
+
+    /// `#switch`, as in POV-Ray: the clauses are tested in order; a clause whose `#case` value
+    /// equals the switch value (within 1e-10) or whose `#range (lo, hi)` holds it (inclusive)
+    /// runs its body, and the next clauses are still tested unless a `#break` ended the switch
+    /// (so a clause without `#break` falls through to the test of the next one). `#else` runs
+    /// when the clause just before it did not match (also when there is none).
+    fn switch(
+        &mut self,
+        value: &Expr,
+        clauses: &[Clause],
+        otherwise: Option<&[Item]>,
+        sink: &mut dyn Sink,
+    ) -> SourceResult<()> {
+        let v = self.eval(value)?.num().at(value.span)?;
+        let mut last_matched = false;
+        for clause in clauses {
+            last_matched = match &clause.test {
+                ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
+                ClauseTest::Range(lo, hi) => {
+                    let a = self.eval(lo)?.num().at(lo.span)?;
+                    let b = self.eval(hi)?.num().at(hi.span)?;
+                    a <= v && v <= b
+                }
+            };
+            if last_matched && self.run_breakable(&clause.body, sink)? {
+                return Ok(());
+            }
+        }
+        match otherwise {
+            Some(body) if !last_matched => self.run_breakable(body, sink).map(|_| ()),
+            _ => Ok(()),
+        }
+    }
+
+    /// `#debug`, `#warning` and `#error`: a message at the directive's span. `#error` stops
+    /// the load.
+    fn message(&mut self, kind: MessageKind, value: &Expr, span: Span) -> SourceResult<()> {
+        let v = self.eval(value)?;
+        let text = match v.show() {
+            Some(t) => t,
+            None => {
+                return Err(vec![
+                    Error::new(format!("a message is a string, found {}", v.type_name()))
+                        .label("not a string")
+                        .help("write a string, e.g. `#debug \"size: \" + str(Size)`")
+                        .at(value.span),
+                ]);
+            }
+        };
+        match kind {
+            MessageKind::Debug | MessageKind::Warning => {
+                // `#debug` and `#warning` together: at most MAX_MESSAGES per load.
+                self.messages += 1;
+                let d = if kind == MessageKind::Debug {
+                    Diagnostic::note(span, text).with_label("`#debug`")
+                } else {
+                    Diagnostic::warning(span, text).with_label("`#warning`")
+                };
+                if self.messages <= super::MAX_MESSAGES {
+                    if kind == MessageKind::Debug {
+                        self.warnings.push(d);
+                    } else {
+                        self.warn(d);
+                    }
+                } else if self.messages == super::MAX_MESSAGES + 1 {
+                    self.warnings.push(
+                        Diagnostic::note(
+                            span,
+                            format!(
+                                "more than {} `#debug` and `#warning` messages: the rest are not \
+                                 shown",
+                                super::MAX_MESSAGES
+                            ),
+                        )
+                        .with_label("this one and the later ones"),
+                    );
+                }
+                Ok(())
+            }
+            MessageKind::Error => {
+                // Every later step fails silently: the load ends with this one error.
+                self.exhausted = true;
+                Err(vec![
+                    Diagnostic::error(span, text).with_label("`#error`: the load stops here"),
+                ])
+            }
         }
     }
 
@@ -159,7 +322,7 @@ impl Evaluator {
             );
         }
         self.frames.push(Frame { vars });
-        let r = self.run_items(&m.body, sink);
+        let r = self.run_body(&m.body, sink);
         let frame = self.frames.pop().expect("frame");
         self.warn_unused(frame.vars);
         r.map_err(|mut ds| {

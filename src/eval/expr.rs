@@ -1,5 +1,6 @@
 //! Expressions: literals, names, operators, indexing, and calls of built-in functions.
 
+use crate::diag::short_number;
 use std::rc::Rc;
 
 use glam::{DVec2, DVec3};
@@ -247,9 +248,12 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
         o => return Err(Error::new(format!("cannot index {}", o.type_name()))),
     };
     if i < 0.0 || i.fract() != 0.0 || i as usize >= len {
-        return Err(Error::new(format!("index {i} out of range (length {len})"))
-            .label("out of range")
-            .help(format!("indices run from 0 to {}", len.saturating_sub(1))));
+        return Err(Error::new(format!(
+            "index {} out of range (length {len})",
+            short_number(i)
+        ))
+        .label("out of range")
+        .help(format!("indices run from 0 to {}", len.saturating_sub(1))));
     }
     let i = i as usize;
     Ok(match v {

@@ -1,11 +1,13 @@
-//! `#include` and the resolution of file paths relative to the file that names them.
+//! `#include` (of scene files and of the built-in standard library) and the resolution of file
+//! paths relative to the file that names them.
 
 use std::path::{Path, PathBuf};
 
 use super::Evaluator;
 use super::blocks::Sink;
-use crate::diag::{Error, SourceResult};
-use crate::span::Span;
+use super::stdlib;
+use crate::diag::{Error, SourceResult, suggest};
+use crate::span::{FileId, Span};
 use crate::syntax::parse;
 
 impl Evaluator {
@@ -15,6 +17,9 @@ impl Evaluator {
         span: Span,
         sink: &mut dyn Sink,
     ) -> SourceResult<()> {
+        if path.starts_with("std/") {
+            return self.include_std(path, span, sink);
+        }
         let resolved = self.resolve_path(path, span);
         let canon = canonical(&resolved);
         if let Some(pos) = self.include_stack.iter().position(|p| *p == canon) {
@@ -64,13 +69,17 @@ impl Evaluator {
                 crate::files::FileError::Io(_) => "cannot be read",
                 crate::files::FileError::Refused(_) => "not a readable scene file",
             };
+            let help = match stdlib::povray_include(path) {
+                Some(h) => format!("POV-Ray's `{path}`: {h}"),
+                None => format!(
+                    "the path is resolved relative to the including file: {}",
+                    resolved.display()
+                ),
+            };
             vec![
                 Error::new(format!("cannot read included file `{path}`: {e}"))
                     .label(label)
-                    .help(format!(
-                        "the path is resolved relative to the including file: {}",
-                        resolved.display()
-                    ))
+                    .help(help)
                     .at(span),
             ]
         })?;
@@ -78,8 +87,45 @@ impl Evaluator {
         let file = self
             .sources
             .add(&resolved, resolved.display().to_string(), text.clone());
-        let items = parse(file, &text)?;
-        self.include_stack.push(canon);
+        self.run_included(file, &text, canon, span, sink)
+    }
+
+    /// `#include "std/NAME.scn"`: a file of the standard library, never looked for on disk.
+    fn include_std(&mut self, path: &str, span: Span, sink: &mut dyn Sink) -> SourceResult<()> {
+        let Some(text) = stdlib::get(path) else {
+            let names: Vec<&str> = stdlib::FILES.iter().map(|(p, _)| *p).collect();
+            let mut e = Error::new(format!("there is no standard file `{path}`"))
+                .label("not in the standard library");
+            e = match suggest(path, names.iter().copied()) {
+                Some(s) => e.help(format!("did you mean `{s}`?")),
+                None => e.help(format!("the standard files are {}", names.join(", "))),
+            };
+            return Err(vec![e.at(span)]);
+        };
+        let key = PathBuf::from(format!("<built-in>/{path}"));
+        if self.include_stack.contains(&key) {
+            return Err(vec![
+                Error::new(format!("cyclic include of `{path}`"))
+                    .label("this file is already being included")
+                    .at(span),
+            ]);
+        }
+        let file = self.sources.add(&key, path.to_string(), text.to_string());
+        self.std_files.insert(file);
+        self.run_included(file, text, key, span, sink)
+    }
+
+    /// Parses and runs an included file's text; errors inside get the include as their trace.
+    fn run_included(
+        &mut self,
+        file: FileId,
+        text: &str,
+        key: PathBuf,
+        span: Span,
+        sink: &mut dyn Sink,
+    ) -> SourceResult<()> {
+        let items = parse(file, text)?;
+        self.include_stack.push(key);
         let r = self.run_items(&items, sink);
         self.include_stack.pop();
         r.map_err(|mut ds| {

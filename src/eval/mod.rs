@@ -9,7 +9,7 @@
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
 //! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
-//!   calls; `include`: `#include` and path resolution;
+//!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
@@ -22,6 +22,7 @@ mod include;
 mod lower;
 mod props;
 mod scope;
+mod stdlib;
 mod value;
 
 use std::collections::{HashMap, HashSet};
@@ -60,6 +61,9 @@ pub struct EvalOptions {
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
 /// build); the thread gets [`EVAL_STACK`], three times what this many levels need.
 pub const MAX_EVAL_NESTING: usize = 100_000;
+/// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
+/// readable and bounded); past it, one last note says the rest were left out.
+pub const MAX_MESSAGES: usize = 1000;
 /// Longest string a scene may build (bytes).
 pub const MAX_STRING_BYTES: usize = 1 << 24;
 /// Stack of the evaluation thread. Reserved, not touched: only what the nesting uses is paid.
@@ -177,15 +181,53 @@ pub(crate) struct Evaluator {
     dependencies: Vec<PathBuf>,
     /// Steps taken so far (see [`EvalOptions::max_steps`]).
     steps: u64,
-    /// Set once the step budget ran out: every later step fails silently, so the evaluation
-    /// unwinds at once with the one error already reported.
+    /// Set once the step budget ran out or an `#error` stopped the load: every later step fails
+    /// silently, so the evaluation unwinds at once with the one error already reported.
     exhausted: bool,
+    /// `#switch`es and loops around the current item that a `#break` may leave (within one
+    /// block body or macro body: blocks and macro calls start again at 0).
+    pub(crate) break_targets: usize,
+    /// Set by `#break` until the `#switch` or loop it leaves has seen it.
+    breaking: bool,
+    /// `#debug` and `#warning` messages so far (see [`MAX_MESSAGES`]).
+    messages: usize,
+    /// Files of the standard library read by this load: their unused declarations are quiet.
+    std_files: HashSet<crate::span::FileId>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
     parts_copied: usize,
     /// Bytes of scene text read so far (the scene and every include).
     pub(crate) source_bytes: u64,
+}
+
+/// "`word` is not a property of a material", with the POV-Ray spelling's counterpart or the
+/// nearest property names.
+fn not_a_property(sink: &dyn Sink, word: &str, span: Span) -> Diagnostic {
+    let kind = sink.kind();
+    let names: Vec<&str> = sink.props().iter().map(|p| p.name).collect();
+    let e = Error::new(format!("`{word}` is not a property of {kind}")).label("unknown property");
+    let near = crate::diag::suggest_all(word, names.iter().copied(), 3);
+    let e = if let Some(hint) = crate::syntax::povray_hint(word, &kind) {
+        e.help(hint)
+    } else if !near.is_empty() {
+        let near: Vec<String> = near.iter().map(|n| format!("`{n}`")).collect();
+        e.help(format!("did you mean {}?", or_list(&near)))
+    } else if names.is_empty() {
+        e.help(format!("{kind} takes no properties"))
+    } else {
+        e.help(format!("{kind} accepts: {}", names.join(", ")))
+    };
+    e.at(span)
+}
+
+/// `a`, `a or b`, `a, b or c`.
+fn or_list(xs: &[String]) -> String {
+    match xs {
+        [] => String::new(),
+        [a] => a.clone(),
+        [init @ .., last] => format!("{} or {last}", init.join(", ")),
+    }
 }
 
 /// A silent error: its cause was already reported.
@@ -210,6 +252,10 @@ impl Evaluator {
             dependencies: Vec::new(),
             steps: 0,
             exhausted: false,
+            break_targets: 0,
+            breaking: false,
+            messages: 0,
+            std_files: HashSet::new(),
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,
@@ -236,7 +282,7 @@ impl Evaluator {
     /// Runs a block body or directive body.
     pub(crate) fn run_items(&mut self, items: &[Item], sink: &mut dyn Sink) -> SourceResult<()> {
         let mut i = 0;
-        while i < items.len() {
+        while i < items.len() && !self.breaking {
             self.step(items, &mut i, sink)?;
         }
         Ok(())
@@ -290,25 +336,11 @@ impl Evaluator {
             Item::Directive(d) => self.directive(d, sink),
             Item::Keyword(kw) => {
                 let Some(spec) = sink.prop_spec(&kw.text) else {
-                    let names: Vec<&str> = sink.props().iter().map(|p| p.name).collect();
-                    let mut e = Error::new(format!(
-                        "`{}` is not a property of {}",
-                        kw.text,
-                        sink.kind()
-                    ))
-                    .label("unknown property");
-                    if let Some(s) = suggest(&kw.text, names.iter().copied()) {
-                        e = e.help(format!("did you mean `{s}`?"));
-                    } else if names.is_empty() {
-                        e = e.help(format!("{} takes no properties", sink.kind()));
-                    } else {
-                        e = e.help(format!("{} accepts: {}", sink.kind(), names.join(", ")));
-                    }
                     // Skip the keyword's would-be arguments.
                     while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
                         *i += 1;
                     }
-                    return Err(vec![e.at(kw.span)]);
+                    return Err(vec![not_a_property(sink, &kw.text, kw.span)]);
                 };
                 let mut args: Vec<Arg> = Vec::new();
                 let mut j = *i;
@@ -354,6 +386,20 @@ impl Evaluator {
                 sink.property(self, kw, args)
             }
             Item::Expr(e) => {
+                // An undeclared name followed by a value reads as a misspelt property
+                // (`difuse 0.5`, POV-Ray's `right x*4/3`): say so, with the nearest properties.
+                if let ExprKind::Ident(name) = &e.kind
+                    && matches!(items.get(*i), Some(Item::Expr(_)))
+                    && self.lookup_quiet(name).is_none()
+                    && !self.poisoned.contains(name)
+                    && (crate::syntax::povray_hint(name, &sink.kind()).is_some()
+                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some())
+                {
+                    while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
+                        *i += 1;
+                    }
+                    return Err(vec![not_a_property(sink, name, e.span)]);
+                }
                 if let ExprKind::Call { name, args } = &e.kind
                     && let Some(Value::Macro(m)) = self.lookup_quiet(&name.text)
                 {

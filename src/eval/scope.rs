@@ -46,6 +46,17 @@ impl Evaluator {
         self.poisoned.remove(&name.text);
     }
 
+    /// Removes a binding (the innermost: the current macro's, else the global one); `false`
+    /// when there was none.
+    pub(super) fn unbind(&mut self, name: &str) -> bool {
+        if let Some(f) = self.frames.last_mut()
+            && f.vars.remove(name).is_some()
+        {
+            return true;
+        }
+        self.globals.remove(name).is_some()
+    }
+
     pub(super) fn mark_used(&mut self, name: &str) {
         if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
             b.used = true;
@@ -79,7 +90,13 @@ impl Evaluator {
         }
         known.extend(CONSTANTS);
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if let Some(s) = suggest(name, known) {
+        if let Some(hint) = crate::syntax::povray_hint(name, "") {
+            e = e.help(hint);
+        } else if let Some(file) = super::stdlib::declaring(name) {
+            e = e.help(format!(
+                "`{name}` is declared in the standard library: add `#include \"{file}\"`"
+            ));
+        } else if let Some(s) = suggest(name, known) {
             e = e.help(format!("did you mean `{s}`?"));
         } else {
             e = e.help(format!("declare it first: `#declare {name} = ...`"));
@@ -90,7 +107,12 @@ impl Evaluator {
     pub(super) fn warn_unused(&mut self, vars: HashMap<String, Binding>) {
         let mut unused: Vec<(String, Binding)> = vars
             .into_iter()
-            .filter(|(n, b)| !b.used && !n.starts_with('_') && !b.span.is_detached())
+            .filter(|(n, b)| {
+                !b.used
+                    && !n.starts_with('_')
+                    && !b.span.is_detached()
+                    && !self.std_files.contains(&b.span.file)
+            })
             .collect();
         unused.sort_by_key(|(_, b)| (b.span.file.0, b.span.start));
         for (name, b) in unused {

@@ -60,6 +60,21 @@ impl Value {
         }
     }
 
+    /// The value as a message shows it (`#debug`): strings as they are, numbers, vectors,
+    /// colors and booleans as written; `None` for the others.
+    pub fn show(&self) -> Option<String> {
+        let n = crate::diag::short_number;
+        Some(match self {
+            Value::Str(s) => s.to_string(),
+            Value::Num(x) => n(*x),
+            Value::Bool(b) => b.to_string(),
+            Value::Vec2(v) => format!("<{}, {}>", n(v.x), n(v.y)),
+            Value::Vec3(v) => format!("<{}, {}, {}>", n(v.x), n(v.y), n(v.z)),
+            Value::Color(v) => format!("rgb <{}, {}, {}>", n(v.x), n(v.y), n(v.z)),
+            _ => return None,
+        })
+    }
+
     fn mismatch(&self, expected: &str) -> Error {
         Error::new(format!("expected {expected}, found {}", self.type_name()))
             .label(format!("this is {}", self.type_name()))

@@ -66,6 +66,48 @@ pub enum DirectiveKind {
         path: String,
         path_span: Span,
     },
+    /// `#ifdef (Name)` (or `#ifndef` when `negate`).
+    IfDef {
+        name: Name,
+        negate: bool,
+        body: Vec<Item>,
+        otherwise: Option<Vec<Item>>,
+    },
+    /// `#undef Name`.
+    Undef(Name),
+    /// `#switch (value) #case ... #range ... [#else ...] #end`.
+    Switch {
+        value: Expr,
+        clauses: Vec<Clause>,
+        otherwise: Option<Vec<Item>>,
+    },
+    /// `#break`: leaves the innermost `#switch`, `#while` or `#for`.
+    Break,
+    /// `#debug`, `#warning` or `#error` with its message.
+    Message {
+        kind: MessageKind,
+        value: Expr,
+    },
+}
+
+/// One `#case (v)` or `#range (lo, hi)` clause of a `#switch`.
+#[derive(Debug, Clone)]
+pub struct Clause {
+    pub test: ClauseTest,
+    pub body: Vec<Item>,
+}
+
+#[derive(Debug, Clone)]
+pub enum ClauseTest {
+    Case(Expr),
+    Range(Expr, Expr),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MessageKind {
+    Debug,
+    Warning,
+    Error,
 }
 
 #[derive(Debug)]

@@ -2,6 +2,8 @@
 
 pub mod ast;
 mod parser;
+pub mod povray;
 
 pub use crate::diag::{SourceFile, SourceMap};
 pub use parser::{MAX_EXPRESSION_TERMS, MAX_NESTING, parse};
+pub use povray::povray_hint;

@@ -58,6 +58,16 @@ fn describe(rule: Rule) -> &'static str {
         Rule::for_d => "`#for`",
         Rule::macro_d => "`#macro`",
         Rule::include_d => "`#include`",
+        Rule::ifdef_d => "`#ifdef`",
+        Rule::ifndef_d => "`#ifndef`",
+        Rule::undef_d => "`#undef`",
+        Rule::switch_d => "`#switch`",
+        Rule::case_d => "`#case`",
+        Rule::range_d => "`#range`",
+        Rule::break_d => "`#break`",
+        Rule::debug_d => "`#debug`",
+        Rule::warning_d => "`#warning`",
+        Rule::error_d => "`#error`",
         Rule::params => "parameter names",
         Rule::keyword => "a property keyword",
         Rule::expr | Rule::vexpr | Rule::iexpr => "an expression",
@@ -120,7 +130,9 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     // Say "a directive" once instead of listing every one, and leave out the tokens that could
     // merely continue an expression when there are other choices.
     if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
-        expected.retain(|e| !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`"));
+        expected.retain(|e| {
+            !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`" | "`#case`" | "`#range`")
+        });
         expected.push("a directive");
     }
     if expected.len() > 3 || after_operand {
@@ -153,10 +165,23 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
             .collect();
         let known = [
             "declare", "local", "if", "elif", "else", "end", "while", "for", "macro", "include",
+            "ifdef", "ifndef", "undef", "switch", "case", "range", "break", "debug", "warning",
+            "error",
         ];
-        if matches!(word.as_str(), "end" | "else" | "elif") {
+        if let Some(hint) = super::povray_hint(&format!("#{word}"), "") {
+            d = d.with_help(hint);
+            if expected_text == "something else" {
+                d.message = format!("syntax error: unexpected {found}");
+                d.label = "a POV-Ray directive".into();
+            }
+        } else if matches!(word.as_str(), "end" | "else" | "elif") {
             d = d.with_help(format!(
-                "`#{word}` without a matching `#if`, `#while`, `#for` or `#macro`"
+                "`#{word}` without a matching `#if`, `#ifdef`, `#switch`, `#while`, `#for` or \
+                 `#macro`"
+            ));
+        } else if matches!(word.as_str(), "case" | "range") {
+            d = d.with_help(format!(
+                "`#{word}` stands only directly inside `#switch (value) ... #end`"
             ));
         } else if let Some(s) = crate::diag::suggest(&word, known) {
             d = d.with_help(format!("did you mean `#{s}`?"));
@@ -169,14 +194,124 @@ fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagno
     } else if pos >= text.len() && expected_text.contains("`}`") {
         d = d.with_help("a block is not closed: add `}`");
     } else if rest.starts_with('{') {
-        d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`");
+        match super::povray_hint(word_before(text, pos), "") {
+            Some(hint) => d = d.with_help(hint),
+            None => d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`"),
+        }
+    } else if rest.starts_with('=') && !rest.starts_with("==") {
+        d = d.with_help(
+            "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
+        );
+    }
+    if pos >= text.len()
+        && let Some(open) = unclosed(text)
+    {
+        return never_closed(file, text, open);
     }
     if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
         d = d.with_help("a directive is not closed: add `#end`");
-    } else if pos >= text.len() && text.matches('{').count() > text.matches('}').count() {
-        d = d.with_help("a block is not closed: add `}`");
     }
     d
+}
+
+/// The name before position `pos`, skipping blanks and one `[...]` (`array[3] {`): what a
+/// misplaced `{` was probably meant to open.
+fn word_before(text: &str, pos: usize) -> &str {
+    let mut head = text[..pos.min(text.len())].trim_end();
+    if head.ends_with(']')
+        && let Some(open) = head.rfind('[')
+    {
+        head = head[..open].trim_end();
+    }
+    let start = head
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |i| i + 1);
+    &head[start..]
+}
+
+/// The innermost `{` or block directive (`#if`, `#switch`, `#while`, ...: what `#end` closes)
+/// still open at the end of the text, as its start and length (comments and strings skipped).
+fn unclosed(text: &str) -> Option<(usize, usize)> {
+    let bytes = text.as_bytes();
+    let mut open: Vec<(usize, usize)> = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'{' => open.push((i, 1)),
+            b'}' => {
+                if let Some(k) = open.iter().rposition(|o| o.1 == 1) {
+                    open.truncate(k);
+                }
+            }
+            b'#' => {
+                let word = text[i + 1..]
+                    .split(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+                    .next()
+                    .unwrap_or("");
+                match word {
+                    "if" | "ifdef" | "ifndef" | "switch" | "while" | "for" | "macro" => {
+                        open.push((i, word.len() + 1));
+                    }
+                    "end" => {
+                        if let Some(k) = open.iter().rposition(|o| o.1 > 1) {
+                            open.truncate(k);
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    open.pop()
+}
+
+/// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a
+/// second label.
+fn never_closed(file: FileId, text: &str, (open, len): (usize, usize)) -> Diagnostic {
+    let opener = &text[open..open + len];
+    let (what, help) = if opener == "{" {
+        let name = word_before(text, open);
+        let block = if name.is_empty() {
+            "a block".to_string()
+        } else {
+            format!("`{name} {{ ... }}`")
+        };
+        (block, "add `}` where the block ends")
+    } else {
+        (format!("`{opener}`"), "add `#end` where it ends")
+    };
+    let end = text.trim_end().len();
+    let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
+    Diagnostic::error(
+        Span::new(file, open as u32, (open + len) as u32),
+        format!("syntax error: {what} is never closed"),
+    )
+    .with_label(format!("this `{opener}` is never closed"))
+    .with_extra(
+        Span::new(file, (end - last) as u32, end as u32),
+        "the file ends here, inside it",
+    )
+    .with_help(help)
 }
 
 /// The rules a syntax error expected, from the ones pest recorded at the error position.
@@ -204,6 +339,14 @@ fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
             Rule::for_d,
             Rule::macro_d,
             Rule::include_d,
+            Rule::ifdef_d,
+            Rule::ifndef_d,
+            Rule::switch_d,
+            Rule::break_d,
+            Rule::undef_d,
+            Rule::debug_d,
+            Rule::warning_d,
+            Rule::error_d,
         ]);
     }
     if positives.contains(&Rule::rgb) {
@@ -229,7 +372,7 @@ fn is_keyword(word: &str) -> bool {
 }
 
 fn count_openers(text: &str) -> usize {
-    ["#if", "#while", "#for", "#macro"]
+    ["#if", "#switch", "#while", "#for", "#macro"]
         .iter()
         .map(|k| text.matches(k).count())
         .sum()
@@ -301,7 +444,7 @@ fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
             b')' | b']' | b'}' => depth = depth.saturating_sub(1),
             b'#' => {
                 let rest = &text[i..];
-                if ["#if", "#while", "#for", "#macro"]
+                if ["#if", "#switch", "#while", "#for", "#macro"]
                     .iter()
                     .any(|k| rest.starts_with(k))
                 {
@@ -445,7 +588,68 @@ impl Cx {
                     path_span,
                 }
             }
+            Rule::ifdef_d | Rule::ifndef_d => {
+                let name = self.name(inner.next().unwrap());
+                let body = self.items(inner.next().unwrap());
+                let otherwise = inner
+                    .next()
+                    .map(|p| self.items(p.into_inner().next().unwrap()));
+                DirectiveKind::IfDef {
+                    name,
+                    negate: rule == Rule::ifndef_d,
+                    body,
+                    otherwise,
+                }
+            }
+            Rule::undef_d => DirectiveKind::Undef(self.name(inner.next().unwrap())),
+            Rule::switch_d => {
+                let value = self.expr(inner.next().unwrap());
+                let mut clauses = Vec::new();
+                let mut otherwise = None;
+                for p in inner {
+                    let r = p.as_rule();
+                    let mut i = p.into_inner();
+                    match r {
+                        Rule::case_d => {
+                            let test = ClauseTest::Case(self.expr(i.next().unwrap()));
+                            let body = self.items(i.next().unwrap());
+                            clauses.push(Clause { test, body });
+                        }
+                        Rule::range_d => {
+                            let lo = self.expr(i.next().unwrap());
+                            let hi = self.expr(i.next().unwrap());
+                            let body = self.items(i.next().unwrap());
+                            clauses.push(Clause {
+                                test: ClauseTest::Range(lo, hi),
+                                body,
+                            });
+                        }
+                        _ => otherwise = Some(self.items(i.next().unwrap())),
+                    }
+                }
+                DirectiveKind::Switch {
+                    value,
+                    clauses,
+                    otherwise,
+                }
+            }
+            Rule::break_d => DirectiveKind::Break,
+            Rule::debug_d | Rule::warning_d | Rule::error_d => DirectiveKind::Message {
+                kind: match rule {
+                    Rule::debug_d => MessageKind::Debug,
+                    Rule::warning_d => MessageKind::Warning,
+                    _ => MessageKind::Error,
+                },
+                value: self.expr(inner.next().unwrap()),
+            },
             r => unreachable!("directive rule {r:?}"),
+        };
+        // A message's span ends with its text (not the blanks that the optional `;` skipped).
+        let span = match &kind {
+            DirectiveKind::Message { value, .. } => {
+                Span::new(self.file, span.start, value.span.end)
+            }
+            _ => span,
         };
         Directive { kind, span }
     }
@@ -474,7 +678,14 @@ impl Cx {
             };
         }
         self.terms.set(terms);
-        let e = self.pratt(pair.into_inner());
+        // One term is a lone primary (prefix and postfix operators and infix operators are
+        // terms of their own): no Pratt parser needed, which halves the AST building time of a
+        // generated scene (most expressions are single numbers and names).
+        let e = if n == 1 {
+            self.primary(pair.into_inner().next().expect("one term"))
+        } else {
+            self.pratt(pair.into_inner())
+        };
         self.terms.set(terms - n);
         e
     }

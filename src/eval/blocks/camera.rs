@@ -1,6 +1,7 @@
 //! `camera { ... }`.
 
 use super::Sink;
+use crate::diag::short_number;
 use crate::diag::{Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, num, positive, range_error, vec3};
@@ -58,7 +59,10 @@ impl Sink for CameraBuilder {
                 if !(f > 0.0 && f < 180.0) {
                     return Err(range_error(
                         args[0].span,
-                        format!("fov must be between 0 and 180 degrees, found {f}"),
+                        format!(
+                            "fov must be between 0 and 180 degrees, found {}",
+                            short_number(f)
+                        ),
                         "e.g. `fov 40`",
                     ));
                 }
@@ -69,7 +73,7 @@ impl Sink for CameraBuilder {
                 if a < 0.0 {
                     return Err(range_error(
                         args[0].span,
-                        format!("aperture must not be negative, found {a}"),
+                        format!("aperture must not be negative, found {}", short_number(a)),
                         "0 is a pinhole",
                     ));
                 }

@@ -1,5 +1,6 @@
 //! `environment { ... }`: an image around the scene, as its background and a light.
 
+use crate::diag::short_number;
 use std::path::PathBuf;
 use std::rc::Rc;
 
@@ -72,7 +73,7 @@ impl Sink for EnvBuilder {
                 if k < 0.0 {
                     return Err(range_error(
                         args[0].span,
-                        format!("intensity must not be negative, found {k}"),
+                        format!("intensity must not be negative, found {}", short_number(k)),
                         "e.g. `intensity 1`",
                     ));
                 }

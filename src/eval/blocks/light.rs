@@ -1,5 +1,6 @@
 //! `light { ... }` (a point light) and `spotlight { ... }`.
 
+use crate::diag::short_number;
 use glam::DVec3;
 
 use super::{Sink, unexpected};
@@ -99,7 +100,10 @@ impl LightBuilder {
         if !(cone > 0.0 && cone <= 90.0) {
             return Err(range_error(
                 cspan,
-                format!("the cone angle must be in (0, 90] degrees, found {cone}"),
+                format!(
+                    "the cone angle must be in (0, 90] degrees, found {}",
+                    short_number(cone)
+                ),
                 "e.g. `angle 30`",
             ));
         }
@@ -107,7 +111,11 @@ impl LightBuilder {
         if !(0.0..=cone).contains(&fall) {
             return Err(range_error(
                 fspan,
-                format!("falloff must be between 0 and the cone angle ({cone}), found {fall}"),
+                format!(
+                    "falloff must be between 0 and the cone angle ({}), found {}",
+                    short_number(cone),
+                    short_number(fall)
+                ),
                 "e.g. `falloff 25` with `angle 30`",
             ));
         }

@@ -1,6 +1,7 @@
 //! `material { ... }`: the kind (diffuse, mirror, glass, glossy), its parameters, and
 //! materials that extend a declared one.
 
+use crate::diag::short_number;
 use std::rc::Rc;
 
 use super::{Sink, unexpected};
@@ -123,7 +124,7 @@ impl MaterialBuilder {
                     if i < 1.0 {
                         return Err(range_error(
                             s,
-                            format!("ior must be at least 1, found {i}"),
+                            format!("ior must be at least 1, found {}", short_number(i)),
                             "glass has an index of refraction ≥ 1 (1.5 for window glass)",
                         ));
                     }

@@ -90,7 +90,10 @@ impl Evaluator {
     ) -> SourceResult<Value> {
         self.check_nesting(kind.span)?;
         self.block_depth += 1;
+        // A `#break` in the body cannot leave a `#switch` or loop around the block.
+        let outer = std::mem::take(&mut self.break_targets);
         let r = self.eval_block_body(kind, items, span);
+        self.break_targets = outer;
         self.block_depth -= 1;
         r
     }
@@ -153,7 +156,9 @@ impl Evaluator {
             _ => {
                 let mut e = Error::new(format!("unknown block `{k}`")).label("not a kind of block");
                 let blocks = OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied();
-                if let Some(s) = suggest(k, blocks) {
+                if let Some(hint) = crate::syntax::povray_hint(k, "") {
+                    e = e.help(hint);
+                } else if let Some(s) = suggest(k, blocks) {
                     e = e.help(format!("did you mean `{s}`?"));
                 }
                 Err(vec![e.at(kind.span)])

@@ -4,6 +4,7 @@
 mod csg;
 mod primitive;
 
+use crate::diag::short_number;
 use std::rc::Rc;
 
 use glam::{DAffine3, DQuat, DVec3};
@@ -292,7 +293,11 @@ impl ObjectBuilder {
                 if p.x < 0.0 {
                     return Err(range_error(
                         profile.span,
-                        format!("profile point <{}, {}> has a negative radius", p.x, p.y),
+                        format!(
+                            "profile point <{}, {}> has a negative radius",
+                            short_number(p.x),
+                            short_number(p.y)
+                        ),
                         "radii (the first component) must be ≥ 0",
                     ));
                 }

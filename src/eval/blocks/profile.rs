@@ -1,6 +1,7 @@
 //! Profiles for `revolve`: `bezier { ... }` (control points) and `spline { ... }` (points a
 //! Catmull-Rom curve passes through), both made of Bezier segments.
 
+use crate::diag::short_number;
 use std::rc::Rc;
 
 use glam::DVec2;
@@ -95,7 +96,10 @@ impl Sink for ProfileBuilder {
         if !(1.0..=7.0).contains(&d) || d.fract() != 0.0 {
             return Err(range_error(
                 args[0].span,
-                format!("degree must be a whole number from 1 to 7, found {d}"),
+                format!(
+                    "degree must be a whole number from 1 to 7, found {}",
+                    short_number(d)
+                ),
                 "e.g. `degree 3`",
             ));
         }

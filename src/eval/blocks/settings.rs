@@ -1,6 +1,7 @@
 //! `settings { ... }`: the render settings.
 
 use super::Sink;
+use crate::diag::short_number;
 use crate::diag::{At, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
@@ -69,7 +70,7 @@ impl Sink for SettingsBuilder {
                 if !(a > 0.0 && a <= 1.0) {
                     return Err(range_error(
                         args[0].span,
-                        format!("alpha must be in (0, 1], found {a}"),
+                        format!("alpha must be in (0, 1], found {}", short_number(a)),
                         "SPPM uses 2/3 or 0.7",
                     ));
                 }
@@ -81,7 +82,7 @@ impl Sink for SettingsBuilder {
                 if x < 0.0 || x.fract() != 0.0 || x > u64::MAX as f64 {
                     return Err(range_error(
                         args[0].span,
-                        format!("seed must be a whole number ≥ 0, found {x}"),
+                        format!("seed must be a whole number ≥ 0, found {}", short_number(x)),
                         "e.g. `seed 7`",
                     ));
                 }

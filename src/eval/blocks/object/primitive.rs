@@ -1,6 +1,7 @@
 //! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `disk`, `triangle`,
 //! `mesh`): their positional values and the checks on them.
 
+use crate::diag::short_number;
 use glam::{DAffine3, DVec3};
 
 use super::{ObjectBuilder, article};
@@ -108,7 +109,7 @@ impl ObjectBuilder {
             if r <= 0.0 {
                 return Err(range_error(
                     s,
-                    format!("radius must be positive, found {r}"),
+                    format!("radius must be positive, found {}", short_number(r)),
                     "use a radius greater than 0",
                 ));
             }

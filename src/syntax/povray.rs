@@ -1,0 +1,194 @@
+//! POV-Ray spellings and their sppm-lang form: one table that the diagnostics consult when a
+//! name, block, directive or property is unknown (docs/povray.md is the same mapping for
+//! readers).
+
+/// One POV-Ray spelling. `context` limits it to the inside of one kind of block (`"camera"`);
+/// `None` applies anywhere.
+pub struct PovSpelling {
+    pub word: &'static str,
+    pub context: Option<&'static str>,
+    /// What to write here instead, as a sentence for a diagnostic's help.
+    pub hint: &'static str,
+}
+
+const fn pov(word: &'static str, hint: &'static str) -> PovSpelling {
+    PovSpelling {
+        word,
+        context: None,
+        hint,
+    }
+}
+
+const fn pov_in(context: &'static str, word: &'static str, hint: &'static str) -> PovSpelling {
+    PovSpelling {
+        word,
+        context: Some(context),
+        hint,
+    }
+}
+
+/// The table, context-bound entries first (they win over a general one of the same word).
+pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
+    pov_in(
+        "camera",
+        "angle",
+        "POV-Ray's camera `angle` (horizontal, degrees) is `fov` here: the vertical field of view \
+         in degrees, e.g. `fov 40`",
+    ),
+    pov_in(
+        "camera",
+        "right",
+        "POV-Ray's camera `right` is not needed here: the aspect ratio comes from \
+         `settings { resolution <w, h> }`; remove `right`",
+    ),
+    pov_in(
+        "camera",
+        "direction",
+        "POV-Ray's camera `direction` is `look_at <point>` and `fov degrees` here",
+    ),
+    pov_in("camera", "sky", "POV-Ray's camera `sky` is `up <v>` here"),
+    pov_in(
+        "camera",
+        "perspective",
+        "the camera is always a perspective (pinhole or thin-lens) camera here: remove `perspective`",
+    ),
+    pov(
+        "light_source",
+        "POV-Ray's `light_source { <pos> color ... }` is `light { <pos> intensity rgb <...> }` here \
+         (intensity in W/sr), or `spotlight { <pos> point_at <target> intensity ... }`",
+    ),
+    pov(
+        "pigment",
+        "POV-Ray's `pigment { color ... }` is the colour of a material here: \
+         `material { diffuse rgb <...> }` (a `texture { ... }` may stand for the colour)",
+    ),
+    pov(
+        "finish",
+        "POV-Ray's `finish { ... }` is the kind of material here: \
+         `material { diffuse ... }`, `mirror ...`, `glass ior n`, or `glossy ... roughness r`",
+    ),
+    pov(
+        "normal",
+        "POV-Ray's `normal { ... }` (bump mapping) has no counterpart here; remove it",
+    ),
+    pov(
+        "interior",
+        "POV-Ray's `interior { ior n }` is `material { glass ior n }` here (absorption: `absorb rgb <...>`)",
+    ),
+    pov(
+        "color",
+        "POV-Ray's `color rgb <r, g, b>` is `rgb <r, g, b>` here: leave out `color`",
+    ),
+    pov(
+        "colour",
+        "POV-Ray's `colour rgb <r, g, b>` is `rgb <r, g, b>` here: leave out `colour`",
+    ),
+    pov(
+        "rgbf",
+        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
+    ),
+    pov(
+        "rgbt",
+        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
+    ),
+    pov(
+        "rgbft",
+        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
+    ),
+    pov(
+        "background",
+        "POV-Ray's `background { color ... }` is `background rgb <r, g, b>` here (no braces)",
+    ),
+    pov(
+        "global_settings",
+        "POV-Ray's `global_settings { ... }` is `settings { ... }` here (resolution, iterations, \
+         photons, integrator, ...)",
+    ),
+    pov(
+        "#version",
+        "POV-Ray's `#version` is not needed here: remove it",
+    ),
+    pov(
+        "array",
+        "POV-Ray's `array[3] { a, b, c }` is `[a, b, c]` here; index it as `A[0]`",
+    ),
+    pov(
+        "reflection",
+        "POV-Ray's `finish { reflection ... }` is `material { mirror rgb <...> }` here",
+    ),
+    pov(
+        "phong",
+        "POV-Ray's highlights (`phong`, `specular`) come from `material { glossy <color> \
+         roughness r }` here",
+    ),
+    pov(
+        "ambient",
+        "there is no ambient term here: light comes from lights and from `area_light { <shape> \
+         radiance rgb <...> }`; remove `ambient`",
+    ),
+    pov(
+        "emission",
+        "an emitting surface is `area_light { <shape> radiance rgb <...> }` here",
+    ),
+    pov(
+        "transmit",
+        "transparency is a material here: `material { glass ior n [tint rgb <...>] }`",
+    ),
+    pov(
+        "filter",
+        "transparency is a material here: `material { glass ior n [tint rgb <...>] }`",
+    ),
+    pov(
+        "sky_sphere",
+        "POV-Ray's `sky_sphere` is `environment { image \"sky.hdr\" }` or `background rgb <...>` here",
+    ),
+    pov(
+        "radiosity",
+        "global illumination is always on here (the integrator of `settings { integrator ... }`); \
+         remove `radiosity`",
+    ),
+    pov(
+        "lathe",
+        "POV-Ray's `lathe` and `sor` are `revolve { profile spline { <r, h>, ... } }` here",
+    ),
+    pov(
+        "sor",
+        "POV-Ray's `lathe` and `sor` are `revolve { profile spline { <r, h>, ... } }` here",
+    ),
+    pov(
+        "bicubic_patch",
+        "POV-Ray's `bicubic_patch` is `bezier_patch { 16 points }` here",
+    ),
+    pov(
+        "mesh2",
+        "meshes are read from OBJ files here: `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "no_shadow",
+        "every object casts shadows here; remove `no_shadow`",
+    ),
+    pov(
+        "hollow",
+        "`hollow` is not needed here (there is no participating media); remove it",
+    ),
+    pov(
+        "clock",
+        "there is no animation `clock` here; declare a value instead: `#declare Clock = 0.5;`",
+    ),
+    pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
+    pov(
+        "#default",
+        "POV-Ray's `#default` has no counterpart: an object without a material is diffuse gray 0.5; \
+         declare a material and use it: `material { Mine }`",
+    ),
+];
+
+/// What to write here instead of the POV-Ray spelling `word` (written inside a block of kind
+/// `context`, e.g. `"a camera"`, or at the top level); `None` when `word` is no known POV-Ray
+/// spelling.
+pub fn povray_hint(word: &str, context: &str) -> Option<&'static str> {
+    POVRAY_SPELLINGS
+        .iter()
+        .find(|s| s.word == word && s.context.is_none_or(|c| context.ends_with(c)))
+        .map(|s| s.hint)
+}
