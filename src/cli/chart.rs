@@ -17,7 +17,7 @@ use clap::Args;
 use sppm_lang::chart::{ChartSpec, Series, draw};
 use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
 use sppm_lang::film::Image;
-use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings, render};
+use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings, render};
 use sppm_lang::scene::{ColorSpace, Integrator, Scene, load_image};
 
 use super::check::print_diagnostics;
@@ -57,6 +57,8 @@ struct Method {
     alpha: Option<f64>,
     radius_factor: f64,
     photon_factor: f64,
+    /// The earlier default radius: one pixel footprint at the look-at distance for every pixel.
+    look_at_radius: bool,
 }
 
 fn methods() -> Vec<Method> {
@@ -66,9 +68,14 @@ fn methods() -> Vec<Method> {
         alpha,
         radius_factor,
         photon_factor,
+        look_at_radius: false,
     };
     vec![
         m("sppm", Integrator::Sppm, None, 1.0, 1.0),
+        Method {
+            look_at_radius: true,
+            ..m("sppm-lookat", Integrator::Sppm, None, 1.0, 1.0)
+        },
         m("sppm-alpha0.5", Integrator::Sppm, Some(0.5), 1.0, 1.0),
         m("sppm-alpha0.7", Integrator::Sppm, Some(0.7), 1.0, 1.0),
         m("sppm-alpha0.9", Integrator::Sppm, Some(0.9), 1.0, 1.0),
@@ -210,11 +217,17 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         // Validate the window once, before rendering anything.
         error(ref_view, ref_view, Some(win))?;
     }
-    let base_radius = {
+    // The earlier default initial radius, one pixel footprint at the look-at distance, for the
+    // `sppm-lookat` method.
+    let look_at_radius = {
         let settings =
             effective_settings(&scene, &RenderOptions::default()).map_err(|e| e.message)?;
-        let prepared = PreparedScene::new(&scene).map_err(|e| e.message)?;
-        sppm_lang::integrators::sppm::initial_radius(&prepared, &settings)
+        match settings.initial_radius(&scene.camera) {
+            InitialRadius::Fixed(r) => r,
+            InitialRadius::Footprint { per_distance } => {
+                per_distance * (scene.camera.look_at - scene.camera.location).length()
+            }
+        }
     };
     let wanted: Option<Vec<String>> = args
         .methods
@@ -231,7 +244,10 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         if let Some(a) = m.alpha {
             s.settings.alpha = a;
         }
-        s.settings.radius = Some(base_radius * m.radius_factor);
+        if m.look_at_radius {
+            s.settings.radius = Some(look_at_radius);
+        }
+        s.settings.radius_scale = m.radius_factor;
         s.settings.photons = ((s.settings.photons as f64 * m.photon_factor) as u64).max(1);
         let opts = RenderOptions {
             iterations: Some(u32::MAX),

@@ -66,6 +66,9 @@ pub struct Settings {
     pub photons: u64,
     /// Initial gather radius in scene units; `None`: chosen from the scene's size.
     pub radius: Option<f64>,
+    /// Scale of the initial radius (the scene's `radius` or the default rule): 1 unless a tool
+    /// varies it (`sppm-lang chart`); not part of the language.
+    pub radius_scale: f64,
     /// SPPM radius reduction parameter, in (0, 1].
     pub alpha: f64,
     /// Maximum path depth for camera paths and photon paths.
@@ -88,6 +91,7 @@ impl Default for Settings {
             iterations: 64,
             photons: 200_000,
             radius: None,
+            radius_scale: 1.0,
             alpha: 2.0 / 3.0,
             max_depth: 16,
             seed: 0,

@@ -21,6 +21,8 @@ pub(crate) struct VisiblePoint {
     pub(crate) bsdf: Bsdf,
     /// The path's throughput up to the point.
     pub(crate) beta: Vec3A,
+    /// The length of the camera path to the point (through specular bounces).
+    pub(crate) distance: f32,
 }
 
 /// A jittered eye path for pixel (x, y) (pixel position and lens position from `rng`): returns
@@ -65,6 +67,7 @@ fn follow_eye_ray(
 ) -> (Vec3A, Option<VisiblePoint>) {
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
+    let mut distance = 0.0f32;
     for _depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             // Only reached at depth 0 or after specular bounces: nothing else samples it.
@@ -72,6 +75,7 @@ fn follow_eye_ray(
             break;
         };
         let wo = -ray.d;
+        distance += sh.hit.t * ray.d.length();
         attenuate_inside(scene, &sh, &ray, &mut beta);
         if let Some((_, al)) = scene.area_light(sh.prim) {
             l += beta * al.le(sh.hit.n, wo);
@@ -84,6 +88,7 @@ fn follow_eye_ray(
                 wo,
                 bsdf,
                 beta,
+                distance,
             };
             return (l, Some(vp));
         }

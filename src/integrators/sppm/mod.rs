@@ -4,7 +4,8 @@
 //! bounces to a visible point on a non-specular surface, adding emitted and directly sampled
 //! light; (2) a photon pass traces photons from the lights (chosen by power) and records where
 //! they arrive from the second surface on, in a hash grid whose cells are sized from the visible
-//! points' radii; every visible point then gathers the photons within its radius (the BSDF at
+//! points' radii (a pixel's radius starts at its first visible point: the scene's `radius`, or
+//! a pixel footprint there, [`crate::prepare::InitialRadius`]); every visible point then gathers the photons within its radius (the BSDF at
 //! the point keeps only photons on the side it faces); (3) each pixel updates N, tau and its
 //! radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2). The deposits are the same as
 //! pbrt-v4's (photon looks up points); only the direction of the lookup differs (`grid.rs` says
@@ -63,26 +64,6 @@ pub struct PixelStats {
     pub tau: [f64; 3],
 }
 
-/// The initial gather radius: the scene's `radius`, else the width of one pixel's footprint at
-/// the look-at distance, so that the first estimates blur about one pixel there whatever the
-/// scene's size and the image resolution. The factor 1 was chosen with `sppm-lang chart` on the
-/// Cornell box (README, "Speed against accuracy"): among 0.25x to 4x of it, it gave the lowest
-/// error over a 30 s budget on the whole image and on the caustic.
-pub fn initial_radius(scene: &PreparedScene, settings: &EffectiveSettings) -> f64 {
-    if let Some(r) = settings.radius {
-        return r;
-    }
-    let cam = &scene.scene.camera;
-    let distance = (cam.look_at - cam.location).length();
-    let fov = cam.fov.to_radians();
-    let footprint = 2.0 * distance * (0.5 * fov).tan() / f64::from(settings.height.max(1));
-    if footprint.is_finite() && footprint > 0.0 {
-        footprint
-    } else {
-        1.0
-    }
-}
-
 /// The render and each pixel's final (N, radius, tau).
 pub fn render_with_state(
     scene: &PreparedScene,
@@ -121,7 +102,9 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
     } = job;
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera;
-    let pixels = vec![Pixel::new(initial_radius(scene, settings)); (w * h) as usize];
+    let initial_radius = settings.initial_radius(&scene.scene.camera);
+    // A pixel's radius is chosen at its first visible point (0 until then).
+    let pixels = vec![Pixel::new(0.0); (w * h) as usize];
     let state = State {
         phi: vec![DVec3::ZERO; pixels.len()],
         m: vec![0u64; pixels.len()],
@@ -143,6 +126,11 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
                 let mut rng = Stream::Camera.rng(seed, iter, i as u64);
                 let (x, y) = (i as u32 % w, i as u32 / w);
                 let (l, vp) = eye_path(scene, &camera, settings, x, y, &mut rng);
+                if px.radius == 0.0
+                    && let Some(r) = vp.and_then(|vp| initial_radius.at(f64::from(vp.distance)))
+                {
+                    px.radius = r;
+                }
                 px.vp = vp;
                 if l.is_finite() { l } else { Vec3A::ZERO }
             })
