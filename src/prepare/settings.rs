@@ -1,7 +1,7 @@
 //! The settings a render uses: the scene's `settings` with the command line's overrides applied,
 //! checked once here.
 
-use crate::scene::{Integrator, Scene};
+use crate::scene::{Antialias, Integrator, Scene};
 use crate::span::Span;
 
 /// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
@@ -34,6 +34,8 @@ pub struct EffectiveSettings {
     pub seed: u64,
     pub integrator: Integrator,
     pub time_limit: Option<f64>,
+    /// `whitted`'s adaptive anti-aliasing threshold (`antialias adaptive`); `None`: jitter only.
+    pub adaptive_threshold: Option<f64>,
 }
 
 /// A render failure; `span` points at the declaration that caused it when there is one.
@@ -173,5 +175,9 @@ pub fn effective_settings(
         seed: o.seed.unwrap_or(s.seed),
         integrator: s.integrator,
         time_limit,
+        adaptive_threshold: (s.antialias == Antialias::Adaptive).then(|| {
+            s.antialias_threshold
+                .unwrap_or(Antialias::DEFAULT_THRESHOLD)
+        }),
     })
 }

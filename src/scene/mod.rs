@@ -79,6 +79,10 @@ pub struct Settings {
     pub exposure: f64,
     /// Stop after this many seconds even if iterations remain.
     pub time_limit: Option<f64>,
+    /// How `whitted` anti-aliases (`antialias jitter|adaptive`); other integrators ignore it.
+    pub antialias: Antialias,
+    /// `threshold t` of `antialias adaptive`; `None`: [`Antialias::DEFAULT_THRESHOLD`].
+    pub antialias_threshold: Option<f64>,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -98,7 +102,34 @@ impl Default for Settings {
             integrator: Integrator::Sppm,
             exposure: 1.0,
             time_limit: None,
+            antialias: Antialias::Jitter,
+            antialias_threshold: None,
             span: Span::detached(),
+        }
+    }
+}
+
+/// Anti-aliasing of `whitted`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Antialias {
+    /// One jittered sample per pixel per iteration.
+    #[default]
+    Jitter,
+    /// As `Jitter`, plus a 4x4 rotated-grid supersample of every pixel whose sample differs
+    /// from a neighbour's (in colour by more than the threshold, or in the objects its eye
+    /// path met).
+    Adaptive,
+}
+
+impl Antialias {
+    /// The colour difference above which `Adaptive` supersamples a pixel.
+    pub const DEFAULT_THRESHOLD: f64 = 0.1;
+    pub const ALL: [Antialias; 2] = [Antialias::Jitter, Antialias::Adaptive];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Antialias::Jitter => "jitter",
+            Antialias::Adaptive => "adaptive",
         }
     }
 }

@@ -81,7 +81,7 @@ pub(crate) fn iterate<S>(
     (output, state)
 }
 
-fn image_of(sums: &[DVec3], width: u32, height: u32, k: u32) -> Image {
+pub(crate) fn image_of(sums: &[DVec3], width: u32, height: u32, k: u32) -> Image {
     let mut img = Image::new(width, height);
     if k == 0 {
         return img;
