@@ -190,6 +190,15 @@ mod adaptive_tests {
     use crate::{EvalOptions, load_file};
 
     fn cornell(antialias: Antialias, iterations: u32, seed: u64) -> Vec<[f64; 3]> {
+        cornell_on(antialias, iterations, seed, None)
+    }
+
+    fn cornell_on(
+        antialias: Antialias,
+        iterations: u32,
+        seed: u64,
+        threads: Option<usize>,
+    ) -> Vec<[f64; 3]> {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
         let mut scene: Scene = load_file(&path, &EvalOptions::default())
             .unwrap()
@@ -201,6 +210,7 @@ mod adaptive_tests {
         let options = RenderOptions {
             iterations: Some(iterations),
             seed: Some(seed),
+            threads,
             ..Default::default()
         };
         let out = render(&scene, &options, &AtomicBool::new(false), &mut |_| {}).unwrap();
@@ -235,5 +245,21 @@ mod adaptive_tests {
         );
         assert!((0.05..0.6).contains(&share), "{share}");
         assert!(e_adaptive < 0.6 * e_jitter, "{e_adaptive} vs {e_jitter}");
+    }
+
+    /// The supersampled pixels and their samples do not depend on the thread count.
+    #[test]
+    fn adaptive_antialiasing_is_the_same_on_any_thread_count() {
+        let one = cornell_on(Antialias::Adaptive, 2, 3, Some(1));
+        let bits = |img: &[[f64; 3]]| -> Vec<[u64; 3]> {
+            img.iter().map(|p| p.map(f64::to_bits)).collect()
+        };
+        for threads in [2, 3] {
+            let other = cornell_on(Antialias::Adaptive, 2, 3, Some(threads));
+            assert!(
+                bits(&one) == bits(&other),
+                "{threads} threads differ from 1"
+            );
+        }
     }
 }

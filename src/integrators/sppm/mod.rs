@@ -35,6 +35,7 @@ use crate::camera::Camera;
 use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
 
+mod balance;
 mod grid;
 mod pass;
 mod pixels;
@@ -42,6 +43,7 @@ mod receiver;
 #[cfg(test)]
 mod tests;
 
+use balance::SampleStats;
 pub use pass::photon_flux;
 use pass::{PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use pixels::{Pixel, image_of, update};
@@ -52,7 +54,7 @@ pub struct Sppm;
 
 impl Integrator for Sppm {
     fn render(&self, job: Job<'_, '_>) -> RenderOutput {
-        render_with(job, camera_path).0
+        render_with(job, camera_path, true).0
     }
 }
 
@@ -77,7 +79,7 @@ pub fn render_with_state(
         cancel,
         on_progress,
     };
-    render_with(job, camera_path)
+    render_with(job, camera_path, true)
 }
 
 /// The eye path of one pixel in an iteration's camera pass: emitted + direct light and the
@@ -92,8 +94,13 @@ pub(crate) type EyePath = fn(
 ) -> (Vec3A, Option<VisiblePoint>);
 
 /// The SPPM loop with `eye_path` for the camera pass (SPPM: a jittered path per iteration; PPM:
-/// the same fixed eye ray in every iteration).
-pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput, Vec<PixelStats>) {
+/// the same fixed eye ray in every iteration); `balanced`: with extra camera samples
+/// (`balance.rs`).
+pub(crate) fn render_with(
+    job: Job<'_, '_>,
+    eye_path: EyePath,
+    balanced: bool,
+) -> (RenderOutput, Vec<PixelStats>) {
     let Job {
         scene,
         settings,
@@ -110,16 +117,22 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
         m: vec![0u64; pixels.len()],
         pixels,
         photon_pass: PhotonPass::new(ROUND_HITS, ROUND_CHUNKS),
+        samples: vec![SampleStats::default(); (w * h) as usize],
+        extra: vec![0; (w * h) as usize],
+        photon_segments: 0,
     };
     let pass = |st: &mut State, iter: u32, stats: &mut RenderStats| {
         let seed = settings.seed;
-        // 1. Camera pass.
+        // 1. Camera pass: each pixel's visible point with its emitted and direct light, and the
+        //    mean of that light over the pixel's extra samples (`balance.rs`).
         let t_camera = Instant::now();
+        let extra_paths: u64 = st.extra.iter().map(|&e| u64::from(e)).sum();
         let lds: Vec<Vec3A> = st
             .pixels
             .par_iter_mut()
+            .zip(st.samples.par_iter_mut().zip(st.extra.par_iter()))
             .enumerate()
-            .map(|(i, px)| {
+            .map(|(i, (px, (samples, &extra)))| {
                 if cancel.load(Ordering::Relaxed) {
                     return Vec3A::ZERO;
                 }
@@ -132,7 +145,21 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
                     px.radius = r;
                 }
                 px.vp = vp;
-                if l.is_finite() { l } else { Vec3A::ZERO }
+                let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
+                let mut sum = finite(l);
+                if !balanced {
+                    return sum;
+                }
+                samples.add(sum);
+                if extra > 0 {
+                    let mut rng = Stream::CameraExtra.rng(seed, iter, i as u64);
+                    for _ in 0..extra {
+                        let l = finite(camera_path(scene, &camera, settings, x, y, &mut rng).0);
+                        samples.add(l);
+                        sum += l;
+                    }
+                }
+                sum / (1 + extra) as f32
             })
             .collect();
         stats.camera_time += t_camera.elapsed();
@@ -149,8 +176,14 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
             return None;
         }
         stats.photon_time += t_photon.elapsed();
-        // 3. Update the pixel statistics.
+        // 3. Update the pixel statistics, and share the next iteration's extra camera samples.
         update(&mut st.pixels, &lds, &mut st.phi, &mut st.m, settings.alpha);
+        if balanced {
+            let photon_rays = st.photon_pass.segments - st.photon_segments;
+            st.photon_segments = st.photon_pass.segments;
+            balance::allocate(&st.samples, photon_rays, &mut st.extra);
+        }
+        stats.camera_paths += extra_paths;
         Some(Finished {
             photons: settings.photons,
             deposits,
@@ -177,4 +210,9 @@ struct State {
     phi: Vec<DVec3>,
     m: Vec<u64>,
     photon_pass: PhotonPass,
+    /// Each pixel's camera samples so far and its extra samples in the next iteration.
+    samples: Vec<SampleStats>,
+    extra: Vec<u32>,
+    /// The photon pass's ray casts before this iteration.
+    photon_segments: u64,
 }
