@@ -24,13 +24,13 @@ use std::f32::consts::PI;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use glam::{DVec3, Vec2, Vec3A};
+use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::common::camera_path::{VisiblePoint, camera_path, signed_camera_path};
-use super::common::progressive::{self, Finished, image_of, iterate};
+use super::common::progressive::{self, render_means};
 use super::common::streams::Stream;
-use super::{Integrator, RenderOutput, RenderStats};
+use super::{Integrator, RenderOutput};
 
 /// Uniform ambient radiance arriving at every non-specular surface (reflected as
 /// `pi * f(wo, n) * AMBIENT`, i.e. `albedo * AMBIENT` on a diffuse surface).
@@ -86,18 +86,12 @@ fn differ(a: (Vec3A, u64), b: (Vec3A, u64), threshold: f32) -> bool {
 
 /// Whitted ray tracing with adaptive supersampling (see the module doc).
 fn render_adaptive(job: Job<'_, '_>, threshold: f32) -> RenderOutput {
-    let Job {
-        scene,
-        settings,
-        cancel,
-        on_progress,
-    } = job;
+    let (scene, settings, cancel) = (job.scene, job.settings, job.cancel);
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera;
     let seed = settings.seed;
     let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
-    let sums = vec![DVec3::ZERO; (w * h) as usize];
-    let pass = |sums: &mut Vec<DVec3>, iter: u32, stats: &mut RenderStats| {
+    render_means(job, |iter, stats| {
         let t_camera = Instant::now();
         // 1. One jittered sample per pixel (as without adaptive anti-aliasing).
         let first: Vec<(Vec3A, u64)> = (0..w * h)
@@ -148,19 +142,8 @@ fn render_adaptive(job: Job<'_, '_>, threshold: f32) -> RenderOutput {
             })
             .collect();
         stats.camera_time += t_camera.elapsed();
-        if cancel.load(Ordering::Relaxed) {
-            return None;
-        }
-        sums.par_iter_mut()
-            .zip(values.par_iter())
-            .for_each(|(s, l)| *s += l.as_dvec3());
-        Some(Finished {
-            photons: 0,
-            deposits: 0,
-        })
-    };
-    let image = |sums: &Vec<DVec3>, k| image_of(sums, w, h, k);
-    iterate(settings, cancel, on_progress, sums, pass, image).0
+        (!cancel.load(Ordering::Relaxed)).then_some((values, 0))
+    })
 }
 
 #[cfg(test)]
