@@ -6,7 +6,9 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use sppm_lang::diag::short_number;
-use sppm_lang::render::{EffectiveSettings, PreparedScene, RenderError, RenderOptions};
+use sppm_lang::render::{
+    EffectiveSettings, InitialRadius, PreparedScene, RenderError, RenderOptions,
+};
 use sppm_lang::scene::{Background, Integrator, Light, Scene, Shape};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
@@ -114,16 +116,15 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
     ));
     match settings.integrator {
         Integrator::Sppm | Integrator::Ppm => {
-            let radius = sppm_lang::integrators::sppm::initial_radius(prepared, settings);
-            out.push_str(&format!(
-                "initial radius: {}{}\n",
-                short_number(radius),
-                if settings.radius.is_some() {
-                    " (from settings)"
-                } else {
-                    " (default, from the pixel footprint)"
-                }
-            ));
+            let text = match settings.initial_radius(&prepared.scene.camera) {
+                InitialRadius::Fixed(r) => format!("{} (from settings)", short_number(r)),
+                InitialRadius::Footprint { per_distance } => format!(
+                    "{} x the distance to each pixel's first visible point (default: one pixel \
+                     footprint there)",
+                    short_number(per_distance)
+                ),
+            };
+            out.push_str(&format!("initial radius: {text}\n"));
         }
         other => out.push_str(&format!("initial radius: not used by {}\n", other.name())),
     }

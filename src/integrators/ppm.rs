@@ -21,6 +21,6 @@ pub struct Ppm;
 
 impl Integrator for Ppm {
     fn render(&self, job: Job<'_, '_>) -> RenderOutput {
-        sppm::render_with(job, fixed_camera_path).0
+        sppm::render_with(job, fixed_camera_path, false).0
     }
 }

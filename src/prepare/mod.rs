@@ -20,7 +20,10 @@ use crate::scene::{self, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
-pub use settings::{EffectiveSettings, RenderError, RenderOptions, effective_settings};
+pub use settings::{
+    EffectiveSettings, InitialRadius, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
+    effective_settings,
+};
 use shapes::build_shapes;
 
 const NO_LIGHT: u32 = u32::MAX;

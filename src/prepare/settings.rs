@@ -1,7 +1,7 @@
 //! The settings a render uses: the scene's `settings` with the command line's overrides applied,
 //! checked once here.
 
-use crate::scene::{Integrator, Scene};
+use crate::scene::{Antialias, Integrator, Scene};
 use crate::span::Span;
 
 /// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
@@ -26,11 +26,16 @@ pub struct EffectiveSettings {
     pub iterations: u32,
     pub photons: u64,
     pub radius: Option<f64>,
+    /// Scale of the default initial radius (the rule of [`InitialRadius::Footprint`]): 1 in a
+    /// render; `sppm-lang chart` varies it to compare radii.
+    pub radius_scale: f64,
     pub alpha: f64,
     pub max_depth: u32,
     pub seed: u64,
     pub integrator: Integrator,
     pub time_limit: Option<f64>,
+    /// `whitted`'s adaptive anti-aliasing threshold (`antialias adaptive`); `None`: jitter only.
+    pub adaptive_threshold: Option<f64>,
 }
 
 /// A render failure; `span` points at the declaration that caused it when there is one.
@@ -72,6 +77,62 @@ impl From<crate::scene::Invalid> for RenderError {
     }
 }
 
+/// Initial SPPM/PPM gather radii per pixel footprint: a pixel's radius starts at this many
+/// widths of its footprint at its first visible point. Chosen with `sppm-lang chart` on the
+/// Cornell box and on `smallppm_far` (docs/integrators.md, "The initial radius"): among 0.5x to
+/// 4x of it, 1 gave the lowest whole-image error at equal time on both.
+pub const RADIUS_FOOTPRINTS: f64 = 1.0;
+
+/// How SPPM and PPM choose a pixel's initial gather radius.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum InitialRadius {
+    /// The scene's `radius`, for every pixel.
+    Fixed(f64),
+    /// Each pixel's radius starts at `per_distance` times the length of the camera path to the
+    /// pixel's first visible point (through mirrors and glass): [`RADIUS_FOOTPRINTS`] widths of
+    /// the pixel's footprint there. Where the camera looks does not enter it.
+    Footprint { per_distance: f64 },
+}
+
+impl InitialRadius {
+    /// The radius of a pixel whose first visible point is `distance` along the camera path;
+    /// `None` when there is no usable value (the pixel then waits for its next visible point).
+    pub fn at(self, distance: f64) -> Option<f64> {
+        let r = match self {
+            InitialRadius::Fixed(r) => r,
+            InitialRadius::Footprint { per_distance } => per_distance * distance,
+        };
+        (r.is_finite() && r > 0.0).then_some(r)
+    }
+}
+
+impl std::fmt::Display for InitialRadius {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            InitialRadius::Fixed(r) => write!(f, "{r} (settings)"),
+            InitialRadius::Footprint { per_distance } => write!(
+                f,
+                "{per_distance:.3e} x the distance to each pixel's first visible point ({RADIUS_FOOTPRINTS} pixel footprint)"
+            ),
+        }
+    }
+}
+
+impl EffectiveSettings {
+    /// The initial radius rule for a render of `camera` with these settings: the scene's
+    /// `radius`, else [`RADIUS_FOOTPRINTS`] pixel footprints at each pixel's first visible
+    /// point (a pixel spans `2 tan(fov / 2) / height` radians), times `radius_scale`.
+    pub fn initial_radius(&self, camera: &crate::scene::Camera) -> InitialRadius {
+        if let Some(r) = self.radius {
+            return InitialRadius::Fixed(r * self.radius_scale);
+        }
+        let pixel = 2.0 * (0.5 * camera.fov.to_radians()).tan() / f64::from(self.height.max(1));
+        InitialRadius::Footprint {
+            per_distance: RADIUS_FOOTPRINTS * pixel * self.radius_scale,
+        }
+    }
+}
+
 use crate::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE as MAX_SIDE};
 
 pub fn effective_settings(
@@ -108,10 +169,15 @@ pub fn effective_settings(
         iterations: o.iterations.unwrap_or(s.iterations),
         photons: o.photons.unwrap_or(s.photons),
         radius: s.radius,
+        radius_scale: s.radius_scale,
         alpha: s.alpha,
         max_depth: s.max_depth.clamp(1, 1024),
         seed: o.seed.unwrap_or(s.seed),
         integrator: s.integrator,
         time_limit,
+        adaptive_threshold: (s.antialias == Antialias::Adaptive).then(|| {
+            s.antialias_threshold
+                .unwrap_or(Antialias::DEFAULT_THRESHOLD)
+        }),
     })
 }

@@ -69,6 +69,9 @@ pub struct Settings {
     pub photons: u64,
     /// Initial gather radius in scene units; `None`: chosen from the scene's size.
     pub radius: Option<f64>,
+    /// Scale of the initial radius (the scene's `radius` or the default rule): 1 unless a tool
+    /// varies it (`sppm-lang chart`); not part of the language.
+    pub radius_scale: f64,
     /// SPPM radius reduction parameter, in (0, 1].
     pub alpha: f64,
     /// Maximum path depth for camera paths and photon paths.
@@ -79,6 +82,10 @@ pub struct Settings {
     pub exposure: f64,
     /// Stop after this many seconds even if iterations remain.
     pub time_limit: Option<f64>,
+    /// How `whitted` anti-aliases (`antialias jitter|adaptive`); other integrators ignore it.
+    pub antialias: Antialias,
+    /// `threshold t` of `antialias adaptive`; `None`: [`Antialias::DEFAULT_THRESHOLD`].
+    pub antialias_threshold: Option<f64>,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -91,13 +98,41 @@ impl Default for Settings {
             iterations: 64,
             photons: 200_000,
             radius: None,
+            radius_scale: 1.0,
             alpha: 2.0 / 3.0,
             max_depth: 16,
             seed: 0,
             integrator: Integrator::Sppm,
             exposure: 1.0,
             time_limit: None,
+            antialias: Antialias::Jitter,
+            antialias_threshold: None,
             span: Span::detached(),
+        }
+    }
+}
+
+/// Anti-aliasing of `whitted`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Antialias {
+    /// One jittered sample per pixel per iteration.
+    #[default]
+    Jitter,
+    /// As `Jitter`, plus a 4x4 rotated-grid supersample of every pixel whose sample differs
+    /// from a neighbour's (in colour by more than the threshold, or in the objects its eye
+    /// path met).
+    Adaptive,
+}
+
+impl Antialias {
+    /// The colour difference above which `Adaptive` supersamples a pixel.
+    pub const DEFAULT_THRESHOLD: f64 = 0.1;
+    pub const ALL: [Antialias; 2] = [Antialias::Jitter, Antialias::Adaptive];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Antialias::Jitter => "jitter",
+            Antialias::Adaptive => "adaptive",
         }
     }
 }

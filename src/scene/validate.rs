@@ -151,6 +151,24 @@ impl Settings {
         if let Some(r) = self.radius {
             size(r, "the initial radius", span)?;
         }
+        if let Some(t) = self.antialias_threshold {
+            if self.antialias != super::Antialias::Adaptive {
+                return Err(invalid(
+                    span,
+                    "`threshold` is given but anti-aliasing is not adaptive".into(),
+                    "threshold without `antialias adaptive`",
+                    "write `antialias adaptive threshold 0.1`, or drop the threshold",
+                ));
+            }
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(invalid(
+                    span,
+                    format!("anti-aliasing threshold {} is out of range", fmt(t)),
+                    "out of range",
+                    "use a positive colour difference, e.g. `threshold 0.1`",
+                ));
+            }
+        }
         if !(self.exposure > 0.0 && self.exposure <= 1e9) {
             return Err(invalid(
                 span,

@@ -24,7 +24,7 @@ use clap::Args;
 use sppm_lang::chart::Dash;
 use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
 use sppm_lang::film::Image;
-use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings, render};
+use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings, render};
 use sppm_lang::scene::{ColorSpace, Integrator, Scene, load_image};
 
 use super::check::print_diagnostics;
@@ -85,6 +85,8 @@ struct Method {
     /// Index in the chart's palette.
     colour: usize,
     dash: Dash,
+    /// The earlier default radius: one pixel footprint at the look-at distance for every pixel.
+    look_at_radius: bool,
 }
 
 /// The methods: the integrators as they are (solid lines, one colour each), then SPPM's
@@ -98,12 +100,17 @@ fn methods() -> Vec<Method> {
         photon_factor,
         colour,
         dash,
+        look_at_radius: false,
     };
     use Dash::{Dashed, Dotted, Solid};
     use Integrator::{Path, PhotonMap, Ppm, Sppm, Whitted};
     // Palette: 0 blue, 1 orange, 2 red, 3 green, 4 teal, 5 purple, 6 brown, 7 gold, 8 pink.
     vec![
         m("sppm", Sppm, None, 1.0, 1.0, 0, Solid),
+        Method {
+            look_at_radius: true,
+            ..m("sppm-lookat", Sppm, None, 1.0, 1.0, 0, Dashed)
+        },
         m("ppm", Ppm, None, 1.0, 1.0, 1, Solid),
         m("photon_map", PhotonMap, None, 1.0, 1.0, 2, Solid),
         m("path", Path, None, 1.0, 1.0, 3, Solid),
@@ -220,11 +227,17 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         error(ref_view, ref_view, Some(win))?;
     }
     let floors = reference_floors(reference_path, ref_view, window)?;
-    let base_radius = {
+    // The earlier default initial radius, one pixel footprint at the look-at distance, for the
+    // `sppm-lookat` method.
+    let look_at_radius = {
         let settings =
             effective_settings(&scene, &RenderOptions::default()).map_err(|e| e.message)?;
-        let prepared = PreparedScene::new(&scene).map_err(|e| e.message)?;
-        sppm_lang::integrators::sppm::initial_radius(&prepared, &settings)
+        match settings.initial_radius(&scene.camera) {
+            InitialRadius::Fixed(r) => r,
+            InitialRadius::Footprint { per_distance } => {
+                per_distance * (scene.camera.look_at - scene.camera.location).length()
+            }
+        }
     };
     let wanted: Option<Vec<String>> = args
         .methods
@@ -241,7 +254,10 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         if let Some(a) = m.alpha {
             s.settings.alpha = a;
         }
-        s.settings.radius = Some(base_radius * m.radius_factor);
+        if m.look_at_radius {
+            s.settings.radius = Some(look_at_radius);
+        }
+        s.settings.radius_scale = m.radius_factor;
         s.settings.photons = ((s.settings.photons as f64 * m.photon_factor) as u64).max(1);
         let measured = measure(&s, budget, ref_view, window)?;
         if measured.is_empty() {

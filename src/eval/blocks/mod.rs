@@ -134,8 +134,7 @@ impl Evaluator {
             "settings" => {
                 let mut b = SettingsBuilder(self.scene.settings.clone());
                 self.run_items(items, &mut b)?;
-                b.0.span = span;
-                Ok(Value::Settings(Box::new(b.0)))
+                b.finish(span)
             }
             "camera" => {
                 let mut b = CameraBuilder(self.scene.camera.clone());

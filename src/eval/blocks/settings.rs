@@ -2,16 +2,18 @@
 
 use super::Sink;
 use crate::diag::short_number;
-use crate::diag::{At, SourceResult};
+use crate::diag::{At, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
-use crate::scene::{Integrator, MAX_RESOLUTION_SIDE, Settings};
+use crate::eval::value::Value;
+use crate::scene::{Antialias, Integrator, MAX_RESOLUTION_SIDE, Settings};
+use crate::span::Span;
 use crate::syntax::ast::Name;
 
 pub(super) struct SettingsBuilder(pub(super) Settings);
 
-static SETTINGS_PROPS: [PropSpec; 10] = [
+static SETTINGS_PROPS: [PropSpec; 12] = [
     p("resolution", 1, 2, "a width and height", "<512, 512>"),
     p("iterations", 1, 1, "a number", "64"),
     p("photons", 1, 1, "a number", "200000"),
@@ -26,7 +28,25 @@ static SETTINGS_PROPS: [PropSpec; 10] = [
     ),
     p("exposure", 1, 1, "a number", "1"),
     p("time_limit", 1, 1, "a number of seconds", "60"),
+    w("antialias", "`jitter` or `adaptive`", "adaptive"),
+    p("threshold", 1, 1, "a colour difference", "0.1"),
 ];
+
+impl SettingsBuilder {
+    pub(super) fn finish(mut self, span: Span) -> SourceResult<Value> {
+        self.0.span = span;
+        // The scene's own check of the anti-aliasing threshold (the one `prepare` runs),
+        // reported here at the block; the other settings are checked as they are read.
+        if self.0.antialias_threshold.is_some()
+            && let Err(e) = self.0.validate()
+        {
+            return Err(vec![
+                Error::new(e.message).label(e.label).help(e.help).at(span),
+            ]);
+        }
+        Ok(Value::Settings(Box::new(self.0)))
+    }
+}
 
 impl Sink for SettingsBuilder {
     fn kind(&self) -> String {
@@ -94,6 +114,15 @@ impl Sink for SettingsBuilder {
             }
             "exposure" => s.exposure = positive(&args[0], "exposure")?,
             "time_limit" => s.time_limit = Some(positive(&args[0], "time limit")?),
+            "antialias" => {
+                let names: Vec<&str> = Antialias::ALL.iter().map(|a| a.name()).collect();
+                let name = word(&args[0], &names)?;
+                s.antialias = *Antialias::ALL
+                    .iter()
+                    .find(|a| a.name() == name)
+                    .expect("known name");
+            }
+            "threshold" => s.antialias_threshold = Some(positive(&args[0], "threshold")?),
             _ => unreachable!(),
         }
         Ok(())

@@ -21,6 +21,8 @@ pub(crate) struct VisiblePoint {
     pub(crate) bsdf: Bsdf,
     /// The path's throughput up to the point.
     pub(crate) beta: Vec3A,
+    /// The length of the camera path to the point (through specular bounces).
+    pub(crate) distance: f32,
 }
 
 /// A jittered eye path for pixel (x, y) (pixel position and lens position from `rng`): returns
@@ -35,7 +37,26 @@ pub(crate) fn camera_path(
 ) -> (Vec3A, Option<VisiblePoint>) {
     let jitter = rng.vec2();
     let lens = rng.vec2();
-    follow_eye_ray(scene, camera.ray(x, y, jitter, lens), settings, rng)
+    follow_eye_ray(scene, camera.ray(x, y, jitter, lens), settings, rng, |_| {})
+}
+
+/// The eye path through `jitter` (in [0,1)^2) in pixel (x, y), the lens position from `rng`,
+/// with the path's signature: a hash of the sequence of objects it met (two paths that met
+/// the same objects in the same order have the same signature).
+pub(crate) fn signed_camera_path(
+    scene: &PreparedScene,
+    camera: &Camera,
+    settings: &EffectiveSettings,
+    (x, y, jitter): (u32, u32, Vec2),
+    rng: &mut Rng,
+) -> (Vec3A, Option<VisiblePoint>, u64) {
+    let lens = rng.vec2();
+    // FNV-1a over the objects' indices.
+    let mut signature = 0xcbf2_9ce4_8422_2325u64;
+    let (l, vp) = follow_eye_ray(scene, camera.ray(x, y, jitter, lens), settings, rng, |o| {
+        signature = (signature ^ u64::from(o)).wrapping_mul(0x100_0000_01b3);
+    });
+    (l, vp, signature)
 }
 
 /// The eye path for pixel (x, y) through the pixel center and the lens center. It draws (and
@@ -52,19 +73,28 @@ pub(crate) fn fixed_camera_path(
     let _jitter = rng.vec2();
     let _lens = rng.vec2();
     let center = Vec2::splat(0.5);
-    follow_eye_ray(scene, camera.ray(x, y, center, center), settings, rng)
+    follow_eye_ray(
+        scene,
+        camera.ray(x, y, center, center),
+        settings,
+        rng,
+        |_| {},
+    )
 }
 
 /// Follows `ray` through specular bounces (at most `max_depth` surfaces) to the first
-/// non-specular surface.
+/// non-specular surface; `on_hit(object)` runs at every surface it meets.
+#[inline]
 fn follow_eye_ray(
     scene: &PreparedScene,
     mut ray: Ray,
     settings: &EffectiveSettings,
     rng: &mut Rng,
+    mut on_hit: impl FnMut(u32),
 ) -> (Vec3A, Option<VisiblePoint>) {
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
+    let mut distance = 0.0f32;
     for _depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             // Only reached at depth 0 or after specular bounces: nothing else samples it.
@@ -72,6 +102,8 @@ fn follow_eye_ray(
             break;
         };
         let wo = -ray.d;
+        on_hit(scene.prim_object[sh.prim as usize]);
+        distance += sh.hit.t * ray.d.length();
         attenuate_inside(scene, &sh, &ray, &mut beta);
         if let Some((_, al)) = scene.area_light(sh.prim) {
             l += beta * al.le(sh.hit.n, wo);
@@ -84,6 +116,7 @@ fn follow_eye_ray(
                 wo,
                 bsdf,
                 beta,
+                distance,
             };
             return (l, Some(vp));
         }

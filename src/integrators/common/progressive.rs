@@ -94,6 +94,35 @@ fn image_of(sums: &[DVec3], width: u32, height: u32, k: u32) -> Image {
     img
 }
 
+/// The loop of integrators whose image is the mean over iterations of one value per pixel:
+/// `values(iteration, stats)` returns every pixel's value in that iteration with the photons it
+/// traced, or `None` when it saw the cancel flag.
+pub(crate) fn render_means(
+    job: Job<'_, '_>,
+    mut values: impl FnMut(u32, &mut RenderStats) -> Option<(Vec<Vec3A>, u64)>,
+) -> RenderOutput {
+    let Job {
+        settings,
+        cancel,
+        on_progress,
+        ..
+    } = job;
+    let (w, h) = (settings.width, settings.height);
+    let sums = vec![DVec3::ZERO; (w * h) as usize];
+    let pass = |sums: &mut Vec<DVec3>, iter: u32, stats: &mut RenderStats| {
+        let (values, photons) = values(iter, stats)?;
+        sums.par_iter_mut()
+            .zip(values.par_iter())
+            .for_each(|(s, l)| *s += l.as_dvec3());
+        Some(Finished {
+            photons,
+            deposits: 0,
+        })
+    };
+    let image = |sums: &Vec<DVec3>, k| image_of(sums, w, h, k);
+    iterate(settings, cancel, on_progress, sums, pass, image).0
+}
+
 /// Runs `setup(iteration)` then `pixel(&state, camera, x, y, rng)` for every pixel, per
 /// iteration; the image is the mean of the pixel values. `setup` returns the photons it traced
 /// (for the statistics) with its state.
@@ -102,16 +131,10 @@ pub(crate) fn render<T: Sync>(
     mut setup: impl FnMut(u32) -> (T, u64),
     pixel: impl Fn(&T, &Camera, u32, u32, &mut Rng) -> Vec3A + Sync,
 ) -> RenderOutput {
-    let Job {
-        scene,
-        settings,
-        cancel,
-        on_progress,
-    } = job;
+    let (settings, cancel) = (job.settings, job.cancel);
     let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera;
-    let sums = vec![DVec3::ZERO; (w * h) as usize];
-    let pass = |sums: &mut Vec<DVec3>, iter: u32, stats: &mut RenderStats| {
+    let camera = job.scene.camera;
+    render_means(job, |iter, stats| {
         let t_setup = Instant::now();
         let (state, photons) = setup(iter);
         stats.photon_time += t_setup.elapsed();
@@ -129,17 +152,6 @@ pub(crate) fn render<T: Sync>(
             })
             .collect();
         stats.camera_time += t_camera.elapsed();
-        if cancel.load(Ordering::Relaxed) {
-            return None;
-        }
-        sums.par_iter_mut()
-            .zip(values.par_iter())
-            .for_each(|(s, l)| *s += l.as_dvec3());
-        Some(Finished {
-            photons,
-            deposits: 0,
-        })
-    };
-    let image = |sums: &Vec<DVec3>, k| image_of(sums, w, h, k);
-    iterate(settings, cancel, on_progress, sums, pass, image).0
+        (!cancel.load(Ordering::Relaxed)).then_some((values, photons))
+    })
 }

@@ -20,15 +20,21 @@ pub(crate) enum Stream {
     Pixel = 2,
     /// Photon mapping's photons, indexed by photon.
     PhotonMap = 3,
+    /// Whitted's adaptive supersamples, indexed by pixel.
+    Supersample = 4,
+    /// SPPM's extra camera samples (emitted and direct light only), indexed by pixel.
+    CameraExtra = 5,
 }
 
 impl Stream {
     #[cfg(test)]
-    const ALL: [Stream; 4] = [
+    const ALL: [Stream; 6] = [
         Stream::Camera,
         Stream::Photon,
         Stream::Pixel,
         Stream::PhotonMap,
+        Stream::Supersample,
+        Stream::CameraExtra,
     ];
 
     /// The generator of item `index` of this stream in iteration `iteration`.
@@ -50,6 +56,6 @@ mod tests {
         for (i, a) in ids.iter().enumerate() {
             assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
         }
-        assert_eq!(ids, [0, 1, 2, 3]);
+        assert_eq!(ids, [0, 1, 2, 3, 4, 5]);
     }
 }

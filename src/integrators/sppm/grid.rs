@@ -201,6 +201,8 @@ struct Filed {
 #[derive(Default)]
 pub(super) struct HitChunk {
     slabs: Vec<Vec<Filed>>,
+    /// Surfaces the chunk's photons reached (filed or not): its ray casts.
+    pub(super) segments: u64,
 }
 
 impl HitChunk {
@@ -210,6 +212,7 @@ impl HitChunk {
         for slab in &mut self.slabs {
             slab.clear();
         }
+        self.segments = 0;
     }
 
     /// Files `hit`, or drops it if no visible point can be within reach.

@@ -4,7 +4,8 @@
 //! bounces to a visible point on a non-specular surface, adding emitted and directly sampled
 //! light; (2) a photon pass traces photons from the lights (chosen by power) and records where
 //! they arrive from the second surface on, in a hash grid whose cells are sized from the visible
-//! points' radii; every visible point then gathers the photons within its radius (the BSDF at
+//! points' radii (a pixel's radius starts at its first visible point: the scene's `radius`, or
+//! a pixel footprint there, [`crate::prepare::InitialRadius`]); every visible point then gathers the photons within its radius (the BSDF at
 //! the point keeps only photons on the side it faces); (3) each pixel updates N, tau and its
 //! radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2). The deposits are the same as
 //! pbrt-v4's (photon looks up points); only the direction of the lookup differs (`grid.rs` says
@@ -34,6 +35,7 @@ use crate::camera::Camera;
 use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
 
+mod balance;
 mod grid;
 mod pass;
 mod pixels;
@@ -41,6 +43,7 @@ mod receiver;
 #[cfg(test)]
 mod tests;
 
+use balance::SampleStats;
 pub use pass::photon_flux;
 use pass::{PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use pixels::{Pixel, image_of, update};
@@ -51,7 +54,7 @@ pub struct Sppm;
 
 impl Integrator for Sppm {
     fn render(&self, job: Job<'_, '_>) -> RenderOutput {
-        render_with(job, camera_path).0
+        render_with(job, camera_path, true).0
     }
 }
 
@@ -61,26 +64,6 @@ pub struct PixelStats {
     pub n: f64,
     pub radius: f64,
     pub tau: [f64; 3],
-}
-
-/// The initial gather radius: the scene's `radius`, else the width of one pixel's footprint at
-/// the look-at distance, so that the first estimates blur about one pixel there whatever the
-/// scene's size and the image resolution. The factor 1 was chosen with `sppm-lang chart` on the
-/// Cornell box (README, "Speed against accuracy"): among 0.25x to 4x of it, it gave the lowest
-/// error over a 30 s budget on the whole image and on the caustic.
-pub fn initial_radius(scene: &PreparedScene, settings: &EffectiveSettings) -> f64 {
-    if let Some(r) = settings.radius {
-        return r;
-    }
-    let cam = &scene.scene.camera;
-    let distance = (cam.look_at - cam.location).length();
-    let fov = cam.fov.to_radians();
-    let footprint = 2.0 * distance * (0.5 * fov).tan() / f64::from(settings.height.max(1));
-    if footprint.is_finite() && footprint > 0.0 {
-        footprint
-    } else {
-        1.0
-    }
 }
 
 /// The render and each pixel's final (N, radius, tau).
@@ -96,7 +79,7 @@ pub fn render_with_state(
         cancel,
         on_progress,
     };
-    render_with(job, camera_path)
+    render_with(job, camera_path, true)
 }
 
 /// The eye path of one pixel in an iteration's camera pass: emitted + direct light and the
@@ -111,8 +94,13 @@ pub(crate) type EyePath = fn(
 ) -> (Vec3A, Option<VisiblePoint>);
 
 /// The SPPM loop with `eye_path` for the camera pass (SPPM: a jittered path per iteration; PPM:
-/// the same fixed eye ray in every iteration).
-pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput, Vec<PixelStats>) {
+/// the same fixed eye ray in every iteration); `balanced`: with extra camera samples
+/// (`balance.rs`).
+pub(crate) fn render_with(
+    job: Job<'_, '_>,
+    eye_path: EyePath,
+    balanced: bool,
+) -> (RenderOutput, Vec<PixelStats>) {
     let Job {
         scene,
         settings,
@@ -121,30 +109,57 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
     } = job;
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera;
-    let pixels = vec![Pixel::new(initial_radius(scene, settings)); (w * h) as usize];
+    let initial_radius = settings.initial_radius(&scene.scene.camera);
+    // A pixel's radius is chosen at its first visible point (0 until then).
+    let pixels = vec![Pixel::new(0.0); (w * h) as usize];
     let state = State {
         phi: vec![DVec3::ZERO; pixels.len()],
         m: vec![0u64; pixels.len()],
         pixels,
         photon_pass: PhotonPass::new(ROUND_HITS, ROUND_CHUNKS),
+        samples: vec![SampleStats::default(); (w * h) as usize],
+        extra: vec![0; (w * h) as usize],
+        photon_segments: 0,
     };
     let pass = |st: &mut State, iter: u32, stats: &mut RenderStats| {
         let seed = settings.seed;
-        // 1. Camera pass.
+        // 1. Camera pass: each pixel's visible point with its emitted and direct light, and the
+        //    mean of that light over the pixel's extra samples (`balance.rs`).
         let t_camera = Instant::now();
+        let extra_paths: u64 = st.extra.iter().map(|&e| u64::from(e)).sum();
         let lds: Vec<Vec3A> = st
             .pixels
             .par_iter_mut()
+            .zip(st.samples.par_iter_mut().zip(st.extra.par_iter()))
             .enumerate()
-            .map(|(i, px)| {
+            .map(|(i, (px, (samples, &extra)))| {
                 if cancel.load(Ordering::Relaxed) {
                     return Vec3A::ZERO;
                 }
                 let mut rng = Stream::Camera.rng(seed, iter, i as u64);
                 let (x, y) = (i as u32 % w, i as u32 / w);
                 let (l, vp) = eye_path(scene, &camera, settings, x, y, &mut rng);
+                if px.radius == 0.0
+                    && let Some(r) = vp.and_then(|vp| initial_radius.at(f64::from(vp.distance)))
+                {
+                    px.radius = r;
+                }
                 px.vp = vp;
-                if l.is_finite() { l } else { Vec3A::ZERO }
+                let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
+                let mut sum = finite(l);
+                if !balanced {
+                    return sum;
+                }
+                samples.add(sum);
+                if extra > 0 {
+                    let mut rng = Stream::CameraExtra.rng(seed, iter, i as u64);
+                    for _ in 0..extra {
+                        let l = finite(camera_path(scene, &camera, settings, x, y, &mut rng).0);
+                        samples.add(l);
+                        sum += l;
+                    }
+                }
+                sum / (1 + extra) as f32
             })
             .collect();
         stats.camera_time += t_camera.elapsed();
@@ -161,8 +176,14 @@ pub(crate) fn render_with(job: Job<'_, '_>, eye_path: EyePath) -> (RenderOutput,
             return None;
         }
         stats.photon_time += t_photon.elapsed();
-        // 3. Update the pixel statistics.
+        // 3. Update the pixel statistics, and share the next iteration's extra camera samples.
         update(&mut st.pixels, &lds, &mut st.phi, &mut st.m, settings.alpha);
+        if balanced {
+            let photon_rays = st.photon_pass.segments - st.photon_segments;
+            st.photon_segments = st.photon_pass.segments;
+            balance::allocate(&st.samples, photon_rays, &mut st.extra);
+        }
+        stats.camera_paths += extra_paths;
         Some(Finished {
             photons: settings.photons,
             deposits,
@@ -189,4 +210,9 @@ struct State {
     phi: Vec<DVec3>,
     m: Vec<u64>,
     photon_pass: PhotonPass,
+    /// Each pixel's camera samples so far and its extra samples in the next iteration.
+    samples: Vec<SampleStats>,
+    extra: Vec<u32>,
+    /// The photon pass's ray casts before this iteration.
+    photon_segments: u64,
 }

@@ -44,6 +44,8 @@ pub(super) struct PhotonPass {
     filed: u64,
     round_hits: usize,
     round_chunks: usize,
+    /// Surfaces all photons so far reached (their ray casts), for [`super::balance`].
+    pub(super) segments: u64,
     /// Gathers done so far.
     pub(super) rounds: u64,
 }
@@ -57,6 +59,7 @@ impl PhotonPass {
             filed: 0,
             round_hits: round_hits.max(1),
             round_chunks: round_chunks.max(1),
+            segments: 0,
             rounds: 0,
         }
     }
@@ -121,6 +124,7 @@ impl PhotonPass {
                 let group = &mut self.chunks[used..used + n];
                 trace_photons(scene, settings, &cells, iter, (next, hi), group, cancel);
                 let got = group.iter().map(HitChunk::len).sum::<usize>();
+                self.segments += group.iter().map(|c| c.segments).sum::<u64>();
                 self.traced += hi - next;
                 self.filed += got as u64;
                 (used, held, next) = (used + n, held + got, hi);
@@ -160,6 +164,7 @@ fn trace_photons(
                 settings.max_depth,
                 &mut rng,
                 |depth, sh, wi, beta| {
+                    chunk.segments += 1;
                     if depth > 0 {
                         let p = sh.hit.p;
                         chunk.push(cells, PhotonHit { p, wi, beta });

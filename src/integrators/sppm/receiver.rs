@@ -78,6 +78,7 @@ mod tests {
                 wo,
                 bsdf: Bsdf::new(lobes, ns, ns.any_orthonormal_vector(), ng),
                 beta: Vec3A::ONE,
+                distance: 1.0,
             };
             let r = Receiver::new(&vp);
             assert_eq!(r.constant.is_some(), i % 2 == 0);
