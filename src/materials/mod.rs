@@ -75,6 +75,14 @@ impl Bsdf {
         matches!(self.lobes, Lobes::Mirror { .. } | Lobes::Glass { .. })
     }
 
+    /// A glossy lobe sharp enough (GGX alpha below 0.3, roughness below about 0.55) that a
+    /// density estimate of the light arriving on it is noisy: photon methods follow camera
+    /// paths through it, by BSDF sampling, to the next surface (pbrt's SPPM does so for every
+    /// glossy surface).
+    pub fn is_glossy(&self) -> bool {
+        matches!(self.lobes, Lobes::Glossy { alpha, .. } if alpha < 0.3)
+    }
+
     /// BSDF value for light arriving from `wi` and leaving toward `wo`.
     pub fn f(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {

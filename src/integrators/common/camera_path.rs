@@ -95,22 +95,28 @@ fn follow_eye_ray(
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
     let mut distance = 0.0f32;
-    for _depth in 0..settings.max_depth {
+    // After a glossy bounce, direct_lighting's BSDF sample already counted emission and the
+    // background the next segment meets.
+    let mut after_specular = true;
+    for depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
-            // Only reached at depth 0 or after specular bounces: nothing else samples it.
-            l += beta * scene.background_radiance(ray.d);
+            if after_specular {
+                l += beta * scene.background_radiance(ray.d);
+            }
             break;
         };
         let wo = -ray.d;
         on_hit(scene.prim_object[sh.prim as usize]);
         distance += sh.hit.t * ray.d.length();
         attenuate_inside(scene, &sh, &ray, &mut beta);
-        if let Some((_, al)) = scene.area_light(sh.prim) {
+        if after_specular && let Some((_, al)) = scene.area_light(sh.prim) {
             l += beta * al.le(sh.hit.n, wo);
         }
         let bsdf = scene.bsdf(&sh);
         if !bsdf.is_specular() {
             l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+        }
+        if !bsdf.is_specular() && (!bsdf.is_glossy() || depth + 1 == settings.max_depth) {
             let vp = VisiblePoint {
                 p: sh.hit.p,
                 wo,
@@ -123,6 +129,7 @@ fn follow_eye_ray(
         let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
             break;
         };
+        after_specular = s.specular;
         beta *= s.weight;
         if beta.max_element() <= 0.0 {
             break;
