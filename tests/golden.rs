@@ -42,7 +42,7 @@
 //! | textures (HDR sky: sun shadows are noisy at 16 iterations) | 8.2e-2 | 6.9% | 0.92% |
 //! | vase | 4.4e-3 | 0.68% | 1.3% |
 //! | teapot | 4.8e-3 | 0.26% | 0.34% |
-//! | csg | 4.9e-2 | 7.1% | 3.2% |
+//! | csg (a dim fill light: noisy at 64 px) | 4.8e-2 | 6.9% | 2.9% |
 //!
 //! Why the 23:15 re-bless: two defaults changed the noise. Each pixel's initial radius is now
 //! one footprint at its own first visible point (it was one footprint at the look-at
