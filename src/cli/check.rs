@@ -221,8 +221,8 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
         st.resolution.1,
         st.iterations,
         st.photons,
-        st.radius.map_or("auto".to_string(), |r| r.to_string()),
-        st.alpha,
+        st.radius.map_or("auto".to_string(), short_number),
+        short_number(st.alpha),
         st.max_depth,
         st.seed,
         st.integrator.name()
