@@ -1,7 +1,8 @@
 //! Whitted-style ray tracing: eye rays follow perfect reflection and refraction (the branch at
-//! glass is chosen by Fresnel, one per sample) up to `max_depth`; at the first non-specular
-//! surface the shared [`direct_lighting`] samples the lights with shadow rays (area lights are
-//! sampled over their surface: soft shadows), and a constant ambient term stands for all
+//! glass is chosen by Fresnel, one per sample), and glossy surfaces as the shared camera path
+//! does, up to `max_depth`; at the first diffuse surface the shared [`direct_lighting`] samples
+//! the lights with shadow rays (area lights by the solid angle they subtend where that pays,
+//! else over their surface: soft shadows), and a constant ambient term stands for all
 //! indirect light. No light ever reaches a diffuse surface through glass or a mirror: caustics
 //! stay dark (a known limitation, not a bug). One jittered sample per pixel per iteration,
 //! seeded from (seed, iteration, pixel).
