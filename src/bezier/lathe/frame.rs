@@ -19,7 +19,9 @@ pub struct RayFrame {
     /// `o + t0 dn`: the point of closest approach to the axis (flat rays) or at mid-height.
     pub oc: DVec3,
     pub(crate) rho2: f64,
-    line_rho2: f64,
+    /// Squared distance of the ray's line from the axis, and the `t` where it is reached.
+    pub(crate) line_rho2: f64,
+    pub(crate) tc: f64,
 }
 
 impl RayFrame {
@@ -35,12 +37,12 @@ impl RayFrame {
         };
         let oc = o + t0 * dn;
         let rho2 = oc.x * oc.x + oc.z * oc.z;
-        let line_rho2 = if dh2 > 0.0 {
+        let (line_rho2, tc) = if dh2 > 0.0 {
             let tc = -(oc.x * dn.x + oc.z * dn.z) / dh2;
             let q = oc + tc * dn;
-            q.x * q.x + q.z * q.z
+            (q.x * q.x + q.z * q.z, t0 + tc)
         } else {
-            rho2
+            (rho2, t0)
         };
         Self {
             o,
@@ -51,6 +53,7 @@ impl RayFrame {
             oc,
             rho2,
             line_rho2,
+            tc,
         }
     }
 

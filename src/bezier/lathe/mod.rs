@@ -23,14 +23,19 @@ use glam::{DVec2, DVec3};
 
 mod frame;
 mod segment;
+mod shell;
 
 pub use frame::RayFrame;
 pub use segment::Segment;
 use segment::TABLE_STEPS;
+pub use shell::{PIECES, Shell};
 
 use super::Solver;
 use super::roots::bracket::Refine;
-use super::roots::{RootKind, find_roots, find_roots_with_noise, newton_roots, root_uncertainty};
+use super::roots::{
+    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots,
+    root_uncertainty,
+};
 /// Which part of the surface was hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Part {
@@ -226,14 +231,35 @@ impl Lathe {
         let (tmin, mut best) = (t_min * dl, t_max * dl);
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
+        // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
+        let mut order = Vec::with_capacity(self.segs.len());
         for (i, seg) in self.segs.iter().enumerate() {
-            if !frame.may_hit(seg, tmin, best, self.size) {
+            if seg.degenerate {
                 continue;
             }
+            let mut mask = 0u32;
+            let mut entry = f64::INFINITY;
+            for (k, shell) in seg.shells.iter().enumerate() {
+                if let Some(t) = frame.shell_entry(shell, tmin, best, self.size) {
+                    mask |= 1 << k;
+                    entry = entry.min(t);
+                }
+            }
+            if mask != 0 {
+                order.push((entry, i, mask));
+            }
+        }
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for &(entry, i, mask) in &order {
+            if entry >= best {
+                // Every later segment's hits lie beyond the nearest hit found.
+                break;
+            }
+            let seg = &self.segs[i];
             let (f, noise) = frame.polynomial(seg);
             roots.clear();
             match solver {
-                Solver::Robust => find_roots_with_noise(&f, noise, &mut roots),
+                Solver::Robust => isolate_in_pieces(&f, noise, mask, &mut roots),
                 Solver::Newton { iterations, starts } => {
                     newton_roots(&f, noise, iterations, starts, &mut roots)
                 }
@@ -251,6 +277,16 @@ impl Lathe {
         self.cap_hits(&frame, tmin, &mut best, &mut found);
         let (t, part, s) = found?;
         Some(self.hit_record(o + t * dn, t / dl, part, s))
+    }
+
+    /// Convenience for tests: whether the ray (unit direction) may meet segment `i` within
+    /// `(tmin, tmax)` by its shells.
+    pub fn shells_entered(&self, o: DVec3, dn: DVec3, i: usize, tmin: f64, tmax: f64) -> bool {
+        let frame = RayFrame::new(o, dn, self.hmin, self.hmax);
+        self.segs[i]
+            .shells
+            .iter()
+            .any(|s| frame.shell_entry(s, tmin, tmax, self.size).is_some())
     }
 
     /// The nearer of the two side caps of a partial sweep, if nearer than `best`.
@@ -405,5 +441,33 @@ impl Lathe {
     pub fn surface_point(&self, i: usize, s: f64, phi: f64) -> DVec3 {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
+    }
+}
+
+/// Roots of `f` on the union of the segment's pieces set in `mask` (bit `k`: the parameter
+/// piece `[k, k + 1] / PIECES`), each maximal run of set pieces isolated on its own.
+fn isolate_in_pieces(f: &super::bernstein::Bernstein, noise: f64, mask: u32, out: &mut Vec<Root>) {
+    let full = (1u32 << PIECES) - 1;
+    if mask & full == full {
+        find_roots_with_noise(f, noise, out);
+        return;
+    }
+    let mut k = 0;
+    while k < PIECES {
+        if mask & (1 << k) == 0 {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < PIECES && mask & (1 << k) != 0 {
+            k += 1;
+        }
+        find_roots_on(
+            f,
+            start as f64 / PIECES as f64,
+            k as f64 / PIECES as f64,
+            noise,
+            out,
+        );
     }
 }

@@ -2,6 +2,7 @@
 
 use glam::DVec2;
 
+use super::shell::{PIECES, Shell};
 use crate::bezier::bernstein::Bernstein;
 
 /// Samples per segment of the arc-length and area tables.
@@ -35,6 +36,8 @@ pub struct Segment {
     len_table: Vec<f64>,
     /// Cumulative `integral r |P'| ds` at the same parameters.
     pub(super) area_table: Vec<f64>,
+    /// Annular shells of the segment's [`PIECES`] parameter pieces (culling).
+    pub(super) shells: [Shell; PIECES],
     /// All control points coincide: the segment is a point (or circle) of zero area.
     pub degenerate: bool,
 }
@@ -58,6 +61,7 @@ impl Segment {
             }
         }
         let degenerate = points.iter().all(|p| *p == points[0]);
+        let shells = Shell::of_segment(&r, &h);
         let mut seg = Self {
             r,
             h,
@@ -66,6 +70,7 @@ impl Segment {
             hmax,
             len_table: vec![0.0],
             area_table: vec![0.0],
+            shells,
             degenerate,
         };
         for k in 0..TABLE_STEPS {

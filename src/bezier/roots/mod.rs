@@ -50,6 +50,13 @@ pub fn find_roots_with_noise(p: &Bernstein, noise: f64, out: &mut Vec<Root>) {
     isolate(p, 0.0, 1.0, noise, 0, out);
 }
 
+/// The roots of `p` in `[a, b]` (a sub-interval of [0, 1]), ascending, appended to `out`:
+/// isolated on the restriction of `p` to `[a, b]` (smaller coefficients' hull, fewer splits) and
+/// mapped back to `p`'s parameter.
+pub fn find_roots_on(p: &Bernstein, a: f64, b: f64, noise: f64, out: &mut Vec<Root>) {
+    isolate(&p.restrict(a, b), a, b, noise, 0, out);
+}
+
 fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<Root>) {
     let c = p.coeffs();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);

@@ -3,10 +3,12 @@
 //!
 //! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
 //!   tessellated meshes of the same surfaces.
+//! - [`cost`]: cost per ray of the Bezier surfaces as a ratio to a quad's.
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
 
 pub mod bezier;
+pub mod cost;
 pub mod reference;
 pub mod tessellate;

@@ -28,6 +28,18 @@ pub enum Bench {
     /// Revolve and patch: robust, Newton settings and tessellated meshes against the reference
     /// intersector; ns per ray against miss rate and t error (CSV and charts).
     Bezier(BezierArgs),
+    /// Cost per ray of the revolves and the patch as a ratio to a quad's, same rays, same run.
+    Cost(CostArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct CostArgs {
+    /// Rays per surface.
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub rays: u64,
+    /// Timed passes (the median ratio is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeats: u64,
 }
 
 #[derive(Debug, Args)]
@@ -64,14 +76,36 @@ fn err(text: &str) {
 
 fn run_bench(args: &BenchArgs) -> ExitCode {
     match &args.what {
-        Bench::Bezier(a) => match bezier(a) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                err(&format!("error: {e}\n"));
-                ExitCode::from(EXIT_USAGE)
-            }
-        },
+        Bench::Bezier(a) => finish(bezier(a)),
+        Bench::Cost(a) => finish(cost(a)),
     }
+}
+
+fn finish(r: Result<(), String>) -> ExitCode {
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            err(&format!("error: {e}\n"));
+            ExitCode::from(EXIT_USAGE)
+        }
+    }
+}
+
+fn cost(args: &CostArgs) -> Result<(), String> {
+    let rows = sppm_measure::cost::run(args.rays as usize, args.repeats as usize)?;
+    let mut table = format!(
+        "{:<16} {:>9} {:>9} {:>9}\n",
+        "surface", "ns/ray", "x quad", "hit rate"
+    );
+    for r in rows {
+        let _ = writeln!(
+            table,
+            "{:<16} {:>9.0} {:>9.2} {:>9.3}",
+            r.name, r.ns_per_ray, r.vs_quad, r.hit_rate
+        );
+    }
+    out(&table);
+    Ok(())
 }
 
 fn bezier(args: &BezierArgs) -> Result<(), String> {
