@@ -232,9 +232,15 @@ impl Lathe {
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
         // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
-        let mut order = Vec::with_capacity(self.segs.len());
+        // On the stack for profiles of up to 32 segments.
+        let mut stack = [(0.0, 0usize, 0u32); 32];
+        let (mut heap, mut len) = (Vec::new(), 0);
         for (i, seg) in self.segs.iter().enumerate() {
-            if seg.degenerate {
+            if seg.degenerate
+                || frame
+                    .shell_entry(&seg.shell, tmin, best, self.size)
+                    .is_none()
+            {
                 continue;
             }
             let mut mask = 0u32;
@@ -245,12 +251,24 @@ impl Lathe {
                     entry = entry.min(t);
                 }
             }
-            if mask != 0 {
-                order.push((entry, i, mask));
+            if mask == 0 {
+                continue;
+            }
+            if len < stack.len() {
+                stack[len] = (entry, i, mask);
+                len += 1;
+            } else {
+                heap.push((entry, i, mask));
             }
         }
-        order.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for &(entry, i, mask) in &order {
+        let order = if heap.is_empty() {
+            &mut stack[..len]
+        } else {
+            heap.extend_from_slice(&stack[..len]);
+            &mut heap[..]
+        };
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(entry, i, mask) in order.iter() {
             if entry >= best {
                 // Every later segment's hits lie beyond the nearest hit found.
                 break;

@@ -90,14 +90,18 @@ fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<
     }
     // Split at the middle unless the middle is itself (nearly) a root: then move the split so
     // that the root lies inside one half rather than on the seam.
-    let mut tau = 0.5;
-    for cand in [0.5, 0.4375, 0.5625, 0.40625, 0.59375] {
-        if p.eval(cand).abs() > noise {
-            tau = cand;
-            break;
+    // The split's shared end coefficient is the value at the split point.
+    let (mut tau, mut halves) = (0.5, p.split(0.5));
+    if halves.0.coeffs()[p.degree()].abs() <= noise {
+        for cand in [0.4375, 0.5625, 0.40625, 0.59375] {
+            if p.eval(cand).abs() > noise {
+                tau = cand;
+                halves = p.split(cand);
+                break;
+            }
         }
     }
-    let (l, r) = p.split(tau);
+    let (l, r) = halves;
     let m = a + (b - a) * tau;
     isolate(&l, a, m, noise, depth + 1, out);
     isolate(&r, m, b, noise, depth + 1, out);

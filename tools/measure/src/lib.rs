@@ -7,8 +7,10 @@
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
+//! - [`twin`]: a scene's twin with its revolves replaced by meshes at a given accuracy.
 
 pub mod bezier;
 pub mod cost;
 pub mod reference;
 pub mod tessellate;
+pub mod twin;

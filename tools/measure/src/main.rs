@@ -30,6 +30,20 @@ pub enum Bench {
     Bezier(BezierArgs),
     /// Cost per ray of the revolves and the patch as a ratio to a quad's, same rays, same run.
     Cost(CostArgs),
+    /// A scene's twin with every revolve replaced by a mesh at a given silhouette accuracy.
+    Twin(TwinArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct TwinArgs {
+    /// The scene whose revolves are tessellated.
+    pub scene: PathBuf,
+    /// Where the twin scene and its OBJ files go.
+    #[arg(short, long, default_value = "target/twin")]
+    pub output: PathBuf,
+    /// Largest distance between mesh and surface, in world units.
+    #[arg(long, default_value_t = 1e-3)]
+    pub tolerance: f64,
 }
 
 #[derive(Debug, Args)]
@@ -78,6 +92,7 @@ fn run_bench(args: &BenchArgs) -> ExitCode {
     match &args.what {
         Bench::Bezier(a) => finish(bezier(a)),
         Bench::Cost(a) => finish(cost(a)),
+        Bench::Twin(a) => finish(twin(a)),
     }
 }
 
@@ -89,6 +104,18 @@ fn finish(r: Result<(), String>) -> ExitCode {
             ExitCode::from(EXIT_USAGE)
         }
     }
+}
+
+fn twin(args: &TwinArgs) -> Result<(), String> {
+    if !(args.tolerance > 0.0 && args.tolerance.is_finite()) {
+        return Err("--tolerance must be a positive number".into());
+    }
+    let (lines, path) = sppm_measure::twin::write_twin(&args.scene, &args.output, args.tolerance)?;
+    for l in lines {
+        out(&format!("{l}\n"));
+    }
+    out(&format!("wrote {path}\n"));
+    Ok(())
 }
 
 fn cost(args: &CostArgs) -> Result<(), String> {
