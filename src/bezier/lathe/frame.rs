@@ -57,24 +57,6 @@ impl RayFrame {
         }
     }
 
-    /// Cheap culling: the ray's line passes outside the segment's bounding cylinder or its
-    /// height range lies outside `(tmin, tmax)`.
-    pub fn may_hit(&self, seg: &Segment, tmin: f64, tmax: f64, size: f64) -> bool {
-        let (o, dn) = (self.o, self.dn);
-        if seg.degenerate || self.line_rho2 > seg.rmax * seg.rmax * (1.0 + 1e-12) {
-            return false;
-        }
-        if dn.y != 0.0 {
-            let ta = (seg.hmin - o.y) / dn.y;
-            let tb = (seg.hmax - o.y) / dn.y;
-            let (ta, tb) = (ta.min(tb), ta.max(tb));
-            let slack = 1e-9 * size;
-            !(tb < tmin - slack || ta > tmax + slack)
-        } else {
-            o.y >= seg.hmin - 1e-12 * size && o.y <= seg.hmax + 1e-12 * size
-        }
-    }
-
     /// The polynomial `F(s)` of the segment (see the module docs) and its rounding noise.
     pub fn polynomial(&self, seg: &Segment) -> (Bernstein, f64) {
         let (oc, dn) = (self.oc, self.dn);

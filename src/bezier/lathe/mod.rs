@@ -297,16 +297,6 @@ impl Lathe {
         Some(self.hit_record(o + t * dn, t / dl, part, s))
     }
 
-    /// Convenience for tests: whether the ray (unit direction) may meet segment `i` within
-    /// `(tmin, tmax)` by its shells.
-    pub fn shells_entered(&self, o: DVec3, dn: DVec3, i: usize, tmin: f64, tmax: f64) -> bool {
-        let frame = RayFrame::new(o, dn, self.hmin, self.hmax);
-        self.segs[i]
-            .shells
-            .iter()
-            .any(|s| frame.shell_entry(s, tmin, tmax, self.size).is_some())
-    }
-
     /// The nearer of the two side caps of a partial sweep, if nearer than `best`.
     pub fn cap_hits(
         &self,

@@ -64,7 +64,7 @@ impl RayFrame {
         } else if !(o.y >= h0 && o.y <= h1) {
             return None;
         }
-        if !(ta <= tb) {
+        if ta.is_nan() || tb.is_nan() || ta > tb {
             return None;
         }
         // Squared distance from the axis along the ray: line_rho2 + dh2 (t - tc)^2.
