@@ -22,20 +22,20 @@ use sppm_lang::shapes::primitive::AnyShape;
 use sppm_lang::shapes::quad::Quad;
 use sppm_lang::shapes::revolve::Revolve;
 
-use crate::bezier::{T_MIN, vase_profile, wavy_points};
+use crate::bezier::{T_MIN, random_ray, vase_profile, wavy_points};
 
-/// The goblet of `examples/goblet.scn`: foot, stem, bowl (outer and inner wall), one closed
-/// profile listed from the axis at the bottom around to the axis inside the bowl.
+/// The goblet of `examples/goblet.scn` (same profile, unscaled): underside, foot, stem, outside
+/// of the bowl, lip, inside of the bowl, from the axis at the bottom to the axis at 0.46.
 pub fn goblet_profile() -> Profile {
     let seg = |p: &[(f64, f64)]| p.iter().map(|&(r, h)| DVec2::new(r, h)).collect::<Vec<_>>();
     Profile {
         segments: vec![
-            seg(&[(0.0, 0.0), (0.6, 0.0)]),
-            seg(&[(0.6, 0.0), (0.6, 0.06), (0.3, 0.08), (0.08, 0.12)]),
-            seg(&[(0.08, 0.12), (0.05, 0.5), (0.05, 0.8), (0.1, 1.0)]),
-            seg(&[(0.1, 1.0), (0.6, 1.05), (0.65, 1.5), (0.55, 2.0)]),
-            seg(&[(0.55, 2.0), (0.52, 2.0)]),
-            seg(&[(0.52, 2.0), (0.6, 1.5), (0.5, 1.12), (0.0, 1.1)]),
+            seg(&[(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)]),
+            seg(&[(0.3, 0.0), (0.3, 0.03), (0.1, 0.04), (0.04, 0.08)]),
+            seg(&[(0.04, 0.08), (0.03, 0.2), (0.03, 0.35), (0.05, 0.42)]),
+            seg(&[(0.05, 0.42), (0.3, 0.45), (0.32, 0.7), (0.27, 0.9)]),
+            seg(&[(0.27, 0.9), (0.265, 0.905), (0.255, 0.905), (0.25, 0.9)]),
+            seg(&[(0.25, 0.9), (0.3, 0.7), (0.27, 0.47), (0.0, 0.46)]),
         ],
     }
 }
@@ -53,15 +53,8 @@ pub struct CostRow {
 fn random_rays(lo: DVec3, hi: DVec3, n: usize, seed: u64) -> Vec<Ray> {
     (0..n)
         .map(|i| {
-            let r = &mut SplitMix64::for_item(seed, 0, i);
-            let c = 0.5 * (lo + hi);
-            let o = c + r.unit() * 3.0 * (hi - lo).max_element();
-            let target = DVec3::new(
-                r.range(lo.x, hi.x),
-                r.range(lo.y, hi.y),
-                r.range(lo.z, hi.z),
-            );
-            Ray::new(o.as_vec3a(), (target - o).normalize().as_vec3a())
+            let (o, d) = random_ray(&mut SplitMix64::for_item(seed, 0, i), lo, hi);
+            Ray::new(o.as_vec3a(), d.normalize().as_vec3a())
         })
         .collect()
 }
