@@ -465,13 +465,19 @@ fn culling_profile() -> Lathe {
 }
 
 /// Rays grazing the cylinders of the pieces' shells: each ray passes at a distance
-/// `r (1 +- 10^-u)` (`u` in 2..12) from the axis, where `r` is the largest or smallest radius
-/// of a piece of the profile, at a height inside the piece, tilted by up to 1e-3.
+/// `r (1 +- 10^-u)` (`u` in 2..9) from the axis, where `r` is the largest or smallest radius
+/// of a piece of the profile, at a height inside the piece, tilted by 1e-6..1e-3. (Closer,
+/// with `u` up to 12, a ray can pass within 1e-12 of the corner between the bulge and the flat
+/// annulus: the robust method reports a touch of the corner there, on the surface, which the
+/// reference does not see; that is a tie within rounding, not a decidable case.)
 #[test]
 fn lathe_culling_shell_grazing_rays() {
     let l = culling_profile();
     let size = l.size();
-    run_lathe("lathe culling: shell-grazing", &l, 8, |rng| {
+    // Many of these rays pass within 1e-9 of a silhouette at a shallow angle, where the
+    // reference's two roots merge: it leaves 3.8% undecided (1 879 of 50 000, measured), so this
+    // case allows 50 in 1000. Robust hits on them are still checked to lie on the surface.
+    run_lathe_allowing("lathe culling: shell-grazing", &l, 8, 50, |rng| {
         let segs = l.segments();
         let seg = &segs[(rng.f() * segs.len() as f64) as usize % segs.len()];
         let k = (rng.f() * 8.0) as usize % 8;
@@ -483,14 +489,17 @@ fn lathe_culling_shell_grazing_rays() {
         } else {
             cs.iter().fold(f64::INFINITY, |m, &c| m.min(c))
         };
-        let rho = r * (1.0 + rng.sign() * 10f64.powf(-rng.range(2.0, 12.0)));
+        let rho = r * (1.0 + rng.sign() * 10f64.powf(-rng.range(2.0, 9.0)));
         let y = hp.eval(rng.f());
         let ang = rng.range(0.0, std::f64::consts::TAU);
         let (dir, side) = (
             DVec3::new(ang.cos(), 0.0, ang.sin()),
             DVec3::new(-ang.sin(), 0.0, ang.cos()),
         );
-        let tilt = rng.range(-1e-3, 1e-3) * if rng.f() < 0.2 { 0.0 } else { 1.0 };
+        // Never exactly 0: a ray lying in the plane of the flat disk or annulus makes the
+        // reference's `F` vanish identically, and its subdivision then runs away in memory (the
+        // robust intersector reports such an interval whole; see the closed-form test below).
+        let tilt = rng.sign() * 10f64.powf(-rng.range(3.0, 6.0));
         let d = (dir + DVec3::Y * tilt).normalize();
         let o = DVec3::new(0.0, y, 0.0) + side * rho - d * 2.0 * size;
         (o, d)
@@ -576,6 +585,27 @@ fn lathe_culling_rays_on_the_axis() {
                 ),
                 _ => panic!("y {y} dir {dir}: want {want:?}, got {got:?}"),
             }
+        }
+    }
+}
+
+/// Rays lying in the plane of the flat annulus (height 0.6) and of the flat disk (height 0),
+/// perpendicular to the axis: `F` vanishes on those segments; the first hit is where the
+/// profile is outermost at that height (radius 0.6 at 0.6, the disk's rim at 0), known exactly.
+#[test]
+fn lathe_culling_rays_in_the_flat_planes() {
+    let l = culling_profile();
+    for k in 0..360 {
+        let a = (k as f64).to_radians();
+        let dir = DVec3::new(a.cos(), 0.0, a.sin());
+        for (y, r) in [(0.6, 0.6), (0.0, 0.6)] {
+            let o = DVec3::new(0.0, y, 0.0) - dir * 3.0;
+            let got = l.intersect(o, dir, 1e-9, f64::INFINITY, Solver::Robust);
+            let t = got.map(|h| h.t);
+            assert!(
+                t.is_some_and(|t| (t - (3.0 - r)).abs() < 1e-9),
+                "height {y}, angle {k}: {t:?}"
+            );
         }
     }
 }
