@@ -19,7 +19,9 @@ pub struct RayFrame {
     /// `o + t0 dn`: the point of closest approach to the axis (flat rays) or at mid-height.
     pub oc: DVec3,
     pub(crate) rho2: f64,
-    line_rho2: f64,
+    /// Squared distance of the ray's line from the axis, and the `t` where it is reached.
+    pub(crate) line_rho2: f64,
+    pub(crate) tc: f64,
 }
 
 impl RayFrame {
@@ -35,12 +37,12 @@ impl RayFrame {
         };
         let oc = o + t0 * dn;
         let rho2 = oc.x * oc.x + oc.z * oc.z;
-        let line_rho2 = if dh2 > 0.0 {
+        let (line_rho2, tc) = if dh2 > 0.0 {
             let tc = -(oc.x * dn.x + oc.z * dn.z) / dh2;
             let q = oc + tc * dn;
-            q.x * q.x + q.z * q.z
+            (q.x * q.x + q.z * q.z, t0 + tc)
         } else {
-            rho2
+            (rho2, t0)
         };
         Self {
             o,
@@ -51,24 +53,7 @@ impl RayFrame {
             oc,
             rho2,
             line_rho2,
-        }
-    }
-
-    /// Cheap culling: the ray's line passes outside the segment's bounding cylinder or its
-    /// height range lies outside `(tmin, tmax)`.
-    pub fn may_hit(&self, seg: &Segment, tmin: f64, tmax: f64, size: f64) -> bool {
-        let (o, dn) = (self.o, self.dn);
-        if seg.degenerate || self.line_rho2 > seg.rmax * seg.rmax * (1.0 + 1e-12) {
-            return false;
-        }
-        if dn.y != 0.0 {
-            let ta = (seg.hmin - o.y) / dn.y;
-            let tb = (seg.hmax - o.y) / dn.y;
-            let (ta, tb) = (ta.min(tb), ta.max(tb));
-            let slack = 1e-9 * size;
-            !(tb < tmin - slack || ta > tmax + slack)
-        } else {
-            o.y >= seg.hmin - 1e-12 * size && o.y <= seg.hmax + 1e-12 * size
+            tc,
         }
     }
 

@@ -23,14 +23,19 @@ use glam::{DVec2, DVec3};
 
 mod frame;
 mod segment;
+mod shell;
 
 pub use frame::RayFrame;
 pub use segment::Segment;
 use segment::TABLE_STEPS;
+pub use shell::{PIECES, Shell};
 
 use super::Solver;
 use super::roots::bracket::Refine;
-use super::roots::{RootKind, find_roots, find_roots_with_noise, newton_roots, root_uncertainty};
+use super::roots::{
+    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots,
+    root_uncertainty,
+};
 /// Which part of the surface was hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Part {
@@ -226,14 +231,53 @@ impl Lathe {
         let (tmin, mut best) = (t_min * dl, t_max * dl);
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
+        // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
+        // On the stack for profiles of up to 32 segments.
+        let mut stack = [(0.0, 0usize, 0u32); 32];
+        let (mut heap, mut len) = (Vec::new(), 0);
         for (i, seg) in self.segs.iter().enumerate() {
-            if !frame.may_hit(seg, tmin, best, self.size) {
+            if seg.degenerate
+                || frame
+                    .shell_entry(&seg.shell, tmin, best, self.size)
+                    .is_none()
+            {
                 continue;
             }
+            let mut mask = 0u32;
+            let mut entry = f64::INFINITY;
+            for (k, shell) in seg.shells.iter().enumerate() {
+                if let Some(t) = frame.shell_entry(shell, tmin, best, self.size) {
+                    mask |= 1 << k;
+                    entry = entry.min(t);
+                }
+            }
+            if mask == 0 {
+                continue;
+            }
+            if len < stack.len() {
+                stack[len] = (entry, i, mask);
+                len += 1;
+            } else {
+                heap.push((entry, i, mask));
+            }
+        }
+        let order = if heap.is_empty() {
+            &mut stack[..len]
+        } else {
+            heap.extend_from_slice(&stack[..len]);
+            &mut heap[..]
+        };
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(entry, i, mask) in order.iter() {
+            if entry >= best {
+                // Every later segment's hits lie beyond the nearest hit found.
+                break;
+            }
+            let seg = &self.segs[i];
             let (f, noise) = frame.polynomial(seg);
             roots.clear();
             match solver {
-                Solver::Robust => find_roots_with_noise(&f, noise, &mut roots),
+                Solver::Robust => isolate_in_pieces(&f, noise, mask, &mut roots),
                 Solver::Newton { iterations, starts } => {
                     newton_roots(&f, noise, iterations, starts, &mut roots)
                 }
@@ -405,5 +449,33 @@ impl Lathe {
     pub fn surface_point(&self, i: usize, s: f64, phi: f64) -> DVec3 {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
+    }
+}
+
+/// Roots of `f` on the union of the segment's pieces set in `mask` (bit `k`: the parameter
+/// piece `[k, k + 1] / PIECES`), each maximal run of set pieces isolated on its own.
+fn isolate_in_pieces(f: &super::bernstein::Bernstein, noise: f64, mask: u32, out: &mut Vec<Root>) {
+    let full = (1u32 << PIECES) - 1;
+    if mask & full == full {
+        find_roots_with_noise(f, noise, out);
+        return;
+    }
+    let mut k = 0;
+    while k < PIECES {
+        if mask & (1 << k) == 0 {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < PIECES && mask & (1 << k) != 0 {
+            k += 1;
+        }
+        find_roots_on(
+            f,
+            start as f64 / PIECES as f64,
+            k as f64 / PIECES as f64,
+            noise,
+            out,
+        );
     }
 }

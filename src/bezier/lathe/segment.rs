@@ -2,6 +2,7 @@
 
 use glam::DVec2;
 
+use super::shell::{PIECES, Shell};
 use crate::bezier::bernstein::Bernstein;
 
 /// Samples per segment of the arc-length and area tables.
@@ -35,6 +36,10 @@ pub struct Segment {
     len_table: Vec<f64>,
     /// Cumulative `integral r |P'| ds` at the same parameters.
     pub(super) area_table: Vec<f64>,
+    /// Annular shells of the segment's [`PIECES`] parameter pieces (culling).
+    pub(super) shells: [Shell; PIECES],
+    /// The union of `shells` (tested first).
+    pub(super) shell: Shell,
     /// All control points coincide: the segment is a point (or circle) of zero area.
     pub degenerate: bool,
 }
@@ -58,6 +63,13 @@ impl Segment {
             }
         }
         let degenerate = points.iter().all(|p| *p == points[0]);
+        let shells = Shell::of_segment(&r, &h);
+        let shell = shells.iter().fold(shells[0], |a, b| Shell {
+            rmin: a.rmin.min(b.rmin),
+            rmax: a.rmax.max(b.rmax),
+            hmin: a.hmin.min(b.hmin),
+            hmax: a.hmax.max(b.hmax),
+        });
         let mut seg = Self {
             r,
             h,
@@ -66,6 +78,8 @@ impl Segment {
             hmax,
             len_table: vec![0.0],
             area_table: vec![0.0],
+            shells,
+            shell,
             degenerate,
         };
         for k in 0..TABLE_STEPS {

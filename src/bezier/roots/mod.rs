@@ -50,6 +50,13 @@ pub fn find_roots_with_noise(p: &Bernstein, noise: f64, out: &mut Vec<Root>) {
     isolate(p, 0.0, 1.0, noise, 0, out);
 }
 
+/// The roots of `p` in `[a, b]` (a sub-interval of [0, 1]), ascending, appended to `out`:
+/// isolated on the restriction of `p` to `[a, b]` (smaller coefficients' hull, fewer splits) and
+/// mapped back to `p`'s parameter.
+pub fn find_roots_on(p: &Bernstein, a: f64, b: f64, noise: f64, out: &mut Vec<Root>) {
+    isolate(&p.restrict(a, b), a, b, noise, 0, out);
+}
+
 fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<Root>) {
     let c = p.coeffs();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -83,14 +90,18 @@ fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<
     }
     // Split at the middle unless the middle is itself (nearly) a root: then move the split so
     // that the root lies inside one half rather than on the seam.
-    let mut tau = 0.5;
-    for cand in [0.5, 0.4375, 0.5625, 0.40625, 0.59375] {
-        if p.eval(cand).abs() > noise {
-            tau = cand;
-            break;
+    // The split's shared end coefficient is the value at the split point.
+    let (mut tau, mut halves) = (0.5, p.split(0.5));
+    if halves.0.coeffs()[p.degree()].abs() <= noise {
+        for cand in [0.4375, 0.5625, 0.40625, 0.59375] {
+            if p.eval(cand).abs() > noise {
+                tau = cand;
+                halves = p.split(cand);
+                break;
+            }
         }
     }
-    let (l, r) = p.split(tau);
+    let (l, r) = halves;
     let m = a + (b - a) * tau;
     isolate(&l, a, m, noise, depth + 1, out);
     isolate(&r, m, b, noise, depth + 1, out);

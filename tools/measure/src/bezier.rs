@@ -203,7 +203,7 @@ type Rng = SplitMix64;
 
 /// A ray from a sphere of 3 sizes around the box through a uniform point inside it, with a
 /// direction length between 0.2 and 2 times the distance.
-fn random_ray(rng: &mut Rng, lo: DVec3, hi: DVec3) -> (DVec3, DVec3) {
+pub fn random_ray(rng: &mut Rng, lo: DVec3, hi: DVec3) -> (DVec3, DVec3) {
     let c = 0.5 * (lo + hi);
     let o = c + rng.unit() * 3.0 * (hi - lo).max_element();
     let target = DVec3::new(

@@ -3,13 +3,17 @@
 //!
 //! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
 //!   tessellated meshes of the same surfaces.
+//! - [`cost`]: cost per ray of the Bezier surfaces as a ratio to a quad's.
 //! - [`lights`]: direct-light noise of area lights sampled by area and by solid angle, at
 //!   equal time (`cargo run --release -p sppm-measure -- lights`).
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
+//! - [`twin`]: a scene's twin with its revolves replaced by meshes at a given accuracy.
 
 pub mod bezier;
+pub mod cost;
 pub mod lights;
 pub mod reference;
 pub mod tessellate;
+pub mod twin;

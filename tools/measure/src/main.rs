@@ -35,6 +35,22 @@ pub enum Bench {
     /// area and by solid angle, wall and CPU time per estimate, and the variance ratio at
     /// equal CPU time.
     Lights(LightsArgs),
+    /// Cost per ray of the revolves and the patch as a ratio to a quad's, same rays, same run.
+    Cost(CostArgs),
+    /// A scene's twin with every revolve replaced by a mesh at a given silhouette accuracy.
+    Twin(TwinArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct TwinArgs {
+    /// The scene whose revolves are tessellated.
+    pub scene: PathBuf,
+    /// Where the twin scene and its OBJ files go.
+    #[arg(short, long, default_value = "target/twin")]
+    pub output: PathBuf,
+    /// Largest distance between mesh and surface, in world units.
+    #[arg(long, default_value_t = 1e-3)]
+    pub tolerance: f64,
 }
 
 #[derive(Debug, Args)]
@@ -48,6 +64,16 @@ pub struct LightsArgs {
     /// Estimates per point, sampler and round.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=100_000))]
     pub per_round: u32,
+}
+
+#[derive(Debug, Args)]
+pub struct CostArgs {
+    /// Rays per surface.
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub rays: u64,
+    /// Timed passes (the median ratio is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub repeats: u64,
 }
 
 #[derive(Debug, Args)]
@@ -83,17 +109,51 @@ fn err(text: &str) {
 }
 
 fn run_bench(args: &BenchArgs) -> ExitCode {
-    let result = match &args.what {
-        Bench::Bezier(a) => bezier(a),
-        Bench::Lights(a) => lights(a),
-    };
-    match result {
+    match &args.what {
+        Bench::Bezier(a) => finish(bezier(a)),
+        Bench::Cost(a) => finish(cost(a)),
+        Bench::Twin(a) => finish(twin(a)),
+        Bench::Lights(a) => finish(lights(a)),
+    }
+}
+
+fn finish(r: Result<(), String>) -> ExitCode {
+    match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             err(&format!("error: {e}\n"));
             ExitCode::from(EXIT_USAGE)
         }
     }
+}
+
+fn twin(args: &TwinArgs) -> Result<(), String> {
+    if !(args.tolerance > 0.0 && args.tolerance.is_finite()) {
+        return Err("--tolerance must be a positive number".into());
+    }
+    let (lines, path) = sppm_measure::twin::write_twin(&args.scene, &args.output, args.tolerance)?;
+    for l in lines {
+        out(&format!("{l}\n"));
+    }
+    out(&format!("wrote {path}\n"));
+    Ok(())
+}
+
+fn cost(args: &CostArgs) -> Result<(), String> {
+    let rows = sppm_measure::cost::run(args.rays as usize, args.repeats as usize)?;
+    let mut table = format!(
+        "{:<16} {:>9} {:>9} {:>9}\n",
+        "surface", "ns/ray", "x quad", "hit rate"
+    );
+    for r in rows {
+        let _ = writeln!(
+            table,
+            "{:<16} {:>9.0} {:>9.2} {:>9.3}",
+            r.name, r.ns_per_ray, r.vs_quad, r.hit_rate
+        );
+    }
+    out(&table);
+    Ok(())
 }
 
 fn lights(args: &LightsArgs) -> Result<(), String> {

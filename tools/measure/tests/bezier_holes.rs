@@ -303,3 +303,9 @@ fn the_check_finds_the_holes_of_a_weak_newton_method() {
     let counts = count("vase, method newton iterations 4 starts 1", loaded);
     assert!(counts.holes > 100, "the weak method should leave holes");
 }
+
+/// Two revolves placed by transforms (the goblet translated, the vase scaled and translated).
+#[test]
+fn goblet_room_has_no_holes_or_speckles() {
+    check_example("goblet");
+}

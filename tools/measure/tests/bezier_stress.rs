@@ -446,3 +446,166 @@ fn patch_grazing_rays() {
         });
     }
 }
+
+/// A profile aimed at the per-piece shell culling: a flat disk from the axis (its shells are
+/// degenerate in height), a bulge, a flat annulus, a cusp (the tangent vanishes mid-segment) and
+/// a dome closing on the axis (radius 0 at the pole).
+fn culling_profile() -> Lathe {
+    Lathe::new(
+        &profile(&[
+            &[(0.0, 0.0), (0.3, 0.0), (0.6, 0.0)],
+            &[(0.6, 0.0), (0.6, 0.3), (0.2, 0.4), (0.5, 0.6)],
+            &[(0.5, 0.6), (0.3, 0.6)],
+            &[(0.3, 0.6), (0.6, 0.9), (0.3, 0.9), (0.6, 0.6)],
+            &[(0.6, 0.6), (0.6, 1.0), (0.3, 1.2), (0.0, 1.2)],
+        ]),
+        None,
+    )
+    .unwrap()
+}
+
+/// Rays grazing the cylinders of the pieces' shells: each ray passes at a distance
+/// `r (1 +- 10^-u)` (`u` in 2..9) from the axis, where `r` is the largest or smallest radius
+/// of a piece of the profile, at a height inside the piece, tilted by 1e-6..1e-3. (Closer,
+/// with `u` up to 12, a ray can pass within 1e-12 of the corner between the bulge and the flat
+/// annulus: the robust method reports a touch of the corner there, on the surface, which the
+/// reference does not see; that is a tie within rounding, not a decidable case.)
+#[test]
+fn lathe_culling_shell_grazing_rays() {
+    let l = culling_profile();
+    let size = l.size();
+    // Many of these rays pass within 1e-9 of a silhouette at a shallow angle, where the
+    // reference's two roots merge: it leaves 3.8% undecided (1 879 of 50 000, measured), so this
+    // case allows 50 in 1000. Robust hits on them are still checked to lie on the surface.
+    run_lathe_allowing("lathe culling: shell-grazing", &l, 8, 50, |rng| {
+        let segs = l.segments();
+        let seg = &segs[(rng.f() * segs.len() as f64) as usize % segs.len()];
+        let k = (rng.f() * 8.0) as usize % 8;
+        let (a, b) = (k as f64 / 8.0, (k + 1) as f64 / 8.0);
+        let (rp, hp) = (seg.r.restrict(a, b), seg.h.restrict(a, b));
+        let cs = rp.coeffs();
+        let r = if rng.f() < 0.5 {
+            cs.iter().fold(0.0f64, |m, &c| m.max(c))
+        } else {
+            cs.iter().fold(f64::INFINITY, |m, &c| m.min(c))
+        };
+        let rho = r * (1.0 + rng.sign() * 10f64.powf(-rng.range(2.0, 9.0)));
+        let y = hp.eval(rng.f());
+        let ang = rng.range(0.0, std::f64::consts::TAU);
+        let (dir, side) = (
+            DVec3::new(ang.cos(), 0.0, ang.sin()),
+            DVec3::new(-ang.sin(), 0.0, ang.cos()),
+        );
+        // Never exactly 0: a ray lying in the plane of the flat disk or annulus makes the
+        // reference's `F` vanish identically, and its subdivision then runs away in memory (the
+        // robust intersector reports such an interval whole; see the closed-form test below).
+        let tilt = rng.sign() * 10f64.powf(-rng.range(3.0, 6.0));
+        let d = (dir + DVec3::Y * tilt).normalize();
+        let o = DVec3::new(0.0, y, 0.0) + side * rho - d * 2.0 * size;
+        (o, d)
+    });
+}
+
+/// Rays within 1e-9..1e-3 of the axis, nearly parallel to it (tilt up to 1e-3), from above and
+/// below: they meet the pole of the dome, the cusp's and the annulus's shells at their inner
+/// radius, and the flat disk. (Rays exactly on the axis are a double root at both poles, which
+/// the reference cannot decide: `lathe_culling_rays_on_the_axis` checks them in closed form.)
+#[test]
+fn lathe_culling_axis_rays() {
+    let l = culling_profile();
+    let size = l.size();
+    // The reference leaves about 9% of these rays undecided (17 827 of 200 000, measured; not
+    // yet analysed which roots it cannot separate): allowed 100 in 1000. Robust hits on them
+    // are still checked to lie on the surface.
+    run_lathe_allowing("lathe culling: along the axis", &l, 9, 100, |rng| {
+        let off = 10f64.powf(-rng.range(3.0, 9.0)) * size;
+        let ang = rng.range(0.0, std::f64::consts::TAU);
+        let p = DVec3::new(off * ang.cos(), rng.range(0.0, 1.2), off * ang.sin());
+        let tilt = if rng.f() < 0.3 {
+            DVec3::ZERO
+        } else {
+            rng.unit() * rng.range(0.0, 1e-3)
+        };
+        let d = (DVec3::Y * rng.sign() + tilt).normalize();
+        (p - d * 3.0 * size, d)
+    });
+}
+
+/// Rays starting on the surface (inside the shells of their own piece, as every secondary ray
+/// does) in a random direction, and rays starting at a random point inside the bounds.
+#[test]
+fn lathe_culling_rays_from_inside_the_shells() {
+    let l = culling_profile();
+    let (lo, hi) = l.bounds();
+    run_lathe("lathe culling: from inside the shells", &l, 10, |rng| {
+        let o = if rng.f() < 0.5 {
+            l.sample(DVec2::new(rng.f(), rng.f())).unwrap().0
+        } else {
+            DVec3::new(
+                rng.range(lo.x, hi.x),
+                rng.range(lo.y, hi.y),
+                rng.range(lo.z, hi.z),
+            )
+        };
+        (o, rng.unit())
+    });
+}
+
+/// Random rays at the culling profile (flat disk, annulus, cusp, pole).
+#[test]
+fn lathe_culling_random_rays() {
+    let l = culling_profile();
+    let (lo, hi) = l.bounds();
+    run_lathe("lathe culling: random", &l, 11, random_rays(lo, hi));
+}
+
+/// Rays exactly on the axis, from below and above, from outside and from inside the solid: the
+/// first hit is the flat disk at height 0 or the dome's pole at 1.2, at a distance known exactly.
+#[test]
+fn lathe_culling_rays_on_the_axis() {
+    let l = culling_profile();
+    for k in 0..1000 {
+        let y = -1.0 + 3.4 * k as f64 / 1000.0;
+        for dir in [1.0, -1.0] {
+            let o = DVec3::new(0.0, y, 0.0);
+            let got = l.intersect(o, DVec3::Y * dir, 1e-9, f64::INFINITY, Solver::Robust);
+            let want = match (dir > 0.0, y) {
+                (true, y) if y < 0.0 => Some(-y),
+                (true, y) if y < 1.2 => Some(1.2 - y),
+                (false, y) if y > 1.2 => Some(y - 1.2),
+                (false, y) if y > 0.0 => Some(y),
+                _ => None,
+            };
+            match (want, got) {
+                (None, None) => {}
+                (Some(t), Some(h)) => assert!(
+                    (h.t - t).abs() <= 1e-12 * t.max(1.0),
+                    "y {y} dir {dir}: t {} want {t}",
+                    h.t
+                ),
+                _ => panic!("y {y} dir {dir}: want {want:?}, got {got:?}"),
+            }
+        }
+    }
+}
+
+/// Rays lying in the plane of the flat annulus (height 0.6) and of the flat disk (height 0),
+/// perpendicular to the axis: `F` vanishes on those segments; the first hit is where the
+/// profile is outermost at that height (radius 0.6 at 0.6, the disk's rim at 0), known exactly.
+#[test]
+fn lathe_culling_rays_in_the_flat_planes() {
+    let l = culling_profile();
+    for k in 0..360 {
+        let a = (k as f64).to_radians();
+        let dir = DVec3::new(a.cos(), 0.0, a.sin());
+        for (y, r) in [(0.6, 0.6), (0.0, 0.6)] {
+            let o = DVec3::new(0.0, y, 0.0) - dir * 3.0;
+            let got = l.intersect(o, dir, 1e-9, f64::INFINITY, Solver::Robust);
+            let t = got.map(|h| h.t);
+            assert!(
+                t.is_some_and(|t| (t - (3.0 - r)).abs() < 1e-9),
+                "height {y}, angle {k}: {t:?}"
+            );
+        }
+    }
+}
