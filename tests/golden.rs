@@ -43,7 +43,7 @@
 //! | vase | 4.4e-3 | 0.68% | 1.3% |
 //! | teapot | 4.8e-3 | 0.26% | 0.34% |
 //! | csg (a dim fill light: noisy at 64 px) | 4.8e-2 | 6.9% | 2.9% |
-//! | goblet (added later the same day) | 5.9e-3 | 0.46% | 1.8% |
+//! | goblet | 3.7e-3 | 0.27% | 1.0% |
 //!
 //! Why the 23:15 re-bless: two defaults changed the noise. Each pixel's initial radius is now
 //! one footprint at its own first visible point (it was one footprint at the look-at
