@@ -16,7 +16,7 @@
 //!
 //! Embree runs in the same run, alternating with this project round by round, through
 //! `benches/scale_embree.py` (pip package `embreex`, Embree 4.4) with the Python found in
-//! `SCALE_PYTHON`, `/work/venv/bin/python` or `python3`; without `embreex` the Embree columns
+//! `SCALE_PYTHON`, the repository's `.venv/bin/python` or `python3`; without `embreex` the Embree columns
 //! are left out and the bench says so. embreex traces from a Cython loop that reads numpy
 //! arrays per ray; the script measures that loop's cost on a scene of one far-away triangle and
 //! reports Embree's rays/s both raw and with the loop's cost taken out. Its build uses all the
@@ -293,7 +293,7 @@ fn ours(mesh: &Mesh, camera: &[Ray], bounce: &[Ray]) -> Figures {
 fn python() -> Option<PathBuf> {
     let candidates = [
         std::env::var_os("SCALE_PYTHON").map(PathBuf::from),
-        Some(PathBuf::from("/work/venv/bin/python")),
+        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python")),
         Some(PathBuf::from("python3")),
     ];
     candidates.into_iter().flatten().find(|p| {

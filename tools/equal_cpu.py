@@ -8,7 +8,7 @@ configuration at a growing number of iterations with the release binary, measure
 rel_mse as `sppm-lang chart`: `src/compare`). Comparing methods at equal CPU time is fair when
 the renders use the same number of threads.
 
-    /work/venv/bin/python tools/equal_cpu.py --scene examples/cornell.scn \
+    .venv/bin/python tools/equal_cpu.py --scene examples/cornell.scn \
         --reference ../shared/reference/cornell-glass/reference.exr \
         --config 'sppm:sppm:' --config 'sppm-lookat:sppm:radius 0.011089' \
         --config 'path:path:' --iterations 4,8,16,32 --window 100,20,156,40 --csv out.csv

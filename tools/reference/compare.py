@@ -1,7 +1,7 @@
 """Per-pixel error of renders against a reference image (EXR, linear RGB).
 
-    /work/venv/bin/pip install mitsuba numpy
-    /work/venv/bin/python tools/reference/compare.py tools/reference/glossy.exr a.exr [b.exr ...]
+    .venv/bin/pip install mitsuba numpy
+    .venv/bin/python tools/reference/compare.py tools/reference/glossy.exr a.exr [b.exr ...]
 
 Prints, per image: the mean over the reference's, and the 99th, 99.9th and 99.99th percentiles,
 the largest value and the root mean square of the per-pixel error (mean absolute difference of
