@@ -10,6 +10,16 @@ fn sppm(args: &[&str]) -> Output {
         .expect("run sppm-lang")
 }
 
+/// `sppm-lang render <scene> -o <image>`.
+fn render_to(scene: &std::path::Path, image: &std::path::Path) -> Output {
+    sppm(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        image.to_str().unwrap(),
+    ])
+}
+
 /// `args` exit 2 (a usage error) without a panic.
 fn usage_error(args: &[&str]) {
     let out = sppm(args);
@@ -260,12 +270,7 @@ fn a_render_that_finishes_no_iteration_keeps_the_previous_image() {
     .unwrap();
     let png = dir.path().join("s.png");
     std::fs::write(&png, "previous image").unwrap();
-    let out = sppm(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-    ]);
+    let out = render_to(&scene, &png);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("no iteration finished"), "{err}");
@@ -424,12 +429,7 @@ fn check_tells_what_prepare_decided_and_warns_of_a_scene_without_light() {
     assert!(stdout.contains("quad.obj (2 triangles)"), "{stdout}");
     assert!(stdout.contains("focus distance: 4\n"), "{stdout}");
     let png = dir.path().join("dark.png");
-    let out = sppm(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-    ]);
+    let out = render_to(&scene, &png);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{stderr}");
     assert!(stderr.contains("the scene has no light"), "{stderr}");
