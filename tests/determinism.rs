@@ -118,3 +118,49 @@ fn every_integrator_is_independent_of_the_thread_count() {
         );
     }
 }
+
+/// SPPM's automatic photon count (no `photons` anywhere, chosen from the pixels and the
+/// photons' counted segments): the count of every iteration and the image are the same on 1,
+/// 2 and 3 threads.
+#[test]
+fn the_automatic_photon_count_is_independent_of_the_thread_count() {
+    let scene = common::cornell_glass(48);
+    assert_eq!(scene.settings.photons, None);
+    let runs: Vec<(Vec<u64>, Vec<[u64; 3]>)> = [1, 2, 3]
+        .into_iter()
+        .map(|threads| {
+            let opts = RenderOptions {
+                iterations: Some(8),
+                seed: Some(5),
+                threads: Some(threads),
+                ..Default::default()
+            };
+            let mut totals = Vec::new();
+            let out = render(&scene, &opts, &AtomicBool::new(false), &mut |p| {
+                totals.push(p.stats.photons)
+            })
+            .unwrap();
+            let per_iteration = totals
+                .iter()
+                .scan(0, |before, &t| {
+                    let n = t - *before;
+                    *before = t;
+                    Some(n)
+                })
+                .collect();
+            let bits = out.image.pixels.iter().map(|p| p.map(f64::to_bits));
+            (per_iteration, bits.collect())
+        })
+        .collect();
+    println!("photons per iteration: {:?}", runs[0].0);
+    // 2 x 3 rays per pixel, 2 segments per photon assumed at first: 6912, in chunks of 4096.
+    assert_eq!(runs[0].0[0], 8192);
+    assert_eq!(runs[0].0.len(), 8);
+    for (threads, run) in [(2, &runs[1]), (3, &runs[2])] {
+        assert_eq!(
+            run.0, runs[0].0,
+            "photon counts differ with {threads} threads"
+        );
+        assert!(run.1 == runs[0].1, "pixels differ with {threads} threads");
+    }
+}

@@ -231,7 +231,7 @@ fn settings_camera_lights_background() {
     assert_eq!(st.resolution, (640, 480));
     assert_eq!(
         (st.iterations, st.photons, st.max_depth, st.seed),
-        (8, 1000, 5, 9)
+        (8, Some(1000), 5, 9)
     );
     assert_eq!(
         (st.radius, st.alpha, st.exposure, st.time_limit),

@@ -220,7 +220,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
         st.resolution.0,
         st.resolution.1,
         st.iterations,
-        st.photons,
+        st.photons.map_or("auto".to_string(), |n| n.to_string()),
         st.radius.map_or("auto".to_string(), short_number),
         short_number(st.alpha),
         st.max_depth,

@@ -13,7 +13,7 @@ use std::mem::size_of;
 
 use super::instances::{shared_key, shared_meshes};
 use super::{EffectiveSettings, RenderError};
-use crate::scene::{Background, Integrator, Pattern, Scene, Shape};
+use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, Pattern, Scene, Shape};
 
 /// The default limit: 2 GiB, or half the machine's memory when that is less.
 pub fn default_memory_limit() -> u64 {
@@ -117,7 +117,10 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         // Rounds of at most 2^21 photon hits (32 bytes), filed twice while the grid is built.
         Integrator::Sppm | Integrator::Ppm => 64u64 << 21,
         // Three stored hits of 48 bytes per photon, in the list and in the kd-tree.
-        Integrator::PhotonMap => settings.photons.saturating_mul(3 * 48 * 2),
+        Integrator::PhotonMap => settings
+            .photons
+            .unwrap_or(DEFAULT_PHOTONS)
+            .saturating_mul(3 * 48 * 2),
         Integrator::Path | Integrator::Whitted => 0,
     };
     items.push(MemoryItem {
@@ -197,7 +200,7 @@ mod tests {
     fn photon_mapping_counts_its_photons_and_sppm_does_not() {
         let mut scene = scene("sphere { <0,0,0> 1 }");
         scene.settings.resolution = (64, 64);
-        scene.settings.photons = 10_000_000_000;
+        scene.settings.photons = Some(10_000_000_000);
         scene.settings.integrator = Integrator::Sppm;
         check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap();
         scene.settings.integrator = Integrator::PhotonMap;

@@ -24,7 +24,8 @@ pub struct EffectiveSettings {
     pub width: u32,
     pub height: u32,
     pub iterations: u32,
-    pub photons: u64,
+    /// Photons per iteration; `None`: chosen by the integrator.
+    pub photons: Option<u64>,
     pub radius: Option<f64>,
     /// Scale of the default initial radius (the rule of [`InitialRadius::Footprint`]): 1 in a
     /// render; `sppm-lang chart` varies it to compare radii.
@@ -167,7 +168,7 @@ pub fn effective_settings(
         width,
         height,
         iterations: o.iterations.unwrap_or(s.iterations),
-        photons: o.photons.unwrap_or(s.photons),
+        photons: o.photons.or(s.photons),
         radius: s.radius,
         radius_scale: s.radius_scale,
         alpha: s.alpha,

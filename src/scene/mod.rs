@@ -58,6 +58,9 @@ impl Scene {
     }
 }
 
+/// Photons per pass of `photon_map` when the scene does not set `photons`.
+pub const DEFAULT_PHOTONS: u64 = 200_000;
+
 /// Render settings (`settings { ... }`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
@@ -65,8 +68,9 @@ pub struct Settings {
     pub resolution: (u32, u32),
     /// Number of SPPM iterations (camera pass + photon pass).
     pub iterations: u32,
-    /// Photons traced per iteration.
-    pub photons: u64,
+    /// Photons traced per iteration; `None`: SPPM and PPM choose it every iteration
+    /// (`integrators::sppm` `photon_count`), photon mapping traces [`DEFAULT_PHOTONS`].
+    pub photons: Option<u64>,
     /// Initial gather radius in scene units; `None`: chosen from the scene's size.
     pub radius: Option<f64>,
     /// Scale of the initial radius (the scene's `radius` or the default rule): 1 unless a tool
@@ -96,7 +100,7 @@ impl Default for Settings {
         Self {
             resolution: (512, 512),
             iterations: 64,
-            photons: 200_000,
+            photons: None,
             radius: None,
             radius_scale: 1.0,
             alpha: 2.0 / 3.0,

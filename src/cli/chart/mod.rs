@@ -25,7 +25,7 @@ use sppm_lang::chart::Dash;
 use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
 use sppm_lang::film::Image;
 use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings, render};
-use sppm_lang::scene::{ColorSpace, Integrator, Scene, load_image};
+use sppm_lang::scene::{ColorSpace, DEFAULT_PHOTONS, Integrator, Scene, load_image};
 
 use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths, to_f32};
@@ -258,7 +258,12 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             s.settings.radius = Some(look_at_radius);
         }
         s.settings.radius_scale = m.radius_factor;
-        s.settings.photons = ((s.settings.photons as f64 * m.photon_factor) as u64).max(1);
+        // The photon variants scale the scene's count, or the fixed default where the scene
+        // leaves the count to SPPM.
+        if m.photon_factor != 1.0 {
+            let n = s.settings.photons.unwrap_or(DEFAULT_PHOTONS) as f64 * m.photon_factor;
+            s.settings.photons = Some((n as u64).max(1));
+        }
         let measured = measure(&s, budget, ref_view, window)?;
         if measured.is_empty() {
             eprintln!("warning: chart: {} finished no iteration", m.label);

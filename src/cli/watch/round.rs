@@ -229,14 +229,14 @@ pub fn upscale(image: &Image, (w, h): (u32, u32)) -> Image {
 }
 
 /// The quick first picture: a quarter of the resolution (at least 32 pixels on the short
-/// side), a tenth of the photons, at most 4 iterations.
+/// side), a tenth of the photons (or the automatic count), at most 4 iterations.
 pub fn preview_of(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     let (w, h) = s.settings.resolution;
     let short = w.min(h).max(1);
     let factor = (short / 32).clamp(1, 4);
     s.settings.resolution = ((w / factor).max(1), (h / factor).max(1));
-    s.settings.photons = (s.settings.photons / 10).max(1000);
+    s.settings.photons = s.settings.photons.map(|n| (n / 10).max(1000));
     s.settings.iterations = s.settings.iterations.min(4);
     s.settings.time_limit = None;
     s

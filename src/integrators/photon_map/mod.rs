@@ -28,6 +28,7 @@ use super::common::progressive;
 use super::common::streams::Stream;
 use super::{Integrator, RenderOutput};
 use crate::prepare::{EffectiveSettings, PreparedScene};
+use crate::scene::DEFAULT_PHOTONS;
 use kdtree::KdTree;
 
 mod kdtree;
@@ -58,7 +59,8 @@ fn build_maps(
     iter: u32,
     cancel: &AtomicBool,
 ) -> Maps {
-    let n_chunks = settings.photons.div_ceil(CHUNK);
+    let photons = settings.photons.unwrap_or(DEFAULT_PHOTONS);
+    let n_chunks = photons.div_ceil(CHUNK);
     type Stored = Vec<(Vec3A, Photon)>;
     let chunks: Vec<(Stored, Stored)> = if scene.lights.is_empty() {
         Vec::new()
@@ -73,7 +75,7 @@ fn build_maps(
                     return (global, caustic);
                 }
                 let lo = c * CHUNK;
-                let hi = (lo + CHUNK).min(settings.photons);
+                let hi = (lo + CHUNK).min(photons);
                 for i in lo..hi {
                     let mut rng = Stream::PhotonMap.rng(settings.seed, iter, i);
                     let mut all_specular = true;
@@ -115,11 +117,7 @@ fn build_maps(
     Maps {
         global: KdTree::new(global),
         caustic: KdTree::new(caustic),
-        emitted: if scene.lights.is_empty() {
-            0
-        } else {
-            settings.photons
-        },
+        emitted: if scene.lights.is_empty() { 0 } else { photons },
     }
 }
 

@@ -18,7 +18,7 @@ use glam::{DVec3, Vec3A};
 /// Rays per camera sample: the eye ray, the shadow ray of the light sample and the BSDF
 /// sample's ray (specular bounces add a few; the photon side's gathers are not counted either,
 /// so the two omissions roughly cancel).
-const RAYS_PER_CAMERA_SAMPLE: f64 = 3.0;
+pub(super) const RAYS_PER_CAMERA_SAMPLE: f64 = 3.0;
 
 /// The most extra camera samples one pixel takes in one iteration.
 pub(super) const MAX_EXTRA: u32 = 63;

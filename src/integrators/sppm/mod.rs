@@ -24,7 +24,7 @@ use crate::integrators::Job;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use glam::{DVec3, Vec3A};
+use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::common::camera_path::{VisiblePoint, camera_path};
@@ -38,6 +38,7 @@ use crate::sampling::Rng;
 mod balance;
 mod grid;
 mod pass;
+mod photon_count;
 mod pixels;
 mod receiver;
 #[cfg(test)]
@@ -45,7 +46,8 @@ mod tests;
 
 use balance::SampleStats;
 pub use pass::photon_flux;
-use pass::{PhotonPass, ROUND_CHUNKS, ROUND_HITS};
+use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
+use photon_count::PhotonCount;
 use pixels::{Pixel, image_of, update};
 
 /// Stochastic progressive photon mapping.
@@ -113,8 +115,9 @@ pub(crate) fn render_with(
     // A pixel's radius is chosen at its first visible point (0 until then).
     let pixels = vec![Pixel::new(0.0); (w * h) as usize];
     let state = State {
-        phi: vec![DVec3::ZERO; pixels.len()],
-        m: vec![0u64; pixels.len()],
+        gathered: Gathered::new(pixels.len()),
+        photon_count: PhotonCount::new(settings.photons, pixels.len()),
+        emitted: 0,
         pixels,
         photon_pass: PhotonPass::new(ROUND_HITS, ROUND_CHUNKS),
         samples: vec![SampleStats::default(); (w * h) as usize],
@@ -168,28 +171,35 @@ pub(crate) fn render_with(
         }
         // 2. Photon pass.
         let t_photon = Instant::now();
-        let (pixels, phi, m) = (&st.pixels, &mut st.phi, &mut st.m);
-        let deposits = st
-            .photon_pass
-            .run(scene, settings, pixels, iter, phi, m, cancel);
+        let photons = st.photon_count.next();
+        let deposits = st.photon_pass.run(
+            scene,
+            settings,
+            &st.pixels,
+            iter,
+            photons,
+            &mut st.gathered,
+            cancel,
+        );
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
         stats.photon_time += t_photon.elapsed();
-        // 3. Update the pixel statistics, and share the next iteration's extra camera samples.
-        update(&mut st.pixels, &lds, &mut st.phi, &mut st.m, settings.alpha);
+        // 3. Update the pixel statistics, share the next iteration's extra camera samples and
+        //    choose its photon count.
+        let photon_rays = st.photon_pass.segments - st.photon_segments;
+        st.photon_segments = st.photon_pass.segments;
+        let g = &mut st.gathered;
+        update(&mut st.pixels, &lds, &mut g.phi, &mut g.m, settings.alpha);
+        st.photon_count.record(photons, photon_rays);
         if balanced {
-            let photon_rays = st.photon_pass.segments - st.photon_segments;
-            st.photon_segments = st.photon_pass.segments;
             balance::allocate(&st.samples, photon_rays, &mut st.extra);
         }
+        st.emitted += photons;
         stats.camera_paths += extra_paths;
-        Some(Finished {
-            photons: settings.photons,
-            deposits,
-        })
+        Some(Finished { photons, deposits })
     };
-    let image = |st: &State, done| image_of(&st.pixels, w, h, done, settings.photons);
+    let image = |st: &State, done| image_of(&st.pixels, w, h, done, st.emitted);
     let (output, state) = iterate(settings, cancel, on_progress, state, pass, image);
     let pixel_stats = state
         .pixels
@@ -206,9 +216,11 @@ pub(crate) fn render_with(
 /// The pixels with the photon pass's buffers, carried from iteration to iteration.
 struct State {
     pixels: Vec<Pixel>,
-    /// Flux gathered by each pixel's visible point in this iteration, and the photon count.
-    phi: Vec<DVec3>,
-    m: Vec<u64>,
+    /// What each pixel's visible point gathered in this iteration.
+    gathered: Gathered,
+    /// Photons per iteration, and the photons of all finished iterations.
+    photon_count: PhotonCount,
+    emitted: u64,
     photon_pass: PhotonPass,
     /// Each pixel's camera samples so far and its extra samples in the next iteration.
     samples: Vec<SampleStats>,

@@ -81,9 +81,10 @@ impl PhotonPass {
         chunks * PHOTON_CHUNK
     }
 
-    /// Traces iteration `iter`'s photons, recording their hits, and lets every visible point
-    /// gather the photons within its radius (adding to `phi` and `m`), in rounds that bound the
-    /// memory. Returns the number of deposits; stops without a gather when `cancel` is set.
+    /// Traces iteration `iter`'s `photons` photons, recording their hits, and lets every
+    /// visible point gather the photons within its radius (adding to `sums`), in rounds that
+    /// bound the memory. Returns the number of deposits; stops without a gather when `cancel`
+    /// is set.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn run(
         &mut self,
@@ -91,8 +92,8 @@ impl PhotonPass {
         settings: &EffectiveSettings,
         pixels: &[Pixel],
         iter: u32,
-        phi: &mut [DVec3],
-        m: &mut [u64],
+        photons: u64,
+        sums: &mut Gathered,
         cancel: &AtomicBool,
     ) -> u64 {
         // Photons deposit from their second surface on: with fewer than 2 bounces there is
@@ -108,15 +109,15 @@ impl PhotonPass {
         };
         let cancelled = || cancel.load(Ordering::Relaxed);
         let (mut next, mut deposits) = (0, 0);
-        while next < settings.photons {
+        while next < photons {
             let (mut used, mut held) = (0, 0);
-            while next < settings.photons && held < self.round_hits && used < self.round_chunks {
+            while next < photons && held < self.round_hits && used < self.round_chunks {
                 if cancelled() {
                     return deposits;
                 }
                 let hi = next
                     .saturating_add(self.group_size(held, used, settings.max_depth))
-                    .min(settings.photons);
+                    .min(photons);
                 let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
                 if self.chunks.len() < used + n {
                     self.chunks.resize_with(used + n, HitChunk::default);
@@ -133,7 +134,7 @@ impl PhotonPass {
                 return deposits;
             }
             self.grid.build(cells, &self.chunks[..used]);
-            deposits += gather(&self.grid, pixels, phi, m);
+            deposits += gather(&self.grid, pixels, sums);
             self.rounds += 1;
         }
         deposits
@@ -175,12 +176,28 @@ fn trace_photons(
     });
 }
 
+/// What each pixel's visible point gathered in an iteration: the flux (f64, summed in the
+/// grid's photon order) and the number of photons.
+pub(super) struct Gathered {
+    pub(super) phi: Vec<DVec3>,
+    pub(super) m: Vec<u64>,
+}
+
+impl Gathered {
+    pub(super) fn new(pixels: usize) -> Self {
+        Gathered {
+            phi: vec![DVec3::ZERO; pixels],
+            m: vec![0; pixels],
+        }
+    }
+}
+
 /// Each visible point gathers the flux of the photons within its radius: adds it to `phi`
-/// (f64, in the grid's photon order) and their number to `m`. Returns the number of deposits.
-fn gather(grid: &PhotonGrid, pixels: &[Pixel], phi: &mut [DVec3], m: &mut [u64]) -> u64 {
+/// and their number to `m`. Returns the number of deposits.
+fn gather(grid: &PhotonGrid, pixels: &[Pixel], sums: &mut Gathered) -> u64 {
     pixels
         .par_iter()
-        .zip(phi.par_iter_mut().zip(m.par_iter_mut()))
+        .zip(sums.phi.par_iter_mut().zip(sums.m.par_iter_mut()))
         .map(|(px, (ph, mm))| {
             let Some(vp) = px.vp.as_ref() else {
                 return 0;

@@ -71,20 +71,20 @@ pub(super) fn image_of(
     width: u32,
     height: u32,
     iters: u32,
-    photons: u64,
+    emitted: u64,
 ) -> Image {
     let mut img = Image::new(width, height);
     if iters == 0 {
         return img;
     }
     let k = iters as f64;
-    let np = (photons as f64 * k).max(1.0);
+    let np = (emitted as f64).max(1.0);
     img.pixels
         .par_iter_mut()
         .zip(pixels.par_iter())
         .for_each(|(out, px)| {
             let area = PI * px.radius * px.radius;
-            let indirect = if photons > 0 && area > 0.0 {
+            let indirect = if emitted > 0 && area > 0.0 {
                 px.tau / (np * area)
             } else {
                 DVec3::ZERO

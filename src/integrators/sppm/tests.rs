@@ -1,6 +1,6 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use glam::{DVec3, Vec2};
+use glam::Vec2;
 
 use super::*;
 use crate::prepare::{RenderOptions, effective_settings};
@@ -49,6 +49,7 @@ fn visible_points(prepared: &PreparedScene, settings: &EffectiveSettings, iter: 
 #[test]
 fn rounds_split_the_photons_without_changing_the_sums() {
     let (scene, settings) = cornell(24, 30_000);
+    let n = 30_000;
     let prepared = PreparedScene::new(&scene).unwrap();
     let cancel = AtomicBool::new(false);
     let mut results = Vec::new();
@@ -58,21 +59,18 @@ fn rounds_split_the_photons_without_changing_the_sums() {
         (usize::MAX, 2),
     ] {
         let mut pass = PhotonPass::new(round_hits, round_chunks);
-        let mut phi = vec![DVec3::ZERO; 24 * 24];
-        let mut m = vec![0u64; 24 * 24];
+        let mut sums = Gathered::new(24 * 24);
         let mut deposits = 0;
         for iter in 0..2 {
             let pixels = visible_points(&prepared, &settings, iter);
-            deposits += pass.run(
-                &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
-            );
+            deposits += pass.run(&prepared, &settings, &pixels, iter, n, &mut sums, &cancel);
         }
         assert!(
             pass.chunks.len() <= round_chunks,
             "{} chunks",
             pass.chunks.len()
         );
-        results.push((pass.rounds, deposits, phi, m));
+        results.push((pass.rounds, deposits, sums.phi, sums.m));
     }
     let one = &results[0];
     assert_eq!(one.0, 2, "one round per iteration");
@@ -99,6 +97,7 @@ fn rounds_split_the_photons_without_changing_the_sums() {
 #[test]
 fn rounds_give_the_same_sums_on_any_thread_count() {
     let (scene, settings) = cornell(24, 30_000);
+    let n = 30_000;
     let prepared = PreparedScene::new(&scene).unwrap();
     let cancel = AtomicBool::new(false);
     let run = |threads: usize| {
@@ -108,16 +107,17 @@ fn rounds_give_the_same_sums_on_any_thread_count() {
             .unwrap();
         pool.install(|| {
             let mut pass = PhotonPass::new(3000, 3);
-            let mut phi = vec![DVec3::ZERO; 24 * 24];
-            let mut m = vec![0u64; 24 * 24];
+            let mut sums = Gathered::new(24 * 24);
             for iter in 0..2 {
                 let pixels = visible_points(&prepared, &settings, iter);
-                pass.run(
-                    &prepared, &settings, &pixels, iter, &mut phi, &mut m, &cancel,
-                );
+                pass.run(&prepared, &settings, &pixels, iter, n, &mut sums, &cancel);
             }
-            let bits: Vec<[u64; 3]> = phi.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
-            (pass.rounds, bits, m)
+            let bits: Vec<[u64; 3]> = sums
+                .phi
+                .iter()
+                .map(|v| v.to_array().map(f64::to_bits))
+                .collect();
+            (pass.rounds, bits, sums.m)
         })
     };
     let one = run(1);
@@ -133,18 +133,19 @@ fn rounds_give_the_same_sums_on_any_thread_count() {
 #[test]
 fn one_bounce_traces_no_photon() {
     let (scene, mut settings) = cornell(16, 100_000);
+    let n = 100_000;
     settings.max_depth = 1;
     let prepared = PreparedScene::new(&scene).unwrap();
     let pixels = visible_points(&prepared, &settings, 0);
-    let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+    let mut sums = Gathered::new(256);
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
     let cancel = AtomicBool::new(false);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, &cancel);
     assert_eq!((deposits, pass.traced, pass.rounds), (0, 0, 0));
     // Two bounces do trace and gather.
     settings.max_depth = 2;
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, &cancel);
     assert!(
         pass.traced == 100_000 && deposits > 0,
         "{} {deposits}",
@@ -159,13 +160,14 @@ fn one_bounce_traces_no_photon() {
 #[test]
 fn a_cancelled_photon_pass_stops_at_once() {
     let (scene, settings) = cornell(16, 1_000_000_000);
+    let n = 1_000_000_000;
     let prepared = PreparedScene::new(&scene).unwrap();
     let pixels = visible_points(&prepared, &settings, 0);
-    let (mut phi, mut m) = (vec![DVec3::ZERO; 256], vec![0u64; 256]);
+    let mut sums = Gathered::new(256);
     // Set before the pass: nothing is traced.
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
     let cancel = AtomicBool::new(true);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel);
+    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, &cancel);
     assert_eq!((deposits, pass.rounds, pass.traced), (0, 0, 0));
     assert!(pass.chunks.is_empty());
     // Set from another thread soon after the start: the pass of 10^9 photons (minutes of
@@ -179,7 +181,7 @@ fn a_cancelled_photon_pass_stops_at_once() {
             std::thread::sleep(std::time::Duration::from_millis(50));
             cancel.store(true, Ordering::Relaxed);
         });
-        pass.run(&prepared, &settings, &pixels, 0, &mut phi, &mut m, &cancel)
+        pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, &cancel)
     });
     println!(
         "cancelled after {} photons, {:?}",
@@ -194,7 +196,7 @@ fn a_cancelled_photon_pass_stops_at_once() {
     );
     assert_eq!(
         deposits,
-        m.iter().sum::<u64>(),
+        sums.m.iter().sum::<u64>(),
         "a deposit count without its sums"
     );
 }
