@@ -16,9 +16,13 @@
 //! fixed order (round by round, bucket by bucket, photon order within a bucket), so the image
 //! does not depend on the thread count or on scheduling.
 //!
+//! Photons per iteration: the scene's `photons`, or chosen from the pixel count and the
+//! photons' counted segments (`photon_count.rs`); the image divides by all photons traced.
+//!
 //! PPM runs the same loop with its own eye paths (`render_with`). Files: `pixels.rs` the
 //! per-pixel state and its update, `pass.rs` the photon pass, `grid.rs` the photon grid,
-//! `receiver.rs` the BSDF at a visible point.
+//! `receiver.rs` the BSDF at a visible point, `balance.rs` the extra camera samples,
+//! `photon_count.rs` the photons per iteration.
 
 use crate::integrators::Job;
 use std::sync::atomic::{AtomicBool, Ordering};
