@@ -86,7 +86,11 @@ impl Bvh {
             .collect();
         // Leaves with two quads or more list them first and test them four at a time.
         let is_quad = |it: &Item| matches!(bounded[it.index].0, AnyShape::Quad(_));
-        for node in nodes.iter_mut().filter(|n| n.count > 0) {
+        // (Skipped without quads: a mesh's millions of leaves are not walked for nothing.)
+        let any_quads = bounded
+            .par_iter()
+            .any(|(s, _)| matches!(s, AnyShape::Quad(_)));
+        for node in nodes.iter_mut().filter(|n| any_quads && n.count > 0) {
             let leaf = &mut items[node.offset as usize..][..node.count as usize];
             let quads = leaf.iter().filter(|it| is_quad(it)).count();
             // (Leaves hold at most 8 shapes; the `u8` check only guards that.)
@@ -98,7 +102,7 @@ impl Bvh {
             }
         }
         let mut packets = Vec::new();
-        for node in nodes.iter_mut().filter(|n| n.quads > 0) {
+        for node in nodes.iter_mut().filter(|n| any_quads && n.quads > 0) {
             node.packet = packets.len() as u32;
             let quads: Vec<Quad> = items[node.offset as usize..][..node.quads as usize]
                 .iter()

@@ -24,11 +24,12 @@ pub fn mesh_triangles(mesh: &MeshData, xf: &DAffine3) -> Result<Vec<Triangle>, S
             mesh.path.display()
         ));
     }
-    // In parallel; the triangles keep the file's order.
-    Ok(mesh
+    // In parallel, into a list of the file's length (so that the threads write their parts of
+    // it in place), and the degenerate triangles left out after.
+    let tris: Vec<Option<Triangle>> = mesh
         .indices
         .par_iter()
-        .filter_map(|tri| {
+        .map(|tri| {
             let mut idx = tri.map(|i| i as usize);
             if mirrored {
                 idx.swap(1, 2); // keep the winding (and so the normal) consistent under a mirror
@@ -38,5 +39,13 @@ pub fn mesh_triangles(mesh: &MeshData, xf: &DAffine3) -> Result<Vec<Triangle>, S
             let uvs = has_uv.then(|| idx.map(|i| mesh.uvs[i].as_vec2()));
             Triangle::new(p, normals, uvs.map(|u| u.map(Vec2::from))).ok()
         })
-        .collect())
+        .collect();
+    if tris.par_iter().all(Option::is_some) {
+        // The usual case, moved in parallel too.
+        return Ok(tris
+            .into_par_iter()
+            .map(|t| t.expect("checked just above"))
+            .collect());
+    }
+    Ok(tris.into_iter().flatten().collect())
 }
