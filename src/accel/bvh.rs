@@ -1,16 +1,18 @@
 //! Binned SAH bounding volume hierarchy over shapes, flattened depth-first.
 //! Shapes without finite bounds (infinite planes) are kept in a side list and tested always.
 
+use std::sync::Mutex;
+
 use arrayvec::ArrayVec;
-use glam::Vec3A;
+use rayon::prelude::*;
+
+use super::build::{Item, Parallelism, build};
 
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::primitive::{AnyShape, LazyHit};
 use crate::shapes::quad::{Quad, QuadPacket};
 
-const BINS: usize = 12;
-const MAX_LEAF: usize = 4;
 /// Traversal stack size: one entry per interior node on the path from the root.
 const STACK: usize = 64;
 /// From this depth on, nodes split at the object median instead of by SAH, so that no tree is
@@ -43,50 +45,52 @@ pub struct Bvh {
     unbounded: Vec<(AnyShape, u32)>,
 }
 
-struct Item {
-    bounds: Aabb,
-    centroid: Vec3A,
-    index: usize,
-}
-
 impl Bvh {
     pub fn new(shapes: Vec<(AnyShape, u32)>) -> Self {
         Self::with_median_depth(shapes, MEDIAN_DEPTH)
     }
 
     fn with_median_depth(shapes: Vec<(AnyShape, u32)>, median_depth: usize) -> Self {
-        let mut bounded = Vec::new();
-        let mut unbounded = Vec::new();
-        for (s, id) in shapes {
-            let b = s.bounds();
-            if b.is_empty() || !(b.min.is_finite() && b.max.is_finite()) {
-                if !b.is_empty() {
-                    unbounded.push((s, id));
+        // Boxes in parallel; most scenes (every mesh) have only bounded shapes.
+        let boxes: Vec<Aabb> = shapes.par_iter().map(|(s, _)| s.bounds()).collect();
+        let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();
+        let (bounded, boxes, unbounded) = if boxes.par_iter().all(finite) {
+            (shapes, boxes, Vec::new())
+        } else {
+            let (mut bounded, mut kept, mut unbounded) = (Vec::new(), Vec::new(), Vec::new());
+            for (shape, b) in shapes.into_iter().zip(boxes) {
+                if finite(&b) {
+                    bounded.push(shape);
+                    kept.push(b);
+                } else if !b.is_empty() {
+                    unbounded.push(shape);
                 }
-            } else {
-                bounded.push((s, id));
             }
-        }
-        let mut items: Vec<Item> = bounded
-            .iter()
+            (bounded, kept, unbounded)
+        };
+        let mut items: Vec<Item> = boxes
+            .par_iter()
             .enumerate()
-            .map(|(index, (s, _))| {
-                let bounds = s.bounds().padded(1e-6);
-                Item {
-                    bounds,
-                    centroid: bounds.centroid(),
-                    index,
-                }
+            .map(|(index, b)| Item::new(b.padded(1e-6), index))
+            .collect();
+        let mut nodes: Vec<Node> = build(&mut items, median_depth, Parallelism::DEFAULT)
+            .into_par_iter()
+            .map(|b| Node {
+                bounds: b.bounds,
+                offset: b.offset,
+                count: b.count as u16,
+                axis: b.axis,
+                quads: 0,
+                packet: 0,
             })
             .collect();
-        let mut nodes = Vec::with_capacity(2 * items.len().max(1));
-        if !items.is_empty() {
-            let n = items.len();
-            build(&mut items, 0, n, 0, median_depth, &mut nodes);
-        }
         // Leaves with two quads or more list them first and test them four at a time.
         let is_quad = |it: &Item| matches!(bounded[it.index].0, AnyShape::Quad(_));
-        for node in nodes.iter_mut().filter(|n| n.count > 0) {
+        // (Skipped without quads: a mesh's millions of leaves are not walked for nothing.)
+        let any_quads = bounded
+            .par_iter()
+            .any(|(s, _)| matches!(s, AnyShape::Quad(_)));
+        for node in nodes.iter_mut().filter(|n| any_quads && n.count > 0) {
             let leaf = &mut items[node.offset as usize..][..node.count as usize];
             let quads = leaf.iter().filter(|it| is_quad(it)).count();
             // (Leaves hold at most 8 shapes; the `u8` check only guards that.)
@@ -98,7 +102,7 @@ impl Bvh {
             }
         }
         let mut packets = Vec::new();
-        for node in nodes.iter_mut().filter(|n| n.quads > 0) {
+        for node in nodes.iter_mut().filter(|n| any_quads && n.quads > 0) {
             node.packet = packets.len() as u32;
             let quads: Vec<Quad> = items[node.offset as usize..][..node.quads as usize]
                 .iter()
@@ -109,11 +113,18 @@ impl Bvh {
                 .collect();
             packets.extend(quads.chunks(4).map(QuadPacket::new));
         }
-        // Reorder the shapes into leaf order.
-        let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
+        // Reorder the shapes into leaf order, in parallel (each slot is taken once, its lock
+        // never waited for).
+        let slots: Vec<Mutex<Option<(AnyShape, u32)>>> = bounded
+            .into_par_iter()
+            .map(|s| Mutex::new(Some(s)))
+            .collect();
         let (shapes, ids) = items
-            .iter()
-            .map(|it| slots[it.index].take().expect("each shape once"))
+            .par_iter()
+            .map(|it| {
+                let slot = slots[it.index].lock().ok().and_then(|mut s| s.take());
+                slot.expect("each shape once")
+            })
             .unzip();
         Self {
             nodes,
@@ -301,105 +312,10 @@ impl Bvh {
     }
 }
 
-fn build(
-    items: &mut [Item],
-    start: usize,
-    end: usize,
-    depth: usize,
-    median_depth: usize,
-    nodes: &mut Vec<Node>,
-) -> usize {
-    let idx = nodes.len();
-    let slice = &mut items[start..end];
-    let bounds = slice.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
-    nodes.push(Node {
-        bounds,
-        offset: start as u32,
-        count: slice.len() as u16,
-        axis: 0,
-        quads: 0,
-        packet: 0,
-    });
-    let n = slice.len();
-    if n <= MAX_LEAF {
-        return idx;
-    }
-    let cb = slice
-        .iter()
-        .fold(Aabb::EMPTY, |b, it| b.with_point(it.centroid));
-    let ext = cb.diagonal();
-    let axis = if ext.x >= ext.y && ext.x >= ext.z {
-        0
-    } else if ext.y >= ext.z {
-        1
-    } else {
-        2
-    };
-    let lo = cb.min[axis];
-    let span = ext[axis];
-    let mid = if depth >= median_depth {
-        slice.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-        n / 2
-    } else if span <= 0.0 || !span.is_finite() {
-        n / 2
-    } else {
-        // Binned SAH.
-        let bin_of = |c: f32| (((c - lo) / span * BINS as f32) as usize).min(BINS - 1);
-        let mut bin_b = [Aabb::EMPTY; BINS];
-        let mut bin_n = [0usize; BINS];
-        for it in slice.iter() {
-            let b = bin_of(it.centroid[axis]);
-            bin_b[b] = bin_b[b].union(it.bounds);
-            bin_n[b] += 1;
-        }
-        let mut best = (f32::INFINITY, 0usize);
-        for split in 1..BINS {
-            let (lb, ln) = (0..split).fold((Aabb::EMPTY, 0), |(b, c), i| {
-                (b.union(bin_b[i]), c + bin_n[i])
-            });
-            let (rb, rn) = (split..BINS).fold((Aabb::EMPTY, 0), |(b, c), i| {
-                (b.union(bin_b[i]), c + bin_n[i])
-            });
-            if ln == 0 || rn == 0 {
-                continue;
-            }
-            let cost = lb.surface_area() * ln as f32 + rb.surface_area() * rn as f32;
-            if cost < best.0 {
-                best = (cost, split);
-            }
-        }
-        let leaf_cost = bounds.surface_area() * n as f32;
-        if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
-            if best.0.is_infinite() {
-                // All centroids in one bin: split in the middle of the ordering.
-                slice.sort_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-                n / 2
-            } else {
-                return idx;
-            }
-        } else {
-            let split = best.1;
-            let mut i = 0;
-            for j in 0..n {
-                if bin_of(slice[j].centroid[axis]) < split {
-                    slice.swap(i, j);
-                    i += 1;
-                }
-            }
-            i
-        }
-    };
-    let mid = mid.clamp(1, n - 1);
-    nodes[idx].count = 0;
-    nodes[idx].axis = axis as u8;
-    build(items, start, start + mid, depth + 1, median_depth, nodes);
-    let second = build(items, start + mid, end, depth + 1, median_depth, nodes);
-    nodes[idx].offset = second as u32;
-    idx
-}
-
 #[cfg(test)]
 mod tests {
+    use glam::Vec3A;
+
     use super::*;
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::sphere::Sphere;

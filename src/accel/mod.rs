@@ -1,5 +1,6 @@
 //! Ray-query acceleration and robust ray spawning.
 
+mod build;
 mod bvh;
 mod instance;
 

@@ -50,6 +50,14 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
+    // `--threads` holds for the whole command: reading a large mesh and building its BVH run
+    // on rayon's global pool, the passes on the render's own. (If the global pool is already
+    // running, as when a test calls this twice, the set-up keeps it.)
+    if let Some(n) = args.threads {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global();
+    }
     match load_scene(&args.scene, &args.limits.options()) {
         Ok((scene, sources)) => render_scene(&scene, &args, &sources),
         Err(code) => code,

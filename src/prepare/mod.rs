@@ -2,6 +2,7 @@
 //! per-object data shading needs. Built once per render from a plain `Scene`.
 
 use glam::{Affine3A, DVec3, Vec3A};
+use rayon::prelude::*;
 
 mod budget;
 mod csg;
@@ -175,6 +176,18 @@ impl<'a> PreparedScene<'a> {
             } else {
                 None
             };
+            if light_shapes.is_none() {
+                // Not a light: the shapes (a mesh's millions) move in parallel.
+                let (base, n) = (prim_object.len(), list.len());
+                shapes.par_extend(
+                    list.into_par_iter()
+                        .enumerate()
+                        .map(|(k, s)| (s, (base + k) as u32)),
+                );
+                prim_object.resize(base + n, oi as u32);
+                prim_light.resize(base + n, NO_LIGHT);
+                continue;
+            }
             let mut light_shapes = light_shapes.map(|l| l.into_iter());
             for s in list {
                 let id = prim_object.len() as u32;

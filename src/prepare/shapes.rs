@@ -5,6 +5,7 @@
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3, Vec3A};
+use rayon::prelude::*;
 
 use crate::scene;
 use crate::shapes::Shape;
@@ -159,7 +160,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             if tris.is_empty() {
                 return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
             }
-            tris.into_iter().map(AnyShape::Triangle).collect()
+            tris.into_par_iter().map(AnyShape::Triangle).collect()
         }
         scene::Shape::Revolve {
             profile,

@@ -118,14 +118,9 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 }
 
 /// Reads a Wavefront OBJ file (all models merged, faces triangulated). The error is a message
-/// fit for a diagnostic.
+/// fit for a diagnostic. Files of the common form are read on every core
+/// ([`super::obj::parse`]); the others, and every file with an error, by `tobj`.
 pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
-    let options = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
     let bytes =
         crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
             crate::files::FileError::Io(e) => {
@@ -133,9 +128,36 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
             }
             refused => format!("cannot read OBJ mesh: {refused}"),
         })?;
+    let mesh = match super::obj::parse(&bytes) {
+        Some(mesh) => MeshData {
+            path: path.to_path_buf(),
+            ..mesh
+        },
+        None => read_with_tobj(&bytes, path)?,
+    };
+    if mesh.indices.is_empty() {
+        return Err(format!("OBJ mesh `{}` has no faces", path.display()));
+    }
+    if mesh.positions.iter().any(|p| !p.is_finite()) {
+        return Err(format!(
+            "OBJ mesh `{}` has a vertex that is not a finite number",
+            path.display()
+        ));
+    }
+    Ok(mesh)
+}
+
+/// The mesh in an OBJ file's `bytes`, read by `tobj`.
+pub(super) fn read_with_tobj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
     // Materials (`mtllib`) are not used: the scene gives the material.
     let (models, _materials) =
-        tobj::load_obj_buf(&mut std::io::Cursor::new(&bytes[..]), &options, |_| {
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
             Err(tobj::LoadError::OpenFileFailed)
         })
         .map_err(|e| format!("cannot read OBJ mesh `{}`: {e}", path.display()))?;
@@ -182,15 +204,6 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
             mesh.indices
                 .push([base + tri[0], base + tri[1], base + tri[2]]);
         }
-    }
-    if mesh.indices.is_empty() {
-        return Err(format!("OBJ mesh `{}` has no faces", path.display()));
-    }
-    if mesh.positions.iter().any(|p| !p.is_finite()) {
-        return Err(format!(
-            "OBJ mesh `{}` has a vertex that is not a finite number",
-            path.display()
-        ));
     }
     Ok(mesh)
 }

@@ -9,6 +9,7 @@
 
 mod assets;
 mod csg;
+mod obj;
 mod validate;
 
 pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};

@@ -8,6 +8,8 @@
 //!   equal time (`cargo run --release -p sppm-measure -- lights`).
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
+//! - [`setup`]: the set-up of a large mesh (OBJ read, triangles, BVH) step by step, on 1
+//!   and more threads.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
 //! - [`twin`]: a scene's twin with its revolves replaced by meshes at a given accuracy.
 
@@ -15,5 +17,6 @@ pub mod bezier;
 pub mod cost;
 pub mod lights;
 pub mod reference;
+pub mod setup;
 pub mod tessellate;
 pub mod twin;

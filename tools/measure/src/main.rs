@@ -39,6 +39,20 @@ pub enum Bench {
     Cost(CostArgs),
     /// A scene's twin with every revolve replaced by a mesh at a given silhouette accuracy.
     Twin(TwinArgs),
+    /// The set-up of a large OBJ mesh step by step (read, parse, triangles, BVH): wall and CPU
+    /// time on each thread count, rounds alternating.
+    Setup(SetupArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct SetupArgs {
+    /// The OBJ file (e.g. the scale bench's `target/scale/n1000000/mesh.obj`).
+    pub obj: PathBuf,
+    /// Thread counts, measured in turn within each round.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub threads: Vec<usize>,
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=20))]
+    pub rounds: u32,
 }
 
 #[derive(Debug, Args)]
@@ -114,6 +128,7 @@ fn run_bench(args: &BenchArgs) -> ExitCode {
         Bench::Cost(a) => finish(cost(a)),
         Bench::Twin(a) => finish(twin(a)),
         Bench::Lights(a) => finish(lights(a)),
+        Bench::Setup(a) => finish(setup(a)),
     }
 }
 
@@ -125,6 +140,37 @@ fn finish(r: Result<(), String>) -> ExitCode {
             ExitCode::from(EXIT_USAGE)
         }
     }
+}
+
+fn setup(args: &SetupArgs) -> Result<(), String> {
+    if args.threads.iter().any(|&t| t == 0 || t > 256) {
+        return Err("--threads takes counts from 1 to 256".into());
+    }
+    for round in 1..=args.rounds {
+        for &threads in &args.threads {
+            let steps = sppm_measure::setup::run(&args.obj, threads)?;
+            let mut text = format!("round {round}, {threads} thread(s):\n");
+            let (mut wall, mut cpu) = (0.0, 0.0);
+            for s in &steps {
+                let _ = writeln!(
+                    text,
+                    "  {:<34} {:7.3} s wall {:7.3} s CPU",
+                    s.name, s.wall, s.cpu
+                );
+                if !s.name.starts_with("tobj") {
+                    wall += s.wall;
+                    cpu += s.cpu;
+                }
+            }
+            let _ = writeln!(
+                text,
+                "  {:<34} {wall:7.3} s wall {cpu:7.3} s CPU",
+                "total (without tobj alone)"
+            );
+            out(&text);
+        }
+    }
+    Ok(())
 }
 
 fn twin(args: &TwinArgs) -> Result<(), String> {

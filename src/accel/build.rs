@@ -1,0 +1,403 @@
+//! Building the BVH: binned SAH splits over the primitives' boxes, recursively, into nodes
+//! flattened depth-first (an interior node's first child follows it).
+//!
+//! Large nodes use every core: the two halves of a split are built with `rayon::join`, each
+//! into its own run of nodes, and the runs are joined in depth-first order afterwards; the
+//! bounds and bins of a very large node are gathered in parallel chunks. A split depends only
+//! on the items (box unions and bin counts do not depend on the order they are merged in), so
+//! the tree is the same, node for node, on any number of threads.
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use crate::geometry::Aabb;
+
+const BINS: usize = 12;
+const MAX_LEAF: usize = 4;
+
+/// Sizes (in items) from which the build works in parallel.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Parallelism {
+    /// A node of at least this many items builds its two halves with `rayon::join`.
+    pub join: usize,
+    /// A node of at least this many items gathers its bounds and bins in parallel chunks.
+    pub binning: usize,
+}
+
+impl Parallelism {
+    /// A task per subtree of 4096 items or more (about 0.5 ms of work), and parallel bins for
+    /// nodes of 64K items or more (the top few levels, which would otherwise run on one core).
+    pub const DEFAULT: Self = Self {
+        join: 4096,
+        binning: 1 << 16,
+    };
+}
+
+/// Items per chunk of a parallel pass over a node's items.
+const CHUNK: usize = 1 << 13;
+
+/// A primitive as the build sees it; the build reorders the items into leaf order.
+pub(super) struct Item {
+    pub bounds: Aabb,
+    pub centroid: Vec3A,
+    pub index: usize,
+}
+
+impl Item {
+    pub fn new(bounds: Aabb, index: usize) -> Self {
+        Self {
+            bounds,
+            centroid: bounds.centroid(),
+            index,
+        }
+    }
+}
+
+/// A node of the built tree.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct BuildNode {
+    pub bounds: Aabb,
+    /// Leaf: index of its first item. Interior: index of its second child.
+    pub offset: u32,
+    /// Items in a leaf (at most 8); 0 for an interior node.
+    pub count: u32,
+    /// Interior: the axis the split ordered the children on.
+    pub axis: u8,
+}
+
+/// Builds the tree over `items` (reordered into leaf order). From depth `median_depth` on,
+/// nodes split at the object median instead of by SAH.
+pub(super) fn build(items: &mut [Item], median_depth: usize, par: Parallelism) -> Vec<BuildNode> {
+    if items.is_empty() {
+        return Vec::new();
+    }
+    let run = build_run(items, 0, 0, median_depth, par);
+    let mut nodes = vec![
+        BuildNode {
+            bounds: Aabb::EMPTY,
+            offset: 0,
+            count: 0,
+            axis: 0,
+        };
+        run.len()
+    ];
+    run.write(&mut nodes, 0);
+    nodes
+}
+
+/// The nodes of a subtree, in depth-first order, before they are placed in the final array.
+enum Run {
+    /// Built on one thread; interior offsets count from the subtree's root.
+    Nodes(Vec<BuildNode>),
+    /// Split with the halves built in parallel.
+    Split {
+        node: BuildNode,
+        first: Box<Run>,
+        second: Box<Run>,
+        len: usize,
+    },
+}
+
+impl Run {
+    fn len(&self) -> usize {
+        match self {
+            Run::Nodes(nodes) => nodes.len(),
+            Run::Split { len, .. } => *len,
+        }
+    }
+
+    /// Writes the subtree into `out`, whose first node has index `base` in the final array.
+    fn write(self, out: &mut [BuildNode], base: usize) {
+        match self {
+            Run::Nodes(nodes) => {
+                for (slot, mut node) in out.iter_mut().zip(nodes) {
+                    if node.count == 0 {
+                        node.offset += base as u32;
+                    }
+                    *slot = node;
+                }
+            }
+            Run::Split {
+                mut node,
+                first,
+                second,
+                ..
+            } => {
+                let n_first = first.len();
+                node.offset = (base + 1 + n_first) as u32;
+                out[0] = node;
+                let (a, b) = out[1..].split_at_mut(n_first);
+                rayon::join(
+                    || first.write(a, base + 1),
+                    || second.write(b, base + 1 + n_first),
+                );
+            }
+        }
+    }
+}
+
+/// The subtree over `items` (which start at index `start` of all items).
+fn build_run(
+    items: &mut [Item],
+    start: usize,
+    depth: usize,
+    median_depth: usize,
+    par: Parallelism,
+) -> Run {
+    if items.len() < par.join {
+        let mut nodes = Vec::with_capacity(items.len() / 2 + 1);
+        build_serial(items, start, depth, median_depth, par, &mut nodes);
+        return Run::Nodes(nodes);
+    }
+    let (node, mid) = split(items, start, depth, median_depth, par);
+    let Some(mid) = mid else {
+        return Run::Nodes(vec![node]);
+    };
+    let (a, b) = items.split_at_mut(mid);
+    let (first, second) = rayon::join(
+        || build_run(a, start, depth + 1, median_depth, par),
+        || build_run(b, start + mid, depth + 1, median_depth, par),
+    );
+    let len = 1 + first.len() + second.len();
+    Run::Split {
+        node,
+        first: Box::new(first),
+        second: Box::new(second),
+        len,
+    }
+}
+
+/// The subtree over `items` on this thread, appended to `nodes`; returns its root's index.
+fn build_serial(
+    items: &mut [Item],
+    start: usize,
+    depth: usize,
+    median_depth: usize,
+    par: Parallelism,
+    nodes: &mut Vec<BuildNode>,
+) -> usize {
+    let idx = nodes.len();
+    let (node, mid) = split(items, start, depth, median_depth, par);
+    nodes.push(node);
+    if let Some(mid) = mid {
+        let (a, b) = items.split_at_mut(mid);
+        build_serial(a, start, depth + 1, median_depth, par, nodes);
+        let second = build_serial(b, start + mid, depth + 1, median_depth, par, nodes);
+        nodes[idx].offset = second as u32;
+    }
+    idx
+}
+
+/// The bounds of the items and of their centroids.
+fn bounds_of(items: &[Item], par: Parallelism) -> (Aabb, Aabb) {
+    let fold = |(b, c): (Aabb, Aabb), it: &Item| (b.union(it.bounds), c.with_point(it.centroid));
+    let empty = (Aabb::EMPTY, Aabb::EMPTY);
+    if items.len() < par.binning {
+        return items.iter().fold(empty, fold);
+    }
+    items
+        .par_chunks(CHUNK)
+        .map(|chunk| chunk.iter().fold(empty, fold))
+        .reduce(|| empty, |x, y| (x.0.union(y.0), x.1.union(y.1)))
+}
+
+type Bins = ([Aabb; BINS], [usize; BINS]);
+
+/// The items' boxes and counts per bin.
+fn bins_of(items: &[Item], bin_of: impl Fn(&Item) -> usize + Sync, par: Parallelism) -> Bins {
+    let fold = |mut bins: Bins, it: &Item| {
+        let b = bin_of(it);
+        bins.0[b] = bins.0[b].union(it.bounds);
+        bins.1[b] += 1;
+        bins
+    };
+    let empty = ([Aabb::EMPTY; BINS], [0; BINS]);
+    if items.len() < par.binning {
+        return items.iter().fold(empty, fold);
+    }
+    items
+        .par_chunks(CHUNK)
+        .map(|chunk| chunk.iter().fold(empty, fold))
+        .reduce(
+            || empty,
+            |mut x, y| {
+                for i in 0..BINS {
+                    x.0[i] = x.0[i].union(y.0[i]);
+                    x.1[i] += y.1[i];
+                }
+                x
+            },
+        )
+}
+
+/// The node over `items`, and where they are split into its children (`None`: a leaf). The
+/// items are reordered so that the first child's come first.
+fn split(
+    items: &mut [Item],
+    start: usize,
+    depth: usize,
+    median_depth: usize,
+    par: Parallelism,
+) -> (BuildNode, Option<usize>) {
+    let n = items.len();
+    let (bounds, cb) = bounds_of(items, par);
+    let mut node = BuildNode {
+        bounds,
+        offset: start as u32,
+        count: n as u32,
+        axis: 0,
+    };
+    if n <= MAX_LEAF {
+        return (node, None);
+    }
+    let ext = cb.diagonal();
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let lo = cb.min[axis];
+    let span = ext[axis];
+    let mid = if depth >= median_depth {
+        items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+        n / 2
+    } else if span <= 0.0 || !span.is_finite() {
+        n / 2
+    } else {
+        // Binned SAH.
+        let bin_of =
+            |it: &Item| (((it.centroid[axis] - lo) / span * BINS as f32) as usize).min(BINS - 1);
+        let (bin_b, bin_n) = bins_of(items, bin_of, par);
+        let mut best = (f32::INFINITY, 0usize);
+        for split in 1..BINS {
+            let (lb, ln) = (0..split).fold((Aabb::EMPTY, 0), |(b, c), i| {
+                (b.union(bin_b[i]), c + bin_n[i])
+            });
+            let (rb, rn) = (split..BINS).fold((Aabb::EMPTY, 0), |(b, c), i| {
+                (b.union(bin_b[i]), c + bin_n[i])
+            });
+            if ln == 0 || rn == 0 {
+                continue;
+            }
+            let cost = lb.surface_area() * ln as f32 + rb.surface_area() * rn as f32;
+            if cost < best.0 {
+                best = (cost, split);
+            }
+        }
+        let leaf_cost = bounds.surface_area() * n as f32;
+        if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
+            if best.0.is_infinite() {
+                // All centroids in one bin: split in the middle of the ordering.
+                items.sort_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+                n / 2
+            } else {
+                return (node, None);
+            }
+        } else {
+            let split = best.1;
+            let mut i = 0;
+            for j in 0..n {
+                if bin_of(&items[j]) < split {
+                    items.swap(i, j);
+                    i += 1;
+                }
+            }
+            i
+        }
+    };
+    node.count = 0;
+    node.axis = axis as u8;
+    (node, Some(mid.clamp(1, n - 1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// Boxes of mixed sizes in clusters, with runs of identical boxes (whose centroids all
+    /// fall in one bin, or coincide): every kind of split the build makes.
+    fn items(rng: &mut Rng, n: usize) -> Vec<Item> {
+        let centres: Vec<Vec3A> = (0..20)
+            .map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 100.0)
+            .collect();
+        let mut out = Vec::with_capacity(n);
+        while out.len() < n {
+            let c = centres[out.len() % centres.len()];
+            let p = c + Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * (0.01 + 10.0 * rng.f32());
+            let b = Aabb::new(p, p + Vec3A::splat(0.001 + rng.f32()));
+            let copies = if rng.f32() < 0.05 { 40 } else { 1 };
+            for _ in 0..copies.min(n - out.len()) {
+                out.push(Item::new(b, out.len()));
+            }
+        }
+        out
+    }
+
+    /// The nodes and the leaf order of the items, built on `threads` threads.
+    fn built(
+        threads: usize,
+        items: &[Item],
+        median_depth: usize,
+        par: Parallelism,
+    ) -> (Vec<BuildNode>, Vec<usize>) {
+        let mut items: Vec<Item> = items
+            .iter()
+            .map(|it| Item::new(it.bounds, it.index))
+            .collect();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let nodes = pool.install(|| build(&mut items, median_depth, par));
+        (nodes, items.iter().map(|it| it.index).collect())
+    }
+
+    /// The tree is the one the plain recursion builds, node for node and with the items in the
+    /// same order, on 1, 2 and 4 threads; with thresholds low enough that thousands of
+    /// subtrees are built as separate tasks and the top nodes bin in parallel chunks, under
+    /// SAH splits and under median splits.
+    #[test]
+    fn the_tree_is_the_same_on_any_number_of_threads() {
+        let mut rng = Rng::new(11);
+        let all = items(&mut rng, 60_000);
+        let par = Parallelism {
+            join: 16,
+            binning: 2 * CHUNK + 5,
+        };
+        for median_depth in [usize::MAX, 32, 4] {
+            let mut plain: Vec<Item> = all
+                .iter()
+                .map(|it| Item::new(it.bounds, it.index))
+                .collect();
+            let mut nodes = Vec::new();
+            let serial = Parallelism {
+                join: usize::MAX,
+                binning: usize::MAX,
+            };
+            build_serial(&mut plain, 0, 0, median_depth, serial, &mut nodes);
+            let order: Vec<usize> = plain.iter().map(|it| it.index).collect();
+            assert!(nodes.len() > 10_000, "{} nodes", nodes.len());
+            for threads in [1, 2, 4] {
+                let (got, got_order) = built(threads, &all, median_depth, par);
+                assert!(
+                    got == nodes,
+                    "{threads} threads, median from {median_depth}"
+                );
+                assert!(
+                    got_order == order,
+                    "{threads} threads, median from {median_depth}"
+                );
+            }
+            // Leaves cover the items once each, in order.
+            let mut next = 0;
+            for n in nodes.iter().filter(|n| n.count > 0) {
+                assert_eq!(n.offset as usize, next);
+                next += n.count as usize;
+            }
+            assert_eq!(next, all.len());
+        }
+    }
+}
