@@ -2,8 +2,11 @@
 
 mod bvh;
 mod instance;
+mod leaf;
+mod triangles;
+mod wide;
 
-pub use bvh::Bvh;
+pub use bvh::{Bvh, Surface};
 
 use glam::Vec3A;
 
