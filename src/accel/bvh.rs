@@ -242,11 +242,14 @@ impl Bvh {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mask, near) = node.hit(&boxes, t_min, t_max);
-                let mut hits = far_to_near(node, mask, near);
-                if let Some((nearest, _)) = hits.pop() {
+                let mut hits = [(0, 0.0); 4];
+                let n = far_to_near(node, mask, near, &mut hits);
+                if n > 0 {
                     // (At most 3 per level of a tree no deeper than `STACK / 3`.)
-                    stack.extend(hits);
-                    cur = nearest;
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
+                    }
+                    cur = hits[n - 1].0;
                     continue;
                 }
             }

@@ -28,6 +28,9 @@ pub(super) struct WideNode {
 pub(super) struct BoxRay {
     o: [Vec4; 3],
     inv_d: [Vec4; 3],
+    /// Per axis: whether the ray runs toward decreasing coordinates (it then enters a box
+    /// through its `max` plane).
+    neg: [bool; 3],
 }
 
 impl BoxRay {
@@ -37,22 +40,30 @@ impl BoxRay {
         Self {
             o: [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat),
             inv_d: [inv_d.x, inv_d.y, inv_d.z].map(Vec4::splat),
+            neg: [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0],
         }
     }
 }
 
 impl WideNode {
     /// The children whose box the ray enters with `t_min <= t <= t_max` (conservatively, as
-    /// [`Aabb::hit`]), as a bit mask, and the entry distances.
+    /// [`Aabb::hit`]), as a bit mask, and the entry distances. The entry and exit planes are
+    /// chosen by the ray's signs; a NaN slab distance (a ray in a slab's plane, parallel to
+    /// it) is ignored. Unused slots may be in the mask.
     #[inline(always)]
     pub(super) fn hit(&self, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, Vec4) {
         let mut near = Vec4::splat(t_min);
         let mut far = Vec4::splat(t_max);
         for a in 0..3 {
-            let t0 = (self.min[a] - ray.o[a]) * ray.inv_d[a];
-            let t1 = (self.max[a] - ray.o[a]) * ray.inv_d[a];
-            near = t0.min(t1).max(near);
-            far = t0.max(t1).min(far);
+            let (lo, hi) = if ray.neg[a] {
+                (self.max[a], self.min[a])
+            } else {
+                (self.min[a], self.max[a])
+            };
+            // `x.max(acc)` keeps `acc` where `x` is NaN (SSE `maxps` returns its second
+            // operand when either is NaN), as `Aabb::hit` does.
+            near = ((lo - ray.o[a]) * ray.inv_d[a]).max(near);
+            far = ((hi - ray.o[a]) * ray.inv_d[a]).min(far);
         }
         (near.cmple(far * FAR_SCALE).bitmask(), near)
     }
@@ -143,11 +154,18 @@ impl WideNode {
     }
 }
 
-/// The hit children of a node (mask from [`WideNode::hit`]) ordered far to near, unused slots
-/// left out.
+/// The hit children of a node (mask and entry distances from [`WideNode::hit`]), unused
+/// slots left out, ordered far to near in `out`; returns how many. (Fixed arrays and an
+/// insertion sort: an `ArrayVec` insert here was a `memmove` call per child.)
 #[inline(always)]
-pub(super) fn far_to_near(node: &WideNode, mask: u32, near: Vec4) -> ArrayVec<(u32, f32), 4> {
-    let mut hits: ArrayVec<(u32, f32), 4> = ArrayVec::new();
+pub(super) fn far_to_near(
+    node: &WideNode,
+    mask: u32,
+    near: Vec4,
+    out: &mut [(u32, f32); 4],
+) -> usize {
+    let near = near.to_array();
+    let mut n = 0;
     let mut bits = mask;
     while bits != 0 {
         let slot = bits.trailing_zeros() as usize;
@@ -156,15 +174,16 @@ pub(super) fn far_to_near(node: &WideNode, mask: u32, near: Vec4) -> ArrayVec<(u
         if c == EMPTY {
             continue;
         }
-        // Insertion, keeping the nearest last.
         let d = near[slot];
-        let mut at = hits.len();
-        while at > 0 && hits[at - 1].1 < d {
+        let mut at = n;
+        while at > 0 && out[at - 1].1 < d {
+            out[at] = out[at - 1];
             at -= 1;
         }
-        hits.insert(at, (c, d));
+        out[at] = (c, d);
+        n += 1;
     }
-    hits
+    n
 }
 
 #[cfg(test)]
