@@ -274,6 +274,13 @@ fn ours(mesh: &Mesh, camera: &[Ray], bounce: &[Ray]) -> Figures {
         bytes_per_triangle: bvh.memory_bytes() as f64 / n as f64,
         ..Figures::default()
     };
+    let parts: Vec<String> = bvh
+        .memory_parts()
+        .iter()
+        .filter(|p| p.1 > 0)
+        .map(|(what, b)| format!("{what} {:.1}", *b as f64 / n as f64))
+        .collect();
+    println!("  (ours, bytes/triangle: {})", parts.join(", "));
     for (set, rays) in [("camera", camera), ("bounce", bounce)] {
         for (q, query) in [("closest", Query::Closest), ("any", Query::Any)] {
             let (_, cpu, _) = trace(&bvh, rays, query, 1);

@@ -190,11 +190,36 @@ impl Bvh {
     /// Bytes held by the hierarchy: its nodes, leaves, shapes, packets, ids and meshes (what a
     /// scale benchmark reports per primitive; a boxed shape's own heap data is not followed).
     pub fn memory_bytes(&self) -> usize {
+        self.memory_parts().iter().map(|p| p.1).sum()
+    }
+
+    /// [`Bvh::memory_bytes`] by part: nodes, leaf records, triangle packets, other leaf
+    /// contents (shapes, their ids, quad packets), meshes' buffers, unbounded shapes.
+    pub fn memory_parts(&self) -> [(&'static str, usize); 6] {
         use std::mem::size_of;
-        self.nodes.capacity() * size_of::<WideNode>()
-            + self.leaves.memory_bytes()
-            + self.meshes.memory_bytes()
-            + self.unbounded.capacity() * size_of::<(AnyShape, u32)>()
+        let l = &self.leaves;
+        [
+            ("nodes", self.nodes.capacity() * size_of::<WideNode>()),
+            (
+                "leaves",
+                l.leaves.capacity() * size_of::<super::leaf::Leaf>(),
+            ),
+            (
+                "triangle packets",
+                l.tri_packets.capacity() * size_of::<super::triangles::TrianglePacket>(),
+            ),
+            (
+                "shapes",
+                l.memory_bytes()
+                    - l.leaves.capacity() * size_of::<super::leaf::Leaf>()
+                    - l.tri_packets.capacity() * size_of::<super::triangles::TrianglePacket>(),
+            ),
+            ("mesh buffers", self.meshes.memory_bytes()),
+            (
+                "unbounded",
+                self.unbounded.capacity() * size_of::<(AnyShape, u32)>(),
+            ),
+        ]
     }
 
     pub fn is_empty(&self) -> bool {

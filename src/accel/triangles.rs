@@ -159,6 +159,7 @@ mod tests {
     use super::*;
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::SplitShape;
+    use crate::shapes::quad::packet_check;
     use crate::shapes::triangle::Triangle;
 
     /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, and `t`),
@@ -189,31 +190,17 @@ mod tests {
                 _ => {}
             }
             let ray = Ray::new(o, d);
-            let (t_min, t_max) = if i % 3 == 0 {
-                (0.5, 2.0)
-            } else {
-                (0.0, f32::INFINITY)
-            };
+            let (t_min, t_max) = packet_check::t_range(i);
             let (mask, t) = packet.hits(&ray, t_min, t_max);
-            let mut best: Option<(u32, f32)> = None;
-            let mut limit = t_max;
-            for (lane, (vs, id)) in tris.iter().enumerate() {
-                let Ok(tri) = Triangle::new(*vs, None, None) else {
-                    continue;
-                };
-                let want = tri.hit_t(&ray, t_min, t_max);
-                assert_eq!(mask.test(lane), want.is_some(), "lane {lane} of case {i}");
-                if let Some(w) = want {
-                    assert_eq!(t[lane].to_bits(), w.to_bits(), "lane {lane} of case {i}");
-                }
-                if let Some(w) = tri.hit_t(&ray, t_min, limit) {
-                    limit = w;
-                    best = Some((*id, w));
-                }
-            }
-            for lane in count..4 {
-                assert!(!mask.test(lane), "empty lane {lane} hit in case {i}");
-            }
+            // (Random triangles are never degenerate here: `Triangle::new` succeeds.)
+            let scalar: Vec<Triangle> = tris
+                .iter()
+                .map(|(vs, _)| Triangle::new(*vs, None, None).unwrap())
+                .collect();
+            let best = packet_check::lanes(mask, t, count, (t_min, t_max), i, |k, lo, hi| {
+                scalar[k].hit_t(&ray, lo, hi)
+            })
+            .map(|(lane, t)| (tris[lane].1, t));
             assert_eq!(packet.hit_t(&ray, t_min, t_max), best, "case {i}");
             assert_eq!(packet.occluded(&ray, t_min, t_max), best.is_some());
             hits += usize::from(best.is_some());
