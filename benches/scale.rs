@@ -9,7 +9,8 @@
 //!
 //! - BVH build time (wall, and CPU time of all the process's threads: the build runs on rayon's
 //!   global pool, all cores);
-//! - memory per triangle (`Bvh::memory_bytes`: nodes, shapes, packets, ids);
+//! - memory per triangle (`Bvh::memory_bytes`: nodes, leaves, triangle packets, the mesh's
+//!   vertex and index buffers);
 //! - closest-hit and any-hit rays/s on both ray sets, 1 thread (CPU time of the tracing thread)
 //!   and 2 threads (wall and the threads' summed CPU time);
 //! - photons/s of an SPPM render of the mesh from an OBJ written to `target/scale/`, and the time
@@ -38,8 +39,7 @@ use sppm_lang::accel::Bvh;
 use sppm_lang::chart::{ChartSpec, Dash, Series, draw_panels};
 use sppm_lang::geometry::Ray;
 use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::shapes::primitive::AnyShape;
-use sppm_lang::shapes::triangle::Triangle;
+use sppm_lang::shapes::mesh::TriangleMesh;
 use sppm_lang::{EvalOptions, load_file};
 
 const CAMERA_SIDE: u32 = 1024;
@@ -88,16 +88,13 @@ fn displaced_sphere(n: usize) -> Mesh {
     }
 }
 
-fn shapes(mesh: &Mesh) -> Vec<(AnyShape, u32)> {
-    let p = |i: u32| Vec3A::from(mesh.vertices[i as usize]);
-    mesh.triangles
-        .iter()
-        .enumerate()
-        .filter_map(|(k, t)| {
-            let tri = Triangle::new(t.map(p), None, None).ok()?;
-            Some((AnyShape::Triangle(tri), k as u32))
-        })
-        .collect()
+/// The mesh as the renderer stores it: a shared vertex buffer and three indices per triangle.
+fn triangle_mesh(mesh: &Mesh) -> TriangleMesh {
+    TriangleMesh::from_buffers(mesh.vertices.clone(), &mesh.triangles)
+}
+
+fn mesh_bvh(mesh: TriangleMesh) -> Bvh {
+    Bvh::with_meshes(Vec::new(), vec![(mesh, 0)])
 }
 
 /// Camera rays from a pinhole at distance 2.4 whose view the mesh fills.
@@ -282,16 +279,23 @@ impl Figures {
 }
 
 fn ours(mesh: &Mesh, camera: &[Ray], bounce: &[Ray]) -> Figures {
-    let prims = shapes(mesh);
+    let prims = triangle_mesh(mesh);
     let n = prims.len();
     let (c0, t0) = (process_cpu(), Instant::now());
-    let bvh = Bvh::new(prims);
+    let bvh = mesh_bvh(prims);
     let mut f = Figures {
         build_wall: t0.elapsed().as_secs_f64(),
         build_cpu: process_cpu() - c0,
         bytes_per_triangle: bvh.memory_bytes() as f64 / n as f64,
         ..Figures::default()
     };
+    let parts: Vec<String> = bvh
+        .memory_parts()
+        .iter()
+        .filter(|p| p.1 > 0)
+        .map(|(what, b)| format!("{what} {:.1}", *b as f64 / n as f64))
+        .collect();
+    println!("  (ours, bytes/triangle: {})", parts.join(", "));
     for (set, rays) in [("camera", camera), ("bounce", bounce)] {
         for (q, query) in [("closest", Query::Closest), ("any", Query::Any)] {
             let (_, cpu, _) = trace(&bvh, rays, query, 1);
@@ -437,7 +441,7 @@ fn main() {
         let mesh = displaced_sphere(size);
         let n = mesh.triangles.len();
         let camera = camera_rays();
-        let probe = Bvh::new(shapes(&mesh));
+        let probe = mesh_bvh(triangle_mesh(&mesh));
         let bounce = bounce_rays(&probe, &camera);
         drop(probe);
         write_mesh(&dir.join("mesh.bin"), &mesh);

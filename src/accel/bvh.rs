@@ -1,56 +1,96 @@
-//! Binned SAH bounding volume hierarchy over shapes, flattened depth-first.
+//! Binned SAH bounding volume hierarchy over shapes and mesh triangles, flattened depth-first.
 //! Shapes without finite bounds (infinite planes) are kept in a side list and tested always.
-
-use std::sync::Mutex;
+//! What the leaves hold is packed after the build ([`super::leaf`]).
 
 use arrayvec::ArrayVec;
 use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, build};
-
+use super::leaf::{Closest, Content, Leaves};
+use super::triangles::Meshes;
+use super::wide::{BoxRay, EMPTY, LEAF, WideNode, collapse, far_to_near, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
+use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::{AnyShape, LazyHit};
-use crate::shapes::quad::{Quad, QuadPacket};
 
-/// Traversal stack size: one entry per interior node on the path from the root.
-const STACK: usize = 64;
+/// Traversal stack size: up to three entries per level of the 4-wide tree, which is no deeper
+/// than the binary tree (< 64 levels, see `MEDIAN_DEPTH`).
+const STACK: usize = 192;
 /// From this depth on, nodes split at the object median instead of by SAH, so that no tree is
 /// deeper than `MEDIAN_DEPTH + log2(primitives)` (< `STACK` for fewer than 2^31 primitives). SAH
 /// alone can peel a few primitives off per level (e.g. exponentially spaced sizes), and a
 /// deeper tree would overflow the traversal stack.
 const MEDIAN_DEPTH: usize = 32;
 
+/// A node of the binary tree the build makes (collapsed into [`WideNode`]s afterwards).
 #[derive(Debug, Clone, Copy)]
-struct Node {
-    bounds: Aabb,
-    /// Leaf: first primitive. Interior: index of the second child (the first follows).
-    offset: u32,
-    /// Primitives in a leaf; 0 for an interior node.
-    count: u16,
-    axis: u8,
-    /// Leaf: how many of its primitives (the first ones) are quads tested in packets.
-    quads: u8,
-    /// Leaf: index of its first quad packet.
-    packet: u32,
+pub(super) struct Node {
+    pub bounds: Aabb,
+    /// Leaf: first item (after packing: its index in the leaf list). Interior: index of the
+    /// second child (the first follows).
+    pub offset: u32,
+    /// Items in a leaf; 0 for an interior node.
+    pub count: u16,
 }
 
-/// The accelerator: owns the shapes, each tagged with a caller id (e.g. a primitive index).
+/// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
+/// primitive index).
 pub struct Bvh {
-    nodes: Vec<Node>,
-    shapes: Vec<AnyShape>,
-    /// Each leaf's quads, four to a packet (the same quads are also in `shapes`).
-    packets: Vec<QuadPacket>,
-    ids: Vec<u32>,
+    nodes: Vec<WideNode>,
+    /// Nodes on the longest root-to-leaf path of the binary tree.
+    #[cfg(test)]
+    binary_depth: usize,
+    bounds: Aabb,
+    leaves: Leaves,
+    meshes: Meshes,
     unbounded: Vec<(AnyShape, u32)>,
+}
+
+/// What a closest hit is on: a shape, or triangle `k` of a mesh.
+#[derive(Clone, Copy)]
+pub enum Surface<'a> {
+    Shape(&'a AnyShape),
+    MeshTriangle(&'a TriangleMesh, usize),
+}
+
+impl<'a> Surface<'a> {
+    /// The full hit for a [`LazyHit`] returned for `ray` (see [`AnyShape::hit_at_uv`]).
+    #[inline]
+    pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
+        match self {
+            Surface::Shape(s) => s.hit_at_uv(ray, lazy, uv),
+            Surface::MeshTriangle(m, k) => match lazy {
+                LazyHit::T(t) => m.hit_at(*k, ray, t),
+                LazyHit::Full(h) | LazyHit::Part(h, _) => h,
+            },
+        }
+    }
+
+    /// The shape hit, unless it is a mesh triangle.
+    pub fn shape(self) -> Option<&'a AnyShape> {
+        match self {
+            Surface::Shape(s) => Some(s),
+            Surface::MeshTriangle(..) => None,
+        }
+    }
 }
 
 impl Bvh {
     pub fn new(shapes: Vec<(AnyShape, u32)>) -> Self {
-        Self::with_median_depth(shapes, MEDIAN_DEPTH)
+        Self::with_meshes(shapes, Vec::new())
     }
 
-    fn with_median_depth(shapes: Vec<(AnyShape, u32)>, median_depth: usize) -> Self {
+    /// A BVH over `shapes` and the triangles of `meshes` (each mesh with the id its hits get).
+    pub fn with_meshes(shapes: Vec<(AnyShape, u32)>, meshes: Vec<(TriangleMesh, u32)>) -> Self {
+        Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH)
+    }
+
+    fn with_median_depth(
+        shapes: Vec<(AnyShape, u32)>,
+        meshes: Vec<(TriangleMesh, u32)>,
+        median_depth: usize,
+    ) -> Self {
         // Boxes in parallel; most scenes (every mesh) have only bounded shapes.
         let boxes: Vec<Aabb> = shapes.par_iter().map(|(s, _)| s.bounds()).collect();
         let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();
@@ -68,98 +108,112 @@ impl Bvh {
             }
             (bounded, kept, unbounded)
         };
+        let meshes = Meshes::new(meshes);
+        let nb = bounded.len();
+        let triangles: Vec<(u32, &TriangleMesh, usize)> = meshes.iter().collect();
         let mut items: Vec<Item> = boxes
             .par_iter()
             .enumerate()
             .map(|(index, b)| Item::new(b.padded(1e-6), index))
+            .chain(
+                triangles
+                    .par_iter()
+                    .map(|&(g, m, k)| Item::new(m.bounds(k).padded(1e-6), nb + g as usize)),
+            )
             .collect();
+        drop(triangles);
         let mut nodes: Vec<Node> = build(&mut items, median_depth, Parallelism::DEFAULT)
             .into_par_iter()
             .map(|b| Node {
                 bounds: b.bounds,
                 offset: b.offset,
                 count: b.count as u16,
-                axis: b.axis,
-                quads: 0,
-                packet: 0,
             })
             .collect();
-        // Leaves with two quads or more list them first and test them four at a time.
-        let is_quad = |it: &Item| matches!(bounded[it.index].0, AnyShape::Quad(_));
-        // (Skipped without quads: a mesh's millions of leaves are not walked for nothing.)
-        let any_quads = bounded
-            .par_iter()
-            .any(|(s, _)| matches!(s, AnyShape::Quad(_)));
-        for node in nodes.iter_mut().filter(|n| any_quads && n.count > 0) {
-            let leaf = &mut items[node.offset as usize..][..node.count as usize];
-            let quads = leaf.iter().filter(|it| is_quad(it)).count();
-            // (Leaves hold at most 8 shapes; the `u8` check only guards that.)
-            if let Ok(q) = u8::try_from(quads)
-                && q >= 2
-            {
-                leaf.sort_by_key(|it| !is_quad(it));
-                node.quads = q;
+        nodes.shrink_to_fit();
+        // Pack each leaf's contents; its node then names the leaf.
+        let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
+        let mut leaves = Leaves::default();
+        let mut contents = Vec::new();
+        for node in nodes.iter_mut().filter(|n| n.count > 0) {
+            contents.clear();
+            contents.extend(
+                items[node.offset as usize..][..node.count as usize]
+                    .iter()
+                    .map(|it| match it.index.checked_sub(nb) {
+                        Some(g) => Content::Triangle(g as u32),
+                        None => Content::Shape(it.index),
+                    }),
+            );
+            node.offset = leaves.push(&contents, &mut slots, &meshes);
+        }
+        leaves.shrink_to_fit();
+        #[cfg(test)]
+        fn below(n: &[Node], i: usize) -> usize {
+            if n[i].count > 0 {
+                1
+            } else {
+                1 + below(n, i + 1).max(below(n, n[i].offset as usize))
             }
         }
-        let mut packets = Vec::new();
-        for node in nodes.iter_mut().filter(|n| any_quads && n.quads > 0) {
-            node.packet = packets.len() as u32;
-            let quads: Vec<Quad> = items[node.offset as usize..][..node.quads as usize]
-                .iter()
-                .filter_map(|it| match &bounded[it.index].0 {
-                    AnyShape::Quad(q) => Some(*q),
-                    _ => None,
-                })
-                .collect();
-            packets.extend(quads.chunks(4).map(QuadPacket::new));
-        }
-        // Reorder the shapes into leaf order, in parallel (each slot is taken once, its lock
-        // never waited for).
-        let slots: Vec<Mutex<Option<(AnyShape, u32)>>> = bounded
-            .into_par_iter()
-            .map(|s| Mutex::new(Some(s)))
-            .collect();
-        let (shapes, ids) = items
-            .par_iter()
-            .map(|it| {
-                let slot = slots[it.index].lock().ok().and_then(|mut s| s.take());
-                slot.expect("each shape once")
-            })
-            .unzip();
         Self {
-            nodes,
-            shapes,
-            packets,
-            ids,
+            #[cfg(test)]
+            binary_depth: if nodes.is_empty() {
+                0
+            } else {
+                below(&nodes, 0)
+            },
+            bounds: nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
+            nodes: collapse(&nodes),
+            leaves,
+            meshes,
             unbounded,
         }
     }
 
-    /// The quad packets of a leaf (empty for interior nodes and leaves without them).
-    #[inline]
-    fn leaf_packets(&self, node: &Node) -> &[QuadPacket] {
-        let n = (node.quads as usize).div_ceil(4);
-        &self.packets[node.packet as usize..][..n]
-    }
-
     /// Bounds of the bounded shapes (infinite planes excluded).
     pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
+        self.bounds
     }
 
+    /// Shapes and mesh triangles.
     pub fn len(&self) -> usize {
-        self.shapes.len() + self.unbounded.len()
+        self.leaves.shapes.len() + self.unbounded.len() + self.meshes.triangles()
     }
 
-    /// Bytes held by the hierarchy: its nodes, shapes, quad packets and ids (what a scale
-    /// benchmark reports per primitive; a boxed shape's own heap data is not followed).
+    /// Bytes held by the hierarchy: its nodes, leaves, shapes, packets, ids and meshes (what a
+    /// scale benchmark reports per primitive; a boxed shape's own heap data is not followed).
     pub fn memory_bytes(&self) -> usize {
+        self.memory_parts().iter().map(|p| p.1).sum()
+    }
+
+    /// [`Bvh::memory_bytes`] by part: nodes, leaf records, triangle packets, other leaf
+    /// contents (shapes, their ids, quad packets), meshes' buffers, unbounded shapes.
+    pub fn memory_parts(&self) -> [(&'static str, usize); 6] {
         use std::mem::size_of;
-        self.nodes.capacity() * size_of::<Node>()
-            + self.shapes.capacity() * size_of::<AnyShape>()
-            + self.packets.capacity() * size_of::<QuadPacket>()
-            + self.ids.capacity() * size_of::<u32>()
-            + self.unbounded.capacity() * size_of::<(AnyShape, u32)>()
+        let l = &self.leaves;
+        [
+            ("nodes", self.nodes.capacity() * size_of::<WideNode>()),
+            (
+                "leaves",
+                l.leaves.capacity() * size_of::<super::leaf::Leaf>(),
+            ),
+            (
+                "triangle packets",
+                l.tri_packets.capacity() * size_of::<super::triangles::TrianglePacket>(),
+            ),
+            (
+                "shapes",
+                l.memory_bytes()
+                    - l.leaves.capacity() * size_of::<super::leaf::Leaf>()
+                    - l.tri_packets.capacity() * size_of::<super::triangles::TrianglePacket>(),
+            ),
+            ("mesh buffers", self.meshes.memory_bytes()),
+            (
+                "unbounded",
+                self.unbounded.capacity() * size_of::<(AnyShape, u32)>(),
+            ),
+        ]
     }
 
     pub fn is_empty(&self) -> bool {
@@ -169,100 +223,93 @@ impl Bvh {
     /// Closest hit with `t_min < t < t_max`, and the hit shape's id. Candidates are tested
     /// for `t` only; the surface data is computed once, for the closest hit.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
-        let (lazy, shape, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((shape.hit_at(ray, lazy), lazy.part().unwrap_or(id)))
+        let (lazy, surface, id) = self.intersect_lazy(ray, t_min, t_max)?;
+        Some((
+            surface.hit_at_uv(ray, lazy, true),
+            lazy.part().unwrap_or(id),
+        ))
     }
 
-    /// Closest hit as a [`LazyHit`], the shape hit and its id.
+    /// Closest hit as a [`LazyHit`], the surface hit and its id.
     #[inline]
     pub fn intersect_lazy(
         &self,
         ray: &Ray,
         t_min: f32,
         mut t_max: f32,
-    ) -> Option<(LazyHit, &AnyShape, u32)> {
-        let mut best: Option<(LazyHit, &AnyShape, u32)> = None;
+    ) -> Option<(LazyHit, Surface<'_>, u32)> {
+        let mut best: Option<(LazyHit, Surface<'_>, u32)> = None;
         for (s, id) in &self.unbounded {
             if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
                 t_max = h.t();
-                best = Some((h, s, *id));
+                best = Some((h, Surface::Shape(s), *id));
             }
         }
         if self.nodes.is_empty() {
             return best;
         }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        // An ArrayVec: a fixed array would be zeroed on every call (a tenth of a short ray's
-        // instructions).
-        let mut stack = ArrayVec::<u32, STACK>::new();
-        let mut cur = 0usize;
-        // The closest bounded shape so far (`usize::MAX`: none; it then beats any unbounded
-        // hit in `best`, whose `t` bounded the search), and its full hit if it is boxed.
-        let mut closest = usize::MAX;
-        let mut full: Option<Hit> = None;
-        // The CSG part of `full`, if it came from a CSG tree (`u32::MAX`: none). Kept apart so
-        // that the loop moves no more than it did before CSG existed.
-        let mut part = u32::MAX;
+        let boxes = BoxRay::new(ray);
+        // Children still to visit, with their entry distances. An ArrayVec: a fixed array
+        // would be zeroed on every call (a tenth of a short ray's instructions).
+        let mut stack = ArrayVec::<(u32, f32), STACK>::new();
+        let mut c = Closest::NONE;
+        let mut cur = 0u32;
         loop {
-            let node = &self.nodes[cur];
-            if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
-                if node.count > 0 {
-                    let start = node.offset as usize;
-                    let end = start + node.count as usize;
-                    let quads = node.quads as usize;
-                    for (p, packet) in self.leaf_packets(node).iter().enumerate() {
-                        if let Some((lane, t)) = packet.hit_t(ray, t_min, t_max) {
-                            t_max = t;
-                            closest = start + 4 * p + lane;
-                            full = None;
-                        }
+            if cur & LEAF != 0 {
+                self.leaves
+                    .closest(cur & !LEAF, ray, t_min, &mut t_max, &mut c);
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (mask, near) = node.hit(&boxes, t_min, t_max);
+                let mut hits = [(0, 0.0); 4];
+                let n = far_to_near(node, mask, near, &mut hits);
+                if n > 0 {
+                    // (At most 3 per level of a tree no deeper than `STACK / 3`.)
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
                     }
-                    let rest = start + quads;
-                    for (k, s) in self.shapes[rest..end].iter().enumerate() {
-                        match s.analytic_t(ray, t_min, t_max) {
-                            Ok(Some(t)) => {
-                                t_max = t;
-                                closest = rest + k;
-                                full = None;
-                            }
-                            Ok(None) => {}
-                            Err(()) => {
-                                if let Some((h, p)) = s.intersect_full(ray, t_min, t_max) {
-                                    t_max = h.t;
-                                    part = p.unwrap_or(u32::MAX);
-                                    closest = rest + k;
-                                    full = Some(h);
-                                }
-                            }
-                        }
-                    }
-                } else {
-                    // Visit the near child first.
-                    let (first, second) = if neg[node.axis as usize] {
-                        (node.offset as usize, cur + 1)
-                    } else {
-                        (cur + 1, node.offset as usize)
-                    };
-                    stack.push(second as u32);
-                    cur = first;
+                    cur = hits[n - 1].0;
                     continue;
                 }
             }
-            match stack.pop() {
-                Some(next) => cur = next as usize,
-                None => break,
+            loop {
+                match stack.pop() {
+                    Some((next, near)) if still_near(near, t_max) => {
+                        cur = next;
+                        break;
+                    }
+                    Some(_) => {}
+                    None => return self.closest_hit(c, t_max, best),
+                }
             }
         }
-        if closest == usize::MAX {
+    }
+
+    /// The result of a closest-hit traversal that ended with `c` and `t_max`.
+    #[inline(always)]
+    fn closest_hit<'a>(
+        &'a self,
+        c: Closest,
+        t_max: f32,
+        best: Option<(LazyHit, Surface<'a>, u32)>,
+    ) -> Option<(LazyHit, Surface<'a>, u32)> {
+        if c.triangle != u32::MAX {
+            let (mesh, k, id) = self.meshes.locate(c.triangle);
+            return Some((LazyHit::T(t_max), Surface::MeshTriangle(mesh, k), id));
+        }
+        if c.shape == usize::MAX {
             return best;
         }
-        let lazy = match full {
+        let lazy = match c.full {
             None => LazyHit::T(t_max),
-            Some(h) if part != u32::MAX => LazyHit::Part(h, part),
+            Some(h) if c.part != u32::MAX => LazyHit::Part(h, c.part),
             Some(h) => LazyHit::Full(h),
         };
-        Some((lazy, &self.shapes[closest], self.ids[closest]))
+        Some((
+            lazy,
+            Surface::Shape(&self.leaves.shapes[c.shape]),
+            self.leaves.ids[c.shape],
+        ))
     }
 
     /// Whether anything is hit with `t_min < t < t_max`.
@@ -277,35 +324,28 @@ impl Bvh {
         if self.nodes.is_empty() {
             return false;
         }
-        let inv_d = ray.d.recip();
-        // An ArrayVec: a fixed array would be zeroed on every call (a tenth of a short ray's
-        // instructions).
+        let boxes = BoxRay::new(ray);
         let mut stack = ArrayVec::<u32, STACK>::new();
-        let mut cur = 0usize;
+        let mut cur = 0u32;
         loop {
-            let node = &self.nodes[cur];
-            if node.bounds.hit(ray, inv_d, t_min, t_max).is_some() {
-                if node.count > 0 {
-                    let start = node.offset as usize + node.quads as usize;
-                    let end = node.offset as usize + node.count as usize;
-                    if self
-                        .leaf_packets(node)
-                        .iter()
-                        .any(|p| p.occluded(ray, t_min, t_max))
-                        || self.shapes[start..end]
-                            .iter()
-                            .any(|s| s.occluded(ray, t_min, t_max))
-                    {
-                        return true;
+            if cur & LEAF != 0 {
+                if self.leaves.occluded(cur & !LEAF, ray, t_min, t_max) {
+                    return true;
+                }
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (mask, _) = node.hit(&boxes, t_min, t_max);
+                let mut bits = mask;
+                while bits != 0 {
+                    let slot = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    if node.child[slot] != EMPTY {
+                        stack.push(node.child[slot]);
                     }
-                } else {
-                    stack.push(node.offset);
-                    cur += 1;
-                    continue;
                 }
             }
             match stack.pop() {
-                Some(next) => cur = next as usize,
+                Some(next) => cur = next,
                 None => return false,
             }
         }
@@ -320,16 +360,9 @@ mod tests {
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::sphere::Sphere;
 
-    /// Nodes on the longest root-to-leaf path.
+    /// Nodes on the longest root-to-leaf path of the binary tree.
     fn depth(bvh: &Bvh) -> usize {
-        fn below(n: &[Node], i: usize) -> usize {
-            if n[i].count > 0 {
-                1
-            } else {
-                1 + below(n, i + 1).max(below(n, n[i].offset as usize))
-            }
-        }
-        below(&bvh.nodes, 0)
+        bvh.binary_depth
     }
 
     fn spheres_bvh(spheres: &[Sphere], median_depth: usize) -> Bvh {
@@ -338,7 +371,7 @@ mod tests {
             .enumerate()
             .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
             .collect();
-        Bvh::with_median_depth(shapes, median_depth)
+        Bvh::with_median_depth(shapes, Vec::new(), median_depth)
     }
 
     fn assert_matches_brute_force(
@@ -499,8 +532,8 @@ mod tests {
                     .map(|(i, s)| (copy_shape(s), 100 + i as u32))
                     .collect(),
             );
-            packed_leaves += bvh.nodes.iter().filter(|n| n.quads > 0).count();
-            two_packets += bvh.nodes.iter().filter(|n| n.quads > 4).count();
+            packed_leaves += bvh.leaves.leaves.iter().filter(|l| l.quads > 0).count();
+            two_packets += bvh.leaves.leaves.iter().filter(|l| l.quads > 4).count();
             for _ in 0..50 {
                 let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
                 let t_max = if rng.f32() < 0.3 { 1.0 } else { f32::INFINITY };

@@ -3,8 +3,11 @@
 mod build;
 mod bvh;
 mod instance;
+mod leaf;
+mod triangles;
+mod wide;
 
-pub use bvh::Bvh;
+pub use bvh::{Bvh, Surface};
 
 use glam::Vec3A;
 

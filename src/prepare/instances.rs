@@ -11,7 +11,7 @@ use glam::DAffine3;
 
 use crate::accel::Bvh;
 use crate::scene::{MeshData, Object, Scene, Shape};
-use crate::shapes::mesh::mesh_triangles;
+use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::AnyShape;
 use crate::shapes::transformed::Transformed;
 
@@ -68,15 +68,11 @@ impl Instancer {
         let bvh = match self.built.get(&id) {
             Some(b) => b.clone(),
             None => {
-                let tris = mesh_triangles(mesh, &DAffine3::IDENTITY)?;
+                let tris = TriangleMesh::new(mesh, &DAffine3::IDENTITY)?;
                 if tris.is_empty() {
                     return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
                 }
-                let bvh = Arc::new(Bvh::new(
-                    tris.into_iter()
-                        .map(|t| (AnyShape::Triangle(t), 0))
-                        .collect(),
-                ));
+                let bvh = Arc::new(Bvh::with_meshes(Vec::new(), vec![(tris, 0)]));
                 self.built.insert(id, bvh.clone());
                 bvh
             }

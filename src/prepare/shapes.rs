@@ -12,7 +12,7 @@ use crate::shapes::Shape;
 use crate::shapes::cuboid::cuboid_faces;
 use crate::shapes::cylinder::Cylinder;
 use crate::shapes::disk::Disk;
-use crate::shapes::mesh::mesh_triangles;
+use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
 use crate::shapes::plane::Plane;
 use crate::shapes::primitive::AnyShape;
@@ -39,14 +39,33 @@ pub(super) fn v(p: DVec3) -> Vec3A {
     p.as_vec3a()
 }
 
+/// The determinant of the object's transform, when it is not singular.
+fn determinant(obj: &scene::Object) -> Result<f64, String> {
+    let det = obj.transform.matrix3.determinant();
+    if !(det.is_finite() && det.abs() > 1e-300) {
+        return Err("the object's transform is singular (a zero scale?)".into());
+    }
+    Ok(det)
+}
+
+/// The world-space mesh of a mesh object.
+pub(super) fn build_mesh(
+    obj: &scene::Object,
+    mesh: &scene::MeshData,
+) -> Result<TriangleMesh, String> {
+    determinant(obj)?;
+    let m = TriangleMesh::new(mesh, &obj.transform)?;
+    if m.is_empty() {
+        return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
+    }
+    Ok(m)
+}
+
 /// World-space shapes of one object.
 pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
     let xf = &obj.transform;
     let m = xf.matrix3;
-    let det = m.determinant();
-    if !(det.is_finite() && det.abs() > 1e-300) {
-        return Err("the object's transform is singular (a zero scale?)".into());
-    }
+    let det = determinant(obj)?;
     let nmat = m.inverse().transpose();
     let mirrored = det < 0.0;
     let sim = similarity_scale(&m);
@@ -155,13 +174,11 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             }
             vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
         }
-        scene::Shape::Mesh { mesh } => {
-            let tris = mesh_triangles(mesh, xf)?;
-            if tris.is_empty() {
-                return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
-            }
-            tris.into_par_iter().map(AnyShape::Triangle).collect()
-        }
+        scene::Shape::Mesh { mesh } => build_mesh(obj, mesh)?
+            .triangles()
+            .into_par_iter()
+            .map(AnyShape::Triangle)
+            .collect(),
         scene::Shape::Revolve {
             profile,
             sweep,

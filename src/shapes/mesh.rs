@@ -1,51 +1,172 @@
-//! Triangle meshes: expanded into world-space triangles for the BVH.
+//! Triangle meshes: one shared vertex buffer (and normal and uv buffers, only when the file has
+//! them) with three vertex indices per triangle. The BVH stores a mesh this way; CSG leaves
+//! and emissive meshes (sampled as lights) expand it into world-space [`Triangle`]s.
 
-use glam::{DAffine3, Vec2};
+use glam::{DAffine3, Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::triangle::Triangle;
+use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::MeshData;
 
-/// The mesh's triangles in world space; smooth normals and uvs when the file has them.
-/// Degenerate triangles are skipped (OBJ files often contain a few).
-pub fn mesh_triangles(mesh: &MeshData, xf: &DAffine3) -> Result<Vec<Triangle>, String> {
-    let n = mesh.positions.len();
-    let nmat = xf.matrix3.inverse().transpose();
-    let mirrored = xf.matrix3.determinant() < 0.0;
-    let has_n = mesh.normals.len() == n;
-    let has_uv = mesh.uvs.len() == n;
-    if mesh
-        .indices
-        .par_iter()
-        .any(|tri| tri.iter().any(|&i| i as usize >= n))
-    {
-        return Err(format!(
-            "mesh `{}` has a vertex index out of range",
-            mesh.path.display()
-        ));
+/// A mesh in the space its transform maps it to. Degenerate triangles are left out.
+pub struct TriangleMesh {
+    positions: Vec<[f32; 3]>,
+    /// Per-vertex normals (transformed, not normalised), or empty.
+    normals: Vec<[f32; 3]>,
+    /// Per-vertex texture coordinates, or empty.
+    uvs: Vec<Vec2>,
+    indices: Vec<[u32; 3]>,
+}
+
+impl TriangleMesh {
+    /// `mesh` under `xf`; a mirroring transform swaps two vertices of each triangle so that its
+    /// winding (and so its normal) stays consistent.
+    pub fn new(mesh: &MeshData, xf: &DAffine3) -> Result<Self, String> {
+        let n = mesh.positions.len();
+        let nmat = xf.matrix3.inverse().transpose();
+        let mirrored = xf.matrix3.determinant() < 0.0;
+        // In parallel: a large mesh's set-up is part of the render's wall time.
+        let positions: Vec<[f32; 3]> = mesh
+            .positions
+            .par_iter()
+            .map(|&p| xf.transform_point3(p).as_vec3().to_array())
+            .collect();
+        let normals = if mesh.normals.len() == n {
+            mesh.normals
+                .par_iter()
+                .map(|&v| (nmat * v).as_vec3().to_array())
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let uvs = if mesh.uvs.len() == n {
+            mesh.uvs.par_iter().map(|uv| uv.as_vec2()).collect()
+        } else {
+            Vec::new()
+        };
+        if mesh
+            .indices
+            .par_iter()
+            .any(|tri| tri.iter().any(|&i| i as usize >= n))
+        {
+            return Err(format!(
+                "mesh `{}` has a vertex index out of range",
+                mesh.path.display()
+            ));
+        }
+        let mut out = Self {
+            positions,
+            normals,
+            uvs,
+            indices: Vec::new(),
+        };
+        // (rayon's collect keeps the file's order.)
+        out.indices = mesh
+            .indices
+            .par_iter()
+            .map(|tri| {
+                let mut idx = *tri;
+                if mirrored {
+                    idx.swap(1, 2);
+                }
+                idx
+            })
+            .filter(|&idx| out.triangle_of(idx).is_ok())
+            .collect();
+        Ok(out)
     }
-    // In parallel, into a list of the file's length (so that the threads write their parts of
-    // it in place), and the degenerate triangles left out after.
-    let tris: Vec<Option<Triangle>> = mesh
-        .indices
-        .par_iter()
-        .map(|tri| {
-            let mut idx = tri.map(|i| i as usize);
-            if mirrored {
-                idx.swap(1, 2); // keep the winding (and so the normal) consistent under a mirror
+
+    /// A mesh from raw buffers (no normals, no uvs); degenerate triangles and those with an
+    /// index out of range are left out.
+    pub fn from_buffers(positions: Vec<[f32; 3]>, indices: &[[u32; 3]]) -> Self {
+        let mut out = Self {
+            positions,
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            indices: Vec::with_capacity(indices.len()),
+        };
+        for tri in indices {
+            if tri.iter().all(|&i| (i as usize) < out.positions.len()) {
+                out.indices.push(*tri);
+                if out.triangle(out.indices.len() - 1).is_err() {
+                    out.indices.pop();
+                }
             }
-            let p = idx.map(|i| xf.transform_point3(mesh.positions[i]).as_vec3a());
-            let normals = has_n.then(|| idx.map(|i| (nmat * mesh.normals[i]).as_vec3a()));
-            let uvs = has_uv.then(|| idx.map(|i| mesh.uvs[i].as_vec2()));
-            Triangle::new(p, normals, uvs.map(|u| u.map(Vec2::from))).ok()
-        })
-        .collect();
-    if tris.par_iter().all(Option::is_some) {
-        // The usual case, moved in parallel too.
-        return Ok(tris
-            .into_par_iter()
-            .map(|t| t.expect("checked just above"))
-            .collect());
+        }
+        out.indices.shrink_to_fit();
+        out
     }
-    Ok(tris.into_iter().flatten().collect())
+
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// The three vertices of triangle `k`.
+    #[inline]
+    pub fn vertices(&self, k: usize) -> [Vec3A; 3] {
+        self.indices[k].map(|i| Vec3A::from(self.positions[i as usize]))
+    }
+
+    pub fn bounds(&self, k: usize) -> Aabb {
+        Aabb::from_points(self.vertices(k))
+    }
+
+    /// Triangle `k` as a stand-alone shape (the same values the shape of an expanded mesh has).
+    pub fn triangle(&self, k: usize) -> Result<Triangle, String> {
+        self.triangle_of(self.indices[k])
+    }
+
+    /// The triangle of vertex indices `idx` (all in range).
+    fn triangle_of(&self, idx: [u32; 3]) -> Result<Triangle, String> {
+        let idx = idx.map(|i| i as usize);
+        let normals = (!self.normals.is_empty()).then(|| idx.map(|i| Vec3A::from(self.normals[i])));
+        let uvs = (!self.uvs.is_empty()).then(|| idx.map(|i| self.uvs[i]));
+        Triangle::new(idx.map(|i| Vec3A::from(self.positions[i])), normals, uvs)
+    }
+
+    /// Every triangle as a stand-alone shape.
+    pub fn triangles(&self) -> Vec<Triangle> {
+        (0..self.len())
+            .into_par_iter()
+            .filter_map(|k| self.triangle(k).ok())
+            .collect()
+    }
+
+    /// The full hit on triangle `k` at ray parameter `t` (a value its intersection returned):
+    /// identical to the stand-alone triangle's.
+    pub fn hit_at(&self, k: usize, ray: &Ray, t: f32) -> Hit {
+        use super::SplitShape;
+        match self.triangle(k) {
+            Ok(tri) => tri.hit_at(ray, t),
+            // Not reached: degenerate triangles are not stored.
+            Err(_) => Hit {
+                t,
+                p: ray.at(t),
+                n: Vec3A::Z,
+                ns: Vec3A::Z,
+                uv: Vec2::ZERO,
+                dpdu: Vec3A::X,
+            },
+        }
+    }
+
+    /// Bytes of the buffers.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.positions.capacity() * size_of::<[f32; 3]>()
+            + self.normals.capacity() * size_of::<[f32; 3]>()
+            + self.uvs.capacity() * size_of::<Vec2>()
+            + self.indices.capacity() * size_of::<[u32; 3]>()
+    }
+}
+
+/// The mesh's triangles in world space, as stand-alone shapes; smooth normals and uvs when the
+/// file has them. Degenerate triangles are skipped (OBJ files often contain a few).
+pub fn mesh_triangles(mesh: &MeshData, xf: &DAffine3) -> Result<Vec<Triangle>, String> {
+    Ok(TriangleMesh::new(mesh, xf)?.triangles())
 }

@@ -332,6 +332,56 @@ impl SplitShape for Quad {
     }
 }
 
+/// What packet tests share (quads here, mesh triangles in the BVH): the checks of a packet's
+/// lanes against the scalar test of each lane's shape.
+#[cfg(test)]
+pub(crate) mod packet_check {
+    use glam::{BVec4A, Vec4};
+
+    /// The `t` range of case `i`: a bounded one every third case.
+    pub(crate) fn t_range(i: usize) -> (f32, f32) {
+        if i.is_multiple_of(3) {
+            (0.5, 2.0)
+        } else {
+            (0.0, f32::INFINITY)
+        }
+    }
+
+    /// Asserts that each of the first `count` lanes (`mask`, `t` from the packet) answers as
+    /// `scalar(lane, t_min, t_max)` does, bit for bit, and that the empty lanes miss; returns
+    /// the nearest (lane, `t`) a scalar loop over the lanes keeps.
+    pub(crate) fn lanes(
+        mask: BVec4A,
+        t: Vec4,
+        count: usize,
+        (t_min, t_max): (f32, f32),
+        case: usize,
+        scalar: impl Fn(usize, f32, f32) -> Option<f32>,
+    ) -> Option<(usize, f32)> {
+        let mut best = None;
+        let mut limit = t_max;
+        for lane in 0..count {
+            let want = scalar(lane, t_min, t_max);
+            assert_eq!(
+                mask.test(lane),
+                want.is_some(),
+                "lane {lane} of case {case}"
+            );
+            if let Some(w) = want {
+                assert_eq!(t[lane].to_bits(), w.to_bits(), "lane {lane} of case {case}");
+            }
+            if let Some(w) = scalar(lane, t_min, limit) {
+                limit = w;
+                best = Some((lane, w));
+            }
+        }
+        for lane in count..4 {
+            assert!(!mask.test(lane), "empty lane {lane} hit in case {case}");
+        }
+        best
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -486,28 +536,12 @@ mod tests {
                 _ => {}
             }
             let ray = Ray::new(o, d);
-            let (t_min, t_max) = if i % 3 == 0 {
-                (0.5, 2.0)
-            } else {
-                (0.0, f32::INFINITY)
-            };
+            let (t_min, t_max) = packet_check::t_range(i);
             let (mask, t) = packet.hits(&ray, t_min, t_max);
-            let mut scalar_best: Option<(usize, f32)> = None;
-            let mut limit = t_max;
-            for (lane, q) in quads.iter().enumerate() {
-                let want = q.hit_t(&ray, t_min, t_max);
-                assert_eq!(mask.test(lane), want.is_some(), "lane {lane} of case {i}");
-                if let Some(w) = want {
-                    assert_eq!(t[lane].to_bits(), w.to_bits(), "lane {lane} of case {i}");
-                }
-                if let Some(w) = q.hit_t(&ray, t_min, limit) {
-                    limit = w;
-                    scalar_best = Some((lane, w));
-                }
-            }
-            for lane in count..4 {
-                assert!(!mask.test(lane), "empty lane {lane} hit in case {i}");
-            }
+            let scalar_best =
+                packet_check::lanes(mask, t, count, (t_min, t_max), i, |k, lo, hi| {
+                    quads[k].hit_t(&ray, lo, hi)
+                });
             assert_eq!(packet.hit_t(&ray, t_min, t_max), scalar_best, "case {i}");
             assert_eq!(packet.occluded(&ray, t_min, t_max), scalar_best.is_some());
             hits += usize::from(scalar_best.is_some());

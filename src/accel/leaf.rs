@@ -1,0 +1,222 @@
+//! What a BVH leaf holds, packed after the build: its mesh triangles four to a packet, its
+//! quads four to a packet (when it has two or more), and its other shapes one by one.
+
+use glam::Vec3A;
+
+use crate::geometry::{Hit, Ray};
+
+use super::triangles::{Meshes, TrianglePacket};
+use crate::shapes::primitive::AnyShape;
+use crate::shapes::quad::{Quad, QuadPacket};
+
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Leaf {
+    /// First of its shapes in the BVH's shape list (its quads first when it has packets).
+    pub shapes: u32,
+    /// First of its quad packets.
+    pub packet: u32,
+    /// First of its triangle packets.
+    pub tri_packet: u32,
+    /// Shapes in the shape list.
+    pub count: u8,
+    /// How many of its shapes (the first ones) are quads tested in packets.
+    pub quads: u8,
+    /// Triangle packets.
+    pub tris: u8,
+}
+
+/// The packed contents of all leaves.
+#[derive(Default)]
+pub(super) struct Leaves {
+    pub leaves: Vec<Leaf>,
+    pub shapes: Vec<AnyShape>,
+    pub ids: Vec<u32>,
+    /// Each leaf's quads, four to a packet (the same quads are also in `shapes`).
+    pub packets: Vec<QuadPacket>,
+    pub tri_packets: Vec<TrianglePacket>,
+}
+
+/// The closest hit found so far in a traversal.
+pub(super) struct Closest {
+    /// The shape hit (its index in the shape list; `usize::MAX`: none, or a triangle).
+    pub shape: usize,
+    /// The mesh triangle hit (its global number; `u32::MAX`: none, or a shape).
+    pub triangle: u32,
+    /// The full hit, when the shape hit is boxed.
+    pub full: Option<Hit>,
+    /// The CSG part of `full`, if it came from a CSG tree (`u32::MAX`: none).
+    pub part: u32,
+}
+
+impl Closest {
+    pub(super) const NONE: Self = Self {
+        shape: usize::MAX,
+        triangle: u32::MAX,
+        full: None,
+        part: u32::MAX,
+    };
+}
+
+/// One item of a leaf: a shape (its index in the shape list given to the build) or a mesh
+/// triangle (its global number).
+#[derive(Clone, Copy)]
+pub(super) enum Content {
+    Shape(usize),
+    Triangle(u32),
+}
+
+impl Leaves {
+    /// Appends a leaf of `items`; returns its index.
+    pub(super) fn push(
+        &mut self,
+        items: &[Content],
+        slots: &mut [Option<(AnyShape, u32)>],
+        meshes: &Meshes,
+    ) -> u32 {
+        let mut leaf = Leaf {
+            shapes: self.shapes.len() as u32,
+            packet: self.packets.len() as u32,
+            tri_packet: self.tri_packets.len() as u32,
+            ..Leaf::default()
+        };
+        let mut tris: Vec<([Vec3A; 3], u32)> = Vec::new();
+        let mut shapes: Vec<(AnyShape, u32)> = Vec::new();
+        for it in items {
+            match *it {
+                Content::Triangle(g) => {
+                    let (mesh, k, _) = meshes.locate(g);
+                    tris.push((mesh.vertices(k), g));
+                }
+                Content::Shape(i) => shapes.extend(slots[i].take()),
+            }
+        }
+        // Leaves with two quads or more list them first and test them four at a time.
+        let is_quad = |s: &(AnyShape, u32)| matches!(s.0, AnyShape::Quad(_));
+        let quads = shapes.iter().filter(|s| is_quad(s)).count();
+        if quads >= 2 {
+            shapes.sort_by_key(|s| !is_quad(s));
+            leaf.quads = quads as u8;
+            let qs: Vec<Quad> = shapes[..quads]
+                .iter()
+                .filter_map(|s| match &s.0 {
+                    AnyShape::Quad(q) => Some(*q),
+                    _ => None,
+                })
+                .collect();
+            self.packets.extend(qs.chunks(4).map(QuadPacket::new));
+        }
+        leaf.count = shapes.len() as u8;
+        for (s, id) in shapes {
+            self.shapes.push(s);
+            self.ids.push(id);
+        }
+        leaf.tris = tris.len().div_ceil(4) as u8;
+        self.tri_packets
+            .extend(tris.chunks(4).map(TrianglePacket::new));
+        self.leaves.push(leaf);
+        (self.leaves.len() - 1) as u32
+    }
+
+    pub(super) fn shrink_to_fit(&mut self) {
+        self.leaves.shrink_to_fit();
+        self.shapes.shrink_to_fit();
+        self.ids.shrink_to_fit();
+        self.packets.shrink_to_fit();
+        self.tri_packets.shrink_to_fit();
+    }
+
+    /// The quad packets of a leaf.
+    #[inline]
+    pub(super) fn quad_packets(&self, leaf: &Leaf) -> &[QuadPacket] {
+        let n = (leaf.quads as usize).div_ceil(4);
+        &self.packets[leaf.packet as usize..][..n]
+    }
+
+    /// The triangle packets of a leaf.
+    #[inline]
+    pub(super) fn triangle_packets(&self, leaf: &Leaf) -> &[TrianglePacket] {
+        &self.tri_packets[leaf.tri_packet as usize..][..leaf.tris as usize]
+    }
+
+    /// Tests leaf `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
+    #[inline(always)]
+    pub(super) fn closest(
+        &self,
+        leaf: u32,
+        ray: &Ray,
+        t_min: f32,
+        t_max: &mut f32,
+        c: &mut Closest,
+    ) {
+        let leaf = &self.leaves[leaf as usize];
+        for packet in self.triangle_packets(leaf) {
+            if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
+                *t_max = t;
+                c.triangle = g;
+                c.shape = usize::MAX;
+            }
+        }
+        if leaf.count == 0 {
+            return;
+        }
+        let start = leaf.shapes as usize;
+        let end = start + leaf.count as usize;
+        for (p, packet) in self.quad_packets(leaf).iter().enumerate() {
+            if let Some((lane, t)) = packet.hit_t(ray, t_min, *t_max) {
+                *t_max = t;
+                c.shape = start + 4 * p + lane;
+                c.triangle = u32::MAX;
+                c.full = None;
+            }
+        }
+        let rest = start + leaf.quads as usize;
+        for (k, s) in self.shapes[rest..end].iter().enumerate() {
+            match s.analytic_t(ray, t_min, *t_max) {
+                Ok(Some(t)) => {
+                    *t_max = t;
+                    c.shape = rest + k;
+                    c.triangle = u32::MAX;
+                    c.full = None;
+                }
+                Ok(None) => {}
+                Err(()) => {
+                    if let Some((h, p)) = s.intersect_full(ray, t_min, *t_max) {
+                        *t_max = h.t;
+                        c.part = p.unwrap_or(u32::MAX);
+                        c.shape = rest + k;
+                        c.triangle = u32::MAX;
+                        c.full = Some(h);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether anything in leaf `leaf` is hit with `t_min < t < t_max`.
+    #[inline(always)]
+    pub(super) fn occluded(&self, leaf: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        use crate::shapes::Shape;
+        let leaf = &self.leaves[leaf as usize];
+        let start = leaf.shapes as usize + leaf.quads as usize;
+        let end = leaf.shapes as usize + leaf.count as usize;
+        self.triangle_packets(leaf)
+            .iter()
+            .any(|p| p.occluded(ray, t_min, t_max))
+            || self
+                .quad_packets(leaf)
+                .iter()
+                .any(|p| p.occluded(ray, t_min, t_max))
+            || self.shapes[start..end]
+                .iter()
+                .any(|s| s.occluded(ray, t_min, t_max))
+    }
+
+    pub(super) fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.leaves.capacity() * size_of::<Leaf>()
+            + self.shapes.capacity() * size_of::<AnyShape>()
+            + self.ids.capacity() * size_of::<u32>()
+            + self.packets.capacity() * size_of::<QuadPacket>()
+            + self.tri_packets.capacity() * size_of::<TrianglePacket>()
+    }
+}

@@ -1,0 +1,210 @@
+//! Mesh triangles in the BVH's leaves: four to a packet, each as its first vertex and two edges
+//! in SoA form, tested four at a time by Möller–Trumbore. A packet holds what the test needs and
+//! the triangles' numbers; the surface data of the closest hit comes from the mesh's shared
+//! buffers ([`TriangleMesh::hit_at`]).
+
+use glam::{BVec4A, Vec3A, Vec4};
+
+use crate::geometry::Ray;
+use crate::shapes::mesh::TriangleMesh;
+
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TrianglePacket {
+    v0: [Vec4; 3],
+    e1: [Vec4; 3],
+    e2: [Vec4; 3],
+    /// Each lane's triangle (a number over all the BVH's meshes); `u32::MAX` in empty lanes.
+    ids: [u32; 4],
+}
+
+#[inline(always)]
+fn dot4(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
+    (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+}
+
+#[inline(always)]
+fn cross4(a: &[Vec4; 3], b: &[Vec4; 3]) -> [Vec4; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+impl TrianglePacket {
+    /// The packet of up to four triangles, each given by its vertices and its number.
+    pub(crate) fn new(tris: &[([Vec3A; 3], u32)]) -> Self {
+        assert!(tris.len() <= 4, "a packet holds four triangles");
+        let mut p = Self {
+            v0: [Vec4::ZERO; 3],
+            e1: [Vec4::ZERO; 3],
+            e2: [Vec4::ZERO; 3],
+            ids: [u32::MAX; 4],
+        };
+        for (lane, (v, id)) in tris.iter().enumerate() {
+            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+            for axis in 0..3 {
+                p.v0[axis][lane] = v[0][axis];
+                p.e1[axis][lane] = e1[axis];
+                p.e2[axis][lane] = e2[axis];
+            }
+            p.ids[lane] = *id;
+        }
+        p
+    }
+
+    /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`:
+    /// the same operations in the same order as the scalar [`Triangle`] test, so the same bits.
+    ///
+    /// [`Triangle`]: crate::shapes::triangle::Triangle
+    #[inline(always)]
+    fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4) {
+        let d = [ray.d.x, ray.d.y, ray.d.z].map(Vec4::splat);
+        let o = [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat);
+        let pv = cross4(&d, &self.e2);
+        let det = dot4(&self.e1, &pv);
+        let inv = Vec4::ONE / det;
+        let tv = [0, 1, 2].map(|a| o[a] - self.v0[a]);
+        let b1 = dot4(&tv, &pv) * inv;
+        let qv = cross4(&tv, &self.e1);
+        let b2 = dot4(&d, &qv) * inv;
+        let t = dot4(&self.e2, &qv) * inv;
+        let (zero, one) = (Vec4::ZERO, Vec4::ONE);
+        let finite = det.abs().cmplt(Vec4::INFINITY);
+        let mask = det.cmpne(zero)
+            & finite
+            & b1.cmpge(zero)
+            & b1.cmple(one)
+            & !b2.cmplt(zero)
+            & !(b1 + b2).cmpgt(one)
+            & t.cmpgt(Vec4::splat(t_min))
+            & t.cmplt(Vec4::splat(t_max));
+        (mask, t)
+    }
+
+    /// The nearest hit with `t_min < t < t_max`: its triangle and `t` (on equal `t`, the lowest
+    /// lane, as a scalar loop over the triangles in lane order would keep).
+    #[inline]
+    pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32)> {
+        let (mask, t) = self.hits(ray, t_min, t_max);
+        if !mask.any() {
+            return None;
+        }
+        let t = Vec4::select(mask, t, Vec4::INFINITY);
+        let best = t.min_element();
+        let lane = (t.cmpeq(Vec4::splat(best)) & mask)
+            .bitmask()
+            .trailing_zeros() as usize;
+        Some((self.ids[lane], best))
+    }
+
+    /// Whether any triangle of the packet is hit with `t_min < t < t_max`.
+    #[inline]
+    pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.hits(ray, t_min, t_max).0.any()
+    }
+}
+
+/// The BVH's meshes, each with its caller id, and the first global triangle number of each.
+#[derive(Default)]
+pub(crate) struct Meshes {
+    meshes: Vec<(TriangleMesh, u32)>,
+    starts: Vec<u32>,
+}
+
+impl Meshes {
+    pub(crate) fn new(meshes: Vec<(TriangleMesh, u32)>) -> Self {
+        let mut starts = Vec::with_capacity(meshes.len());
+        let mut n = 0u32;
+        for (m, _) in &meshes {
+            starts.push(n);
+            n = n.saturating_add(u32::try_from(m.len()).unwrap_or(u32::MAX));
+        }
+        Self { meshes, starts }
+    }
+
+    /// Triangles over all meshes.
+    pub(crate) fn triangles(&self) -> usize {
+        self.meshes.iter().map(|(m, _)| m.len()).sum()
+    }
+
+    /// Every triangle as (global number, mesh, triangle within it).
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (u32, &TriangleMesh, usize)> {
+        self.meshes
+            .iter()
+            .zip(&self.starts)
+            .flat_map(|((m, _), &s)| (0..m.len()).map(move |k| (s + k as u32, m, k)))
+    }
+
+    /// The mesh, triangle within it and caller id of global triangle `g`.
+    #[inline]
+    pub(crate) fn locate(&self, g: u32) -> (&TriangleMesh, usize, u32) {
+        let m = self.starts.partition_point(|&s| s <= g) - 1;
+        let (mesh, id) = &self.meshes[m];
+        (mesh, (g - self.starts[m]) as usize, *id)
+    }
+
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.meshes
+            .iter()
+            .map(|(m, _)| m.memory_bytes())
+            .sum::<usize>()
+            + self.meshes.capacity() * std::mem::size_of::<(TriangleMesh, u32)>()
+            + self.starts.capacity() * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Rng, uniform_sphere};
+    use crate::shapes::SplitShape;
+    use crate::shapes::quad::packet_check;
+    use crate::shapes::triangle::Triangle;
+
+    /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, and `t`),
+    /// including rays through vertices and along edges, and the packet's nearest is the
+    /// scalar loop's nearest.
+    #[test]
+    fn packets_match_the_scalar_test() {
+        let mut rng = Rng::new(5);
+        let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
+        let mut hits = 0;
+        for i in 0..20000 {
+            let count = 1 + i % 4;
+            let tris: Vec<([Vec3A; 3], u32)> = (0..count)
+                .map(|k| ([v(&mut rng), v(&mut rng), v(&mut rng)], 10 + k as u32))
+                .collect();
+            let packet = TrianglePacket::new(&tris);
+            let mut o = 2.0 * v(&mut rng);
+            let mut d = uniform_sphere(rng.vec2());
+            let p = tris[i % count].0;
+            match i % 10 {
+                0 => d = (p[1] - o).normalize(), // through a vertex
+                1 => d = (p[0] + 0.5 * (p[1] - p[0]) - o).normalize(), // through an edge
+                2 => o = p[0] + 0.3 * (p[1] - p[0]), // from an edge
+                3..=6 => {
+                    let (a, b) = (1.2 * rng.f32() - 0.1, 1.2 * rng.f32() - 0.1);
+                    d = (p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]) - o).normalize();
+                }
+                _ => {}
+            }
+            let ray = Ray::new(o, d);
+            let (t_min, t_max) = packet_check::t_range(i);
+            let (mask, t) = packet.hits(&ray, t_min, t_max);
+            // (Random triangles are never degenerate here: `Triangle::new` succeeds.)
+            let scalar: Vec<Triangle> = tris
+                .iter()
+                .map(|(vs, _)| Triangle::new(*vs, None, None).unwrap())
+                .collect();
+            let best = packet_check::lanes(mask, t, count, (t_min, t_max), i, |k, lo, hi| {
+                scalar[k].hit_t(&ray, lo, hi)
+            })
+            .map(|(lane, t)| (tris[lane].1, t));
+            assert_eq!(packet.hit_t(&ray, t_min, t_max), best, "case {i}");
+            assert_eq!(packet.occluded(&ray, t_min, t_max), best.is_some());
+            hits += usize::from(best.is_some());
+        }
+        assert!(hits > 5000, "{hits} of 20000 cases hit");
+    }
+}
