@@ -99,6 +99,12 @@ impl RayFrame {
     /// [`Refine::FalsePosition`], the reference [`Refine::Bisection`] (so the stress test compares
     /// two refinements, not one with itself).
     /// Returns `(t, s)` pairs.
+    ///
+    /// `window = (t_min, t_max)`: the caller keeps only candidates with `t_min < t < t_max`. A
+    /// side whose every candidate provably lies outside (bounds of `t` over the bracket, see
+    /// [`RayFrame::side_ranges`]) is not searched; its candidate may then be NaN where the full
+    /// search would give one outside the window, and the candidates inside are the same.
+    /// The reference passes the whole line.
     pub fn candidates(
         &self,
         seg: &Segment,
@@ -106,11 +112,17 @@ impl RayFrame {
         ds: f64,
         size: f64,
         refine: Refine,
+        window: (f64, f64),
     ) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
         let lo = (root.lo - 4.0 * ds).max(0.0);
         let hi = (root.hi + 4.0 * ds).min(1.0);
         let mut cands = [(f64::NAN, root.t); 2];
+        let ranges = self.side_ranges(seg, lo, hi);
+        let inside = ranges.map(|(a, b)| b > window.0 && a < window.1);
+        if !inside[0] && !inside[1] {
+            return cands;
+        }
         if self.steep {
             let t_of = |s: f64| (seg.h.eval(s) - oc.y) / dn.y;
             let g = |s: f64| {
@@ -147,6 +159,18 @@ impl RayFrame {
         };
         let mut refined = false;
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            // A side outside the window matters only by whether it changes sign (which rules
+            // out the tangency search below). Where `r` stays at or above `reach` on the whole
+            // bracket its factor is never NaN, and then a sign change between the scan's end
+            // samples means the scan would find one between some neighbouring samples.
+            if !inside[k] {
+                let (rl, _) = seg.value_range(lo, hi).0;
+                let (ga, gb) = (g(sigma, lo), g(sigma, lo + (hi - lo)));
+                if rl >= reach && ((ga <= 0.0 && gb >= 0.0) || (ga >= 0.0 && gb <= 0.0)) {
+                    refined = true;
+                    continue;
+                }
+            }
             if let Some(s) =
                 nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi, refine)
             {
@@ -161,11 +185,40 @@ impl RayFrame {
         // factor really reaches zero (the root of `F` alone is not enough: near a pole its
         // uncertainty in `s` is large enough to turn a ray that passes 1e-7 away into a hit).
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            if !inside[k] {
+                continue;
+            }
             if let Some(s) = touch(&|s| g(sigma, s), lo, hi, size) {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
             }
         }
         cands
+    }
+}
+
+impl RayFrame {
+    /// Intervals containing the `t` of every candidate [`RayFrame::candidates`] can compute
+    /// from an `s` in `[lo, hi]`: for steep rays one interval (the second is empty), for flat
+    /// rays one per side `sigma = +1, -1`. The candidates' `t` are computed from `r(s)` or `h(s)`
+    /// by a chain of correctly rounded operations, each monotone in its input, so the same
+    /// chain applied to the ends of an interval containing the computed `r(s)` or `h(s)`
+    /// ([`Segment::value_range`]) bounds the computed `t`, rounding included.
+    pub fn side_ranges(&self, seg: &Segment, lo: f64, hi: f64) -> [(f64, f64); 2] {
+        let ((rl, rh), (hl, hh)) = seg.value_range(lo, hi);
+        if self.steep {
+            let t_at = |h: f64| self.t0 + (h - self.oc.y) / self.dn.y;
+            let (a, b) = (t_at(hl), t_at(hh));
+            return [(a.min(b), a.max(b)), (f64::INFINITY, f64::NEG_INFINITY)];
+        }
+        // The same expression as `w_of` in `candidates`, from a squared radius.
+        let w_at = |r2: f64| ((r2 - self.rho2) / self.dh2).max(0.0).sqrt();
+        let lo2 = if rl > 0.0 { rl * rl } else { 0.0 };
+        let m = rl.abs().max(rh.abs());
+        let (wl, wh) = (w_at(lo2), w_at(m * m));
+        [
+            (self.t0 + wl, self.t0 + wh),
+            (self.t0 + -1.0 * wh, self.t0 + -1.0 * wl),
+        ]
     }
 }
 

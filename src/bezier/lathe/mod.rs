@@ -284,7 +284,10 @@ impl Lathe {
             }
             for root in &roots {
                 let ds = root_uncertainty(&f, root.t, noise);
-                for (t, s) in frame.candidates(seg, root, ds, self.size, Refine::FalsePosition) {
+                let window = (tmin, best);
+                let cands =
+                    frame.candidates(seg, root, ds, self.size, Refine::FalsePosition, window);
+                for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
                         found = Some((t, Part::Side(i), s));
