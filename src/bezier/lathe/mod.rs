@@ -284,9 +284,9 @@ impl Lathe {
             }
             for root in &roots {
                 let ds = root_uncertainty(&f, root.t, noise);
-                let window = (tmin, best);
+                let prune = Some((tmin, best));
                 let cands =
-                    frame.candidates(seg, root, ds, self.size, Refine::FalsePosition, window);
+                    frame.candidates(seg, root, ds, self.size, Refine::FalsePosition, prune);
                 for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
