@@ -62,7 +62,7 @@ impl RayFrame {
         let (oc, dn) = (self.oc, self.dn);
         let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
         let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
-        let rr = seg.r.mul(&seg.r).expect("degree <= 14");
+        let rr = &seg.rr;
         let f = a
             .mul(&a)
             .and_then(|aa| aa.add(&b.mul(&b)?))

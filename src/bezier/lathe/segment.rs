@@ -29,6 +29,8 @@ const GL_W: [f64; 5] = [
 pub struct Segment {
     pub r: Bernstein,
     pub h: Bernstein,
+    /// `r^2` (the same for every ray).
+    pub(super) rr: Bernstein,
     pub(crate) rmax: f64,
     pub(crate) hmin: f64,
     pub(crate) hmax: f64,
@@ -85,6 +87,7 @@ impl Segment {
             hmax: a.hmax.max(b.hmax),
         });
         let mut seg = Self {
+            rr: r.mul(&r).expect("degree <= 7"),
             r,
             h,
             rmax,
