@@ -237,7 +237,8 @@ impl RayFrame {
         let (wl, wh) = b.w;
         [
             (self.t0 + wl, self.t0 + wh),
-            (self.t0 + -1.0 * wh, self.t0 + -1.0 * wl),
+            // `sigma * w` with `sigma = -1` is `-w` exactly.
+            (self.t0 - wh, self.t0 - wl),
         ]
     }
 
