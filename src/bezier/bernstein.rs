@@ -107,13 +107,42 @@ impl Bernstein {
         (left, right)
     }
 
+    /// The part on [0, t] reparameterised on [0, 1] (the left half of [`Bernstein::split`],
+    /// the same arithmetic).
+    pub fn left_of(&self, t: f64) -> Self {
+        let n = self.n;
+        let mut left = *self;
+        let mut b = self.c;
+        for level in 1..=n {
+            for i in 0..=n - level {
+                b[i] += t * (b[i + 1] - b[i]);
+            }
+            left.c[level] = b[0];
+        }
+        left
+    }
+
+    /// The part on [t, 1] reparameterised on [0, 1] (the right half of [`Bernstein::split`],
+    /// the same arithmetic, in place).
+    pub fn right_of(&self, t: f64) -> Self {
+        let n = self.n;
+        let mut right = *self;
+        let b = &mut right.c;
+        for level in 1..=n {
+            for i in 0..=n - level {
+                b[i] += t * (b[i + 1] - b[i]);
+            }
+        }
+        right
+    }
+
     /// The restriction to [a, b] reparameterised on [0, 1].
     pub fn restrict(&self, a: f64, b: f64) -> Self {
         if b >= 1.0 {
-            return self.split(a).1;
+            return self.right_of(a);
         }
-        let (left, _) = self.split(b);
-        if a <= 0.0 { left } else { left.split(a / b).1 }
+        let left = self.left_of(b);
+        if a <= 0.0 { left } else { left.right_of(a / b) }
     }
 
     /// The derivative (degree n - 1; the zero constant for a constant).
@@ -219,6 +248,18 @@ mod tests {
         }
         assert_eq!(binomial(15, 7), 6435.0);
         assert_eq!(binomial(6, 3), 20.0);
+    }
+
+    /// `left_of` and `right_of` are the halves of `split`, bit for bit (the root finder's
+    /// results must not depend on which is used).
+    #[test]
+    fn one_sided_splits_are_the_halves_of_split() {
+        let p = cubic().mul(&cubic()).unwrap().add_constant(0.3);
+        for t in [0.0, 1e-9, 0.125, 0.3, 0.5, 0.77, 1.0 - 1e-12, 1.0] {
+            let (l, r) = p.split(t);
+            assert_eq!(p.left_of(t), l, "{t}");
+            assert_eq!(p.right_of(t), r, "{t}");
+        }
     }
 
     fn power_eval(p: &[f64], t: f64) -> f64 {

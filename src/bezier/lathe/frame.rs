@@ -62,7 +62,7 @@ impl RayFrame {
         let (oc, dn) = (self.oc, self.dn);
         let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
         let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
-        let rr = seg.r.mul(&seg.r).expect("degree <= 14");
+        let rr = &seg.rr;
         let f = a
             .mul(&a)
             .and_then(|aa| aa.add(&b.mul(&b)?))
@@ -99,6 +99,14 @@ impl RayFrame {
     /// [`Refine::FalsePosition`], the reference [`Refine::Bisection`] (so the stress test compares
     /// two refinements, not one with itself).
     /// Returns `(t, s)` pairs.
+    ///
+    /// `prune = Some((t_min, t_max))`: the caller keeps only candidates with
+    /// `t_min < t < t_max`, and work that provably cannot give one is skipped: a side whose every
+    /// candidate lies outside (bounds of `t` over the bracket, see [`RayFrame::side_ranges`]),
+    /// and the scan of a factor that keeps one sign on the whole bracket (bounds of its computed
+    /// value). A skipped side's candidate is NaN where the full search may give one outside the
+    /// window; the candidates inside are the same, bit for bit. The reference passes `None`
+    /// (the full search).
     pub fn candidates(
         &self,
         seg: &Segment,
@@ -106,11 +114,21 @@ impl RayFrame {
         ds: f64,
         size: f64,
         refine: Refine,
+        prune: Option<(f64, f64)>,
     ) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
         let lo = (root.lo - 4.0 * ds).max(0.0);
         let hi = (root.hi + 4.0 * ds).min(1.0);
         let mut cands = [(f64::NAN, root.t); 2];
+        let inside = match prune {
+            Some(w) => self
+                .side_ranges(seg, lo, hi)
+                .map(|(a, b)| b > w.0 && a < w.1),
+            None => [true; 2],
+        };
+        if !inside[0] && !inside[1] {
+            return cands;
+        }
         if self.steep {
             let t_of = |s: f64| (seg.h.eval(s) - oc.y) / dn.y;
             let g = |s: f64| {
@@ -145,8 +163,37 @@ impl RayFrame {
             }
             seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
         };
+        let b = self.bracket_bounds(seg, lo, hi);
+        let g_range = |sigma: f64| {
+            // `g` is increasing in `h` and monotone in `w` (through `dn.y sigma w`), and so is
+            // its computed value: the same expression at the bounds bounds it.
+            let y = |w: f64| oc.y + dn.y * sigma * w;
+            let (ya, yb) = (y(b.w.0), y(b.w.1));
+            (b.h.0 - ya.max(yb), b.h.1 - ya.min(yb))
+        };
+        // Far enough from 0 that a product of two such values cannot underflow to 0.
+        const TINY: f64 = 1e-140;
         let mut refined = false;
+        let mut sign_kept = [false; 2];
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            // A factor of one sign on the whole bracket (where the ray reaches it) has no sign
+            // change between any of the scan's samples: the scan would find nothing.
+            let (gl, gh) = g_range(sigma);
+            if prune.is_some() && (gl > TINY || gh < -TINY) {
+                sign_kept[k] = gl > 1e-10 * size || gh < -1e-10 * size;
+                continue;
+            }
+            // A side outside the window matters only by whether it changes sign (which rules
+            // out the tangency search below). Where `r` stays at or above `reach` on the whole
+            // bracket its factor is never NaN, and then a sign change between the scan's end
+            // samples means the scan would find one between some neighbouring samples.
+            if !inside[k] {
+                let (ga, gb) = (g(sigma, lo), g(sigma, lo + (hi - lo)));
+                if b.r.0 >= reach && ((ga <= 0.0 && gb >= 0.0) || (ga >= 0.0 && gb <= 0.0)) {
+                    refined = true;
+                    continue;
+                }
+            }
             if let Some(s) =
                 nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi, refine)
             {
@@ -161,12 +208,61 @@ impl RayFrame {
         // factor really reaches zero (the root of `F` alone is not enough: near a pole its
         // uncertainty in `s` is large enough to turn a ray that passes 1e-7 away into a hit).
         for (k, sigma) in [1.0, -1.0].into_iter().enumerate() {
+            // Outside the window, or `|g|` above the touch's threshold everywhere: no candidate.
+            if !inside[k] || sign_kept[k] {
+                continue;
+            }
             if let Some(s) = touch(&|s| g(sigma, s), lo, hi, size) {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
             }
         }
         cands
     }
+}
+
+impl RayFrame {
+    /// Intervals containing the `t` of every candidate [`RayFrame::candidates`] can compute
+    /// from an `s` in `[lo, hi]`: for steep rays one interval (the second is empty), for flat
+    /// rays one per side `sigma = +1, -1`. The candidates' `t` are computed from `r(s)` or `h(s)`
+    /// by a chain of correctly rounded operations, each monotone in its input, so the same
+    /// chain applied to the ends of an interval containing the computed `r(s)` or `h(s)`
+    /// ([`Segment::value_range`]) bounds the computed `t`, rounding included.
+    pub fn side_ranges(&self, seg: &Segment, lo: f64, hi: f64) -> [(f64, f64); 2] {
+        let b = self.bracket_bounds(seg, lo, hi);
+        if self.steep {
+            let t_at = |h: f64| self.t0 + (h - self.oc.y) / self.dn.y;
+            let (a, c) = (t_at(b.h.0), t_at(b.h.1));
+            return [(a.min(c), a.max(c)), (f64::INFINITY, f64::NEG_INFINITY)];
+        }
+        let (wl, wh) = b.w;
+        [
+            (self.t0 + wl, self.t0 + wh),
+            // `sigma * w` with `sigma = -1` is `-w` exactly.
+            (self.t0 - wh, self.t0 - wl),
+        ]
+    }
+
+    /// Bounds of the computed `r(s)`, `h(s)` and `w(s)` (the half chord at radius `r`, as
+    /// `candidates` computes it) for every `s` in `[lo, hi]`.
+    fn bracket_bounds(&self, seg: &Segment, lo: f64, hi: f64) -> BracketBounds {
+        let (r, h) = seg.value_range(lo, hi);
+        // The same expression as `w_of` in `candidates`, from a squared radius.
+        let w_at = |r2: f64| ((r2 - self.rho2) / self.dh2).max(0.0).sqrt();
+        let lo2 = if r.0 > 0.0 { r.0 * r.0 } else { 0.0 };
+        let m = r.0.abs().max(r.1.abs());
+        BracketBounds {
+            r,
+            h,
+            w: (w_at(lo2), w_at(m * m)),
+        }
+    }
+}
+
+/// See [`RayFrame::bracket_bounds`]: `(lower, upper)` pairs.
+struct BracketBounds {
+    r: (f64, f64),
+    h: (f64, f64),
+    w: (f64, f64),
 }
 
 /// Where a factor `g` touches zero on `[lo, hi]` without a sign change between samples (a

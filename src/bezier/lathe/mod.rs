@@ -268,12 +268,27 @@ impl Lathe {
             &mut heap[..]
         };
         order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(entry, i, mask) in order.iter() {
+        let best_at_entry = best;
+        for &(entry, i, mut mask) in order.iter() {
             if entry >= best {
                 // Every later segment's hits lie beyond the nearest hit found.
                 break;
             }
             let seg = &self.segs[i];
+            if best < best_at_entry {
+                // A nearer hit was found since the shells were tested: drop the pieces the ray
+                // now enters only beyond it.
+                for (k, shell) in seg.shells.iter().enumerate() {
+                    if mask & (1 << k) != 0
+                        && frame.shell_entry(shell, tmin, best, self.size).is_none()
+                    {
+                        mask &= !(1 << k);
+                    }
+                }
+                if mask == 0 {
+                    continue;
+                }
+            }
             let (f, noise) = frame.polynomial(seg);
             roots.clear();
             match solver {
@@ -284,7 +299,10 @@ impl Lathe {
             }
             for root in &roots {
                 let ds = root_uncertainty(&f, root.t, noise);
-                for (t, s) in frame.candidates(seg, root, ds, self.size, Refine::FalsePosition) {
+                let prune = Some((tmin, best));
+                let cands =
+                    frame.candidates(seg, root, ds, self.size, Refine::FalsePosition, prune);
+                for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
                         found = Some((t, Part::Side(i), s));

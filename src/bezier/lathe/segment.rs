@@ -29,6 +29,8 @@ const GL_W: [f64; 5] = [
 pub struct Segment {
     pub r: Bernstein,
     pub h: Bernstein,
+    /// `r^2` (the same for every ray).
+    pub(super) rr: Bernstein,
     pub(crate) rmax: f64,
     pub(crate) hmin: f64,
     pub(crate) hmax: f64,
@@ -42,6 +44,20 @@ pub struct Segment {
     pub(super) shell: Shell,
     /// All control points coincide: the segment is a point (or circle) of zero area.
     pub degenerate: bool,
+    /// Bounds of `|r'|` and `|h'|` on [0, 1] (the derivative's control polygon) and the
+    /// rounding allowance of an evaluation of `r` and `h` ([`Segment::value_range`]).
+    lip: (f64, f64),
+    pad: (f64, f64),
+}
+
+/// `n max |c_{i+1} - c_i|` (a bound of `|p'|` on [0, 1]) and a rounding allowance for a value of
+/// `p` computed by de Casteljau's algorithm: 256 (n + 1) ulps of the largest coefficient, far
+/// above the `2n` ulps such an evaluation and the subtraction around it can lose.
+fn slope_and_pad(p: &Bernstein) -> (f64, f64) {
+    (
+        p.derivative().max_abs(),
+        256.0 * f64::EPSILON * (p.degree() as f64 + 1.0) * p.max_abs(),
+    )
 }
 
 impl Segment {
@@ -71,6 +87,7 @@ impl Segment {
             hmax: a.hmax.max(b.hmax),
         });
         let mut seg = Self {
+            rr: r.mul(&r).expect("degree <= 7"),
             r,
             h,
             rmax,
@@ -81,6 +98,8 @@ impl Segment {
             shells,
             shell,
             degenerate,
+            lip: (slope_and_pad(&r).0, slope_and_pad(&h).0),
+            pad: (slope_and_pad(&r).1, slope_and_pad(&h).1),
         };
         for k in 0..TABLE_STEPS {
             let (a, b) = (
@@ -117,6 +136,22 @@ impl Segment {
         let s = s.clamp(0.0, 1.0);
         let k = ((s * TABLE_STEPS as f64) as usize).min(TABLE_STEPS - 1);
         self.len_table[k] + self.integrate(k as f64 / TABLE_STEPS as f64, s, |_| 1.0)
+    }
+
+    /// Intervals containing `r.eval(s)` and `h.eval(s)`, as computed, for every `s` in
+    /// `[lo, hi]`: the value at the middle plus the slope bound times the half width and the
+    /// rounding allowance.
+    pub(super) fn value_range(&self, lo: f64, hi: f64) -> ((f64, f64), (f64, f64)) {
+        let mid = 0.5 * (lo + hi);
+        let half = 0.5 * (hi - lo);
+        let around = |v: f64, lip: f64, pad: f64| {
+            let e = lip * half + pad;
+            (v - e, v + e)
+        };
+        (
+            around(self.r.eval(mid), self.lip.0, self.pad.0),
+            around(self.h.eval(mid), self.lip.1, self.pad.1),
+        )
     }
 
     pub fn point(&self, s: f64) -> DVec2 {

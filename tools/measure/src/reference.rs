@@ -188,7 +188,7 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
                 }
                 let (_, df) = g(root.t);
                 let ds = b.noise / df.abs().max(1e-300);
-                for (t, s) in frame.candidates(seg, root, ds, size, Refine::Bisection) {
+                for (t, s) in frame.candidates(seg, root, ds, size, Refine::Bisection, None) {
                     if t.is_finite() {
                         cands.push((t, s));
                     }
