@@ -36,6 +36,8 @@ use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
 
 mod balance;
+#[cfg(test)]
+mod census;
 mod grid;
 mod pass;
 mod pixels;
