@@ -24,33 +24,21 @@ Model mapping (README.md beside this file). Units: smallpt's scaled by 1/100 (me
   the indirect part and far less of the image (measured: docs/measurements.md).
 """
 import argparse
+import os
+import sys
 
 import mitsuba as mi
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# `frame` maps Mitsuba's local xy shapes (normal +z); `lambert` is a two-sided diffuse.
+from glossy import frame, lambert, rgb  # noqa: E402
 
 S = 0.01
 GREY = [0.75, 0.75, 0.75]
 LEFT = [0.75, 0.25, 0.25]
 RIGHT = [0.25, 0.25, 0.75]
 Z_FAR = 200.0
-
-
-def frame(center, u, v, n):
-    """A `rectangle` or `disk` (local xy, normal +z) mapped to center + x u + y v, normal n."""
-    return mi.ScalarTransform4f([
-        [u[0], v[0], n[0], center[0]],
-        [u[1], v[1], n[1], center[1]],
-        [u[2], v[2], n[2], center[2]],
-        [0.0, 0.0, 0.0, 1.0],
-    ])
-
-
-def rgb(value):
-    return {'type': 'rgb', 'value': value}
-
-
-def lambert(color):
-    return {'type': 'twosided', 'bsdf': {'type': 'diffuse', 'reflectance': rgb(color)}}
 
 
 def scene(spp, width=256, height=192):
