@@ -36,8 +36,6 @@ use crate::prepare::{EffectiveSettings, PreparedScene};
 use crate::sampling::Rng;
 
 mod balance;
-#[cfg(test)]
-mod census;
 mod grid;
 mod pass;
 mod pixels;
