@@ -370,9 +370,13 @@ mod census {
         )
     }
 
+    /// Photons per iteration of a census or noise split where the scene leaves them automatic.
+    const CENSUS_PHOTONS: u64 = 200_000;
+
     /// One iteration's photons on an example at `1 / shrink` of its resolution (with `1 / shrink^2`
     /// of its photons, so that the photons per pixel stay the same), every pixel's radius from
-    /// `radius(distance)` (the camera path's length to its visible point).
+    /// `radius(distance)` (the camera path's length to its visible point). A scene that leaves
+    /// the photon count automatic is censused at 200 000 photons per iteration at full size.
     struct Census {
         pixels: u32,
         photons: u64,
@@ -397,10 +401,11 @@ mod census {
         let (w, h) = (settings.width / shrink, settings.height / shrink);
         scene.settings.resolution = (w, h);
         let options = RenderOptions {
-            photons: Some(settings.photons / u64::from(shrink * shrink)),
+            photons: Some(settings.photons.unwrap_or(CENSUS_PHOTONS) / u64::from(shrink * shrink)),
             ..Default::default()
         };
         let settings = effective_settings(&scene, &options).unwrap();
+        let photons = settings.photons.unwrap_or(CENSUS_PHOTONS);
         let scene = PreparedScene::new(&scene).unwrap();
         let camera = Camera::new(&scene.scene.camera, w, h).unwrap();
         let (mut vps, mut radii, mut distances) = (Vec::new(), Vec::new(), Vec::new());
@@ -418,7 +423,7 @@ mod census {
         let mut chunk = HitChunk::default();
         chunk.reset(&cells);
         let (mut hits, mut in_bounds, mut segments, mut hit_flux) = (0u64, 0u64, 0u64, 0.0f64);
-        for i in 0..settings.photons {
+        for i in 0..photons {
             let mut rng = Stream::Photon.rng(1, 0, i);
             trace_photon(
                 &scene,
@@ -461,7 +466,7 @@ mod census {
         }
         Census {
             pixels: w * h,
-            photons: settings.photons,
+            photons,
             radii,
             distances,
             per_point,
@@ -567,8 +572,10 @@ mod census {
             scene.settings.iterations = iterations;
             let mut parts = Vec::new();
             for seed in [1, 2] {
+                // (A fixed count, so that the photons emitted are known.)
                 let options = RenderOptions {
                     seed: Some(seed),
+                    photons: Some(CENSUS_PHOTONS),
                     ..Default::default()
                 };
                 let settings = effective_settings(&scene, &options).unwrap();
@@ -579,7 +586,7 @@ mod census {
                     &std::sync::atomic::AtomicBool::new(false),
                     &mut |_| {},
                 );
-                let np = settings.photons as f64 * f64::from(out.iterations_done);
+                let np = CENSUS_PHOTONS as f64 * f64::from(out.iterations_done);
                 let total: Vec<[f64; 3]> =
                     out.image.pixels.iter().map(|p| p.map(f64::from)).collect();
                 let indirect: Vec<[f64; 3]> = stats
