@@ -306,14 +306,7 @@ fn candidate_window_keeps_every_candidate_inside_it() {
             ],
             None,
         ),
-        lathe(
-            &[
-                &[(0.6, 0.0), (0.6, 0.3), (0.2, 0.4), (0.5, 0.6)],
-                &[(0.3, 0.6), (0.6, 0.9), (0.3, 0.9), (0.6, 0.6)],
-                &[(0.6, 0.6), (0.6, 1.0), (0.3, 1.2), (0.0, 1.2)],
-            ],
-            None,
-        ),
+        bulge_cusp_dome(),
     ];
     let (mut compared, mut skipped) = (0usize, 0usize);
     for (n, l) in shapes.iter().enumerate() {
@@ -369,13 +362,12 @@ fn candidate_window_keeps_every_candidate_inside_it() {
     assert!(compared > 100_000, "{compared}");
 }
 
-/// The stress test's culling profile (flat disk, bulge, annulus, cusp, dome).
-fn culling_profile() -> Lathe {
+/// The bulge, cusp and dome of the stress test's culling profile (its flat disk and annulus
+/// left out).
+fn bulge_cusp_dome() -> Lathe {
     lathe(
         &[
-            &[(0.0, 0.0), (0.3, 0.0), (0.6, 0.0)],
             &[(0.6, 0.0), (0.6, 0.3), (0.2, 0.4), (0.5, 0.6)],
-            &[(0.5, 0.6), (0.3, 0.6)],
             &[(0.3, 0.6), (0.6, 0.9), (0.3, 0.9), (0.6, 0.6)],
             &[(0.6, 0.6), (0.6, 1.0), (0.3, 1.2), (0.0, 1.2)],
         ],
@@ -383,10 +375,11 @@ fn culling_profile() -> Lathe {
     )
 }
 
-/// Rays from the stress case "lathe culling: from inside the shells" (rays #511630 and #958799
-/// of 10^6) that start on the surface and meet it again within 1e-4, nearly tangent. The true
-/// `t` of each hit was computed with 60-digit decimal arithmetic (2D Newton on
-/// `h(s) = o_y + t d_y`, `r(s)^2 = |o_xz + t d_xz|^2`, from the exact f64 inputs).
+/// Rays #511630 and #958799 of the stress case "lathe culling: from inside the shells" (at 10^6
+/// rays; the culling profile there, of which only the bulge and the dome matter here): they
+/// start on the surface and meet it again within 1e-4, nearly tangent. The true `t` of each hit
+/// was computed with 60-digit decimal arithmetic (2D Newton on `h(s) = o_y + t d_y`,
+/// `r(s)^2 = |o_xz + t d_xz|^2`, from the exact f64 inputs).
 ///
 /// The first ray, on the dome: the two roots of `F` (the origin's at `t` 1.4e-12 and the hit
 /// at 8.03e-5) are 1.8e-6 apart in `s`, inside one widened bracket; the nearest sign change
@@ -396,7 +389,7 @@ fn culling_profile() -> Lathe {
 /// the stress test's 1e-6 of the true value.
 #[test]
 fn rays_from_the_surface_that_meet_it_again_within_1e_4() {
-    let l = culling_profile();
+    let l = bulge_cusp_dome();
     let cases = [
         (
             DVec3::new(0.15499278632492244, 1.11773005683808, 0.27770696273279466),
@@ -406,13 +399,13 @@ fn rays_from_the_surface_that_meet_it_again_within_1e_4() {
                 -0.4724737392432739,
             ),
             8.031_811_035_709_652e-5,
-            4,
+            2,
         ),
         (
             DVec3::new(-0.3957217192652609, 0.5494280490929794, 0.18403506912486725),
             DVec3::new(0.6103946907962211, -0.703731515944941, -0.3635660530269854),
             5.047_383_840_691_549e-6,
-            1,
+            0,
         ),
     ];
     for (o, d, want, seg) in cases {
