@@ -107,6 +107,14 @@ impl RayFrame {
     /// value). A skipped side's candidate is NaN where the full search may give one outside the
     /// window; the candidates inside are the same, bit for bit. The reference passes `None`
     /// (the full search).
+    ///
+    /// `t_after`: where a side's bracket holds several sign changes, the nearest one with
+    /// `t > t_after` is taken (the caller's `t_min`). A ray starting on the surface meets it at
+    /// `t ~ 0` and may meet it again within the root uncertainty of `F` (both roots of `F` in
+    /// one widened bracket, e.g. 8e-5 along a nearly tangent ray from the dome): taking the
+    /// nearest one overall would return the origin's own root, which the caller then drops as
+    /// `t <= t_min`, and the real hit behind it would be lost.
+    #[allow(clippy::too_many_arguments)]
     pub fn candidates(
         &self,
         seg: &Segment,
@@ -114,6 +122,7 @@ impl RayFrame {
         ds: f64,
         size: f64,
         refine: Refine,
+        t_after: f64,
         prune: Option<(f64, f64)>,
     ) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
@@ -136,7 +145,8 @@ impl RayFrame {
                 let (x, z) = (oc.x + t * dn.x, oc.z + t * dn.z);
                 seg.r.eval(s) - (x * x + z * z).sqrt()
             };
-            if let Some(s) = nearest_sign_change(&g, &|s| t_of(s), lo, hi, refine) {
+            let t_at = |s: f64| self.t0 + t_of(s);
+            if let Some(s) = nearest_sign_change(&g, &t_at, t_after, lo, hi, refine) {
                 cands[0] = (self.t0 + t_of(s), s);
                 return cands;
             }
@@ -194,9 +204,8 @@ impl RayFrame {
                     continue;
                 }
             }
-            if let Some(s) =
-                nearest_sign_change(&|s| g(sigma, s), &|s| sigma * w_of(s), lo, hi, refine)
-            {
+            let t_at = |s: f64| self.t0 + sigma * w_of(s);
+            if let Some(s) = nearest_sign_change(&|s| g(sigma, s), &t_at, t_after, lo, hi, refine) {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
                 refined = true;
             }
@@ -311,10 +320,12 @@ fn touch(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, size: f64) -> Option<f64> {
 }
 
 /// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
-/// refined root with the smallest `t(s)`. Neighbouring pieces share their end samples.
+/// refined root with the smallest `t(s)` above `t_after`, else the one with the smallest
+/// `t(s)` (the caller drops it). Neighbouring pieces share their end samples.
 fn nearest_sign_change(
     g: &dyn Fn(f64) -> f64,
     t: &dyn Fn(f64) -> f64,
+    t_after: f64,
     lo: f64,
     hi: f64,
     refine: Refine,
@@ -328,7 +339,12 @@ fn nearest_sign_change(
         let gb = g(b);
         if let Some(s) = bracketed_root(g, a, b, ga, gb, refine) {
             let ts = t(s);
-            if best.is_none_or(|(_, bt)| ts < bt) {
+            // Ordered by (beyond `t_after`, nearest): a root beyond `t_after` beats one before.
+            let better = |bt: f64| match (ts > t_after, bt > t_after) {
+                (a, b) if a != b => a,
+                _ => ts < bt,
+            };
+            if best.is_none_or(|(_, bt)| better(bt)) {
                 best = Some((s, ts));
             }
         }

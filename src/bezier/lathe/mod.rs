@@ -300,8 +300,8 @@ impl Lathe {
             for root in &roots {
                 let ds = root_uncertainty(&f, root.t, noise);
                 let prune = Some((tmin, best));
-                let cands =
-                    frame.candidates(seg, root, ds, self.size, Refine::FalsePosition, prune);
+                let refine = Refine::FalsePosition;
+                let cands = frame.candidates(seg, root, ds, self.size, refine, tmin, prune);
                 for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
