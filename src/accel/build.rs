@@ -41,6 +41,8 @@ pub(super) struct Item {
     pub bounds: Aabb,
     pub centroid: Vec3A,
     pub index: usize,
+    /// A mesh triangle: leaves test these four at a time (see `split`'s cost).
+    pub triangle: bool,
 }
 
 impl Item {
@@ -49,6 +51,15 @@ impl Item {
             bounds,
             centroid: bounds.centroid(),
             index,
+            triangle: false,
+        }
+    }
+
+    /// A mesh triangle's item.
+    pub fn triangle(bounds: Aabb, index: usize) -> Self {
+        Self {
+            triangle: true,
+            ..Self::new(bounds, index)
         }
     }
 }
@@ -258,6 +269,14 @@ fn split(
     } else {
         2
     };
+    // A node of mesh triangles only counts its cost in packets of four (the leaf tests them
+    // four at a time), so that splits prefer multiples of four and packets fill, and it counts
+    // the visit of the extra node a split makes as one packet test, so that a leaf of two
+    // packets is kept when splitting saves less than that. Any other node counts items, which
+    // leaves trees without meshes as they were.
+    let packets = items.iter().all(|it| it.triangle);
+    let cost = |k: usize| if packets { k.div_ceil(4) } else { k } as f32;
+    let visit = if packets { 1.0 } else { 0.0 };
     let lo = cb.min[axis];
     let span = ext[axis];
     let mid = if depth >= median_depth {
@@ -281,12 +300,12 @@ fn split(
             if ln == 0 || rn == 0 {
                 continue;
             }
-            let cost = lb.surface_area() * ln as f32 + rb.surface_area() * rn as f32;
+            let cost = lb.surface_area() * cost(ln) + rb.surface_area() * cost(rn);
             if cost < best.0 {
                 best = (cost, split);
             }
         }
-        let leaf_cost = bounds.surface_area() * n as f32;
+        let leaf_cost = bounds.surface_area() * (cost(n) - visit);
         if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
             if best.0.is_infinite() {
                 // All centroids in one bin: split in the middle of the ordering.
@@ -325,15 +344,28 @@ mod tests {
             .collect();
         let mut out = Vec::with_capacity(n);
         while out.len() < n {
-            let c = centres[out.len() % centres.len()];
+            let cluster = out.len() % centres.len();
+            let c = centres[cluster];
             let p = c + Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * (0.01 + 10.0 * rng.f32());
             let b = Aabb::new(p, p + Vec3A::splat(0.001 + rng.f32()));
             let copies = if rng.f32() < 0.05 { 40 } else { 1 };
             for _ in 0..copies.min(n - out.len()) {
-                out.push(Item::new(b, out.len()));
+                // Every other cluster is mesh triangles (costed in packets of four).
+                out.push(Item {
+                    triangle: cluster.is_multiple_of(2),
+                    ..Item::new(b, out.len())
+                });
             }
         }
         out
+    }
+
+    fn copied(items: &[Item]) -> Vec<Item> {
+        let copy = |it: &Item| Item {
+            triangle: it.triangle,
+            ..Item::new(it.bounds, it.index)
+        };
+        items.iter().map(copy).collect()
     }
 
     /// The nodes and the leaf order of the items, built on `threads` threads.
@@ -343,10 +375,7 @@ mod tests {
         median_depth: usize,
         par: Parallelism,
     ) -> (Vec<BuildNode>, Vec<usize>) {
-        let mut items: Vec<Item> = items
-            .iter()
-            .map(|it| Item::new(it.bounds, it.index))
-            .collect();
+        let mut items = copied(items);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -368,10 +397,7 @@ mod tests {
             binning: 2 * CHUNK + 5,
         };
         for median_depth in [usize::MAX, 32, 4] {
-            let mut plain: Vec<Item> = all
-                .iter()
-                .map(|it| Item::new(it.bounds, it.index))
-                .collect();
+            let mut plain = copied(&all);
             let mut nodes = Vec::new();
             let serial = Parallelism {
                 join: usize::MAX,

@@ -118,7 +118,7 @@ impl Bvh {
             .chain(
                 triangles
                     .par_iter()
-                    .map(|&(g, m, k)| Item::new(m.bounds(k).padded(1e-6), nb + g as usize)),
+                    .map(|&(g, m, k)| Item::triangle(m.bounds(k).padded(1e-6), nb + g as usize)),
             )
             .collect();
         drop(triangles);
