@@ -6,6 +6,7 @@
 use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 /// Largest image side accepted (pixels).
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
@@ -121,13 +122,14 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 /// fit for a diagnostic. Files of the common form are read on every core
 /// ([`super::obj::parse`]); the others, and every file with an error, by `tobj`.
 pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
-    let bytes =
-        crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
+    let bytes = crate::files::read_bytes_parallel(path, crate::files::MAX_ASSET_BYTES).map_err(
+        |e| match e {
             crate::files::FileError::Io(e) => {
                 format!("cannot read OBJ mesh `{}`: {e}", path.display())
             }
             refused => format!("cannot read OBJ mesh: {refused}"),
-        })?;
+        },
+    )?;
     let mesh = match super::obj::parse(&bytes) {
         Some(mesh) => MeshData {
             path: path.to_path_buf(),
@@ -138,7 +140,7 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
     if mesh.indices.is_empty() {
         return Err(format!("OBJ mesh `{}` has no faces", path.display()));
     }
-    if mesh.positions.iter().any(|p| !p.is_finite()) {
+    if mesh.positions.par_iter().any(|p| !p.is_finite()) {
         return Err(format!(
             "OBJ mesh `{}` has a vertex that is not a finite number",
             path.display()

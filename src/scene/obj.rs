@@ -12,6 +12,8 @@
 //! (`single_index`, triangulated, all models merged): vertices numbered in the order the
 //! faces first use them, unused ones left out, polygons split into fans.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
@@ -58,12 +60,9 @@ fn parse_in_chunks(bytes: &[u8], chunk_bytes: usize) -> Option<super::MeshData> 
         }
     }
     let (has_uv, has_normal) = form?;
-    let concat = |part: fn(&Chunk) -> &[[f32; 3]]| -> Vec<[f32; 3]> {
-        chunks.iter().flat_map(part).copied().collect()
-    };
-    let positions = concat(|c| &c.positions);
-    let normals = concat(|c| &c.normals);
-    let uvs: Vec<[f32; 2]> = chunks.iter().flat_map(|c| &c.uvs).copied().collect();
+    let positions = concat(chunks.iter().map(|c| &c.positions[..]).collect());
+    let normals = concat(chunks.iter().map(|c| &c.normals[..]).collect());
+    let uvs = concat(chunks.iter().map(|c| &c.uvs[..]).collect());
     // `tobj` checks a corner's texture coordinate and normal only when the file has some.
     let limit = [
         Some(positions.len()),
@@ -73,29 +72,16 @@ fn parse_in_chunks(bytes: &[u8], chunk_bytes: usize) -> Option<super::MeshData> 
     .into_iter()
     .flatten()
     .min()?;
-    // Vertices numbered in the order of first use.
-    let mut number = vec![u32::MAX; positions.len()];
-    let mut used = Vec::new();
-    let mut indices = Vec::with_capacity(chunks.iter().map(|c| c.corners.len() / 3).sum());
-    for c in &chunks {
-        for tri in c.corners.chunks_exact(3) {
-            let mut out = [0; 3];
-            for (o, &v) in out.iter_mut().zip(tri) {
-                let v = v as usize;
-                if v >= limit {
-                    return None;
-                }
-                if number[v] == u32::MAX {
-                    number[v] = used.len() as u32;
-                    used.push(v);
-                }
-                *o = number[v];
-            }
-            indices.push(out);
-        }
+    if chunks
+        .par_iter()
+        .any(|c| c.corners.iter().any(|&v| v as usize >= limit))
+    {
+        return None;
     }
+    let (used, indices) = number_by_first_use(&chunks, positions.len());
+    drop(chunks);
     let d3 = |p: [f32; 3]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-    let gather3 = |all: &[[f32; 3]]| used.par_iter().map(|&v| d3(all[v])).collect();
+    let gather3 = |all: &[[f32; 3]]| used.par_iter().map(|&v| d3(all[v as usize])).collect();
     // Normals and texture coordinates for every vertex or none (as `load_obj` merges models).
     let with_uv = has_uv && !uvs.is_empty();
     let with_normal = has_normal && !normals.is_empty();
@@ -109,13 +95,86 @@ fn parse_in_chunks(bytes: &[u8], chunk_bytes: usize) -> Option<super::MeshData> 
         },
         uvs: if with_uv {
             used.par_iter()
-                .map(|&v| DVec2::new(uvs[v][0] as f64, uvs[v][1] as f64))
+                .map(|&v| DVec2::new(uvs[v as usize][0] as f64, uvs[v as usize][1] as f64))
                 .collect()
         } else {
             Vec::new()
         },
         indices,
     })
+}
+
+/// The vertices the chunks' faces use, in the order of their first use (the corner that uses
+/// a vertex first, in file order), and the triangles with vertices renumbered in that order:
+/// what a serial walk numbering each vertex when it first meets it gives, done in parallel.
+/// Every corner must be below `vertices`.
+fn number_by_first_use(chunks: &[Chunk], vertices: usize) -> (Vec<u32>, Vec<[u32; 3]>) {
+    // The position of each chunk's first corner among all corners.
+    let starts: Vec<u64> = chunks
+        .iter()
+        .scan(0u64, |at, c| {
+            let start = *at;
+            *at += c.corners.len() as u64;
+            Some(start)
+        })
+        .collect();
+    // Each vertex's first corner: the least position naming it (order-independent).
+    let first: Vec<AtomicU64> = (0..vertices)
+        .into_par_iter()
+        .map(|_| AtomicU64::new(u64::MAX))
+        .collect();
+    chunks.par_iter().zip(&starts).for_each(|(c, &start)| {
+        for (at, &v) in (start..).zip(&c.corners) {
+            let f = &first[v as usize];
+            if f.load(Ordering::Relaxed) > at {
+                f.fetch_min(at, Ordering::Relaxed);
+            }
+        }
+    });
+    // The used vertices in order: those whose first corner is where they stand.
+    let used: Vec<Vec<u32>> = chunks
+        .par_iter()
+        .zip(&starts)
+        .map(|(c, &start)| {
+            (start..)
+                .zip(&c.corners)
+                .filter(|&(at, &v)| first[v as usize].load(Ordering::Relaxed) == at)
+                .map(|(_, &v)| v)
+                .collect()
+        })
+        .collect();
+    let used = concat(used.iter().map(|u| &u[..]).collect());
+    // `first` now holds each used vertex's number.
+    used.par_iter()
+        .enumerate()
+        .for_each(|(k, &v)| first[v as usize].store(k as u64, Ordering::Relaxed));
+    let number = |v: u32| first[v as usize].load(Ordering::Relaxed) as u32;
+    let triangles: Vec<Vec<[u32; 3]>> = chunks
+        .par_iter()
+        .map(|c| {
+            c.corners
+                .chunks_exact(3)
+                .map(|t| [number(t[0]), number(t[1]), number(t[2])])
+                .collect()
+        })
+        .collect();
+    (used, concat(triangles.iter().map(|t| &t[..]).collect()))
+}
+
+/// The parts one after another, copied in parallel.
+fn concat<T: Copy + Default + Send + Sync>(parts: Vec<&[T]>) -> Vec<T> {
+    let mut out = vec![T::default(); parts.iter().map(|p| p.len()).sum()];
+    let mut rest = &mut out[..];
+    let mut pieces = Vec::with_capacity(parts.len());
+    for part in parts {
+        let (piece, tail) = rest.split_at_mut(part.len());
+        pieces.push((piece, part));
+        rest = tail;
+    }
+    pieces
+        .into_par_iter()
+        .for_each(|(piece, part)| piece.copy_from_slice(part));
+    out
 }
 
 /// `bytes` cut into parts of about `chunk_bytes`, each ending after a line end (or at the end).

@@ -8,6 +8,7 @@
 //! [`Camera::validate`] too, to report a bad camera at its block as soon as it is written.
 
 use glam::{DAffine3, DVec3};
+use rayon::prelude::*;
 
 use super::{
     Background, CLOSED_HELP, Camera, Csg, CsgOp, Light, MAX_CSG_DEPTH, MAX_CSG_LEAVES, Object,
@@ -336,8 +337,14 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             }
         }
         Shape::Mesh { mesh } => {
-            for v in &mesh.positions {
-                at(*v)?;
+            // A mesh may have millions of vertices: looked at in parallel, the first one out of
+            // range reported.
+            let far = |p: &DVec3| {
+                let m = t.transform_point3(*p).abs().max_element();
+                m.is_nan() || m > MAX_COORD
+            };
+            if let Some(p) = mesh.positions.par_iter().find_first(|p| far(p)) {
+                at(*p)?;
             }
         }
         Shape::Revolve { profile, .. } => {
