@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::SourceMap;
-use sppm_lang::render::{Progress, RenderOptions, RenderStats, render_with_warnings};
+use sppm_lang::render::{Progress, RenderOptions, RenderStats, prepare, render_prepared};
 use sppm_lang::scene::{Integrator, Scene};
 
 use super::check::{load_scene, print_render_error, print_render_warning};
@@ -59,7 +59,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
             .build_global();
     }
     match load_scene(&args.scene, &args.limits.options()) {
-        Ok((scene, sources)) => render_scene(&scene, &args, &sources),
+        Ok((scene, sources)) => {
+            let code = render_scene(&scene, &args, &sources);
+            // The image is written and the process ends here: freeing a large scene (a mesh's
+            // millions of vertices) is left to the exit.
+            std::mem::forget(scene);
+            code
+        }
         Err(code) => code,
     }
 }
@@ -128,21 +134,27 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             snapshot_error = Some(e);
         }
     };
-    let mut on_warning = |w: &sppm_lang::render::RenderError| {
+    let on_warning = |w: &sppm_lang::render::RenderError| {
         if let Some(b) = &bar {
             b.suspend(|| print_render_warning(sources, w));
         } else {
             print_render_warning(sources, w);
         }
     };
-    let result = render_with_warnings(scene, &options, &cancel, &mut on_warning, &mut on_progress);
+    let result = prepare(scene, &options).and_then(|(settings, prepared)| {
+        for w in prepared.warnings() {
+            on_warning(&w);
+        }
+        let out = render_prepared(&prepared, &settings, &options, &cancel, &mut on_progress)?;
+        Ok((out, prepared))
+    });
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     if let Some(e) = snapshot_error {
         eprintln!("warning: snapshot: {e}");
     }
-    let out = match result {
+    let (out, prepared) = match result {
         Ok(o) => o,
         Err(e) => {
             print_render_error(sources, &e);
@@ -169,6 +181,9 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
+    // Written: the process ends after this command, and the exit frees the prepared scene's
+    // buffers (BVH, mesh) at once; freeing them one by one first is serial work for nothing.
+    std::mem::forget(prepared);
     let secs = out.elapsed.as_secs_f64().max(1e-9);
     eprintln!(
         "{} {}: {} iterations{} in {:.2}s{}",

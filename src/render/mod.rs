@@ -41,6 +41,19 @@ pub fn render_with_warnings(
     for w in prepared.warnings() {
         on_warning(&w);
     }
+    render_prepared(&prepared, &settings, options, cancel, on_progress)
+}
+
+/// The part of [`render_with_warnings`] after [`prepare`]: runs the integrator on `prepared`
+/// with the `settings` prepare made from `options`. A caller that prepares the scene itself
+/// keeps it afterwards (a process about to exit may leave a large one unfreed).
+pub fn render_prepared(
+    prepared: &PreparedScene,
+    settings: &EffectiveSettings,
+    options: &RenderOptions,
+    cancel: &AtomicBool,
+    on_progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<RenderOutput, RenderError> {
     let integrator = integrators::for_method(settings.integrator);
     let deadline = settings
         .time_limit
@@ -51,8 +64,8 @@ pub fn render_with_warnings(
     let flag = if deadline.is_some() { &stop } else { cancel };
     let mut run = || {
         integrator.render(integrators::Job {
-            scene: &prepared,
-            settings: &settings,
+            scene: prepared,
+            settings,
             cancel: flag,
             on_progress: &mut *on_progress,
         })
