@@ -157,7 +157,7 @@ fn setup(args: &SetupArgs) -> Result<(), String> {
                     "  {:<34} {:7.3} s wall {:7.3} s CPU",
                     s.name, s.wall, s.cpu
                 );
-                if !s.name.starts_with("tobj") {
+                if sppm_measure::setup::counted(s) {
                     wall += s.wall;
                     cpu += s.cpu;
                 }
@@ -165,7 +165,7 @@ fn setup(args: &SetupArgs) -> Result<(), String> {
             let _ = writeln!(
                 text,
                 "  {:<34} {wall:7.3} s wall {cpu:7.3} s CPU",
-                "total (without tobj alone)"
+                "total (steps not in parentheses)"
             );
             out(&text);
         }

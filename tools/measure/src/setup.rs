@@ -1,16 +1,19 @@
-//! The set-up of a large mesh, step by step: wall time and CPU time (all threads) of reading
-//! an OBJ file with `tobj` alone (the baseline), with `load_obj` (the product's reader), of
-//! turning the mesh into world-space triangles, and of building the BVH over them, each in a
-//! rayon pool of a given number of threads. `sppm-measure setup <file.obj> --threads 1,2`.
+//! The set-up of a large mesh, step by step, as a render does it: wall time and CPU time (all
+//! threads) of reading an OBJ file with `tobj` alone (the baseline, not used), of loading a
+//! scene that places the mesh once (evaluation, the parallel OBJ reader), of the scene's
+//! validation, of the world-space compact mesh (`TriangleMesh::new`, what `prepare` builds for
+//! a mesh that is neither instanced nor a light), of the BVH over it (`Bvh::with_meshes`) and of
+//! dropping it all; then the whole `PreparedScene::new` once more as a check that the steps add
+//! up. Each in a rayon pool of a given number of threads.
+//! `sppm-measure setup <file.obj> --threads 1,2`.
 
 use std::path::Path;
 use std::time::Instant;
 
-use glam::DAffine3;
 use sppm_lang::accel::Bvh;
-use sppm_lang::scene::load_obj;
-use sppm_lang::shapes::mesh::mesh_triangles;
-use sppm_lang::shapes::primitive::AnyShape;
+use sppm_lang::render::PreparedScene;
+use sppm_lang::scene::Shape;
+use sppm_lang::shapes::mesh::TriangleMesh;
 
 /// One step: its name, wall seconds and CPU seconds (summed over the process's threads).
 #[derive(Debug, Clone)]
@@ -48,41 +51,63 @@ fn timed<T>(name: &'static str, steps: &mut Vec<Step>, f: impl FnOnce() -> T) ->
     out
 }
 
+/// Steps whose time is part of a render's set-up (the others, in parentheses, are baselines
+/// and checks).
+pub fn counted(step: &Step) -> bool {
+    !step.name.starts_with('(')
+}
+
 /// The steps for `obj` on `threads` threads.
 pub fn run(obj: &Path, threads: usize) -> Result<Vec<Step>, String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| e.to_string())?;
+    let obj = obj
+        .canonicalize()
+        .map_err(|e| format!("{}: {e}", obj.display()))?;
+    let text = format!("mesh {{ {:?} }}\n", obj.display().to_string());
     pool.install(|| {
         let mut steps = Vec::new();
-        let bytes = timed("read the file", &mut steps, || std::fs::read(obj))
-            .map_err(|e| format!("{}: {e}", obj.display()))?;
         let options = tobj::LoadOptions {
             single_index: true,
             triangulate: true,
             ignore_points: true,
             ignore_lines: true,
         };
-        let baseline = timed("tobj alone (baseline, not used)", &mut steps, || {
+        let baseline = timed("(baseline) tobj alone, not used", &mut steps, || {
+            let bytes = std::fs::read(&obj).map_err(|e| format!("{}: {e}", obj.display()))?;
             tobj::load_obj_buf(&mut std::io::Cursor::new(&bytes[..]), &options, |_| {
                 Err(tobj::LoadError::OpenFileFailed)
             })
-        });
+            .map_err(|e| e.to_string())
+        })?;
         drop(baseline);
-        let mesh = timed("load_obj (read, parse, checks)", &mut steps, || {
-            load_obj(obj)
-        })?;
-        let tris = timed("mesh_triangles", &mut steps, || {
-            mesh_triangles(&mesh, &DAffine3::IDENTITY)
-        })?;
-        let shapes: Vec<(AnyShape, u32)> = timed("shapes for the BVH", &mut steps, || {
-            tris.into_iter()
-                .map(|t| (AnyShape::Triangle(t), 0))
-                .collect()
+        let loaded = timed("load the scene (eval, load_obj)", &mut steps, || {
+            sppm_lang::load_source("setup.scn", &text, &Default::default())
         });
-        let bvh = timed("Bvh::new", &mut steps, || Bvh::new(shapes));
-        timed("drop the BVH and mesh", &mut steps, || drop((bvh, mesh)));
+        let scene = loaded
+            .scene
+            .ok_or_else(|| format!("{} does not load: {:?}", obj.display(), loaded.diagnostics))?;
+        timed("validate the scene", &mut steps, || scene.validate())
+            .map_err(|e| format!("{e:?}"))?;
+        let object = &scene.objects[0];
+        let Shape::Mesh { mesh } = &object.shape else {
+            return Err("the scene holds no mesh".into());
+        };
+        let compact = timed("TriangleMesh::new", &mut steps, || {
+            TriangleMesh::new(mesh, &object.transform)
+        })?;
+        let bvh = timed("Bvh::with_meshes", &mut steps, || {
+            Bvh::with_meshes(Vec::new(), vec![(compact, 0)])
+        });
+        timed("drop the BVH", &mut steps, || drop(bvh));
+        let prepared = timed("(check) PreparedScene::new", &mut steps, || {
+            PreparedScene::new(&scene)
+        })
+        .map_err(|e| e.message)?;
+        timed("(check) drop it", &mut steps, || drop(prepared));
+        timed("drop the scene", &mut steps, || drop(scene));
         Ok(steps)
     })
 }
