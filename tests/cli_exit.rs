@@ -12,12 +12,18 @@ fn sppm(args: &[&str]) -> Output {
 
 /// `sppm-lang render <scene> -o <image>`.
 fn render_to(scene: &std::path::Path, image: &std::path::Path) -> Output {
-    sppm(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        image.to_str().unwrap(),
-    ])
+    render_with(scene.to_str().unwrap(), image.to_str().unwrap(), &[])
+}
+
+/// `sppm-lang render <scene> -o <image> <flags>`.
+fn render_with(scene: &str, image: &str, flags: &[&str]) -> Output {
+    sppm(&[&["render", scene, "-o", image][..], flags].concat())
+}
+
+/// The command exited 0 (its stderr shown otherwise).
+fn succeeded(out: &Output) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
 }
 
 /// `args` exit 2 (a usage error) without a panic.
@@ -77,22 +83,12 @@ fn usage_errors_exit_2() {
 fn render_writes_an_image_and_leaves_no_temporary_file() {
     let dir = tempfile::tempdir().unwrap();
     let out_path = dir.path().join("furnace.exr");
-    let out = sppm(&[
-        "render",
+    let out = render_with(
         "examples/furnace.scn",
-        "-o",
         out_path.to_str().unwrap(),
-        "--iterations",
-        "2",
-        "--photons",
-        "2000",
-    ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        &["--iterations", "2", "--photons", "2000"],
     );
+    succeeded(&out);
     let img = image::open(&out_path).unwrap().to_rgb32f();
     assert!(img.pixels().all(|p| p.0.iter().all(|v| v.is_finite())));
     let names: Vec<_> = std::fs::read_dir(dir.path())
@@ -110,22 +106,12 @@ fn integrator_flag_overrides_the_scene() {
     let dir = tempfile::tempdir().unwrap();
     for (name, expected) in [("path", 1.0), ("whitted", 0.775)] {
         let out_path = dir.path().join(format!("{name}.exr"));
-        let out = sppm(&[
-            "render",
+        let out = render_with(
             "examples/furnace.scn",
-            "-o",
             out_path.to_str().unwrap(),
-            "--iterations",
-            "16",
-            "--integrator",
-            name,
-        ]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+            &["--iterations", "16", "--integrator", name],
         );
+        succeeded(&out);
         let img = image::open(&out_path).unwrap().to_rgb32f();
         let n = img.pixels().len() as f64;
         let mean = img
@@ -289,14 +275,7 @@ fn an_output_path_that_is_a_link_or_a_device_is_refused() {
     let folder = dir.path().join("folder.png");
     std::fs::create_dir(&folder).unwrap();
     for o in [link.to_str().unwrap(), folder.to_str().unwrap()] {
-        let out = sppm(&[
-            "render",
-            "examples/furnace.scn",
-            "-o",
-            o,
-            "--iterations",
-            "1",
-        ]);
+        let out = render_with("examples/furnace.scn", o, &["--iterations", "1"]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{o}:\n{err}");
         assert!(
@@ -321,22 +300,22 @@ fn the_time_limit_stops_an_iteration_in_flight() {
     let png = dir.path().join("c.png");
     for method in ["sppm", "photon_map", "ppm"] {
         let start = std::time::Instant::now();
-        let out = sppm(&[
-            "render",
+        let out = render_with(
             "examples/cornell.scn",
-            "-o",
             png.to_str().unwrap(),
-            "--integrator",
-            method,
-            "--photons",
-            "10000000000",
-            "--time-limit",
-            "0.5",
-            // Past the memory estimate of photon mapping's 10^10 stored photons on purpose:
-            // the deadline is what is tested here.
-            "--memory-limit",
-            "100T",
-        ]);
+            &[
+                "--integrator",
+                method,
+                "--photons",
+                "10000000000",
+                "--time-limit",
+                "0.5",
+                // Past the memory estimate of photon mapping's 10^10 stored photons on purpose:
+                // the deadline is what is tested here.
+                "--memory-limit",
+                "100T",
+            ],
+        );
         let err = String::from_utf8_lossy(&out.stderr);
         let took = start.elapsed().as_secs_f64();
         assert_eq!(out.status.code(), Some(1), "{method}:\n{err}");
@@ -471,26 +450,38 @@ fn render_prints_the_statistics_of_its_method() {
         ("path", false, false),
         ("whitted", false, false),
     ] {
-        let out = sppm(&[
-            "render",
+        let out = render_with(
             "examples/cornell.scn",
-            "-o",
             png.to_str().unwrap(),
-            "--integrator",
-            method,
-            "--iterations",
-            "1",
-            "--photons",
-            "2000",
-            "--scale",
-            "0.125",
-        ]);
+            &[
+                "--integrator",
+                method,
+                "--iterations",
+                "1",
+                "--photons",
+                "2000",
+                "--scale",
+                "0.125",
+            ],
+        );
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{method}: {stderr}");
         assert_eq!(stderr.contains("photons"), photons, "{method}: {stderr}");
         assert_eq!(stderr.contains("deposits"), deposits, "{method}: {stderr}");
         assert!(!stderr.contains("no light"), "{method}: {stderr}");
     }
+}
+
+/// `sppm-lang <command> examples/cornell.scn --resolution 48x <args> -o <output>`, which must
+/// succeed: its stderr and the seconds it took.
+fn cornell_at_48(command: &str, args: &[&str], output: &std::path::Path) -> (String, f64) {
+    let start = std::time::Instant::now();
+    let scene = [command, "examples/cornell.scn", "--resolution", "48x"];
+    let out = sppm(&[&scene[..], args, &["-o", output.to_str().unwrap()]].concat());
+    let took = start.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    (stderr, took)
 }
 
 /// `reference` writes the image, its noise image and the JSON summary; `chart` reads the
@@ -501,20 +492,7 @@ fn render_prints_the_statistics_of_its_method() {
 fn reference_and_chart_respect_their_time_budgets() {
     let dir = tempfile::tempdir().unwrap();
     let reference = dir.path().join("ref.exr");
-    let start = std::time::Instant::now();
-    let out = sppm(&[
-        "reference",
-        "examples/cornell.scn",
-        "--time",
-        "1",
-        "--resolution",
-        "48x",
-        "-o",
-        reference.to_str().unwrap(),
-    ]);
-    let took = start.elapsed().as_secs_f64();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let (stderr, took) = cornell_at_48("reference", &["--time", "1"], &reference);
     println!("reference --time 1 took {took:.2} s: {stderr}");
     assert!(took < 1.1 * 1.0 + 1.0, "reference --time 1 took {took} s");
     let json = std::fs::read_to_string(dir.path().join("ref.noise.json")).unwrap();
@@ -525,24 +503,13 @@ fn reference_and_chart_respect_their_time_budgets() {
 
     let chart = dir.path().join("chart.png");
     let budget = 1.0;
-    let start = std::time::Instant::now();
-    let out = sppm(&[
+    let reference_arg = reference.to_str().unwrap();
+    let methods = ["--budget", "1", "--methods", "sppm,path"];
+    let (stderr, took) = cornell_at_48(
         "chart",
-        "examples/cornell.scn",
-        "--reference",
-        reference.to_str().unwrap(),
-        "--resolution",
-        "48x",
-        "--budget",
-        "1",
-        "--methods",
-        "sppm,path",
-        "-o",
-        chart.to_str().unwrap(),
-    ]);
-    let took = start.elapsed().as_secs_f64();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+        &[&["--reference", reference_arg][..], &methods].concat(),
+        &chart,
+    );
     assert!(stderr.contains("the reference's noise: RMSE"), "{stderr}");
     assert!(image::open(&chart).is_ok());
     let csv = std::fs::read_to_string(dir.path().join("chart.csv")).unwrap();

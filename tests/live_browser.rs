@@ -12,12 +12,14 @@
 //! page's screenshot in `target/tmp/live-browser/live.png`; with `SPPM_BLESS=1` it also replaces
 //! the README's `docs/gallery/live.png`.
 
-use std::io::{BufRead, BufReader};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::Command;
 use std::time::{Duration, Instant};
+
+#[path = "common/running.rs"]
+mod running;
+use running::Running;
 
 use serde_json::{Value, json};
 
@@ -62,72 +64,6 @@ fn chromium() -> Option<PathBuf> {
     std::env::split_paths(&path)
         .flat_map(|d| ["chromium", "chromium-browser"].map(|n| d.join(n)))
         .find(|p| p.is_file())
-}
-
-/// A child process killed when dropped, with its stderr lines on a channel.
-struct Process {
-    child: Child,
-    lines: Receiver<String>,
-    log: Vec<String>,
-}
-
-impl Process {
-    fn spawn(mut command: Command) -> Process {
-        let mut child = command
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap_or_else(|e| panic!("cannot start {command:?}: {e}"));
-        let stderr = child.stderr.take().unwrap();
-        let (tx, lines) = channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Process {
-            child,
-            lines,
-            log: Vec::new(),
-        }
-    }
-
-    /// The first stderr line containing `needle`, within `timeout`.
-    fn expect(&mut self, needle: &str, timeout: Duration) -> String {
-        let deadline = Instant::now() + timeout;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.log.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => panic!(
-                    "no line containing `{needle}` within {timeout:?}; output so far:\n{}",
-                    self.log.join("\n")
-                ),
-            }
-        }
-    }
-
-    fn drain(&mut self) -> String {
-        while let Ok(line) = self.lines.try_recv() {
-            self.log.push(line);
-        }
-        self.log.join("\n")
-    }
-}
-
-impl Drop for Process {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 /// One page of the browser, over the DevTools protocol.
@@ -285,8 +221,8 @@ fn dominant(look: &Value) -> Option<usize> {
 
 struct Session {
     page: Page,
-    watch: Process,
-    _browser: Process,
+    watch: Running,
+    _browser: Running,
     dir: PathBuf,
 }
 
@@ -315,7 +251,10 @@ impl Session {
         panic!(
             "{message}\nscreenshot: {}\nwatch output:\n{}",
             shot.display(),
-            self.watch.drain()
+            {
+                self.watch.drain(Duration::ZERO);
+                self.watch.log.join("\n")
+            }
         );
     }
 }
@@ -355,7 +294,7 @@ fn the_live_page_follows_saves_in_a_real_browser() {
         "--threads",
         "2",
     ]);
-    let mut watch = Process::spawn(watch);
+    let mut watch = Running::spawn(watch);
     let line = watch.expect("serving the live view on ", FIRST_PICTURE);
     let url = line
         .split("serving the live view on ")
@@ -379,7 +318,7 @@ fn the_live_page_follows_saves_in_a_real_browser() {
         "about:blank",
     ]);
     browser.arg(format!("--user-data-dir={}", profile.path().display()));
-    let mut browser = Process::spawn(browser);
+    let mut browser = Running::spawn(browser);
     let line = browser.expect("DevTools listening on ", FIRST_PICTURE);
     let ws_url = line
         .split("DevTools listening on ")

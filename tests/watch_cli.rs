@@ -6,11 +6,14 @@
 //! edit must leave the previous image byte-for-byte, and no temporary file may be left behind.
 
 use std::fs;
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+#[path = "common/running.rs"]
+mod running;
+use running::Running;
 
 const STEP_TIMEOUT: Duration = Duration::from_secs(60);
 
@@ -32,11 +35,8 @@ fn scene_with(background_line: &str) -> String {
     )
 }
 
-struct Watch {
-    child: Child,
-    lines: Receiver<String>,
-    log: Vec<String>,
-}
+/// `sppm-lang watch`, running.
+struct Watch(Running);
 
 impl Watch {
     fn start(dir: &Path, scene: &str, out: &str) -> Watch {
@@ -45,64 +45,27 @@ impl Watch {
 
     /// `watch` with `args`, writing every snapshot.
     fn start_with(dir: &Path, args: &[&str]) -> Watch {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        let mut command = Command::new(env!("CARGO_BIN_EXE_sppm-lang"));
+        command
             .current_dir(dir)
             .arg("watch")
             .args(args)
-            .args(["--snapshot-every", "0"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start sppm-lang watch");
-        let stderr = child.stderr.take().unwrap();
-        let (tx, lines) = channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Watch {
-            child,
-            lines,
-            log: Vec::new(),
-        }
+            .args(["--snapshot-every", "0"]);
+        Watch(Running::spawn(command))
     }
 
     /// Waits for a status line containing `needle`; returns it.
     fn expect(&mut self, needle: &str) -> String {
-        let deadline = Instant::now() + STEP_TIMEOUT;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.log.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => panic!(
-                    "no line containing `{needle}` within {STEP_TIMEOUT:?}; output so far:\n{}",
-                    self.log.join("\n")
-                ),
-            }
-        }
+        self.0.expect(needle, STEP_TIMEOUT)
     }
 
     /// Collects lines until `quiet` passes without one.
     fn drain(&mut self, quiet: Duration) -> Vec<String> {
-        let mut got = Vec::new();
-        while let Ok(line) = self.lines.recv_timeout(quiet) {
-            self.log.push(line.clone());
-            got.push(line);
-        }
-        got
+        self.0.drain(quiet)
     }
 
     fn interrupt(mut self) -> (std::process::ExitStatus, Vec<String>) {
-        let pid = self.child.id().to_string();
+        let pid = self.0.child.id().to_string();
         let ok = Command::new("kill")
             .args(["-INT", &pid])
             .status()
@@ -111,7 +74,7 @@ impl Watch {
         assert!(ok, "kill -INT failed");
         let deadline = Instant::now() + STEP_TIMEOUT;
         let status = loop {
-            if let Some(s) = self.child.try_wait().unwrap() {
+            if let Some(s) = self.0.child.try_wait().unwrap() {
                 break s;
             }
             assert!(Instant::now() < deadline, "watch did not exit after Ctrl-C");
@@ -119,13 +82,6 @@ impl Watch {
         };
         let rest = self.drain(Duration::from_millis(200));
         (status, rest)
-    }
-}
-
-impl Drop for Watch {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
     }
 }
 
@@ -239,7 +195,7 @@ fn watch_follows_editor_saves_and_keeps_the_last_good_image() {
     assert!(
         finished_last,
         "the image never showed the last save; output:\n{}",
-        w.log.join("\n")
+        w.0.log.join("\n")
     );
     assert!(
         (1..=8).contains(&started),
@@ -427,9 +383,9 @@ fn the_preview_is_written_at_full_size_and_status_lines_are_true() {
     loop {
         let line = w.expect("render #1");
         assert!(
-            !w.log.iter().any(|l| l.contains("waiting for changes")),
+            !w.0.log.iter().any(|l| l.contains("waiting for changes")),
             "`waiting for changes` while rendering: {:?}",
-            w.log
+            w.0.log
         );
         if line.contains("written to") {
             let img = image::open(&out).unwrap();
