@@ -1,7 +1,8 @@
-//! Environment light: an equirectangular map at infinity around the scene (pbrt's
-//! `ImageInfiniteLight`). Direct lighting samples it by importance (`EnvironmentMap::sample`);
-//! photons start on a disk of the scene's bounding-sphere radius, perpendicular to the sampled
-//! direction and outside the scene, and travel inward.
+//! Environment light: radiance at infinity around the scene, either an equirectangular map
+//! (pbrt's `ImageInfiniteLight`, sampled by importance with `EnvironmentMap::sample`) or a
+//! constant background colour (pbrt's `UniformInfiniteLight`, sampled uniformly over the
+//! sphere). Photons start on a disk of the scene's bounding-sphere radius, perpendicular to the
+//! sampled direction and outside the scene, and travel inward.
 
 use std::f32::consts::PI;
 
@@ -9,11 +10,55 @@ use glam::{Vec2, Vec3A};
 
 use super::{LightSample, PhotonSample};
 use crate::geometry::Frame;
-use crate::sampling::concentric_disk;
-use crate::textures::EnvironmentMap;
+use crate::sampling::{concentric_disk, uniform_sphere};
+use crate::textures::{EnvSample, EnvironmentMap};
+
+/// What the environment light shows in each direction.
+pub enum Sky {
+    /// An image around the scene.
+    Map(EnvironmentMap),
+    /// The same radiance from every direction: a non-black background colour.
+    Uniform(Vec3A),
+}
+
+impl Sky {
+    #[inline]
+    fn radiance(&self, dir: Vec3A) -> Vec3A {
+        match self {
+            Sky::Map(m) => m.radiance(dir),
+            Sky::Uniform(c) => *c,
+        }
+    }
+
+    #[inline]
+    fn pdf(&self, dir: Vec3A) -> f32 {
+        match self {
+            Sky::Map(m) => m.pdf(dir),
+            Sky::Uniform(_) => 1.0 / (4.0 * PI),
+        }
+    }
+
+    fn sample(&self, u: Vec2) -> Option<EnvSample> {
+        match self {
+            Sky::Map(m) => m.sample(u),
+            Sky::Uniform(c) => Some(EnvSample {
+                direction: uniform_sphere(u),
+                radiance: *c,
+                pdf: 1.0 / (4.0 * PI),
+            }),
+        }
+    }
+
+    fn integrated_radiance(&self) -> Vec3A {
+        match self {
+            Sky::Map(m) => m.integrated_radiance(),
+            Sky::Uniform(c) => *c * (4.0 * PI),
+        }
+    }
+}
 
 pub struct EnvironmentLight {
-    pub map: EnvironmentMap,
+    pub sky: Sky,
     /// Bounding sphere of the scene's finite shapes.
     pub center: Vec3A,
     pub radius: f32,
@@ -21,7 +66,7 @@ pub struct EnvironmentLight {
 
 impl EnvironmentLight {
     /// `radius` is clamped to a small positive value so an empty scene still works.
-    pub fn new(map: EnvironmentMap, center: Vec3A, radius: f32) -> Self {
+    pub fn new(sky: Sky, center: Vec3A, radius: f32) -> Self {
         let radius = if radius.is_finite() && radius > 0.0 {
             radius
         } else {
@@ -33,7 +78,7 @@ impl EnvironmentLight {
             Vec3A::ZERO
         };
         Self {
-            map,
+            sky,
             center,
             radius,
         }
@@ -42,22 +87,22 @@ impl EnvironmentLight {
     /// Radiance arriving along a ray that leaves the scene in direction `dir`.
     #[inline]
     pub fn le(&self, dir: Vec3A) -> Vec3A {
-        self.map.radiance(dir)
+        self.sky.radiance(dir)
     }
 
     /// Power sent into the scene: π r² ∫ L dω.
     pub fn power(&self) -> Vec3A {
-        self.map.integrated_radiance() * (PI * self.radius * self.radius)
+        self.sky.integrated_radiance() * (PI * self.radius * self.radius)
     }
 
     /// Solid-angle density of `sample_li` choosing direction `wi`.
     #[inline]
     pub fn pdf_li(&self, wi: Vec3A) -> f32 {
-        self.map.pdf(wi)
+        self.sky.pdf(wi)
     }
 
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
-        let s = self.map.sample(u)?;
+        let s = self.sky.sample(u)?;
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.radiance == Vec3A::ZERO {
             return None;
         }
@@ -74,7 +119,7 @@ impl EnvironmentLight {
     }
 
     pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
-        let s = self.map.sample(u1)?;
+        let s = self.sky.sample(u1)?;
         if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }

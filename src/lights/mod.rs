@@ -7,7 +7,7 @@ mod point;
 mod spot;
 
 pub use area::{AreaLight, LightSampling};
-pub use environment::EnvironmentLight;
+pub use environment::{EnvironmentLight, Sky};
 pub use point::PointLight;
 pub use spot::SpotLight;
 

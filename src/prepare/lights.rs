@@ -1,12 +1,12 @@
 //! Building the lights of a prepared scene that are not emissive shapes: point and spot
-//! lights, validated, and the environment light of a non-black background map.
+//! lights, validated, and the environment light of a non-black background.
 
 use glam::Vec3A;
 
 use super::RenderError;
 use super::shapes::v;
 use crate::accel::Bvh;
-use crate::lights::{EnvironmentLight, Light, PointLight, SpotLight};
+use crate::lights::{EnvironmentLight, Light, PointLight, Sky, SpotLight};
 use crate::scene::{self, Scene};
 use crate::textures;
 
@@ -72,30 +72,33 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
     Ok(())
 }
 
-/// Appends the environment light of a non-black background map; returns its index.
+/// Appends the environment light of a non-black background (a map, or a constant colour:
+/// pbrt's uniform infinite light, so photons carry the light a path tracer gets from the
+/// background); returns its index.
 pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>) -> Option<usize> {
-    let mut environment = None;
-    if let scene::Background::Environment {
-        image,
-        intensity,
-        transform,
-    } = &scene.background
-    {
-        let map = textures::EnvironmentMap::new(image, *intensity, *transform);
-        if !map.is_black() {
-            // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite
-            // lights use for photon emission.
-            let b = bvh.bounds();
-            let (center, radius) = if b.is_empty() {
-                (Vec3A::ZERO, 1.0)
-            } else {
-                (b.centroid(), 0.5 * b.diagonal().length())
-            };
-            environment = Some(lights.len());
-            lights.push(Light::Environment(EnvironmentLight::new(
-                map, center, radius,
-            )));
+    let sky = match &scene.background {
+        scene::Background::Environment {
+            image,
+            intensity,
+            transform,
+        } => {
+            let map = textures::EnvironmentMap::new(image, *intensity, *transform);
+            (!map.is_black()).then_some(Sky::Map(map))
         }
-    }
-    environment
+        scene::Background::Color(c) => {
+            let c = c.as_vec3a();
+            (c.is_finite() && c.min_element() >= 0.0 && c.max_element() > 0.0)
+                .then_some(Sky::Uniform(c))
+        }
+    }?;
+    // Bounding sphere of the finite shapes (planes excluded), as pbrt's infinite lights use
+    // for photon emission.
+    let b = bvh.bounds();
+    let (center, radius) = if b.is_empty() {
+        (Vec3A::ZERO, 1.0)
+    } else {
+        (b.centroid(), 0.5 * b.diagonal().length())
+    };
+    lights.push(Light::Environment(EnvironmentLight::new(sky, center, radius)));
+    Some(lights.len() - 1)
 }

@@ -59,7 +59,8 @@ pub struct PreparedScene<'a> {
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
     pub light_distr: PiecewiseConstant1D,
-    /// Index in `lights` of the environment light, if the background is a non-black map.
+    /// Index in `lights` of the environment light, if the background (a map or a colour) is
+    /// not black.
     pub environment: Option<usize>,
     /// Material index of each primitive id (saves the object indirection per hit).
     prim_material: Vec<u32>,
@@ -105,14 +106,13 @@ impl<'a> PreparedScene<'a> {
         if self.lights.is_empty() {
             out.push(RenderError {
                 help: Some(
-                    "add a `light { <position> intensity <color> }`, an `area_light { ... }` \
-                     or an `environment { image \"sky.hdr\" }`"
+                    "add a `light { <position> intensity <color> }`, an `area_light { ... }`, \
+                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }`"
                         .into(),
                 ),
                 ..RenderError::new(
-                    "the scene has no light: no light source, no emitting object and no \
-                     environment map, so it renders black (except a background colour seen \
-                     directly)",
+                    "the scene has no light: no light source, no emitting object and a black \
+                     background, so it renders black",
                 )
             });
         }
