@@ -413,8 +413,8 @@ fn check_tells_what_prepare_decided_and_warns_of_a_scene_without_light() {
     assert_eq!(out.status.code(), Some(0), "{stderr}");
     assert!(stderr.contains("the scene has no light"), "{stderr}");
 
-    // A lit scene: no warning; the default radius is one pixel's footprint, so half the
-    // resolution doubles it.
+    // A lit scene: no warning; the default radius is a number of pixel footprints, so half
+    // the resolution doubles it.
     let radius = |extra: &[&str]| -> f64 {
         let mut args = vec!["check", "examples/cornell.scn"];
         args.extend_from_slice(extra);

@@ -45,7 +45,7 @@ fn scene(back: [f64; 3], glass: &str) -> String {
     );
     // Long enough to be watched in progress, small enough for a loaded machine.
     text.replace(
-        "resolution <256, 256>  iterations 32  photons 200000",
+        "resolution <256, 256>  iterations 32",
         "resolution <320, 320>  iterations 400  photons 40000",
     )
 }

@@ -9,8 +9,9 @@ Three steps, each re-runnable on its own (the files go under --out, default
    reference's), one thread, `--time T` each, two at a time. `ref/<scene>.noise.json` holds its
    noise (the RMSE the reference itself has against the converged image): the floor under
    which no comparison means anything. For Cornell a Mitsuba 3 reference (256x256) can be given
-   with `--cornell-mitsuba`: it is box-filtered down to the scaled size (both renderers use a
-   box pixel filter, so 2x2 pixel means are the smaller image's pixels).
+   with `--cornell-mitsuba`, for smallppm_far one with `--far-mitsuba`
+   (tools/reference/smallppm_far.exr): each is box-filtered down to the scaled size (both
+   renderers use a box pixel filter, so 2x2 pixel means are the smaller image's pixels).
 2. `renders`: every method on every example at doubling iteration counts until the render's
    CPU time (user + system of the render process, one thread) passes the largest budget; the
    images are kept (`renders/`), with `renders.csv` (scene, method, iterations, CPU seconds).
@@ -18,14 +19,26 @@ Three steps, each re-runnable on its own (the files go under --out, default
    (the scene without its `photons` setting: the automatic photon count; only where the scene
    sets `photons`). Two renders run at a time (one thread each: the CPU time of one render
    does not depend on the other).
-3. `table`: errors against the references (RMSE and relative MSE as `src/compare`, over the
-   whole image and over the windows below), interpolated at the CPU budgets in log-log between
-   the two renders that bracket each budget; writes `table.csv` and a Markdown table.
+3. `table`: errors against the references (RMSE and relative MSE as `src/compare`, and the
+   image mean over the reference's, over the whole image, its `edges` (the tenth of the pixels
+   with the steepest local contrast in the reference, where a radius blurs), the rest
+   (`smooth`) and the windows below), interpolated at the CPU budgets in log-log between the
+   two renders that bracket each budget; writes `table.csv` and a Markdown table.
 
     .venv/bin/python tools/every_example.py references --time 150
     .venv/bin/python tools/every_example.py renders --budgets 2,4,8
     .venv/bin/python tools/every_example.py table --budgets 2,4,8 \\
         --cornell-mitsuba ../shared/reference/cornell-glass/reference.exr
+
+Other initial radii (`RADIUS_FOOTPRINTS` in src/prepare/settings.rs) go into the same table:
+build with the factor changed, copy the binary, and render only the SPPM methods under a tag
+(method names become `sppm@r2`, `sppm-auto@r2`):
+
+    .venv/bin/python tools/every_example.py renders --binary target/bins/r2 \\
+        --methods sppm,sppm-auto --tag r2
+
+The table also prints smallppm_far's relative MSE over the Cornell box's at equal CPU time per
+pixel (far at `budget x its pixels / Cornell's pixels`) for every SPPM method.
 
 Needs numpy and mitsuba (for reading EXR): `pip install mitsuba numpy` into the `.venv`.
 """
@@ -94,9 +107,10 @@ def render_cpu(cmd):
     return ru.ru_utime + ru.ru_stime
 
 
-def method_scenes(name, out):
+def method_scenes(name, out, wanted, tag):
     """(method, scene file) pairs for one example: temporary scene files in a copy of
-    `examples/` under `out` (so that the example's relative paths resolve)."""
+    `examples/` under `out` (so that the example's relative paths resolve). Only the methods in
+    `wanted`; SPPM methods get `@tag` appended to their names when a tag is given."""
     copy = f"{out}/examples"
     if not os.path.isdir(copy):
         shutil.copytree("examples", copy)
@@ -108,6 +122,10 @@ def method_scenes(name, out):
         methods.append(("sppm-auto", stripped + "\nsettings { integrator sppm }\n"))
     files = []
     for method, body in methods:
+        if method not in wanted:
+            continue
+        if tag and method != "path":
+            method = f"{method}@{tag}"
         path = f"{copy}/{name}_{method}.scn"
         with open(path, "w") as f:
             f.write(body)
@@ -144,7 +162,7 @@ def cmd_renders(a):
             f.write("scene,method,iterations,cpu_seconds,image\n")
     jobs = []
     for name in scenes(a.only):
-        for method, path in method_scenes(name, a.out):
+        for method, path in method_scenes(name, a.out, a.methods.split(","), a.tag):
             if (name, method) in done:
                 os.remove(path)
             else:
@@ -190,14 +208,33 @@ def interpolate(points, budget):
     return float("nan")
 
 
+def edge_mask(ref):
+    """The pixels with the steepest local contrast in the reference: the tenth of the image
+    whose value differs most from its 3x3 neighbourhood's mean, relative to that mean (where a
+    gather radius blurs most). Luminance-like: the mean of the channels."""
+    y = ref.mean(axis=2)
+    p = np.pad(y, 1, mode="edge")
+    blur = sum(p[i:i + y.shape[0], j:j + y.shape[1]] for i in range(3) for j in range(3)) / 9
+    contrast = np.abs(y - blur) / (blur + 0.01)
+    return contrast >= np.quantile(contrast, 0.9)
+
+
+def sppm_methods(methods):
+    return [m for m in methods if m != "path"]
+
+
 def cmd_table(a):
     budgets = [float(b) for b in a.budgets.split(",")]
     with open(f"{a.out}/renders.csv") as f:
         renders = list(csv.DictReader(f))
+    methods = list(dict.fromkeys(r["method"] for r in renders))
+    methods = ["path"] + sorted(sppm_methods(methods))
     out_rows = []
-    md = ["| scene | region | ref. noise | CPU s | " +
-          " | ".join(f"{m} RMSE" for m in ("path", "sppm", "sppm-auto")) + " | sppm-auto / path |",
-          "|---|---|---:|---:|---:|---:|---:|---:|"]
+    md = ["| scene | region | ref. noise | CPU s | path RMSE | " +
+          " | ".join(f"{m} / path" for m in sppm_methods(methods)) + " |",
+          "|---|---|---:|---:|---:|" + "---:|" * len(sppm_methods(methods))]
+    rel_at = {}  # (scene, method) -> [(cpu, rel_mse)] over the whole image
+    pixels = {}
     for name in scenes(a.only):
         rows = [r for r in renders if r["scene"] == name]
         if not rows:
@@ -207,20 +244,27 @@ def cmd_table(a):
         ref = read_exr(ref_path) if os.path.exists(ref_path) else None
         noise = read_exr(noise_path) if os.path.exists(noise_path) else None
         shape = read_exr(rows[0]["image"]).shape[:2]
-        if name == "cornell" and a.cornell_mitsuba:
-            ref = downsample_to(read_exr(a.cornell_mitsuba), shape)
+        pixels[name] = shape[0] * shape[1]
+        mitsuba = {"cornell": a.cornell_mitsuba, "smallppm_far": a.far_mitsuba}.get(name)
+        if mitsuba:
+            ref = downsample_to(read_exr(mitsuba), shape)
             noise = None
         if ref is None:
             continue
         full_w = int(round(shape[1] / a.scale))
         k = shape[1] / full_w
-        regions = [("whole", None)] + [
+        edges = edge_mask(ref)
+        regions = [("whole", None), ("edges", edges), ("smooth", ~edges)] + [
             (label, tuple(int(round(v * k)) for v in w))
             for label, w in WINDOWS.get(name, {}).items()]
+        images = {r["image"]: read_exr(r["image"]) for r in rows}
         for label, w in regions:
             if w is None:
                 def cut(im):
                     return im
+            elif isinstance(w, np.ndarray):
+                def cut(im, keep=w):
+                    return im[keep]
             elif label.startswith("without"):
                 keep = np.ones(shape, dtype=bool)
                 keep[w[1]:w[3], w[0]:w[2]] = False
@@ -231,26 +275,50 @@ def cmd_table(a):
                 def cut(im, w=w):
                     return im[w[1]:w[3], w[0]:w[2]]
             floor = float(np.sqrt(np.mean(cut(noise) ** 2))) if noise is not None else 0.0
+            ref_mean = float(np.mean(cut(ref)))
             curves = {}
             for r in rows:
-                img = read_exr(r["image"])
+                img = images[r["image"]]
                 rmse, rel = errors(cut(img), cut(ref))
-                curves.setdefault(r["method"], []).append((float(r["cpu_seconds"]), rmse, rel))
+                # Mean over the reference's: a bias of the method shows as a ratio off 1 that
+                # does not shrink with time.
+                mean = float(np.mean(cut(img))) / ref_mean if ref_mean > 0 else float("nan")
+                curves.setdefault(r["method"], []).append(
+                    (float(r["cpu_seconds"]), rmse, rel, mean))
+            if label == "whole":
+                for m, pts in curves.items():
+                    rel_at[(name, m)] = [(c, e) for c, _, e, _ in pts]
             for b in budgets:
                 vals = {}
                 for m, pts in curves.items():
-                    vals[m] = (interpolate([(c, e) for c, e, _ in pts], b),
-                               interpolate([(c, e) for c, _, e in pts], b))
+                    vals[m] = tuple(interpolate([(p[0], p[i]) for p in pts], b)
+                                    for i in (1, 2, 3))
                     out_rows.append((name, label, b, m, floor) + vals[m])
-                auto = vals.get("sppm-auto", vals.get("sppm"))
-                cells = [f"{vals[m][0]:.4f}" if m in vals else "=sppm" for m in
-                         ("path", "sppm", "sppm-auto")]
-                md.append(f"| {name} | {label} | {floor:.4f} | {b:g} | " + " | ".join(cells) +
-                          f" | {auto[0] / vals['path'][0]:.2f} |")
+                if "path" not in vals:
+                    continue
+                cells = [f"{vals[m][0] / vals['path'][0]:.2f}" if m in vals else "-"
+                         for m in sppm_methods(methods)]
+                md.append(f"| {name} | {label} | {floor:.4f} | {b:g} | {vals['path'][0]:.4f} | "
+                          + " | ".join(cells) + " |")
     with open(f"{a.out}/table.csv", "w") as f:
-        f.write("scene,region,cpu_seconds,method,reference_noise_rmse,rmse,rel_mse\n")
+        f.write("scene,region,cpu_seconds,method,reference_noise_rmse,rmse,rel_mse,mean_ratio\n")
         for r in out_rows:
             f.write(",".join(str(v) for v in r) + "\n")
+    if "cornell" in pixels and "smallppm_far" in pixels:
+        share = pixels["smallppm_far"] / pixels["cornell"]
+        md += ["", "smallppm_far / cornell relative MSE at equal CPU time per pixel:", "",
+               "| method | cornell CPU s | far CPU s | cornell rel MSE | far rel MSE | far / cornell |",
+               "|---|---:|---:|---:|---:|---:|"]
+        for m in methods:
+            for b in budgets:
+                c = interpolate(rel_at.get(("cornell", m), []), b)
+                # smallppm_far sets no photon count: its `sppm` is already automatic.
+                far = rel_at.get(("smallppm_far", m)) or rel_at.get(
+                    ("smallppm_far", m.replace("sppm-auto", "sppm")), [])
+                f_ = interpolate(far, b * share)
+                if c == c and f_ == f_:
+                    md.append(f"| {m} | {b:g} | {b * share:g} | {c:.5f} | {f_:.5f} | "
+                              f"{f_ / c:.2f} |")
     with open(f"{a.out}/table.md", "w") as f:
         f.write("\n".join(md) + "\n")
     print("\n".join(md))
@@ -266,7 +334,10 @@ def main():
     ap.add_argument("--budgets", default="2,4,8", help="CPU seconds")
     ap.add_argument("--max-iterations", type=int, default=4096)
     ap.add_argument("--cornell-mitsuba", help="Mitsuba reference of examples/cornell.scn")
+    ap.add_argument("--far-mitsuba", help="Mitsuba reference of examples/smallppm_far.scn")
     ap.add_argument("--binary", default="target/release/sppm-lang")
+    ap.add_argument("--methods", default="path,sppm,sppm-auto", help="renders: which methods")
+    ap.add_argument("--tag", help="renders: appended to the SPPM methods' names (`sppm@TAG`)")
     a = ap.parse_args()
     {"references": cmd_references, "renders": cmd_renders, "table": cmd_table}[a.step](a)
 

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use sppm_lang::diag::short_number;
 use sppm_lang::render::{
-    EffectiveSettings, InitialRadius, PreparedScene, RenderError, RenderOptions,
+    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
 };
 use sppm_lang::scene::{Background, Integrator, Light, Scene, Shape};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
@@ -119,8 +119,8 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
             let text = match settings.initial_radius(&prepared.scene.camera) {
                 InitialRadius::Fixed(r) => format!("{} (from settings)", short_number(r)),
                 InitialRadius::Footprint { per_distance } => format!(
-                    "{} x the distance to each pixel's first visible point (default: one pixel \
-                     footprint there)",
+                    "{} x the distance to each pixel's first visible point (default: \
+                     {RADIUS_FOOTPRINTS} pixel footprints there)",
                     short_number(per_distance)
                 ),
             };

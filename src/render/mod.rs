@@ -7,8 +7,8 @@
 
 pub use crate::integrators::{Progress, RenderOutput, RenderStats};
 pub use crate::prepare::{
-    EffectiveSettings, InitialRadius, PreparedScene, RenderError, RenderOptions, SurfaceHit,
-    effective_settings, prepare,
+    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
+    SurfaceHit, effective_settings, prepare,
 };
 
 use std::sync::atomic::{AtomicBool, Ordering};

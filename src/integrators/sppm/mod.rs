@@ -5,7 +5,7 @@
 //! light; (2) a photon pass traces photons from the lights (chosen by power) and records where
 //! they arrive from the second surface on, in a hash grid whose cells are sized from the visible
 //! points' radii (a pixel's radius starts at its first visible point: the scene's `radius`, or
-//! a pixel footprint there, [`crate::prepare::InitialRadius`]); every visible point then gathers the photons within its radius (the BSDF at
+//! 1.5 pixel footprints there, [`crate::prepare::InitialRadius`]); every visible point then gathers the photons within its radius (the BSDF at
 //! the point keeps only photons on the side it faces); (3) each pixel updates N, tau and its
 //! radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2). The deposits are the same as
 //! pbrt-v4's (photon looks up points); only the direction of the lookup differs (`grid.rs` says

@@ -255,8 +255,8 @@ fn radius_over_footprint(example: &str) -> ((f64, f64, f64), f64) {
     ((q(0.5), q(0.05), q(0.95)), old[old.len() / 2])
 }
 
-/// A pixel's initial radius is one footprint at its own first visible point, wherever the
-/// camera looks. With smallpt's camera (`smallppm_far`: look_at 100 units ahead, the objects
+/// A pixel's initial radius is `RADIUS_FOOTPRINTS` footprints at its own first visible point,
+/// wherever the camera looks. With smallpt's camera (`smallppm_far`: look_at 100 units ahead, the objects
 /// about 235 away) the earlier rule, one footprint at the look-at distance, gives a median of
 /// 0.50 footprints, and the test checks that it would fail; in the Cornell box (look_at at
 /// the box's middle) 0.95.
@@ -478,7 +478,8 @@ mod census {
         }
     }
 
-    /// The default rule: one pixel footprint at each pixel's first visible point.
+    /// The default rule: `RADIUS_FOOTPRINTS` pixel footprints at each pixel's first visible
+    /// point.
     fn footprint(
         settings: &EffectiveSettings,
         distance: f64,
