@@ -153,11 +153,7 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
         if v == 0.0 {
             return (t, t, t, evals);
         }
-        if (v < 0.0) == (c0 < 0.0) {
-            lo = t;
-        } else {
-            hi = t;
-        }
+        narrow(v, c0, t, &mut lo, &mut hi);
         if hi - lo <= f64::EPSILON * hi.max(1e-300) {
             break;
         }
@@ -181,11 +177,7 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
                 if v == 0.0 {
                     return (q, q, q, evals);
                 }
-                if (v < 0.0) == (c0 < 0.0) {
-                    lo = q;
-                } else {
-                    hi = q;
-                }
+                narrow(v, c0, q, &mut lo, &mut hi);
             }
             break;
         }
@@ -200,6 +192,16 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
         t = next;
     }
     (t.clamp(lo, hi), lo, hi, evals)
+}
+
+/// Moves the end of the bracket `[lo, hi]` whose value has the sign of `v` (the sign of `c0`
+/// at `lo`) to `x`.
+fn narrow(v: f64, c0: f64, x: f64, lo: &mut f64, hi: &mut f64) {
+    if (v < 0.0) == (c0 < 0.0) {
+        *lo = x;
+    } else {
+        *hi = x;
+    }
 }
 
 /// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
