@@ -6,17 +6,19 @@ use arrayvec::ArrayVec;
 use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, build};
-use super::leaf::{Closest, Content, Leaves};
+use super::leaf::{Closest, Leaves};
 use super::triangles::Meshes;
-use super::wide::{BoxRay, EMPTY, LEAF, WideNode, collapse, far_to_near, still_near};
+use super::wide::{
+    Avx, BoxRay, BoxTest, Halves, LEAF, WIDTH, WideNode, collapse, far_to_near, still_near,
+};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::{AnyShape, LazyHit};
 
-/// Traversal stack size: up to three entries per level of the 4-wide tree, which is no deeper
+/// Traversal stack size: up to seven entries per level of the 8-wide tree, which is no deeper
 /// than the binary tree (< 64 levels, see `MEDIAN_DEPTH`).
-const STACK: usize = 192;
+const STACK: usize = 7 * 64;
 /// From this depth on, nodes split at the object median instead of by SAH, so that no tree is
 /// deeper than `MEDIAN_DEPTH + log2(primitives)` (< `STACK` for fewer than 2^31 primitives). SAH
 /// alone can peel a few primitives off per level (e.g. exponentially spaced sizes), and a
@@ -27,7 +29,7 @@ const MEDIAN_DEPTH: usize = 32;
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Node {
     pub bounds: Aabb,
-    /// Leaf: first item (after packing: its index in the leaf list). Interior: index of the
+    /// Leaf: first item (after packing: its leaf reference, see [`super::leaf::PACKETS`]). Interior: index of the
     /// second child (the first follows).
     pub offset: u32,
     /// Items in a leaf; 0 for an interior node.
@@ -134,18 +136,14 @@ impl Bvh {
         // Pack each leaf's contents; its node then names the leaf.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
         let mut leaves = Leaves::default();
-        let mut contents = Vec::new();
-        for node in nodes.iter_mut().filter(|n| n.count > 0) {
-            contents.clear();
-            contents.extend(
-                items[node.offset as usize..][..node.count as usize]
-                    .iter()
-                    .map(|it| match it.index.checked_sub(nb) {
-                        Some(g) => Content::Triangle(g as u32),
-                        None => Content::Shape(it.index),
-                    }),
-            );
-            node.offset = leaves.push(&contents, &mut slots, &meshes);
+        let ranges: Vec<(u32, u16)> = nodes
+            .par_iter()
+            .filter(|n| n.count > 0)
+            .map(|n| (n.offset, n.count))
+            .collect();
+        let refs = leaves.pack(&items, &ranges, nb, &mut slots, &meshes);
+        for (node, r) in nodes.iter_mut().filter(|n| n.count > 0).zip(refs) {
+            node.offset = r;
         }
         leaves.shrink_to_fit();
         #[cfg(test)]
@@ -230,10 +228,41 @@ impl Bvh {
         ))
     }
 
-    /// Closest hit as a [`LazyHit`], the surface hit and its id.
+    /// Closest hit as a [`LazyHit`], the surface hit and its id. The traversal is compiled
+    /// twice, with the box test of [`Avx`] (taken where the CPU has it) and of [`Halves`];
+    /// both give the same bits, so the same hit.
     #[inline]
     pub fn intersect_lazy(
         &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(LazyHit, Surface<'_>, u32)> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = Avx::detect() {
+            // SAFETY: an `Avx` value exists only where the CPU has AVX.
+            return unsafe { self.intersect_avx(avx, ray, t_min, t_max) };
+        }
+        self.closest_with(Halves, ray, t_min, t_max)
+    }
+
+    /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn intersect_avx(
+        &self,
+        avx: Avx,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(LazyHit, Surface<'_>, u32)> {
+        self.closest_with(avx, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn closest_with<B: BoxTest>(
+        &self,
+        test: B,
         ray: &Ray,
         t_min: f32,
         mut t_max: f32,
@@ -260,15 +289,29 @@ impl Bvh {
                     .closest(cur & !LEAF, ray, t_min, &mut t_max, &mut c);
             } else {
                 let node = &self.nodes[cur as usize];
-                let (mask, near) = node.hit(&boxes, t_min, t_max);
-                let mut hits = [(0, 0.0); 4];
-                let n = far_to_near(node, mask, near, &mut hits);
-                if n > 0 {
-                    // (At most 3 per level of a tree no deeper than `STACK / 3`.)
-                    for &h in &hits[..n - 1] {
-                        stack.push(h);
+                let (mask, near) = test.hit(node, &boxes, t_min, t_max);
+                // Visit the nearest hit child next and stack the others; one or two hit
+                // children (most nodes) take no sort. (At most 7 pushes per level of a tree no
+                // deeper than `STACK / 7`.)
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize;
+                    let rest = mask & (mask - 1);
+                    if rest == 0 {
+                        cur = node.child[a];
+                    } else if rest & (rest - 1) == 0 {
+                        let b = rest.trailing_zeros() as usize;
+                        // As `far_to_near` orders them: on equal distances, `b` first.
+                        let (first, second) = if near[a] < near[b] { (a, b) } else { (b, a) };
+                        stack.push((node.child[second], near[second]));
+                        cur = node.child[first];
+                    } else {
+                        let mut hits = [(0, 0.0); WIDTH];
+                        let n = far_to_near(node, mask, &near, &mut hits);
+                        for &h in &hits[..n - 1] {
+                            stack.push(h);
+                        }
+                        cur = hits[n - 1].0;
                     }
-                    cur = hits[n - 1].0;
                     continue;
                 }
             }
@@ -312,8 +355,26 @@ impl Bvh {
         ))
     }
 
-    /// Whether anything is hit with `t_min < t < t_max`.
+    /// Whether anything is hit with `t_min < t < t_max` (with AVX where the CPU has it, as
+    /// [`Bvh::intersect_lazy`]).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = Avx::detect() {
+            // SAFETY: an `Avx` value exists only where the CPU has AVX.
+            return unsafe { self.occluded_avx(avx, ray, t_min, t_max) };
+        }
+        self.occluded_with(Halves, ray, t_min, t_max)
+    }
+
+    /// [`Bvh::occluded`] with every operation allowed to use AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn occluded_avx(&self, avx: Avx, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.occluded_with(avx, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_with<B: BoxTest>(&self, test: B, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         if self
             .unbounded
             .iter()
@@ -334,14 +395,12 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[cur as usize];
-                let (mask, _) = node.hit(&boxes, t_min, t_max);
+                let (mask, _) = test.hit(node, &boxes, t_min, t_max);
                 let mut bits = mask;
                 while bits != 0 {
                     let slot = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    if node.child[slot] != EMPTY {
-                        stack.push(node.child[slot]);
-                    }
+                    stack.push(node.child[slot]);
                 }
             }
             match stack.pop() {
@@ -353,218 +412,4 @@ impl Bvh {
 }
 
 #[cfg(test)]
-mod tests {
-    use glam::Vec3A;
-
-    use super::*;
-    use crate::sampling::{Rng, uniform_sphere};
-    use crate::shapes::sphere::Sphere;
-
-    /// Nodes on the longest root-to-leaf path of the binary tree.
-    fn depth(bvh: &Bvh) -> usize {
-        bvh.binary_depth
-    }
-
-    fn spheres_bvh(spheres: &[Sphere], median_depth: usize) -> Bvh {
-        let shapes = spheres
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
-            .collect();
-        Bvh::with_median_depth(shapes, Vec::new(), median_depth)
-    }
-
-    fn assert_matches_brute_force(
-        spheres: &[Sphere],
-        bvh: &Bvh,
-        rng: &mut Rng,
-        ray_of: fn(&mut Rng) -> Ray,
-    ) {
-        let mut hits = 0;
-        for _ in 0..500 {
-            let ray = ray_of(rng);
-            let brute = spheres
-                .iter()
-                .enumerate()
-                .filter_map(|(i, s)| s.intersect(&ray, 0.0, f32::INFINITY).map(|h| (h.t, i)))
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            let got = bvh
-                .intersect(&ray, 0.0, f32::INFINITY)
-                .map(|(h, i)| (h.t, i as usize));
-            assert_eq!(brute, got);
-            assert_eq!(brute.is_some(), bvh.occluded(&ray, 0.0, f32::INFINITY));
-            hits += usize::from(brute.is_some());
-        }
-        assert!(hits > 100, "too few rays hit ({hits} of 500)");
-    }
-
-    /// `n` spheres of radius 0.1..0.6 centred in a random cube of side 10.
-    fn sphere_cloud(rng: &mut Rng, n: usize) -> Vec<Sphere> {
-        (0..n)
-            .map(|_| {
-                let c = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-                Sphere::new(c, 0.1 + rng.f32() * 0.5).unwrap()
-            })
-            .collect()
-    }
-
-    /// Rays in a random cube of side 10.
-    fn cloud_ray(rng: &mut Rng) -> Ray {
-        let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 10.0;
-        Ray::new(o, uniform_sphere(rng.vec2()))
-    }
-
-    /// Rays parallel to the x axis, within 0.05 of it, starting at x in 2^(0..100), running
-    /// either way.
-    fn chain_ray(rng: &mut Rng) -> Ray {
-        let (y, z) = (0.1 * (rng.f32() - 0.5), 0.1 * (rng.f32() - 0.5));
-        let o = Vec3A::new(2f32.powf(rng.f32() * 100.0), y, z);
-        let side = if rng.f32() < 0.5 { -1.0 } else { 1.0 };
-        Ray::new(o, Vec3A::new(side, 0.0, 0.0))
-    }
-
-    /// Below `median_depth` nodes split at the object median, which bounds the depth by
-    /// `median_depth + log2(n)`: the traversal stack cannot overflow. Checked with the limit
-    /// lowered so that median splits really happen, on spheres spaced exponentially along a
-    /// line (SAH peels a few off per level there: 28 levels for 100 of them at ratio 2).
-    #[test]
-    fn median_splits_bound_the_depth_and_keep_hits() {
-        let chain: Vec<Sphere> = (0..100)
-            .map(|k| Sphere::new(Vec3A::new(2f32.powi(k), 0.0, 0.0), 0.1).unwrap())
-            .collect();
-        let sah = depth(&spheres_bvh(&chain, usize::MAX));
-        assert!(sah > 20, "SAH alone builds a deep tree here ({sah})");
-        assert!(
-            depth(&Bvh::new(
-                chain.iter().map(|s| (AnyShape::Sphere(*s), 0)).collect()
-            )) <= STACK
-        );
-        let mut rng = Rng::new(3);
-        let cloud = sphere_cloud(&mut rng, 300);
-        for limit in [0, 3, 8] {
-            for (spheres, ray_of) in [
-                (&chain, chain_ray as fn(&mut Rng) -> Ray),
-                (&cloud, cloud_ray),
-            ] {
-                let bvh = spheres_bvh(spheres, limit);
-                let bound = limit + (spheres.len() as f32).log2().ceil() as usize + 1;
-                let d = depth(&bvh);
-                assert!(
-                    d <= bound,
-                    "depth {d} over {bound} with median splits from {limit}"
-                );
-                assert_matches_brute_force(spheres, &bvh, &mut rng, ray_of);
-            }
-        }
-    }
-
-    #[test]
-    fn matches_brute_force() {
-        let mut rng = Rng::new(7);
-        let spheres = sphere_cloud(&mut rng, 200);
-        let bvh = spheres_bvh(&spheres, MEDIAN_DEPTH);
-        assert_matches_brute_force(&spheres, &bvh, &mut rng, cloud_ray);
-    }
-
-    /// Leaves that mix quads, spheres, triangles and disks: the quads are reordered to the
-    /// front of the leaf and tested four at a time, the rest one by one. The nearest hit
-    /// (its `t` bit for bit, and its id) and occlusion must be those of brute force over the
-    /// shapes, including the Cornell box's single leaf of 6 quads and 2 spheres.
-    #[test]
-    fn leaves_of_mixed_shapes_match_brute_force() {
-        use crate::shapes::disk::Disk;
-        use crate::shapes::quad::Quad;
-        use crate::shapes::triangle::Triangle;
-        let mut rng = Rng::new(17);
-        let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
-        let (mut packed_leaves, mut two_packets) = (0, 0);
-        for case in 0..300 {
-            let n = 2 + case % 12;
-            // Every tenth case is a closed box of 6 walls (random proportions) with 0-2 spheres
-            // inside: often one leaf, whose 6 quads take two packets (as in the Cornell box).
-            let walls = |rng: &mut Rng| {
-                let (x, y, z) = (Vec3A::X, Vec3A::Y, Vec3A::Z);
-                let s = Vec3A::ONE + v(rng).abs();
-                let o = -s;
-                let e = 2.0 * s;
-                [
-                    (o, e.x * x, e.z * z),
-                    (o + e.y * y, e.x * x, e.z * z),
-                    (o, e.x * x, e.y * y),
-                    (o + e.z * z, e.x * x, e.y * y),
-                    (o, e.z * z, e.y * y),
-                    (o + e.x * x, e.z * z, e.y * y),
-                ]
-                .map(|(o, a, b)| AnyShape::Quad(Quad::new(o, a, b).unwrap()))
-            };
-            let shapes: Vec<AnyShape> = if case % 10 == 0 {
-                let mut s = Vec::from(walls(&mut rng));
-                for _ in 0..case % 3 {
-                    s.push(AnyShape::Sphere(
-                        Sphere::new(0.5 * v(&mut rng), 0.3).unwrap(),
-                    ));
-                }
-                s
-            } else {
-                (0..n)
-                    .map(|k| {
-                        let c = 1.5 * v(&mut rng);
-                        match (k + case) % 5 {
-                            0 | 1 => {
-                                AnyShape::Quad(Quad::new(c, v(&mut rng), v(&mut rng)).unwrap())
-                            }
-                            2 | 3 => {
-                                AnyShape::Sphere(Sphere::new(c, 0.1 + 0.4 * rng.f32()).unwrap())
-                            }
-                            _ if k % 2 == 0 => AnyShape::Triangle(
-                                Triangle::new([c, c + v(&mut rng), c + v(&mut rng)], None, None)
-                                    .unwrap(),
-                            ),
-                            _ => AnyShape::Disk(Disk::new(c, v(&mut rng), 0.5).unwrap()),
-                        }
-                    })
-                    .collect()
-            };
-            let bvh = Bvh::new(
-                shapes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| (copy_shape(s), 100 + i as u32))
-                    .collect(),
-            );
-            packed_leaves += bvh.leaves.leaves.iter().filter(|l| l.quads > 0).count();
-            two_packets += bvh.leaves.leaves.iter().filter(|l| l.quads > 4).count();
-            for _ in 0..50 {
-                let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
-                let t_max = if rng.f32() < 0.3 { 1.0 } else { f32::INFINITY };
-                let mut brute: Option<(f32, u32)> = None;
-                let mut limit = t_max;
-                for (i, s) in shapes.iter().enumerate() {
-                    if let Some(h) = s.intersect(&ray, 0.0, limit) {
-                        limit = h.t;
-                        brute = Some((h.t, 100 + i as u32));
-                    }
-                }
-                let got = bvh.intersect(&ray, 0.0, t_max).map(|(h, id)| (h.t, id));
-                assert_eq!(
-                    got.map(|(t, id)| (t.to_bits(), id)),
-                    brute.map(|(t, id)| (t.to_bits(), id)),
-                    "case {case}"
-                );
-                assert_eq!(bvh.occluded(&ray, 0.0, t_max), brute.is_some());
-            }
-        }
-        assert!(packed_leaves > 100, "{packed_leaves} leaves with packets");
-        assert!(two_packets >= 10, "{two_packets} leaves with two packets");
-    }
-
-    fn copy_shape(s: &AnyShape) -> AnyShape {
-        match s {
-            AnyShape::Quad(q) => AnyShape::Quad(*q),
-            AnyShape::Sphere(q) => AnyShape::Sphere(*q),
-            AnyShape::Triangle(q) => AnyShape::Triangle(*q),
-            AnyShape::Disk(q) => AnyShape::Disk(*q),
-            _ => unreachable!("only the kinds this test builds"),
-        }
-    }
-}
+mod tests;

@@ -1,15 +1,16 @@
 //! What a BVH leaf holds, packed after the build: its mesh triangles four to a packet, its
 //! quads four to a packet (when it has two or more), and its other shapes one by one.
 
-use glam::Vec3A;
+use rayon::prelude::*;
 
 use crate::geometry::{Hit, Ray};
 
+use super::build::Item;
 use super::triangles::{Meshes, TrianglePacket};
 use crate::shapes::primitive::AnyShape;
 use crate::shapes::quad::{Quad, QuadPacket};
 
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct Leaf {
     /// First of its shapes in the BVH's shape list (its quads first when it has packets).
     pub shapes: u32,
@@ -24,6 +25,12 @@ pub(super) struct Leaf {
     /// Triangle packets.
     pub tris: u8,
 }
+
+/// A leaf reference with this bit set names a leaf of mesh triangles only by its packets
+/// directly, without a [`Leaf`] record: bits 0..29 hold its first packet, bit 29 is set when it
+/// has two. Otherwise a leaf reference is the leaf's index in the leaf list.
+pub(super) const PACKETS: u32 = 1 << 30;
+const TWO_PACKETS: u32 = 1 << 29;
 
 /// The packed contents of all leaves.
 #[derive(Default)]
@@ -57,39 +64,78 @@ impl Closest {
     };
 }
 
-/// One item of a leaf: a shape (its index in the shape list given to the build) or a mesh
-/// triangle (its global number).
-#[derive(Clone, Copy)]
-pub(super) enum Content {
-    Shape(usize),
-    Triangle(u32),
-}
-
 impl Leaves {
-    /// Appends a leaf of `items`; returns its index.
-    pub(super) fn push(
+    /// Packs the leaves whose items are `ranges` of `items` (first item, count; in the build's
+    /// order, where a shape item's index is its slot in `slots` and a triangle's is `nb` plus
+    /// its global number). Returns each leaf's reference. The triangle packets are made in
+    /// parallel, in leaf order; the shapes are moved serially.
+    pub(super) fn pack(
         &mut self,
-        items: &[Content],
+        items: &[Item],
+        ranges: &[(u32, u16)],
+        nb: usize,
         slots: &mut [Option<(AnyShape, u32)>],
         meshes: &Meshes,
+    ) -> Vec<u32> {
+        let leaf_items = |&(first, count): &(u32, u16)| &items[first as usize..][..count as usize];
+        let triangles = |leaf: &[Item]| {
+            leaf.iter()
+                .filter_map(|it| it.index.checked_sub(nb))
+                .map(|g| {
+                    let (mesh, k, _) = meshes.locate(g as u32);
+                    (mesh.vertices(k), g as u32)
+                })
+                .collect::<Vec<_>>()
+        };
+        let counts: Vec<usize> = ranges
+            .par_iter()
+            .map(|r| {
+                leaf_items(r)
+                    .iter()
+                    .filter(|it| it.index >= nb)
+                    .count()
+                    .div_ceil(4)
+            })
+            .collect();
+        let start = self.tri_packets.len();
+        self.tri_packets
+            .par_extend(ranges.par_iter().flat_map_iter(|r| {
+                let tris = triangles(leaf_items(r));
+                tris.chunks(4).map(TrianglePacket::new).collect::<Vec<_>>()
+            }));
+        let mut packet = start;
+        ranges
+            .iter()
+            .zip(counts)
+            .map(|(r, tris)| {
+                let shapes = leaf_items(r).iter().filter(|it| it.index < nb);
+                let leaf = self.push(shapes.map(|it| it.index), packet, tris, slots);
+                packet += tris;
+                leaf
+            })
+            .collect()
+    }
+
+    /// Appends a leaf of the shapes in `slots` at `shapes` and `tris` triangle packets from
+    /// `tri_packet` on; returns its reference (below `1 << 31`).
+    fn push(
+        &mut self,
+        shapes: impl Iterator<Item = usize>,
+        tri_packet: usize,
+        tris: usize,
+        slots: &mut [Option<(AnyShape, u32)>],
     ) -> u32 {
+        let mut shapes: Vec<(AnyShape, u32)> = shapes.filter_map(|i| slots[i].take()).collect();
+        if shapes.is_empty() && (1..=2).contains(&tris) && tri_packet < TWO_PACKETS as usize {
+            return PACKETS | tri_packet as u32 | if tris == 2 { TWO_PACKETS } else { 0 };
+        }
         let mut leaf = Leaf {
             shapes: self.shapes.len() as u32,
             packet: self.packets.len() as u32,
-            tri_packet: self.tri_packets.len() as u32,
+            tri_packet: tri_packet as u32,
+            tris: tris as u8,
             ..Leaf::default()
         };
-        let mut tris: Vec<([Vec3A; 3], u32)> = Vec::new();
-        let mut shapes: Vec<(AnyShape, u32)> = Vec::new();
-        for it in items {
-            match *it {
-                Content::Triangle(g) => {
-                    let (mesh, k, _) = meshes.locate(g);
-                    tris.push((mesh.vertices(k), g));
-                }
-                Content::Shape(i) => shapes.extend(slots[i].take()),
-            }
-        }
         // Leaves with two quads or more list them first and test them four at a time.
         let is_quad = |s: &(AnyShape, u32)| matches!(s.0, AnyShape::Quad(_));
         let quads = shapes.iter().filter(|s| is_quad(s)).count();
@@ -110,9 +156,6 @@ impl Leaves {
             self.shapes.push(s);
             self.ids.push(id);
         }
-        leaf.tris = tris.len().div_ceil(4) as u8;
-        self.tri_packets
-            .extend(tris.chunks(4).map(TrianglePacket::new));
         self.leaves.push(leaf);
         (self.leaves.len() - 1) as u32
     }
@@ -138,7 +181,15 @@ impl Leaves {
         &self.tri_packets[leaf.tri_packet as usize..][..leaf.tris as usize]
     }
 
-    /// Tests leaf `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
+    /// The triangle packets of a leaf referenced by its packets ([`PACKETS`]).
+    #[inline(always)]
+    fn direct_packets(&self, leaf: u32) -> &[TrianglePacket] {
+        let first = (leaf & (TWO_PACKETS - 1)) as usize;
+        let n = 1 + usize::from(leaf & TWO_PACKETS != 0);
+        &self.tri_packets[first..][..n]
+    }
+
+    /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
     #[inline(always)]
     pub(super) fn closest(
         &self,
@@ -148,6 +199,16 @@ impl Leaves {
         t_max: &mut f32,
         c: &mut Closest,
     ) {
+        if leaf & PACKETS != 0 {
+            for packet in self.direct_packets(leaf) {
+                if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
+                    *t_max = t;
+                    c.triangle = g;
+                    c.shape = usize::MAX;
+                }
+            }
+            return;
+        }
         let leaf = &self.leaves[leaf as usize];
         for packet in self.triangle_packets(leaf) {
             if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
@@ -192,10 +253,16 @@ impl Leaves {
         }
     }
 
-    /// Whether anything in leaf `leaf` is hit with `t_min < t < t_max`.
+    /// Whether anything in the leaf referenced by `leaf` is hit with `t_min < t < t_max`.
     #[inline(always)]
     pub(super) fn occluded(&self, leaf: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         use crate::shapes::Shape;
+        if leaf & PACKETS != 0 {
+            return self
+                .direct_packets(leaf)
+                .iter()
+                .any(|p| p.occluded(ray, t_min, t_max));
+        }
         let leaf = &self.leaves[leaf as usize];
         let start = leaf.shapes as usize + leaf.quads as usize;
         let end = leaf.shapes as usize + leaf.count as usize;

@@ -8,7 +8,7 @@ use glam::{BVec4A, Vec3A, Vec4};
 use crate::geometry::Ray;
 use crate::shapes::mesh::TriangleMesh;
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct TrianglePacket {
     v0: [Vec4; 3],
     e1: [Vec4; 3],

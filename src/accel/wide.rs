@@ -1,33 +1,39 @@
-//! The BVH as traversed: 4-wide nodes collapsed from the binary SAH tree, each holding its
-//! children's boxes in SoA form so that one ray tests all four at once, visiting the hit
-//! children nearest first.
+//! The BVH as traversed: 8-wide nodes collapsed from the binary SAH tree, each holding its
+//! children's boxes in SoA form so that one ray tests all eight at once (in one AVX register
+//! when the CPU has AVX, else as two halves of four), visiting the hit children nearest first.
 
 use arrayvec::ArrayVec;
 use glam::{Vec3A, Vec4};
+use rayon::prelude::*;
 
 use super::bvh::Node as BinaryNode;
 use crate::geometry::{Aabb, Ray};
 
-/// A child reference with this bit set names a leaf (the rest is its index in the leaf list).
+/// Children per node.
+pub(super) const WIDTH: usize = 8;
+/// A child reference with this bit set names a leaf (the rest is its leaf reference, see
+/// [`super::leaf::PACKETS`]).
 pub(super) const LEAF: u32 = 1 << 31;
 /// An unused child slot.
-pub(super) const EMPTY: u32 = u32::MAX;
+const EMPTY: u32 = u32::MAX;
 /// Far bounds are scaled up by 1 + 2*gamma(3) (pbrt) so that rounding never culls a hit, as
 /// in [`Aabb::hit`].
 const FAR_SCALE: f32 = 1.000_000_4;
 
-#[derive(Debug, Clone, Copy)]
+/// Eight children's boxes: per axis, their minima and their maxima as two halves of four.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
 pub(super) struct WideNode {
-    min: [Vec4; 3],
-    max: [Vec4; 3],
-    /// Interior child: its node index; leaf: `LEAF | leaf index`; unused: `EMPTY`.
-    pub child: [u32; 4],
+    min: [[Vec4; 2]; 3],
+    max: [[Vec4; 2]; 3],
+    /// Interior child: its node index; leaf: `LEAF | leaf reference`; unused: `EMPTY`.
+    pub child: [u32; WIDTH],
 }
 
 /// A ray set up for box tests.
 pub(super) struct BoxRay {
-    o: [Vec4; 3],
-    inv_d: [Vec4; 3],
+    o: [f32; 3],
+    inv_d: [f32; 3],
     /// Per axis: whether the ray runs toward decreasing coordinates (it then enters a box
     /// through its `max` plane).
     neg: [bool; 3],
@@ -38,71 +44,220 @@ impl BoxRay {
     pub(super) fn new(ray: &Ray) -> Self {
         let inv_d: Vec3A = ray.d.recip();
         Self {
-            o: [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat),
-            inv_d: [inv_d.x, inv_d.y, inv_d.z].map(Vec4::splat),
+            o: ray.o.to_array(),
+            inv_d: inv_d.to_array(),
             neg: [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0],
         }
     }
 }
 
-impl WideNode {
-    /// The children whose box the ray enters with `t_min <= t <= t_max` (conservatively, as
-    /// [`Aabb::hit`]), as a bit mask, and the entry distances. The entry and exit planes are
-    /// chosen by the ray's signs; a NaN slab distance (a ray in a slab's plane, parallel to
-    /// it) is ignored. Unused slots may be in the mask.
+/// A box test: [`Halves`] on any CPU, [`Avx`] where the CPU has AVX.
+pub(super) trait BoxTest: Copy {
+    /// The children of `node` whose box the ray enters with `t_min <= t <= t_max`
+    /// (conservatively, as [`Aabb::hit`]), as a bit mask, and the entry distances. The entry
+    /// and exit planes are chosen by the ray's signs; a NaN slab distance (a ray in a slab's
+    /// plane, parallel to it) is ignored. Unused slots are never in the mask. Both tests do
+    /// the same operations in the same order, so they give the same bits.
+    fn hit(self, node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// The box test four children at a time (SSE on x86-64).
+#[derive(Clone, Copy)]
+pub(super) struct Halves;
+
+impl BoxTest for Halves {
     #[inline(always)]
-    pub(super) fn hit(&self, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, Vec4) {
-        let mut near = Vec4::splat(t_min);
-        let mut far = Vec4::splat(t_max);
-        for a in 0..3 {
-            let (lo, hi) = if ray.neg[a] {
-                (self.max[a], self.min[a])
-            } else {
-                (self.min[a], self.max[a])
-            };
-            // `x.max(acc)` keeps `acc` where `x` is NaN (SSE `maxps` returns its second
-            // operand when either is NaN), as `Aabb::hit` does.
-            near = ((lo - ray.o[a]) * ray.inv_d[a]).max(near);
-            far = ((hi - ray.o[a]) * ray.inv_d[a]).min(far);
+    fn hit(self, node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+        let mut mask = 0;
+        let mut out = [0.0; WIDTH];
+        for h in 0..2 {
+            let mut near = Vec4::splat(t_min);
+            let mut far = Vec4::splat(t_max);
+            for a in 0..3 {
+                let (lo, hi) = if ray.neg[a] {
+                    (node.max[a][h], node.min[a][h])
+                } else {
+                    (node.min[a][h], node.max[a][h])
+                };
+                let (o, inv_d) = (Vec4::splat(ray.o[a]), Vec4::splat(ray.inv_d[a]));
+                // `x.max(acc)` keeps `acc` where `x` is NaN (SSE `maxps` returns its second
+                // operand when either is NaN), as `Aabb::hit` does.
+                near = ((lo - o) * inv_d).max(near);
+                far = ((hi - o) * inv_d).min(far);
+            }
+            mask |= near.cmple(far * FAR_SCALE).bitmask() << (4 * h);
+            out[4 * h..4 * h + 4].copy_from_slice(&near.to_array());
         }
-        (near.cmple(far * FAR_SCALE).bitmask(), near)
+        (mask, out)
     }
 }
 
+/// The box test eight children at a time; a value exists only where the CPU has AVX.
+#[derive(Clone, Copy)]
+pub(super) struct Avx(());
+
+impl Avx {
+    /// The AVX box test, if the CPU has AVX.
+    #[inline]
+    pub(super) fn detect() -> Option<Self> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            return Some(Self(()));
+        }
+        None
+    }
+}
+
+impl BoxTest for Avx {
+    #[inline(always)]
+    fn hit(self, node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: an `Avx` value is made only after AVX was detected.
+            unsafe { hit_avx(node, ray, t_min, t_max) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        Halves.hit(node, ray, t_min, t_max)
+    }
+}
+
+/// [`BoxTest::hit`] eight children at a time.
+///
+/// # Safety
+///
+/// The CPU must have AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn hit_avx(node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
+    let load = |v: &[Vec4; 2]| {
+        // SAFETY: `[Vec4; 2]` is eight consecutive `f32`s.
+        unsafe { _mm256_loadu_ps(v.as_ptr().cast::<f32>()) }
+    };
+    let mut near = _mm256_set1_ps(t_min);
+    let mut far = _mm256_set1_ps(t_max);
+    for a in 0..3 {
+        let (lo, hi) = if ray.neg[a] {
+            (&node.max[a], &node.min[a])
+        } else {
+            (&node.min[a], &node.max[a])
+        };
+        let (o, inv_d) = (_mm256_set1_ps(ray.o[a]), _mm256_set1_ps(ray.inv_d[a]));
+        // `vmaxps` and `vminps` return their second operand on NaN, as `maxps` does.
+        near = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(load(lo), o), inv_d), near);
+        far = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(load(hi), o), inv_d), far);
+    }
+    let far = _mm256_mul_ps(far, _mm256_set1_ps(FAR_SCALE));
+    // Ordered, non-signalling `<=`: false on NaN, as `cmpleps`.
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+    let mut out = [0.0; WIDTH];
+    // SAFETY: `out` holds eight `f32`s.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), near) };
+    (mask, out)
+}
+
 /// Whether a child entered at `near` may still hold a hit closer than `t_max` (the test of
-/// [`WideNode::hit`] against a shrunk `t_max`).
+/// [`BoxTest::hit`] against a shrunk `t_max`).
 #[inline(always)]
 pub(super) fn still_near(near: f32, t_max: f32) -> bool {
     near <= t_max * FAR_SCALE
 }
 
+/// Binary nodes from which the collapse works in parallel.
+const PARALLEL_NODES: usize = 1 << 14;
+/// Levels of the wide tree whose subtrees are collapsed as parallel tasks (up to 8^2 tasks).
+const PARALLEL_LEVELS: usize = 2;
+
 /// Collapses the binary tree (flattened depth-first: an interior node's first child follows
-/// it, `offset` names the second; a leaf's `offset` is its leaf index) into 4-wide nodes: each
-/// node takes its two children, then repeatedly replaces the interior child of largest surface
-/// area by that child's two children, up to four. The root is node 0.
+/// it, `offset` names the second; a leaf's `offset` is its leaf reference) into 8-wide nodes,
+/// depth-first: each node takes its two children, then repeatedly replaces the interior child
+/// of largest surface area by that child's two children, up to eight. The root is node 0.
+///
+/// In a large tree the subtrees of the top levels are collapsed in parallel, each into its
+/// own run of nodes, and the runs are joined in depth-first order: the nodes are the same on
+/// any number of threads.
 pub(super) fn collapse(nodes: &[BinaryNode]) -> Vec<WideNode> {
-    let mut out = Vec::with_capacity(nodes.len() / 3 + 1);
     if nodes.is_empty() {
-        return out;
+        return Vec::new();
     }
     if nodes[0].count > 0 {
         // A single leaf: one node with one child.
-        out.push(WideNode::from_children(
+        return vec![WideNode::from_children(
             nodes,
             &[0],
             &[LEAF | nodes[0].offset],
-        ));
+        )];
+    }
+    let levels = if nodes.len() >= PARALLEL_NODES {
+        PARALLEL_LEVELS
+    } else {
+        0
+    };
+    let mut out = collapse_run(nodes, 0, levels);
+    out.shrink_to_fit();
+    out
+}
+
+/// The wide subtree of interior binary node `i` as a run of nodes whose references count from
+/// the run's start; `levels` more levels are collapsed in parallel.
+fn collapse_run(nodes: &[BinaryNode], i: usize, levels: usize) -> Vec<WideNode> {
+    let mut out = Vec::new();
+    if levels == 0 {
+        collapse_at(nodes, i, &mut out);
         return out;
     }
-    collapse_at(nodes, 0, &mut out);
-    out.shrink_to_fit();
+    let kids = kids_of(nodes, i);
+    let runs: Vec<Option<Vec<WideNode>>> = kids
+        .par_iter()
+        .map(|&k| (nodes[k].count == 0).then(|| collapse_run(nodes, k, levels - 1)))
+        .collect();
+    out.push(WideNode::from_children(nodes, &[], &[]));
+    let mut refs: ArrayVec<u32, WIDTH> = ArrayVec::new();
+    for (&k, run) in kids.iter().zip(runs) {
+        match run {
+            None => refs.push(LEAF | nodes[k].offset),
+            Some(run) => {
+                let base = out.len() as u32;
+                refs.push(base);
+                out.extend(run.into_iter().map(|mut n| {
+                    // (Leaf and unused references both have the `LEAF` bit: they stay.)
+                    for c in &mut n.child {
+                        if *c & LEAF == 0 {
+                            *c += base;
+                        }
+                    }
+                    n
+                }));
+            }
+        }
+    }
+    out[0] = WideNode::from_children(nodes, &kids, &refs);
     out
 }
 
 fn collapse_at(nodes: &[BinaryNode], i: usize, out: &mut Vec<WideNode>) -> u32 {
     let idx = out.len();
     out.push(WideNode::from_children(nodes, &[], &[]));
-    let mut kids: ArrayVec<usize, 4> = ArrayVec::new();
+    let kids = kids_of(nodes, i);
+    let refs: ArrayVec<u32, WIDTH> = kids
+        .iter()
+        .map(|&k| {
+            if nodes[k].count > 0 {
+                LEAF | nodes[k].offset
+            } else {
+                collapse_at(nodes, k, out)
+            }
+        })
+        .collect();
+    out[idx] = WideNode::from_children(nodes, &kids, &refs);
+    idx as u32
+}
+
+/// The children of wide node made from interior binary node `i`: its two children, opened up
+/// to eight, the interior one of largest surface area first.
+fn kids_of(nodes: &[BinaryNode], i: usize) -> ArrayVec<usize, WIDTH> {
+    let mut kids: ArrayVec<usize, WIDTH> = ArrayVec::new();
     kids.push(i + 1);
     kids.push(nodes[i].offset as usize);
     while !kids.is_full() {
@@ -120,33 +275,24 @@ fn collapse_at(nodes: &[BinaryNode], i: usize, out: &mut Vec<WideNode>) -> u32 {
         kids.insert(j, nodes[k].offset as usize);
         kids.insert(j, k + 1);
     }
-    let refs: ArrayVec<u32, 4> = kids
-        .iter()
-        .map(|&k| {
-            if nodes[k].count > 0 {
-                LEAF | nodes[k].offset
-            } else {
-                collapse_at(nodes, k, out)
-            }
-        })
-        .collect();
-    out[idx] = WideNode::from_children(nodes, &kids, &refs);
-    idx as u32
+    kids
 }
 
 impl WideNode {
     fn from_children(nodes: &[BinaryNode], kids: &[usize], refs: &[u32]) -> Self {
-        // Unused slots get NaN boxes; traversal also skips them by their `EMPTY` reference.
+        // Unused slots get inverted infinite boxes (min +inf, max -inf), which no ray enters:
+        // on each axis the entry distance is +inf and the exit distance -inf, whatever the
+        // ray's signs, so they never reach the hit mask.
         let mut n = Self {
-            min: [Vec4::NAN; 3],
-            max: [Vec4::NAN; 3],
-            child: [EMPTY; 4],
+            min: [[Vec4::INFINITY; 2]; 3],
+            max: [[Vec4::NEG_INFINITY; 2]; 3],
+            child: [EMPTY; WIDTH],
         };
         for (slot, (&k, &r)) in kids.iter().zip(refs).enumerate() {
             let b: Aabb = nodes[k].bounds;
             for a in 0..3 {
-                n.min[a][slot] = b.min[a];
-                n.max[a][slot] = b.max[a];
+                n.min[a][slot / 4][slot % 4] = b.min[a];
+                n.max[a][slot / 4][slot % 4] = b.max[a];
             }
             n.child[slot] = r;
         }
@@ -154,26 +300,22 @@ impl WideNode {
     }
 }
 
-/// The hit children of a node (mask and entry distances from [`WideNode::hit`]), unused
-/// slots left out, ordered far to near in `out`; returns how many. (Fixed arrays and an
-/// insertion sort: an `ArrayVec` insert here was a `memmove` call per child.)
+/// The hit children of a node (mask and entry distances from [`BoxTest::hit`]) ordered far
+/// to near in `out` (on equal distances, the higher slot nearer); returns how many. (Fixed
+/// arrays and an insertion sort: an `ArrayVec` insert here was a `memmove` call per child.)
 #[inline(always)]
 pub(super) fn far_to_near(
     node: &WideNode,
     mask: u32,
-    near: Vec4,
-    out: &mut [(u32, f32); 4],
+    near: &[f32; WIDTH],
+    out: &mut [(u32, f32); WIDTH],
 ) -> usize {
-    let near = near.to_array();
     let mut n = 0;
     let mut bits = mask;
     while bits != 0 {
         let slot = bits.trailing_zeros() as usize;
         bits &= bits - 1;
         let c = node.child[slot];
-        if c == EMPTY {
-            continue;
-        }
         let d = near[slot];
         let mut at = n;
         while at > 0 && out[at - 1].1 < d {
@@ -191,7 +333,9 @@ mod tests {
     use glam::{DAffine3, DVec2, DVec3};
 
     use super::super::Bvh;
-    use crate::geometry::Ray;
+    use super::super::bvh::Node as BinaryNode;
+    use super::{Avx, BoxRay, BoxTest, Halves, WideNode};
+    use crate::geometry::{Aabb, Ray};
     use crate::sampling::{Rng, uniform_sphere};
     use crate::scene::MeshData;
     use crate::shapes::Shape;
@@ -236,8 +380,109 @@ mod tests {
         }
     }
 
+    /// The AVX box test gives the mask and entry distances of the test four at a time, bit for
+    /// bit, on random boxes and rays, including rays parallel to an axis, rays in a box's
+    /// plane, flat boxes and unused slots.
+    #[test]
+    fn avx_box_test_matches_the_halves() {
+        if let Some(avx) = Avx::detect() {
+            let mut rng = Rng::new(23);
+            let v = |rng: &mut Rng| {
+                glam::Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - glam::Vec3A::ONE
+            };
+            let mut hits = 0;
+            for i in 0..5000 {
+                let kids = 1 + i % 8;
+                let nodes: Vec<BinaryNode> = (0..kids)
+                    .map(|k| {
+                        let (a, mut b) = (v(&mut rng), v(&mut rng));
+                        if k == 1 {
+                            b.y = a.y; // flat
+                        }
+                        BinaryNode {
+                            bounds: Aabb::new(a, b),
+                            offset: 0,
+                            count: 1,
+                        }
+                    })
+                    .collect();
+                let slots: Vec<usize> = (0..kids).collect();
+                let refs = vec![0; kids];
+                let node = WideNode::from_children(&nodes, &slots, &refs);
+                let mut o = 2.0 * v(&mut rng);
+                let mut d = uniform_sphere(rng.vec2());
+                match i % 6 {
+                    0 => d = glam::Vec3A::new(d.x, 0.0, d.z).normalize(),
+                    1 => d = glam::Vec3A::new(0.0, 0.0, if d.z < 0.0 { -1.0 } else { 1.0 }),
+                    2 => o.x = nodes[0].bounds.min.x,
+                    3 => o.y = nodes[kids - 1].bounds.max.y,
+                    _ => d = (nodes[i % kids].bounds.centroid() - o).normalize(),
+                }
+                let ray = BoxRay::new(&Ray::new(o, d));
+                let t_max = if i % 3 == 0 { 0.5 } else { f32::INFINITY };
+                let halves = Halves.hit(&node, &ray, 0.0, t_max);
+                let got = avx.hit(&node, &ray, 0.0, t_max);
+                assert_eq!(halves.0, got.0, "case {i}");
+                assert_eq!(halves.0 >> kids, 0, "case {i}: an unused slot is hit");
+                assert_eq!(
+                    halves.1.map(f32::to_bits),
+                    got.1.map(f32::to_bits),
+                    "case {i}"
+                );
+                hits += halves.0.count_ones();
+            }
+            assert!(hits > 1000, "{hits} boxes hit");
+        }
+    }
+
+    /// A random binary tree of up to `2^depth` leaves, flattened depth-first (leaf `offset`s
+    /// are the leaves' node indices).
+    fn random_tree(rng: &mut Rng, out: &mut Vec<BinaryNode>, depth: usize) -> Aabb {
+        let i = out.len();
+        let v = |rng: &mut Rng| glam::Vec3A::new(rng.f32(), rng.f32(), rng.f32());
+        out.push(BinaryNode {
+            bounds: Aabb::EMPTY,
+            offset: i as u32,
+            count: 1,
+        });
+        let bounds = if depth == 0 || (depth < 10 && rng.f32() < 0.15) {
+            Aabb::new(v(rng), v(rng))
+        } else {
+            let a = random_tree(rng, out, depth - 1);
+            out[i].offset = out.len() as u32;
+            out[i].count = 0;
+            a.union(random_tree(rng, out, depth - 1))
+        };
+        out[i].bounds = bounds;
+        bounds
+    }
+
+    /// The collapse of a large tree, its top levels in parallel, gives the nodes of the serial
+    /// depth-first collapse, on 1, 2 and 4 threads.
+    #[test]
+    fn parallel_collapse_matches_the_serial_one() {
+        let mut nodes = Vec::new();
+        random_tree(&mut Rng::new(31), &mut nodes, 16);
+        assert!(
+            nodes.len() >= super::PARALLEL_NODES,
+            "{} nodes",
+            nodes.len()
+        );
+        let mut serial = Vec::new();
+        super::collapse_at(&nodes, 0, &mut serial);
+        assert!(serial.len() > 1000);
+        for threads in [1, 2, 4] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let parallel = pool.install(|| super::collapse(&nodes));
+            assert!(parallel == serial, "{threads} threads");
+        }
+    }
+
     /// Two meshes (one with normals and uvs, one mirrored without) and a few spheres in one
-    /// 4-wide BVH: the closest hit (every field of it, bit for bit, and its id) and occlusion
+    /// 8-wide BVH: the closest hit (every field of it, bit for bit, and its id) and occlusion
     /// are those of brute force over the meshes expanded into stand-alone triangles.
     #[test]
     fn meshes_and_shapes_match_brute_force() {

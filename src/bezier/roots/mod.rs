@@ -75,7 +75,7 @@ fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<
     }
     let (c0, cn) = (c[0], c[c.len() - 1]);
     if c0 * cn < 0.0 && sign_changes(c) == 1 {
-        let (t, l, h) = polish(p, c0);
+        let (t, l, h, _) = polish(p, c0);
         out.push(Root {
             t: a + (b - a) * t,
             lo: a + (b - a) * l,
@@ -140,26 +140,47 @@ fn sign_changes(c: &[f64]) -> usize {
 }
 
 /// Newton iteration safeguarded by bisection in [0, 1] where `p(0)` has the sign of `c0` and
-/// `p(1)` the opposite one. Returns the root and its final bracket.
-fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64) {
+/// `p(1)` the opposite one. Returns the root, its final bracket and the number of evaluations.
+fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     let cn = p.coeffs()[p.degree()];
     // Regula falsi start.
     let mut t = (c0 / (c0 - cn)).clamp(0.0, 1.0);
+    let mut evals = 0;
     for _ in 0..200 {
         let (v, dv) = p.eval_with_derivative(t);
+        evals += 1;
         if v == 0.0 {
-            return (t, t, t);
+            return (t, t, t, evals);
         }
-        if (v < 0.0) == (c0 < 0.0) {
-            lo = t;
-        } else {
-            hi = t;
-        }
+        narrow(v, c0, t, &mut lo, &mut hi);
         if hi - lo <= f64::EPSILON * hi.max(1e-300) {
             break;
         }
         let newton = t - v / dv;
+        // Converged to rounding: the step moves the point by a few ulps at most. It may round
+        // onto `t` itself or just past the end of the bracket at `t`; bisecting then would only
+        // walk the bracket down to `t` in about 50 steps.
+        if newton.is_finite() && (newton - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1e-300) {
+            // `t` is one end of the bracket; the root lies toward the other.
+            let right = lo == t;
+            if newton > lo && newton < hi {
+                t = newton;
+            }
+            // Close the far end of the bracket onto the root: one evaluation a few ulps past
+            // it (the callers search the bracket again, widened by the root's uncertainty).
+            let e = 4.0 * f64::EPSILON * t.abs().max(1e-300);
+            let q = if right { t + e } else { t - e };
+            if q > lo && q < hi {
+                let v = p.eval(q);
+                evals += 1;
+                if v == 0.0 {
+                    return (q, q, q, evals);
+                }
+                narrow(v, c0, q, &mut lo, &mut hi);
+            }
+            break;
+        }
         let next = if newton > lo && newton < hi && newton.is_finite() {
             newton
         } else {
@@ -168,14 +189,19 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64) {
         if next == t {
             break;
         }
-        // Converged to rounding: the step no longer moves the point.
-        if (next - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1e-300) {
-            t = next;
-            break;
-        }
         t = next;
     }
-    (t.clamp(lo, hi), lo, hi)
+    (t.clamp(lo, hi), lo, hi, evals)
+}
+
+/// Moves the end of the bracket `[lo, hi]` whose value has the sign of `v` (the sign of `c0`
+/// at `lo`) to `x`.
+fn narrow(v: f64, c0: f64, x: f64, lo: &mut f64, hi: &mut f64) {
+    if (v < 0.0) == (c0 < 0.0) {
+        *lo = x;
+    } else {
+        *hi = x;
+    }
 }
 
 /// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
@@ -239,6 +265,42 @@ mod tests {
             assert_eq!(g.kind, RootKind::Simple);
             assert!((g.t - w).abs() < 1e-13, "{} vs {w}", g.t);
             assert!(g.lo <= g.t && g.t <= g.hi);
+        }
+    }
+
+    /// Newton's last step rounds onto the end of the bracket it stands on (or just past it):
+    /// that is convergence, not a reason to bisect the rest of the bracket down to that end
+    /// (which took about 30 evaluations on this polynomial, a ray's `F` on one bracket).
+    #[test]
+    fn polish_stops_when_the_newton_step_rounds_onto_the_bracket_end() {
+        let c = [
+            0.003631321892035835,
+            0.0013817331620761433,
+            -0.0009557917372353128,
+            -0.0033226467764470168,
+            -0.005667694120536526,
+            -0.007946657657748126,
+            -0.010121552698214875,
+        ];
+        let p = Bernstein::new(&c).unwrap();
+        let (t, lo, hi, evals) = polish(&p, c[0]);
+        assert!(evals <= 8, "{evals} evaluations");
+        assert!(lo <= t && t <= hi && p.eval(lo) >= 0.0 && p.eval(hi) <= 0.0);
+        // The root to the last bit by bisection, for comparison.
+        let (mut a, mut b) = (0.0f64, 1.0f64);
+        while b - a > f64::EPSILON * b {
+            let m = 0.5 * (a + b);
+            if p.eval(m) > 0.0 { a = m } else { b = m }
+        }
+        assert!((t - a).abs() <= 4.0 * f64::EPSILON * a, "{t} vs {a}");
+        // Every root of a product of linear factors polishes in a few evaluations.
+        for k in 1..100 {
+            let r = k as f64 / 100.0;
+            let p = from_roots(&[r, 1.3, -0.2, 0.5 * r - 0.7]);
+            let c0 = p.coeffs()[0];
+            let (t, _, _, evals) = polish(&p, c0);
+            assert!((t - r).abs() <= 1e-15, "{t} vs {r}");
+            assert!(evals <= 12, "root {r}: {evals} evaluations");
         }
     }
 
