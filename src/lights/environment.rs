@@ -16,7 +16,7 @@ use crate::textures::{EnvSample, EnvironmentMap};
 /// What the environment light shows in each direction.
 pub enum Sky {
     /// An image around the scene.
-    Map(EnvironmentMap),
+    Map(Box<EnvironmentMap>),
     /// The same radiance from every direction: a non-black background colour.
     Uniform(Vec3A),
 }

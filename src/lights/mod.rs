@@ -66,6 +66,17 @@ impl Light {
         }
     }
 
+    /// A constant background colour (pbrt's uniform infinite light).
+    pub fn is_uniform_sky(&self) -> bool {
+        matches!(
+            self,
+            Light::Environment(EnvironmentLight {
+                sky: Sky::Uniform(_),
+                ..
+            })
+        )
+    }
+
     pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
         match self {
             Light::Point(l) => l.sample_photon(u1),

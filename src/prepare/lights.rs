@@ -83,7 +83,7 @@ pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>
             transform,
         } => {
             let map = textures::EnvironmentMap::new(image, *intensity, *transform);
-            (!map.is_black()).then_some(Sky::Map(map))
+            (!map.is_black()).then(|| Sky::Map(Box::new(map)))
         }
         scene::Background::Color(c) => {
             let c = c.as_vec3a();
@@ -99,6 +99,8 @@ pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>
     } else {
         (b.centroid(), 0.5 * b.diagonal().length())
     };
-    lights.push(Light::Environment(EnvironmentLight::new(sky, center, radius)));
+    lights.push(Light::Environment(EnvironmentLight::new(
+        sky, center, radius,
+    )));
     Some(lights.len() - 1)
 }

@@ -58,7 +58,11 @@ pub struct PreparedScene<'a> {
     pub prim_light: Vec<u32>,
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
+    /// How direct lighting chooses a light: by power, except a uniform background, which is
+    /// left to the BSDF sample.
     pub light_distr: PiecewiseConstant1D,
+    /// How a photon chooses the light it leaves from: by power, every light.
+    pub photon_distr: PiecewiseConstant1D,
     /// Index in `lights` of the environment light, if the background (a map or a colour) is
     /// not black.
     pub environment: Option<usize>,
@@ -233,8 +237,19 @@ impl<'a> PreparedScene<'a> {
         lights::push_scene_lights(scene, &mut lights)?;
         let bvh = Bvh::with_meshes(shapes, meshes);
         let environment = lights::push_environment(scene, &bvh, &mut lights);
-        let light_distr =
-            PiecewiseConstant1D::new(&lights.iter().map(Light::power).collect::<Vec<_>>());
+        let power: Vec<f64> = lights.iter().map(Light::power).collect();
+        let photon_distr = PiecewiseConstant1D::new(&power);
+        // Direct lighting leaves a uniform background to the BSDF sample, which draws it with
+        // (nearly) no variance: by power it would take most light samples, its power counting
+        // the whole disk around the scene rather than what reaches a point.
+        let light_distr = match environment {
+            Some(i) if lights[i].is_uniform_sky() => {
+                let mut w = power;
+                w[i] = 0.0;
+                PiecewiseConstant1D::new(&w)
+            }
+            _ => photon_distr.clone(),
+        };
         let prim_material = prim_object
             .iter()
             .map(|&o| objects[o as usize].material as u32)
@@ -248,6 +263,7 @@ impl<'a> PreparedScene<'a> {
             objects,
             lights,
             light_distr,
+            photon_distr,
             environment,
             prim_material,
             const_lobes: Vec::new(),

@@ -1,7 +1,7 @@
 //! Direct lighting at a non-specular surface point: one light sample (lights chosen by power)
 //! and one BSDF sample, combined with the power heuristic (MIS). Delta lights use light
-//! sampling alone; a BSDF sample that escapes sees the background color, or the environment
-//! light weighted by MIS.
+//! sampling alone; a BSDF sample that escapes sees the environment light weighted by MIS (a
+//! uniform background is never chosen for a light sample, so its BSDF sample weighs 1).
 
 use glam::Vec3A;
 

@@ -19,7 +19,7 @@ pub(crate) fn trace_photon(
     rng: &mut Rng,
     mut at_hit: impl FnMut(u32, &SurfaceHit, Vec3A, Vec3A),
 ) {
-    let Some((li, pl)) = scene.light_distr.sample(rng.f32()) else {
+    let Some((li, pl)) = scene.photon_distr.sample(rng.f32()) else {
         return;
     };
     let (u1, u2) = (rng.vec2(), rng.vec2());
