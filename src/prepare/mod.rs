@@ -369,22 +369,13 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
-    /// The constant background color (black for an environment map: use
-    /// [`background_radiance`](Self::background_radiance) for a ray's direction).
-    pub fn background(&self) -> Vec3A {
-        match &self.scene.background {
-            scene::Background::Color(c) => color3(*c),
-            scene::Background::Environment { .. } => Vec3A::ZERO,
-        }
-    }
-
-    /// The radiance a ray leaving the scene in direction `dir` sees: the background color, or
-    /// the environment map.
+    /// The radiance a ray leaving the scene in direction `dir` sees: the environment light's (a
+    /// map or a background colour), or black.
     #[inline]
     pub fn background_radiance(&self, dir: Vec3A) -> Vec3A {
         match self.environment_light() {
             Some((_, env)) => env.le(dir),
-            None => self.background(),
+            None => Vec3A::ZERO,
         }
     }
 

@@ -59,17 +59,17 @@ pub fn direct_lighting(
                     }
                 }
             }
-            None => match scene.environment_light() {
-                // The environment is a light: weigh its BSDF sample against light sampling.
-                Some((li, env)) => {
+            // A non-black background is the environment light: weigh its BSDF sample against
+            // light sampling.
+            None => {
+                if let Some((li, env)) = scene.environment_light() {
                     let le = env.le(bs.wi);
                     if le != Vec3A::ZERO {
                         let light_pdf = scene.light_distr.pdf(li) * env.pdf_li(bs.wi);
                         l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
                     }
                 }
-                None => l += bs.weight * scene.background(),
-            },
+            }
         }
     }
     l
