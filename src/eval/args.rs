@@ -46,7 +46,8 @@ fn check_magnitude(c: Color, span: Span) -> SourceResult<()> {
     Ok(())
 }
 
-/// A colour a surface reflects or a texture shows: within range and not negative.
+/// A colour a surface reflects, a texture shows or the background emits: within range and not
+/// negative.
 pub(super) fn surface_color(a: &Arg) -> SourceResult<Color> {
     let c = color(a)?;
     check_surface(c, a.span)?;
@@ -58,7 +59,7 @@ fn check_surface(c: Color, span: Span) -> SourceResult<()> {
         return Err(range_error(
             span,
             format!(
-                "a surface color must not be negative, found {}",
+                "a color must not be negative, found {}",
                 crate::diag::short_number(c.min_element())
             ),
             "use components >= 0",
