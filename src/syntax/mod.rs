@@ -1,6 +1,7 @@
 //! Syntax: source files, the pest grammar, and the AST with spans.
 
 pub mod ast;
+mod errors;
 mod parser;
 pub mod povray;
 

@@ -1,0 +1,420 @@
+//! Syntax errors: what the pest parser's failures and over-deep nesting are reported as (the
+//! expected tokens named as a reader calls them, unclosed brackets pointed at where they open).
+
+use pest::Parser;
+
+use super::parser::{MAX_NESTING, Rule, SceneParser};
+use crate::diag::{Diagnostic, SourceResult};
+use crate::span::{FileId, Span};
+
+/// What a grammar rule is called in messages.
+fn describe(rule: Rule) -> &'static str {
+    match rule {
+        Rule::EOI => "end of file",
+        Rule::items | Rule::item => "a statement",
+        Rule::comma => "`,`",
+        Rule::declare => "`#declare`",
+        Rule::local => "`#local`",
+        Rule::if_d => "`#if`",
+        Rule::elif_d => "`#elif`",
+        Rule::else_d => "`#else`",
+        Rule::while_d => "`#while`",
+        Rule::for_d => "`#for`",
+        Rule::macro_d => "`#macro`",
+        Rule::include_d => "`#include`",
+        Rule::ifdef_d => "`#ifdef`",
+        Rule::ifndef_d => "`#ifndef`",
+        Rule::undef_d => "`#undef`",
+        Rule::switch_d => "`#switch`",
+        Rule::case_d => "`#case`",
+        Rule::range_d => "`#range`",
+        Rule::break_d => "`#break`",
+        Rule::debug_d => "`#debug`",
+        Rule::warning_d => "`#warning`",
+        Rule::error_d => "`#error`",
+        Rule::params => "parameter names",
+        Rule::keyword => "a property keyword",
+        Rule::expr | Rule::vexpr | Rule::iexpr => "an expression",
+        Rule::add | Rule::sub | Rule::mul | Rule::div => "an operator",
+        Rule::le | Rule::ge | Rule::eq | Rule::ne | Rule::lt | Rule::gt => "an operator",
+        Rule::and | Rule::or => "an operator",
+        Rule::neg | Rule::pos | Rule::not => "an operator",
+        Rule::rgb => "`rgb`",
+        Rule::index => "`[`",
+        Rule::field => "`.`",
+        Rule::paren => "`(`",
+        Rule::vector => "a vector `<x, y, z>`",
+        Rule::array => "an array `[a, b]`",
+        Rule::named => "a name",
+        Rule::args => "`(`",
+        Rule::number => "a number",
+        Rule::boolean => "`true` or `false`",
+        Rule::string | Rule::str_inner => "a string",
+        Rule::ident | Rule::ident_raw => "a name",
+        _ => "something else",
+    }
+}
+
+pub(super) fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagnostic {
+    let pos = match e.location {
+        pest::error::InputLocation::Pos(p) => p,
+        pest::error::InputLocation::Span((s, _)) => s,
+    };
+    let found = found_at(text, pos);
+    let len = if pos >= text.len() {
+        0
+    } else {
+        found_len(text, pos)
+    };
+    let span = Span::new(file, pos as u32, (pos + len) as u32);
+    let (rules, after_operand) = match &e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => expected_rules(positives),
+        pest::error::ErrorVariant::CustomError { .. } => (Vec::new(), false),
+    };
+    let mut expected: Vec<&str> = rules.into_iter().map(describe).collect();
+    // Say "a directive" once instead of listing every one, and leave out the tokens that could
+    // merely continue an expression when there are other choices.
+    if expected.iter().filter(|e| e.starts_with("`#")).count() > 2 {
+        expected.retain(|e| {
+            !e.starts_with("`#") || matches!(*e, "`#elif`" | "`#else`" | "`#case`" | "`#range`")
+        });
+        expected.push("a directive");
+    }
+    if expected.len() > 3 || after_operand {
+        expected.retain(|e| !matches!(*e, "`.`" | "`[`" | "an operator"));
+    }
+    expected.sort();
+    expected.dedup();
+    let expected_text = match expected.len() {
+        0 => "something else".to_string(),
+        1 => expected[0].to_string(),
+        n => format!("{} or {}", expected[..n - 1].join(", "), expected[n - 1]),
+    };
+    let mut d = if expected.is_empty() {
+        Diagnostic::error(span, format!("syntax error: unexpected {found}"))
+            .with_label("not expected here")
+    } else {
+        Diagnostic::error(
+            span,
+            format!("syntax error: expected {expected_text}, found {found}"),
+        )
+        .with_label(format!("expected {expected_text}"))
+    };
+    let rest = &text[pos.min(text.len())..];
+    if rest.starts_with('#') {
+        let word: String = rest
+            .strip_prefix('#')
+            .unwrap_or(rest)
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        let known = [
+            "declare", "local", "if", "elif", "else", "end", "while", "for", "macro", "include",
+            "ifdef", "ifndef", "undef", "switch", "case", "range", "break", "debug", "warning",
+            "error",
+        ];
+        if let Some(hint) = super::povray_hint(&format!("#{word}"), "") {
+            d = d.with_help(hint);
+            if expected_text == "something else" {
+                d.message = format!("syntax error: unexpected {found}");
+                d.label = "a POV-Ray directive".into();
+            }
+        } else if matches!(word.as_str(), "end" | "else" | "elif") {
+            d = d.with_help(format!(
+                "`#{word}` without a matching `#if`, `#ifdef`, `#switch`, `#while`, `#for` or \
+                 `#macro`"
+            ));
+        } else if matches!(word.as_str(), "case" | "range") {
+            d = d.with_help(format!(
+                "`#{word}` stands only directly inside `#switch (value) ... #end`"
+            ));
+        } else if let Some(s) = crate::diag::suggest(&word, known) {
+            d = d.with_help(format!("did you mean `#{s}`?"));
+        }
+    } else if expected_text.contains("a name") && is_keyword(&text[pos..pos + len]) {
+        d = d.with_help(format!(
+            "`{}` is a reserved word (a property keyword); choose another name",
+            &text[pos..pos + len]
+        ));
+    } else if pos >= text.len() && expected_text.contains("`}`") {
+        d = d.with_help("a block is not closed: add `}`");
+    } else if rest.starts_with('{') {
+        match super::povray_hint(word_before(text, pos), "") {
+            Some(hint) => d = d.with_help(hint),
+            None => d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`"),
+        }
+    } else if rest.starts_with('=') && !rest.starts_with("==") {
+        d = d.with_help(
+            "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
+        );
+    }
+    if pos >= text.len()
+        && let Some(open) = unclosed(text)
+    {
+        return never_closed(file, text, open);
+    }
+    if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
+        d = d.with_help("a directive is not closed: add `#end`");
+    }
+    d
+}
+
+/// The name before position `pos`, skipping blanks and one `[...]` (`array[3] {`): what a
+/// misplaced `{` was probably meant to open.
+fn word_before(text: &str, pos: usize) -> &str {
+    let mut head = text[..pos.min(text.len())].trim_end();
+    if head.ends_with(']')
+        && let Some(open) = head.rfind('[')
+    {
+        head = head[..open].trim_end();
+    }
+    let start = head
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |i| i + 1);
+    &head[start..]
+}
+
+/// The innermost `{` or block directive (`#if`, `#switch`, `#while`, ...: what `#end` closes)
+/// still open at the end of the text, as its start and length (comments and strings skipped).
+fn unclosed(text: &str) -> Option<(usize, usize)> {
+    let bytes = text.as_bytes();
+    let mut open: Vec<(usize, usize)> = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'{' => open.push((i, 1)),
+            b'}' => {
+                if let Some(k) = open.iter().rposition(|o| o.1 == 1) {
+                    open.truncate(k);
+                }
+            }
+            b'#' => {
+                let word = text[i + 1..]
+                    .split(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+                    .next()
+                    .unwrap_or("");
+                match word {
+                    "if" | "ifdef" | "ifndef" | "switch" | "while" | "for" | "macro" => {
+                        open.push((i, word.len() + 1));
+                    }
+                    "end" => {
+                        if let Some(k) = open.iter().rposition(|o| o.1 > 1) {
+                            open.truncate(k);
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    open.pop()
+}
+
+/// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a
+/// second label.
+fn never_closed(file: FileId, text: &str, (open, len): (usize, usize)) -> Diagnostic {
+    let opener = &text[open..open + len];
+    let (what, help) = if opener == "{" {
+        let name = word_before(text, open);
+        let block = if name.is_empty() {
+            "a block".to_string()
+        } else {
+            format!("`{name} {{ ... }}`")
+        };
+        (block, "add `}` where the block ends")
+    } else {
+        (format!("`{opener}`"), "add `#end` where it ends")
+    };
+    let end = text.trim_end().len();
+    let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
+    Diagnostic::error(
+        Span::new(file, open as u32, (open + len) as u32),
+        format!("syntax error: {what} is never closed"),
+    )
+    .with_label(format!("this `{opener}` is never closed"))
+    .with_extra(
+        Span::new(file, (end - last) as u32, end as u32),
+        "the file ends here, inside it",
+    )
+    .with_help(help)
+}
+
+/// The rules a syntax error expected, from the ones pest recorded at the error position.
+///
+/// The grammar tries some rules only where the next character allows them (see the speed notes
+/// in `grammar/scene.pest`); one rule of each place is always tried and stands for the others:
+/// `comma` for an item, `rgb` for an operand, `index` for what may follow an operand (postfix
+/// and infix operators). This puts back the rules that a place allows, so that the message lists
+/// everything that could stand there. The second value says that the position follows an
+/// operand: the message then leaves out the tokens that could merely continue the expression.
+fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
+    let mut rules: Vec<Rule> = positives
+        .iter()
+        .copied()
+        .filter(|r| *r != Rule::args)
+        .collect();
+    if positives.contains(&Rule::comma) {
+        rules.extend([
+            Rule::keyword,
+            Rule::iexpr,
+            Rule::declare,
+            Rule::local,
+            Rule::if_d,
+            Rule::while_d,
+            Rule::for_d,
+            Rule::macro_d,
+            Rule::include_d,
+            Rule::ifdef_d,
+            Rule::ifndef_d,
+            Rule::switch_d,
+            Rule::break_d,
+            Rule::undef_d,
+            Rule::debug_d,
+            Rule::warning_d,
+            Rule::error_d,
+        ]);
+    }
+    if positives.contains(&Rule::rgb) {
+        rules.extend([
+            Rule::neg,
+            Rule::not,
+            Rule::pos,
+            Rule::number,
+            Rule::ident,
+            Rule::vector,
+            Rule::string,
+            Rule::boolean,
+            Rule::array,
+            Rule::paren,
+        ]);
+    }
+    (rules, positives.contains(&Rule::index))
+}
+
+fn is_keyword(word: &str) -> bool {
+    SceneParser::parse(Rule::keyword, word).is_ok_and(|p| p.as_str() == word)
+        || matches!(word, "rgb" | "true" | "false")
+}
+
+fn count_openers(text: &str) -> usize {
+    ["#if", "#switch", "#while", "#for", "#macro"]
+        .iter()
+        .map(|k| text.matches(k).count())
+        .sum()
+}
+
+fn found_len(text: &str, pos: usize) -> usize {
+    let rest = &text[pos..];
+    let word = rest
+        .char_indices()
+        .take_while(|(_, c)| c.is_ascii_alphanumeric() || *c == '_' || *c == '#')
+        .last()
+        .map(|(i, c)| i + c.len_utf8());
+    word.unwrap_or_else(|| rest.chars().next().map_or(0, char::len_utf8))
+}
+
+fn found_at(text: &str, pos: usize) -> String {
+    if pos >= text.len() {
+        return "end of file".into();
+    }
+    let len = found_len(text, pos);
+    format!("`{}`", &text[pos..pos + len])
+}
+
+/// Rejects input nested deeper than [`MAX_NESTING`] before the recursive parser sees it.
+pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut prefix_run = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        // `rgb` is a prefix operator too: a chain of them nests like `- - - 1`.
+        let ident_byte =
+            |b: Option<&u8>| b.is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_');
+        if c == b'r'
+            && bytes[i..].starts_with(b"rgb")
+            && !(i > 0 && ident_byte(bytes.get(i - 1)))
+            && !ident_byte(bytes.get(i + 3))
+        {
+            prefix_run += 1;
+            if prefix_run > MAX_NESTING {
+                return Err(vec![too_deep(Span::new(file, i as u32, (i + 3) as u32))]);
+            }
+            i += 3;
+            continue;
+        }
+        match c {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 2;
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            b'#' => {
+                let rest = &text[i..];
+                if ["#if", "#switch", "#while", "#for", "#macro"]
+                    .iter()
+                    .any(|k| rest.starts_with(k))
+                {
+                    depth += 1;
+                } else if rest.starts_with("#end") {
+                    depth = depth.saturating_sub(1);
+                }
+            }
+            _ => {}
+        }
+        if matches!(c, b'-' | b'+' | b'!') {
+            prefix_run += 1;
+        } else if !c.is_ascii_whitespace() {
+            prefix_run = 0;
+        }
+        if depth > MAX_NESTING || prefix_run > MAX_NESTING {
+            return Err(vec![too_deep(Span::new(file, i as u32, (i + 1) as u32))]);
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
+fn too_deep(span: Span) -> Diagnostic {
+    Diagnostic::error(span, format!("nesting deeper than {MAX_NESTING} levels"))
+        .with_label("too deeply nested")
+        .with_help("split the expression or block into declared parts")
+}
