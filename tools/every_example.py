@@ -10,8 +10,14 @@ Three steps, each re-runnable on its own (the files go under --out, default
    noise (the RMSE the reference itself has against the converged image): the floor under
    which no comparison means anything. For Cornell a Mitsuba 3 reference (256x256) can be given
    with `--cornell-mitsuba`, for smallppm_far one with `--far-mitsuba`
-   (tools/reference/smallppm_far.exr): each is box-filtered down to the scaled size (both
-   renderers use a box pixel filter, so 2x2 pixel means are the smaller image's pixels).
+   (tools/reference/smallppm_far.exr), for smallppm a light-tracing one with
+   `--smallppm-mitsuba` (tools/reference/smallppm.exr): each is box-filtered down to the scaled
+   size (both renderers use a box pixel filter, so 2x2 pixel means are the smaller image's
+   pixels). A reference with a mask beside it (`*.mask.exr`, 1 where it holds) is compared on
+   the masked pixels only: smallppm's light-tracing reference holds where the camera sees a
+   diffuse surface (its `whole` region), and no path tracer can render its scene (a point
+   light reaches the walls by way of the mirror and glass balls too), so its path-traced
+   reference is only a stand-in, compared outside the glass ball's caustic.
 2. `renders`: every method on every example at doubling iteration counts until the render's
    CPU time (user + system of the render process, one thread) passes the largest budget; the
    images are kept (`renders/`), with `renders.csv` (scene, method, iterations, CPU seconds).
@@ -28,7 +34,9 @@ Three steps, each re-runnable on its own (the files go under --out, default
     .venv/bin/python tools/every_example.py references --time 150
     .venv/bin/python tools/every_example.py renders --budgets 2,4,8
     .venv/bin/python tools/every_example.py table --budgets 2,4,8 \\
-        --cornell-mitsuba ../shared/reference/cornell-glass/reference.exr
+        --cornell-mitsuba ../shared/reference/cornell-glass/reference.exr \\
+        --far-mitsuba tools/reference/smallppm_far.exr \\
+        --smallppm-mitsuba tools/reference/smallppm.exr
 
 Other initial radii (`RADIUS_FOOTPRINTS` in src/prepare/settings.rs) go into the same table:
 build with the factor changed, copy the binary, and render only the SPPM methods under a tag
@@ -245,18 +253,29 @@ def cmd_table(a):
         noise = read_exr(noise_path) if os.path.exists(noise_path) else None
         shape = read_exr(rows[0]["image"]).shape[:2]
         pixels[name] = shape[0] * shape[1]
-        mitsuba = {"cornell": a.cornell_mitsuba, "smallppm_far": a.far_mitsuba}.get(name)
+        mitsuba = {"cornell": a.cornell_mitsuba, "smallppm_far": a.far_mitsuba,
+                   "smallppm": a.smallppm_mitsuba}.get(name)
+        # Pixels where the reference holds (all of them unless it comes with a mask).
+        valid = None
         if mitsuba:
             ref = downsample_to(read_exr(mitsuba), shape)
             noise = None
+            mask_path = re.sub(r"\.exr$", ".mask.exr", mitsuba)
+            if mask_path != mitsuba and os.path.exists(mask_path):
+                # A smaller pixel is valid where all the pixels it averages are.
+                valid = downsample_to(read_exr(mask_path), shape)[:, :, 0] > 0.999
         if ref is None:
             continue
         full_w = int(round(shape[1] / a.scale))
         k = shape[1] / full_w
         edges = edge_mask(ref)
-        regions = [("whole", None), ("edges", edges), ("smooth", ~edges)] + [
-            (label, tuple(int(round(v * k)) for v in w))
-            for label, w in WINDOWS.get(name, {}).items()]
+        if valid is None:
+            regions = [("whole", None), ("edges", edges), ("smooth", ~edges)] + [
+                (label, tuple(int(round(v * k)) for v in w))
+                for label, w in WINDOWS.get(name, {}).items()]
+        else:
+            # A masked reference replaces the windows that worked around a path-traced one.
+            regions = [("whole", valid), ("edges", edges & valid), ("smooth", ~edges & valid)]
         images = {r["image"]: read_exr(r["image"]) for r in rows}
         for label, w in regions:
             if w is None:
@@ -335,6 +354,9 @@ def main():
     ap.add_argument("--max-iterations", type=int, default=4096)
     ap.add_argument("--cornell-mitsuba", help="Mitsuba reference of examples/cornell.scn")
     ap.add_argument("--far-mitsuba", help="Mitsuba reference of examples/smallppm_far.scn")
+    ap.add_argument("--smallppm-mitsuba",
+                    help="Mitsuba light-tracing reference of examples/smallppm.scn (with the "
+                         "mask of pixels where it holds beside it, `*.mask.exr`)")
     ap.add_argument("--binary", default="target/release/sppm-lang")
     ap.add_argument("--methods", default="path,sppm,sppm-auto", help="renders: which methods")
     ap.add_argument("--tag", help="renders: appended to the SPPM methods' names (`sppm@TAG`)")
