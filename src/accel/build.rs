@@ -3,7 +3,9 @@
 //!
 //! Large nodes use every core: the two halves of a split are built with `rayon::join`, each
 //! into its own run of nodes, and the runs are joined in depth-first order afterwards; the
-//! bounds and bins of a very large node are gathered in parallel chunks. A split depends only
+//! bounds, bins and items' bin numbers of a very large node are gathered in parallel chunks
+//! (the partition itself stays serial and in place: a parallel one that keeps this order
+//! copies the items twice and was measured slower). A split depends only
 //! on the items (box unions and bin counts do not depend on the order they are merged in), so
 //! the tree is the same, node for node, on any number of threads.
 
@@ -199,17 +201,37 @@ fn build_serial(
     idx
 }
 
-/// The bounds of the items and of their centroids.
-fn bounds_of(items: &[Item], par: Parallelism) -> (Aabb, Aabb) {
-    let fold = |(b, c): (Aabb, Aabb), it: &Item| (b.union(it.bounds), c.with_point(it.centroid));
-    let empty = (Aabb::EMPTY, Aabb::EMPTY);
+/// The bounds of the items and of their centroids, and whether all are mesh triangles (in the
+/// same pass over the items, so in parallel chunks for a large node).
+fn bounds_of(items: &[Item], par: Parallelism) -> (Aabb, Aabb, bool) {
+    let fold = |(b, c, t): (Aabb, Aabb, bool), it: &Item| {
+        (
+            b.union(it.bounds),
+            c.with_point(it.centroid),
+            t & it.triangle,
+        )
+    };
+    let empty = (Aabb::EMPTY, Aabb::EMPTY, true);
     if items.len() < par.binning {
         return items.iter().fold(empty, fold);
     }
     items
         .par_chunks(CHUNK)
         .map(|chunk| chunk.iter().fold(empty, fold))
-        .reduce(|| empty, |x, y| (x.0.union(y.0), x.1.union(y.1)))
+        .reduce(|| empty, |x, y| (x.0.union(y.0), x.1.union(y.1), x.2 & y.2))
+}
+
+/// Each item's bin (the items of a large node, in parallel chunks), for the partition.
+fn bin_indices(items: &[Item], bin_of: impl Fn(&Item) -> usize + Sync) -> Vec<u8> {
+    let mut bins = vec![0u8; items.len()];
+    bins.par_chunks_mut(CHUNK)
+        .zip(items.par_chunks(CHUNK))
+        .for_each(|(out, chunk)| {
+            for (b, it) in out.iter_mut().zip(chunk) {
+                *b = bin_of(it) as u8;
+            }
+        });
+    bins
 }
 
 type Bins = ([Aabb; BINS], [usize; BINS]);
@@ -251,7 +273,7 @@ fn split(
     par: Parallelism,
 ) -> (BuildNode, Option<usize>) {
     let n = items.len();
-    let (bounds, cb) = bounds_of(items, par);
+    let (bounds, cb, packets) = bounds_of(items, par);
     let mut node = BuildNode {
         bounds,
         offset: start as u32,
@@ -274,7 +296,6 @@ fn split(
     // the visit of the extra node a split makes as one packet test, so that a leaf of two
     // packets is kept when splitting saves less than that. Any other node counts items, which
     // leaves trees without meshes as they were.
-    let packets = items.iter().all(|it| it.triangle);
     let cost = |k: usize| if packets { k.div_ceil(4) } else { k } as f32;
     let visit = if packets { 1.0 } else { 0.0 };
     let lo = cb.min[axis];
@@ -316,11 +337,23 @@ fn split(
             }
         } else {
             let split = best.1;
+            // (Lomuto: an item not yet visited is still at its place, so its bin can be
+            // computed beforehand, in parallel for a large node.)
             let mut i = 0;
-            for j in 0..n {
-                if bin_of(&items[j]) < split {
-                    items.swap(i, j);
-                    i += 1;
+            if n < par.binning {
+                for j in 0..n {
+                    if bin_of(&items[j]) < split {
+                        items.swap(i, j);
+                        i += 1;
+                    }
+                }
+            } else {
+                let bins = bin_indices(items, bin_of);
+                for (j, &b) in bins.iter().enumerate() {
+                    if (b as usize) < split {
+                        items.swap(i, j);
+                        i += 1;
+                    }
                 }
             }
             i

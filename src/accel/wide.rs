@@ -20,12 +20,12 @@ const EMPTY: u32 = u32::MAX;
 /// in [`Aabb::hit`].
 const FAR_SCALE: f32 = 1.000_000_4;
 
-/// Eight children's boxes: per axis, their minima and their maxima as two halves of four.
+/// Eight children's boxes: their minima on x, y, z, then their maxima on x, y, z, each plane as
+/// two halves of four.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C, align(32))]
 pub(super) struct WideNode {
-    min: [[Vec4; 2]; 3],
-    max: [[Vec4; 2]; 3],
+    planes: [[Vec4; 2]; 6],
     /// Interior child: its node index; leaf: `LEAF | leaf reference`; unused: `EMPTY`.
     pub child: [u32; WIDTH],
 }
@@ -34,19 +34,24 @@ pub(super) struct WideNode {
 pub(super) struct BoxRay {
     o: [f32; 3],
     inv_d: [f32; 3],
-    /// Per axis: whether the ray runs toward decreasing coordinates (it then enters a box
-    /// through its `max` plane).
-    neg: [bool; 3],
+    /// Per axis: the plane (in [`WideNode::planes`]) through which the ray enters the boxes,
+    /// `a` (the minima) or, when the ray runs toward decreasing coordinates, `a + 3` (the
+    /// maxima); always below 6.
+    enter: [usize; 3],
+    /// Per axis: the plane through which it leaves them (the other one).
+    leave: [usize; 3],
 }
 
 impl BoxRay {
     #[inline(always)]
     pub(super) fn new(ray: &Ray) -> Self {
         let inv_d: Vec3A = ray.d.recip();
+        let neg = |a: usize| usize::from(inv_d[a] < 0.0);
         Self {
             o: ray.o.to_array(),
             inv_d: inv_d.to_array(),
-            neg: [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0],
+            enter: [0, 1, 2].map(|a| a + 3 * neg(a)),
+            leave: [0, 1, 2].map(|a| a + 3 - 3 * neg(a)),
         }
     }
 }
@@ -74,11 +79,7 @@ impl BoxTest for Halves {
             let mut near = Vec4::splat(t_min);
             let mut far = Vec4::splat(t_max);
             for a in 0..3 {
-                let (lo, hi) = if ray.neg[a] {
-                    (node.max[a][h], node.min[a][h])
-                } else {
-                    (node.min[a][h], node.max[a][h])
-                };
+                let (lo, hi) = (node.planes[ray.enter[a]][h], node.planes[ray.leave[a]][h]);
                 let (o, inv_d) = (Vec4::splat(ray.o[a]), Vec4::splat(ray.inv_d[a]));
                 // `x.max(acc)` keeps `acc` where `x` is NaN (SSE `maxps` returns its second
                 // operand when either is NaN), as `Aabb::hit` does.
@@ -131,18 +132,16 @@ impl BoxTest for Avx {
 #[inline]
 unsafe fn hit_avx(node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
     use std::arch::x86_64::*;
-    let load = |v: &[Vec4; 2]| {
-        // SAFETY: `[Vec4; 2]` is eight consecutive `f32`s.
-        unsafe { _mm256_loadu_ps(v.as_ptr().cast::<f32>()) }
+    let load = |plane: usize| {
+        // SAFETY: `BoxRay` plane indices are below 6 (see `BoxRay::new`), and a plane,
+        // `[Vec4; 2]`, is eight consecutive `f32`s. (Unchecked: the bounds checks were a
+        // compare and branch per plane and node.)
+        unsafe { _mm256_loadu_ps(node.planes.get_unchecked(plane).as_ptr().cast::<f32>()) }
     };
     let mut near = _mm256_set1_ps(t_min);
     let mut far = _mm256_set1_ps(t_max);
     for a in 0..3 {
-        let (lo, hi) = if ray.neg[a] {
-            (&node.max[a], &node.min[a])
-        } else {
-            (&node.min[a], &node.max[a])
-        };
+        let (lo, hi) = (ray.enter[a], ray.leave[a]);
         let (o, inv_d) = (_mm256_set1_ps(ray.o[a]), _mm256_set1_ps(ray.inv_d[a]));
         // `vmaxps` and `vminps` return their second operand on NaN, as `maxps` does.
         near = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(load(lo), o), inv_d), near);
@@ -284,15 +283,21 @@ impl WideNode {
         // on each axis the entry distance is +inf and the exit distance -inf, whatever the
         // ray's signs, so they never reach the hit mask.
         let mut n = Self {
-            min: [[Vec4::INFINITY; 2]; 3],
-            max: [[Vec4::NEG_INFINITY; 2]; 3],
+            planes: [
+                [Vec4::INFINITY; 2],
+                [Vec4::INFINITY; 2],
+                [Vec4::INFINITY; 2],
+                [Vec4::NEG_INFINITY; 2],
+                [Vec4::NEG_INFINITY; 2],
+                [Vec4::NEG_INFINITY; 2],
+            ],
             child: [EMPTY; WIDTH],
         };
         for (slot, (&k, &r)) in kids.iter().zip(refs).enumerate() {
             let b: Aabb = nodes[k].bounds;
             for a in 0..3 {
-                n.min[a][slot / 4][slot % 4] = b.min[a];
-                n.max[a][slot / 4][slot % 4] = b.max[a];
+                n.planes[a][slot / 4][slot % 4] = b.min[a];
+                n.planes[a + 3][slot / 4][slot % 4] = b.max[a];
             }
             n.child[slot] = r;
         }
