@@ -75,18 +75,20 @@ impl Bernstein {
 
     /// Value and first derivative at `t` from one de Casteljau pass.
     pub fn eval_with_derivative(&self, t: f64) -> (f64, f64) {
-        let n = self.n;
-        if n == 0 {
-            return (self.c[0], 0.0);
+        // One copy of the pass per degree, so that its loops have fixed bounds (unrolled, no
+        // copy of the unused coefficients); the arithmetic is the same whatever the degree.
+        let c = &self.c;
+        match self.n {
+            0 => (c[0], 0.0),
+            1 => casteljau::<2>(c, t),
+            2 => casteljau::<3>(c, t),
+            3 => casteljau::<4>(c, t),
+            4 => casteljau::<5>(c, t),
+            5 => casteljau::<6>(c, t),
+            6 => casteljau::<7>(c, t),
+            7 => casteljau::<8>(c, t),
+            n => casteljau_in_place(&mut self.c.clone()[..=n], t),
         }
-        let mut b = self.c;
-        for level in 1..n {
-            for i in 0..=n - level {
-                b[i] += t * (b[i + 1] - b[i]);
-            }
-        }
-        let v = b[0] + t * (b[1] - b[0]);
-        (v, n as f64 * (b[1] - b[0]))
     }
 
     /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
@@ -231,6 +233,29 @@ impl Bernstein {
         }
         Some(Self { n: n + m, c })
     }
+}
+
+/// Value and derivative of the degree `M - 1` polynomial with coefficients `c[..M]` (a copy of
+/// de Casteljau's pass whose loop bounds are constants).
+#[inline(always)]
+fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    casteljau_in_place(&mut b, t)
+}
+
+/// Value and derivative at `t` of the polynomial with the coefficients `b` (at least two),
+/// by de Casteljau's algorithm, which overwrites them.
+#[inline(always)]
+fn casteljau_in_place(b: &mut [f64], t: f64) -> (f64, f64) {
+    let n = b.len() - 1;
+    for level in 1..n {
+        for i in 0..=n - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+    }
+    let v = b[0] + t * (b[1] - b[0]);
+    (v, n as f64 * (b[1] - b[0]))
 }
 
 #[cfg(test)]

@@ -156,10 +156,9 @@ impl RayFrame {
             }
             return cands;
         }
-        let w_of = |s: f64| {
-            let r = seg.r.eval(s);
-            ((r * r - self.rho2) / self.dh2).max(0.0).sqrt()
-        };
+        // The half chord at radius `r`.
+        let w_at = |r: f64| ((r * r - self.rho2) / self.dh2).max(0.0).sqrt();
+        let w_of = |s: f64| w_at(seg.r.eval(s));
         // The ray reaches radius `r` only where `r >= rho`. The slack is absolute in `r` (not in
         // `r^2`): near a pointed tip `rho` itself may be 1e-7 of the size, and a slack in `r^2`
         // of 1e-12 size^2 would let `r` fall far below `rho` and create a false hit at `t_c`.
@@ -171,7 +170,7 @@ impl RayFrame {
                 // The ray does not reach radius r: no hit at this s.
                 return f64::NAN;
             }
-            seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
+            seg.h.eval(s) - (oc.y + dn.y * sigma * w_at(r))
         };
         let b = self.bracket_bounds(seg, lo, hi);
         let g_range = |sigma: f64| {
