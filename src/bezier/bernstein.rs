@@ -80,9 +80,20 @@ impl Bernstein {
         let c = &self.c;
         match self.n {
             0 => (c[0], 0.0),
-            1 => casteljau::<2>(c, t),
-            2 => casteljau::<3>(c, t),
-            3 => casteljau::<4>(c, t),
+            1 => (c[0] + t * (c[1] - c[0]), c[1] - c[0]),
+            2 => {
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1) = (lerp(c[0], c[1]), lerp(c[1], c[2]));
+                (lerp(b0, b1), 2.0 * (b1 - b0))
+            }
+            3 => {
+                // The pass of `casteljau_in_place` in local variables: the vectorised loop
+                // stores single lanes and reloads them as pairs, a stalled store forwarding.
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
+                let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
+                (lerp(b0, b1), 3.0 * (b1 - b0))
+            }
             4 => casteljau::<5>(c, t),
             5 => casteljau::<6>(c, t),
             6 => casteljau::<7>(c, t),
@@ -221,18 +232,37 @@ impl Bernstein {
         if n + m > MAX_DEGREE {
             return None;
         }
-        let mut c = [0.0; MAX_DEGREE + 1];
-        for i in 0..=n {
-            let bi = binomial(n, i) * self.c[i];
-            for j in 0..=m {
-                c[i + j] += bi * binomial(m, j) * other.c[j];
-            }
-        }
-        for (k, ck) in c.iter_mut().enumerate().take(n + m + 1) {
-            *ck /= binomial(n + m, k);
-        }
+        // The squares of profile coordinates (equal low degrees) get loops of fixed bounds.
+        let c = match (n, m) {
+            (1, 1) => product(1, 1, &self.c, &other.c),
+            (2, 2) => product(2, 2, &self.c, &other.c),
+            (3, 3) => product(3, 3, &self.c, &other.c),
+            _ => product(n, m, &self.c, &other.c),
+        };
         Some(Self { n: n + m, c })
     }
+}
+
+/// The Bernstein coefficients of the product of the degree `n` and degree `m` polynomials with
+/// the coefficients `a` and `b` (`n + m <= MAX_DEGREE`).
+#[inline(always)]
+fn product(
+    n: usize,
+    m: usize,
+    a: &[f64; MAX_DEGREE + 1],
+    b: &[f64; MAX_DEGREE + 1],
+) -> [f64; MAX_DEGREE + 1] {
+    let mut c = [0.0; MAX_DEGREE + 1];
+    for i in 0..=n {
+        let bi = binomial(n, i) * a[i];
+        for j in 0..=m {
+            c[i + j] += bi * binomial(m, j) * b[j];
+        }
+    }
+    for (k, ck) in c.iter_mut().enumerate().take(n + m + 1) {
+        *ck /= binomial(n + m, k);
+    }
+    c
 }
 
 /// Value and derivative of the degree `M - 1` polynomial with coefficients `c[..M]` (a copy of
