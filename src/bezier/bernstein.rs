@@ -75,8 +75,7 @@ impl Bernstein {
 
     /// Value and first derivative at `t` from one de Casteljau pass.
     pub fn eval_with_derivative(&self, t: f64) -> (f64, f64) {
-        // One copy of the pass per degree, so that its loops have fixed bounds (unrolled, no
-        // copy of the unused coefficients); the arithmetic is the same whatever the degree.
+        // The same arithmetic whatever the degree, in code specialised per degree.
         let c = &self.c;
         match self.n {
             0 => (c[0], 0.0),
@@ -87,8 +86,7 @@ impl Bernstein {
                 (lerp(b0, b1), 2.0 * (b1 - b0))
             }
             3 => {
-                // The pass of `casteljau_in_place` in local variables: the vectorised loop
-                // stores single lanes and reloads them as pairs, a stalled store forwarding.
+                // The pass of `casteljau` in local variables.
                 let lerp = |a: f64, b: f64| a + t * (b - a);
                 let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
                 let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
@@ -98,7 +96,14 @@ impl Bernstein {
             5 => casteljau::<6>(c, t),
             6 => casteljau::<7>(c, t),
             7 => casteljau::<8>(c, t),
-            n => casteljau_in_place(&mut self.c.clone()[..=n], t),
+            8 => casteljau::<9>(c, t),
+            9 => casteljau::<10>(c, t),
+            10 => casteljau::<11>(c, t),
+            11 => casteljau::<12>(c, t),
+            12 => casteljau::<13>(c, t),
+            13 => casteljau::<14>(c, t),
+            14 => casteljau::<15>(c, t),
+            _ => casteljau::<{ MAX_DEGREE + 1 }>(c, t),
         }
     }
 
@@ -265,24 +270,21 @@ fn product(
     c
 }
 
-/// Value and derivative of the degree `M - 1` polynomial with coefficients `c[..M]` (a copy of
-/// de Casteljau's pass whose loop bounds are constants).
+/// Value and derivative of the degree `M - 1` polynomial (`M >= 2`) with coefficients `c[..M]`,
+/// by de Casteljau's algorithm (a copy of the pass per degree, whose loop bounds are constants).
 #[inline(always)]
 fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
     let mut b = [0.0; M];
     b.copy_from_slice(&c[..M]);
-    casteljau_in_place(&mut b, t)
-}
-
-/// Value and derivative at `t` of the polynomial with the coefficients `b` (at least two),
-/// by de Casteljau's algorithm, which overwrites them.
-#[inline(always)]
-fn casteljau_in_place(b: &mut [f64], t: f64) -> (f64, f64) {
-    let n = b.len() - 1;
+    // Each level into a fresh array (kept in registers): updating one array in place, the
+    // vectorised loop stores single lanes and reloads them as pairs, a stalled store forwarding.
+    let n = M - 1;
     for level in 1..n {
+        let mut next = [0.0; M];
         for i in 0..=n - level {
-            b[i] += t * (b[i + 1] - b[i]);
+            next[i] = b[i] + t * (b[i + 1] - b[i]);
         }
+        b = next;
     }
     let v = b[0] + t * (b[1] - b[0]);
     (v, n as f64 * (b[1] - b[0]))

@@ -13,6 +13,8 @@ pub struct RayFrame {
     pub o: DVec3,
     pub dn: DVec3,
     pub dh2: f64,
+    /// `1 / d_y` (infinite for horizontal rays).
+    pub(crate) inv_dy: f64,
     /// `|d_y| >= |d_xz|`: `t` is recovered from the height, otherwise from the radius.
     steep: bool,
     pub(crate) t0: f64,
@@ -48,6 +50,7 @@ impl RayFrame {
             o,
             dn,
             dh2,
+            inv_dy: 1.0 / dn.y,
             steep,
             t0,
             oc,
