@@ -140,12 +140,7 @@ impl Lathe {
             }
         };
         let segs: Vec<Segment> = segments.iter().map(|s| Segment::new(s)).collect();
-        let rmax = segs.iter().map(|s| s.rmax).fold(0.0, f64::max);
-        let hmin = segs.iter().map(|s| s.hmin).fold(f64::INFINITY, f64::min);
-        let hmax = segs
-            .iter()
-            .map(|s| s.hmax)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let (rmax, hmin, hmax) = extent(&segs);
         let size = rmax.max(hmax - hmin).max(1e-300);
         let mut len_before = Vec::new();
         let mut total_len = 0.0;
@@ -268,13 +263,7 @@ impl Lathe {
         if parts.caps {
             return self.bounds();
         }
-        let segs = &self.segs[parts.segs.clone()];
-        let rmax = segs.iter().map(|s| s.rmax).fold(0.0, f64::max);
-        let hmin = segs.iter().map(|s| s.hmin).fold(f64::INFINITY, f64::min);
-        let hmax = segs
-            .iter()
-            .map(|s| s.hmax)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let (rmax, hmin, hmax) = extent(&self.segs[parts.segs.clone()]);
         self.sector_box(rmax, hmin, hmax)
     }
 
@@ -539,6 +528,14 @@ impl Lathe {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
     }
+}
+
+/// The largest radius and the lowest and highest heights of some segments' bounds.
+fn extent(segs: &[Segment]) -> (f64, f64, f64) {
+    segs.iter()
+        .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(r, lo, hi), s| {
+            (r.max(s.rmax), lo.min(s.hmin), hi.max(s.hmax))
+        })
 }
 
 /// Roots of `f` on the union of the segment's pieces set in `mask` (bit `k`: the parameter
