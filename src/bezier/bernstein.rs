@@ -231,20 +231,44 @@ impl Bernstein {
         Some(p)
     }
 
+    /// `a^2 + b^2 + w c` for `a`, `b` of one degree `n` and `c` of degree `2n`, computed as
+    /// `a.mul(&a)?.add(&b.mul(&b)?)?.add(&c.scale(w))` computes it (the same operations, bit for
+    /// bit) without the intermediate values; other degrees go that way. `None` above
+    /// `MAX_DEGREE`.
+    pub fn square_sum(a: &Self, b: &Self, c: &Self, w: f64) -> Option<Self> {
+        let n = a.n;
+        if b.n != n || c.n != 2 * n || 2 * n > MAX_DEGREE {
+            return a.mul(a)?.add(&b.mul(b)?)?.add(&c.scale(w));
+        }
+        let (aa, bb) = (a.product_with(a), b.product_with(b));
+        let mut f = [0.0; MAX_DEGREE + 1];
+        for k in 0..=2 * n {
+            f[k] = (aa[k] + bb[k]) + c.c[k] * w;
+        }
+        Some(Self { n: 2 * n, c: f })
+    }
+
     /// `self * other` (degree n + m). `None` above `MAX_DEGREE`.
     pub fn mul(&self, other: &Self) -> Option<Self> {
         let (n, m) = (self.n, other.n);
         if n + m > MAX_DEGREE {
             return None;
         }
-        // The squares of profile coordinates (equal low degrees) get loops of fixed bounds.
-        let c = match (n, m) {
+        Some(Self {
+            n: n + m,
+            c: self.product_with(other),
+        })
+    }
+
+    /// The coefficients of `self * other` (`n + m <= MAX_DEGREE`). The squares of profile
+    /// coordinates (equal low degrees) get loops of fixed bounds.
+    fn product_with(&self, other: &Self) -> [f64; MAX_DEGREE + 1] {
+        match (self.n, other.n) {
             (1, 1) => product(1, 1, &self.c, &other.c),
             (2, 2) => product(2, 2, &self.c, &other.c),
             (3, 3) => product(3, 3, &self.c, &other.c),
-            _ => product(n, m, &self.c, &other.c),
-        };
-        Some(Self { n: n + m, c })
+            (n, m) => product(n, m, &self.c, &other.c),
+        }
     }
 }
 

@@ -66,11 +66,7 @@ impl RayFrame {
         let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
         let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
         let rr = &seg.rr;
-        let f = a
-            .mul(&a)
-            .and_then(|aa| aa.add(&b.mul(&b)?))
-            .and_then(|s| s.add(&rr.scale(-dn.y * dn.y)))
-            .expect("degree <= 14");
+        let f = Bernstein::square_sum(&a, &b, rr, -dn.y * dn.y).expect("degree <= 14");
         let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * rr.max_abs();
         (f, scale * 64.0 * f64::EPSILON * (f.degree() as f64 + 1.0))
     }
