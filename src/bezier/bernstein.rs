@@ -75,18 +75,36 @@ impl Bernstein {
 
     /// Value and first derivative at `t` from one de Casteljau pass.
     pub fn eval_with_derivative(&self, t: f64) -> (f64, f64) {
-        let n = self.n;
-        if n == 0 {
-            return (self.c[0], 0.0);
-        }
-        let mut b = self.c;
-        for level in 1..n {
-            for i in 0..=n - level {
-                b[i] += t * (b[i + 1] - b[i]);
+        // The same arithmetic whatever the degree, in code specialised per degree.
+        let c = &self.c;
+        match self.n {
+            0 => (c[0], 0.0),
+            1 => (c[0] + t * (c[1] - c[0]), c[1] - c[0]),
+            2 => {
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1) = (lerp(c[0], c[1]), lerp(c[1], c[2]));
+                (lerp(b0, b1), 2.0 * (b1 - b0))
             }
+            3 => {
+                // The pass of `casteljau` in local variables.
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
+                let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
+                (lerp(b0, b1), 3.0 * (b1 - b0))
+            }
+            4 => casteljau::<5>(c, t),
+            5 => casteljau::<6>(c, t),
+            6 => casteljau::<7>(c, t),
+            7 => casteljau::<8>(c, t),
+            8 => casteljau::<9>(c, t),
+            9 => casteljau::<10>(c, t),
+            10 => casteljau::<11>(c, t),
+            11 => casteljau::<12>(c, t),
+            12 => casteljau::<13>(c, t),
+            13 => casteljau::<14>(c, t),
+            14 => casteljau::<15>(c, t),
+            _ => casteljau::<{ MAX_DEGREE + 1 }>(c, t),
         }
-        let v = b[0] + t * (b[1] - b[0]);
-        (v, n as f64 * (b[1] - b[0]))
     }
 
     /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
@@ -213,24 +231,84 @@ impl Bernstein {
         Some(p)
     }
 
+    /// `a^2 + b^2 + w c` for `a`, `b` of one degree `n` and `c` of degree `2n`, computed as
+    /// `a.mul(&a)?.add(&b.mul(&b)?)?.add(&c.scale(w))` computes it (the same operations, bit for
+    /// bit) without the intermediate values; other degrees go that way. `None` above
+    /// `MAX_DEGREE`.
+    pub fn square_sum(a: &Self, b: &Self, c: &Self, w: f64) -> Option<Self> {
+        let n = a.n;
+        if b.n != n || c.n != 2 * n || 2 * n > MAX_DEGREE {
+            return a.mul(a)?.add(&b.mul(b)?)?.add(&c.scale(w));
+        }
+        let (aa, bb) = (a.product_with(a), b.product_with(b));
+        let mut f = [0.0; MAX_DEGREE + 1];
+        for k in 0..=2 * n {
+            f[k] = (aa[k] + bb[k]) + c.c[k] * w;
+        }
+        Some(Self { n: 2 * n, c: f })
+    }
+
     /// `self * other` (degree n + m). `None` above `MAX_DEGREE`.
     pub fn mul(&self, other: &Self) -> Option<Self> {
         let (n, m) = (self.n, other.n);
         if n + m > MAX_DEGREE {
             return None;
         }
-        let mut c = [0.0; MAX_DEGREE + 1];
-        for i in 0..=n {
-            let bi = binomial(n, i) * self.c[i];
-            for j in 0..=m {
-                c[i + j] += bi * binomial(m, j) * other.c[j];
-            }
-        }
-        for (k, ck) in c.iter_mut().enumerate().take(n + m + 1) {
-            *ck /= binomial(n + m, k);
-        }
-        Some(Self { n: n + m, c })
+        Some(Self {
+            n: n + m,
+            c: self.product_with(other),
+        })
     }
+
+    /// The coefficients of `self * other` (`n + m <= MAX_DEGREE`). The squares of profile
+    /// coordinates (equal low degrees) get loops of fixed bounds.
+    fn product_with(&self, other: &Self) -> [f64; MAX_DEGREE + 1] {
+        match (self.n, other.n) {
+            (1, 1) => product(1, 1, &self.c, &other.c),
+            (2, 2) => product(2, 2, &self.c, &other.c),
+            (3, 3) => product(3, 3, &self.c, &other.c),
+            (n, m) => product(n, m, &self.c, &other.c),
+        }
+    }
+}
+
+/// The Bernstein coefficients of the product of the degree `n` and degree `m` polynomials with
+/// the coefficients `a` and `b` (`n + m <= MAX_DEGREE`).
+#[inline(always)]
+fn product(
+    n: usize,
+    m: usize,
+    a: &[f64; MAX_DEGREE + 1],
+    b: &[f64; MAX_DEGREE + 1],
+) -> [f64; MAX_DEGREE + 1] {
+    let mut c = [0.0; MAX_DEGREE + 1];
+    for i in 0..=n {
+        let bi = binomial(n, i) * a[i];
+        for j in 0..=m {
+            c[i + j] += bi * binomial(m, j) * b[j];
+        }
+    }
+    for (k, ck) in c.iter_mut().enumerate().take(n + m + 1) {
+        *ck /= binomial(n + m, k);
+    }
+    c
+}
+
+/// Value and derivative of the degree `M - 1` polynomial (`M >= 2`) with coefficients `c[..M]`,
+/// by de Casteljau's algorithm (a copy of the pass per degree, whose loop bounds are constants).
+#[inline(always)]
+fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    // Degrees 4 and up keep the in-place update (a fresh array per level measured slower).
+    let n = M - 1;
+    for level in 1..n {
+        for i in 0..=n - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+    }
+    let v = b[0] + t * (b[1] - b[0]);
+    (v, n as f64 * (b[1] - b[0]))
 }
 
 #[cfg(test)]

@@ -183,7 +183,11 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             profile,
             sweep,
             method,
-        } => vec![wrap(Arc::new(Revolve::new(profile, *sweep, *method)?))?],
+        } => Revolve::new(profile, *sweep, *method)?
+            .split()
+            .into_iter()
+            .map(|part| wrap(Arc::new(part)))
+            .collect::<Result<_, _>>()?,
         scene::Shape::BezierPatch { points, method } => {
             vec![wrap(Arc::new(BezierPatch::new(points, *method)?))?]
         }

@@ -4,19 +4,24 @@
 //! f32 types. Area and area sampling cover the swept side only; the flat caps of a partial sweep
 //! are not sampled (see `docs/bezier.md`).
 
+use std::sync::Arc;
+
 use glam::{DVec3, Vec2, Vec3A};
 
 use super::{AreaSample, Shape, solver_of};
 use crate::bezier::Solver;
-use crate::bezier::lathe::{Lathe, LatheHit};
+use crate::bezier::lathe::{Lathe, LatheHit, Parts};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::{IntersectMethod, Profile};
 
+/// A surface of revolution, or some of its parts (see [`Revolve::split`]).
 pub struct Revolve {
-    lathe: Lathe,
+    lathe: Arc<Lathe>,
+    parts: Parts,
     solver: Solver,
     bounds: Aabb,
-    area: f64,
+    /// The side area of the whole surface, `None` for a part (which is not sampled).
+    area: Option<f64>,
 }
 
 /// f32 bounds that contain the f64 box (rounded outward).
@@ -42,11 +47,33 @@ impl Revolve {
         let (lo, hi) = lathe.bounds();
         let area = lathe.area();
         Ok(Self {
-            lathe,
+            parts: lathe.all_parts(),
+            lathe: Arc::new(lathe),
             solver: solver_of(method),
             bounds: outward_box(lo, hi),
-            area,
+            area: Some(area),
         })
+    }
+
+    /// The surface as separate shapes, one per profile segment (and one for the caps of a
+    /// partial sweep), each bounded by its own box, so that a BVH skips the segments a ray
+    /// passes by. The nearest of their hits is the surface's hit. The parts share the
+    /// surface's data; they have no area and cannot be sampled (a revolve is not a light).
+    pub fn split(&self) -> Vec<Revolve> {
+        self.lathe
+            .separate_parts()
+            .into_iter()
+            .map(|parts| {
+                let (lo, hi) = self.lathe.parts_bounds(&parts);
+                Revolve {
+                    lathe: Arc::clone(&self.lathe),
+                    parts,
+                    solver: self.solver,
+                    bounds: outward_box(lo, hi),
+                    area: None,
+                }
+            })
+            .collect()
     }
 
     /// The f64 core (for measurements and tests).
@@ -73,7 +100,8 @@ impl Shape for Revolve {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let h = self.lathe.intersect(
+        let h = self.lathe.intersect_parts(
+            self.parts.clone(),
             ray.o.as_dvec3(),
             ray.d.as_dvec3(),
             t_min as f64,
@@ -86,18 +114,19 @@ impl Shape for Revolve {
     }
 
     fn area(&self) -> f32 {
-        self.area as f32
+        self.area.unwrap_or(0.0) as f32
     }
 
     fn sample(&self, u: Vec2) -> Option<AreaSample> {
-        if self.area.is_nan() || self.area <= 0.0 {
+        let area = self.area?;
+        if area.is_nan() || area <= 0.0 {
             return None;
         }
         let (p, n) = self.lathe.sample(u.as_dvec2())?;
         Some(AreaSample {
             p: p.as_vec3a(),
             n: Vec3A::from(n.as_vec3()),
-            pdf: (1.0 / self.area) as f32,
+            pdf: (1.0 / area) as f32,
         })
     }
 }

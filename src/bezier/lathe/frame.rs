@@ -13,6 +13,8 @@ pub struct RayFrame {
     pub o: DVec3,
     pub dn: DVec3,
     pub dh2: f64,
+    /// `1 / d_y` (infinite for horizontal rays).
+    pub(crate) inv_dy: f64,
     /// `|d_y| >= |d_xz|`: `t` is recovered from the height, otherwise from the radius.
     steep: bool,
     pub(crate) t0: f64,
@@ -48,6 +50,7 @@ impl RayFrame {
             o,
             dn,
             dh2,
+            inv_dy: 1.0 / dn.y,
             steep,
             t0,
             oc,
@@ -63,11 +66,7 @@ impl RayFrame {
         let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
         let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
         let rr = &seg.rr;
-        let f = a
-            .mul(&a)
-            .and_then(|aa| aa.add(&b.mul(&b)?))
-            .and_then(|s| s.add(&rr.scale(-dn.y * dn.y)))
-            .expect("degree <= 14");
+        let f = Bernstein::square_sum(&a, &b, rr, -dn.y * dn.y).expect("degree <= 14");
         let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * rr.max_abs();
         (f, scale * 64.0 * f64::EPSILON * (f.degree() as f64 + 1.0))
     }
@@ -156,10 +155,9 @@ impl RayFrame {
             }
             return cands;
         }
-        let w_of = |s: f64| {
-            let r = seg.r.eval(s);
-            ((r * r - self.rho2) / self.dh2).max(0.0).sqrt()
-        };
+        // The half chord at radius `r`.
+        let w_at = |r: f64| ((r * r - self.rho2) / self.dh2).max(0.0).sqrt();
+        let w_of = |s: f64| w_at(seg.r.eval(s));
         // The ray reaches radius `r` only where `r >= rho`. The slack is absolute in `r` (not in
         // `r^2`): near a pointed tip `rho` itself may be 1e-7 of the size, and a slack in `r^2`
         // of 1e-12 size^2 would let `r` fall far below `rho` and create a false hit at `t_c`.
@@ -171,7 +169,7 @@ impl RayFrame {
                 // The ray does not reach radius r: no hit at this s.
                 return f64::NAN;
             }
-            seg.h.eval(s) - (oc.y + dn.y * sigma * w_of(s))
+            seg.h.eval(s) - (oc.y + dn.y * sigma * w_at(r))
         };
         let b = self.bracket_bounds(seg, lo, hi);
         let g_range = |sigma: f64| {

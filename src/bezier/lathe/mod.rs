@@ -61,6 +61,15 @@ pub struct LatheHit {
     pub s: f64,
 }
 
+/// Some parts of a lathe (see [`Lathe::intersect_parts`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Parts {
+    /// Segment indices.
+    pub segs: std::ops::Range<usize>,
+    /// The flat caps of a partial sweep.
+    pub caps: bool,
+}
+
 /// A surface of revolution, ready for intersection.
 #[derive(Debug, Clone)]
 pub struct Lathe {
@@ -131,12 +140,7 @@ impl Lathe {
             }
         };
         let segs: Vec<Segment> = segments.iter().map(|s| Segment::new(s)).collect();
-        let rmax = segs.iter().map(|s| s.rmax).fold(0.0, f64::max);
-        let hmin = segs.iter().map(|s| s.hmin).fold(f64::INFINITY, f64::min);
-        let hmax = segs
-            .iter()
-            .map(|s| s.hmax)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let (rmax, hmin, hmax) = extent(&segs);
         let size = rmax.max(hmax - hmin).max(1e-300);
         let mut len_before = Vec::new();
         let mut total_len = 0.0;
@@ -164,11 +168,12 @@ impl Lathe {
 
     /// Object-space bounds `(min, max)`: the control polygon's, limited to the swept sector.
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        let r = self.rmax;
-        let (mut lo, mut hi) = (
-            DVec3::new(0.0, self.hmin, 0.0),
-            DVec3::new(0.0, self.hmax, 0.0),
-        );
+        self.sector_box(self.rmax, self.hmin, self.hmax)
+    }
+
+    /// The box of the radii up to `r` and heights `hmin..hmax`, limited to the swept sector.
+    fn sector_box(&self, r: f64, hmin: f64, hmax: f64) -> (DVec3, DVec3) {
+        let (mut lo, mut hi) = (DVec3::new(0.0, hmin, 0.0), DVec3::new(0.0, hmax, 0.0));
         let mut add = |a: f64| {
             let p = DVec3::new(r * a.cos(), 0.0, r * a.sin());
             lo = lo.min(p);
@@ -176,8 +181,8 @@ impl Lathe {
         };
         match self.sweep {
             None => {
-                lo = DVec3::new(-r, self.hmin, -r);
-                hi = DVec3::new(r, self.hmax, r);
+                lo = DVec3::new(-r, hmin, -r);
+                hi = DVec3::new(r, hmax, r);
             }
             Some((a0, span)) => {
                 add(a0);
@@ -222,6 +227,57 @@ impl Lathe {
         t_max: f64,
         solver: Solver,
     ) -> Option<LatheHit> {
+        self.intersect_parts(self.all_parts(), o, d, t_min, t_max, solver)
+    }
+
+    /// Every part of the surface: all segments, and the caps of a partial sweep.
+    pub fn all_parts(&self) -> Parts {
+        Parts {
+            segs: 0..self.segs.len(),
+            caps: self.sweep.is_some(),
+        }
+    }
+
+    /// The parts a renderer can keep apart in its BVH: one per segment of nonzero area, and
+    /// the caps of a partial sweep. Their nearest hits give the nearest hit of the whole.
+    pub fn separate_parts(&self) -> Vec<Parts> {
+        let mut out: Vec<Parts> = (0..self.segs.len())
+            .filter(|&i| !self.segs[i].degenerate)
+            .map(|i| Parts {
+                segs: i..i + 1,
+                caps: false,
+            })
+            .collect();
+        if self.sweep.is_some() {
+            out.push(Parts {
+                segs: 0..0,
+                caps: true,
+            });
+        }
+        out
+    }
+
+    /// Object-space bounds `(min, max)` of some parts: their segments' control polygons (the
+    /// whole profile's for the caps), limited to the swept sector.
+    pub fn parts_bounds(&self, parts: &Parts) -> (DVec3, DVec3) {
+        if parts.caps {
+            return self.bounds();
+        }
+        let (rmax, hmin, hmax) = extent(&self.segs[parts.segs.clone()]);
+        self.sector_box(rmax, hmin, hmax)
+    }
+
+    /// Nearest hit with `t_min < t < t_max` on the parts given: the segments in `parts.segs`
+    /// and, if `parts.caps`, the caps of a partial sweep.
+    pub fn intersect_parts(
+        &self,
+        parts: Parts,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        solver: Solver,
+    ) -> Option<LatheHit> {
         let dl = d.length();
         if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
             return None;
@@ -235,7 +291,9 @@ impl Lathe {
         // On the stack for profiles of up to 32 segments.
         let mut stack = [(0.0, 0usize, 0u32); 32];
         let (mut heap, mut len) = (Vec::new(), 0);
-        for (i, seg) in self.segs.iter().enumerate() {
+        let first = parts.segs.start;
+        for (i, seg) in self.segs[parts.segs].iter().enumerate() {
+            let i = first + i;
             if seg.degenerate
                 || frame
                     .shell_entry(&seg.shell, tmin, best, self.size)
@@ -310,7 +368,9 @@ impl Lathe {
                 }
             }
         }
-        self.cap_hits(&frame, tmin, &mut best, &mut found);
+        if parts.caps {
+            self.cap_hits(&frame, tmin, &mut best, &mut found);
+        }
         let (t, part, s) = found?;
         Some(self.hit_record(o + t * dn, t / dl, part, s))
     }
@@ -468,6 +528,14 @@ impl Lathe {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
     }
+}
+
+/// The largest radius and the lowest and highest heights of some segments' bounds.
+fn extent(segs: &[Segment]) -> (f64, f64, f64) {
+    segs.iter()
+        .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(r, lo, hi), s| {
+            (r.max(s.rmax), lo.min(s.hmin), hi.max(s.hmax))
+        })
 }
 
 /// Roots of `f` on the union of the segment's pieces set in `mask` (bit `k`: the parameter

@@ -58,7 +58,18 @@ impl RayFrame {
         let (h0, h1) = (s.hmin - pad, s.hmax + pad);
         let (mut ta, mut tb) = (tmin - pad, tmax + pad);
         if dn.y != 0.0 {
-            let (u, v) = ((h0 - o.y) / dn.y, (h1 - o.y) / dn.y);
+            let (u, v) = if self.inv_dy.is_finite() {
+                // A product with the reciprocal (no division per shell), its rounding (a few
+                // ulps of the quotient) allowed for on the safe side.
+                let (u, v) = ((h0 - o.y) * self.inv_dy, (h1 - o.y) * self.inv_dy);
+                let (lo, hi) = (u.min(v), u.max(v));
+                (
+                    lo - 4.0 * f64::EPSILON * lo.abs(),
+                    hi + 4.0 * f64::EPSILON * hi.abs(),
+                )
+            } else {
+                ((h0 - o.y) / dn.y, (h1 - o.y) / dn.y)
+            };
             ta = ta.max(u.min(v));
             tb = tb.min(u.max(v));
         } else if !(o.y >= h0 && o.y <= h1) {

@@ -13,7 +13,7 @@ use std::time::Instant;
 use glam::{DVec2, DVec3, Vec3A};
 
 use sppm_lang::accel::Bvh;
-use sppm_lang::geometry::Ray;
+use sppm_lang::geometry::{Aabb, Ray};
 use sppm_lang::sampling::SplitMix64;
 use sppm_lang::scene::{IntersectMethod, Profile};
 use sppm_lang::shapes::Shape;
@@ -70,13 +70,18 @@ fn section_quad(lo: DVec3, hi: DVec3) -> Result<AnyShape, String> {
     Ok(AnyShape::Quad(q))
 }
 
-/// Median ns per ray of `surface` and of a quad over the same box, alternating on every chunk.
-fn pair(name: &str, surface: AnyShape, rays: usize, repeats: usize) -> Result<CostRow, String> {
-    let b = surface.bounds();
+/// Median ns per ray of `surface` (its primitives, in the box `b`) and of a quad over the same
+/// box, alternating on every chunk.
+fn pair(
+    name: &str,
+    (surface, b): (Vec<AnyShape>, Aabb),
+    rays: usize,
+    repeats: usize,
+) -> Result<CostRow, String> {
     let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
     let rays = random_rays(lo, hi, rays, 7);
     let subjects = [
-        Bvh::new(vec![(surface, 0)]),
+        Bvh::new(surface.into_iter().map(|s| (s, 0)).collect()),
         Bvh::new(vec![(section_quad(lo, hi)?, 0)]),
     ];
     let mut passes = Vec::new();
@@ -120,20 +125,23 @@ fn pair(name: &str, surface: AnyShape, rays: usize, repeats: usize) -> Result<Co
 
 /// The vase, the goblet and the wavy patch, each against its quad.
 pub fn run(rays: usize, repeats: usize) -> Result<Vec<CostRow>, String> {
-    let revolve = |p: &Profile| -> Result<AnyShape, String> {
-        Ok(AnyShape::Other(Box::new(Revolve::new(
-            p,
-            None,
-            IntersectMethod::Robust,
-        )?)))
+    // Split as the renderer places it: one primitive per profile segment.
+    let revolve = |p: &Profile| -> Result<(Vec<AnyShape>, Aabb), String> {
+        let whole = Revolve::new(p, None, IntersectMethod::Robust)?;
+        let parts = whole.split().into_iter();
+        Ok((
+            parts.map(|part| AnyShape::Other(Box::new(part))).collect(),
+            whole.bounds(),
+        ))
     };
     let patch = AnyShape::Other(Box::new(BezierPatch::new(
         &wavy_points(),
         IntersectMethod::Robust,
     )?));
+    let patch_bounds = patch.bounds();
     Ok(vec![
         pair("revolve vase", revolve(&vase_profile())?, rays, repeats)?,
         pair("revolve goblet", revolve(&goblet_profile())?, rays, repeats)?,
-        pair("patch wavy", patch, rays, repeats)?,
+        pair("patch wavy", (vec![patch], patch_bounds), rays, repeats)?,
     ])
 }
