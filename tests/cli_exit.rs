@@ -207,6 +207,40 @@ fn absurdly_long_expressions_exit_1_not_abort() {
     }
 }
 
+/// A revolve whose profile sweeps no surface (on the axis) is refused by `check` and `render`
+/// alike (prepare decides), with its span, and `render` writes nothing.
+#[test]
+fn a_revolve_without_surface_is_refused_by_check_and_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("flat.scn");
+    std::fs::write(
+        &scene,
+        "camera { location <0, 1, -4> look_at <0, 0.5, 0> }\n\
+         light { <2, 4, -3> intensity rgb <20, 20, 20> }\n\
+         revolve { profile bezier { <0, 0>, <0, 0.5>, <0, 1>, <0, 2> } }\n",
+    )
+    .unwrap();
+    let png = dir.path().join("flat.png");
+    for args in [
+        vec!["check", scene.to_str().unwrap()],
+        vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+    ] {
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("sweeps no surface") && err.contains("flat.scn:3:1"),
+            "{err}"
+        );
+    }
+    assert!(!png.exists());
+}
+
 #[test]
 fn absurd_flags_are_usage_errors_at_once() {
     let dir = tempfile::tempdir().unwrap();

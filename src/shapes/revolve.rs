@@ -176,6 +176,21 @@ mod tests {
         };
         assert!(Revolve::new(&long, None, IntersectMethod::Robust).is_err());
         assert!(Revolve::new(&cylinder(), Some((90.0, 10.0)), IntersectMethod::Robust).is_err());
+        // Profiles that sweep no surface: on the axis, or one point (a circle).
+        for points in [
+            vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(0.0, 1.0),
+                DVec2::new(0.0, 2.0),
+            ],
+            vec![DVec2::new(0.5, 1.0); 4],
+        ] {
+            let flat = Profile {
+                segments: vec![points],
+            };
+            let e = Revolve::new(&flat, None, IntersectMethod::Robust).err();
+            assert!(e.is_some_and(|e| e.contains("sweeps no surface")));
+        }
         // NaN rays are misses.
         let r = Revolve::new(&cylinder(), None, IntersectMethod::Robust).unwrap();
         let ray = Ray::new(Vec3A::splat(f32::NAN), Vec3A::Z);

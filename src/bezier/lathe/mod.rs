@@ -153,6 +153,13 @@ impl Lathe {
             let base = *area_cdf.last().unwrap_or(&0.0);
             area_cdf.extend(s.area_table[1..].iter().map(|a| base + a));
         }
+        if !(area_cdf.last().is_some_and(|&a| a > 0.0)) {
+            return Err(
+                "the profile sweeps no surface: its points all lie on the axis or at one \
+                 point, so it would draw nothing (give the profile a radius)"
+                    .into(),
+            );
+        }
         Ok(Self {
             segs,
             sweep,
