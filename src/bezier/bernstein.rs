@@ -34,6 +34,31 @@ fn binomial(n: usize, k: usize) -> f64 {
     BINOMIAL[n][k]
 }
 
+/// Calls `$f::<M>(args)` with `M = n + 1` (`n <= MAX_DEGREE`): de Casteljau's loops with
+/// constant bounds for every degree, the same arithmetic as one loop over `n`.
+macro_rules! by_degree {
+    ($n:expr, $f:ident, $($arg:expr),*) => {
+        match $n {
+            0 => $f::<1>($($arg),*),
+            1 => $f::<2>($($arg),*),
+            2 => $f::<3>($($arg),*),
+            3 => $f::<4>($($arg),*),
+            4 => $f::<5>($($arg),*),
+            5 => $f::<6>($($arg),*),
+            6 => $f::<7>($($arg),*),
+            7 => $f::<8>($($arg),*),
+            8 => $f::<9>($($arg),*),
+            9 => $f::<10>($($arg),*),
+            10 => $f::<11>($($arg),*),
+            11 => $f::<12>($($arg),*),
+            12 => $f::<13>($($arg),*),
+            13 => $f::<14>($($arg),*),
+            14 => $f::<15>($($arg),*),
+            _ => $f::<{ MAX_DEGREE + 1 }>($($arg),*),
+        }
+    };
+}
+
 impl Bernstein {
     /// From coefficients `c_0..=c_n`; `None` when there are none or more than `MAX_DEGREE + 1`.
     pub fn new(coeffs: &[f64]) -> Option<Self> {
@@ -109,48 +134,25 @@ impl Bernstein {
 
     /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
     pub fn split(&self, t: f64) -> (Self, Self) {
-        let n = self.n;
         let mut left = *self;
         let mut right = *self;
-        let mut b = self.c;
-        left.c[0] = b[0];
-        right.c[n] = b[n];
-        for level in 1..=n {
-            for i in 0..=n - level {
-                b[i] += t * (b[i + 1] - b[i]);
-            }
-            left.c[level] = b[0];
-            right.c[n - level] = b[n - level];
-        }
+        by_degree!(self.n, split_levels, &self.c, t, &mut left.c, &mut right.c);
         (left, right)
     }
 
     /// The part on [0, t] reparameterised on [0, 1] (the left half of [`Bernstein::split`],
     /// the same arithmetic).
     pub fn left_of(&self, t: f64) -> Self {
-        let n = self.n;
         let mut left = *self;
-        let mut b = self.c;
-        for level in 1..=n {
-            for i in 0..=n - level {
-                b[i] += t * (b[i + 1] - b[i]);
-            }
-            left.c[level] = b[0];
-        }
+        by_degree!(self.n, left_levels, &self.c, t, &mut left.c);
         left
     }
 
     /// The part on [t, 1] reparameterised on [0, 1] (the right half of [`Bernstein::split`],
     /// the same arithmetic, in place).
     pub fn right_of(&self, t: f64) -> Self {
-        let n = self.n;
         let mut right = *self;
-        let b = &mut right.c;
-        for level in 1..=n {
-            for i in 0..=n - level {
-                b[i] += t * (b[i + 1] - b[i]);
-            }
-        }
+        by_degree!(self.n, right_levels, t, &mut right.c);
         right
     }
 
@@ -215,6 +217,16 @@ impl Bernstein {
         let mut p = *self;
         for c in &mut p.c[..=p.n] {
             *c += v;
+        }
+        p
+    }
+
+    /// `self * s + v` for a constant `v`: [`Bernstein::scale`] then [`Bernstein::add_constant`]
+    /// (the same operations) in one pass.
+    pub fn scale_add(&self, s: f64, v: f64) -> Self {
+        let mut p = *self;
+        for c in &mut p.c[..=p.n] {
+            *c = *c * s + v;
         }
         p
     }
@@ -292,6 +304,59 @@ fn product(
         *ck /= binomial(n + m, k);
     }
     c
+}
+
+/// De Casteljau's levels of the degree `M - 1` coefficients `c` at `t`: the left part's
+/// coefficients into `left[..M]` and the right part's into `right[..M]`.
+#[inline(always)]
+fn split_levels<const M: usize>(
+    c: &[f64; MAX_DEGREE + 1],
+    t: f64,
+    left: &mut [f64; MAX_DEGREE + 1],
+    right: &mut [f64; MAX_DEGREE + 1],
+) {
+    let n = M - 1;
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    left[0] = b[0];
+    right[n] = b[n];
+    for level in 1..M {
+        for i in 0..M - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+        left[level] = b[0];
+        right[n - level] = b[n - level];
+    }
+}
+
+/// The left part only (see [`split_levels`]).
+#[inline(always)]
+fn left_levels<const M: usize>(
+    c: &[f64; MAX_DEGREE + 1],
+    t: f64,
+    left: &mut [f64; MAX_DEGREE + 1],
+) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    for level in 1..M {
+        for i in 0..M - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+        left[level] = b[0];
+    }
+}
+
+/// The right part only, in place (see [`split_levels`]).
+#[inline(always)]
+fn right_levels<const M: usize>(t: f64, c: &mut [f64; MAX_DEGREE + 1]) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    for level in 1..M {
+        for i in 0..M - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+    }
+    c[..M].copy_from_slice(&b);
 }
 
 /// Value and derivative of the degree `M - 1` polynomial (`M >= 2`) with coefficients `c[..M]`,

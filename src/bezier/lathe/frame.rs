@@ -63,11 +63,11 @@ impl RayFrame {
     /// The polynomial `F(s)` of the segment (see the module docs) and its rounding noise.
     pub fn polynomial(&self, seg: &Segment) -> (Bernstein, f64) {
         let (oc, dn) = (self.oc, self.dn);
-        let a = seg.h.scale(dn.x).add_constant(oc.x * dn.y - oc.y * dn.x);
-        let b = seg.h.scale(dn.z).add_constant(oc.z * dn.y - oc.y * dn.z);
+        let a = seg.h.scale_add(dn.x, oc.x * dn.y - oc.y * dn.x);
+        let b = seg.h.scale_add(dn.z, oc.z * dn.y - oc.y * dn.z);
         let rr = &seg.rr;
         let f = Bernstein::square_sum(&a, &b, rr, -dn.y * dn.y).expect("degree <= 14");
-        let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * rr.max_abs();
+        let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * seg.rr_max;
         (f, scale * 64.0 * f64::EPSILON * (f.degree() as f64 + 1.0))
     }
 

@@ -28,7 +28,7 @@ mod shell;
 pub use frame::RayFrame;
 pub use segment::Segment;
 use segment::TABLE_STEPS;
-pub use shell::{PIECES, Shell};
+pub use shell::{PIECES, SHELL_PAD, SegmentShells, Shell, ShellLanes, shell_slack};
 
 use super::Solver;
 use super::roots::bracket::Refine;
@@ -85,6 +85,8 @@ pub struct Lathe {
     total_len: f64,
     /// Cumulative side area over all segments' table steps (for sampling).
     area_cdf: Vec<f64>,
+    /// Each segment's shells, padded for this size (culling).
+    shells: Vec<SegmentShells>,
 }
 
 impl Lathe {
@@ -160,7 +162,12 @@ impl Lathe {
                     .into(),
             );
         }
+        let shells = segs
+            .iter()
+            .map(|s| SegmentShells::new(&s.shell, &s.shells, size))
+            .collect();
         Ok(Self {
+            shells,
             segs,
             sweep,
             rmax,
@@ -295,27 +302,24 @@ impl Lathe {
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
         // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
-        // On the stack for profiles of up to 32 segments.
-        let mut stack = [(0.0, 0usize, 0u32); 32];
+        // On the stack for up to 8 segments (the renderer asks for one at a time).
+        let mut stack = [(0.0, 0usize, 0u32); 8];
         let (mut heap, mut len) = (Vec::new(), 0);
+        let (pad, slack) = (SHELL_PAD * self.size, shell_slack(self.size));
+        let ta0 = tmin - pad;
         let first = parts.segs.start;
         for (i, seg) in self.segs[parts.segs].iter().enumerate() {
             let i = first + i;
+            let shells = &self.shells[i];
             if seg.degenerate
                 || frame
-                    .shell_entry(&seg.shell, tmin, best, self.size)
-                    .is_none()
+                    .shells_entered(&shells.union, ta0, best + pad, slack)
+                    .0
+                    == 0
             {
                 continue;
             }
-            let mut mask = 0u32;
-            let mut entry = f64::INFINITY;
-            for (k, shell) in seg.shells.iter().enumerate() {
-                if let Some(t) = frame.shell_entry(shell, tmin, best, self.size) {
-                    mask |= 1 << k;
-                    entry = entry.min(t);
-                }
-            }
+            let (mask, entry) = frame.shells_entered(&shells.pieces, ta0, best + pad, slack);
             if mask == 0 {
                 continue;
             }
@@ -343,13 +347,9 @@ impl Lathe {
             if best < best_at_entry {
                 // A nearer hit was found since the shells were tested: drop the pieces the ray
                 // now enters only beyond it.
-                for (k, shell) in seg.shells.iter().enumerate() {
-                    if mask & (1 << k) != 0
-                        && frame.shell_entry(shell, tmin, best, self.size).is_none()
-                    {
-                        mask &= !(1 << k);
-                    }
-                }
+                mask &= frame
+                    .shells_entered(&self.shells[i].pieces, ta0, best + pad, slack)
+                    .0;
                 if mask == 0 {
                     continue;
                 }

@@ -31,6 +31,8 @@ pub struct Segment {
     pub h: Bernstein,
     /// `r^2` (the same for every ray).
     pub(super) rr: Bernstein,
+    /// `rr.max_abs()`.
+    pub(super) rr_max: f64,
     pub(crate) rmax: f64,
     pub(crate) hmin: f64,
     pub(crate) hmax: f64,
@@ -86,8 +88,10 @@ impl Segment {
             hmin: a.hmin.min(b.hmin),
             hmax: a.hmax.max(b.hmax),
         });
+        let rr = r.mul(&r).expect("degree <= 7");
         let mut seg = Self {
-            rr: r.mul(&r).expect("degree <= 7"),
+            rr_max: rr.max_abs(),
+            rr,
             r,
             h,
             rmax,

@@ -1,8 +1,8 @@
 //! Per-segment culling: each profile segment is cut into [`PIECES`] parameter pieces, each
 //! bounded by an annular shell (radii `rmin..rmax`, heights `hmin..hmax` from the piece's
 //! control polygon, so the shell contains the swept piece). A ray can meet the piece's surface
-//! only at a `t` where it is inside the shell; [`RayFrame::shell_entry`] decides that in closed
-//! form (the ray's squared distance from the axis is a quadratic in `t`) and gives the ray's
+//! only at a `t` where it is inside the shell; [`RayFrame::shells_entered`] decides that in
+//! closed form (the ray's squared distance from the axis is a quadratic in `t`) and gives the ray's
 //! entry into the shell's height slab, a lower bound on the `t` of any hit in the piece.
 
 use super::frame::RayFrame;
@@ -48,20 +48,153 @@ impl Shell {
 /// quantities compared (f64, values of the size of the scene), far below any visible margin.
 pub const SHELL_PAD: f64 = 1e-7;
 
+/// `n` shells padded for a lathe of a given size, stored lane by lane as the test reads them:
+/// heights `h0..h1` (padded), squared radii `r0sq` (inner, padded, at least 0) and `r1sq_slack`
+/// (outer, padded, plus the slack allowed for the rounding of the ray's squared distance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellLanes<const N: usize> {
+    h0: [f64; N],
+    h1: [f64; N],
+    r0sq: [f64; N],
+    r1sq_slack: [f64; N],
+}
+
+/// The slack in squared distances from the axis: the ray's `q(t)` is computed from terms of the
+/// size of the scene, which cancel in it.
+pub fn shell_slack(size: f64) -> f64 {
+    1e-12 * size * size
+}
+
+impl<const N: usize> ShellLanes<N> {
+    /// The shells `s`, padded by [`SHELL_PAD`] of `size`.
+    pub fn new(s: &[Shell; N], size: f64) -> Self {
+        let pad = SHELL_PAD * size;
+        let slack = shell_slack(size);
+        Self {
+            h0: std::array::from_fn(|k| s[k].hmin - pad),
+            h1: std::array::from_fn(|k| s[k].hmax + pad),
+            r0sq: std::array::from_fn(|k| {
+                let r0 = (s[k].rmin - pad).max(0.0);
+                r0 * r0
+            }),
+            r1sq_slack: std::array::from_fn(|k| {
+                let r1 = s[k].rmax + pad;
+                r1 * r1 + slack
+            }),
+        }
+    }
+}
+
+/// The union shell of a segment and the shells of its [`PIECES`] pieces, padded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentShells {
+    pub union: ShellLanes<1>,
+    pub pieces: ShellLanes<PIECES>,
+}
+
+impl SegmentShells {
+    pub fn new(union: &Shell, pieces: &[Shell; PIECES], size: f64) -> Self {
+        Self {
+            union: ShellLanes::new(&[*union], size),
+            pieces: ShellLanes::new(pieces, size),
+        }
+    }
+}
+
 impl RayFrame {
-    /// Where the ray (unit direction) enters the padded shell within `(tmin, tmax)`: `None` when
-    /// it is not inside the shell anywhere on that interval, else a lower bound on the `t` of
-    /// every point of the interval inside it.
-    pub fn shell_entry(&self, s: &Shell, tmin: f64, tmax: f64, size: f64) -> Option<f64> {
-        let (o, dn) = (self.o, self.dn);
+    /// Which of the padded shells `s` the ray (unit direction) is inside somewhere on
+    /// `(ta0, tb0)` (the caller's `(t_min, t_max)` widened by the pad), as a bit mask (bit `k`:
+    /// shell `k`), and the smallest of their entries into the shells' height slabs (a lower
+    /// bound on the `t` of every point of the interval inside them; infinite when none is
+    /// entered). `slack` is [`shell_slack`] of the size.
+    ///
+    /// Each shell's test is branch-free arithmetic on its lane (the shells of a segment are
+    /// tested in one pass); the ray's kind (`d_y` zero, or too small for a finite reciprocal)
+    /// is decided once.
+    #[inline(always)]
+    pub fn shells_entered<const N: usize>(
+        &self,
+        s: &ShellLanes<N>,
+        ta0: f64,
+        tb0: f64,
+        slack: f64,
+    ) -> (u32, f64) {
+        let (oy, dy, inv) = (self.o.y, self.dn.y, self.inv_dy);
+        let mut ta = [ta0; N];
+        let mut tb = [tb0; N];
+        if dy != 0.0 && inv.is_finite() {
+            for k in 0..N {
+                // A product with the reciprocal (no division per shell), its rounding (a few
+                // ulps of the quotient) allowed for on the safe side.
+                let (u, v) = ((s.h0[k] - oy) * inv, (s.h1[k] - oy) * inv);
+                let (lo, hi) = (u.min(v), u.max(v));
+                let lo = lo - 4.0 * f64::EPSILON * lo.abs();
+                let hi = hi + 4.0 * f64::EPSILON * hi.abs();
+                ta[k] = ta0.max(lo.min(hi));
+                tb[k] = tb0.min(lo.max(hi));
+            }
+        } else if dy != 0.0 {
+            for k in 0..N {
+                let (u, v) = ((s.h0[k] - oy) / dy, (s.h1[k] - oy) / dy);
+                ta[k] = ta0.max(u.min(v));
+                tb[k] = tb0.min(u.max(v));
+            }
+        } else {
+            for k in 0..N {
+                if !(oy >= s.h0[k] && oy <= s.h1[k]) {
+                    // Outside the slab of a horizontal ray: an empty interval.
+                    ta[k] = f64::INFINITY;
+                    tb[k] = f64::NEG_INFINITY;
+                }
+            }
+        }
+        let (tc, rho2, dh2) = (self.tc, self.line_rho2, self.dh2);
+        // Squared distance from the axis along the ray: line_rho2 + dh2 (t - tc)^2.
+        let q = |t: f64| {
+            let dt = t - tc;
+            rho2 + dh2 * dt * dt
+        };
+        let mut mask = 0u32;
+        let mut entry = f64::INFINITY;
+        for k in 0..N {
+            let (a, b) = (ta[k], tb[k]);
+            let (qmin, qmax) = if dh2 > 0.0 {
+                // `tc.clamp(a, b)` without its check of `a <= b` (tested below).
+                let c = if tc < a { a } else { tc };
+                let c = if c > b { b } else { c };
+                (q(c), q(a).max(q(b)))
+            } else {
+                (rho2, rho2)
+            };
+            // `a <= b` is false also where either is NaN.
+            let inside = a <= b
+                && qmin * (1.0 - 1e-12) <= s.r1sq_slack[k]
+                && qmax * (1.0 + 1e-12) + slack >= s.r0sq[k];
+            if inside {
+                mask |= 1 << k;
+                entry = entry.min(a);
+            }
+        }
+        (mask, entry)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+
+    /// The test of one shell as it was written before the lanes: each shell's values padded per
+    /// call, `f64::clamp` after the check of the interval.
+    fn shell_entry(f: &RayFrame, s: &Shell, tmin: f64, tmax: f64, size: f64) -> Option<f64> {
+        let (o, dn) = (f.o, f.dn);
         let pad = SHELL_PAD * size;
         let (h0, h1) = (s.hmin - pad, s.hmax + pad);
         let (mut ta, mut tb) = (tmin - pad, tmax + pad);
         if dn.y != 0.0 {
-            let (u, v) = if self.inv_dy.is_finite() {
-                // A product with the reciprocal (no division per shell), its rounding (a few
-                // ulps of the quotient) allowed for on the safe side.
-                let (u, v) = ((h0 - o.y) * self.inv_dy, (h1 - o.y) * self.inv_dy);
+            let (u, v) = if f.inv_dy.is_finite() {
+                let (u, v) = ((h0 - o.y) * f.inv_dy, (h1 - o.y) * f.inv_dy);
                 let (lo, hi) = (u.min(v), u.max(v));
                 (
                     lo - 4.0 * f64::EPSILON * lo.abs(),
@@ -78,20 +211,85 @@ impl RayFrame {
         if ta.is_nan() || tb.is_nan() || ta > tb {
             return None;
         }
-        // Squared distance from the axis along the ray: line_rho2 + dh2 (t - tc)^2.
         let q = |t: f64| {
-            let dt = t - self.tc;
-            self.line_rho2 + self.dh2 * dt * dt
+            let dt = t - f.tc;
+            f.line_rho2 + f.dh2 * dt * dt
         };
-        let (qmin, qmax) = if self.dh2 > 0.0 {
-            (q(self.tc.clamp(ta, tb)), q(ta).max(q(tb)))
+        let (qmin, qmax) = if f.dh2 > 0.0 {
+            (q(f.tc.clamp(ta, tb)), q(ta).max(q(tb)))
         } else {
-            (self.line_rho2, self.line_rho2)
+            (f.line_rho2, f.line_rho2)
         };
         let (r0, r1) = ((s.rmin - pad).max(0.0), s.rmax + pad);
-        // Rounding of q: relative to q itself and to the size (terms of the size cancel in it).
         let slack = 1e-12 * size * size;
         (qmin * (1.0 - 1e-12) <= r1 * r1 + slack && qmax * (1.0 + 1e-12) + slack >= r0 * r0)
             .then_some(ta)
+    }
+
+    /// The lanes decide as the one-shell test, bit for bit (mask and entry), on rays of every
+    /// kind: random, horizontal (`d_y = 0`), with a subnormal `d_y` (no finite reciprocal),
+    /// vertical, along the axis, grazing the shells' cylinders and slabs, with infinite `t_max`.
+    #[test]
+    fn lanes_decide_as_the_one_shell_test() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let size = 1.3;
+        let mut compared = [0usize; 2];
+        for case in 0..200_000 {
+            let shells: [Shell; PIECES] = std::array::from_fn(|_| {
+                let (r0, r1) = (rnd() * 0.8, rnd() * 0.8);
+                let (h0, h1) = (rnd() * 1.3, rnd() * 1.3);
+                Shell {
+                    rmin: r0.min(r1) * if rnd() < 0.2 { 0.0 } else { 1.0 },
+                    rmax: r0.max(r1),
+                    hmin: h0.min(h1),
+                    hmax: if rnd() < 0.1 { h0.min(h1) } else { h0.max(h1) },
+                }
+            });
+            let lanes = ShellLanes::new(&shells, size);
+            let target = DVec3::new(rnd() - 0.5, rnd() * 1.3, rnd() - 0.5) * 1.6;
+            let o = DVec3::new(rnd() - 0.5, rnd() * 1.3, rnd() - 0.5) * 4.0;
+            let mut d = (target - o).normalize();
+            match case % 8 {
+                0 => d.y = 0.0,
+                1 => d.y = 1e-310,
+                2 => d = DVec3::Y * if rnd() < 0.5 { 1.0 } else { -1.0 },
+                3 => d.y *= 1e-9,
+                _ => {}
+            }
+            let d = d.normalize();
+            let d = if d.is_finite() { d } else { DVec3::X };
+            let o = if case % 16 == 5 {
+                // On the axis.
+                DVec3::new(0.0, o.y, 0.0)
+            } else {
+                o
+            };
+            let frame = RayFrame::new(o, d, 0.0, 1.3);
+            let tmin = if rnd() < 0.5 { 0.0 } else { rnd() };
+            let tmax = if rnd() < 0.3 {
+                f64::INFINITY
+            } else {
+                tmin + rnd() * 5.0
+            };
+            let pad = SHELL_PAD * size;
+            let (mask, entry) =
+                frame.shells_entered(&lanes, tmin - pad, tmax + pad, shell_slack(size));
+            let mut want = (0u32, f64::INFINITY);
+            for (k, s) in shells.iter().enumerate() {
+                if let Some(t) = shell_entry(&frame, s, tmin, tmax, size) {
+                    want = (want.0 | 1 << k, want.1.min(t));
+                }
+            }
+            assert_eq!((mask, entry), want, "case {case}: o {o}, d {d}");
+            compared[(mask != 0) as usize] += 1;
+        }
+        // Both outcomes occur often enough for the comparison to mean something.
+        assert!(compared[0] > 10_000 && compared[1] > 10_000, "{compared:?}");
     }
 }
