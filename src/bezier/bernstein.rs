@@ -89,12 +89,23 @@ impl Bernstein {
     }
 
     /// Largest absolute coefficient: a bound on `|p|` over [0, 1].
+    #[inline]
     pub fn max_abs(&self) -> f64 {
         self.coeffs().iter().fold(0.0, |m, c| m.max(c.abs()))
     }
 
-    /// Value at `t` by de Casteljau's algorithm (stable for t in [0, 1]).
+    /// Value at `t` by de Casteljau's algorithm (stable for t in [0, 1]). Cubics (the profiles'
+    /// usual degree) inline, without the derivative: the same arithmetic as
+    /// [`Bernstein::eval_with_derivative`].
+    #[inline]
     pub fn eval(&self, t: f64) -> f64 {
+        if self.n == 3 {
+            let c = &self.c;
+            let lerp = |a: f64, b: f64| a + t * (b - a);
+            let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
+            let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
+            return lerp(b0, b1);
+        }
         self.eval_with_derivative(t).0
     }
 
@@ -223,6 +234,7 @@ impl Bernstein {
 
     /// `self * s + v` for a constant `v`: [`Bernstein::scale`] then [`Bernstein::add_constant`]
     /// (the same operations) in one pass.
+    #[inline]
     pub fn scale_add(&self, s: f64, v: f64) -> Self {
         let mut p = *self;
         for c in &mut p.c[..=p.n] {
@@ -247,6 +259,7 @@ impl Bernstein {
     /// `a.mul(&a)?.add(&b.mul(&b)?)?.add(&c.scale(w))` computes it (the same operations, bit for
     /// bit) without the intermediate values; other degrees go that way. `None` above
     /// `MAX_DEGREE`.
+    #[inline]
     pub fn square_sum(a: &Self, b: &Self, c: &Self, w: f64) -> Option<Self> {
         let n = a.n;
         if b.n != n || c.n != 2 * n || 2 * n > MAX_DEGREE {
@@ -274,6 +287,7 @@ impl Bernstein {
 
     /// The coefficients of `self * other` (`n + m <= MAX_DEGREE`). The squares of profile
     /// coordinates (equal low degrees) get loops of fixed bounds.
+    #[inline]
     fn product_with(&self, other: &Self) -> [f64; MAX_DEGREE + 1] {
         match (self.n, other.n) {
             (1, 1) => product(1, 1, &self.c, &other.c),
