@@ -273,6 +273,30 @@ impl Bernstein {
         Some(Self { n: 2 * n, c: f })
     }
 
+    /// [`Bernstein::square_sum`] for cubics `a`, `b` and a sextic `c` given by their
+    /// coefficients: the same operations, on arrays of their own length.
+    pub fn cubic_square_sum(a: &[f64; 4], b: &[f64; 4], c: &[f64; 7], w: f64) -> Self {
+        let square = |p: &[f64; 4]| {
+            let mut s = [0.0; 7];
+            for i in 0..4 {
+                let bi = binomial(3, i) * p[i];
+                for j in 0..4 {
+                    s[i + j] += bi * binomial(3, j) * p[j];
+                }
+            }
+            for (k, sk) in s.iter_mut().enumerate() {
+                *sk /= binomial(6, k);
+            }
+            s
+        };
+        let (aa, bb) = (square(a), square(b));
+        let mut f = [0.0; MAX_DEGREE + 1];
+        for k in 0..7 {
+            f[k] = (aa[k] + bb[k]) + c[k] * w;
+        }
+        Self { n: 6, c: f }
+    }
+
     /// `self * other` (degree n + m). `None` above `MAX_DEGREE`.
     pub fn mul(&self, other: &Self) -> Option<Self> {
         let (n, m) = (self.n, other.n);
@@ -393,6 +417,33 @@ fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The cubic path of `square_sum` gives the general one's result bit for bit.
+    #[test]
+    fn cubic_square_sum_is_square_sum() {
+        let mut x = 0.123_456_789f64;
+        let mut next = || {
+            x = (x * 3.987_654_321 + 0.314_159).fract();
+            (x - 0.5) * 10f64.powi((x * 8.0) as i32 - 4)
+        };
+        for _ in 0..10_000 {
+            let a: [f64; 4] = std::array::from_fn(|_| next());
+            let b: [f64; 4] = std::array::from_fn(|_| next());
+            let c: [f64; 7] = std::array::from_fn(|_| next());
+            let w = next();
+            let (pa, pb, pc) = (
+                Bernstein::new(&a).unwrap(),
+                Bernstein::new(&b).unwrap(),
+                Bernstein::new(&c).unwrap(),
+            );
+            let want = Bernstein::square_sum(&pa, &pb, &pc, w).unwrap();
+            let got = Bernstein::cubic_square_sum(&a, &b, &c, w);
+            assert_eq!(got.n, want.n);
+            for (g, w) in got.c.iter().zip(want.c) {
+                assert_eq!(g.to_bits(), w.to_bits());
+            }
+        }
+    }
 
     #[test]
     fn binomial_table_is_pascals_triangle() {

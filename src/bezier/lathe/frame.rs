@@ -63,8 +63,21 @@ impl RayFrame {
     /// The polynomial `F(s)` of the segment (see the module docs) and its rounding noise.
     pub fn polynomial(&self, seg: &Segment) -> (Bernstein, f64) {
         let (oc, dn) = (self.oc, self.dn);
-        let a = seg.h.scale_add(dn.x, oc.x * dn.y - oc.y * dn.x);
-        let b = seg.h.scale_add(dn.z, oc.z * dn.y - oc.y * dn.z);
+        let (kx, kz) = (oc.x * dn.y - oc.y * dn.x, oc.z * dn.y - oc.y * dn.z);
+        if let (Ok(h), Ok(rr)) = (
+            <&[f64; 4]>::try_from(seg.h.coeffs()),
+            <&[f64; 7]>::try_from(seg.rr.coeffs()),
+        ) {
+            // Cubic profiles (the usual case): the same operations on arrays of their length.
+            let a: [f64; 4] = std::array::from_fn(|i| h[i] * dn.x + kx);
+            let b: [f64; 4] = std::array::from_fn(|i| h[i] * dn.z + kz);
+            let f = Bernstein::cubic_square_sum(&a, &b, rr, -dn.y * dn.y);
+            let max_abs = |p: &[f64; 4]| p.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+            let scale = max_abs(&a).powi(2) + max_abs(&b).powi(2) + dn.y * dn.y * seg.rr_max;
+            return (f, scale * 64.0 * f64::EPSILON * 7.0);
+        }
+        let a = seg.h.scale_add(dn.x, kx);
+        let b = seg.h.scale_add(dn.z, kz);
         let rr = &seg.rr;
         let f = Bernstein::square_sum(&a, &b, rr, -dn.y * dn.y).expect("degree <= 14");
         let scale = a.max_abs().powi(2) + b.max_abs().powi(2) + dn.y * dn.y * seg.rr_max;
