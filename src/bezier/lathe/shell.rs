@@ -120,6 +120,10 @@ impl RayFrame {
         slack: f64,
     ) -> (u32, f64) {
         let (oy, dy, inv) = (self.o.y, self.dn.y, self.inv_dy);
+        // Minimum and maximum as one comparison each, where no operand can be NaN for a
+        // finite ray (or only the second, which a comparison ignores as `f64::min` does).
+        let min = |a: f64, b: f64| if b < a { b } else { a };
+        let max = |a: f64, b: f64| if b > a { b } else { a };
         let mut ta = [ta0; N];
         let mut tb = [tb0; N];
         if dy != 0.0 && inv.is_finite() {
@@ -127,17 +131,19 @@ impl RayFrame {
                 // A product with the reciprocal (no division per shell), its rounding (a few
                 // ulps of the quotient) allowed for on the safe side.
                 let (u, v) = ((s.h0[k] - oy) * inv, (s.h1[k] - oy) * inv);
-                let (lo, hi) = (u.min(v), u.max(v));
+                let (lo, hi) = (min(u, v), max(u, v));
                 let lo = lo - 4.0 * f64::EPSILON * lo.abs();
                 let hi = hi + 4.0 * f64::EPSILON * hi.abs();
-                ta[k] = ta0.max(lo.min(hi));
-                tb[k] = tb0.min(lo.max(hi));
+                // Where the product overflows (`d_y` near the smallest normal) `lo` or `hi`
+                // is an infinity minus itself, NaN: `f64::min` and `f64::max` take the other.
+                ta[k] = max(ta0, lo.min(hi));
+                tb[k] = min(tb0, lo.max(hi));
             }
         } else if dy != 0.0 {
             for k in 0..N {
                 let (u, v) = ((s.h0[k] - oy) / dy, (s.h1[k] - oy) / dy);
-                ta[k] = ta0.max(u.min(v));
-                tb[k] = tb0.min(u.max(v));
+                ta[k] = max(ta0, min(u, v));
+                tb[k] = min(tb0, max(u, v));
             }
         } else {
             for k in 0..N {
@@ -154,25 +160,31 @@ impl RayFrame {
             let dt = t - tc;
             rho2 + dh2 * dt * dt
         };
+        let mut inside = [false; N];
+        if dh2 > 0.0 {
+            for k in 0..N {
+                let (a, b) = (ta[k], tb[k]);
+                // `tc.clamp(a, b)` without its check of `a <= b` (tested here).
+                let c = min(max(tc, a), b);
+                let (qmin, qmax) = (q(c), max(q(a), q(b)));
+                // `a <= b` is false also where either is NaN.
+                inside[k] = (a <= b)
+                    & (qmin * (1.0 - 1e-12) <= s.r1sq_slack[k])
+                    & (qmax * (1.0 + 1e-12) + slack >= s.r0sq[k]);
+            }
+        } else {
+            for k in 0..N {
+                inside[k] = (ta[k] <= tb[k])
+                    & (rho2 * (1.0 - 1e-12) <= s.r1sq_slack[k])
+                    & (rho2 * (1.0 + 1e-12) + slack >= s.r0sq[k]);
+            }
+        }
         let mut mask = 0u32;
         let mut entry = f64::INFINITY;
         for k in 0..N {
-            let (a, b) = (ta[k], tb[k]);
-            let (qmin, qmax) = if dh2 > 0.0 {
-                // `tc.clamp(a, b)` without its check of `a <= b` (tested below).
-                let c = if tc < a { a } else { tc };
-                let c = if c > b { b } else { c };
-                (q(c), q(a).max(q(b)))
-            } else {
-                (rho2, rho2)
-            };
-            // `a <= b` is false also where either is NaN.
-            let inside = a <= b
-                && qmin * (1.0 - 1e-12) <= s.r1sq_slack[k]
-                && qmax * (1.0 + 1e-12) + slack >= s.r0sq[k];
-            if inside {
+            if inside[k] {
                 mask |= 1 << k;
-                entry = entry.min(a);
+                entry = min(entry, ta[k]);
             }
         }
         (mask, entry)
@@ -257,7 +269,9 @@ mod tests {
             let mut d = (target - o).normalize();
             match case % 8 {
                 0 => d.y = 0.0,
-                1 => d.y = 1e-310,
+                // A reciprocal that overflows (no finite `1 / d_y`), and one that is finite
+                // but overflows in the products.
+                1 => d.y = if rnd() < 0.5 { 1e-310 } else { 6e-309 },
                 2 => d = DVec3::Y * if rnd() < 0.5 { 1.0 } else { -1.0 },
                 3 => d.y *= 1e-9,
                 _ => {}
