@@ -141,11 +141,11 @@ impl RayFrame {
         let lo = (root.lo - 4.0 * ds).max(0.0);
         let hi = (root.hi + 4.0 * ds).min(1.0);
         let mut cands = [(f64::NAN, root.t); 2];
-        let inside = match prune {
-            Some(w) => self
-                .side_ranges(seg, lo, hi)
-                .map(|(a, b)| b > w.0 && a < w.1),
-            None => [true; 2],
+        // Bounds of `r`, `h` and the half chord on the bracket (only where they are used).
+        let bounds = (prune.is_some() || !self.steep).then(|| self.bracket_bounds(seg, lo, hi));
+        let inside = match (prune, &bounds) {
+            (Some(w), Some(b)) => self.ranges_of(b).map(|(a, b)| b > w.0 && a < w.1),
+            _ => [true; 2],
         };
         if !inside[0] && !inside[1] {
             return cands;
@@ -184,7 +184,7 @@ impl RayFrame {
             }
             seg.h.eval(s) - (oc.y + dn.y * sigma * w_at(r))
         };
-        let b = self.bracket_bounds(seg, lo, hi);
+        let b = bounds.unwrap_or_else(|| self.bracket_bounds(seg, lo, hi));
         let g_range = |sigma: f64| {
             // `g` is increasing in `h` and monotone in `w` (through `dn.y sigma w`), and so is
             // its computed value: the same expression at the bounds bounds it.
@@ -248,7 +248,11 @@ impl RayFrame {
     /// chain applied to the ends of an interval containing the computed `r(s)` or `h(s)`
     /// ([`Segment::value_range`]) bounds the computed `t`, rounding included.
     pub fn side_ranges(&self, seg: &Segment, lo: f64, hi: f64) -> [(f64, f64); 2] {
-        let b = self.bracket_bounds(seg, lo, hi);
+        self.ranges_of(&self.bracket_bounds(seg, lo, hi))
+    }
+
+    /// [`RayFrame::side_ranges`] from the bracket's bounds.
+    fn ranges_of(&self, b: &BracketBounds) -> [(f64, f64); 2] {
         if self.steep {
             let t_at = |h: f64| self.t0 + (h - self.oc.y) / self.dn.y;
             let (a, c) = (t_at(b.h.0), t_at(b.h.1));
@@ -279,6 +283,7 @@ impl RayFrame {
 }
 
 /// See [`RayFrame::bracket_bounds`]: `(lower, upper)` pairs.
+#[derive(Clone, Copy)]
 struct BracketBounds {
     r: (f64, f64),
     h: (f64, f64),
@@ -348,6 +353,12 @@ fn nearest_sign_change(
     for k in 0..n {
         let b = x(k + 1);
         let gb = g(b);
+        // No sign change (both values of one sign; a product with a NaN is not above 0):
+        // what `bracketed_root` answers first, without the call.
+        if ga * gb > 0.0 {
+            (a, ga) = (b, gb);
+            continue;
+        }
         if let Some(s) = bracketed_root(g, a, b, ga, gb, refine) {
             let ts = t(s);
             // Ordered by (beyond `t_after`, nearest): a root beyond `t_after` beats one before.
