@@ -60,9 +60,15 @@ pub fn find_roots_on(p: &Bernstein, a: f64, b: f64, noise: f64, out: &mut Vec<Ro
 fn isolate(p: &Bernstein, a: f64, b: f64, noise: f64, depth: u32, out: &mut Vec<Root>) {
     let c = p.coeffs();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    // Comparisons skip a NaN coefficient as `f64::min` and `f64::max` do (`lo` and `hi` start
+    // as numbers), at one instruction each.
     for &v in c {
-        lo = lo.min(v);
-        hi = hi.max(v);
+        if v < lo {
+            lo = v;
+        }
+        if v > hi {
+            hi = v;
+        }
     }
     if !(lo <= noise && hi >= -noise) {
         // Every coefficient beyond the noise on one side (or NaN): no root by the hull property.
