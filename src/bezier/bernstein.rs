@@ -376,11 +376,11 @@ fn left_levels<const M: usize>(
 ) {
     let mut b = [0.0; M];
     b.copy_from_slice(&c[..M]);
-    for level in 1..M {
+    for (level, out) in left.iter_mut().enumerate().take(M).skip(1) {
         for i in 0..M - level {
             b[i] += t * (b[i + 1] - b[i]);
         }
-        left[level] = b[0];
+        *out = b[0];
     }
 }
 

@@ -243,12 +243,11 @@ mod tests {
     /// vertical, along the axis, grazing the shells' cylinders and slabs, with infinite `t_max`.
     #[test]
     fn lanes_decide_as_the_one_shell_test() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rng = crate::sampling::Rng::new(7);
+        // 53 random bits in [0, 1).
         let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
+            let hi = (rng.next_u32() as u64) << 21;
+            (hi | (rng.next_u32() as u64 >> 11)) as f64 / (1u64 << 53) as f64
         };
         let size = 1.3;
         let mut compared = [0usize; 2];
