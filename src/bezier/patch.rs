@@ -38,6 +38,9 @@ pub struct PatchHit {
 pub struct Patch {
     p: [DVec3; 16],
     size: f64,
+    /// The part of the original patch's parameter square this one covers: its `(0, 0)` corner
+    /// and its extent (`(0, 0)` and `(1, 1)` for a whole patch; see [`Patch::piece`]).
+    domain: (DVec2, DVec2),
 }
 
 fn bern3(t: f64) -> ([f64; 4], [f64; 4]) {
@@ -62,6 +65,24 @@ fn split4(c: [DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
     let b = (m12 + m23) * 0.5;
     let mid = (a + b) * 0.5;
     ([c[0], m01, a, mid], [mid, b, m23, c[3]])
+}
+
+/// The control points of a cubic restricted to `[a, b]` (within `[0, 1]`), by de Casteljau's
+/// algorithm: the right part after `a`, then the left part of that up to `b`.
+fn restrict4(c: [DVec3; 4], a: f64, b: f64) -> [DVec3; 4] {
+    let split_at = |c: [DVec3; 4], t: f64| {
+        let l = |p: DVec3, q: DVec3| p + (q - p) * t;
+        let (m01, m12, m23) = (l(c[0], c[1]), l(c[1], c[2]), l(c[2], c[3]));
+        let (a, b) = (l(m01, m12), l(m12, m23));
+        let mid = l(a, b);
+        ([c[0], m01, a, mid], [mid, b, m23, c[3]])
+    };
+    let right = if a > 0.0 { split_at(c, a).1 } else { c };
+    if b < 1.0 {
+        split_at(right, (b - a) / (1.0 - a)).0
+    } else {
+        right
+    }
 }
 
 /// Splits a 4x4 net at u = 1/2 (`along_u`) or v = 1/2.
@@ -170,7 +191,48 @@ impl Patch {
         Ok(Self {
             p: *points,
             size: (hi - lo).max_element().max(1e-300),
+            domain: (DVec2::ZERO, DVec2::ONE),
         })
+    }
+
+    /// The patch cut into `n x n` pieces over equal parameter squares (see [`Patch::piece`]),
+    /// row-major in u.
+    pub fn pieces(&self, n: u32) -> Vec<Patch> {
+        let n = n.max(1);
+        let at = |k: u32| f64::from(k) / f64::from(n);
+        (0..n * n)
+            .map(|k| {
+                let (i, j) = (k / n, k % n);
+                self.piece((at(i), at(i + 1)), (at(j), at(j + 1)))
+            })
+            .collect()
+    }
+
+    /// The part of the patch over `u0 <= u <= u1`, `v0 <= v <= v1` (within `[0, 1]`) as a patch
+    /// of its own: its control net (tighter bounds than the whole net's), and hits reported in
+    /// this patch's parameters (`uv`, `dpdu`, `dpdv`), so that pieces covering the square
+    /// together give the whole patch's hits. Tolerances stay relative to this patch's size.
+    pub fn piece(&self, (u0, u1): (f64, f64), (v0, v1): (f64, f64)) -> Patch {
+        let mut q = self.p;
+        for i in 0..4 {
+            let row = restrict4([q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]], v0, v1);
+            q[4 * i..4 * i + 4].copy_from_slice(&row);
+        }
+        for j in 0..4 {
+            let col = restrict4([q[j], q[4 + j], q[8 + j], q[12 + j]], u0, u1);
+            for (i, c) in col.into_iter().enumerate() {
+                q[4 * i + j] = c;
+            }
+        }
+        let (lo, ext) = self.domain;
+        Patch {
+            p: q,
+            size: self.size,
+            domain: (
+                lo + ext * DVec2::new(u0, v0),
+                ext * DVec2::new(u1 - u0, v1 - v0),
+            ),
+        }
     }
 
     pub fn points(&self) -> &[DVec3; 16] {
@@ -217,15 +279,17 @@ impl Patch {
         DVec3::Z
     }
 
+    /// The hit at this patch's own `(u, v)`, reported in the original patch's parameters.
     fn record(&self, o: DVec3, d: DVec3, t: f64, uv: DVec2) -> PatchHit {
         let (_, pu, pv) = self.eval(uv.x, uv.y);
+        let (lo, ext) = self.domain;
         PatchHit {
             t,
             p: o + t * d,
-            uv,
+            uv: lo + ext * uv,
             n: self.normal(uv.x, uv.y),
-            dpdu: pu,
-            dpdv: pv,
+            dpdu: pu / ext.x,
+            dpdv: pv / ext.y,
         }
     }
 
@@ -348,17 +412,17 @@ impl Patch {
         // boxes, so that the stress test checks them against a method without them.
         let bands = |q: &[DVec3; 16]| !polish || bands_hold_origin(q, eps);
         let (lo, hi) = net_bounds(&q);
+        // The sub-patch to examine next, and the others waiting (farther first): most pieces
+        // are done at the first node, which then needs no allocation.
+        let mut next = (may_hit(lo, hi, best_t) && bands(&q)).then_some(Node {
+            q,
+            u: (0.0, 1.0),
+            v: (0.0, 1.0),
+            lo,
+            hi,
+        });
         let mut stack = Vec::new();
-        if may_hit(lo, hi, best_t) && bands(&q) {
-            stack.push(Node {
-                q,
-                u: (0.0, 1.0),
-                v: (0.0, 1.0),
-                lo,
-                hi,
-            });
-        }
-        while let Some(node) = stack.pop() {
+        while let Some(node) = next.take().or_else(|| stack.pop()) {
             let (lo, hi) = (node.lo, node.hi);
             if lo.z >= best_t {
                 continue;
@@ -443,11 +507,137 @@ impl Patch {
                 lo: lb,
                 hi: hb,
             });
-            // Push the farther first so that the nearer is examined first.
-            let (first, second) = if la.z <= lb.z { (nb, na) } else { (na, nb) };
-            stack.extend(first);
-            stack.extend(second);
+            // The nearer is examined next, the farther waits.
+            let (nearer, farther) = if la.z <= lb.z { (na, nb) } else { (nb, na) };
+            stack.extend(farther);
+            next = nearer;
         }
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// A bumpy height field over [0, 3]^2 whose rows also lean (not a graph along every ray).
+    fn bumpy() -> Patch {
+        let z = [
+            [0.0, 0.8, -0.6, 0.2],
+            [0.5, -1.2, 1.4, -0.3],
+            [-0.4, 1.5, -1.1, 0.6],
+            [0.3, -0.2, 0.7, 0.0],
+        ];
+        Patch::new(&std::array::from_fn(|k| {
+            let (i, j) = (k / 4, k % 4);
+            DVec3::new(i as f64 + 0.3 * z[i][j], j as f64, z[i][j])
+        }))
+        .unwrap()
+    }
+
+    fn f(rng: &mut Rng) -> f64 {
+        f64::from(rng.f32())
+    }
+
+    #[test]
+    fn a_restricted_cubic_is_the_same_curve() {
+        let c = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 2.0, -1.0),
+            DVec3::new(2.0, -1.0, 0.5),
+            DVec3::new(3.0, 1.0, 2.0),
+        ];
+        let at = |c: &[DVec3; 4], t: f64| {
+            let (b, _) = bern3(t);
+            (0..4).map(|k| c[k] * b[k]).sum::<DVec3>()
+        };
+        for (a, b) in [
+            (0.0, 1.0),
+            (0.0, 0.375),
+            (0.3, 0.7),
+            (0.625, 1.0),
+            (0.875, 1.0),
+        ] {
+            let r = restrict4(c, a, b);
+            for s in [0.0, 0.1, 0.5, 0.93, 1.0] {
+                let (want, got) = (at(&c, a + s * (b - a)), at(&r, s));
+                assert!(
+                    (want - got).length() < 1e-14,
+                    "[{a}, {b}] at {s}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    /// The nearest hit over a patch's pieces is the whole patch's hit, reported in the whole
+    /// patch's parameters: random rays through its box, and rays aimed at the seams between
+    /// pieces (where a gap or an overlap would show), for dyadic and non-dyadic cuts.
+    #[test]
+    fn pieces_hit_where_the_whole_patch_does() {
+        let whole = bumpy();
+        let (lo, hi) = whole.bounds();
+        let size = whole.size();
+        let mut rng = Rng::new(9);
+        for n in [3u32, 8] {
+            let pieces = whole.pieces(n);
+            let (mut hits, mut seam_hits, mut worst) = (0, 0, 0.0f64);
+            for i in 0..6000 {
+                let seam = i % 2 == 1;
+                let target = if seam {
+                    // A point on a seam: u (or v) a multiple of 1/n.
+                    let k = f64::from(1 + (rng.f32() * (n - 1) as f32) as u32) / f64::from(n);
+                    let w = f(&mut rng);
+                    let (u, v) = if i % 4 == 1 { (k, w) } else { (w, k) };
+                    whole.eval(u, v).0
+                } else {
+                    lo + (hi - lo) * DVec3::new(f(&mut rng), f(&mut rng), f(&mut rng))
+                };
+                let d = DVec3::new(f(&mut rng) - 0.5, f(&mut rng) - 0.5, f(&mut rng) - 0.5);
+                if d.length() < 1e-3 {
+                    continue;
+                }
+                let d = d.normalize();
+                let o = target - d * 3.0 * size;
+                let want = whole.intersect(o, d, 1e-9, f64::INFINITY, Solver::Robust);
+                let mut got: Option<PatchHit> = None;
+                for p in &pieces {
+                    let t_max = got.map_or(f64::INFINITY, |h| h.t);
+                    if let Some(h) = p.intersect(o, d, 1e-9, t_max, Solver::Robust) {
+                        got = Some(h);
+                    }
+                }
+                match (want, got) {
+                    (None, None) => {}
+                    (Some(w), Some(g)) => {
+                        hits += 1;
+                        seam_hits += seam as usize;
+                        // Both are hits to the method's tolerance (residual 1e-12 of the size
+                        // across the ray; along a grazing ray that is more in t).
+                        worst = worst.max((w.t - g.t).abs() / w.t);
+                        assert!(
+                            (w.t - g.t).abs() <= 1e-7 * w.t,
+                            "ray {i}: t {} vs {}",
+                            g.t,
+                            w.t
+                        );
+                        // The pieces report the whole patch's (u, v): it evaluates to the hit.
+                        let (q, pu, pv) = whole.eval(g.uv.x, g.uv.y);
+                        assert!((q - g.p).length() <= 1e-7 * size, "ray {i}: uv {}", g.uv);
+                        assert!((pu - g.dpdu).length() <= 1e-9 * pu.length().max(size));
+                        assert!((pv - g.dpdv).length() <= 1e-9 * pv.length().max(size));
+                        assert!(g.n.dot(w.n) > 1.0 - 1e-6);
+                    }
+                    _ => panic!("ray {i} (n = {n}, seam {seam}): whole {want:?}, pieces {got:?}"),
+                }
+            }
+            println!(
+                "n = {n}: {hits} hits, {seam_hits} on seams, largest relative t gap {worst:.1e}"
+            );
+            assert!(
+                hits > 2000 && seam_hits > 1000,
+                "n = {n}: {hits} hits, {seam_hits} on seams"
+            );
+        }
     }
 }

@@ -14,6 +14,7 @@ use std::mem::size_of;
 use super::instances::{shared_key, shared_meshes};
 use super::{EffectiveSettings, ObjectInfo, RenderError};
 use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, Shape};
+use crate::shapes::patch::{BezierPatch, PIECES as PATCH_PIECES};
 
 /// The default limit: 2 GiB, or half the machine's memory when that is less.
 pub fn default_memory_limit() -> u64 {
@@ -43,6 +44,8 @@ fn primitives(shape: &Shape) -> u64 {
         Shape::Box { .. } => 6,
         // Body and two caps.
         Shape::Cylinder { .. } => 3,
+        // Cut into pieces, each a primitive of its own.
+        Shape::BezierPatch { .. } => u64::from(PATCH_PIECES * PATCH_PIECES),
         // Its shapes live in the one CSG primitive (an overestimate by one).
         Shape::Csg(csg) => csg
             .leaves()
@@ -50,6 +53,15 @@ fn primitives(shape: &Shape) -> u64 {
             .map(|o| primitives(&o.shape))
             .fold(1u64, u64::saturating_add),
         _ => 1,
+    }
+}
+
+/// Bytes a primitive of `shape` holds beyond its record (a patch piece's control net, in its
+/// own allocation).
+fn held_bytes(shape: &Shape) -> u64 {
+    match shape {
+        Shape::BezierPatch { .. } => size_of::<BezierPatch>() as u64,
+        _ => 0,
     }
 }
 
@@ -121,7 +133,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
                 let copies = if o.emission.is_some() { 2 } else { 1 };
                 primitives(&o.shape)
                     .saturating_mul(copies)
-                    .saturating_mul(per_primitive)
+                    .saturating_mul(per_primitive.saturating_add(held_bytes(&o.shape)))
             }
         })
         .fold(0u64, u64::saturating_add)

@@ -188,9 +188,11 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             .into_iter()
             .map(|part| wrap(Arc::new(part)))
             .collect::<Result<_, _>>()?,
-        scene::Shape::BezierPatch { points, method } => {
-            vec![wrap(Arc::new(BezierPatch::new(points, *method)?))?]
-        }
+        scene::Shape::BezierPatch { points, method } => BezierPatch::new(points, *method)?
+            .split()
+            .into_iter()
+            .map(|piece| wrap(Arc::new(piece)))
+            .collect::<Result<_, _>>()?,
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

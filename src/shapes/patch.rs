@@ -17,6 +17,10 @@ use crate::scene::IntersectMethod;
 /// Parameter cells per side of the area table.
 const CELLS: usize = 16;
 
+/// Pieces per side a patch is cut into for the BVH ([`BezierPatch::split`]): of 1, 2, 4, 8, 16
+/// and 32, 8 rendered the teapot fastest (docs/measurements.md).
+pub const PIECES: u32 = 8;
+
 pub struct BezierPatch {
     patch: Patch,
     solver: Solver,
@@ -55,6 +59,27 @@ impl BezierPatch {
             bounds: outward_box(lo, hi),
             cdf,
         })
+    }
+
+    /// The patch as [`PIECES`] x [`PIECES`] separate shapes over equal parameter squares, each bounded by its
+    /// own control net's box (tighter than the whole net's), so that a BVH skips the pieces a
+    /// ray passes by and each piece's subdivision starts nearer its hit. The nearest of their
+    /// hits is the patch's hit, in the patch's own `(u, v)`. The pieces have no area and cannot
+    /// be sampled (a patch is not a light).
+    pub fn split(&self) -> Vec<BezierPatch> {
+        self.patch
+            .pieces(PIECES)
+            .into_iter()
+            .map(|patch| {
+                let (lo, hi) = patch.bounds();
+                BezierPatch {
+                    patch,
+                    solver: self.solver,
+                    bounds: outward_box(lo, hi),
+                    cdf: Vec::new(),
+                }
+            })
+            .collect()
     }
 
     /// The f64 core (for measurements and tests).

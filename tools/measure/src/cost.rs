@@ -134,14 +134,17 @@ pub fn run(rays: usize, repeats: usize) -> Result<Vec<CostRow>, String> {
             whole.bounds(),
         ))
     };
-    let patch = AnyShape::Other(Box::new(BezierPatch::new(
-        &wavy_points(),
-        IntersectMethod::Robust,
-    )?));
+    // Cut into pieces as the renderer places it.
+    let patch = BezierPatch::new(&wavy_points(), IntersectMethod::Robust)?;
     let patch_bounds = patch.bounds();
+    let pieces = patch
+        .split()
+        .into_iter()
+        .map(|piece| AnyShape::Other(Box::new(piece)))
+        .collect();
     Ok(vec![
         pair("revolve vase", revolve(&vase_profile())?, rays, repeats)?,
         pair("revolve goblet", revolve(&goblet_profile())?, rays, repeats)?,
-        pair("patch wavy", (vec![patch], patch_bounds), rays, repeats)?,
+        pair("patch wavy", (pieces, patch_bounds), rays, repeats)?,
     ])
 }

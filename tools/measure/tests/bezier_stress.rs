@@ -9,9 +9,10 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use sppm_lang::bezier::lathe::{Lathe, LatheHit, Part};
-use sppm_lang::bezier::patch::Patch;
+use sppm_lang::bezier::patch::{Patch, PatchHit};
 use sppm_lang::bezier::{Solver, Solver as PatchSolver};
 use sppm_lang::sampling::SplitMix64;
+use sppm_lang::shapes::patch::PIECES;
 use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_measure::reference;
 
@@ -401,6 +402,8 @@ fn run_patch(
     make_ray: impl Fn(&mut Rng) -> (DVec3, DVec3) + Sync,
 ) {
     let start = std::time::Instant::now();
+    // The renderer cuts a patch into pieces, each its own BVH primitive (`BezierPatch::split`).
+    let pieces = patch.pieces(PIECES);
     let st = (0..rays())
         .into_par_iter()
         .fold(Stats::default, |mut st, i| {
@@ -408,9 +411,18 @@ fn run_patch(
             st.rays += 1;
             let want = reference::patch(patch, o, d, 1e-9, f64::INFINITY);
             let got = patch.intersect(o, d, 1e-9, f64::INFINITY, PatchSolver::Robust);
+            let mut split: Option<PatchHit> = None;
+            for p in &pieces {
+                let t_max = split.map_or(f64::INFINITY, |h| h.t);
+                if let Some(h) = p.intersect(o, d, 1e-9, t_max, PatchSolver::Robust) {
+                    split = Some(h);
+                }
+            }
+            st.split_differs += (split.map(|h| h.t) != got.map(|h| h.t)) as usize;
             let before = st.failures();
-            // Every robust hit, also on rays the reference cannot decide, lies on the surface.
-            if let Some(h) = got {
+            // Every robust hit, also on rays the reference cannot decide, lies on the surface
+            // (the pieces' hits at the whole patch's (u, v)).
+            for h in got.iter().chain(split.iter()) {
                 let (q, _, _) = patch.eval(h.uv.x, h.uv.y);
                 if (q - h.p).length() > 1e-6 * patch.size() {
                     st.off_surface += 1;
@@ -423,8 +435,11 @@ fn run_patch(
             let want = want.t;
             st.ref_hits += want.is_some() as usize;
             st.compare(want, got.map(|h| h.t));
+            st.compare(want, split.map(|h| h.t));
             if before != st.failures() && st.failing.len() < 3 {
-                let msg = format!("o={o:?} d={d:?}: reference {want:?}, robust {got:?}");
+                let msg = format!(
+                    "o={o:?} d={d:?}: reference {want:?}, robust {got:?}, pieces {split:?}"
+                );
                 st.failing.push((i, msg));
             }
             let newton = patch.intersect(o, d, 1e-9, f64::INFINITY, PATCH_NEWTON);
