@@ -34,17 +34,21 @@ impl Sphere {
         // Re-project onto the surface: removes most of the rounding error of the quadratic.
         rel *= self.radius / rel.length();
         let n = rel / self.radius;
+        // u around the y axis from +z towards +x (½ facing -z), v from 0 at the -y pole to 1 at
+        // the +y pole: the `spherical` mapping's coordinates, so an image (v up) shows upright
+        // and not mirrored seen from outside by the right-handed camera.
         let uv = if uv {
             let phi = {
-                let p = rel.z.atan2(rel.x);
+                let p = rel.x.atan2(rel.z);
                 if p < 0.0 { p + 2.0 * PI } else { p }
             };
+            let u = phi / (2.0 * PI);
             let theta = n.y.clamp(-1.0, 1.0).acos();
-            Vec2::new(phi / (2.0 * PI), theta / PI)
+            Vec2::new(if u < 1.0 { u } else { 0.0 }, 1.0 - theta / PI)
         } else {
             Vec2::NAN
         };
-        let dpdu = Vec3A::new(-rel.z, 0.0, rel.x) * (2.0 * PI);
+        let dpdu = Vec3A::new(rel.z, 0.0, -rel.x) * (2.0 * PI);
         Hit {
             t,
             p: self.center + rel,
