@@ -510,3 +510,49 @@ fn image_maps_on_a_sphere_are_upright_and_not_mirrored_seen_from_outside() {
         }
     }
 }
+
+/// A sphere's `uv` turn with the object: `rotate <0, 90, 0>` of a uv-textured ball (baked into a
+/// world-space sphere, the rotation being a similarity) shows what the unrotated ball shows a
+/// quarter turn away, as the `spherical` mapping (which reads the object-space point) does.
+#[test]
+fn rotating_a_sphere_turns_its_uv() {
+    let (w, h) = (8u32, 4u32);
+    // A bright band at u in [0.125, 0.375): around +x (u = 0.25) before the rotation.
+    let pixels = (0..w * h)
+        .map(|i| {
+            if matches!(i % w, 1 | 2) {
+                [0.9; 3]
+            } else {
+                [0.1; 3]
+            }
+        })
+        .collect::<Vec<_>>();
+    let centre = |mapping: Mapping, turn: f64| {
+        let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
+        scene.settings.integrator = Integrator::Path;
+        scene.textures.push(image_texture(
+            "column",
+            (w, h),
+            pixels.clone(),
+            mapping,
+            false,
+        ));
+        scene.objects[0].transform = DAffine3::from_rotation_y(turn.to_radians());
+        let img = run(&scene, 4, 100);
+        (14..18)
+            .flat_map(|y| (12..20).map(move |x| (x, y)))
+            .map(|(x, y)| img.get(x, y)[1])
+            .sum::<f64>()
+            / 32.0
+    };
+    // Unrotated, the camera (on -z) faces u = 0.5: dark. Turned by 90 degrees about y (+x goes
+    // to -z), the bright column faces the camera.
+    for mapping in [Mapping::Uv, Mapping::Spherical] {
+        let (still, turned) = (centre(mapping, 0.0), centre(mapping, 90.0));
+        println!("{mapping:?}: facing the camera {still:.3} unrotated, {turned:.3} turned");
+        assert!(
+            still < 0.3 && turned > 0.5,
+            "{mapping:?} does not turn with the object"
+        );
+    }
+}
