@@ -220,6 +220,33 @@ fn image_texture(
     }
 }
 
+/// The unit ball of [`sphere_scene`] (32 px, path tracing) with texture `tex` and transform
+/// `transform`, under a white constant environment.
+fn textured_ball(tex: Texture, transform: DAffine3) -> Image {
+    let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
+    scene.settings.integrator = Integrator::Path;
+    scene.textures.push(tex);
+    scene.objects[0].transform = transform;
+    run(&scene, 4, 100)
+}
+
+/// Grey texels, row-major from the top: `f(column, row)`.
+fn grey_pixels(size: (u32, u32), f: impl Fn(u32, u32) -> f32) -> Vec<[f32; 3]> {
+    (0..size.1)
+        .flat_map(|r| (0..size.0).map(move |c| (c, r)))
+        .map(|(c, r)| [f(c, r); 3])
+        .collect()
+}
+
+/// Mean green value of the pixels in columns `xs` and rows `ys`.
+fn block_mean(img: &Image, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> f64 {
+    let n = f64::from(xs.len() as u32 * ys.len() as u32);
+    ys.flat_map(|y| xs.clone().map(move |x| (x, y)))
+        .map(|(x, y)| img.get(x, y)[1])
+        .sum::<f64>()
+        / n
+}
+
 /// A 64x32 grey-level image, values from `f(u)`, on a sphere with `spherical` mapping, seen
 /// from +z so the seam u = 0 = 1 runs down the middle of the image (between columns 31 and 32).
 /// Returns the mean signed step between neighbouring columns across the seam and next to it.
@@ -410,11 +437,9 @@ fn background_colour_lights_sppm_and_path_alike() {
 #[test]
 fn environment_image_is_not_mirrored_seen_from_inside() {
     let (w, h) = (4u32, 2u32);
-    let pixels = (0..h)
-        .flat_map(|r| {
-            (0..w).map(move |c| [(c + 1) as f32 * 0.1 * if r == 0 { 2.0 } else { 1.0 }; 3])
-        })
-        .collect();
+    let pixels = grey_pixels((w, h), |c, r| {
+        (c + 1) as f32 * 0.1 * if r == 0 { 2.0 } else { 1.0 }
+    });
     let mut scene = common::empty_scene((32, 24));
     scene.settings.integrator = Integrator::Path;
     scene.camera.location = DVec3::ZERO;
@@ -431,18 +456,12 @@ fn environment_image_is_not_mirrored_seen_from_inside() {
         transform: DAffine3::IDENTITY,
     };
     let img = run(&scene, 4, 100);
-    let mean = |x0: u32, x1: u32, y0: u32, y1: u32| {
-        let mut s = 0.0;
-        for y in y0..y1 {
-            for x in x0..x1 {
-                s += img.get(x, y)[1];
-            }
-        }
-        s / f64::from((x1 - x0) * (y1 - y0))
-    };
     // Pixels away from the middle column and row (the bilinear blend between texels).
-    let (left_top, right_top) = (mean(0, 8, 0, 4), mean(24, 32, 0, 4));
-    let (left_bottom, right_bottom) = (mean(0, 8, 20, 24), mean(24, 32, 20, 24));
+    let (left_top, right_top) = (block_mean(&img, 0..8, 0..4), block_mean(&img, 24..32, 0..4));
+    let (left_bottom, right_bottom) = (
+        block_mean(&img, 0..8, 20..24),
+        block_mean(&img, 24..32, 20..24),
+    );
     println!("top {left_top:.3} | {right_top:.3}, bottom {left_bottom:.3} | {right_bottom:.3}");
     assert!(
         left_top < right_top,
@@ -473,33 +492,24 @@ fn environment_image_is_not_mirrored_seen_from_inside() {
 #[test]
 fn image_maps_on_a_sphere_are_upright_and_not_mirrored_seen_from_outside() {
     let (w, h) = (8u32, 4u32);
-    let pixels = (0..w * h)
-        .map(|i| {
-            let (c, r) = (i % w, i / w);
-            [match (c < w / 2, r < h / 2) {
-                (true, true) => 0.3,
-                (false, true) => 0.9,
-                (true, false) => 0.1,
-                (false, false) => 0.6,
-            }; 3]
-        })
-        .collect::<Vec<_>>();
+    let pixels = grey_pixels((w, h), |c, r| match (c < w / 2, r < h / 2) {
+        (true, true) => 0.3,
+        (false, true) => 0.9,
+        (true, false) => 0.1,
+        (false, false) => 0.6,
+    });
     for mapping in [Mapping::Uv, Mapping::Spherical, Mapping::Cylindrical] {
         let tex = image_texture("quadrants", (w, h), pixels.clone(), mapping, false);
-        let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
-        scene.settings.integrator = Integrator::Path;
-        scene.textures.push(tex);
-        let img = run(&scene, 4, 100);
-        let mean = |x0: u32, x1: u32, y0: u32, y1: u32| {
-            (y0..y1)
-                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
-                .map(|(x, y)| img.get(x, y)[1])
-                .sum::<f64>()
-                / f64::from((x1 - x0) * (y1 - y0))
-        };
+        let img = textured_ball(tex, DAffine3::IDENTITY);
         // Blocks inside the disc, away from its centre lines (texel edges).
-        let (tl, tr) = (mean(9, 14, 9, 14), mean(18, 23, 9, 14));
-        let (bl, br) = (mean(9, 14, 18, 23), mean(18, 23, 18, 23));
+        let (tl, tr) = (
+            block_mean(&img, 9..14, 9..14),
+            block_mean(&img, 18..23, 9..14),
+        );
+        let (bl, br) = (
+            block_mean(&img, 9..14, 18..23),
+            block_mean(&img, 18..23, 18..23),
+        );
         println!("{mapping:?}: top {tl:.3} | {tr:.3}, bottom {bl:.3} | {br:.3}");
         assert!(tl < tr && bl < br, "{mapping:?} shows the image mirrored");
         if mapping != Mapping::Cylindrical {
@@ -518,32 +528,11 @@ fn image_maps_on_a_sphere_are_upright_and_not_mirrored_seen_from_outside() {
 fn rotating_a_sphere_turns_its_uv() {
     let (w, h) = (8u32, 4u32);
     // A bright band at u in [0.125, 0.375): around +x (u = 0.25) before the rotation.
-    let pixels = (0..w * h)
-        .map(|i| {
-            if matches!(i % w, 1 | 2) {
-                [0.9; 3]
-            } else {
-                [0.1; 3]
-            }
-        })
-        .collect::<Vec<_>>();
+    let pixels = grey_pixels((w, h), |c, _| if matches!(c, 1 | 2) { 0.9 } else { 0.1 });
     let centre = |mapping: Mapping, turn: f64| {
-        let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
-        scene.settings.integrator = Integrator::Path;
-        scene.textures.push(image_texture(
-            "column",
-            (w, h),
-            pixels.clone(),
-            mapping,
-            false,
-        ));
-        scene.objects[0].transform = DAffine3::from_rotation_y(turn.to_radians());
-        let img = run(&scene, 4, 100);
-        (14..18)
-            .flat_map(|y| (12..20).map(move |x| (x, y)))
-            .map(|(x, y)| img.get(x, y)[1])
-            .sum::<f64>()
-            / 32.0
+        let tex = image_texture("column", (w, h), pixels.clone(), mapping, false);
+        let img = textured_ball(tex, DAffine3::from_rotation_y(turn.to_radians()));
+        block_mean(&img, 12..20, 14..18)
     };
     // Unrotated, the camera (on -z) faces u = 0.5: dark. Turned by 90 degrees about y (+x goes
     // to -z), the bright column faces the camera.
