@@ -195,6 +195,58 @@ fn textured_furnace_gives_albedo_per_texel() {
     assert!(seen.iter().filter(|s| **s).count() >= 4);
 }
 
+/// An image texture (repeating) of `size` texels under `mapping`.
+fn image_texture(
+    name: &str,
+    size: (u32, u32),
+    pixels: Vec<[f32; 3]>,
+    mapping: Mapping,
+    bilinear: bool,
+) -> Texture {
+    Texture {
+        pattern: Pattern::Image {
+            image: Arc::new(ImageData {
+                path: name.into(),
+                width: size.0,
+                height: size.1,
+                pixels,
+            }),
+            wrap: Wrap::Repeat,
+            bilinear,
+        },
+        mapping,
+        transform: DAffine3::IDENTITY,
+        span: Span::detached(),
+    }
+}
+
+/// The unit ball of [`sphere_scene`] (32 px, path tracing) with texture `tex` and transform
+/// `transform`, under a white constant environment.
+fn textured_ball(tex: Texture, transform: DAffine3) -> Image {
+    let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
+    scene.settings.integrator = Integrator::Path;
+    scene.textures.push(tex);
+    scene.objects[0].transform = transform;
+    run(&scene, 4, 100)
+}
+
+/// Grey texels, row-major from the top: `f(column, row)`.
+fn grey_pixels(size: (u32, u32), f: impl Fn(u32, u32) -> f32) -> Vec<[f32; 3]> {
+    (0..size.1)
+        .flat_map(|r| (0..size.0).map(move |c| (c, r)))
+        .map(|(c, r)| [f(c, r); 3])
+        .collect()
+}
+
+/// Mean green value of the pixels in columns `xs` and rows `ys`.
+fn block_mean(img: &Image, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> f64 {
+    let n = f64::from(xs.len() as u32 * ys.len() as u32);
+    ys.flat_map(|y| xs.clone().map(move |x| (x, y)))
+        .map(|(x, y)| img.get(x, y)[1])
+        .sum::<f64>()
+        / n
+}
+
 /// A 64x32 grey-level image, values from `f(u)`, on a sphere with `spherical` mapping, seen
 /// from +z so the seam u = 0 = 1 runs down the middle of the image (between columns 31 and 32).
 /// Returns the mean signed step between neighbouring columns across the seam and next to it.
@@ -203,21 +255,7 @@ fn seam_steps(f: impl Fn(f64) -> f64) -> (f64, Vec<f64>) {
     let pixels: Vec<[f32; 3]> = (0..h)
         .flat_map(|_| (0..w).map(|i| [f((i as f64 + 0.5) / w as f64) as f32; 3]))
         .collect();
-    let tex = Texture {
-        pattern: Pattern::Image {
-            image: Arc::new(ImageData {
-                path: "ramp".into(),
-                width: w,
-                height: h,
-                pixels,
-            }),
-            wrap: Wrap::Repeat,
-            bilinear: true,
-        },
-        mapping: Mapping::Spherical,
-        transform: DAffine3::IDENTITY,
-        span: Span::detached(),
-    };
+    let tex = image_texture("ramp", (w, h), pixels, Mapping::Spherical, true);
     let res = 64;
     let mut scene = sphere_scene(res, ColorParam::Texture(TextureId(0)), 1.0);
     scene.textures.push(tex);
@@ -388,4 +426,122 @@ fn background_colour_lights_sppm_and_path_alike() {
         (sppm / path - 1.0).abs() < 0.01,
         "sppm {sppm} vs path {path}"
     );
+}
+
+/// Orientation of the equirectangular map as Mitsuba 3's `envmap` has it: a camera looking
+/// along +z sees the image centre, with the image's left columns on the left of the picture and
+/// its top rows at the top (not mirrored seen from inside; `tools/reference/conformance.py`
+/// compares the same scene with Mitsuba). The map has four columns (0.1, 0.2, 0.3, 0.4 from left
+/// to right) over a bright top row and a dim bottom row; a camera with a 90 degree vertical
+/// field of view looking along +z sees columns 1 and 2 (u from 0.35 to 0.65).
+#[test]
+fn environment_image_is_not_mirrored_seen_from_inside() {
+    let (w, h) = (4u32, 2u32);
+    let pixels = grey_pixels((w, h), |c, r| {
+        (c + 1) as f32 * 0.1 * if r == 0 { 2.0 } else { 1.0 }
+    });
+    let mut scene = common::empty_scene((32, 24));
+    scene.settings.integrator = Integrator::Path;
+    scene.camera.location = DVec3::ZERO;
+    scene.camera.look_at = DVec3::Z;
+    scene.camera.fov = 90.0;
+    scene.background = Background::Environment {
+        image: Arc::new(ImageData {
+            path: "columns".into(),
+            width: w,
+            height: h,
+            pixels,
+        }),
+        intensity: 1.0,
+        transform: DAffine3::IDENTITY,
+    };
+    let img = run(&scene, 4, 100);
+    // Pixels away from the middle column and row (the bilinear blend between texels).
+    let (left_top, right_top) = (block_mean(&img, 0..8, 0..4), block_mean(&img, 24..32, 0..4));
+    let (left_bottom, right_bottom) = (
+        block_mean(&img, 0..8, 20..24),
+        block_mean(&img, 24..32, 20..24),
+    );
+    println!("top {left_top:.3} | {right_top:.3}, bottom {left_bottom:.3} | {right_bottom:.3}");
+    assert!(
+        left_top < right_top,
+        "the image's left column must show on the left"
+    );
+    assert!(left_bottom < right_bottom);
+    assert!(
+        left_top > left_bottom,
+        "the image's top row must show at the top"
+    );
+    assert!(right_top > right_bottom);
+    // Looking along +x (turned left, the camera being right-handed) shows columns 0 and 1.
+    scene.camera.look_at = DVec3::X;
+    let img = run(&scene, 4, 100);
+    let centre = (10..22).map(|x| img.get(x, 2)[1]).sum::<f64>() / 12.0;
+    println!("looking along +x: centre of the top rows {centre:.3}");
+    assert!(
+        centre < 0.35,
+        "+x sees u = 0.25 (columns 0 and 1, 0.2 and 0.4 on the top row)"
+    );
+}
+
+/// Image textures on a sphere, by its own `uv` and by the `spherical` and `cylindrical`
+/// mappings, show unmirrored from outside: seen from the default camera (on -z, looking along
+/// +z; right-handed, so -x is on the right of the picture), the image's left half is on the
+/// left; with `uv` and `spherical` its top row is at the top (the +y pole). The image's
+/// quadrants are 0.3 (top left), 0.9 (top right), 0.1 (bottom left) and 0.6 (bottom right).
+#[test]
+fn image_maps_on_a_sphere_are_upright_and_not_mirrored_seen_from_outside() {
+    let (w, h) = (8u32, 4u32);
+    let pixels = grey_pixels((w, h), |c, r| match (c < w / 2, r < h / 2) {
+        (true, true) => 0.3,
+        (false, true) => 0.9,
+        (true, false) => 0.1,
+        (false, false) => 0.6,
+    });
+    for mapping in [Mapping::Uv, Mapping::Spherical, Mapping::Cylindrical] {
+        let tex = image_texture("quadrants", (w, h), pixels.clone(), mapping, false);
+        let img = textured_ball(tex, DAffine3::IDENTITY);
+        // Blocks inside the disc, away from its centre lines (texel edges).
+        let (tl, tr) = (
+            block_mean(&img, 9..14, 9..14),
+            block_mean(&img, 18..23, 9..14),
+        );
+        let (bl, br) = (
+            block_mean(&img, 9..14, 18..23),
+            block_mean(&img, 18..23, 18..23),
+        );
+        println!("{mapping:?}: top {tl:.3} | {tr:.3}, bottom {bl:.3} | {br:.3}");
+        assert!(tl < tr && bl < br, "{mapping:?} shows the image mirrored");
+        if mapping != Mapping::Cylindrical {
+            assert!(
+                tl > bl && tr > br,
+                "{mapping:?} shows the image upside down"
+            );
+        }
+    }
+}
+
+/// A sphere's `uv` turn with the object: `rotate <0, 90, 0>` of a uv-textured ball (baked into a
+/// world-space sphere, the rotation being a similarity) shows what the unrotated ball shows a
+/// quarter turn away, as the `spherical` mapping (which reads the object-space point) does.
+#[test]
+fn rotating_a_sphere_turns_its_uv() {
+    let (w, h) = (8u32, 4u32);
+    // A bright band at u in [0.125, 0.375): around +x (u = 0.25) before the rotation.
+    let pixels = grey_pixels((w, h), |c, _| if matches!(c, 1 | 2) { 0.9 } else { 0.1 });
+    let centre = |mapping: Mapping, turn: f64| {
+        let tex = image_texture("column", (w, h), pixels.clone(), mapping, false);
+        let img = textured_ball(tex, DAffine3::from_rotation_y(turn.to_radians()));
+        block_mean(&img, 12..20, 14..18)
+    };
+    // Unrotated, the camera (on -z) faces u = 0.5: dark. Turned by 90 degrees about y (+x goes
+    // to -z), the bright column faces the camera.
+    for mapping in [Mapping::Uv, Mapping::Spherical] {
+        let (still, turned) = (centre(mapping, 0.0), centre(mapping, 90.0));
+        println!("{mapping:?}: facing the camera {still:.3} unrotated, {turned:.3} turned");
+        assert!(
+            still < 0.3 && turned > 0.5,
+            "{mapping:?} does not turn with the object"
+        );
+    }
 }

@@ -180,9 +180,9 @@ pub fn wood() -> RgbImage {
     })
 }
 
-/// Equirectangular sky (same convention as the environment map: centre looks along +z, row 0
-/// straight up): blue zenith, pale horizon, a dim ground, and a sun 35 degrees up, as linear
-/// radiance.
+/// Equirectangular sky (same convention as the environment map: centre looks along +z, -x to its
+/// right, row 0 straight up): blue zenith, pale horizon, a dim ground, and a sun 35 degrees up
+/// towards +x (0.6 rad from +z), as linear radiance.
 pub fn sky() -> Rgb32FImage {
     let (w, h) = (128u32, 64u32);
     let sun_phi: f64 = 0.6;
@@ -195,7 +195,7 @@ pub fn sky() -> Rgb32FImage {
     Rgb32FImage::from_fn(w, h, |x, y| {
         let u = (x as f64 + 0.5) / w as f64;
         let theta = (y as f64 + 0.5) / h as f64 * std::f64::consts::PI;
-        let phi = (u - 0.5) * 2.0 * std::f64::consts::PI;
+        let phi = (0.5 - u) * 2.0 * std::f64::consts::PI;
         let d = [
             theta.sin() * phi.sin(),
             theta.cos(),

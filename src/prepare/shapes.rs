@@ -86,9 +86,10 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
     };
     Ok(match &obj.shape {
         scene::Shape::Sphere { center, radius } => match sim {
-            Some(s) => vec![AnyShape::Sphere(Sphere::new(
+            Some(s) => vec![AnyShape::Sphere(Sphere::with_frame(
                 v(xf.transform_point3(*center)),
                 (radius * s) as f32,
+                glam::Mat3A::from(((m / s).transpose()).as_mat3()),
             )?)],
             None => vec![wrap(Arc::new(Sphere::new(v(*center), *radius as f32)?))?],
         },

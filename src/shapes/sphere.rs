@@ -2,7 +2,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3A};
+use glam::{Mat3A, Vec2, Vec3A};
 
 use super::{
     AreaSample, SolidAngleSample, SplitShape, area_pdf_to_solid_angle, area_to_solid_angle,
@@ -14,6 +14,10 @@ use crate::sampling::uniform_sphere;
 pub struct Sphere {
     pub center: Vec3A,
     pub radius: f32,
+    /// World to the object's own frame (a rotation, or a rotation and a mirror): the `uv` of a
+    /// sphere baked from a rotated object are counted in the object's frame, so they turn with
+    /// it. Identity for a sphere made in world space.
+    to_object: Mat3A,
 }
 
 impl Sphere {
@@ -23,7 +27,21 @@ impl Sphere {
                 "sphere radius must be positive and finite, got {radius}"
             ));
         }
-        Ok(Self { center, radius })
+        Ok(Self {
+            center,
+            radius,
+            to_object: Mat3A::IDENTITY,
+        })
+    }
+
+    /// A sphere whose `uv` are counted in a frame turned by `to_object` (world to object; an
+    /// orthogonal matrix: the object's transform without its scale and translation).
+    pub fn with_frame(center: Vec3A, radius: f32, to_object: Mat3A) -> Result<Self, String> {
+        let mut s = Self::new(center, radius)?;
+        if to_object.is_finite() {
+            s.to_object = to_object;
+        }
+        Ok(s)
     }
 
     /// [`Sphere::hit_at`], with `uv` left NaN unless `uv` is asked for: it costs an `atan2` and
@@ -34,17 +52,24 @@ impl Sphere {
         // Re-project onto the surface: removes most of the rounding error of the quadratic.
         rel *= self.radius / rel.length();
         let n = rel / self.radius;
+        // u around the y axis from +z towards +x (½ facing -z), v from 0 at the -y pole to 1 at
+        // the +y pole: the `spherical` mapping's coordinates, so an image (v up) shows upright
+        // and not mirrored seen from outside by the right-handed camera.
+        // The object's frame: `dpdu` stays the world-space tangent along the world's
+        // longitudes (any tangent serves the isotropic materials' shading frame).
         let uv = if uv {
+            let o = self.to_object * n;
             let phi = {
-                let p = rel.z.atan2(rel.x);
+                let p = o.x.atan2(o.z);
                 if p < 0.0 { p + 2.0 * PI } else { p }
             };
-            let theta = n.y.clamp(-1.0, 1.0).acos();
-            Vec2::new(phi / (2.0 * PI), theta / PI)
+            let u = phi / (2.0 * PI);
+            let theta = o.y.clamp(-1.0, 1.0).acos();
+            Vec2::new(if u < 1.0 { u } else { 0.0 }, 1.0 - theta / PI)
         } else {
             Vec2::NAN
         };
-        let dpdu = Vec3A::new(-rel.z, 0.0, rel.x) * (2.0 * PI);
+        let dpdu = Vec3A::new(rel.z, 0.0, -rel.x) * (2.0 * PI);
         Hit {
             t,
             p: self.center + rel,

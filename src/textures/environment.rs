@@ -3,10 +3,12 @@
 //! photon emission.
 //!
 //! Conventions (environment space, +y up): a direction `d` looks up the image at
-//! `u = 0.5 + atan2(d.x, d.z) / 2π` (columns left to right) and `θ = acos(d.y)` (rows top to
+//! `u = 0.5 - atan2(d.x, d.z) / 2π` (columns left to right) and `θ = acos(d.y)` (rows top to
 //! bottom, `θ = 0` straight up in row 0). So the image centre is seen looking along +z (the
-//! default camera's view), +x is to its right (`u = 0.75`, not mirrored seen from inside),
-//! and the seam `u = 0 = 1` is behind the default camera, along -z. World directions are turned
+//! default camera's view) and -x is to its right (`u = 0.75`): the camera is right-handed
+//! (looking along +z, +x is on the left of the picture), so the image seen from inside is not
+//! mirrored. The seam `u = 0 = 1` is behind the default camera, along -z. This is Mitsuba 3's
+//! `envmap` convention (`tools/reference/conformance.py`). World directions are turned
 //! into environment directions by the scene's world-to-environment transform (its linear part).
 //!
 //! Radiance is the image bilinearly filtered (repeating across the seam, clamped at the poles)
@@ -141,7 +143,7 @@ impl EnvironmentMap {
     /// unit direction.
     #[inline]
     fn coordinates(d: Vec3A) -> (f32, f32, f32) {
-        let mut u = 0.5 + d.x.atan2(d.z) / (2.0 * PI);
+        let mut u = 0.5 - d.x.atan2(d.z) / (2.0 * PI);
         if !(0.0..1.0).contains(&u) {
             u = if u.is_nan() { 0.5 } else { 0.0 };
         }
@@ -204,7 +206,7 @@ impl EnvironmentMap {
         let s = (col as f32 + du) / w as f32;
         let t = (row as f32 + dv) / h as f32;
         let theta = t * PI;
-        let phi = (s - 0.5) * 2.0 * PI;
+        let phi = (0.5 - s) * 2.0 * PI;
         let sin_theta = theta.sin();
         if sin_theta <= 0.0 {
             return None;
@@ -324,12 +326,12 @@ mod tests {
             let (u, v, _) = EnvironmentMap::coordinates(d.normalize());
             ((u * 8.0) as u32, ((1.0 - v) * 4.0) as u32)
         };
-        assert_eq!(nearest(Vec3A::new(0.01, 0.1, 1.0)), (4, 1));
-        assert_eq!(nearest(Vec3A::new(1.0, -0.1, 0.0)), (6, 2));
-        assert_eq!(nearest(Vec3A::new(-1.0, 0.1, 0.0)), (2, 1));
+        assert_eq!(nearest(Vec3A::new(-0.01, 0.1, 1.0)), (4, 1));
+        assert_eq!(nearest(Vec3A::new(-1.0, -0.1, 0.0)), (6, 2));
+        assert_eq!(nearest(Vec3A::new(1.0, 0.1, 0.0)), (2, 1));
         assert_eq!(nearest(Vec3A::new(0.0, 1.0, 0.01)), (4, 0));
         // The filtered radiance at a texel centre is the texel (column 6, row 2 centre).
-        let phi = (6.5 / 8.0 - 0.5) * 2.0 * PI;
+        let phi = (0.5 - 6.5 / 8.0) * 2.0 * PI;
         let theta = 2.5 / 4.0 * PI;
         let d = Vec3A::new(
             theta.sin() * phi.sin(),

@@ -12,9 +12,10 @@
 //! | `Spherical`   | `(u, v, 0)`, `u` longitude around y, `v` latitude (POV-Ray map_type 1)  |
 //! | `Cylindrical` | `(u, y, 0)`, `u` longitude around y, height unchanged (map_type 2)      |
 //!
-//! Longitude: `u = 0.5 + atan2(x, -z) / 2π`, so `u = 0.5` faces -z (towards the default camera),
-//! `u` grows towards +x (an image is not mirrored seen from outside), and the seam `u = 0 = 1`
-//! lies on the +z side. Latitude: `v = 1 - θ / π` with `θ = acos(y / |p|)`, 1 at the north pole (+y), 0 at
+//! Longitude: `u = 0.5 - atan2(x, -z) / 2π`, so `u = 0.5` faces -z (towards the default camera),
+//! `u` grows towards -x, which is to the right seen from the default camera (the camera is
+//! right-handed), so an image is not mirrored seen from outside; the seam `u = 0 = 1` lies on
+//! the +z side. Latitude: `v = 1 - θ / π` with `θ = acos(y / |p|)`, 1 at the north pole (+y), 0 at
 //! the south pole; the image's top row is at the north pole.
 
 use std::f64::consts::PI;
@@ -46,11 +47,11 @@ pub fn map(mapping: Mapping, at: &TexCoord) -> DVec3 {
     }
 }
 
-/// `u` in [0, 1) around the y axis; 0.5 on the -z axis, growing towards +x.
+/// `u` in [0, 1) around the y axis; 0.5 on the -z axis, growing towards -x.
 #[inline]
 pub fn longitude(p: DVec3) -> f64 {
     // `0.0 - z` rather than `-z`: on the axis itself (x = z = 0) atan2 sees +0 and gives 0.
-    let u = 0.5 + p.x.atan2(0.0 - p.z) / (2.0 * PI);
+    let u = 0.5 - p.x.atan2(0.0 - p.z) / (2.0 * PI);
     // atan2 is in [-π, π]: fold the single value 1.0 onto 0.0; NaN (a NaN input) to 0.5.
     if u >= 1.0 {
         0.0
@@ -92,8 +93,8 @@ mod tests {
         let m = |p| map(Mapping::Spherical, &at(p, [0.0, 0.0]));
         // Facing the default camera: image centre.
         assert!(close(m([0.0, 0.0, -2.0]), DVec3::new(0.5, 0.5, 0.0)));
-        assert!(close(m([3.0, 0.0, 0.0]), DVec3::new(0.75, 0.5, 0.0)));
-        assert!(close(m([-1.0, 0.0, 0.0]), DVec3::new(0.25, 0.5, 0.0)));
+        assert!(close(m([3.0, 0.0, 0.0]), DVec3::new(0.25, 0.5, 0.0)));
+        assert!(close(m([-1.0, 0.0, 0.0]), DVec3::new(0.75, 0.5, 0.0)));
         assert!(close(m([0.0, 0.0, 1.0]), DVec3::new(0.0, 0.5, 0.0)));
         assert!(close(m([0.0, 1.0, 0.0]), DVec3::new(0.5, 1.0, 0.0)));
         assert!(close(m([0.0, -1.0, 0.0]), DVec3::new(0.5, 0.0, 0.0)));
@@ -108,11 +109,11 @@ mod tests {
     #[test]
     fn cylindrical_keeps_height() {
         let m = map(Mapping::Cylindrical, &at([2.0, 0.3, 0.0], [0.0, 0.0]));
-        assert!(close(m, DVec3::new(0.75, 0.3, 0.0)));
-        // Just either side of the seam on +z: u near 1 on the +x side, near 0 on the -x side.
+        assert!(close(m, DVec3::new(0.25, 0.3, 0.0)));
+        // Just either side of the seam on +z: u near 0 on the +x side, near 1 on the -x side.
         let l = map(Mapping::Cylindrical, &at([1e-4, 0.0, 1.0], [0.0, 0.0])).x;
         let r = map(Mapping::Cylindrical, &at([-1e-4, 0.0, 1.0], [0.0, 0.0])).x;
-        assert!(l > 0.999 && l < 1.0, "{l}");
-        assert!((0.0..0.001).contains(&r), "{r}");
+        assert!((0.0..0.001).contains(&l), "{l}");
+        assert!(r > 0.999 && r < 1.0, "{r}");
     }
 }

@@ -187,16 +187,16 @@ mod tests {
         let sph = image_texture(Mapping::Spherical, 8, 4);
         // Facing -z at the equator: u = 0.5, v = 0.5 -> column 4, row 2.
         assert_eq!(texel(&sph, &at([0.0, 0.0, -1.0], [0.0, 0.0])), (4.0, 2.0));
-        // +x, slightly north: u = 0.75 -> column 6, row 1.
-        assert_eq!(texel(&sph, &at([1.0, 0.1, 0.0], [0.0, 0.0])), (6.0, 1.0));
+        // -x, slightly north: u = 0.75 -> column 6, row 1.
+        assert_eq!(texel(&sph, &at([-1.0, 0.1, 0.0], [0.0, 0.0])), (6.0, 1.0));
         // Near the south pole: bottom row.
         assert_eq!(texel(&sph, &at([0.01, -1.0, -0.01], [0.0, 0.0])).1, 3.0);
 
         let cyl = image_texture(Mapping::Cylindrical, 8, 4);
-        // -x at height 0.8: u = 0.25 -> column 2; v = 0.8 -> row 0.
-        assert_eq!(texel(&cyl, &at([-2.0, 0.8, 0.0], [0.0, 0.0])), (2.0, 0.0));
+        // +x at height 0.8: u = 0.25 -> column 2; v = 0.8 -> row 0.
+        assert_eq!(texel(&cyl, &at([2.0, 0.8, 0.0], [0.0, 0.0])), (2.0, 0.0));
         // Height 1.3 repeats to 0.3 -> row 2.
-        assert_eq!(texel(&cyl, &at([-2.0, 1.3, 0.0], [0.0, 0.0])), (2.0, 2.0));
+        assert_eq!(texel(&cyl, &at([2.0, 1.3, 0.0], [0.0, 0.0])), (2.0, 2.0));
     }
 
     #[test]
