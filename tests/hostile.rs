@@ -1,11 +1,12 @@
 //! Hostile input through the real binary: every scene in `tests/hostile/` (one hazard each, its
 //! expected exit codes in a `// expect: check=<1|2|ok> render=<1|2|ok>` header) plus a few
-//! generated ones (an empty file, binary garbage, a 70 KB line, 300 000 nested `<`, a PNG that
-//! declares 20000x20000 pixels), and hazardous command-line flags. Each child runs under a 2 GB
-//! address-space limit (`prlimit`) and is killed after 60 s. A case passes when the process did
-//! not panic or die of a signal, exited as expected, located its error (file:line:column) when it
-//! exited 1, left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
-//! reported together, one line per case.
+//! generated ones (an empty file, binary garbage, a 70 KB line, 300 000 nested `<`, 100 000
+//! errors and 100 000 warnings, a PNG that declares 20000x20000 pixels), and hazardous
+//! command-line flags. Each child runs under a 2 GB address-space limit (`prlimit`) and is
+//! killed after 60 s. A case passes when the process did not panic or die of a signal, exited
+//! as expected, located its error (file:line:column) when it exited 1, left no `.sppm-*`
+//! temporary file and, for `ok`, wrote a PNG. All failures are reported together, one line per
+//! case.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -216,6 +217,26 @@ fn generated_cases(dir: &Path) -> Vec<Case> {
         nested.into_bytes(),
         Expect::Exit(1),
         Expect::Exit(1),
+    );
+    // 100 000 errors, one per line: each diagnostic once showed a copy of the whole file,
+    // which miette then scanned from its start (quadratic: 8 000 of them took 7 s, these an
+    // hour).
+    add(
+        "errors_100000.scn",
+        "sphere { <0, 0, 0>, -1 }\n".repeat(100_000).into_bytes(),
+        Expect::Exit(1),
+        Expect::Exit(1),
+    );
+    // 100 000 unused declarations: as many warnings, on a scene that renders.
+    let mut unused = String::from(header);
+    for i in 0..100_000 {
+        unused.push_str(&format!("#declare Unused{i} = {i};\n"));
+    }
+    add(
+        "warnings_100000.scn",
+        unused.into_bytes(),
+        Expect::Ok,
+        Expect::Ok,
     );
     // A texture that declares 20000x20000 pixels (1.6 GB as RGBA8, more as floats).
     huge_png(&dir.join("huge_20000.png"), 20_000, 20_000);
