@@ -1,10 +1,11 @@
 //! Hostile input through the real binary: every scene in `tests/hostile/` (one hazard each, its
 //! expected exit codes in a `// expect: check=<1|2|ok> render=<1|2|ok>` header) plus a few
-//! generated ones (an empty file, binary garbage, a 70 KB line, 300 000 nested `<`, a PNG that
-//! declares 20000x20000 pixels), and hazardous command-line flags. Each child runs under a 2 GB
+//! generated ones (an empty file, binary garbage, a 70 KB line, 300 000 nested `<`, 100 000
+//! errors and 100 000 warnings, an area light of 3 million triangles, a PNG that declares
+//! 20000x20000 pixels), and hazardous command-line flags. Each child runs under a 2 GB
 //! address-space limit (`prlimit`) and is killed after 60 s. A case passes when the process did
-//! not panic or die of a signal, exited as expected, located its error (file:line:column) when it
-//! exited 1, left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
+//! not panic or die of a signal, exited as expected, located its error (file:line:column) when
+//! it exited 1, left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
 //! reported together, one line per case.
 
 use std::path::{Path, PathBuf};
@@ -112,7 +113,8 @@ struct Case {
 fn read_header(path: &Path) -> Option<(Expect, Expect)> {
     let bytes = std::fs::read(path).ok()?;
     let text = String::from_utf8_lossy(&bytes);
-    let line = text.lines().next()?.strip_prefix("// expect:")?.trim();
+    let first = text.lines().next()?.trim_start_matches('\u{feff}');
+    let line = first.strip_prefix("// expect:")?.trim();
     let mut check = None;
     let mut render = None;
     for part in line.split_whitespace() {
@@ -214,6 +216,39 @@ fn generated_cases(dir: &Path) -> Vec<Case> {
     add(
         "nested_lt_300000.scn",
         nested.into_bytes(),
+        Expect::Exit(1),
+        Expect::Exit(1),
+    );
+    // 100 000 errors, one per line: each diagnostic once showed a copy of the whole file,
+    // which miette then scanned from its start (quadratic: 8 000 of them took 7 s, these an
+    // hour).
+    add(
+        "errors_100000.scn",
+        "sphere { <0, 0, 0>, -1 }\n".repeat(100_000).into_bytes(),
+        Expect::Exit(1),
+        Expect::Exit(1),
+    );
+    // 100 000 unused declarations: as many warnings, on a scene that renders.
+    let mut unused = String::from(header);
+    for i in 0..100_000 {
+        unused.push_str(&format!("#declare Unused{i} = {i};\n"));
+    }
+    add(
+        "warnings_100000.scn",
+        unused.into_bytes(),
+        Expect::Ok,
+        Expect::Ok,
+    );
+    // An area light made of a mesh of 3 million triangles: one light each. The memory estimate
+    // once left the light records out (2.4 GB in all), and preparing aborted on a failed
+    // allocation under the 2 GB limit instead of refusing the render.
+    let mut obj = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    obj.push_str(&"f 1 2 3\n".repeat(3_000_000));
+    std::fs::write(dir.join("light_3m.obj"), obj).unwrap();
+    add(
+        "area_light_mesh_3m_triangles.scn",
+        format!("{header}area_light {{ mesh {{ \"light_3m.obj\" }} radiance rgb 1 }}\n")
+            .into_bytes(),
         Expect::Exit(1),
         Expect::Exit(1),
     );

@@ -3,7 +3,7 @@
 //! Modelled on typst: evaluation returns [`SourceResult`], a list of diagnostics on failure;
 //! helpers return a plain [`Error`] (message and help, no position) and the caller attaches the
 //! span late with [`At::at`]. Diagnostics are rendered only at the edge (the CLI, tests), with
-//! [`to_report`] (a miette report, one snippet of the whole file per span) or
+//! [`to_report`] (a miette report, one snippet of the lines around each span) or
 //! [`render_plain`] (a string without colors at a fixed width).
 
 mod render;

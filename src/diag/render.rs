@@ -4,20 +4,20 @@ use std::fmt;
 
 use miette::{
     Diagnostic as MietteDiagnostic, GraphicalReportHandler, GraphicalTheme, LabeledSpan,
-    NamedSource, SourceCode, SourceSpan,
+    MietteError, MietteSpanContents, SourceCode, SourceSpan, SpanContents,
 };
 
 use super::SourceMap;
 use super::{Diagnostic, Severity};
 use crate::span::Span;
 
-/// One diagnostic in miette's shape: a snippet of the whole file, labels, help, and related
+/// One diagnostic in miette's shape: a snippet of the file around its spans, labels, help, and related
 /// reports (trace entries in other files, further errors).
 #[derive(Debug)]
 struct Rendered {
     message: String,
     severity: miette::Severity,
-    source: Option<NamedSource<String>>,
+    source: Option<Snippet>,
     labels: Vec<LabeledSpan>,
     help: Option<String>,
     related: Vec<Rendered>,
@@ -72,10 +72,49 @@ const MAX_LINE: usize = 1024;
 /// Characters kept on either side of the spans of a cut line.
 const CONTEXT: usize = 60;
 
+/// Whole lines copied before the first span's line and after the last span's line: miette
+/// shows one line of context on each side.
+const WINDOW_LINES: usize = 2;
+
+/// The part of a file miette is shown for one diagnostic: a window of whole lines around its
+/// spans, whose first line is line `first_line` (0-based) of the file, so that miette numbers
+/// the lines as in the file. Reading only the window keeps the cost of a diagnostic independent
+/// of the file's size.
+#[derive(Debug)]
+struct Snippet {
+    name: String,
+    text: String,
+    first_line: usize,
+}
+
+impl SourceCode for Snippet {
+    fn read_span<'a>(
+        &'a self,
+        span: &SourceSpan,
+        context_lines_before: usize,
+        context_lines_after: usize,
+    ) -> Result<Box<dyn SpanContents<'a> + 'a>, MietteError> {
+        let inner = self
+            .text
+            .read_span(span, context_lines_before, context_lines_after)?;
+        Ok(Box::new(
+            MietteSpanContents::new_named(
+                self.name.clone(),
+                inner.data(),
+                *inner.span(),
+                inner.line() + self.first_line,
+                inner.column(),
+                inner.line_count(),
+            )
+            .with_language("scn"),
+        ))
+    }
+}
+
 /// The text miette is shown for one diagnostic's file, with offsets into the original text
 /// mapped onto it.
 struct Excerpt {
-    source: NamedSource<String>,
+    source: Snippet,
     /// `(original start, original end, start in the excerpt)` of every copied piece, in order.
     pieces: Vec<(usize, usize, usize)>,
 }
@@ -109,29 +148,59 @@ fn floor_char(text: &str, mut i: usize) -> usize {
     i
 }
 
-/// The whole file, except that every line longer than [`MAX_LINE`] is cut to a window around
-/// the spans on it (or to its start), marked with `…`. Line numbers stay the same; the name says
-/// where the first span really is when its line was cut.
+/// The lines of the file around the spans ([`WINDOW_LINES`] more on each side), except that
+/// every line longer than [`MAX_LINE`] is cut to a window around the spans on it (or to its
+/// start), marked with `…`. Line numbers stay the same; the name says where the first span
+/// really is when its line was cut.
 fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
     let file = map.get(span.file)?;
     let text: &str = &file.text;
     let spans: Vec<Span> = std::iter::once(span)
         .chain(others.iter().copied().filter(|s| s.file == span.file))
         .collect();
-    if text.split('\n').all(|l| l.len() <= MAX_LINE) {
+    // The window: whole lines from WINDOW_LINES before the first span's line to WINDOW_LINES
+    // after the last span's line.
+    let lo = spans.iter().map(|s| s.start as usize).min().unwrap_or(0);
+    let hi = spans.iter().map(|s| s.end as usize).max().unwrap_or(0);
+    let lo = floor_char(text, lo);
+    let hi = floor_char(text, hi.max(lo));
+    let mut first = file.locate(lo);
+    for _ in 0..WINDOW_LINES {
+        if first.line_start == 0 {
+            break;
+        }
+        first = file.locate(first.line_start - 1);
+    }
+    let window_start = first.line_start;
+    let mut window_end = hi;
+    for _ in 0..=WINDOW_LINES {
+        match text[window_end..].find('\n') {
+            Some(i) => window_end += i + 1,
+            None => {
+                window_end = text.len();
+                break;
+            }
+        }
+    }
+    let window = &text[window_start..window_end];
+    if window.split('\n').all(|l| l.len() <= MAX_LINE) {
         return Some(Excerpt {
-            source: NamedSource::new(file.name.clone(), text.to_string()).with_language("scn"),
-            pieces: vec![(0, text.len(), 0)],
+            source: Snippet {
+                name: file.name.clone(),
+                text: window.to_string(),
+                first_line: first.line,
+            },
+            pieces: vec![(window_start, window_end, 0)],
         });
     }
     let mut out = String::new();
     let mut pieces = Vec::new();
     let mut cut_primary = false;
-    let mut start = 0;
-    while start < text.len() {
-        let end = text[start..]
+    let mut start = window_start;
+    while start < window_end {
+        let end = text[start..window_end]
             .find('\n')
-            .map_or(text.len(), |i| start + i + 1);
+            .map_or(window_end, |i| start + i + 1);
         let body_end = if text[..end].ends_with('\n') {
             end - 1
         } else {
@@ -186,7 +255,11 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
         file.name.clone()
     };
     Some(Excerpt {
-        source: NamedSource::new(name, out).with_language("scn"),
+        source: Snippet {
+            name,
+            text: out,
+            first_line: first.line,
+        },
         pieces,
     })
 }
@@ -353,7 +426,7 @@ mod tests {
     fn offsets_map_into_the_excerpt() {
         let (map, id) = one_line_map(5_000);
         let ex = excerpt(&map, Span::new(id, 5_001, 5_005), &[]).unwrap();
-        let src = ex.source.inner();
+        let src = &ex.source.text;
         let at = ex.span(Span::new(id, 5_001, 5_005));
         assert_eq!(&src[at.offset()..at.offset() + at.len()], "oops");
         // The next line is kept whole and maps exactly.

@@ -206,6 +206,8 @@ impl<'a> PreparedScene<'a> {
                 continue;
             }
             let mut light_shapes = light_shapes.map(|l| l.into_iter());
+            // One light per shape (an emissive mesh's millions): no doubling of the vector.
+            lights.reserve(list.len());
             for s in list {
                 let id = prim_object.len() as u32;
                 let mut light = NO_LIGHT;

@@ -97,10 +97,24 @@ pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData
             srgb_to_linear(v)
         }
     };
-    let pixels = rgb
+    let pixels: Vec<[f32; 3]> = rgb
         .pixels()
         .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])])
         .collect();
+    // Float formats can hold NaN and infinity; such a texel would read as black (a texture) or
+    // dark the whole sky (an environment) without a word.
+    let bad = pixels
+        .iter()
+        .filter(|p| !p.iter().all(|c| c.is_finite()))
+        .count();
+    if bad > 0 {
+        return Err(format!(
+            "image `{}` has {bad} pixel{} that {} NaN or infinite",
+            path.display(),
+            if bad == 1 { "" } else { "s" },
+            if bad == 1 { "is" } else { "are" },
+        ));
+    }
     Ok(ImageData {
         path: path.to_path_buf(),
         width,
@@ -130,12 +144,14 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
             refused => format!("cannot read OBJ mesh: {refused}"),
         },
     )?;
-    let mesh = match super::obj::parse(&bytes) {
+    // A UTF-8 byte order mark (Windows tools write one) would hide the first line.
+    let body = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
+    let mesh = match super::obj::parse(body) {
         Some(mesh) => MeshData {
             path: path.to_path_buf(),
             ..mesh
         },
-        None => read_with_tobj(&bytes, path)?,
+        None => read_with_tobj(body, path)?,
     };
     if mesh.indices.is_empty() {
         return Err(format!("OBJ mesh `{}` has no faces", path.display()));
@@ -299,6 +315,36 @@ mod tests {
         std::fs::write(&p, png_header_only(16_000, 16_000)).unwrap();
         let e = load_image(&p, ColorSpace::Srgb).unwrap_err();
         assert!(e.contains("more than the limit"), "{e}");
+    }
+
+    #[test]
+    fn an_exr_with_nan_or_infinite_pixels_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("sky.exr");
+        for (bad, count) in [(f32::NAN, 1), (f32::INFINITY, 1), (f32::NEG_INFINITY, 1)] {
+            let mut img = image::Rgb32FImage::from_pixel(4, 2, image::Rgb([0.5, 1.0, 2.0]));
+            img.put_pixel(3, 1, image::Rgb([0.5, bad, 2.0]));
+            img.save(&p).unwrap();
+            let e = load_image(&p, ColorSpace::Linear).unwrap_err();
+            assert!(
+                e.contains(&format!("{count} pixel that is NaN or infinite")),
+                "{e}"
+            );
+        }
+        let img = image::Rgb32FImage::from_pixel(4, 2, image::Rgb([0.5, 1e30, 2.0]));
+        img.save(&p).unwrap();
+        let ok = load_image(&p, ColorSpace::Linear).unwrap();
+        assert_eq!(ok.pixels[7], [0.5, 1e30, 2.0]);
+    }
+
+    #[test]
+    fn an_obj_with_a_byte_order_mark_and_crlf_reads_every_vertex() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bom.obj");
+        std::fs::write(&p, "\u{feff}v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n").unwrap();
+        let m = load_obj(&p).unwrap();
+        assert_eq!(m.positions.len(), 3);
+        assert_eq!(m.indices.len(), 1);
     }
 
     #[test]

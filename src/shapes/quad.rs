@@ -82,12 +82,13 @@ pub struct Quad {
 impl Quad {
     pub fn new(origin: Vec3A, eu: Vec3A, ev: Vec3A) -> Result<Self, String> {
         let c = eu.cross(ev);
-        let area = c.length();
+        let area = crate::geometry::scaled_length(c);
         if !(area.is_finite() && area > 0.0 && origin.is_finite()) {
             return Err("quad edges are parallel or degenerate (zero area)".into());
         }
         let n = c / area;
-        let w = c / c.length_squared();
+        // c / |c|^2, without squaring |c| (edges 1e11 long would overflow it).
+        let w = n / area;
         Ok(Self {
             origin,
             eu,
@@ -480,6 +481,26 @@ mod tests {
     /// The density [`Quad::pdf_toward`] gives a point a ray from `p` hits is a normalized
     /// density over the directions that hit the quad (MIS uses it for BSDF samples): its
     /// integral over uniform directions is one.
+    /// Edges 1e11 long are legal (world coordinates go to 1e12), but the square of their cross
+    /// product (1e44) overflows f32: the quad was refused as "degenerate (zero area)".
+    #[test]
+    fn a_quad_with_edges_1e11_long_is_built_and_hit() {
+        for s in [1e-4f32, 1.0, 1e11] {
+            let quad = Quad::new(
+                Vec3A::new(-s, 0.0, -s),
+                2.0 * s * Vec3A::X,
+                2.0 * s * Vec3A::Z,
+            )
+            .unwrap_or_else(|e| panic!("size {s}: {e}"));
+            assert!((quad.area / (4.0 * s * s) - 1.0).abs() < 1e-5, "size {s}");
+            let ray = Ray::new(Vec3A::new(0.3 * s, s, 0.2 * s), -Vec3A::Y);
+            let hit =
+                crate::shapes::Shape::intersect(&quad, &ray, 0.0, f32::INFINITY).expect("a hit");
+            assert!((hit.t / s - 1.0).abs() < 1e-5, "size {s}: t = {}", hit.t);
+            assert!((hit.uv - glam::Vec2::new(0.65, 0.6)).abs().max_element() < 1e-5);
+        }
+    }
+
     #[test]
     fn pdf_toward_integrates_to_one() {
         let quad = Quad::new(Vec3A::new(-1.0, 0.5, -1.0), 2.0 * Vec3A::X, 1.5 * Vec3A::Z).unwrap();

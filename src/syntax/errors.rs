@@ -148,6 +148,15 @@ pub(super) fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>
             "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
         );
     }
+    if rest.starts_with('*') && text[..pos].ends_with('/') && !rest[1..].contains("*/") {
+        return Diagnostic::error(
+            Span::new(file, pos as u32 - 1, pos as u32 + 1),
+            "syntax error: a `/* ... */` comment is never closed",
+        )
+        .with_label("this `/*` is never closed")
+        .with_extra(last_char(file, text), "the file ends here, inside it")
+        .with_help("close it with `*/`");
+    }
     if pos >= text.len()
         && let Some(open) = unclosed(text)
     {
@@ -245,18 +254,20 @@ fn never_closed(file: FileId, text: &str, (open, len): (usize, usize)) -> Diagno
     } else {
         (format!("`{opener}`"), "add `#end` where it ends")
     };
-    let end = text.trim_end().len();
-    let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
     Diagnostic::error(
         Span::new(file, open as u32, (open + len) as u32),
         format!("syntax error: {what} is never closed"),
     )
     .with_label(format!("this `{opener}` is never closed"))
-    .with_extra(
-        Span::new(file, (end - last) as u32, end as u32),
-        "the file ends here, inside it",
-    )
+    .with_extra(last_char(file, text), "the file ends here, inside it")
     .with_help(help)
+}
+
+/// The last character of the text that is not blank.
+fn last_char(file: FileId, text: &str) -> Span {
+    let end = text.trim_end().len();
+    let last = text[..end].chars().next_back().map_or(0, char::len_utf8);
+    Span::new(file, (end - last) as u32, end as u32)
 }
 
 /// The rules a syntax error expected, from the ones pest recorded at the error position.

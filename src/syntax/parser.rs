@@ -55,11 +55,17 @@ pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
         file,
         terms: Cell::new(0),
         too_long: RefCell::new(None),
+        errors: RefCell::new(Vec::new()),
     };
     let items = cx.items(items);
-    match cx.too_long.into_inner() {
-        Some(d) => Err(vec![d]),
-        None => Ok(items),
+    if let Some(d) = cx.too_long.into_inner() {
+        return Err(vec![d]);
+    }
+    let errors = cx.errors.into_inner();
+    if errors.is_empty() {
+        Ok(items)
+    } else {
+        Err(errors)
     }
 }
 
@@ -70,6 +76,9 @@ struct Cx {
     terms: Cell<usize>,
     /// The first expression that went over [`MAX_EXPRESSION_TERMS`].
     too_long: RefCell<Option<Diagnostic>>,
+    /// Errors found while building the tree (unknown escapes in strings, a macro parameter
+    /// named twice): the text parsed, but it means nothing.
+    errors: RefCell<Vec<Diagnostic>>,
 }
 
 impl Cx {
@@ -160,12 +169,25 @@ impl Cx {
             }
             Rule::macro_d => {
                 let name = self.name(inner.next().unwrap());
-                let params = inner
+                let params: Vec<Name> = inner
                     .next()
                     .unwrap()
                     .into_inner()
                     .map(|p| self.name(p))
                     .collect();
+                for (i, p) in params.iter().enumerate() {
+                    if let Some(first) = params[..i].iter().find(|q| q.text == p.text) {
+                        self.errors.borrow_mut().push(
+                            Diagnostic::error(
+                                p.span,
+                                format!("macro parameter `{}` is named twice", p.text),
+                            )
+                            .with_label("second parameter of this name")
+                            .with_extra(first.span, "first one")
+                            .with_help("give each parameter its own name"),
+                        );
+                    }
+                }
                 let body = self.items(inner.next().unwrap());
                 DirectiveKind::Macro(Rc::new(MacroDef { name, params, body }))
             }
@@ -173,7 +195,7 @@ impl Cx {
                 let s = inner.next().unwrap();
                 let path_span = self.span(&s);
                 DirectiveKind::Include {
-                    path: unescape(s.into_inner().next().unwrap().as_str()),
+                    path: self.unescape(s.into_inner().next().unwrap()),
                     path_span,
                 }
             }
@@ -335,9 +357,7 @@ impl Cx {
         let kind = match pair.as_rule() {
             Rule::number => ExprKind::Number(pair.as_str().parse().unwrap_or(f64::NAN)),
             Rule::boolean => ExprKind::Bool(pair.as_str() == "true"),
-            Rule::string => {
-                ExprKind::Str(unescape(pair.into_inner().next().unwrap().as_str()).into())
-            }
+            Rule::string => ExprKind::Str(self.unescape(pair.into_inner().next().unwrap()).into()),
             Rule::paren => return self.expr(pair.into_inner().next().unwrap()),
             Rule::vector => ExprKind::Vector(pair.into_inner().map(|p| self.expr(p)).collect()),
             Rule::array => ExprKind::Array(pair.into_inner().map(|p| self.expr(p)).collect()),
@@ -369,22 +389,43 @@ impl Cx {
     }
 }
 
-fn unescape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        if c == '\\' {
-            match chars.next() {
-                Some('n') => out.push('\n'),
-                Some('t') => out.push('\t'),
-                Some(o) => out.push(o),
-                None => {}
+impl Cx {
+    /// The text of a string literal's inside (`str_inner`) with its escapes replaced: `\"`,
+    /// `\\`, `\n` and `\t`. Any other backslash is an error at it (a Windows path such as
+    /// `"C:\textures\wood.png"` would otherwise silently lose its backslashes).
+    fn unescape(&self, pair: Pair<Rule>) -> String {
+        let s = pair.as_str();
+        let base = pair.as_span().start();
+        let mut out = String::with_capacity(s.len());
+        let mut chars = s.char_indices();
+        while let Some((i, c)) = chars.next() {
+            if c != '\\' {
+                out.push(c);
+                continue;
             }
-        } else {
-            out.push(c);
+            match chars.next() {
+                Some((_, 'n')) => out.push('\n'),
+                Some((_, 't')) => out.push('\t'),
+                Some((_, o @ ('"' | '\\'))) => out.push(o),
+                other => {
+                    let end = other.map_or(s.len(), |(j, o)| j + o.len_utf8());
+                    let span = Span::new(self.file, (base + i) as u32, (base + end) as u32);
+                    self.errors.borrow_mut().push(
+                        Diagnostic::error(
+                            span,
+                            format!("unknown escape `{}` in a string", &s[i..end]),
+                        )
+                        .with_label("not an escape")
+                        .with_help(
+                            "the escapes are `\\\"`, `\\\\`, `\\n` and `\\t`; write `\\\\` for a \
+                             backslash (or `/` in a file path)",
+                        ),
+                    );
+                }
+            }
         }
+        out
     }
-    out
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 
 use std::fmt::Write;
 
+use sppm_lang::diag::SourceFile;
 use sppm_lang::{Diagnostic, SourceMap};
 
 use super::Status;
@@ -42,26 +43,32 @@ pub fn diagnostics_view(sources: &SourceMap, diagnostics: &[Diagnostic]) -> Vec<
             if let Some(file) = sources.get(d.span.file) {
                 let (line, col) = sources.line_col(d.span);
                 v.location = format!("{}:{line}:{col}", file.name);
-                v.lines = excerpt(&file.text, d.span.start as usize, d.span.end as usize);
+                v.lines = excerpt(file, d.span.start as usize, d.span.end as usize);
             }
             v
         })
         .collect()
 }
 
-/// The lines around byte range `start..end` of `text`, each with the part of the range it holds.
-fn excerpt(text: &str, start: usize, end: usize) -> Vec<ExcerptLine> {
+/// The lines around byte range `start..end` of `file`, each with the part of the range it holds.
+/// Only the lines shown are read (a file with many diagnostics costs each only its lines).
+fn excerpt(file: &SourceFile, start: usize, end: usize) -> Vec<ExcerptLine> {
+    let text: &str = &file.text;
     let start = floor_boundary(text, start.min(text.len()));
     let end = floor_boundary(text, end.clamp(start, text.len()));
-    let first = text[..start].matches('\n').count();
+    let mut from = file.locate(start);
+    let first = from.line;
+    for _ in 0..CONTEXT_LINES {
+        if from.line_start == 0 {
+            break;
+        }
+        from = file.locate(from.line_start - 1);
+    }
     let mut out = Vec::new();
-    let mut offset = 0;
-    for (number, line) in text.split('\n').enumerate() {
+    let mut offset = from.line_start;
+    for (number, line) in (from.line..).zip(text[from.line_start..].split('\n')) {
         let line_start = offset;
         offset += line.len() + 1;
-        if number + CONTEXT_LINES < first {
-            continue;
-        }
         let line_end = line_start + line.len();
         if number > first + CONTEXT_LINES && line_start > end {
             break;
@@ -186,6 +193,13 @@ fn string(s: &str) -> String {
 mod tests {
     use super::*;
 
+    /// [`excerpt`] of `text` as a file of its own.
+    fn excerpt_of(text: &str, start: usize, end: usize) -> Vec<ExcerptLine> {
+        let mut map = SourceMap::new();
+        let id = map.add(std::path::Path::new("t.scn"), "t.scn".into(), text);
+        excerpt(map.get(id).unwrap(), start, end)
+    }
+
     #[test]
     fn strings_are_escaped() {
         assert_eq!(string("a\"b\\c\nd\u{1}<"), r#""a\"b\\c\nd\u0001\u003c""#);
@@ -195,7 +209,7 @@ mod tests {
     fn excerpt_marks_the_span_on_its_line_with_context() {
         let text = "one\ntwo\nthree bad here\nfour\nfive\nsix\n";
         let start = text.find("bad").unwrap();
-        let lines = excerpt(text, start, start + 3);
+        let lines = excerpt_of(text, start, start + 3);
         let numbers: Vec<usize> = lines.iter().map(|l| l.0).collect();
         assert_eq!(numbers, [1, 2, 3, 4, 5]);
         assert_eq!(lines[2].1, "three bad here");
@@ -208,7 +222,7 @@ mod tests {
         let mut text = "x".repeat(100_000);
         text.push_str("ééé bad");
         let start = text.find("bad").unwrap();
-        let lines = excerpt(&text, start, start + 3);
+        let lines = excerpt_of(&text, start, start + 3);
         assert_eq!(lines.len(), 1);
         let (_, line, hl) = &lines[0];
         assert!(line.chars().count() <= MAX_LINE);
@@ -220,7 +234,7 @@ mod tests {
     #[test]
     fn an_empty_span_at_the_end_of_the_text_is_marked() {
         let text = "sphere {";
-        let lines = excerpt(text, text.len(), text.len());
+        let lines = excerpt_of(text, text.len(), text.len());
         assert_eq!(lines, vec![(1, "sphere {".to_string(), Some((8, 8)))]);
     }
 }
