@@ -30,12 +30,9 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// Most iterations a render may be asked for on the command line.
-pub const MAX_ITERATIONS: u32 = 100_000_000;
-/// Most photons per iteration on the command line (memory is checked again by the render).
-pub const MAX_PHOTONS: u64 = 100_000_000_000;
-/// Most worker threads.
-pub const MAX_THREADS: usize = 1024;
+/// The limits of the render options, checked again by the render (the library's callers have
+/// no command line).
+pub use sppm_lang::prepare::{MAX_ITERATIONS, MAX_PHOTONS, MAX_THREADS};
 /// Longest time limit or snapshot interval in seconds (a year).
 pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 

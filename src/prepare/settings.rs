@@ -4,6 +4,14 @@
 use crate::scene::{Antialias, Integrator, Scene};
 use crate::span::Span;
 
+/// Most iterations a render may be asked for ([`RenderOptions::iterations`]) without a time
+/// limit.
+pub const MAX_ITERATIONS: u32 = 100_000_000;
+/// Most photons per iteration ([`RenderOptions::photons`]; memory is checked again).
+pub const MAX_PHOTONS: u64 = 100_000_000_000;
+/// Most worker threads ([`RenderOptions::threads`]).
+pub const MAX_THREADS: usize = 1024;
+
 /// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RenderOptions {
@@ -162,8 +170,27 @@ pub fn effective_settings(
             "time limit must be a positive number of seconds, got {t}"
         )));
     }
-    if o.threads == Some(0) {
-        return Err(RenderError::new("threads must be at least 1"));
+    if let Some(n) = o.threads
+        && !(1..=MAX_THREADS).contains(&n)
+    {
+        return Err(RenderError::new(format!(
+            "threads must be from 1 to {MAX_THREADS}, got {n}"
+        )));
+    }
+    // More iterations only under a time limit, which then ends the render (`reference`).
+    if let Some(n) = o.iterations
+        && (n == 0 || (n > MAX_ITERATIONS && time_limit.is_none()))
+    {
+        return Err(RenderError::new(format!(
+            "iterations must be from 1 to {MAX_ITERATIONS}, got {n}"
+        )));
+    }
+    if let Some(n) = o.photons
+        && !(1..=MAX_PHOTONS).contains(&n)
+    {
+        return Err(RenderError::new(format!(
+            "photons per iteration must be from 1 to {MAX_PHOTONS}, got {n}"
+        )));
     }
     Ok(EffectiveSettings {
         width,

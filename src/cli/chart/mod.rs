@@ -316,8 +316,9 @@ fn measure(
     ref_view: ImageView<'_>,
     window: Option<Window>,
 ) -> Result<Vec<Measured>, String> {
+    // Stopped by `stop` once past the budget.
     let opts = RenderOptions {
-        iterations: Some(u32::MAX),
+        iterations: Some(crate::cli::MAX_ITERATIONS),
         ..Default::default()
     };
     let checkpoints: Vec<f64> = (0..6).rev().map(|k| budget / f64::from(1 << k)).collect();
