@@ -30,13 +30,6 @@ fn absurd_overrides_are_errors() {
         (
             "photons",
             RenderOptions {
-                photons: Some(0),
-                ..Default::default()
-            },
-        ),
-        (
-            "photons",
-            RenderOptions {
                 photons: Some(u64::MAX),
                 ..Default::default()
             },

@@ -185,11 +185,12 @@ pub fn effective_settings(
             "iterations must be from 1 to {MAX_ITERATIONS}, got {n}"
         )));
     }
+    // 0 is allowed: methods without photons are run with it.
     if let Some(n) = o.photons
-        && !(1..=MAX_PHOTONS).contains(&n)
+        && n > MAX_PHOTONS
     {
         return Err(RenderError::new(format!(
-            "photons per iteration must be from 1 to {MAX_PHOTONS}, got {n}"
+            "photons per iteration must be at most {MAX_PHOTONS}, got {n}"
         )));
     }
     Ok(EffectiveSettings {
