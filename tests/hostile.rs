@@ -228,6 +228,15 @@ fn generated_cases(dir: &Path) -> Vec<Case> {
         Expect::Exit(1),
         Expect::Exit(1),
     );
+    // A macro with 100 000 parameters, the last named like the sixth: the check for a name
+    // given twice goes by name (comparing every pair would take minutes).
+    let params: Vec<String> = (0..100_000).map(|i| format!("a{i}")).collect();
+    add(
+        "macro_params_100000_twice.scn",
+        format!("{header}#macro M({}, a5)\n  1\n#end\n", params.join(", ")).into_bytes(),
+        Expect::Exit(1),
+        Expect::Exit(1),
+    );
     // 100 000 unused declarations: as many warnings, on a scene that renders.
     let mut unused = String::from(header);
     for i in 0..100_000 {

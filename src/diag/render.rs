@@ -164,13 +164,7 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
     let hi = spans.iter().map(|s| s.end as usize).max().unwrap_or(0);
     let lo = floor_char(text, lo);
     let hi = floor_char(text, hi.max(lo));
-    let mut first = file.locate(lo);
-    for _ in 0..WINDOW_LINES {
-        if first.line_start == 0 {
-            break;
-        }
-        first = file.locate(first.line_start - 1);
-    }
+    let first = file.lines_above(lo, WINDOW_LINES);
     let window_start = first.line_start;
     let mut window_end = hi;
     for _ in 0..=WINDOW_LINES {

@@ -71,6 +71,19 @@ impl SourceFile {
         }
     }
 
+    /// The start of the line `n` lines above the one holding byte `offset` (or of the first
+    /// line), with [`SourceFile::locate`]'s cost per line.
+    pub fn lines_above(&self, offset: usize, n: usize) -> Location {
+        let mut at = self.locate(offset);
+        for _ in 0..n {
+            if at.line_start == 0 {
+                break;
+            }
+            at = self.locate(at.line_start - 1);
+        }
+        at
+    }
+
     /// The line, line start and column of byte `offset` (clamped to the text), reading at most
     /// [`BLOCK`] bytes.
     pub fn locate(&self, offset: usize) -> Location {

@@ -478,9 +478,6 @@ mod tests {
         }
     }
 
-    /// The density [`Quad::pdf_toward`] gives a point a ray from `p` hits is a normalized
-    /// density over the directions that hit the quad (MIS uses it for BSDF samples): its
-    /// integral over uniform directions is one.
     /// Edges 1e11 long are legal (world coordinates go to 1e12), but the square of their cross
     /// product (1e44) overflows f32: the quad was refused as "degenerate (zero area)".
     #[test]
@@ -501,6 +498,9 @@ mod tests {
         }
     }
 
+    /// The density [`Quad::pdf_toward`] gives a point a ray from `p` hits is a normalized
+    /// density over the directions that hit the quad (MIS uses it for BSDF samples): its
+    /// integral over uniform directions is one.
     #[test]
     fn pdf_toward_integrates_to_one() {
         let quad = Quad::new(Vec3A::new(-1.0, 0.5, -1.0), 2.0 * Vec3A::X, 1.5 * Vec3A::Z).unwrap();

@@ -175,8 +175,10 @@ impl Cx {
                     .into_inner()
                     .map(|p| self.name(p))
                     .collect();
-                for (i, p) in params.iter().enumerate() {
-                    if let Some(first) = params[..i].iter().find(|q| q.text == p.text) {
+                // By name (a macro may have thousands of parameters).
+                let mut seen: std::collections::HashMap<&str, &Name> = Default::default();
+                for p in &params {
+                    if let Some(first) = seen.get(p.text.as_str()).copied() {
                         self.errors.borrow_mut().push(
                             Diagnostic::error(
                                 p.span,
@@ -186,6 +188,8 @@ impl Cx {
                             .with_extra(first.span, "first one")
                             .with_help("give each parameter its own name"),
                         );
+                    } else {
+                        seen.insert(&p.text, p);
                     }
                 }
                 let body = self.items(inner.next().unwrap());

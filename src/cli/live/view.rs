@@ -56,14 +56,8 @@ fn excerpt(file: &SourceFile, start: usize, end: usize) -> Vec<ExcerptLine> {
     let text: &str = &file.text;
     let start = floor_boundary(text, start.min(text.len()));
     let end = floor_boundary(text, end.clamp(start, text.len()));
-    let mut from = file.locate(start);
-    let first = from.line;
-    for _ in 0..CONTEXT_LINES {
-        if from.line_start == 0 {
-            break;
-        }
-        from = file.locate(from.line_start - 1);
-    }
+    let first = file.locate(start).line;
+    let from = file.lines_above(start, CONTEXT_LINES);
     let mut out = Vec::new();
     let mut offset = from.line_start;
     for (number, line) in (from.line..).zip(text[from.line_start..].split('\n')) {
