@@ -17,10 +17,7 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&Path, &mut File) -> Result<(), String>,
 ) -> Result<(), String> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(path);
     check_target(path)?;
     remove_stale(dir);
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
@@ -35,7 +32,7 @@ pub fn write_atomic(
     }
     let mut tmp = builder
         .tempfile_in(dir)
-        .map_err(|e| format!("cannot create a file in `{}`: {e}", dir.display()))?;
+        .map_err(|e| cannot_create_in(dir, &e))?;
     let tmp_path = tmp.path().to_path_buf();
     fill(&tmp_path, tmp.as_file_mut())?;
     // Checked again just before the rename: the path may have changed while `fill` ran.
@@ -47,7 +44,80 @@ pub fn write_atomic(
 
 const TEMP_PREFIX: &str = ".sppm-";
 
-/// Refuses a target that exists and is not a regular file (not following a symbolic link).
+/// "cannot create a file in `dir`: <the OS's reason>" (tempfile's error names the temporary
+/// file, a name the user never chose; only the OS's reason is kept).
+fn cannot_create_in(dir: &Path, e: &std::io::Error) -> String {
+    let text = e.to_string();
+    let reason = text.split(" at path ").next().unwrap_or(&text);
+    format!("cannot create a file in `{}`: {reason}", dir.display())
+}
+
+/// The folder `path` is written in (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Checks, before any work is done, that [`write_atomic`] can write `path` later: the target
+/// is absent or a regular file ([`check_target`]), its folder exists and accepts a new file
+/// (a temporary file is created there and removed: this also catches a read-only file
+/// system, which binds even the superuser), and it is none of `inputs`, the files the job
+/// reads (the scene, its includes, images, meshes): writing there would destroy one. An
+/// input is the target when both name the same directory entry after symbolic links are
+/// resolved (a hard link to an input is another entry: replacing it leaves the input whole).
+pub fn check_output<P: AsRef<Path>>(path: &Path, inputs: &[P]) -> Result<(), String> {
+    check_target(path)?;
+    let dir = folder_of(path);
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => {
+            return Err(format!(
+                "the folder `{}` of output `{}` is not a directory",
+                dir.display(),
+                path.display()
+            ));
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(format!(
+                "the folder `{}` of output `{}` does not exist (create it first)",
+                dir.display(),
+                path.display()
+            ));
+        }
+        Err(e) => {
+            return Err(format!(
+                "the folder `{}` of output `{}` cannot be used: {e}",
+                dir.display(),
+                path.display()
+            ));
+        }
+    }
+    tempfile::Builder::new()
+        .prefix(&format!("{TEMP_PREFIX}{}-", std::process::id()))
+        .tempfile_in(dir)
+        .map_err(|e| cannot_create_in(dir, &e))?;
+    let target = path
+        .file_name()
+        .and_then(|name| Some(dir.canonicalize().ok()?.join(name)));
+    if let Some(target) = target {
+        for input in inputs {
+            if input.as_ref().canonicalize().is_ok_and(|i| i == target) {
+                return Err(format!(
+                    "output `{}` is `{}`, which this command reads; writing there would \
+                     destroy it (choose another output path)",
+                    path.display(),
+                    input.as_ref().display()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a target that exists and is not a regular file (not following a symbolic link),
+/// and a path the system cannot use (a name too long, a file where a folder should be).
 pub fn check_target(path: &Path) -> Result<(), String> {
     match std::fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_file() => Ok(()),
@@ -65,7 +135,8 @@ pub fn check_target(path: &Path) -> Result<(), String> {
                 path.display()
             ))
         }
-        Err(_) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(format!("output `{}` cannot be used: {e}", path.display())),
     }
 }
 
@@ -126,6 +197,52 @@ mod tests {
         assert!(e.contains("directory") || e.contains("cannot"), "{e}");
         let e = write(Path::new("/dev/null")).unwrap_err();
         assert!(e.contains("not a regular file"), "{e}");
+    }
+
+    #[test]
+    fn an_output_is_checked_before_any_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let none: &[&Path] = &[];
+        let fine = dir.path().join("out.png");
+        check_output(&fine, none).unwrap();
+        // The probe leaves nothing behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let e = check_output(&dir.path().join("missing/out.png"), none).unwrap_err();
+        assert!(e.contains("does not exist"), "{e}");
+        let file = dir.path().join("scene.scn");
+        std::fs::write(&file, "sphere {}").unwrap();
+        let e = check_output(&file.join("out.png"), none).unwrap_err();
+        assert!(e.contains("cannot be used"), "{e}");
+        let long = dir.path().join(format!("{}.png", "a".repeat(5000)));
+        let e = check_output(&long, none).unwrap_err();
+        assert!(e.contains("cannot be used"), "{e}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn an_output_that_is_an_input_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("scene.png");
+        std::fs::write(&scene, "sphere {}").unwrap();
+        let e = check_output(&scene, &[&scene]).unwrap_err();
+        assert!(e.contains("which this command reads"), "{e}");
+        // The same file by another spelling of its path.
+        let other = dir.path().join(".").join("scene.png");
+        assert!(check_output(&other, &[&scene]).is_err());
+        // An input that is a link to the output: writing would replace what it reads.
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link.scn");
+            std::os::unix::fs::symlink(&scene, &link).unwrap();
+            assert!(check_output(&scene, &[&link]).is_err());
+            // A hard link is another directory entry: replacing it leaves the input whole.
+            let hard = dir.path().join("hard.png");
+            std::fs::hard_link(&scene, &hard).unwrap();
+            check_output(&hard, &[&scene]).unwrap();
+        }
+        // Inputs that are not the output, or do not exist, are no obstacle.
+        let missing = dir.path().join("missing.png");
+        check_output(&dir.path().join("out.png"), &[&scene, &missing]).unwrap();
     }
 
     #[test]

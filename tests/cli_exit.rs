@@ -256,6 +256,7 @@ fn absurd_flags_are_usage_errors_at_once() {
         &["--photons", "0"],
         &["--photons", "1000000000000000"],
         &["--snapshot-every", "0"],
+        &["--resolution", "16384x16384"],
     ] {
         let start = std::time::Instant::now();
         let mut args = vec!["render", "examples/furnace.scn", "-o", o];
@@ -595,4 +596,142 @@ fn chart_lists_the_reference_as_required() {
     let out = sppm(&["chart", "examples/cornell.scn", "-o", "/tmp/never.png"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--reference"));
+}
+
+/// A tiny scene that renders in milliseconds; `extra` goes after it.
+fn tiny_scene(extra: &str) -> String {
+    format!(
+        "settings {{ resolution <8, 8> iterations 2 photons 500 seed 1 }}\n\
+         camera {{ location <0, 0, -5> look_at <0, 0, 0> fov 30 }}\n\
+         light {{ <0, 5, -5> intensity 10 }}\n{extra}\n"
+    )
+}
+
+/// The image would replace a file the command reads: the scene itself (a scene named `.png`,
+/// whose default output is its own name), an include or a texture, also through a link. Each
+/// is refused as a usage error and the file stays as it was.
+#[test]
+fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let s = |name: &str| p(name).to_str().unwrap().to_string();
+    std::fs::write(p("scene.png"), tiny_scene("sphere { <0, 0, 0>, 1 }")).unwrap();
+    std::fs::write(p("inc.png"), tiny_scene("")).unwrap();
+    std::fs::write(p("inc.scn"), format!("#include \"{}\"\n", s("inc.png"))).unwrap();
+    // A real texture: the first render writes it.
+    std::fs::write(p("plain.scn"), tiny_scene("sphere { <0, 0, 0>, 1 }")).unwrap();
+    succeeded(&render_to(&p("plain.scn"), &p("tex.png")));
+    std::fs::write(
+        p("tex.scn"),
+        tiny_scene(&format!(
+            "sphere {{ <0, 0, 0>, 1 material {{ diffuse texture {{ image \"{}\" }} }} }}",
+            s("tex.png")
+        )),
+    )
+    .unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(p("scene.png"), p("link.scn")).unwrap();
+    let before: Vec<Vec<u8>> = ["scene.png", "inc.png", "tex.png"]
+        .iter()
+        .map(|n| std::fs::read(p(n)).unwrap())
+        .collect();
+    let scene = s("scene.png");
+    let dotted = format!("{}/./scene.png", dir.path().display());
+    let mut cases: Vec<Vec<String>> = vec![
+        vec!["render".into(), scene.clone()],
+        vec!["render".into(), scene.clone(), "-o".into(), dotted],
+        vec!["render".into(), s("inc.scn"), "-o".into(), s("inc.png")],
+        vec!["render".into(), s("tex.scn"), "-o".into(), s("tex.png")],
+        vec!["watch".into(), scene.clone()],
+        vec![
+            "chart".into(),
+            s("plain.scn"),
+            "--reference".into(),
+            s("tex.png"),
+            "-o".into(),
+            s("tex.png"),
+        ],
+    ];
+    if cfg!(unix) {
+        cases.push(vec!["render".into(), s("link.scn"), "-o".into(), scene]);
+    }
+    for args in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}:\n{err}");
+        assert!(err.contains("which this command reads"), "{args:?}:\n{err}");
+    }
+    let after: Vec<Vec<u8>> = ["scene.png", "inc.png", "tex.png"]
+        .iter()
+        .map(|n| std::fs::read(p(n)).unwrap())
+        .collect();
+    assert!(before == after, "an input was overwritten");
+    let temporary = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with(".sppm-")
+        })
+        .count();
+    assert_eq!(temporary, 0);
+}
+
+/// An output that cannot be written (no such folder, a file where a folder should be, a name
+/// too long, a read-only folder) is a usage error found before rendering: the render asked
+/// for here (10^8 iterations) would not end within the test's time otherwise.
+#[test]
+fn an_unwritable_output_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.scn");
+    std::fs::write(&scene, tiny_scene("sphere { <0, 0, 0>, 1 }")).unwrap();
+    let mut outputs = vec![
+        (dir.path().join("missing/o.png"), "does not exist"),
+        (scene.join("o.png"), "cannot be used"),
+        (
+            dir.path().join(format!("{}.png", "a".repeat(5000))),
+            "cannot be used",
+        ),
+    ];
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let locked = dir.path().join("locked");
+        std::fs::create_dir(&locked).unwrap();
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+        // The superuser writes into a read-only folder anyway: nothing to test then.
+        if std::fs::write(locked.join("probe"), "x").is_err() {
+            outputs.push((locked.join("o.png"), "cannot create a file"));
+        } else {
+            eprintln!("skipped the read-only folder: running as a user who may write there");
+        }
+    }
+    for (o, why) in &outputs {
+        let start = std::time::Instant::now();
+        for command in ["render", "watch"] {
+            let out = sppm(&[command, scene.to_str().unwrap(), "-o", o.to_str().unwrap()]);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{command} {o:?}:\n{err}");
+            assert!(err.contains(why), "{command} {o:?}:\n{err}");
+        }
+        let out = render_with(
+            scene.to_str().unwrap(),
+            o.to_str().unwrap(),
+            &["--iterations", "100000000"],
+        );
+        assert_eq!(out.status.code(), Some(2));
+        assert!(
+            start.elapsed().as_secs() < 30,
+            "{o:?}: {:?}",
+            start.elapsed()
+        );
+    }
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(names.len() <= 2, "{names:?}");
 }

@@ -311,7 +311,51 @@ fn watch_without_a_scene_file_is_a_usage_error() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("does not exist"), "{err}");
+    // A folder is named as one (it exists, but is no scene).
+    let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        .args(["watch", dir.path().to_str().unwrap(), "-o", "x.png"])
+        .current_dir(dir.path())
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("is a directory"), "{err}");
     let _ = std::io::stdout().flush();
+}
+
+/// An edit that makes the scene read its own output image (as a texture) is refused for that
+/// round: writing the image would destroy the texture, and each write would start the next
+/// round, forever. The image stays as it was until a save that no longer reads it.
+#[test]
+fn a_scene_that_reads_its_own_output_is_not_rendered_over_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("own.scn");
+    let out = dir.path().join("own.png");
+    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
+    let mut w = Watch::start(dir.path(), "own.scn", "own.png");
+    w.expect("render #1 full finished");
+    let before = fs::read(&out).unwrap();
+    fs::write(
+        &scene,
+        scene_with(
+            "background rgb <0, 0, 1>
+             sphere { <0, 0, 0>, 1 material { diffuse texture { image \"own.png\" } } }",
+        ),
+    )
+    .unwrap();
+    w.expect("which this command reads");
+    w.expect("waiting for changes");
+    let later = w.drain(Duration::from_millis(800));
+    assert!(
+        !later.iter().any(|l| l.contains("started")),
+        "rendered over its own texture: {later:?}"
+    );
+    assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
+    fs::write(&scene, scene_text([0, 255, 0])).unwrap();
+    w.expect("render #2 full finished");
+    assert_eq!(centre(&out), [0, 255, 0]);
+    no_temporaries(dir.path());
 }
 
 #[test]

@@ -64,10 +64,17 @@ fn print_unplaced(sources: &SourceMap, kind: &str, e: &RenderError) {
     }
 }
 
+/// A scene loaded without errors, the text of its files and every file the load read.
+pub struct LoadedScene {
+    pub scene: Scene,
+    pub sources: SourceMap,
+    pub dependencies: Vec<std::path::PathBuf>,
+}
+
 /// Loads a scene named on the command line and prints its diagnostics: the scene (free of
 /// errors) and its sources, or the exit status (usage error: the file cannot be read; scene
 /// error: it has errors).
-pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<(Scene, SourceMap), ExitCode> {
+pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, ExitCode> {
     let loaded = sppm_lang::load_file(path, options).map_err(|e| {
         err(&format!("error: cannot read `{}`: {e}\n", path.display()));
         ExitCode::from(EXIT_USAGE)
@@ -75,7 +82,11 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<(Scene, SourceMa
     print_diagnostics(&loaded);
     let has_errors = loaded.has_errors();
     match loaded.scene {
-        Some(scene) if !has_errors => Ok((scene, loaded.sources)),
+        Some(scene) if !has_errors => Ok(LoadedScene {
+            scene,
+            sources: loaded.sources,
+            dependencies: loaded.dependencies,
+        }),
         _ => Err(ExitCode::from(EXIT_SCENE_ERROR)),
     }
 }

@@ -82,7 +82,9 @@ pub fn parse_bytes(text: &str) -> Result<u64, String> {
 }
 
 /// The image a command writes: `-o`, or the scene's name with `.png`; a `.png` or `.exr` that
-/// is absent or a regular file (never a link, folder or device).
+/// is absent or a regular file (never a link, folder or device), in an existing folder that
+/// accepts files, and not the scene itself. Checked before the scene is loaded; the files the
+/// load reads are checked with [`check_not_an_input`].
 pub fn output_path(
     output: Option<&std::path::Path>,
     scene: &std::path::Path,
@@ -97,8 +99,17 @@ pub fn output_path(
             ));
         }
     }
-    sppm_lang::atomic_file::check_target(&output)?;
+    sppm_lang::atomic_file::check_output(&output, &[scene])?;
     Ok(output)
+}
+
+/// Refuses `outputs` that are among `inputs` (the files a load read): writing there would
+/// destroy a scene, an include or a texture (and `watch` would see its own output as a change).
+pub fn check_not_an_input(outputs: &[&std::path::Path], inputs: &[PathBuf]) -> Result<(), String> {
+    for o in outputs {
+        sppm_lang::atomic_file::check_output(o, inputs)?;
+    }
+    Ok(())
 }
 
 /// A thread count from 1 to [`MAX_THREADS`].
@@ -134,6 +145,13 @@ pub fn parse_resolution(text: &str) -> Result<Resolution, String> {
     };
     match (side(w)?, side(h)?) {
         (None, None) => Err(usage()),
+        (Some(w), Some(h)) if u64::from(w) * u64::from(h) > sppm_lang::scene::MAX_PIXELS => {
+            Err(format!(
+                "{w}x{h} is {} pixels, more than the limit of {}",
+                u64::from(w) * u64::from(h),
+                sppm_lang::scene::MAX_PIXELS
+            ))
+        }
         (w, h) => Ok(Resolution {
             width: w,
             height: h,

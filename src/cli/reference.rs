@@ -74,26 +74,21 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         );
         return ExitCode::from(EXIT_USAGE);
     }
-    let folder = match args.output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !folder.is_dir() {
-        eprintln!(
-            "error: the folder `{}` of the reference does not exist",
-            folder.display()
-        );
+    let (noise_exr, noise_json) = noise_paths(&args.output);
+    let outputs = [args.output.as_path(), &noise_exr, &noise_json];
+    // Before the load, against the scene; after it, against every file it read.
+    if let Err(e) = super::check_not_an_input(&outputs, std::slice::from_ref(&args.scene)) {
+        eprintln!("error: {e}");
         return ExitCode::from(EXIT_USAGE);
     }
-    let (noise_exr, noise_json) = noise_paths(&args.output);
-    for p in [&args.output, &noise_exr, &noise_json] {
-        if let Err(e) = sppm_lang::atomic_file::check_target(p) {
-            eprintln!("error: {e}");
-            return ExitCode::from(EXIT_USAGE);
-        }
-    }
     let (mut scene, sources) = match load_scene(&args.scene, &args.limits.options()) {
-        Ok(loaded) => loaded,
+        Ok(loaded) => {
+            if let Err(e) = super::check_not_an_input(&outputs, &loaded.dependencies) {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_USAGE);
+            }
+            (loaded.scene, loaded.sources)
+        }
         Err(code) => return code,
     };
     scene.settings.integrator = Integrator::Path;

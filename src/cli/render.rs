@@ -1,7 +1,7 @@
 //! `sppm-lang render`: load a scene, render it with progress, write the image atomically.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -58,21 +58,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
             .num_threads(n)
             .build_global();
     }
-    match load_scene(&args.scene, &args.limits.options()) {
-        Ok((scene, sources)) => {
-            let code = render_scene(&scene, &args, &sources);
-            // The image is written and the process ends here: freeing a large scene (a mesh's
-            // millions of vertices) is left to the exit.
-            std::mem::forget(scene);
-            code
-        }
-        Err(code) => code,
-    }
-}
-
-/// Renders an already loaded scene as `args` asks; `sources` turn render errors that carry a
-/// span into diagnostics.
-fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCode {
+    // The output is checked before the load (which may read a large mesh) and again against
+    // the files the load read.
     let output = match super::output_path(args.output.as_deref(), &args.scene) {
         Ok(o) => o,
         Err(e) => {
@@ -80,6 +67,25 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
             return ExitCode::from(EXIT_USAGE);
         }
     };
+    match load_scene(&args.scene, &args.limits.options()) {
+        Ok(loaded) => {
+            if let Err(e) = super::check_not_an_input(&[&output], &loaded.dependencies) {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_USAGE);
+            }
+            let code = render_scene(&loaded.scene, &args, &loaded.sources, &output);
+            // The image is written and the process ends here: freeing a large scene (a mesh's
+            // millions of vertices) is left to the exit.
+            std::mem::forget(loaded);
+            code
+        }
+        Err(code) => code,
+    }
+}
+
+/// Renders an already loaded scene as `args` asks into `output`; `sources` turn render errors
+/// that carry a span into diagnostics.
+fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &Path) -> ExitCode {
     let mut scene = std::borrow::Cow::Borrowed(scene);
     if let Some(integrator) = args.integrator {
         scene.to_mut().settings.integrator = integrator;
@@ -129,7 +135,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         if let Some(k) = args.snapshot_every
             && p.iteration.is_multiple_of(k)
             && p.iteration < p.iterations
-            && let Err(e) = p.image().write(&output, exposure)
+            && let Err(e) = p.image().write(output, exposure)
         {
             snapshot_error = Some(e);
         }
@@ -177,7 +183,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap) -> ExitCo
         print_render_error(sources, &e);
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
-    if let Err(e) = out.image.write(&output, exposure) {
+    if let Err(e) = out.image.write(output, exposure) {
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_SCENE_ERROR);
     }

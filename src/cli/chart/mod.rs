@@ -30,7 +30,7 @@ use sppm_lang::scene::{ColorSpace, DEFAULT_PHOTONS, Integrator, Scene, load_imag
 use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths, to_f32};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
-use outputs::{Floors, read_csv, write_outputs};
+use outputs::{Floors, output_files, read_csv, write_outputs};
 
 /// A method whose error ends within this factor of the reference's noise is "at the floor":
 /// its own error is at most about the reference's (sqrt(1.5^2 - 1) = 1.1 times it).
@@ -197,6 +197,18 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             args.output.display()
         ));
     }
+    // Every file the chart writes, checked before anything is rendered against the files named
+    // on the command line, and against the scene's files once it is loaded. (The CSV of
+    // `--from-csv` may be the one written: redrawing writes back the table it read.)
+    let outputs = output_files(&args.output, window.is_some() || args.from_csv.is_some());
+    let outputs: Vec<&std::path::Path> = outputs.iter().map(PathBuf::as_path).collect();
+    let named: Vec<PathBuf> = [&args.scene, &args.reference]
+        .into_iter()
+        .flatten()
+        .cloned()
+        .chain(args.reference.as_deref().map(|r| noise_paths(r).0))
+        .collect();
+    super::check_not_an_input(&outputs, &named)?;
     if let Some(csv) = &args.from_csv {
         let table = read_csv(csv)?;
         write_outputs(&args.output, &table)?;
@@ -213,6 +225,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         Some(s) if !loaded.has_errors() => s.clone(),
         _ => return Ok(ExitCode::from(EXIT_SCENE_ERROR)),
     };
+    super::check_not_an_input(&outputs, &loaded.dependencies)?;
     args.size.apply_to(&mut scene);
     let (w, h) = scene.settings.resolution;
     if (w, h) != (reference.width, reference.height) {

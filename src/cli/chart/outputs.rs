@@ -93,6 +93,23 @@ pub fn read_csv(path: &Path) -> Result<Table, String> {
     Ok(table)
 }
 
+/// Every file [`write_outputs`] writes for `output`: the CSV, then a PNG and an SVG per chart
+/// (the window's charts only when `has_window`).
+pub fn output_files(output: &Path, has_window: bool) -> Vec<PathBuf> {
+    let suffixes: &[&str] = if has_window {
+        &["", "_relmse", "_window", "_window_relmse"]
+    } else {
+        &["", "_relmse"]
+    };
+    let mut files = vec![output.with_extension("csv")];
+    for suffix in suffixes {
+        for ext in ["png", "svg"] {
+            files.push(sibling(output, suffix, ext));
+        }
+    }
+    files
+}
+
 fn sibling(path: &Path, suffix: &str, ext: &str) -> PathBuf {
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("chart");
     path.with_file_name(format!("{stem}{suffix}.{ext}"))

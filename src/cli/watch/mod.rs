@@ -21,6 +21,7 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use clap::Args;
+use sppm_lang::files::FileError;
 use sppm_lang::scene::Scene;
 use sppm_lang::watch::DependencyWatcher;
 use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
@@ -95,11 +96,16 @@ impl Job {
 }
 
 pub fn run(args: &WatchArgs) -> ExitCode {
-    if !args.scene.is_file() {
-        eprintln!(
-            "error: scene file `{}` does not exist (watch needs an existing scene to start)",
-            args.scene.display()
-        );
+    // Read as a load reads it: a folder, FIFO or device is named as such.
+    if let Err(e) = sppm_lang::files::open_regular(&args.scene, sppm_lang::files::MAX_SOURCE_BYTES)
+    {
+        let why = match &e {
+            FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+                format!("scene file `{}` does not exist", args.scene.display())
+            }
+            _ => e.with_path(&args.scene),
+        };
+        eprintln!("error: {why} (watch needs an existing scene to start)");
         return ExitCode::from(EXIT_USAGE);
     }
     let output = match super::output_path(args.output.as_deref(), &args.scene) {
@@ -158,8 +164,19 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         if let Err(e) = watcher.set_dependencies(&loaded.dependencies) {
             status(&format!("cannot watch the scene's files: {e}"));
         }
-        let diagnostics = live::diagnostics_view(&loaded.sources, &loaded.diagnostics);
-        match loaded.scene {
+        let mut diagnostics = live::diagnostics_view(&loaded.sources, &loaded.diagnostics);
+        // An output the scene now reads (an image or include of that name) would be destroyed,
+        // and each write would start the next round.
+        let scene = match super::check_not_an_input(&[&output], &loaded.dependencies) {
+            Ok(()) => loaded.scene,
+            Err(e) => {
+                status(&format!("error: {e}"));
+                let d = Diagnostic::error(sppm_lang::span::Span::detached(), e);
+                diagnostics.extend(live::diagnostics_view(&loaded.sources, &[d]));
+                None
+            }
+        };
+        match scene {
             Some(mut scene) => {
                 round += 1;
                 args.size.apply_to(&mut scene);
