@@ -9,7 +9,7 @@ use super::Evaluator;
 use super::blocks::Sink;
 use super::scope::{Binding, Frame};
 use super::value::Value;
-use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
+use crate::diag::{At, Diagnostic, Error, SourceResult, short_number, suggest};
 use crate::span::Span;
 use crate::syntax::ast::*;
 
@@ -191,6 +191,18 @@ impl Evaluator {
                 ClauseTest::Range(lo, hi) => {
                     let a = self.eval(lo)?.num().at(lo.span)?;
                     let b = self.eval(hi)?.num().at(hi.span)?;
+                    if a > b {
+                        // Would never match: a mistake, as with `clamp`'s bounds.
+                        let (a, b) = (short_number(a), short_number(b));
+                        return Err(vec![
+                            Error::new(format!("`#range` bounds are reversed ({a} > {b})"))
+                                .label("the lower bound comes first")
+                                .help(format!(
+                                    "write `#range ({b}, {a})`: a reversed range never matches"
+                                ))
+                                .at(lo.span.join(hi.span)),
+                        ]);
+                    }
                     a <= v && v <= b
                 }
             };
