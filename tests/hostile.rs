@@ -5,7 +5,8 @@
 //! 20000x20000 pixels), and hazardous command-line flags. Each child runs under a 2 GB
 //! address-space limit (`prlimit`) and is killed after 60 s. A case passes when the process did
 //! not panic or die of a signal, exited as expected, located its error (file:line:column) when
-//! it exited 1, left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
+//! it exited 1, printed no control character from the scene raw (a terminal would obey it),
+//! left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
 //! reported together, one line per case.
 
 use std::path::{Path, PathBuf};
@@ -337,6 +338,14 @@ fn judge(
     }
     if outcome.stderr.contains("memory allocation of") {
         return fail("allocation failure");
+    }
+    // A control character from the scene would reach the terminal (escape injection).
+    if let Some(c) = outcome
+        .stderr
+        .chars()
+        .find(|c| c.is_control() && !matches!(c, '\n' | '\t'))
+    {
+        return fail(&format!("a raw control character {c:?} in the diagnostics"));
     }
     let leftovers = leftover_temporaries(out_dir);
     if !leftovers.is_empty() {

@@ -148,6 +148,57 @@ fn floor_char(text: &str, mut i: usize) -> usize {
     i
 }
 
+/// Whether `c` is shown escaped: a control character other than tab, newline and the
+/// carriage return of a CRLF line end (`crlf`: a newline follows it). Printed raw, an escape
+/// sequence in a hostile scene (ESC, NUL, a lone CR, C1 controls) would drive the terminal that
+/// shows the diagnostic: recolour it, hide lines, retitle the window.
+fn hidden(c: char, crlf: bool) -> bool {
+    c.is_control() && c != '\n' && c != '\t' && !(c == '\r' && crlf)
+}
+
+/// `c` as Rust writes it in a string: `\u{1b}`.
+fn escaped(c: char) -> String {
+    format!("\\u{{{:x}}}", u32::from(c))
+}
+
+/// `text` with its [`hidden`] characters escaped.
+fn visible(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for (i, c) in text.char_indices() {
+        if hidden(c, text[i + c.len_utf8()..].starts_with('\n')) {
+            out.push_str(&escaped(c));
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Copies `text[lo..hi]` to the end of `out` with its [`hidden`] characters escaped, recording
+/// the copied pieces (`(original start, original end, start in out)`) so that offsets still
+/// map: a span over a hidden character covers its escape.
+fn push_visible(
+    out: &mut String,
+    pieces: &mut Vec<(usize, usize, usize)>,
+    text: &str,
+    lo: usize,
+    hi: usize,
+) {
+    let mut start = lo;
+    for (i, c) in text[lo..hi].char_indices() {
+        let at = lo + i;
+        let next = at + c.len_utf8();
+        if hidden(c, text[next..].starts_with('\n')) {
+            pieces.push((start, at, out.len()));
+            out.push_str(&text[start..at]);
+            out.push_str(&escaped(c));
+            start = next;
+        }
+    }
+    pieces.push((start, hi, out.len()));
+    out.push_str(&text[start..hi]);
+}
+
 /// The lines of the file around the spans ([`WINDOW_LINES`] more on each side), except that
 /// every line longer than [`MAX_LINE`] is cut to a window around the spans on it (or to its
 /// start), marked with `…`. Line numbers stay the same; the name says where the first span
@@ -177,18 +228,19 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
         }
     }
     let window = &text[window_start..window_end];
-    if window.split('\n').all(|l| l.len() <= MAX_LINE) {
-        return Some(Excerpt {
-            source: Snippet {
-                name: file.name.clone(),
-                text: window.to_string(),
-                first_line: first.line,
-            },
-            pieces: vec![(window_start, window_end, 0)],
-        });
-    }
     let mut out = String::new();
     let mut pieces = Vec::new();
+    if window.split('\n').all(|l| l.len() <= MAX_LINE) {
+        push_visible(&mut out, &mut pieces, text, window_start, window_end);
+        return Some(Excerpt {
+            source: Snippet {
+                name: visible(&file.name),
+                text: out,
+                first_line: first.line,
+            },
+            pieces,
+        });
+    }
     let mut cut_primary = false;
     let mut start = window_start;
     while start < window_end {
@@ -201,8 +253,7 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
             end
         };
         if body_end - start <= MAX_LINE {
-            pieces.push((start, end, out.len()));
-            out.push_str(&text[start..end]);
+            push_visible(&mut out, &mut pieces, text, start, end);
         } else {
             let on_line: Vec<&Span> = spans
                 .iter()
@@ -231,8 +282,7 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
             if lo > start {
                 out.push('…');
             }
-            pieces.push((lo, hi, out.len()));
-            out.push_str(&text[lo..hi]);
+            push_visible(&mut out, &mut pieces, text, lo, hi);
             if hi < body_end {
                 out.push('…');
             }
@@ -244,9 +294,12 @@ fn excerpt(map: &SourceMap, span: Span, others: &[Span]) -> Option<Excerpt> {
     }
     let name = if cut_primary {
         let (line, col) = map.line_col(span);
-        format!("{} (line {line} cut around column {col})", file.name)
+        format!(
+            "{} (line {line} cut around column {col})",
+            visible(&file.name)
+        )
     } else {
-        file.name.clone()
+        visible(&file.name)
     };
     Some(Excerpt {
         source: Snippet {
@@ -264,14 +317,14 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
     let mut labels = Vec::new();
     let mut related = Vec::new();
     if let Some(ex) = &excerpt {
-        let text = (!d.label.is_empty()).then(|| d.label.clone());
+        let text = (!d.label.is_empty()).then(|| visible(&d.label));
         labels.push(LabeledSpan::new_primary_with_span(text, ex.span(d.span)));
     }
     for (span, label) in &d.labels {
         match &excerpt {
             Some(ex) if span.file == d.span.file => {
                 labels.push(LabeledSpan::new_with_span(
-                    Some(label.clone()),
+                    Some(visible(label)),
                     ex.span(*span),
                 ));
             }
@@ -282,7 +335,7 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
         related.push(note(map, *span, label));
     }
     Rendered {
-        message: d.message.clone(),
+        message: visible(&d.message),
         severity: match d.severity {
             Severity::Error => miette::Severity::Error,
             Severity::Warning => miette::Severity::Warning,
@@ -290,7 +343,7 @@ fn convert(map: &SourceMap, d: &Diagnostic) -> Rendered {
         },
         source: excerpt.map(|e| e.source),
         labels,
-        help: d.help.clone(),
+        help: d.help.as_deref().map(visible),
         related,
     }
 }
@@ -305,7 +358,7 @@ fn note(map: &SourceMap, span: Span, label: &str) -> Rendered {
         None => Vec::new(),
     };
     Rendered {
-        message: label.to_string(),
+        message: visible(label),
         severity: miette::Severity::Advice,
         source: excerpt.map(|e| e.source),
         labels,
@@ -414,6 +467,59 @@ mod tests {
         let text = render_plain(&map, &[d], 80);
         assert!(text.contains("[a.scn:1:10]"), "{text}");
         assert!(text.contains("sphere { oops }"), "{text}");
+    }
+
+    /// Control characters from the scene (ESC, BEL, NUL, DEL, a lone CR, a C1 CSI) reach the
+    /// output escaped, in the excerpt, the message and the labels; the label still sits under
+    /// the right text, and a CRLF line end is kept as a line end.
+    #[test]
+    fn control_characters_are_shown_escaped() {
+        let mut map = SourceMap::new();
+        let text = "a\r\nb \x1b[31m\x07\0\x7f\u{9b} oops\rx\r\n";
+        let id = map.add(Path::new("c.scn"), "c\x1b.scn".into(), text);
+        let at = text.find("oops").unwrap() as u32;
+        let mut d = Diagnostic::error(Span::new(id, at, at + 4), "found `\x1b`");
+        d.label = "bad\x07".into();
+        d.help = Some("help\0".into());
+        d.labels.push((Span::new(id, 4, 5), "escape\x1b".into()));
+        let shown = render_plain(&map, std::slice::from_ref(&d), 200);
+        let raw: Vec<char> = shown
+            .chars()
+            .filter(|c| c.is_control() && *c != '\n')
+            .collect();
+        assert!(raw.is_empty(), "raw {raw:?} in:\n{shown}");
+        for want in [
+            "b \\u{1b}[31m\\u{7}\\u{0}\\u{7f}\\u{9b} oops\\u{d}x",
+            "found `\\u{1b}`",
+            "bad\\u{7}",
+            "help\\u{0}",
+            "escape\\u{1b}",
+            "c\\u{1b}.scn",
+        ] {
+            assert!(shown.contains(want), "no {want} in:\n{shown}");
+        }
+        // The CRLF after `a` stays a line break: `b ...` is line 2.
+        assert!(shown.contains(" 2 │ b "), "{shown}");
+        // The label's underline starts under `oops` in the escaped line.
+        let line = shown.lines().find(|l| l.contains("oops")).unwrap();
+        let under = shown
+            .lines()
+            .skip_while(|l| !l.contains("oops"))
+            .nth(1)
+            .unwrap();
+        let col = |s: &str, p: usize| s[..p].chars().count();
+        assert_eq!(
+            col(under, under.find('─').unwrap()),
+            col(line, line.find("oops").unwrap()),
+            "{shown}"
+        );
+        // The same through miette's own handler (the terminal path).
+        let report = format!("{:?}", to_report(&map, &[d]));
+        assert!(!report.contains('\x1b') || report.contains("\\u{1b}[31m"));
+        assert!(
+            !report.contains('\x07') && !report.contains('\0'),
+            "{report}"
+        );
     }
 
     #[test]
