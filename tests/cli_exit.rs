@@ -735,3 +735,56 @@ fn an_unwritable_output_is_refused_before_rendering() {
         .collect();
     assert!(names.len() <= 2, "{names:?}");
 }
+
+/// `sppm-lang args`, killed after `seconds`: `None` when it had not ended by then.
+fn sppm_within(args: &[&str], seconds: u64) -> Option<Output> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run sppm-lang");
+    let start = std::time::Instant::now();
+    while start.elapsed().as_secs() < seconds {
+        if child.try_wait().unwrap().is_some() {
+            return Some(child.wait_with_output().unwrap());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// `chart --from-csv` reads its CSV as a scene is read: a FIFO (which would block the read
+/// forever) and a device such as /dev/zero (endless zeros, valid UTF-8, until the memory runs
+/// out) are refused at once.
+#[cfg(unix)]
+#[test]
+fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("table.csv");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    let out_png = dir.path().join("c.png");
+    let mut inputs = vec![("/dev/zero".to_string(), "a device")];
+    if made {
+        inputs.push((fifo.to_str().unwrap().to_string(), "named pipe"));
+    } else {
+        eprintln!("skipped the FIFO: mkfifo is not available");
+    }
+    for (csv, why) in &inputs {
+        let out = sppm_within(
+            &["chart", "--from-csv", csv, "-o", out_png.to_str().unwrap()],
+            20,
+        )
+        .unwrap_or_else(|| panic!("chart --from-csv {csv} did not end"));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{csv}:\n{err}");
+        assert!(err.contains(why), "{csv}:\n{err}");
+    }
+    assert!(!out_png.exists());
+}

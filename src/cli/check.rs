@@ -76,7 +76,7 @@ pub struct LoadedScene {
 /// error: it has errors).
 pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, ExitCode> {
     let loaded = sppm_lang::load_file(path, options).map_err(|e| {
-        err(&format!("error: cannot read `{}`: {e}\n", path.display()));
+        err(&format!("error: {}\n", e.with_path(path)));
         ExitCode::from(EXIT_USAGE)
     })?;
     print_diagnostics(&loaded);
@@ -151,7 +151,7 @@ pub fn run(
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
-            err(&format!("error: cannot read `{}`: {e}\n", scene.display()));
+            err(&format!("error: {}\n", e.with_path(scene)));
             return ExitCode::from(EXIT_USAGE);
         }
     };

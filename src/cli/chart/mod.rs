@@ -219,7 +219,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
     };
     let reference = load_image(reference_path, ColorSpace::Linear)?;
     let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
-        .map_err(|e| format!("cannot read `{}`: {e}", scene_path.display()))?;
+        .map_err(|e| e.with_path(scene_path))?;
     print_diagnostics(&loaded);
     let mut scene = match &loaded.scene {
         Some(s) if !loaded.has_errors() => s.clone(),

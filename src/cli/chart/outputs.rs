@@ -34,8 +34,9 @@ pub struct Table {
 
 /// Reads a CSV written by [`write_outputs`].
 pub fn read_csv(path: &Path) -> Result<Table, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    // As a scene is read: a FIFO would block, /dev/zero would fill the memory.
+    let text = sppm_lang::files::read_text(path, sppm_lang::files::MAX_SOURCE_BYTES)
+        .map_err(|e| e.with_path(path))?;
     let mut table = Table {
         scene: String::new(),
         reference: String::new(),

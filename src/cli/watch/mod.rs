@@ -309,7 +309,7 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
         }
         Err(e) => {
             // Deleted between saves (delete-and-recreate): keep watching the path.
-            let message = format!("cannot read `{}`: {e}", path.display());
+            let message = e.with_path(path);
             status(&message);
             Load {
                 empty: false,
