@@ -788,3 +788,45 @@ fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
     }
     assert!(!out_png.exists());
 }
+
+/// `chart` flags that would run for ages (a budget of 1e300 s per method) or chart nothing (an
+/// unknown method, skipped silently before) are usage errors before any rendering.
+#[test]
+fn absurd_chart_flags_are_usage_errors_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    // A reference the chart accepts (same size), so that only the flags can stop it.
+    let reference = dir.path().join("ref.exr");
+    let r = reference.to_str().unwrap();
+    succeeded(&render_with(
+        "examples/furnace.scn",
+        r,
+        &["--resolution", "8x8", "--iterations", "1"],
+    ));
+    let chart = dir.path().join("c.png");
+    let c = chart.to_str().unwrap();
+    for flags in [
+        &["--budget", "1e300"][..],
+        &["--budget", "nan"],
+        &["--budget", "0s"],
+        &["--budget", "0.1", "--methods", "sppm,nosuch"],
+        &["--budget", "0.1", "--methods", ""],
+    ] {
+        let mut args = vec![
+            "chart",
+            "examples/furnace.scn",
+            "--resolution",
+            "8x8",
+            "--reference",
+            r,
+            "-o",
+            c,
+        ];
+        args.extend(flags);
+        let out = sppm_within(&args, 20).unwrap_or_else(|| panic!("{flags:?} did not end"));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flags:?}:\n{err}");
+        assert!(!err.contains("panicked"), "{flags:?}:\n{err}");
+    }
+    // Only the reference: no chart, CSV or temporary file.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}

@@ -57,9 +57,9 @@ pub struct ChartArgs {
     /// Redraw the charts from a CSV this command wrote earlier, without rendering.
     #[arg(long, value_name = "CSV", conflicts_with_all = ["scene", "reference", "window", "methods"])]
     pub from_csv: Option<PathBuf>,
-    /// Largest time budget per method, in seconds (`60` or `60s`).
-    #[arg(long, default_value = "60")]
-    pub budget: String,
+    /// Largest time budget per method, in seconds (`60` or `60s`; at most a year).
+    #[arg(long, default_value = "60", value_parser = parse_budget)]
+    pub budget: f64,
     /// Pixel window x0,y0,x1,y1 (columns then rows, half-open) also measured on its own.
     #[arg(long)]
     pub window: Option<String>,
@@ -167,14 +167,25 @@ impl From<ErrorStats> for Errors {
     }
 }
 
+/// A number of seconds as [`super::parse_seconds`] takes it, with an optional `s`.
 fn parse_budget(text: &str) -> Result<f64, String> {
-    let t = text.trim().trim_end_matches('s');
-    match t.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!(
-            "--budget `{text}`: expected a positive number of seconds"
-        )),
+    super::parse_seconds(text.trim().trim_end_matches('s'))
+}
+
+/// The methods `--methods` names (comma-separated labels); an unknown label is an error
+/// naming the known ones (it would otherwise be skipped, and the chart end up empty).
+fn parse_methods(text: &str) -> Result<Vec<String>, String> {
+    let known: Vec<String> = methods().into_iter().map(|m| m.label).collect();
+    let wanted: Vec<String> = text.split(',').map(|s| s.trim().to_string()).collect();
+    for w in &wanted {
+        if !known.contains(w) {
+            return Err(format!(
+                "--methods: unknown method `{w}`; the methods are {}",
+                known.join(", ")
+            ));
+        }
     }
+    Ok(wanted)
 }
 
 pub fn run(args: &ChartArgs) -> ExitCode {
@@ -188,7 +199,8 @@ pub fn run(args: &ChartArgs) -> ExitCode {
 }
 
 fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
-    let budget = parse_budget(&args.budget)?;
+    let budget = args.budget;
+    let wanted = args.methods.as_deref().map(parse_methods).transpose()?;
     let window = args.window.as_deref().map(Window::parse).transpose()?;
     let ext = args.output.extension().and_then(|e| e.to_str());
     if !ext.is_some_and(|e| e.eq_ignore_ascii_case("png")) {
@@ -252,10 +264,6 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             }
         }
     };
-    let wanted: Option<Vec<String>> = args
-        .methods
-        .as_deref()
-        .map(|m| m.split(',').map(|s| s.trim().to_string()).collect());
     let mut rows = Vec::new();
     for m in methods() {
         if wanted.as_ref().is_some_and(|w| !w.contains(&m.label)) {
