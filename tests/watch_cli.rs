@@ -345,6 +345,7 @@ fn a_scene_that_reads_its_own_output_is_not_rendered_over_it() {
     )
     .unwrap();
     w.expect("which this command reads");
+    w.expect("the output cannot be written; the last image is kept");
     w.expect("waiting for changes");
     let later = w.drain(Duration::from_millis(800));
     assert!(

@@ -167,7 +167,9 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         let mut diagnostics = live::diagnostics_view(&loaded.sources, &loaded.diagnostics);
         // An output the scene now reads (an image or include of that name) would be destroyed,
         // and each write would start the next round.
-        let scene = match super::check_not_an_input(&[&output], &loaded.dependencies) {
+        let output_ok = super::check_not_an_input(&[&output], &loaded.dependencies);
+        let scene_ok = loaded.scene.is_some();
+        let scene = match output_ok.clone() {
             Ok(()) => loaded.scene,
             Err(e) => {
                 status(&format!("error: {e}"));
@@ -213,6 +215,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             None => {
                 let (state, message) = if loaded.empty {
                     ("empty", "the scene file is empty; the last image is kept")
+                } else if output_ok.is_err() && scene_ok {
+                    let m = "the output cannot be written; the last image is kept";
+                    status(m);
+                    ("errors", m)
                 } else {
                     status("the scene has errors; the last image is kept");
                     ("errors", "the scene has errors; the last image is kept")
