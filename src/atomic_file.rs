@@ -68,6 +68,18 @@ fn folder_of(path: &Path) -> &Path {
 /// input is the target when both name the same directory entry after symbolic links are
 /// resolved (a hard link to an input is another entry: replacing it leaves the input whole).
 pub fn check_output<P: AsRef<Path>>(path: &Path, inputs: &[P]) -> Result<(), String> {
+    // `out.png/` or `out.png/.` names a folder: the final rename would fail.
+    let named = path.file_name().is_some_and(|n| {
+        path.as_os_str()
+            .as_encoded_bytes()
+            .ends_with(n.as_encoded_bytes())
+    });
+    if !named {
+        return Err(format!(
+            "output `{}` does not end in a file name",
+            path.display()
+        ));
+    }
     check_target(path)?;
     let dir = folder_of(path);
     match std::fs::metadata(dir) {
@@ -213,6 +225,10 @@ mod tests {
         std::fs::write(&file, "sphere {}").unwrap();
         let e = check_output(&file.join("out.png"), none).unwrap_err();
         assert!(e.contains("cannot be used"), "{e}");
+        for folder_like in ["out.png/", "out.png/.", "..", "/"] {
+            let e = check_output(&dir.path().join(folder_like), none).unwrap_err();
+            assert!(e.contains("does not end in a file name"), "{e}");
+        }
         let long = dir.path().join(format!("{}.png", "a".repeat(5000)));
         let e = check_output(&long, none).unwrap_err();
         assert!(e.contains("cannot be used"), "{e}");

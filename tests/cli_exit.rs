@@ -680,8 +680,8 @@ fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
     assert_eq!(temporary, 0);
 }
 
-/// An output that cannot be written (no such folder, a file where a folder should be, a name
-/// too long, a read-only folder) is a usage error found before rendering: the render asked
+/// An output that cannot be written (no such folder, a file where a folder should be, a
+/// trailing `/`, a name too long, a read-only folder) is a usage error found before rendering: the render asked
 /// for here (10^8 iterations) would not end within the test's time otherwise.
 #[test]
 fn an_unwritable_output_is_refused_before_rendering() {
@@ -691,6 +691,7 @@ fn an_unwritable_output_is_refused_before_rendering() {
     let mut outputs = vec![
         (dir.path().join("missing/o.png"), "does not exist"),
         (scene.join("o.png"), "cannot be used"),
+        (dir.path().join("o.png/"), "does not end in a file name"),
         (
             dir.path().join(format!("{}.png", "a".repeat(5000))),
             "cannot be used",
