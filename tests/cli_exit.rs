@@ -758,6 +758,15 @@ fn sppm_within(args: &[&str], seconds: u64) -> Option<Output> {
     None
 }
 
+/// `out` is a usage error (exit 2, no panic) whose message contains `why`; `what` names the
+/// case.
+fn refused(out: &Output, what: &str, why: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{what}:\n{err}");
+    assert!(!err.contains("panicked"), "{what}:\n{err}");
+    assert!(err.contains(why), "{what}:\n{err}");
+}
+
 /// `chart --from-csv` reads its CSV as a scene is read: a FIFO (which would block the read
 /// forever) and a device such as /dev/zero (endless zeros, valid UTF-8, until the memory runs
 /// out) are refused at once.
@@ -783,9 +792,7 @@ fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
             20,
         )
         .unwrap_or_else(|| panic!("chart --from-csv {csv} did not end"));
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{csv}:\n{err}");
-        assert!(err.contains(why), "{csv}:\n{err}");
+        refused(&out, csv, why);
     }
     assert!(!out_png.exists());
 }
@@ -824,9 +831,7 @@ fn absurd_chart_flags_are_usage_errors_at_once() {
         ];
         args.extend(flags);
         let out = sppm_within(&args, 20).unwrap_or_else(|| panic!("{flags:?} did not end"));
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{flags:?}:\n{err}");
-        assert!(!err.contains("panicked"), "{flags:?}:\n{err}");
+        refused(&out, &flags.join(" "), "error:");
     }
     // Only the reference: no chart, CSV or temporary file.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);

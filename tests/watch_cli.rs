@@ -303,25 +303,35 @@ fn watch_rerenders_when_a_texture_image_is_replaced() {
 fn watch_without_a_scene_file_is_a_usage_error() {
     let dir = tempfile::tempdir().unwrap();
     let missing: PathBuf = dir.path().join("nope.scn");
-    let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
-        .args(["watch", missing.to_str().unwrap()])
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("does not exist"), "{err}");
-    // A folder is named as one (it exists, but is no scene).
-    let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
-        .args(["watch", dir.path().to_str().unwrap(), "-o", "x.png"])
-        .current_dir(dir.path())
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("is a directory"), "{err}");
+    // A missing scene, and a folder (it exists, but is no scene), named as such.
+    for (scene, why) in [
+        (&missing, "does not exist"),
+        (&dir.path().to_path_buf(), "is a directory"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
+            .args(["watch", scene.to_str().unwrap(), "-o"])
+            .arg(dir.path().join("x.png"))
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(why), "{err}");
+    }
     let _ = std::io::stdout().flush();
+}
+
+/// `watch STEM.scn -o STEM.png` in a new folder on a red scene, after its first render: the
+/// folder, the scene, the image and the running watch.
+fn watching_a_red_scene(stem: &str) -> (tempfile::TempDir, PathBuf, PathBuf, Watch) {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene_name, out_name) = (format!("{stem}.scn"), format!("{stem}.png"));
+    let scene = dir.path().join(&scene_name);
+    let out = dir.path().join(&out_name);
+    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
+    let mut w = Watch::start(dir.path(), &scene_name, &out_name);
+    w.expect("render #1 full finished");
+    (dir, scene, out, w)
 }
 
 /// An edit that makes the scene read its own output image (as a texture) is refused for that
@@ -329,12 +339,7 @@ fn watch_without_a_scene_file_is_a_usage_error() {
 /// round, forever. The image stays as it was until a save that no longer reads it.
 #[test]
 fn a_scene_that_reads_its_own_output_is_not_rendered_over_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("own.scn");
-    let out = dir.path().join("own.png");
-    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
-    let mut w = Watch::start(dir.path(), "own.scn", "own.png");
-    w.expect("render #1 full finished");
+    let (dir, scene, out, mut w) = watching_a_red_scene("own");
     let before = fs::read(&out).unwrap();
     fs::write(
         &scene,
@@ -391,12 +396,7 @@ fn ctrl_c_during_a_render_writes_the_finished_iterations_and_exits_0() {
 #[test]
 fn an_empty_save_keeps_the_last_image_and_the_next_save_renders() {
     // Editors truncate a file before writing it; the empty scene is not rendered over the image.
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("scene.scn");
-    let out = dir.path().join("out.png");
-    fs::write(&scene, scene_text([255, 0, 0])).unwrap();
-    let mut w = Watch::start(dir.path(), "scene.scn", "out.png");
-    w.expect("render #1 full finished");
+    let (dir, scene, out, mut w) = watching_a_red_scene("scene");
     let before = fs::read(&out).unwrap();
     fs::write(&scene, "").unwrap();
     w.expect("is empty; the last image is kept");
