@@ -22,8 +22,8 @@ use crate::shapes::Shape;
 use crate::textures::TexCoord;
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
 pub use settings::{
-    EffectiveSettings, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS, MAX_THREADS, RADIUS_FOOTPRINTS,
-    RenderError, RenderOptions, effective_settings,
+    EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
+    MAX_THREADS, RADIUS_FOOTPRINTS, RenderError, RenderOptions, effective_settings,
 };
 use shapes::{build_mesh, build_shapes};
 

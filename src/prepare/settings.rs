@@ -45,6 +45,8 @@ pub struct EffectiveSettings {
     pub time_limit: Option<f64>,
     /// `whitted`'s adaptive anti-aliasing threshold (`antialias adaptive`); `None`: jitter only.
     pub adaptive_threshold: Option<f64>,
+    /// SPPM's final gathering (`final_gather on`).
+    pub final_gather: bool,
 }
 
 /// A render failure; `span` points at the declaration that caused it when there is one.
@@ -92,6 +94,11 @@ impl From<crate::scene::Invalid> for RenderError {
 /// 1.5 and 2, 1.5 gave the lowest RMSE against path tracing over all examples (geometric
 /// mean) and 0.72x the relative MSE of 1.
 pub const RADIUS_FOOTPRINTS: f64 = 1.5;
+
+/// With final gathering, a gather point's initial radius is this many times the radius the
+/// visible points' rule gives at its distance along the camera path (chosen with the furnace:
+/// 1, 2, 3, 4 and 8 measured, see `docs/integrators.md`).
+pub const GATHER_RADIUS_FACTOR: f64 = 2.0;
 
 /// How SPPM and PPM choose a pixel's initial gather radius.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -209,5 +216,6 @@ pub fn effective_settings(
             s.antialias_threshold
                 .unwrap_or(Antialias::DEFAULT_THRESHOLD)
         }),
+        final_gather: s.final_gather,
     })
 }

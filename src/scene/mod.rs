@@ -91,6 +91,10 @@ pub struct Settings {
     pub antialias: Antialias,
     /// `threshold t` of `antialias adaptive`; `None`: [`Antialias::DEFAULT_THRESHOLD`].
     pub antialias_threshold: Option<f64>,
+    /// SPPM's final gathering (`final_gather on`): a visible point gathers only caustic
+    /// photons, and one BSDF-sampled gather path per pixel and iteration brings the rest from
+    /// the next diffuse surface. Other integrators ignore it.
+    pub final_gather: bool,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -112,6 +116,7 @@ impl Default for Settings {
             time_limit: None,
             antialias: Antialias::Jitter,
             antialias_threshold: None,
+            final_gather: false,
             span: Span::detached(),
         }
     }

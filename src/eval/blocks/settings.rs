@@ -13,7 +13,7 @@ use crate::syntax::ast::Name;
 
 pub(super) struct SettingsBuilder(pub(super) Settings);
 
-static SETTINGS_PROPS: [PropSpec; 12] = [
+static SETTINGS_PROPS: [PropSpec; 13] = [
     p("resolution", 1, 2, "a width and height", "<512, 512>"),
     p("iterations", 1, 1, "a number", "64"),
     p("photons", 1, 1, "a number", "200000"),
@@ -30,6 +30,7 @@ static SETTINGS_PROPS: [PropSpec; 12] = [
     p("time_limit", 1, 1, "a number of seconds", "60"),
     w("antialias", "`jitter` or `adaptive`", "adaptive"),
     p("threshold", 1, 1, "a colour difference", "0.1"),
+    w("final_gather", "`on` or `off`", "on"),
 ];
 
 impl SettingsBuilder {
@@ -123,6 +124,7 @@ impl Sink for SettingsBuilder {
                     .expect("known name");
             }
             "threshold" => s.antialias_threshold = Some(positive(&args[0], "threshold")?),
+            "final_gather" => s.final_gather = word(&args[0], &["on", "off"])? == "on",
             _ => unreachable!(),
         }
         Ok(())

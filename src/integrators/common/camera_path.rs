@@ -87,20 +87,81 @@ pub(crate) fn fixed_camera_path(
 #[inline]
 fn follow_eye_ray(
     scene: &PreparedScene,
+    ray: Ray,
+    settings: &EffectiveSettings,
+    rng: &mut Rng,
+    on_hit: impl FnMut(u32),
+) -> (Vec3A, Option<VisiblePoint>) {
+    let start = PathStart {
+        beta: Vec3A::ONE,
+        distance: 0.0,
+        gather: false,
+    };
+    follow(scene, ray, settings, rng, start, on_hit)
+}
+
+/// The final-gather path from visible point `vp`: one BSDF sample there, then through
+/// specular and glossy bounces to the next non-specular surface (the gather point), adding the
+/// direct light of every non-specular surface it meets. Light that reaches `vp` from an emitter
+/// through specular bounces only is left out: the caustic photons at `vp` carry it (see
+/// `docs/integrators.md`). Returns that light (weighted by the path's throughput from the
+/// camera) and the gather point.
+pub(crate) fn gather_path(
+    scene: &PreparedScene,
+    settings: &EffectiveSettings,
+    vp: &VisiblePoint,
+    rng: &mut Rng,
+) -> (Vec3A, Option<VisiblePoint>) {
+    let Some(s) = vp
+        .bsdf
+        .sample(vp.wo, rng.f32(), rng.vec2(), TransportMode::Radiance)
+    else {
+        return (Vec3A::ZERO, None);
+    };
+    let beta = vp.beta * s.weight;
+    if beta.max_element().is_nan() || beta.max_element() <= 0.0 {
+        return (Vec3A::ZERO, None);
+    }
+    let start = PathStart {
+        beta,
+        distance: vp.distance,
+        gather: true,
+    };
+    let ray = spawn_ray(vp.p, vp.bsdf.ng, s.wi);
+    follow(scene, ray, settings, rng, start, |_| {})
+}
+
+/// Where [`follow`] starts: the throughput and length of the path so far, and whether it is a
+/// gather path (which starts after a BSDF sample at a visible point, not at the camera).
+struct PathStart {
+    beta: Vec3A,
+    distance: f32,
+    gather: bool,
+}
+
+/// Follows `ray` through specular and glossy bounces (at most `max_depth` surfaces) to the
+/// first other surface; `on_hit(object)` runs at every surface it meets.
+#[inline]
+fn follow(
+    scene: &PreparedScene,
     mut ray: Ray,
     settings: &EffectiveSettings,
     rng: &mut Rng,
+    start: PathStart,
     mut on_hit: impl FnMut(u32),
 ) -> (Vec3A, Option<VisiblePoint>) {
-    let mut beta = Vec3A::ONE;
+    let mut beta = start.beta;
     let mut l = Vec3A::ZERO;
-    let mut distance = 0.0f32;
+    let mut distance = start.distance;
     // After a glossy bounce, direct_lighting's BSDF sample already counted emission and the
-    // background the next segment meets.
-    let mut after_specular = true;
+    // background the next segment meets. A gather path starts after such a sample too, and
+    // the light it meets through specular bounces alone is the caustic photons' share: it
+    // counts emission only once it has passed a glossy surface.
+    let mut after_specular = !start.gather;
+    let mut counts_emission = !start.gather;
     for depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
-            if after_specular {
+            if after_specular && counts_emission {
                 l += beta * scene.background_radiance(ray.d);
             }
             break;
@@ -109,12 +170,16 @@ fn follow_eye_ray(
         on_hit(scene.prim_object[sh.prim as usize]);
         distance += sh.hit.t * ray.d.length();
         attenuate_inside(scene, &sh, &ray, &mut beta);
-        if after_specular && let Some((_, al)) = scene.area_light(sh.prim) {
+        if after_specular
+            && counts_emission
+            && let Some((_, al)) = scene.area_light(sh.prim)
+        {
             l += beta * al.le(sh.hit.n, wo);
         }
         let bsdf = scene.bsdf(&sh);
         if !bsdf.is_specular() {
             l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+            counts_emission = true;
         }
         if !bsdf.is_specular() && (!bsdf.is_glossy() || depth + 1 == settings.max_depth) {
             let vp = VisiblePoint {

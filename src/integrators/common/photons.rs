@@ -19,6 +19,19 @@ pub(crate) fn trace_photon(
     rng: &mut Rng,
     mut at_hit: impl FnMut(u32, &SurfaceHit, Vec3A, Vec3A),
 ) {
+    trace_classified_photon(scene, max_depth, rng, |depth, sh, wi, beta, _| {
+        at_hit(depth, sh, wi, beta)
+    });
+}
+
+/// [`trace_photon`], telling `at_hit` also whether every bounce before this surface was a
+/// specular one (true at the first surface): the photon is then a caustic photon.
+pub(crate) fn trace_classified_photon(
+    scene: &PreparedScene,
+    max_depth: u32,
+    rng: &mut Rng,
+    mut at_hit: impl FnMut(u32, &SurfaceHit, Vec3A, Vec3A, bool),
+) {
     let Some((li, pl)) = scene.photon_distr.sample(rng.f32()) else {
         return;
     };
@@ -32,17 +45,19 @@ pub(crate) fn trace_photon(
     } else {
         spawn_ray(ps.p, ps.n, ps.dir)
     };
+    let mut all_specular = true;
     for depth in 0..max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             return;
         };
         attenuate_inside(scene, &sh, &ray, &mut beta);
         let wi = -ray.d;
-        at_hit(depth, &sh, wi, beta);
+        at_hit(depth, &sh, wi, beta, all_specular);
         let bsdf = scene.bsdf(&sh);
         let Some(s) = bsdf.sample(wi, rng.f32(), rng.vec2(), TransportMode::Importance) else {
             return;
         };
+        all_specular &= s.specular;
         let bnew = beta * s.weight;
         // Russian roulette keeps the photon's power roughly constant.
         let q = (1.0 - bnew.max_element() / beta.max_element()).max(0.0);

@@ -24,17 +24,20 @@ pub(crate) enum Stream {
     Supersample = 4,
     /// SPPM's extra camera samples (emitted and direct light only), indexed by pixel.
     CameraExtra = 5,
+    /// SPPM's final-gather paths, indexed by pixel.
+    Gather = 6,
 }
 
 impl Stream {
     #[cfg(test)]
-    const ALL: [Stream; 6] = [
+    const ALL: [Stream; 7] = [
         Stream::Camera,
         Stream::Photon,
         Stream::Pixel,
         Stream::PhotonMap,
         Stream::Supersample,
         Stream::CameraExtra,
+        Stream::Gather,
     ];
 
     /// The generator of item `index` of this stream in iteration `iteration`.
@@ -56,6 +59,6 @@ mod tests {
         for (i, a) in ids.iter().enumerate() {
             assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
         }
-        assert_eq!(ids, [0, 1, 2, 3, 4, 5]);
+        assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6]);
     }
 }

@@ -209,6 +209,11 @@ impl HitChunk {
     /// Empties the chunk for a round over `cells`.
     pub(super) fn reset(&mut self, cells: &Cells) {
         self.slabs.resize_with(cells.slabs(), Vec::new);
+        self.clear();
+    }
+
+    /// Drops the hits and the count (a pass that files nothing here).
+    pub(super) fn clear(&mut self) {
         for slab in &mut self.slabs {
             slab.clear();
         }

@@ -31,12 +31,12 @@ use std::time::Instant;
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::common::camera_path::{VisiblePoint, camera_path};
+use super::common::camera_path::{VisiblePoint, camera_path, gather_path};
 use super::common::progressive::{Finished, iterate};
 use super::common::streams::Stream;
 use super::{Integrator, Progress, RenderOutput, RenderStats};
 use crate::camera::Camera;
-use crate::prepare::{EffectiveSettings, PreparedScene};
+use crate::prepare::{EffectiveSettings, GATHER_RADIUS_FACTOR, PreparedScene};
 use crate::sampling::Rng;
 
 mod balance;
@@ -52,7 +52,7 @@ use balance::SampleStats;
 pub use pass::photon_flux;
 use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use photon_count::PhotonCount;
-use pixels::{Pixel, image_of, update};
+use pixels::{Estimate, Pixel, image_of, update, update_gather};
 
 /// Stochastic progressive photon mapping.
 #[derive(Debug, Clone, Copy, Default)]
@@ -118,8 +118,16 @@ pub(crate) fn render_with(
     let initial_radius = settings.initial_radius(&scene.scene.camera);
     // A pixel's radius is chosen at its first visible point (0 until then).
     let pixels = vec![Pixel::new(0.0); (w * h) as usize];
+    // Final gathering is SPPM's (PPM's eye paths are fixed, without balancing).
+    let final_gather = settings.final_gather && balanced;
     let state = State {
         gathered: Gathered::new(pixels.len()),
+        gather_gathered: Gathered::new(if final_gather { pixels.len() } else { 0 }),
+        gather: if final_gather {
+            vec![Estimate::default(); pixels.len()]
+        } else {
+            Vec::new()
+        },
         photon_count: PhotonCount::new(settings.photons, pixels.len()),
         emitted: 0,
         pixels,
@@ -134,6 +142,7 @@ pub(crate) fn render_with(
         //    mean of that light over the pixel's extra samples (`balance.rs`).
         let t_camera = Instant::now();
         let extra_paths: u64 = st.extra.iter().map(|&e| u64::from(e)).sum();
+        let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
         let lds: Vec<Vec3A> = st
             .pixels
             .par_iter_mut()
@@ -152,7 +161,6 @@ pub(crate) fn render_with(
                     px.radius = r;
                 }
                 px.vp = vp;
-                let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
                 let mut sum = finite(l);
                 if !balanced {
                     return sum;
@@ -169,6 +177,31 @@ pub(crate) fn render_with(
                 sum / (1 + extra) as f32
             })
             .collect();
+        //    With final gathering, each visible point's gather path: its direct light and its
+        //    gather point.
+        let lgs: Vec<Vec3A> = st
+            .gather
+            .par_iter_mut()
+            .zip(st.pixels.par_iter())
+            .enumerate()
+            .map(|(i, (g, px))| {
+                let Some(vp) = px.vp.as_ref() else {
+                    return Vec3A::ZERO;
+                };
+                if cancel.load(Ordering::Relaxed) {
+                    return Vec3A::ZERO;
+                }
+                let mut rng = Stream::Gather.rng(seed, iter, i as u64);
+                let (l, gp) = gather_path(scene, settings, vp, &mut rng);
+                if g.radius == 0.0
+                    && let Some(r) = gp.and_then(|gp| initial_radius.at(f64::from(gp.distance)))
+                {
+                    g.radius = r * GATHER_RADIUS_FACTOR;
+                }
+                g.vp = gp;
+                finite(l)
+            })
+            .collect();
         stats.camera_time += t_camera.elapsed();
         if cancel.load(Ordering::Relaxed) {
             return None;
@@ -183,6 +216,7 @@ pub(crate) fn render_with(
             iter,
             photons,
             &mut st.gathered,
+            final_gather.then_some((&st.gather, &mut st.gather_gathered)),
             cancel,
         );
         if cancel.load(Ordering::Relaxed) {
@@ -195,6 +229,10 @@ pub(crate) fn render_with(
         st.photon_segments = st.photon_pass.segments;
         let g = &mut st.gathered;
         update(&mut st.pixels, &lds, &mut g.phi, &mut g.m, settings.alpha);
+        if final_gather {
+            let g = &mut st.gather_gathered;
+            update_gather(&mut st.gather, &lgs, &mut g.phi, &mut g.m, settings.alpha);
+        }
         st.photon_count.record(photons, photon_rays);
         if balanced {
             balance::allocate(&st.samples, photon_rays, &mut st.extra);
@@ -203,7 +241,7 @@ pub(crate) fn render_with(
         stats.camera_paths += extra_paths;
         Some(Finished { photons, deposits })
     };
-    let image = |st: &State, done| image_of(&st.pixels, w, h, done, st.emitted);
+    let image = |st: &State, done| image_of(&st.pixels, &st.gather, w, h, done, st.emitted);
     let (output, state) = iterate(settings, cancel, on_progress, state, pass, image);
     let pixel_stats = state
         .pixels
@@ -222,6 +260,10 @@ struct State {
     pixels: Vec<Pixel>,
     /// What each pixel's visible point gathered in this iteration.
     gathered: Gathered,
+    /// Each pixel's final-gather estimate and what its gather point gathered in this
+    /// iteration (empty without final gathering).
+    gather: Vec<Estimate>,
+    gather_gathered: Gathered,
     /// Photons per iteration, and the photons of all finished iterations.
     photon_count: PhotonCount,
     emitted: u64,

@@ -8,9 +8,10 @@ use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 use super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
-use super::pixels::Pixel;
+use super::pixels::{Estimate, Pixel};
 use super::receiver::Receiver;
-use crate::integrators::common::photons::trace_photon;
+use crate::integrators::common::camera_path::VisiblePoint;
+use crate::integrators::common::photons::{trace_classified_photon, trace_photon};
 use crate::integrators::common::streams::Stream;
 use crate::prepare::{EffectiveSettings, PreparedScene};
 
@@ -36,6 +37,11 @@ const PHOTON_GROUP: u64 = 1 << 18;
 pub(super) struct PhotonPass {
     pub(super) chunks: Vec<HitChunk>,
     grid: PhotonGrid,
+    /// The final gather's hits and grid (every photon from the second surface on, around the
+    /// gather points); with final gathering the visible points' own grid keeps only caustic
+    /// photons.
+    gather_chunks: Vec<HitChunk>,
+    gather_grid: PhotonGrid,
     /// Photons traced and hits filed so far, over the whole render: their ratio sizes the
     /// groups. Before any photon, the estimate is `max_depth` hits per photon (see
     /// [`Self::group_size`]), the most there can be, so that the first group cannot overfill a
@@ -55,6 +61,8 @@ impl PhotonPass {
         PhotonPass {
             chunks: Vec::new(),
             grid: PhotonGrid::default(),
+            gather_chunks: Vec::new(),
+            gather_grid: PhotonGrid::default(),
             traced: 0,
             filed: 0,
             round_hits: round_hits.max(1),
@@ -83,8 +91,9 @@ impl PhotonPass {
 
     /// Traces iteration `iter`'s `photons` photons, recording their hits, and lets every
     /// visible point gather the photons within its radius (adding to `sums`), in rounds that
-    /// bound the memory. Returns the number of deposits; stops without a gather when `cancel`
-    /// is set.
+    /// bound the memory. With `gather_sums` (final gathering) the visible points gather only
+    /// caustic photons and every gather point gathers all photons, adding to `gather_sums`.
+    /// Returns the number of deposits; stops without a gather when `cancel` is set.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn run(
         &mut self,
@@ -94,6 +103,7 @@ impl PhotonPass {
         iter: u32,
         photons: u64,
         sums: &mut Gathered,
+        final_gather: Option<(&[Estimate], &mut Gathered)>,
         cancel: &AtomicBool,
     ) -> u64 {
         // Photons deposit from their second surface on: with fewer than 2 bounces there is
@@ -104,9 +114,19 @@ impl PhotonPass {
         let points = pixels
             .iter()
             .filter_map(|px| px.vp.as_ref().map(|vp| (vp.p, px.radius as f32)));
-        let Some(cells) = Cells::new(points) else {
+        let cells = Cells::new(points);
+        let (gather_points, mut gather_sums) = final_gather.unzip();
+        let gather_cells = gather_points.and_then(|points| {
+            Cells::new(
+                points
+                    .iter()
+                    .filter_map(|g| g.vp.as_ref().map(|vp| (vp.p, g.radius as f32))),
+            )
+        });
+        if cells.is_none() && gather_cells.is_none() {
             return 0;
-        };
+        }
+        let caustic_only = gather_sums.is_some();
         let cancelled = || cancel.load(Ordering::Relaxed);
         let (mut next, mut deposits) = (0, 0);
         while next < photons {
@@ -119,12 +139,31 @@ impl PhotonPass {
                     .saturating_add(self.group_size(held, used, settings.max_depth))
                     .min(photons);
                 let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
-                if self.chunks.len() < used + n {
-                    self.chunks.resize_with(used + n, HitChunk::default);
+                for chunks in [&mut self.chunks, &mut self.gather_chunks] {
+                    if chunks.len() < used + n {
+                        chunks.resize_with(used + n, HitChunk::default);
+                    }
                 }
                 let group = &mut self.chunks[used..used + n];
-                trace_photons(scene, settings, &cells, iter, (next, hi), group, cancel);
-                let got = group.iter().map(HitChunk::len).sum::<usize>();
+                let gather_group = &mut self.gather_chunks[used..used + n];
+                let filing = Filing {
+                    cells: cells.as_ref(),
+                    caustic_only,
+                    gather_cells: gather_cells.as_ref(),
+                };
+                trace_photons(
+                    scene,
+                    settings,
+                    &filing,
+                    iter,
+                    (next, hi),
+                    (group, gather_group),
+                    cancel,
+                );
+                let group = &self.chunks[used..used + n];
+                let gather_group = &self.gather_chunks[used..used + n];
+                let got = group.iter().map(HitChunk::len).sum::<usize>()
+                    + gather_group.iter().map(HitChunk::len).sum::<usize>();
                 self.segments += group.iter().map(|c| c.segments).sum::<u64>();
                 self.traced += hi - next;
                 self.filed += got as u64;
@@ -133,42 +172,80 @@ impl PhotonPass {
             if cancelled() {
                 return deposits;
             }
-            self.grid.build(cells, &self.chunks[..used]);
-            deposits += gather(&self.grid, pixels, sums);
+            if let Some(cells) = cells {
+                self.grid.build(cells, &self.chunks[..used]);
+                let points = pixels.iter().map(|px| (px.vp.as_ref(), px.radius));
+                deposits += gather(&self.grid, points, sums);
+            }
+            if let (Some(cells), Some(points), Some(sums)) =
+                (gather_cells, gather_points, gather_sums.as_deref_mut())
+            {
+                self.gather_grid.build(cells, &self.gather_chunks[..used]);
+                let points = points.iter().map(|g| (g.vp.as_ref(), g.radius));
+                deposits += gather(&self.gather_grid, points, sums);
+            }
             self.rounds += 1;
         }
         deposits
     }
 }
 
+/// Where a photon pass files its hits: the visible points' cells (all photons, or only the
+/// caustic ones with final gathering), and the gather points' cells (all photons).
+struct Filing<'a> {
+    cells: Option<&'a Cells>,
+    caustic_only: bool,
+    gather_cells: Option<&'a Cells>,
+}
+
 /// Traces photons `lo..hi` of iteration `iter` in parallel tasks of [`PHOTON_CHUNK`] photons,
-/// filing their hits in `chunks` (reset first; one per task, in photon order).
+/// filing their hits in `chunks` and `gather_chunks` (reset first; one per task, in photon
+/// order).
 fn trace_photons(
     scene: &PreparedScene,
     settings: &EffectiveSettings,
-    cells: &Cells,
+    filing: &Filing,
     iter: u32,
     (lo, hi): (u64, u64),
-    chunks: &mut [HitChunk],
+    (chunks, gather_chunks): (&mut [HitChunk], &mut [HitChunk]),
     cancel: &AtomicBool,
 ) {
-    chunks.par_iter_mut().enumerate().for_each(|(c, chunk)| {
-        chunk.reset(cells);
+    let tasks = chunks.par_iter_mut().zip(gather_chunks.par_iter_mut());
+    tasks.enumerate().for_each(|(c, (chunk, gather_chunk))| {
+        match filing.cells {
+            Some(cells) => chunk.reset(cells),
+            None => chunk.clear(),
+        }
+        match filing.gather_cells {
+            Some(cells) => gather_chunk.reset(cells),
+            None => gather_chunk.clear(),
+        }
         if cancel.load(Ordering::Relaxed) {
             return;
         }
         let first = lo + c as u64 * PHOTON_CHUNK;
         for i in first..(first + PHOTON_CHUNK).min(hi) {
             let mut rng = Stream::Photon.rng(settings.seed, iter, i);
-            trace_photon(
+            trace_classified_photon(
                 scene,
                 settings.max_depth,
                 &mut rng,
-                |depth, sh, wi, beta| {
+                |depth, sh, wi, beta, caustic| {
                     chunk.segments += 1;
                     if depth > 0 {
-                        let p = sh.hit.p;
-                        chunk.push(cells, PhotonHit { p, wi, beta });
+                        let hit = PhotonHit {
+                            p: sh.hit.p,
+                            wi,
+                            beta,
+                        };
+                        if let Some(cells) = filing.cells
+                            && (caustic || !filing.caustic_only)
+                        {
+                            chunk.push(cells, hit);
+                        }
+                        if let Some(cells) = filing.gather_cells {
+                            gather_chunk.push(cells, hit);
+                        }
                     }
                 },
             );
@@ -192,17 +269,23 @@ impl Gathered {
     }
 }
 
-/// Each visible point gathers the flux of the photons within its radius: adds it to `phi`
-/// and their number to `m`. Returns the number of deposits.
-fn gather(grid: &PhotonGrid, pixels: &[Pixel], sums: &mut Gathered) -> u64 {
-    pixels
+/// Each point (a pixel's visible or gather point, and its radius) gathers the flux of the
+/// photons within its radius: adds it to `phi` and their number to `m`. Returns the number of
+/// deposits.
+fn gather<'a>(
+    grid: &PhotonGrid,
+    points: impl Iterator<Item = (Option<&'a VisiblePoint>, f64)>,
+    sums: &mut Gathered,
+) -> u64 {
+    let points: Vec<_> = points.collect();
+    points
         .par_iter()
         .zip(sums.phi.par_iter_mut().zip(sums.m.par_iter_mut()))
-        .map(|(px, (ph, mm))| {
-            let Some(vp) = px.vp.as_ref() else {
+        .map(|(&(vp, radius), (ph, mm))| {
+            let Some(vp) = vp else {
                 return 0;
             };
-            let r = px.radius as f32;
+            let r = radius as f32;
             // Points without a positive radius gather nothing (they also left the cells out).
             if r.is_nan() || r <= 0.0 {
                 return 0;
