@@ -83,9 +83,9 @@ fn final_gathering_keeps_the_furnace_at_one() {
 }
 
 /// The furnace with lossless balls, against the path tracer on the same scene (the scene is
-/// not quite the analytic furnace: every method here renders about 0.9 % above 1). Measured
-/// (4 seeds): path +0.81 to +0.86 %, SPPM with final gathering +0.92 to +1.00 %, plain SPPM
-/// +0.35 to +0.57 % (its radius at this resolution blurs the light the balls pass).
+/// not quite the analytic furnace: path tracing renders it 0.8 % above 1). Measured (seed 1):
+/// path +0.81 %, SPPM with final gathering +0.82 %, plain SPPM +0.35 % (its radius at this
+/// resolution blurs the light around the balls).
 #[test]
 fn final_gathering_agrees_with_path_tracing_around_glass_and_mirror_balls() {
     let mut s = furnace_with_balls(24);

@@ -57,6 +57,7 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--binary", default="target/release/sppm-lang")
+    ap.add_argument("--scale", type=float, help="render at this fraction of the resolution")
     ap.add_argument("--csv", required=True)
     a = ap.parse_args()
     ref = read_exr(a.reference)
@@ -75,7 +76,8 @@ def main():
                 before = cpu_of_children()
                 subprocess.run(
                     [a.binary, "render", tmp_scene, "--iterations", str(it), "--seed",
-                     str(a.seed), "--threads", str(a.threads), "-o", tmp_out],
+                     str(a.seed), "--threads", str(a.threads), "-o", tmp_out]
+                    + (["--scale", str(a.scale)] if a.scale else []),
                     check=True, capture_output=True)
                 cpu = cpu_of_children() - before
                 img = read_exr(tmp_out)

@@ -169,8 +169,10 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         bytes: image_pixels.saturating_mul(12),
     });
     // Per pixel: the film's sums and the image snapshots (f32 RGB twice), plus the method's own
-    // state (SPPM: the pixel record, its visible point and its grid entry).
+    // state (SPPM: the pixel record, its visible point and its grid entry; with final gathering
+    // the gather estimate, its gather point and its grid entry too).
     let per_pixel = match settings.integrator {
+        Integrator::Sppm if settings.final_gather => 640,
         Integrator::Sppm | Integrator::Ppm => 400,
         _ => 64,
     };

@@ -95,10 +95,9 @@ impl From<crate::scene::Invalid> for RenderError {
 /// mean) and 0.72x the relative MSE of 1.
 pub const RADIUS_FOOTPRINTS: f64 = 1.5;
 
-/// With final gathering, a gather point's initial radius is this many times the radius the
-/// visible points' rule gives at its distance along the camera path (chosen with the furnace:
-/// 1, 2, 3, 4 and 8 measured, see `docs/integrators.md`).
-pub const GATHER_RADIUS_FACTOR: f64 = 2.0;
+/// With final gathering, a pixel's gather points start with this many times the initial radius
+/// of its visible point (chosen with the furnace, see `docs/integrators.md`).
+pub const GATHER_RADIUS_FACTOR: f64 = 4.0;
 
 /// How SPPM and PPM choose a pixel's initial gather radius.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -63,7 +63,9 @@ fn rounds_split_the_photons_without_changing_the_sums() {
         let mut deposits = 0;
         for iter in 0..2 {
             let pixels = visible_points(&prepared, &settings, iter);
-            deposits += pass.run(&prepared, &settings, &pixels, iter, n, &mut sums, None, &cancel);
+            deposits += pass.run(
+                &prepared, &settings, &pixels, iter, n, &mut sums, None, &cancel,
+            );
         }
         assert!(
             pass.chunks.len() <= round_chunks,
@@ -110,7 +112,9 @@ fn rounds_give_the_same_sums_on_any_thread_count() {
             let mut sums = Gathered::new(24 * 24);
             for iter in 0..2 {
                 let pixels = visible_points(&prepared, &settings, iter);
-                pass.run(&prepared, &settings, &pixels, iter, n, &mut sums, None, &cancel);
+                pass.run(
+                    &prepared, &settings, &pixels, iter, n, &mut sums, None, &cancel,
+                );
             }
             let bits: Vec<[u64; 3]> = sums
                 .phi
@@ -140,12 +144,16 @@ fn one_bounce_traces_no_photon() {
     let mut sums = Gathered::new(256);
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
     let cancel = AtomicBool::new(false);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel);
+    let deposits = pass.run(
+        &prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel,
+    );
     assert_eq!((deposits, pass.traced, pass.rounds), (0, 0, 0));
     // Two bounces do trace and gather.
     settings.max_depth = 2;
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel);
+    let deposits = pass.run(
+        &prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel,
+    );
     assert!(
         pass.traced == 100_000 && deposits > 0,
         "{} {deposits}",
@@ -167,7 +175,9 @@ fn a_cancelled_photon_pass_stops_at_once() {
     // Set before the pass: nothing is traced.
     let mut pass = PhotonPass::new(ROUND_HITS, ROUND_CHUNKS);
     let cancel = AtomicBool::new(true);
-    let deposits = pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel);
+    let deposits = pass.run(
+        &prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel,
+    );
     assert_eq!((deposits, pass.rounds, pass.traced), (0, 0, 0));
     assert!(pass.chunks.is_empty());
     // Set from another thread soon after the start: the pass of 10^9 photons (minutes of
@@ -181,7 +191,9 @@ fn a_cancelled_photon_pass_stops_at_once() {
             std::thread::sleep(std::time::Duration::from_millis(50));
             cancel.store(true, Ordering::Relaxed);
         });
-        pass.run(&prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel)
+        pass.run(
+            &prepared, &settings, &pixels, 0, n, &mut sums, None, &cancel,
+        )
     });
     println!(
         "cancelled after {} photons, {:?}",
