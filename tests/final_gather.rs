@@ -7,25 +7,10 @@
 
 mod common;
 
-use std::sync::atomic::AtomicBool;
-
 use common::*;
 use glam::DVec3;
 use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{ColorParam, Integrator, Material, Scene};
-
-fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
-    let opts = RenderOptions {
-        iterations: Some(iterations),
-        photons: Some(photons),
-        seed: Some(1),
-        ..Default::default()
-    };
-    let out = render(scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
-    assert_eq!(out.iterations_done, iterations);
-    out.image
-}
+use sppm_lang::scene::{Integrator, Scene};
 
 /// The image mean's relative error (every pixel should be 1) and the worst pixel's.
 fn errors(img: &Image) -> (f64, f64) {
@@ -44,20 +29,7 @@ fn errors(img: &Image) -> (f64, f64) {
 /// The emitting furnace with a glass ball and a mirror ball in front of the camera.
 fn furnace_with_balls(res: u32) -> Scene {
     let mut s = furnace_emitting(res);
-    let glass = add_material(
-        &mut s,
-        Material::Glass {
-            ior: 1.5,
-            absorb: ColorParam::Const(DVec3::ZERO),
-            tint: DVec3::ONE,
-        },
-    );
-    let mirror = add_material(
-        &mut s,
-        Material::Mirror {
-            tint: ColorParam::Const(DVec3::ONE),
-        },
-    );
+    let (glass, mirror) = glass_and_mirror(&mut s);
     add_object(
         &mut s,
         sphere(DVec3::new(-0.1, 0.0, 0.6), 0.25),

@@ -2,28 +2,12 @@
 
 mod common;
 
-use std::sync::atomic::AtomicBool;
-
 use common::*;
 use glam::Vec2;
 use sppm_lang::camera::Camera;
 use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::Scene;
 use sppm_lang::shapes::Shape as _;
 use sppm_lang::shapes::sphere::Sphere;
-
-fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
-    let opts = RenderOptions {
-        iterations: Some(iterations),
-        photons: Some(photons),
-        seed: Some(1),
-        ..Default::default()
-    };
-    let out = render(scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
-    assert_eq!(out.iterations_done, iterations);
-    out.image
-}
 
 fn assert_finite(img: &Image) {
     for (i, p) in img.pixels.iter().enumerate() {

@@ -2,7 +2,11 @@
 #![allow(dead_code)]
 
 use glam::{DAffine3, DVec3, Vec3A};
+use std::sync::atomic::AtomicBool;
+
+use sppm_lang::film::Image;
 use sppm_lang::geometry::Ray;
+use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::sampling::{Rng, uniform_sphere};
 use sppm_lang::scene::{
     Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, Scene, Settings,
@@ -51,6 +55,25 @@ pub fn add_object(s: &mut Scene, shape: Shape, material: MaterialId, emission: O
 
 pub fn sphere(center: DVec3, radius: f64) -> Shape {
     Shape::Sphere { center, radius }
+}
+
+/// A clear glass of index 1.5 and a white mirror, both lossless.
+pub fn glass_and_mirror(s: &mut Scene) -> (MaterialId, MaterialId) {
+    let glass = add_material(
+        s,
+        Material::Glass {
+            ior: 1.5,
+            absorb: ColorParam::Const(DVec3::ZERO),
+            tint: DVec3::ONE,
+        },
+    );
+    let mirror = add_material(
+        s,
+        Material::Mirror {
+            tint: ColorParam::Const(DVec3::ONE),
+        },
+    );
+    (glass, mirror)
 }
 
 /// Camera at the center of a unit sphere, looking along +z.
@@ -172,20 +195,7 @@ pub fn cornell_glass(res: u32) -> Scene {
         },
     );
     let black = diffuse(&mut s, 0.0);
-    let glass = add_material(
-        &mut s,
-        Material::Glass {
-            ior: 1.5,
-            absorb: ColorParam::Const(DVec3::ZERO),
-            tint: DVec3::ONE,
-        },
-    );
-    let mirror = add_material(
-        &mut s,
-        Material::Mirror {
-            tint: ColorParam::Const(DVec3::ONE),
-        },
-    );
+    let (glass, mirror) = glass_and_mirror(&mut s);
     let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
     // Floor, ceiling, back wall, left, right (two-sided diffuse).
     add_object(
@@ -328,4 +338,18 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         (sum / 16.0, floor_point(0.5, 0.5).x as f64)
     };
     (s, expected)
+}
+
+/// Renders `scene` (iterations and photons per iteration given, seed 1); every iteration must
+/// finish.
+pub fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
+    let opts = RenderOptions {
+        iterations: Some(iterations),
+        photons: Some(photons),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let out = render(scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
+    assert_eq!(out.iterations_done, iterations);
+    out.image
 }

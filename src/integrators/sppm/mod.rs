@@ -52,7 +52,7 @@ use balance::SampleStats;
 pub use pass::photon_flux;
 use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use photon_count::PhotonCount;
-use pixels::{Estimate, Pixel, image_of, update, update_gather};
+use pixels::{Pixel, image_of, update};
 
 /// Stochastic progressive photon mapping.
 #[derive(Debug, Clone, Copy, Default)]
@@ -124,7 +124,7 @@ pub(crate) fn render_with(
         gathered: Gathered::new(pixels.len()),
         gather_gathered: Gathered::new(if final_gather { pixels.len() } else { 0 }),
         gather: if final_gather {
-            vec![Estimate::default(); pixels.len()]
+            vec![Pixel::new(0.0); pixels.len()]
         } else {
             Vec::new()
         },
@@ -235,7 +235,7 @@ pub(crate) fn render_with(
         update(&mut st.pixels, &lds, &mut g.phi, &mut g.m, settings.alpha);
         if final_gather {
             let g = &mut st.gather_gathered;
-            update_gather(&mut st.gather, &lgs, &mut g.phi, &mut g.m, settings.alpha);
+            update(&mut st.gather, &lgs, &mut g.phi, &mut g.m, settings.alpha);
         }
         st.photon_count.record(photons, photon_rays);
         if balanced {
@@ -266,7 +266,7 @@ struct State {
     gathered: Gathered,
     /// Each pixel's final-gather estimate and what its gather point gathered in this
     /// iteration (empty without final gathering).
-    gather: Vec<Estimate>,
+    gather: Vec<Pixel>,
     gather_gathered: Gathered,
     /// Photons per iteration, and the photons of all finished iterations.
     photon_count: PhotonCount,

@@ -8,7 +8,7 @@ use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 use super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
-use super::pixels::{Estimate, Pixel};
+use super::pixels::Pixel;
 use super::receiver::Receiver;
 use crate::integrators::common::camera_path::VisiblePoint;
 use crate::integrators::common::photons::{trace_classified_photon, trace_photon};
@@ -103,7 +103,7 @@ impl PhotonPass {
         iter: u32,
         photons: u64,
         sums: &mut Gathered,
-        final_gather: Option<(&[Estimate], &mut Gathered)>,
+        final_gather: Option<(&[Pixel], &mut Gathered)>,
         cancel: &AtomicBool,
     ) -> u64 {
         // Photons deposit from their second surface on: with fewer than 2 bounces there is

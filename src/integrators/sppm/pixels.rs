@@ -10,21 +10,12 @@ use rayon::prelude::*;
 use crate::film::Image;
 use crate::integrators::common::camera_path::VisiblePoint;
 
+/// A pixel's progressive estimate: the light its camera paths found, and the photons at their
+/// visible points. With final gathering a pixel has a second one, for its gather paths and
+/// gather points (`super::gather_path`).
 #[derive(Clone)]
 pub(super) struct Pixel {
     /// Sum over iterations of emitted + direct radiance.
-    pub(super) ld: DVec3,
-    pub(super) tau: DVec3,
-    pub(super) n: f64,
-    pub(super) radius: f64,
-    pub(super) vp: Option<VisiblePoint>,
-}
-
-/// A pixel's progressive estimate from its final-gather paths (with `final_gather on`): the
-/// direct light they found, and the photons at their gather points, with their own radius (see
-/// [`super::gather_path`]).
-#[derive(Clone, Default)]
-pub(super) struct Estimate {
     pub(super) ld: DVec3,
     pub(super) tau: DVec3,
     pub(super) n: f64,
@@ -43,27 +34,6 @@ impl Pixel {
             vp: None,
         }
     }
-}
-
-/// One progressive step (Hachisuka & Jensen's): `m` new photons of flux `phi` (before the
-/// point's throughput `beta`) at radius `r`: `N += alpha M`, `r^2 *= N_new / (N + M)`, and tau
-/// scaled with the area.
-fn shrink(
-    tau: &mut DVec3,
-    n: &mut f64,
-    radius: &mut f64,
-    beta: Vec3A,
-    phi: DVec3,
-    m: u64,
-    alpha: f64,
-) {
-    let mf = m as f64;
-    let n_new = *n + alpha * mf;
-    let r_new = *radius * (n_new / (*n + mf)).sqrt();
-    let flux = beta.as_dvec3() * phi;
-    *tau = (*tau + flux) * (r_new * r_new) / (*radius * *radius);
-    *n = n_new;
-    *radius = r_new;
 }
 
 /// Adds every pixel's camera-pass light `lds` and its gathered flux `phi` from `m` photons
@@ -85,15 +55,13 @@ pub(super) fn update(
             if *mm > 0
                 && let Some(vp) = px.vp
             {
-                shrink(
-                    &mut px.tau,
-                    &mut px.n,
-                    &mut px.radius,
-                    vp.beta,
-                    *ph,
-                    *mm,
-                    alpha,
-                );
+                let mf = *mm as f64;
+                let n_new = px.n + alpha * mf;
+                let r_new = px.radius * (n_new / (px.n + mf)).sqrt();
+                let flux = vp.beta.as_dvec3() * *ph;
+                px.tau = (px.tau + flux) * (r_new * r_new) / (px.radius * px.radius);
+                px.n = n_new;
+                px.radius = r_new;
             }
             *ph = DVec3::ZERO;
             *mm = 0;
@@ -101,45 +69,11 @@ pub(super) fn update(
         });
 }
 
-/// [`update`] for the final gather's estimates: `lds` the direct light of each pixel's gather
-/// path, `phi` and `m` what its gather point gathered.
-pub(super) fn update_gather(
-    gather: &mut [Estimate],
-    lds: &[Vec3A],
-    phi: &mut [DVec3],
-    m: &mut [u64],
-    alpha: f64,
-) {
-    gather
-        .par_iter_mut()
-        .zip(lds.par_iter())
-        .zip(phi.par_iter_mut().zip(m.par_iter_mut()))
-        .for_each(|((g, l), (ph, mm))| {
-            g.ld += l.as_dvec3();
-            if *mm > 0
-                && let Some(vp) = g.vp
-            {
-                shrink(
-                    &mut g.tau,
-                    &mut g.n,
-                    &mut g.radius,
-                    vp.beta,
-                    *ph,
-                    *mm,
-                    alpha,
-                );
-            }
-            *ph = DVec3::ZERO;
-            *mm = 0;
-            g.vp = None;
-        });
-}
-
 /// The image after `iters` iterations of `emitted` photons in all; `gather`: the pixels'
 /// final-gather estimates (empty without final gathering).
 pub(super) fn image_of(
     pixels: &[Pixel],
-    gather: &[Estimate],
+    gather: &[Pixel],
     width: u32,
     height: u32,
     iters: u32,
