@@ -54,10 +54,8 @@ fn final_gathering_keeps_the_furnace_at_one() {
     assert!(mean.abs() < 0.01 && worst < 0.05, "{mean} {worst}");
 }
 
-/// The furnace with lossless balls, against the path tracer on the same scene (the scene is
-/// not quite the analytic furnace: path tracing renders it 0.8 % above 1). Measured (seed 1):
-/// path +0.81 %, SPPM with final gathering +0.82 %, plain SPPM +0.35 % (its radius at this
-/// resolution blurs the light around the balls).
+/// The furnace with lossless balls (every radiance still 1), also against the path tracer on
+/// the same scene. Measured (seed 1): final gathering +0.16 %, path +0.04 %.
 #[test]
 fn final_gathering_agrees_with_path_tracing_around_glass_and_mirror_balls() {
     let mut s = furnace_with_balls(24);
@@ -67,7 +65,7 @@ fn final_gathering_agrees_with_path_tracing_around_glass_and_mirror_balls() {
     let (path, _) = errors(&run(&s, 1024, 0));
     println!("balls: final gathering {gathered:+.4} (worst pixel {worst:.4}), path {path:+.4}");
     assert!(
-        (gathered - path).abs() < 0.003 && worst < 0.1,
+        gathered.abs() < 0.005 && (gathered - path).abs() < 0.003 && worst < 0.1,
         "{gathered} {path} {worst}"
     );
 }
