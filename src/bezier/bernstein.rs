@@ -143,6 +143,49 @@ impl Bernstein {
         }
     }
 
+    /// Value, first and second derivative at `t` from one de Casteljau pass. The value and the
+    /// first derivative are those of [`Bernstein::eval_with_derivative`], bit for bit; the
+    /// second is `n (n - 1) (b_2 - 2 b_1 + b_0)` of the pass's level `n - 2`.
+    pub fn eval_with_two_derivatives(&self, t: f64) -> (f64, f64, f64) {
+        let c = &self.c;
+        match self.n {
+            0 | 1 => {
+                let (v, d) = self.eval_with_derivative(t);
+                (v, d, 0.0)
+            }
+            2 => casteljau2::<3>(c, t),
+            3 => casteljau2::<4>(c, t),
+            4 => casteljau2::<5>(c, t),
+            5 => casteljau2::<6>(c, t),
+            6 => casteljau2::<7>(c, t),
+            7 => casteljau2::<8>(c, t),
+            8 => casteljau2::<9>(c, t),
+            9 => casteljau2::<10>(c, t),
+            10 => casteljau2::<11>(c, t),
+            11 => casteljau2::<12>(c, t),
+            12 => casteljau2::<13>(c, t),
+            13 => casteljau2::<14>(c, t),
+            14 => casteljau2::<15>(c, t),
+            _ => casteljau2::<{ MAX_DEGREE + 1 }>(c, t),
+        }
+    }
+
+    /// A bound of `|p''|` on [0, 1]: `n (n - 1)` times the largest second difference of the
+    /// coefficients (the second derivative's control polygon), computed in f64 (a relative
+    /// rounding of a few ulps).
+    pub fn second_derivative_bound(&self) -> f64 {
+        let n = self.n;
+        if n < 2 {
+            return 0.0;
+        }
+        let c = &self.c;
+        let mut m = 0.0f64;
+        for i in 0..n - 1 {
+            m = m.max((c[i + 2] - 2.0 * c[i + 1] + c[i]).abs());
+        }
+        (n * (n - 1)) as f64 * m
+    }
+
     /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
     pub fn split(&self, t: f64) -> (Self, Self) {
         let mut left = *self;
@@ -414,9 +457,58 @@ fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
     (v, n as f64 * (b[1] - b[0]))
 }
 
+/// Value, first and second derivative of the degree `M - 1` polynomial (`M >= 3`): the pass
+/// of [`casteljau`], with the second derivative taken from level `n - 2`.
+#[inline(always)]
+fn casteljau2<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64, f64) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    let n = M - 1;
+    for level in 1..n - 1 {
+        for i in 0..=n - level {
+            b[i] += t * (b[i + 1] - b[i]);
+        }
+    }
+    let d2 = (n * (n - 1)) as f64 * (b[2] - 2.0 * b[1] + b[0]);
+    // Level `n - 1` as `casteljau` computes it, then the value.
+    b[0] += t * (b[1] - b[0]);
+    b[1] += t * (b[2] - b[1]);
+    let v = b[0] + t * (b[1] - b[0]);
+    (v, n as f64 * (b[1] - b[0]), d2)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One pass gives `eval_with_derivative`'s value and slope bit for bit, and the second
+    /// derivative of the derivative polynomial within rounding; the bound of `|p''|` holds.
+    #[test]
+    fn two_derivatives_in_one_pass() {
+        let mut x = 0.271_828f64;
+        let mut next = || {
+            x = (x * 3.987_654_321 + 0.314_159).fract();
+            x - 0.5
+        };
+        for n in 0..=MAX_DEGREE {
+            for _ in 0..200 {
+                let c: Vec<f64> = (0..=n).map(|_| next()).collect();
+                let p = Bernstein::new(&c).unwrap();
+                let bound = p.second_derivative_bound();
+                let d2p = p.derivative().derivative();
+                for k in 0..=16 {
+                    let t = (k as f64 / 16.0 + 1e-3 * next()).clamp(0.0, 1.0);
+                    let (v, d1, d2) = p.eval_with_two_derivatives(t);
+                    let (v0, d0) = p.eval_with_derivative(t);
+                    assert_eq!((v.to_bits(), d1.to_bits()), (v0.to_bits(), d0.to_bits()));
+                    let want = p.derivative().eval_with_derivative(t).1;
+                    let scale = (n * n) as f64 * 1e-14 * (1.0 + d2p.max_abs());
+                    assert!((d2 - want).abs() <= scale, "n {n} t {t}: {d2} vs {want}");
+                    assert!(d2.abs() <= bound * (1.0 + 1e-12), "n {n}: {d2} > {bound}");
+                }
+            }
+        }
+    }
 
     /// The cubic path of `square_sum` gives the general one's result bit for bit.
     #[test]
