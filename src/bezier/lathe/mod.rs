@@ -33,8 +33,8 @@ pub use shell::{PIECES, SHELL_PAD, SegmentShells, Shell, ShellLanes, shell_slack
 use super::Solver;
 use super::roots::bracket::Refine;
 use super::roots::{
-    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots,
-    root_uncertainty,
+    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots, root_spread,
+    strictly_monotone_on, widened,
 };
 /// Which part of the surface was hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -362,11 +362,14 @@ impl Lathe {
                     newton_roots(&f, noise, iterations, starts, &mut roots)
                 }
             }
+            // A bound of |F''| on the segment, computed for the first simple root.
+            let mut bound = None;
             for root in &roots {
-                let ds = root_uncertainty(&f, root.t, noise);
+                let (ds, monotone) = spread_and_certificate(&f, root, noise, &mut bound);
                 let prune = Some((tmin, best));
                 let refine = Refine::FalsePosition;
-                let cands = frame.candidates(seg, root, ds, self.size, refine, tmin, prune);
+                let cands =
+                    frame.candidates(seg, root, ds, self.size, refine, tmin, prune, monotone);
                 for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
@@ -535,6 +538,24 @@ impl Lathe {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
     }
+}
+
+/// The uncertainty `ds` of a root of `f` and whether `f` is certified strictly monotone on its
+/// widened bracket (see [`RayFrame::candidates`]); `bound` caches `f`'s bound of `|f''|`.
+#[inline(never)]
+fn spread_and_certificate(
+    f: &super::bernstein::Bernstein,
+    root: &Root,
+    noise: f64,
+    bound: &mut Option<f64>,
+) -> (f64, bool) {
+    let (ds, slope) = root_spread(f, root.t, noise);
+    let monotone = root.kind == RootKind::Simple && {
+        let (lo, hi) = widened(root, ds);
+        let b = *bound.get_or_insert_with(|| f.second_derivative_bound());
+        strictly_monotone_on(f.degree(), slope, b, noise, root.t, lo, hi)
+    };
+    (ds, monotone)
 }
 
 /// The largest radius and the lowest and highest heights of some segments' bounds.
