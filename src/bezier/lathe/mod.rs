@@ -22,10 +22,12 @@ use std::f64::consts::TAU;
 use glam::{DVec2, DVec3};
 
 mod frame;
+mod hit;
 mod segment;
 mod shell;
 
 pub use frame::RayFrame;
+pub use hit::{LatheHit, NearestHit};
 pub use segment::Segment;
 use segment::TABLE_STEPS;
 pub use shell::{PIECES, SHELL_PAD, SegmentShells, Shell, ShellLanes, shell_slack};
@@ -45,20 +47,6 @@ pub enum Part {
     StartCap,
     /// The flat cap at the end angle.
     EndCap,
-}
-
-/// A hit in the lathe's own space, `t` in units of the ray direction given.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LatheHit {
-    pub t: f64,
-    pub p: DVec3,
-    /// Unit outward geometric normal (outward is to the right of the profile's direction).
-    pub n: DVec3,
-    pub uv: DVec2,
-    pub dpdu: DVec3,
-    pub part: Part,
-    /// Profile parameter within the segment (0 on caps).
-    pub s: f64,
 }
 
 /// Some parts of a lathe (see [`Lathe::intersect_parts`]).
@@ -292,13 +280,60 @@ impl Lathe {
         t_max: f64,
         solver: Solver,
     ) -> Option<LatheHit> {
+        let h = self.nearest(parts, o, d, t_min, t_max, solver)?;
+        Some(self.complete(o, d, &h, true))
+    }
+
+    /// [`Lathe::intersect_parts`] without the surface data: where the nearest hit is, from
+    /// which [`Lathe::complete`] gives the same [`LatheHit`].
+    pub fn nearest(
+        &self,
+        parts: Parts,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        solver: Solver,
+    ) -> Option<NearestHit> {
         let dl = d.length();
         if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
             return None;
         }
         let frame = RayFrame::new(o, d / dl, self.hmin, self.hmax);
-        let dn = frame.dn;
-        let (tmin, mut best) = (t_min * dl, t_max * dl);
+        let (tmin, best) = (t_min * dl, t_max * dl);
+        // Most rays that reach a segment's box miss its union shell: they end here, before
+        // the search's setup (the search tests the same shells again, with the same result).
+        let (pad, slack) = (SHELL_PAD * self.size, shell_slack(self.size));
+        let missed = |i: usize| {
+            self.segs[i].degenerate
+                || frame
+                    .shells_entered(&self.shells[i].union, tmin - pad, best + pad, slack)
+                    .0
+                    == 0
+        };
+        if !parts.caps && parts.segs.clone().all(missed) {
+            return None;
+        }
+        let (t, part, s) = self.search(parts, &frame, tmin, best, solver)?;
+        Some(NearestHit {
+            t: t / dl,
+            t_unit: t,
+            part,
+            s,
+        })
+    }
+
+    /// The nearest hit `(t, part, s)` with `tmin < t < best` along the frame's unit direction.
+    #[inline(never)]
+    fn search(
+        &self,
+        parts: Parts,
+        frame: &RayFrame,
+        tmin: f64,
+        mut best: f64,
+        solver: Solver,
+    ) -> Option<(f64, Part, f64)> {
+        let (o, dn) = (frame.o, frame.dn);
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
         // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
@@ -379,10 +414,9 @@ impl Lathe {
             }
         }
         if parts.caps {
-            self.cap_hits(&frame, tmin, &mut best, &mut found);
+            self.cap_hits(frame, tmin, &mut best, &mut found);
         }
-        let (t, part, s) = found?;
-        Some(self.hit_record(o + t * dn, t / dl, part, s))
+        found
     }
 
     /// The nearer of the two side caps of a partial sweep, if nearer than `best`.
@@ -439,59 +473,6 @@ impl Lathe {
             }
         }
         crossings % 2 == 1
-    }
-
-    pub fn hit_record(&self, p: DVec3, t: f64, part: Part, s: f64) -> LatheHit {
-        let (a0, span) = self.sweep.unwrap_or((0.0, TAU));
-        match part {
-            Part::Side(i) => {
-                let seg = &self.segs[i];
-                let rxz = (p.x * p.x + p.z * p.z).sqrt();
-                let phi = p.z.atan2(p.x);
-                let (c, sn) = if rxz > 0.0 {
-                    (p.x / rxz, p.z / rxz)
-                } else {
-                    (phi.cos(), phi.sin())
-                };
-                let tan = seg.tangent(s, self.size);
-                let n = DVec3::new(tan.y * c, -tan.x, tan.y * sn).normalize();
-                let dpdu = DVec3::new(tan.x * c, tan.y, tan.x * sn) * self.total_len.max(1e-300);
-                let u = (self.len_before[i] + seg.arc(s)) / self.total_len.max(1e-300);
-                let v = (phi - a0).rem_euclid(TAU) / span;
-                LatheHit {
-                    t,
-                    p,
-                    n,
-                    uv: DVec2::new(u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)),
-                    dpdu,
-                    part,
-                    s,
-                }
-            }
-            Part::StartCap | Part::EndCap => {
-                let angle = if part == Part::StartCap {
-                    a0
-                } else {
-                    a0 + span
-                };
-                let e = DVec3::new(angle.cos(), 0.0, angle.sin());
-                let m = DVec3::new(-angle.sin(), 0.0, angle.cos());
-                let n = if part == Part::StartCap { -m } else { m };
-                let h = (self.hmax - self.hmin).max(1e-300);
-                LatheHit {
-                    t,
-                    p,
-                    n,
-                    uv: DVec2::new(
-                        (p.dot(e) / self.rmax.max(1e-300)).clamp(0.0, 1.0),
-                        ((p.y - self.hmin) / h).clamp(0.0, 1.0),
-                    ),
-                    dpdu: e * self.rmax,
-                    part,
-                    s: 0.0,
-                }
-            }
-        }
     }
 
     /// Area of the swept side (caps excluded), from the tabulated `integral r |P'| ds`.
