@@ -419,11 +419,15 @@ fn left_levels<const M: usize>(
 ) {
     let mut b = [0.0; M];
     b.copy_from_slice(&c[..M]);
-    for (level, out) in left.iter_mut().enumerate().take(M).skip(1) {
+    left[0] = b[0];
+    // Index loops of constant bounds: an iterator chain here (enumerate, take, skip) was not
+    // optimised away and cost three times the arithmetic.
+    #[allow(clippy::needless_range_loop)]
+    for level in 1..M {
         for i in 0..M - level {
             b[i] += t * (b[i + 1] - b[i]);
         }
-        *out = b[0];
+        left[level] = b[0];
     }
 }
 
