@@ -130,12 +130,12 @@ impl RayFrame {
     /// `monotone`: the caller has certified that `F` is strictly monotone on the widened
     /// bracket ([`strictly_monotone_on`](crate::bezier::roots::strictly_monotone_on)), so `F`
     /// has at most one root there and each factor (whose roots are roots of `F`) at most one
-    /// sign change. Then a factor (never NaN on the bracket) is sampled at the bracket's two
-    /// ends: one sign means no sign change; opposite signs, a bisection over the scan's
-    /// sample points finds the pair where the sign changes (7 samples instead of 17), refined
-    /// as the scan refines it: the same root, bit for bit, unless a sample falls within the
-    /// factor's rounding of its root (the scan may then see several sign changes there and
-    /// pick another one within that rounding). Where the certificate fails (two roots of `F` in
+    /// sign change. Then the pair of the scan's samples where a factor (never NaN on the
+    /// bracket) changes sign is looked for around the root of `F` (2 or 3 samples), else by
+    /// its ends (one sign: no sign change) and a bisection over the scan's points (7 samples),
+    /// instead of 17, and refined as the scan refines it: the same root, bit for bit, unless
+    /// two samples fall within the factor's rounding of its root (the scan may then see
+    /// several sign changes there and pick another one within that rounding). Where the certificate fails (two roots of `F` in
     /// one bracket as above, a double root, a cluster) the full scan runs. Refining the whole
     /// bracket at once was tried: it took fewer samples but moved ill-conditioned hits (nearly
     /// tangent chords from the surface, whose factor's rounding spans 1e-11 in `s`) by up to
@@ -172,7 +172,7 @@ impl RayFrame {
                 seg.r.eval(s) - (x * x + z * z).sqrt()
             };
             let t_at = |s: f64| self.t0 + t_of(s);
-            let found = match monotone.then(|| single_sign_change(&g, lo, hi, refine)) {
+            let found = match monotone.then(|| single_sign_change(&g, lo, hi, root.t, refine)) {
                 Some(Ends::Root(s)) => Some(s),
                 Some(Ends::OneSign) => None,
                 Some(Ends::Unknown) | None => {
@@ -239,8 +239,8 @@ impl RayFrame {
             let t_at = |s: f64| self.t0 + sigma * w_of(s);
             let gs = |s| g(sigma, s);
             // The shortcut only where the factor cannot be NaN on the bracket (`r >= reach`).
-            let ends =
-                (monotone && b.r.0 >= reach).then(|| single_sign_change(&gs, lo, hi, refine));
+            let ends = (monotone && b.r.0 >= reach)
+                .then(|| single_sign_change(&gs, lo, hi, root.t, refine));
             let found = match ends {
                 Some(Ends::Root(s)) => Some(s),
                 Some(Ends::OneSign) => None,
@@ -387,16 +387,56 @@ fn scan_point(lo: f64, hi: f64, k: usize) -> f64 {
     lo + (hi - lo) * k as f64 / SCAN_PIECES as f64
 }
 
-/// [`Ends`] of `g` on `[lo, hi]`, for a `g` known to change sign at most once there: its
-/// samples at the two ends, then a bisection over the scan's points for the pair where the sign
-/// changes (5 more samples instead of 15), refined as [`nearest_sign_change`] refines it. Where
-/// the samples change sign once, as they do for such a `g` unless a sample falls within the
-/// rounding of its root, this is the same pair of samples with the same values, and so the
-/// same root, bit for bit.
-fn single_sign_change(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, refine: Refine) -> Ends {
+/// [`Ends`] of `g` on `[lo, hi]`, for a `g` known to change sign at most once there, whose
+/// sign change is expected near `near` (the root of `F`).
+///
+/// Where the samples of `g` at the scan's points change sign once (as they do for such a `g`,
+/// unless two samples fall within the rounding of its root) the pair of neighbouring samples
+/// of opposite signs is the one [`nearest_sign_change`] refines, and any such pair found is it.
+/// So the samples around `near` are tried first (2 or 3 samples); failing that, the two ends
+/// (one sign: no sign change) and a bisection over the points (5 more samples). The pair is
+/// refined as the scan refines it: the same root, bit for bit.
+fn single_sign_change(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, near: f64, refine: Refine) -> Ends {
+    let decided = |v: f64| v != 0.0 && !v.is_nan();
+    let refined = |a: usize, b: usize, ga: f64, gb: f64| {
+        let (xa, xb) = (scan_point(lo, hi, a), scan_point(lo, hi, b));
+        match bracketed_root(g, xa, xb, ga, gb, refine) {
+            Some(s) => Ends::Root(s),
+            None => Ends::Unknown,
+        }
+    };
+    // The piece holding `near`, and its neighbour on the side `near` is closer to.
+    let f = (near - lo) / (hi - lo) * SCAN_PIECES as f64;
+    if f > 0.0 && f < SCAN_PIECES as f64 {
+        let k = (f as usize).min(SCAN_PIECES - 1);
+        let (gk, gk1) = (g(scan_point(lo, hi, k)), g(scan_point(lo, hi, k + 1)));
+        if !(decided(gk) && decided(gk1)) {
+            return Ends::Unknown;
+        }
+        if (gk > 0.0) != (gk1 > 0.0) {
+            return refined(k, k + 1, gk, gk1);
+        }
+        let j = if f - (k as f64) < 0.5 {
+            k.checked_sub(1).map(|j| (j, j + 1))
+        } else {
+            (k + 2 <= SCAN_PIECES).then_some((k + 1, k + 2))
+        };
+        if let Some((a, b)) = j {
+            let (ga, gb) = if a == k + 1 {
+                (gk1, g(scan_point(lo, hi, b)))
+            } else {
+                (g(scan_point(lo, hi, a)), gk)
+            };
+            if !(decided(ga) && decided(gb)) {
+                return Ends::Unknown;
+            }
+            if (ga > 0.0) != (gb > 0.0) {
+                return refined(a, b, ga, gb);
+            }
+        }
+    }
     let (mut a, mut b) = (0, SCAN_PIECES);
     let (mut ga, mut gb) = (g(scan_point(lo, hi, a)), g(scan_point(lo, hi, b)));
-    let decided = |v: f64| v != 0.0 && !v.is_nan();
     if !(decided(ga) && decided(gb)) {
         return Ends::Unknown;
     }
@@ -415,11 +455,7 @@ fn single_sign_change(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, refine: Refine) 
             (b, gb) = (m, gm);
         }
     }
-    let (xa, xb) = (scan_point(lo, hi, a), scan_point(lo, hi, b));
-    match bracketed_root(g, xa, xb, ga, gb, refine) {
-        Some(s) => Ends::Root(s),
-        None => Ends::Unknown,
-    }
+    refined(a, b, ga, gb)
 }
 
 /// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
