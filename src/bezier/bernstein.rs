@@ -130,7 +130,18 @@ impl Bernstein {
             }
             4 => casteljau::<5>(c, t),
             5 => casteljau::<6>(c, t),
-            6 => casteljau::<7>(c, t),
+            6 => {
+                // A cubic profile's `F` (the polish's degree): the pass in local variables.
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
+                let (b3, b4, b5) = (lerp(c[3], c[4]), lerp(c[4], c[5]), lerp(c[5], c[6]));
+                let (b0, b1, b2) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3));
+                let (b3, b4) = (lerp(b3, b4), lerp(b4, b5));
+                let (b0, b1, b2, b3) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3), lerp(b3, b4));
+                let (b0, b1, b2) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3));
+                let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
+                (lerp(b0, b1), 6.0 * (b1 - b0))
+            }
             7 => casteljau::<8>(c, t),
             8 => casteljau::<9>(c, t),
             9 => casteljau::<10>(c, t),

@@ -157,3 +157,25 @@ fn convex_hull_bounds_the_values() {
         assert!(v >= lo && v <= hi);
     }
 }
+
+/// The degree-6 pass in local variables gives the general pass's value and slope bit for bit.
+#[test]
+fn degree_six_in_locals_is_the_general_pass() {
+    let mut x = 0.618_034f64;
+    let mut next = || {
+        x = (x * 3.987_654_321 + 0.314_159).fract();
+        (x - 0.5) * 10f64.powi((x * 8.0) as i32 - 4)
+    };
+    for _ in 0..20_000 {
+        let c: [f64; 7] = std::array::from_fn(|_| next());
+        let p = Bernstein::new(&c).unwrap();
+        let t = next().abs().fract();
+        let (v, d) = p.eval_with_derivative(t);
+        let (w, e) = casteljau::<7>(&p.c, t);
+        assert_eq!(
+            (v.to_bits(), d.to_bits()),
+            (w.to_bits(), e.to_bits()),
+            "{c:?} at {t}"
+        );
+    }
+}
