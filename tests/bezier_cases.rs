@@ -295,19 +295,7 @@ fn candidate_window_keeps_every_candidate_inside_it() {
     use sppm_lang::bezier::roots::bracket::Refine;
     use sppm_lang::bezier::roots::{find_roots_with_noise, root_uncertainty};
     use sppm_lang::sampling::SplitMix64;
-    let shapes = [
-        lathe(
-            &[
-                &[(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)],
-                &[(0.3, 0.0), (0.3, 0.03), (0.1, 0.04), (0.04, 0.08)],
-                &[(0.04, 0.08), (0.03, 0.2), (0.03, 0.35), (0.05, 0.42)],
-                &[(0.05, 0.42), (0.3, 0.45), (0.32, 0.7), (0.27, 0.9)],
-                &[(0.27, 0.9), (0.3, 0.7), (0.27, 0.47), (0.0, 0.46)],
-            ],
-            None,
-        ),
-        bulge_cusp_dome(),
-    ];
+    let shapes = [goblet_like(), bulge_cusp_dome()];
     let (mut compared, mut skipped) = (0usize, 0usize);
     for (n, l) in shapes.iter().enumerate() {
         let (lo, hi) = l.bounds();
@@ -335,7 +323,7 @@ fn candidate_window_keeps_every_candidate_inside_it() {
                     let ds = root_uncertainty(&f, root.t, noise);
                     let cand = |after, w| {
                         let refine = Refine::FalsePosition;
-                        frame.candidates(seg, root, ds, l.size(), refine, after, w)
+                        frame.candidates(seg, root, ds, l.size(), refine, after, w, false)
                     };
                     for w in windows {
                         let all = cand(w.0, None);
@@ -360,6 +348,20 @@ fn candidate_window_keeps_every_candidate_inside_it() {
     }
     println!("{compared} windowed candidate pairs compared, {skipped} sides skipped");
     assert!(compared > 100_000, "{compared}");
+}
+
+/// A goblet-like profile with corners, a flat disk and a pole.
+fn goblet_like() -> Lathe {
+    lathe(
+        &[
+            &[(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.3, 0.0)],
+            &[(0.3, 0.0), (0.3, 0.03), (0.1, 0.04), (0.04, 0.08)],
+            &[(0.04, 0.08), (0.03, 0.2), (0.03, 0.35), (0.05, 0.42)],
+            &[(0.05, 0.42), (0.3, 0.45), (0.32, 0.7), (0.27, 0.9)],
+            &[(0.27, 0.9), (0.3, 0.7), (0.27, 0.47), (0.0, 0.46)],
+        ],
+        None,
+    )
 }
 
 /// The bulge, cusp and dome of the stress test's culling profile (its flat disk and annulus
@@ -419,4 +421,151 @@ fn rays_from_the_surface_that_meet_it_again_within_1e_4() {
         );
         assert_eq!(hit.part, Part::Side(seg), "o {o:?}");
     }
+}
+
+/// The factor search's shortcut (`candidates` with `monotone`: the factor at the bracket's two
+/// ends, then a bisection over the scan's points) against the full 16-piece scan, on every
+/// root of `F` the certificate accepts: random rays through a goblet-like profile and the
+/// culling profile's bulge, cusp and dome, and rays starting on their surfaces (random and
+/// nearly tangent directions). The candidates are the same bit for bit (allowed to differ
+/// within the factor's rounding where a sample falls inside it, on at most 1 in 1000); most
+/// roots are certified.
+#[test]
+fn factor_shortcut_matches_the_full_scan_where_f_is_monotone() {
+    use sppm_lang::bezier::lathe::RayFrame;
+    use sppm_lang::bezier::roots::bracket::Refine;
+    use sppm_lang::bezier::roots::{
+        RootKind, find_roots_with_noise, root_spread, strictly_monotone_on, widened,
+    };
+    use sppm_lang::sampling::SplitMix64;
+    let shapes = [goblet_like(), bulge_cusp_dome()];
+    let (mut simple, mut certified, mut same_bits, mut compared) = (0, 0, 0usize, 0usize);
+    let mut max_dt = 0.0f64;
+    for (n, l) in shapes.iter().enumerate() {
+        let (lo, hi) = l.bounds();
+        let mut rng = SplitMix64::for_item(29, n, 0);
+        for k in 0..20_000 {
+            let (o, d) = if k % 2 == 0 {
+                let target = lo + (hi - lo) * DVec3::new(rng.f(), rng.f(), rng.f());
+                let o = target + rng.unit() * 3.0 * (hi - lo).length();
+                (o, (target - o).normalize())
+            } else {
+                let (o, normal) = l.sample(DVec2::new(rng.f(), rng.f())).unwrap();
+                let tangent = normal.cross(DVec3::Y).normalize_or(DVec3::Z);
+                let small = 10f64.powf(rng.range(-9.0, -2.0));
+                let d = if rng.f() < 0.5 {
+                    rng.unit()
+                } else {
+                    (tangent + normal * small * rng.range(-1.0, 1.0)).normalize()
+                };
+                (o, d)
+            };
+            let frame = RayFrame::new(o, d, lo.y, hi.y);
+            for seg in l.segments() {
+                let (f, noise) = frame.polynomial(seg);
+                let mut roots = Vec::new();
+                find_roots_with_noise(&f, noise, &mut roots);
+                for root in roots.iter().filter(|r| r.kind == RootKind::Simple) {
+                    simple += 1;
+                    let (ds, slope) = root_spread(&f, root.t, noise);
+                    let (a, b) = widened(root, ds);
+                    let bound = f.second_derivative_bound();
+                    if !strictly_monotone_on(f.degree(), slope, bound, noise, root.t, a, b) {
+                        continue;
+                    }
+                    certified += 1;
+                    let refine = Refine::FalsePosition;
+                    let cand = |m| frame.candidates(seg, root, ds, l.size(), refine, 1e-9, None, m);
+                    let (got, want) = (cand(true), cand(false));
+                    for (g, w) in got.iter().zip(&want) {
+                        assert_eq!(
+                            g.0.is_nan(),
+                            w.0.is_nan(),
+                            "o {o:?} d {d:?}: {got:?} {want:?}"
+                        );
+                        if g.0.is_nan() {
+                            continue;
+                        }
+                        // The same sign change refined from another bracket: `t` and `s`
+                        // within their conditioning (near-tangent chords from the surface,
+                        // whose `t` is conditioned to 1e-8 and worse; the origin's own root,
+                        // `t` within 1e-11 of 0), far inside the stress test's 1e-6.
+                        let dt = (g.0 - w.0).abs() / (w.0.abs() + 1e-3 * l.size());
+                        max_dt = max_dt.max(dt);
+                        assert!(
+                            dt <= 1e-7 && (g.1 - w.1).abs() <= 1e-10,
+                            "o {o:?} d {d:?} root {root:?}: {got:?} vs {want:?}"
+                        );
+                        same_bits += usize::from(g.0 == w.0 && g.1 == w.1);
+                        compared += 1;
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "{simple} simple roots, {certified} certified, {same_bits} of {compared} candidates \
+         bit-equal, largest relative t difference {max_dt:.2e}"
+    );
+    assert!(certified * 10 > simple * 8, "{certified} of {simple}");
+    assert!(
+        same_bits * 1000 >= compared * 999,
+        "{same_bits} of {compared}"
+    );
+}
+
+/// The case the certificate must refuse: two roots of `F` in one widened bracket. The nearly
+/// tangent ray from the dome of `rays_from_the_surface_that_meet_it_again_within_1e_4` starts
+/// on the surface and meets it again at `t = 8.03e-5`; the two roots of `F` (the origin's and
+/// the hit's) are 1.8e-6 apart in `s`. Each root's own bracket is refused (the other root is
+/// within what the slope and the bound of `F''` allow). A bracket holding both (as an earlier
+/// polish left them) is refused too: there the factor changes sign twice, and the full scan
+/// finds both (a factor with one sign at both ends would read as no sign change).
+#[test]
+fn factor_shortcut_is_refused_where_two_roots_of_f_share_a_bracket() {
+    use sppm_lang::bezier::lathe::RayFrame;
+    use sppm_lang::bezier::roots::bracket::Refine;
+    use sppm_lang::bezier::roots::{
+        Root, RootKind, find_roots_with_noise, root_spread, strictly_monotone_on, widened,
+    };
+    let l = bulge_cusp_dome();
+    let o = DVec3::new(0.15499278632492244, 1.11773005683808, 0.27770696273279466);
+    let d = DVec3::new(
+        0.8812907105528318,
+        -0.009759570623935848,
+        -0.4724737392432739,
+    );
+    let hit = l.intersect(o, d, 1e-9, f64::INFINITY, R).expect("the hit");
+    assert!((hit.t - 8.0318e-5).abs() < 1e-8, "{}", hit.t);
+    let (lo, hi) = l.bounds();
+    let frame = RayFrame::new(o, d.normalize(), lo.y, hi.y);
+    let seg = &l.segments()[2];
+    let (f, noise) = frame.polynomial(seg);
+    let mut roots = Vec::new();
+    find_roots_with_noise(&f, noise, &mut roots);
+    assert_eq!(roots.len(), 2, "{roots:?}");
+    let bound = f.second_derivative_bound();
+    let certified = |root: &Root| {
+        let (ds, slope) = root_spread(&f, root.t, noise);
+        let (a, b) = widened(root, ds);
+        strictly_monotone_on(f.degree(), slope, bound, noise, root.t, a, b)
+    };
+    assert!(roots.iter().all(|r| !certified(r)), "{roots:?}");
+    // One bracket around both roots.
+    let both = Root {
+        t: roots[0].t,
+        lo: roots[0].t - 1e-6,
+        hi: roots[1].t + 1e-6,
+        kind: RootKind::Simple,
+    };
+    assert!(!certified(&both));
+    let (ds, _) = root_spread(&f, both.t, noise);
+    let refine = Refine::FalsePosition;
+    let cand = |after, m| frame.candidates(seg, &both, ds, l.size(), refine, after, None, m);
+    let nearest = |c: [(f64, f64); 2]| c.iter().map(|c| c.0).fold(f64::NAN, f64::min);
+    // The full scan sees both: the origin's own root overall, the hit beyond `t_min` (its `t`
+    // conditioned to about 1e-8 here: another bracket, other last digits).
+    assert!(nearest(cand(f64::NEG_INFINITY, false)).abs() < 1e-9);
+    let t = nearest(cand(1e-9, false));
+    assert!((t - hit.t).abs() < 1e-6 * hit.t, "{t} vs {}", hit.t);
 }

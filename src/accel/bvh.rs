@@ -63,7 +63,8 @@ impl<'a> Surface<'a> {
         match self {
             Surface::Shape(s) => s.hit_at_uv(ray, lazy, uv),
             Surface::MeshTriangle(m, k) => match lazy {
-                LazyHit::T(t) => m.hit_at(*k, ray, t),
+                // A triangle's hit is always `T`.
+                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, ray, t),
                 LazyHit::Full(h) | LazyHit::Part(h, _) => h,
             },
         }
@@ -343,11 +344,7 @@ impl Bvh {
         if c.shape == usize::MAX {
             return best;
         }
-        let lazy = match c.full {
-            None => LazyHit::T(t_max),
-            Some(h) if c.part != u32::MAX => LazyHit::Part(h, c.part),
-            Some(h) => LazyHit::Full(h),
-        };
+        let lazy = c.boxed.unwrap_or(LazyHit::T(t_max));
         Some((
             lazy,
             Surface::Shape(&self.leaves.shapes[c.shape]),

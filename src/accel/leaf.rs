@@ -3,11 +3,11 @@
 
 use rayon::prelude::*;
 
-use crate::geometry::{Hit, Ray};
+use crate::geometry::Ray;
 
 use super::build::Item;
 use super::triangles::{Meshes, TrianglePacket};
-use crate::shapes::primitive::AnyShape;
+use crate::shapes::primitive::{AnyShape, LazyHit};
 use crate::shapes::quad::{Quad, QuadPacket};
 
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -49,18 +49,16 @@ pub(super) struct Closest {
     pub shape: usize,
     /// The mesh triangle hit (its global number; `u32::MAX`: none, or a shape).
     pub triangle: u32,
-    /// The full hit, when the shape hit is boxed.
-    pub full: Option<Hit>,
-    /// The CSG part of `full`, if it came from a CSG tree (`u32::MAX`: none).
-    pub part: u32,
+    /// The hit of a boxed shape or CSG tree (full, with its CSG part, or deferred); `None`
+    /// for an analytic shape (only its `t` is known).
+    pub boxed: Option<LazyHit>,
 }
 
 impl Closest {
     pub(super) const NONE: Self = Self {
         shape: usize::MAX,
         triangle: u32::MAX,
-        full: None,
-        part: u32::MAX,
+        boxed: None,
     };
 }
 
@@ -227,7 +225,7 @@ impl Leaves {
                 *t_max = t;
                 c.shape = start + 4 * p + lane;
                 c.triangle = u32::MAX;
-                c.full = None;
+                c.boxed = None;
             }
         }
         let rest = start + leaf.quads as usize;
@@ -237,16 +235,15 @@ impl Leaves {
                     *t_max = t;
                     c.shape = rest + k;
                     c.triangle = u32::MAX;
-                    c.full = None;
+                    c.boxed = None;
                 }
                 Ok(None) => {}
                 Err(()) => {
-                    if let Some((h, p)) = s.intersect_full(ray, t_min, *t_max) {
-                        *t_max = h.t;
-                        c.part = p.unwrap_or(u32::MAX);
+                    if let Some(h) = s.boxed_hit(ray, t_min, *t_max) {
+                        *t_max = h.t();
                         c.shape = rest + k;
                         c.triangle = u32::MAX;
-                        c.full = Some(h);
+                        c.boxed = Some(h);
                     }
                 }
             }

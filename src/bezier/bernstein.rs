@@ -130,7 +130,18 @@ impl Bernstein {
             }
             4 => casteljau::<5>(c, t),
             5 => casteljau::<6>(c, t),
-            6 => casteljau::<7>(c, t),
+            6 => {
+                // A cubic profile's `F` (the polish's degree): the pass in local variables.
+                let lerp = |a: f64, b: f64| a + t * (b - a);
+                let (b0, b1, b2) = (lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3]));
+                let (b3, b4, b5) = (lerp(c[3], c[4]), lerp(c[4], c[5]), lerp(c[5], c[6]));
+                let (b0, b1, b2) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3));
+                let (b3, b4) = (lerp(b3, b4), lerp(b4, b5));
+                let (b0, b1, b2, b3) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3), lerp(b3, b4));
+                let (b0, b1, b2) = (lerp(b0, b1), lerp(b1, b2), lerp(b2, b3));
+                let (b0, b1) = (lerp(b0, b1), lerp(b1, b2));
+                (lerp(b0, b1), 6.0 * (b1 - b0))
+            }
             7 => casteljau::<8>(c, t),
             8 => casteljau::<9>(c, t),
             9 => casteljau::<10>(c, t),
@@ -141,6 +152,49 @@ impl Bernstein {
             14 => casteljau::<15>(c, t),
             _ => casteljau::<{ MAX_DEGREE + 1 }>(c, t),
         }
+    }
+
+    /// Value, first and second derivative at `t` from one de Casteljau pass. The value and the
+    /// first derivative are those of [`Bernstein::eval_with_derivative`], bit for bit; the
+    /// second is `n (n - 1) (b_2 - 2 b_1 + b_0)` of the pass's level `n - 2`.
+    pub fn eval_with_two_derivatives(&self, t: f64) -> (f64, f64, f64) {
+        let c = &self.c;
+        match self.n {
+            0 | 1 => {
+                let (v, d) = self.eval_with_derivative(t);
+                (v, d, 0.0)
+            }
+            2 => casteljau2::<3>(c, t),
+            3 => casteljau2::<4>(c, t),
+            4 => casteljau2::<5>(c, t),
+            5 => casteljau2::<6>(c, t),
+            6 => casteljau2::<7>(c, t),
+            7 => casteljau2::<8>(c, t),
+            8 => casteljau2::<9>(c, t),
+            9 => casteljau2::<10>(c, t),
+            10 => casteljau2::<11>(c, t),
+            11 => casteljau2::<12>(c, t),
+            12 => casteljau2::<13>(c, t),
+            13 => casteljau2::<14>(c, t),
+            14 => casteljau2::<15>(c, t),
+            _ => casteljau2::<{ MAX_DEGREE + 1 }>(c, t),
+        }
+    }
+
+    /// A bound of `|p''|` on [0, 1]: `n (n - 1)` times the largest second difference of the
+    /// coefficients (the second derivative's control polygon), computed in f64 (a relative
+    /// rounding of a few ulps).
+    pub fn second_derivative_bound(&self) -> f64 {
+        let n = self.n;
+        if n < 2 {
+            return 0.0;
+        }
+        let c = &self.c;
+        let mut m = 0.0f64;
+        for i in 0..n - 1 {
+            m = m.max((c[i + 2] - 2.0 * c[i + 1] + c[i]).abs());
+        }
+        (n * (n - 1)) as f64 * m
     }
 
     /// Splits at `t`: the left part reparameterised on [0, 1] covers [0, t], the right [t, 1].
@@ -376,11 +430,15 @@ fn left_levels<const M: usize>(
 ) {
     let mut b = [0.0; M];
     b.copy_from_slice(&c[..M]);
-    for (level, out) in left.iter_mut().enumerate().take(M).skip(1) {
+    left[0] = b[0];
+    // Index loops of constant bounds: an iterator chain here (enumerate, take, skip) was not
+    // optimised away and cost three times the arithmetic.
+    #[allow(clippy::needless_range_loop)]
+    for level in 1..M {
         for i in 0..M - level {
             b[i] += t * (b[i + 1] - b[i]);
         }
-        *out = b[0];
+        left[level] = b[0];
     }
 }
 
@@ -414,134 +472,25 @@ fn casteljau<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64) {
     (v, n as f64 * (b[1] - b[0]))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The cubic path of `square_sum` gives the general one's result bit for bit.
-    #[test]
-    fn cubic_square_sum_is_square_sum() {
-        let mut x = 0.123_456_789f64;
-        let mut next = || {
-            x = (x * 3.987_654_321 + 0.314_159).fract();
-            (x - 0.5) * 10f64.powi((x * 8.0) as i32 - 4)
-        };
-        for _ in 0..10_000 {
-            let a: [f64; 4] = std::array::from_fn(|_| next());
-            let b: [f64; 4] = std::array::from_fn(|_| next());
-            let c: [f64; 7] = std::array::from_fn(|_| next());
-            let w = next();
-            let (pa, pb, pc) = (
-                Bernstein::new(&a).unwrap(),
-                Bernstein::new(&b).unwrap(),
-                Bernstein::new(&c).unwrap(),
-            );
-            let want = Bernstein::square_sum(&pa, &pb, &pc, w).unwrap();
-            let got = Bernstein::cubic_square_sum(&a, &b, &c, w);
-            assert_eq!(got.n, want.n);
-            for (g, w) in got.c.iter().zip(want.c) {
-                assert_eq!(g.to_bits(), w.to_bits());
-            }
+/// Value, first and second derivative of the degree `M - 1` polynomial (`M >= 3`): the pass
+/// of [`casteljau`], with the second derivative taken from level `n - 2`.
+#[inline(always)]
+fn casteljau2<const M: usize>(c: &[f64; MAX_DEGREE + 1], t: f64) -> (f64, f64, f64) {
+    let mut b = [0.0; M];
+    b.copy_from_slice(&c[..M]);
+    let n = M - 1;
+    for level in 1..n - 1 {
+        for i in 0..=n - level {
+            b[i] += t * (b[i + 1] - b[i]);
         }
     }
-
-    #[test]
-    fn binomial_table_is_pascals_triangle() {
-        for n in 0..=MAX_DEGREE {
-            let row: f64 = (0..=n).map(|k| binomial(n, k)).sum();
-            assert_eq!(row, (1u64 << n) as f64, "row {n}");
-            for k in 0..=n {
-                assert_eq!(binomial(n, k), binomial(n, n - k));
-            }
-        }
-        assert_eq!(binomial(15, 7), 6435.0);
-        assert_eq!(binomial(6, 3), 20.0);
-    }
-
-    /// `left_of` and `right_of` are the halves of `split`, bit for bit (the root finder's
-    /// results must not depend on which is used).
-    #[test]
-    fn one_sided_splits_are_the_halves_of_split() {
-        let p = cubic().mul(&cubic()).unwrap().add_constant(0.3);
-        for t in [0.0, 1e-9, 0.125, 0.3, 0.5, 0.77, 1.0 - 1e-12, 1.0] {
-            let (l, r) = p.split(t);
-            assert_eq!(p.left_of(t), l, "{t}");
-            assert_eq!(p.right_of(t), r, "{t}");
-        }
-    }
-
-    fn power_eval(p: &[f64], t: f64) -> f64 {
-        p.iter().rev().fold(0.0, |acc, c| acc * t + c)
-    }
-
-    /// (t - 0.25)(t - 0.5)(t - 0.75) in the Bernstein basis, built from products.
-    fn cubic() -> Bernstein {
-        let f = |r: f64| Bernstein::new(&[-r, 1.0 - r]).unwrap();
-        f(0.25).mul(&f(0.5)).unwrap().mul(&f(0.75)).unwrap()
-    }
-
-    #[test]
-    fn product_matches_power_basis() {
-        let p = cubic();
-        assert_eq!(p.degree(), 3);
-        for k in 0..=20 {
-            let t = k as f64 / 20.0;
-            let want = (t - 0.25) * (t - 0.5) * (t - 0.75);
-            assert!((p.eval(t) - want).abs() < 1e-15, "t={t}");
-        }
-    }
-
-    #[test]
-    fn derivative_matches_finite_difference_and_de_casteljau() {
-        let p = cubic();
-        let dp = p.derivative();
-        for k in 1..20 {
-            let t = k as f64 / 20.0;
-            // p' = 3t^2 - 3t + 0.6875 (expanded by hand)
-            let want = power_eval(&[0.6875, -3.0, 3.0], t);
-            assert!((dp.eval(t) - want).abs() < 1e-14);
-            assert!((p.eval_with_derivative(t).1 - want).abs() < 1e-14);
-        }
-    }
-
-    #[test]
-    fn split_and_restrict_reparameterise() {
-        let p = cubic();
-        let (l, r) = p.split(0.3);
-        let q = p.restrict(0.2, 0.7);
-        for k in 0..=10 {
-            let s = k as f64 / 10.0;
-            assert!((l.eval(s) - p.eval(0.3 * s)).abs() < 1e-15);
-            assert!((r.eval(s) - p.eval(0.3 + 0.7 * s)).abs() < 1e-15);
-            assert!((q.eval(s) - p.eval(0.2 + 0.5 * s)).abs() < 1e-15);
-        }
-    }
-
-    #[test]
-    fn elevation_and_sum_preserve_values() {
-        let p = cubic();
-        let e = p.elevate_to(7).unwrap();
-        let s = p.add(&Bernstein::new(&[1.0, 2.0]).unwrap()).unwrap();
-        for k in 0..=10 {
-            let t = k as f64 / 10.0;
-            assert!((e.eval(t) - p.eval(t)).abs() < 1e-15);
-            assert!((s.eval(t) - (p.eval(t) + 1.0 + t)).abs() < 1e-14);
-            assert!((p.add_constant(2.0).eval(t) - p.eval(t) - 2.0).abs() < 1e-15);
-        }
-        assert!(Bernstein::new(&[0.0; 17]).is_none());
-        assert!(e.mul(&e.elevate().unwrap().elevate().unwrap()).is_none());
-    }
-
-    #[test]
-    fn convex_hull_bounds_the_values() {
-        let p = Bernstein::new(&[0.3, -2.0, 5.0, 0.1, -0.7]).unwrap();
-        let (lo, hi) = p
-            .coeffs()
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)));
-        for k in 0..=1000 {
-            let v = p.eval(k as f64 / 1000.0);
-            assert!(v >= lo && v <= hi);
-        }
-    }
+    let d2 = (n * (n - 1)) as f64 * (b[2] - 2.0 * b[1] + b[0]);
+    // Level `n - 1` as `casteljau` computes it, then the value.
+    b[0] += t * (b[1] - b[0]);
+    b[1] += t * (b[2] - b[1]);
+    let v = b[0] + t * (b[1] - b[0]);
+    (v, n as f64 * (b[1] - b[0]), d2)
 }
+
+#[cfg(test)]
+mod tests;

@@ -305,7 +305,7 @@ impl<'a> PreparedScene<'a> {
     /// Whether anything may read the `uv` of a hit on `prim`: only textures do (through
     /// [`Self::tex_coord`], for the lobes or a glass's absorption), so a primitive whose
     /// material has no texture gets hits without it (spheres, disks and cylinders then skip
-    /// their trigonometry; `uv` is NaN).
+    /// their trigonometry, revolves their arc length and angle; `uv` is NaN).
     #[inline]
     fn reads_uv(&self, prim: u32) -> bool {
         let m = self.prim_material[prim as usize] as usize;
@@ -397,12 +397,12 @@ mod tests {
     use super::*;
     use crate::camera::Camera;
     use crate::sampling::{Rng, uniform_sphere};
-    use crate::shapes::primitive::AnyShape;
+    use crate::shapes::primitive::{AnyShape, LazyHit};
     use crate::{EvalOptions, load_file, load_source};
 
     /// A hit from [`PreparedScene::intersect`] is the full hit of the same shape, field for
-    /// field and bit for bit, except that `uv` is NaN on spheres, disks and cylinders whose
-    /// material reads no texture. Checked on the examples with textured and plain spheres,
+    /// field and bit for bit, except that `uv` is NaN on spheres, disks, cylinders and revolves
+    /// whose material reads no texture. Checked on the examples with textured and plain spheres,
     /// cylinders, disks, quads and revolves, and on glass whose absorption is textured, with
     /// camera rays and rays from random points in random directions (back faces, insides);
     /// fails if `uv` is left out where a texture could read it, or if leaving it out changed
@@ -411,6 +411,8 @@ mod tests {
     fn hits_leave_out_uv_only_where_no_texture_reads_it() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
         let (mut kept, mut left_out, mut absorbing_kept) = (0usize, 0usize, 0usize);
+        // Revolve hits with `uv` kept and left out.
+        let mut revolves = (0usize, 0usize);
         // Glass whose absorption is a uv-mapped texture reads `uv` too (its lobes do not).
         let absorbing = r#"
             camera { location <0, 1.2, -4>  look_at <0, 0.5, 0>  fov 60 }
@@ -427,6 +429,7 @@ mod tests {
             "room.scn",
             "crystal_tree.scn",
             "cornell.scn",
+            "goblet.scn",
         ]
         .map(|name| {
             let loaded = load_file(&root.join(name), &EvalOptions::default()).unwrap();
@@ -462,20 +465,23 @@ mod tests {
                     (h.t.to_bits(), v)
                 };
                 assert_eq!(bits(&full), bits(&got.hit), "{name}: {ray:?}");
-                let trig = matches!(
-                    prepared
-                        .bvh
-                        .intersect_lazy(ray, 0.0, f32::INFINITY)
-                        .and_then(|(_, s, _)| s.shape()),
-                    Some(AnyShape::Sphere(_) | AnyShape::Disk(_) | AnyShape::Cylinder(_))
-                );
+                let lazy = prepared.bvh.intersect_lazy(ray, 0.0, f32::INFINITY);
+                // A revolve's hit is deferred (its `uv` needs the arc length and an angle).
+                let deferred = matches!(lazy, Some((LazyHit::Deferred(..), _, _)));
+                let trig = deferred
+                    || matches!(
+                        lazy.and_then(|(_, s, _)| s.shape()),
+                        Some(AnyShape::Sphere(_) | AnyShape::Disk(_) | AnyShape::Cylinder(_))
+                    );
                 if trig && !prepared.reads_uv(id) {
                     assert!(got.hit.uv.is_nan(), "{name}");
                     left_out += 1;
+                    revolves.1 += usize::from(deferred);
                 } else {
                     let uv_bits = |h: &Hit| h.uv.to_array().map(f32::to_bits);
                     assert_eq!(uv_bits(&full), uv_bits(&got.hit), "{name}: {ray:?}");
                     kept += usize::from(trig);
+                    revolves.0 += usize::from(deferred);
                     if name == "absorbing glass" {
                         absorbing_kept += usize::from(trig);
                     }
@@ -486,7 +492,12 @@ mod tests {
             "uv kept on {kept} textured trig-shape hits ({absorbing_kept} on glass with textured \
              absorption), left out on {left_out}"
         );
+        println!(
+            "revolve hits: uv kept on {}, left out on {}",
+            revolves.0, revolves.1
+        );
         assert!(kept > 1000 && left_out > 1000, "{kept} {left_out}");
+        assert!(revolves.0 > 300 && revolves.1 > 300, "{revolves:?}");
         assert!(absorbing_kept > 300, "{absorbing_kept}");
     }
 }

@@ -74,6 +74,24 @@ pub(crate) fn area_to_solid_angle(
     })
 }
 
+/// What a shape keeps of a hit whose surface data it computes later ([`Shape::complete`]):
+/// two numbers and an index for the shape's own use (a revolve: the hit's ray parameter along
+/// the unit direction, its profile parameter and its part).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Deferred {
+    pub a: f64,
+    pub b: f64,
+    pub k: u32,
+}
+
+/// The result of [`Shape::intersect_boxed`].
+#[derive(Debug, Clone, Copy)]
+pub enum BoxedHit {
+    Full(Hit),
+    /// The hit's `t` and what [`Shape::complete`] needs for the rest.
+    Deferred(f32, Deferred),
+}
+
 pub trait Shape: Send + Sync {
     /// Bounds in the same space as the rays it is given.
     fn bounds(&self) -> Aabb;
@@ -82,6 +100,27 @@ pub trait Shape: Send + Sync {
     /// Whether anything is hit with `t_min < t < t_max` (shadow rays); may be faster.
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.intersect(ray, t_min, t_max).is_some()
+    }
+    /// [`Shape::intersect`] as a [`BoxedHit`]: shapes whose surface data is costly may give
+    /// only the hit's `t` and a [`Deferred`] record, from which [`Shape::complete`] builds the
+    /// hit later (the BVH does so once, for the nearest hit). The default gives the full hit.
+    fn intersect_boxed(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<BoxedHit> {
+        self.intersect(ray, t_min, t_max).map(BoxedHit::Full)
+    }
+    /// The hit for a [`BoxedHit::Deferred`] this shape returned for `ray`: what
+    /// [`Shape::intersect`] gives, except that `uv: false` lets the shape leave `uv` NaN (for
+    /// primitives whose material reads no texture). Shapes that never defer need not
+    /// implement it: the default intersects again just before `t`.
+    fn complete(&self, ray: &Ray, t: f32, _rec: Deferred, _uv: bool) -> Hit {
+        self.intersect(ray, t * (1.0 - 1e-6), f32::INFINITY)
+            .unwrap_or(Hit {
+                t,
+                p: ray.at(t),
+                n: Vec3A::Z,
+                ns: Vec3A::Z,
+                uv: Vec2::ZERO,
+                dpdu: Vec3A::X,
+            })
     }
     /// Surface area (for emissive shapes).
     fn area(&self) -> f32;

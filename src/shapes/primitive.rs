@@ -3,8 +3,8 @@
 use glam::Vec2;
 
 use super::{
-    AreaSample, Shape, csg::Csg, cylinder::Cylinder, disk::Disk, plane::Plane, quad::Quad,
-    sphere::Sphere, triangle::Triangle,
+    AreaSample, BoxedHit, Deferred, Shape, csg::Csg, cylinder::Cylinder, disk::Disk, plane::Plane,
+    quad::Quad, sphere::Sphere, triangle::Triangle,
 };
 use crate::geometry::{Aabb, Hit, Ray};
 
@@ -37,19 +37,21 @@ macro_rules! dispatch {
 
 /// The result of a cheap intersection test: the analytic shapes give only `t` (their surface
 /// data is computed once, for the closest hit, by [`AnyShape::hit_at`]); boxed shapes give
-/// their full hit at once, and a CSG tree its full hit with the id of the part hit.
+/// their full hit at once, or `t` and a [`Deferred`] record (see [`Shape::intersect_boxed`]),
+/// and a CSG tree its full hit with the id of the part hit.
 #[derive(Debug, Clone, Copy)]
 pub enum LazyHit {
     T(f32),
     Full(Hit),
     Part(Hit, u32),
+    Deferred(f32, Deferred),
 }
 
 impl LazyHit {
     #[inline]
     pub fn t(&self) -> f32 {
         match self {
-            LazyHit::T(t) => *t,
+            LazyHit::T(t) | LazyHit::Deferred(t, _) => *t,
             LazyHit::Full(h) | LazyHit::Part(h, _) => h.t,
         }
     }
@@ -76,30 +78,23 @@ impl AnyShape {
             AnyShape::Cylinder(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Triangle(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
             AnyShape::Plane(s) => s.hit_t(ray, t_min, t_max).map(LazyHit::T),
-            AnyShape::Other(_) | AnyShape::Csg(_) => {
-                self.intersect_full(ray, t_min, t_max)
-                    .map(|(h, part)| match part {
-                        Some(id) => LazyHit::Part(h, id),
-                        None => LazyHit::Full(h),
-                    })
-            }
+            AnyShape::Other(_) | AnyShape::Csg(_) => self.boxed_hit(ray, t_min, t_max),
         }
     }
 
-    /// The full hit of a shape that has no split intersection (boxed shapes, CSG trees), with
-    /// the part hit for a CSG tree.
+    /// The hit of a shape that has no split intersection: a boxed shape's (full or
+    /// deferred), a CSG tree's full hit with the part hit.
     #[inline]
-    pub(crate) fn intersect_full(
-        &self,
-        ray: &Ray,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<(Hit, Option<u32>)> {
+    pub(crate) fn boxed_hit(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {
         match self {
             AnyShape::Csg(c) => c
                 .intersect_part(ray, t_min, t_max)
-                .map(|(h, id)| (h, Some(id))),
-            s => s.intersect(ray, t_min, t_max).map(|h| (h, None)),
+                .map(|(h, id)| LazyHit::Part(h, id)),
+            AnyShape::Other(s) => s.intersect_boxed(ray, t_min, t_max).map(|h| match h {
+                BoxedHit::Full(h) => LazyHit::Full(h),
+                BoxedHit::Deferred(t, rec) => LazyHit::Deferred(t, rec),
+            }),
+            s => s.intersect(ray, t_min, t_max).map(LazyHit::Full),
         }
     }
 
@@ -128,13 +123,15 @@ impl AnyShape {
     }
 
     /// [`AnyShape::hit_at`], where `uv: false` lets the shapes whose `uv` needs trigonometry
-    /// (sphere, disk, cylinder) leave it NaN: for primitives whose material reads no texture.
-    /// Every other field is the same. Shapes whose `uv` is cheap, and boxed shapes, fill it.
+    /// (sphere, disk, cylinder, and a boxed shape's deferred hit: a revolve's arc length) leave
+    /// it NaN: for primitives whose material reads no texture. Every other field is the same.
+    /// Shapes whose `uv` is cheap, and boxed shapes' full hits, fill it.
     #[inline]
     pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
         use super::SplitShape;
         let t = match lazy {
             LazyHit::Full(h) | LazyHit::Part(h, _) => return h,
+            LazyHit::Deferred(t, rec) => return self.complete(ray, t, rec, uv),
             LazyHit::T(t) => t,
         };
         match self {
@@ -163,6 +160,12 @@ impl AnyShape {
 impl Shape for AnyShape {
     fn bounds(&self) -> Aabb {
         dispatch!(self, s => s.bounds())
+    }
+    fn intersect_boxed(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<BoxedHit> {
+        dispatch!(self, s => s.intersect_boxed(ray, t_min, t_max))
+    }
+    fn complete(&self, ray: &Ray, t: f32, rec: Deferred, uv: bool) -> Hit {
+        dispatch!(self, s => s.complete(ray, t, rec, uv))
     }
     #[inline]
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {

@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3A};
 
-use super::{AreaSample, Shape, solver_of};
+use super::{AreaSample, BoxedHit, Deferred, Shape, solver_of};
 use crate::bezier::Solver;
-use crate::bezier::lathe::{Lathe, LatheHit, Parts};
+use crate::bezier::lathe::{Lathe, LatheHit, NearestHit, Part, Parts};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::{IntersectMethod, Profile};
 
@@ -82,6 +82,23 @@ impl Revolve {
     }
 }
 
+impl Revolve {
+    /// The nearest hit with `t_min < t < t_max` and its `t` in f32 (the conversion must not
+    /// move the hit outside the caller's interval).
+    fn nearest(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(NearestHit, f32)> {
+        let h = self.lathe.nearest(
+            self.parts.clone(),
+            ray.o.as_dvec3(),
+            ray.d.as_dvec3(),
+            t_min as f64,
+            t_max as f64,
+            self.solver,
+        )?;
+        let t = h.t as f32;
+        (t > t_min && t < t_max).then_some((h, t))
+    }
+}
+
 fn to_hit(h: LatheHit) -> Hit {
     let n = h.n.as_vec3a();
     Hit {
@@ -100,17 +117,51 @@ impl Shape for Revolve {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let h = self.lathe.intersect_parts(
-            self.parts.clone(),
+        let (h, _) = self.nearest(ray, t_min, t_max)?;
+        Some(to_hit(self.lathe.complete(
             ray.o.as_dvec3(),
             ray.d.as_dvec3(),
-            t_min as f64,
-            t_max as f64,
-            self.solver,
-        )?;
-        // The f32 conversion must not move the hit outside the caller's interval.
-        let hit = to_hit(h);
-        (hit.t > t_min && hit.t < t_max).then_some(hit)
+            &h,
+            true,
+        )))
+    }
+
+    /// The surface data (the arc length for `u`, the angle for `v`, the normal) is computed
+    /// later, for the nearest hit only.
+    fn intersect_boxed(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<BoxedHit> {
+        let (h, t) = self.nearest(ray, t_min, t_max)?;
+        let part = match h.part {
+            Part::Side(i) => i as u32,
+            Part::StartCap => u32::MAX - 1,
+            Part::EndCap => u32::MAX,
+        };
+        let rec = Deferred {
+            a: h.t_unit,
+            b: h.s,
+            k: part,
+        };
+        Some(BoxedHit::Deferred(t, rec))
+    }
+
+    fn complete(&self, ray: &Ray, _t: f32, rec: Deferred, uv: bool) -> Hit {
+        let part = match rec.k {
+            k if k == u32::MAX - 1 => Part::StartCap,
+            u32::MAX => Part::EndCap,
+            i => Part::Side(i as usize),
+        };
+        let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
+        // The hit as `Lathe::nearest` gave it (its `t` computed the same way).
+        let h = NearestHit {
+            t: rec.a / d.length(),
+            t_unit: rec.a,
+            part,
+            s: rec.b,
+        };
+        to_hit(self.lathe.complete(o, d, &h, uv))
+    }
+
+    fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.nearest(ray, t_min, t_max).is_some()
     }
 
     fn area(&self) -> f32 {

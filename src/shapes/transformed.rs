@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A, Vec2};
 
-use super::{AreaSample, Shape};
+use super::{AreaSample, BoxedHit, Deferred, Shape};
 use crate::geometry::{Aabb, Hit, Ray};
 
 pub struct Transformed {
@@ -32,6 +32,30 @@ impl Transformed {
     }
 }
 
+impl Transformed {
+    /// The ray in object space (an affine map keeps the ray parameter `t`).
+    #[inline]
+    fn object_ray(&self, ray: &Ray) -> Ray {
+        Ray::new(
+            self.to_object.transform_point3a(ray.o),
+            self.to_object.transform_vector3a(ray.d),
+        )
+    }
+
+    /// An object-space hit in world space.
+    #[inline]
+    fn world_hit(&self, h: Hit) -> Hit {
+        Hit {
+            t: h.t,
+            p: self.to_world.transform_point3a(h.p),
+            n: (self.normal_matrix * h.n).normalize(),
+            ns: (self.normal_matrix * h.ns).normalize(),
+            uv: h.uv,
+            dpdu: self.to_world.transform_vector3a(h.dpdu),
+        }
+    }
+}
+
 impl Shape for Transformed {
     fn bounds(&self) -> Aabb {
         let b = self.inner.bounds();
@@ -49,28 +73,29 @@ impl Shape for Transformed {
     }
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        // An affine map keeps the ray parameter t.
-        let r = Ray::new(
-            self.to_object.transform_point3a(ray.o),
-            self.to_object.transform_vector3a(ray.d),
-        );
-        let h = self.inner.intersect(&r, t_min, t_max)?;
-        Some(Hit {
-            t: h.t,
-            p: self.to_world.transform_point3a(h.p),
-            n: (self.normal_matrix * h.n).normalize(),
-            ns: (self.normal_matrix * h.ns).normalize(),
-            uv: h.uv,
-            dpdu: self.to_world.transform_vector3a(h.dpdu),
-        })
+        let h = self.inner.intersect(&self.object_ray(ray), t_min, t_max)?;
+        Some(self.world_hit(h))
+    }
+
+    fn intersect_boxed(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<BoxedHit> {
+        Some(
+            match self
+                .inner
+                .intersect_boxed(&self.object_ray(ray), t_min, t_max)?
+            {
+                BoxedHit::Full(h) => BoxedHit::Full(self.world_hit(h)),
+                deferred => deferred,
+            },
+        )
+    }
+
+    fn complete(&self, ray: &Ray, t: f32, rec: Deferred, uv: bool) -> Hit {
+        // The same object-space ray as `intersect_boxed` gave the inner shape.
+        self.world_hit(self.inner.complete(&self.object_ray(ray), t, rec, uv))
     }
 
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        let r = Ray::new(
-            self.to_object.transform_point3a(ray.o),
-            self.to_object.transform_vector3a(ray.d),
-        );
-        self.inner.occluded(&r, t_min, t_max)
+        self.inner.occluded(&self.object_ray(ray), t_min, t_max)
     }
 
     /// Not known in closed form for a general affine map: emissive objects need a transform

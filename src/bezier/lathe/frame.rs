@@ -4,8 +4,8 @@ use glam::DVec3;
 
 use super::segment::Segment;
 use crate::bezier::bernstein::Bernstein;
-use crate::bezier::roots::Root;
 use crate::bezier::roots::bracket::{Refine, bracketed_root};
+use crate::bezier::roots::{Root, widened};
 
 /// A ray prepared for one lathe: unit direction and an origin shifted near the surface.
 #[derive(Debug, Clone, Copy)]
@@ -126,6 +126,20 @@ impl RayFrame {
     /// one widened bracket, e.g. 8e-5 along a nearly tangent ray from the dome): taking the
     /// nearest one overall would return the origin's own root, which the caller then drops as
     /// `t <= t_min`, and the real hit behind it would be lost.
+    ///
+    /// `monotone`: the caller has certified that `F` is strictly monotone on the widened
+    /// bracket ([`strictly_monotone_on`](crate::bezier::roots::strictly_monotone_on)), so `F`
+    /// has at most one root there and each factor (whose roots are roots of `F`) at most one
+    /// sign change. Then the pair of the scan's samples where a factor (never NaN on the
+    /// bracket) changes sign is looked for around the root of `F` (2 or 3 samples), else by
+    /// its ends (one sign: no sign change) and a bisection over the scan's points (7 samples),
+    /// instead of 17, and refined as the scan refines it: the same root, bit for bit, unless
+    /// two samples fall within the factor's rounding of its root (the scan may then see
+    /// several sign changes there and pick another one within that rounding). Where the certificate fails (two roots of `F` in
+    /// one bracket as above, a double root, a cluster) the full scan runs. Refining the whole
+    /// bracket at once was tried: it took fewer samples but moved ill-conditioned hits (nearly
+    /// tangent chords from the surface, whose factor's rounding spans 1e-11 in `s`) by up to
+    /// 1.5e-6 of their `t`.
     #[allow(clippy::too_many_arguments)]
     pub fn candidates(
         &self,
@@ -136,10 +150,10 @@ impl RayFrame {
         refine: Refine,
         t_after: f64,
         prune: Option<(f64, f64)>,
+        monotone: bool,
     ) -> [(f64, f64); 2] {
         let (oc, dn) = (self.oc, self.dn);
-        let lo = (root.lo - 4.0 * ds).max(0.0);
-        let hi = (root.hi + 4.0 * ds).min(1.0);
+        let (lo, hi) = widened(root, ds);
         let mut cands = [(f64::NAN, root.t); 2];
         // Bounds of `r`, `h` and the half chord on the bracket (only where they are used).
         let bounds = (prune.is_some() || !self.steep).then(|| self.bracket_bounds(seg, lo, hi));
@@ -158,7 +172,14 @@ impl RayFrame {
                 seg.r.eval(s) - (x * x + z * z).sqrt()
             };
             let t_at = |s: f64| self.t0 + t_of(s);
-            if let Some(s) = nearest_sign_change(&g, &t_at, t_after, lo, hi, refine) {
+            let found = match monotone.then(|| single_sign_change(&g, lo, hi, root.t, refine)) {
+                Some(Ends::Root(s)) => Some(s),
+                Some(Ends::OneSign) => None,
+                Some(Ends::Unknown) | None => {
+                    nearest_sign_change(&g, &t_at, t_after, lo, hi, refine)
+                }
+            };
+            if let Some(s) = found {
                 cands[0] = (self.t0 + t_of(s), s);
                 return cands;
             }
@@ -216,7 +237,18 @@ impl RayFrame {
                 }
             }
             let t_at = |s: f64| self.t0 + sigma * w_of(s);
-            if let Some(s) = nearest_sign_change(&|s| g(sigma, s), &t_at, t_after, lo, hi, refine) {
+            let gs = |s| g(sigma, s);
+            // The shortcut only where the factor cannot be NaN on the bracket (`r >= reach`).
+            let ends = (monotone && b.r.0 >= reach)
+                .then(|| single_sign_change(&gs, lo, hi, root.t, refine));
+            let found = match ends {
+                Some(Ends::Root(s)) => Some(s),
+                Some(Ends::OneSign) => None,
+                Some(Ends::Unknown) | None => {
+                    nearest_sign_change(&gs, &t_at, t_after, lo, hi, refine)
+                }
+            };
+            if let Some(s) = found {
                 cands[k] = (self.t0 + sigma * w_of(s), s);
                 refined = true;
             }
@@ -335,6 +367,97 @@ fn touch(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, size: f64) -> Option<f64> {
     (best.1 <= 1e-10 * size).then_some(best.0)
 }
 
+/// What a factor's samples at the scan's points tell where it has at most one sign change on
+/// the bracket.
+enum Ends {
+    /// The sign change, refined in the piece between the samples where the sign changes.
+    Root(f64),
+    /// One sign at both ends, and so no sign change.
+    OneSign,
+    /// A sample NaN or exactly zero: not decided here.
+    Unknown,
+}
+
+/// Samples of the factor scan over `[lo, hi]` ([`nearest_sign_change`]'s points).
+const SCAN_PIECES: usize = 16;
+
+/// The scan's point `k` of `[lo, hi]`.
+#[inline]
+fn scan_point(lo: f64, hi: f64, k: usize) -> f64 {
+    lo + (hi - lo) * k as f64 / SCAN_PIECES as f64
+}
+
+/// [`Ends`] of `g` on `[lo, hi]`, for a `g` known to change sign at most once there, whose
+/// sign change is expected near `near` (the root of `F`).
+///
+/// Where the samples of `g` at the scan's points change sign once (as they do for such a `g`,
+/// unless two samples fall within the rounding of its root) the pair of neighbouring samples
+/// of opposite signs is the one [`nearest_sign_change`] refines, and any such pair found is it.
+/// So the samples around `near` are tried first (2 or 3 samples); failing that, the two ends
+/// (one sign: no sign change) and a bisection over the points (5 more samples). The pair is
+/// refined as the scan refines it: the same root, bit for bit.
+fn single_sign_change(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, near: f64, refine: Refine) -> Ends {
+    let decided = |v: f64| v != 0.0 && !v.is_nan();
+    let refined = |a: usize, b: usize, ga: f64, gb: f64| {
+        let (xa, xb) = (scan_point(lo, hi, a), scan_point(lo, hi, b));
+        match bracketed_root(g, xa, xb, ga, gb, refine) {
+            Some(s) => Ends::Root(s),
+            None => Ends::Unknown,
+        }
+    };
+    // The piece holding `near`, and its neighbour on the side `near` is closer to.
+    let f = (near - lo) / (hi - lo) * SCAN_PIECES as f64;
+    if f > 0.0 && f < SCAN_PIECES as f64 {
+        let k = (f as usize).min(SCAN_PIECES - 1);
+        let (gk, gk1) = (g(scan_point(lo, hi, k)), g(scan_point(lo, hi, k + 1)));
+        if !(decided(gk) && decided(gk1)) {
+            return Ends::Unknown;
+        }
+        if (gk > 0.0) != (gk1 > 0.0) {
+            return refined(k, k + 1, gk, gk1);
+        }
+        let j = if f - (k as f64) < 0.5 {
+            k.checked_sub(1).map(|j| (j, j + 1))
+        } else {
+            (k + 2 <= SCAN_PIECES).then_some((k + 1, k + 2))
+        };
+        if let Some((a, b)) = j {
+            let (ga, gb) = if a == k + 1 {
+                (gk1, g(scan_point(lo, hi, b)))
+            } else {
+                (g(scan_point(lo, hi, a)), gk)
+            };
+            if !(decided(ga) && decided(gb)) {
+                return Ends::Unknown;
+            }
+            if (ga > 0.0) != (gb > 0.0) {
+                return refined(a, b, ga, gb);
+            }
+        }
+    }
+    let (mut a, mut b) = (0, SCAN_PIECES);
+    let (mut ga, mut gb) = (g(scan_point(lo, hi, a)), g(scan_point(lo, hi, b)));
+    if !(decided(ga) && decided(gb)) {
+        return Ends::Unknown;
+    }
+    if (ga > 0.0) == (gb > 0.0) {
+        return Ends::OneSign;
+    }
+    while b - a > 1 {
+        let m = (a + b) / 2;
+        let gm = g(scan_point(lo, hi, m));
+        if !decided(gm) {
+            return Ends::Unknown;
+        }
+        if (gm > 0.0) == (ga > 0.0) {
+            (a, ga) = (m, gm);
+        } else {
+            (b, gb) = (m, gm);
+        }
+    }
+    refined(a, b, ga, gb)
+}
+
 /// Scans `[lo, hi]` in 16 pieces for sign changes of `g` (NaN: no hit there) and returns the
 /// refined root with the smallest `t(s)` above `t_after`, else the one with the smallest
 /// `t(s)` (the caller drops it). Neighbouring pieces share their end samples.
@@ -347,8 +470,8 @@ fn nearest_sign_change(
     refine: Refine,
 ) -> Option<f64> {
     let mut best: Option<(f64, f64)> = None;
-    let n = 16;
-    let x = |k: usize| lo + (hi - lo) * k as f64 / n as f64;
+    let n = SCAN_PIECES;
+    let x = |k: usize| scan_point(lo, hi, k);
     let (mut a, mut ga) = (x(0), g(x(0)));
     for k in 0..n {
         let b = x(k + 1);

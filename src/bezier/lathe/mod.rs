@@ -22,10 +22,12 @@ use std::f64::consts::TAU;
 use glam::{DVec2, DVec3};
 
 mod frame;
+mod hit;
 mod segment;
 mod shell;
 
 pub use frame::RayFrame;
+pub use hit::{LatheHit, NearestHit};
 pub use segment::Segment;
 use segment::TABLE_STEPS;
 pub use shell::{PIECES, SHELL_PAD, SegmentShells, Shell, ShellLanes, shell_slack};
@@ -33,8 +35,8 @@ pub use shell::{PIECES, SHELL_PAD, SegmentShells, Shell, ShellLanes, shell_slack
 use super::Solver;
 use super::roots::bracket::Refine;
 use super::roots::{
-    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots,
-    root_uncertainty,
+    Root, RootKind, find_roots, find_roots_on, find_roots_with_noise, newton_roots, root_spread,
+    strictly_monotone_on, widened,
 };
 /// Which part of the surface was hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,20 +47,6 @@ pub enum Part {
     StartCap,
     /// The flat cap at the end angle.
     EndCap,
-}
-
-/// A hit in the lathe's own space, `t` in units of the ray direction given.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LatheHit {
-    pub t: f64,
-    pub p: DVec3,
-    /// Unit outward geometric normal (outward is to the right of the profile's direction).
-    pub n: DVec3,
-    pub uv: DVec2,
-    pub dpdu: DVec3,
-    pub part: Part,
-    /// Profile parameter within the segment (0 on caps).
-    pub s: f64,
 }
 
 /// Some parts of a lathe (see [`Lathe::intersect_parts`]).
@@ -292,13 +280,60 @@ impl Lathe {
         t_max: f64,
         solver: Solver,
     ) -> Option<LatheHit> {
+        let h = self.nearest(parts, o, d, t_min, t_max, solver)?;
+        Some(self.complete(o, d, &h, true))
+    }
+
+    /// [`Lathe::intersect_parts`] without the surface data: where the nearest hit is, from
+    /// which [`Lathe::complete`] gives the same [`LatheHit`].
+    pub fn nearest(
+        &self,
+        parts: Parts,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        solver: Solver,
+    ) -> Option<NearestHit> {
         let dl = d.length();
         if !(dl > 0.0 && dl.is_finite() && o.is_finite()) {
             return None;
         }
         let frame = RayFrame::new(o, d / dl, self.hmin, self.hmax);
-        let dn = frame.dn;
-        let (tmin, mut best) = (t_min * dl, t_max * dl);
+        let (tmin, best) = (t_min * dl, t_max * dl);
+        // Most rays that reach a segment's box miss its union shell: they end here, before
+        // the search's setup (the search tests the same shells again, with the same result).
+        let (pad, slack) = (SHELL_PAD * self.size, shell_slack(self.size));
+        let missed = |i: usize| {
+            self.segs[i].degenerate
+                || frame
+                    .shells_entered(&self.shells[i].union, tmin - pad, best + pad, slack)
+                    .0
+                    == 0
+        };
+        if !parts.caps && parts.segs.clone().all(missed) {
+            return None;
+        }
+        let (t, part, s) = self.search(parts, &frame, tmin, best, solver)?;
+        Some(NearestHit {
+            t: t / dl,
+            t_unit: t,
+            part,
+            s,
+        })
+    }
+
+    /// The nearest hit `(t, part, s)` with `tmin < t < best` along the frame's unit direction.
+    #[inline(never)]
+    fn search(
+        &self,
+        parts: Parts,
+        frame: &RayFrame,
+        tmin: f64,
+        mut best: f64,
+        solver: Solver,
+    ) -> Option<(f64, Part, f64)> {
+        let (o, dn) = (frame.o, frame.dn);
         let mut found: Option<(f64, Part, f64)> = None;
         let mut roots = Vec::new();
         // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).
@@ -362,11 +397,14 @@ impl Lathe {
                     newton_roots(&f, noise, iterations, starts, &mut roots)
                 }
             }
+            // A bound of |F''| on the segment, computed for the first simple root.
+            let mut bound = None;
             for root in &roots {
-                let ds = root_uncertainty(&f, root.t, noise);
+                let (ds, monotone) = spread_and_certificate(&f, root, noise, &mut bound);
                 let prune = Some((tmin, best));
                 let refine = Refine::FalsePosition;
-                let cands = frame.candidates(seg, root, ds, self.size, refine, tmin, prune);
+                let cands =
+                    frame.candidates(seg, root, ds, self.size, refine, tmin, prune, monotone);
                 for (t, s) in cands {
                     if t > tmin && t < best && self.in_sweep(o + t * dn) {
                         best = t;
@@ -376,10 +414,9 @@ impl Lathe {
             }
         }
         if parts.caps {
-            self.cap_hits(&frame, tmin, &mut best, &mut found);
+            self.cap_hits(frame, tmin, &mut best, &mut found);
         }
-        let (t, part, s) = found?;
-        Some(self.hit_record(o + t * dn, t / dl, part, s))
+        found
     }
 
     /// The nearer of the two side caps of a partial sweep, if nearer than `best`.
@@ -438,59 +475,6 @@ impl Lathe {
         crossings % 2 == 1
     }
 
-    pub fn hit_record(&self, p: DVec3, t: f64, part: Part, s: f64) -> LatheHit {
-        let (a0, span) = self.sweep.unwrap_or((0.0, TAU));
-        match part {
-            Part::Side(i) => {
-                let seg = &self.segs[i];
-                let rxz = (p.x * p.x + p.z * p.z).sqrt();
-                let phi = p.z.atan2(p.x);
-                let (c, sn) = if rxz > 0.0 {
-                    (p.x / rxz, p.z / rxz)
-                } else {
-                    (phi.cos(), phi.sin())
-                };
-                let tan = seg.tangent(s, self.size);
-                let n = DVec3::new(tan.y * c, -tan.x, tan.y * sn).normalize();
-                let dpdu = DVec3::new(tan.x * c, tan.y, tan.x * sn) * self.total_len.max(1e-300);
-                let u = (self.len_before[i] + seg.arc(s)) / self.total_len.max(1e-300);
-                let v = (phi - a0).rem_euclid(TAU) / span;
-                LatheHit {
-                    t,
-                    p,
-                    n,
-                    uv: DVec2::new(u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)),
-                    dpdu,
-                    part,
-                    s,
-                }
-            }
-            Part::StartCap | Part::EndCap => {
-                let angle = if part == Part::StartCap {
-                    a0
-                } else {
-                    a0 + span
-                };
-                let e = DVec3::new(angle.cos(), 0.0, angle.sin());
-                let m = DVec3::new(-angle.sin(), 0.0, angle.cos());
-                let n = if part == Part::StartCap { -m } else { m };
-                let h = (self.hmax - self.hmin).max(1e-300);
-                LatheHit {
-                    t,
-                    p,
-                    n,
-                    uv: DVec2::new(
-                        (p.dot(e) / self.rmax.max(1e-300)).clamp(0.0, 1.0),
-                        ((p.y - self.hmin) / h).clamp(0.0, 1.0),
-                    ),
-                    dpdu: e * self.rmax,
-                    part,
-                    s: 0.0,
-                }
-            }
-        }
-    }
-
     /// Area of the swept side (caps excluded), from the tabulated `integral r |P'| ds`.
     pub fn area(&self) -> f64 {
         let span = self.sweep.map_or(TAU, |s| s.1);
@@ -535,6 +519,24 @@ impl Lathe {
         let q = self.segs[i].point(s);
         DVec3::new(q.x * phi.cos(), q.y, q.x * phi.sin())
     }
+}
+
+/// The uncertainty `ds` of a root of `f` and whether `f` is certified strictly monotone on its
+/// widened bracket (see [`RayFrame::candidates`]); `bound` caches `f`'s bound of `|f''|`.
+#[inline(never)]
+fn spread_and_certificate(
+    f: &super::bernstein::Bernstein,
+    root: &Root,
+    noise: f64,
+    bound: &mut Option<f64>,
+) -> (f64, bool) {
+    let (ds, slope) = root_spread(f, root.t, noise);
+    let monotone = root.kind == RootKind::Simple && {
+        let (lo, hi) = widened(root, ds);
+        let b = *bound.get_or_insert_with(|| f.second_derivative_bound());
+        strictly_monotone_on(f.degree(), slope, b, noise, root.t, lo, hi)
+    };
+    (ds, monotone)
 }
 
 /// The largest radius and the lowest and highest heights of some segments' bounds.

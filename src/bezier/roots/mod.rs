@@ -213,9 +213,44 @@ fn narrow(v: f64, c0: f64, x: f64, lo: &mut f64, hi: &mut f64) {
 /// How far a root of `f` at `s` may be from the computed one given value noise `noise`:
 /// `noise / |f'|` near a simple root, `sqrt(2 noise / |f''|)` near a double one.
 pub fn root_uncertainty(f: &Bernstein, s: f64, noise: f64) -> f64 {
-    let d1 = f.eval_with_derivative(s).1.abs();
-    let d2 = f.derivative().eval_with_derivative(s).1.abs();
-    (noise / d1.max(1e-300)).min((2.0 * noise / d2.max(1e-300)).sqrt())
+    root_spread(f, s, noise).0
+}
+
+/// [`root_uncertainty`] and `|f'(s)|`, both from one de Casteljau pass at `s`.
+pub fn root_spread(f: &Bernstein, s: f64, noise: f64) -> (f64, f64) {
+    let (_, d1, d2) = f.eval_with_two_derivatives(s);
+    let (d1, d2) = (d1.abs(), d2.abs());
+    let ds = (noise / d1.max(1e-300)).min((2.0 * noise / d2.max(1e-300)).sqrt());
+    (ds, d1)
+}
+
+/// The bracket of `root` widened by 4 times its uncertainty `ds` (see [`root_uncertainty`]),
+/// within [0, 1]: where the lathe searches the factors of its polynomial again.
+pub fn widened(root: &Root, ds: f64) -> (f64, f64) {
+    ((root.lo - 4.0 * ds).max(0.0), (root.hi + 4.0 * ds).min(1.0))
+}
+
+/// Whether `f` is certified strictly monotone on `[lo, hi]`, an interval of [0, 1] holding
+/// `s`, so that it has at most one root there: `|f'| >= slope - (bound + e2) w - e1 > 0` on
+/// it, with `slope = |f'(s)|` as computed, `bound` = [`Bernstein::second_derivative_bound`]
+/// of `f`, `w` the largest distance from `s` to an end, and allowances for the rounding:
+/// `f`'s coefficients differ from the exact polynomial's by at most `noise` each, which moves
+/// `f'` by at most `2 n noise` and `f''` by at most `4 n (n - 1) noise`; the computed slope
+/// and bound are allowed twice that. NaN anywhere refuses.
+pub fn strictly_monotone_on(
+    degree: usize,
+    slope: f64,
+    bound: f64,
+    noise: f64,
+    s: f64,
+    lo: f64,
+    hi: f64,
+) -> bool {
+    let n = degree as f64;
+    let w = (s - lo).max(hi - s);
+    let e1 = 4.0 * n * noise;
+    let e2 = 8.0 * n * (n - 1.0) * noise;
+    slope - (bound + e2) * w - e1 > 0.0 && lo <= s && s <= hi
 }
 
 /// Newton iteration on `f` from `starts` evenly spaced starting guesses, keeping what converges
@@ -308,6 +343,76 @@ mod tests {
             assert!((t - r).abs() <= 1e-15, "{t} vs {r}");
             assert!(evals <= 12, "root {r}: {evals} evaluations");
         }
+    }
+
+    /// The certificate of monotonicity: taken on a transversal root's widened bracket,
+    /// refused where the bracket holds two roots (or a double one), and never given where the
+    /// derivative changes sign on the interval (checked densely on random polynomials).
+    #[test]
+    fn monotone_certificate_is_sound_and_refuses_two_roots() {
+        let certify = |p: &Bernstein, root: &Root| {
+            let noise = noise_of(p);
+            let (ds, slope) = root_spread(p, root.t, noise);
+            let (lo, hi) = widened(root, ds);
+            let bound = p.second_derivative_bound();
+            strictly_monotone_on(p.degree(), slope, bound, noise, root.t, lo, hi)
+        };
+        // Transversal roots: every one certified.
+        let p = from_roots(&[0.2, 0.5, 0.77, 1.3, -0.4, 0.9]);
+        let roots = roots_of(&p);
+        assert_eq!(roots.len(), 4);
+        assert!(roots.iter().all(|r| certify(&p, r)), "{roots:?}");
+        // Two roots 1e-9 apart: one cluster or two brackets, each refused.
+        let p = from_roots(&[0.4, 0.4 + 1e-9, 1.5]);
+        let roots = roots_of(&p);
+        assert!(!roots.is_empty());
+        assert!(roots.iter().all(|r| !certify(&p, r)), "{roots:?}");
+        // The same pair given as one bracket around both (as a widened bracket can be).
+        let two = Root {
+            t: 0.4,
+            lo: 0.4 - 1e-7,
+            hi: 0.4 + 1e-7,
+            kind: RootKind::Simple,
+        };
+        let p = from_roots(&[0.4, 0.4 + 1e-8, 1.5]);
+        let noise = noise_of(&p);
+        let slope = p.eval_with_derivative(two.t).1.abs();
+        let bound = p.second_derivative_bound();
+        assert!(!strictly_monotone_on(
+            6, slope, bound, noise, two.t, two.lo, two.hi
+        ));
+        // Soundness: where certified, f' keeps its sign on the interval.
+        let mut x = 0.5f64;
+        let mut next = || {
+            x = (x * 3.987_654_321 + 0.314_159).fract();
+            x
+        };
+        let mut certified = 0;
+        for _ in 0..20_000 {
+            let n = 2 + (next() * 6.0) as usize;
+            let c: Vec<f64> = (0..=n).map(|_| next() - 0.5).collect();
+            let p = Bernstein::new(&c).unwrap();
+            let s = next();
+            let w = 10f64.powf(-1.0 - 8.0 * next());
+            let (lo, hi) = ((s - w * next()).max(0.0), (s + w * next()).min(1.0));
+            let noise = noise_of(&p);
+            let slope = p.eval_with_derivative(s).1.abs();
+            let bound = p.second_derivative_bound();
+            if !strictly_monotone_on(n, slope, bound, noise, s, lo, hi) {
+                continue;
+            }
+            certified += 1;
+            let sign = p.eval_with_derivative(s).1 > 0.0;
+            for k in 0..=64 {
+                let q = lo + (hi - lo) * k as f64 / 64.0;
+                let d = p.eval_with_derivative(q).1;
+                assert!(
+                    d != 0.0 && (d > 0.0) == sign,
+                    "{c:?} on [{lo}, {hi}] at {q}: {d}"
+                );
+            }
+        }
+        assert!(certified > 5_000, "{certified}");
     }
 
     #[test]

@@ -188,7 +188,9 @@ pub fn lathe(lathe: &Lathe, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> RefHi
                 }
                 let (_, df) = g(root.t);
                 let ds = b.noise / df.abs().max(1e-300);
-                for (t, s) in frame.candidates(seg, root, ds, size, Refine::Bisection, tmin, None) {
+                for (t, s) in
+                    frame.candidates(seg, root, ds, size, Refine::Bisection, tmin, None, false)
+                {
                     if t.is_finite() {
                         cands.push(polish_hit(seg, o, dn, t, s));
                     }

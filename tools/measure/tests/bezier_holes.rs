@@ -193,7 +193,9 @@ fn count(name: &str, loaded: Loaded) -> Counts {
             let ray = ray_of(x, y);
             if is_curved(px.object) {
                 st.curved_pixels += 1;
-                let h = prepared.intersect(&ray, f32::INFINITY).unwrap().hit;
+                // The full hit, `uv` included (the renderer's leaves it NaN where no texture
+                // reads it).
+                let (h, _) = prepared.bvh.intersect(&ray, 0.0, f32::INFINITY).unwrap();
                 let unit = |v: glam::Vec3A| v.is_finite() && (v.length() - 1.0).abs() < 1e-3;
                 if !(unit(h.n) && unit(h.ns) && h.n.dot(h.ns) > 0.0 && h.uv.is_finite()) {
                     st.bad_normals += 1;
