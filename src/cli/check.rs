@@ -227,7 +227,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     ));
     let st = &s.settings;
     out.push_str(&format!(
-        "settings: {}x{}, {} iterations, {} photons/iteration, radius {}, alpha {}, max_depth {}, seed {}, integrator {}\n",
+        "settings: {}x{}, {} iterations, {} photons/iteration, radius {}, alpha {}, max_depth {}, seed {}, integrator {}{}\n",
         st.resolution.0,
         st.resolution.1,
         st.iterations,
@@ -236,7 +236,12 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
         short_number(st.alpha),
         st.max_depth,
         st.seed,
-        st.integrator.name()
+        st.integrator.name(),
+        if st.final_gather && st.integrator == Integrator::Sppm {
+            " with final gathering"
+        } else {
+            ""
+        }
     ));
     match &s.background {
         Background::Color(c) => {
