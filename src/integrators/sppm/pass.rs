@@ -10,7 +10,6 @@ use rayon::prelude::*;
 use super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
 use super::pixels::Pixel;
 use super::receiver::Receiver;
-use crate::integrators::common::camera_path::VisiblePoint;
 use crate::integrators::common::photons::{trace_classified_photon, trace_photon};
 use crate::integrators::common::streams::Stream;
 use crate::prepare::{EffectiveSettings, PreparedScene};
@@ -174,14 +173,12 @@ impl PhotonPass {
             }
             if let Some(cells) = cells {
                 self.grid.build(cells, &self.chunks[..used]);
-                let points = pixels.iter().map(|px| (px.vp.as_ref(), px.radius));
-                deposits += gather(&self.grid, points, sums);
+                deposits += gather(&self.grid, pixels, sums);
             }
             if let (Some(cells), Some(points), Some(sums)) =
                 (gather_cells, gather_points, gather_sums.as_deref_mut())
             {
                 self.gather_grid.build(cells, &self.gather_chunks[..used]);
-                let points = points.iter().map(|g| (g.vp.as_ref(), g.radius));
                 deposits += gather(&self.gather_grid, points, sums);
             }
             self.rounds += 1;
@@ -269,23 +266,17 @@ impl Gathered {
     }
 }
 
-/// Each point (a pixel's visible or gather point, and its radius) gathers the flux of the
-/// photons within its radius: adds it to `phi` and their number to `m`. Returns the number of
-/// deposits.
-fn gather<'a>(
-    grid: &PhotonGrid,
-    points: impl Iterator<Item = (Option<&'a VisiblePoint>, f64)>,
-    sums: &mut Gathered,
-) -> u64 {
-    let points: Vec<_> = points.collect();
+/// Each point (a pixel's visible point, or its gather point) gathers the flux of the photons
+/// within its radius: adds it to `phi` and their number to `m`. Returns the number of deposits.
+fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
     points
         .par_iter()
         .zip(sums.phi.par_iter_mut().zip(sums.m.par_iter_mut()))
-        .map(|(&(vp, radius), (ph, mm))| {
-            let Some(vp) = vp else {
+        .map(|(px, (ph, mm))| {
+            let Some(vp) = px.vp.as_ref() else {
                 return 0;
             };
-            let r = radius as f32;
+            let r = px.radius as f32;
             // Points without a positive radius gather nothing (they also left the cells out).
             if r.is_nan() || r <= 0.0 {
                 return 0;
