@@ -50,7 +50,14 @@ impl AreaLight {
     /// for weighing a BSDF sample that hit the light (MIS): the same density the light sampler
     /// used, per solid angle.
     pub fn pdf_li(&self, p: Vec3A, pl: Vec3A, nl: Vec3A) -> f32 {
+        self.pdf_li_from(p, pl, nl, false)
+    }
+
+    /// [`AreaLight::pdf_li`] for a receiver that may be a point of this light's own surface
+    /// (`on_light`), where a sphere is sampled by area ([`AreaLight::sample_li_from`]).
+    pub fn pdf_li_from(&self, p: Vec3A, pl: Vec3A, nl: Vec3A, on_light: bool) -> f32 {
         match (&self.shape, self.sampling) {
+            (AnyShape::Sphere(_), _) if on_light => area_pdf_to_solid_angle(p, pl, nl, self.area),
             (AnyShape::Sphere(s), LightSampling::SolidAngle) => s.pdf_toward(p, pl, nl),
             (AnyShape::Quad(q), LightSampling::SolidAngle) => q.pdf_toward(p, pl, nl),
             _ => area_pdf_to_solid_angle(p, pl, nl, self.area),
@@ -61,6 +68,16 @@ impl AreaLight {
     /// subtend (by area from inside), rectangles by the spherical rectangle they subtend, other
     /// shapes uniformly by area. The density is per solid angle.
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        self.sample_li_from(p, u, false)
+    }
+
+    /// [`AreaLight::sample_li`] for a receiver that may be a point of this light's own surface
+    /// (`on_light`). Such a point is inside or outside a sphere by rounding alone: from just
+    /// outside, the cone toward the sphere is nearly a hemisphere whose every sample lands next
+    /// to the point, where no shadow ray is blocked, so light that an object inside the sphere
+    /// hides would be counted. From its own surface a sphere is sampled by area (exact: from the
+    /// inner side every point is in view, from the outer side none is above the horizon).
+    pub fn sample_li_from(&self, p: Vec3A, u: Vec2, on_light: bool) -> Option<LightSample> {
         // Behind a one-sided rectangle nothing arrives: skip the sampling.
         if let AnyShape::Quad(q) = &self.shape
             && !self.two_sided
@@ -69,7 +86,7 @@ impl AreaLight {
             return None;
         }
         let s = match (&self.shape, self.sampling) {
-            (AnyShape::Sphere(s), LightSampling::SolidAngle) => s.sample_toward(p, u),
+            (AnyShape::Sphere(s), LightSampling::SolidAngle) if !on_light => s.sample_toward(p, u),
             (AnyShape::Quad(q), LightSampling::SolidAngle) => q.sample_toward(p, u),
             (shape, _) => {
                 let s = shape.sample(u)?;

@@ -58,10 +58,16 @@ impl Light {
     }
 
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        self.sample_li_from(p, u, false)
+    }
+
+    /// [`Light::sample_li`] for a receiver that may lie on this light's own surface
+    /// (`on_light`; see [`AreaLight::sample_li_from`]).
+    pub fn sample_li_from(&self, p: Vec3A, u: Vec2, on_light: bool) -> Option<LightSample> {
         match self {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
-            Light::Area(l) => l.sample_li(p, u),
+            Light::Area(l) => l.sample_li_from(p, u, on_light),
             Light::Environment(l) => l.sample_li(p, u),
         }
     }

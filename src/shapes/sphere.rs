@@ -126,17 +126,10 @@ impl Sphere {
     /// angle is representable; otherwise the sphere is sampled by area.
     #[inline]
     fn cone_from(&self, p: Vec3A) -> Option<Cone> {
-        /// Relative margin of `d^2` over `r^2` within which a point counts as on the sphere:
-        /// far above f32 rounding of a surface point (about 1e-7).
-        const ON_SURFACE: f32 = 1e-4;
         let to_center = self.center - p;
         let d2 = to_center.length_squared();
         let r2 = self.radius * self.radius;
-        // A point on the sphere (a surface point of the light itself, or of anything touching
-        // it) lies inside or outside by rounding alone. From just outside, the cone is nearly a
-        // hemisphere and every sample lands next to `p`, unoccluded: light that other objects
-        // block would be counted. Such points sample by area, as from inside.
-        if !(d2 > r2 * (1.0 + ON_SURFACE) && d2.is_finite()) {
+        if !(d2 > r2 && d2.is_finite()) {
             return None;
         }
         let sin2_max = r2 / d2;

@@ -21,11 +21,14 @@ pub fn direct_lighting(
     let p = sh.hit.p;
     let n = sh.hit.n;
     let mut l = Vec3A::ZERO;
+    // Whether the point lies on light `li`'s own surface (sampled there by area).
+    let own = scene.prim_light.get(sh.prim as usize).copied();
+    let on_light = |li: usize| own == Some(li as u32);
     // Light sampling.
     let uc = rng.f32();
     let ul = rng.vec2();
     if let Some((li, pl)) = scene.light_distr.sample(uc)
-        && let Some(ls) = scene.lights[li].sample_li(p, ul)
+        && let Some(ls) = scene.lights[li].sample_li_from(p, ul, on_light(li))
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(bsdf.frame.n).abs();
         if f != Vec3A::ZERO {
@@ -53,8 +56,8 @@ pub fn direct_lighting(
                 if let Some((li, al)) = scene.area_light(h2.prim) {
                     let le = al.le(h2.hit.n, -bs.wi);
                     if le != Vec3A::ZERO {
-                        let light_pdf =
-                            scene.light_distr.pdf(li) * al.pdf_li(p, h2.hit.p, h2.hit.n);
+                        let light_pdf = scene.light_distr.pdf(li)
+                            * al.pdf_li_from(p, h2.hit.p, h2.hit.n, on_light(li));
                         l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
                     }
                 }
