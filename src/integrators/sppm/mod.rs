@@ -193,9 +193,8 @@ pub(crate) fn render_with(
                 }
                 let mut rng = Stream::Gather.rng(seed, iter, i as u64);
                 let (l, gp) = gather_path(scene, settings, vp, &mut rng);
-                // The gather point's radius starts from the visible point's rule at the visible
-                // point (not at the gather point, which may lie far down a corridor: one huge
-                // radius sets the cells of the whole grid).
+                // The gather point's radius starts at a multiple of the visible point's own
+                // initial radius: its blur is averaged over the gather direction.
                 if g.radius == 0.0
                     && gp.is_some()
                     && let Some(r) = initial_radius.at(f64::from(vp.distance))
