@@ -36,6 +36,11 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
     // (shape, whether its own normals point into it)
     let shapes = [
         ("cylinder { <0, -0.8, 0>, <0.3, 0.8, 0.2>, 0.6 }", false),
+        ("cone { <0, -0.8, 0>, 0.7, <0.2, 0.8, 0.1>, 0.2 }", false),
+        (
+            "cone { <0, 0.8, 0>, 0, <0, -0.8, 0>, 0.9 scale <1, 0.8, 1.3> }",
+            false,
+        ),
         (
             "box { <-0.7, -0.5, -0.6>, <0.8, 0.6, 0.5> scale <1, 2, 0.5> rotate <20, 30, 0> }",
             false,

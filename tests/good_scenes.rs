@@ -184,6 +184,33 @@ fn macros_recurse_and_count() {
     assert!((radius - 0.04).abs() < 1e-12);
 }
 
+/// POV-Ray's `cone`: base point and radius, cap point and radius, either radius 0, `open`.
+#[test]
+fn cones_as_in_pov_ray() {
+    let s = scene(
+        "cone { <0, 0, 0>, 1, <0, 2, 0>, 0 }
+         cone { <1, 0, 0>, 0.25, <1, 1, 0>, 0.5 open }",
+    );
+    let Shape::Cone {
+        base,
+        base_radius,
+        cap,
+        cap_radius,
+        open,
+    } = s.objects[0].shape
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (base, base_radius, cap, cap_radius, open),
+        (DVec3::ZERO, 1.0, DVec3::new(0.0, 2.0, 0.0), 0.0, false)
+    );
+    assert!(
+        matches!(s.objects[1].shape, Shape::Cone { open: true, cap_radius, .. } if cap_radius == 0.5)
+    );
+    assert_eq!(s.objects[1].shape.kind(), "cone");
+}
+
 #[test]
 fn expressions_and_builtins() {
     let s = scene(

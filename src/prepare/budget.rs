@@ -43,7 +43,7 @@ fn primitives(shape: &Shape) -> u64 {
         Shape::Mesh { mesh } => mesh.indices.len() as u64,
         Shape::Box { .. } => 6,
         // Body and two caps.
-        Shape::Cylinder { .. } => 3,
+        Shape::Cylinder { .. } | Shape::Cone { .. } => 3,
         // Cut into pieces, each a primitive of its own.
         Shape::BezierPatch { .. } => u64::from(PATCH_PIECES * PATCH_PIECES),
         // Its shapes live in the one CSG primitive (an overestimate by one).

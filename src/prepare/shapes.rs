@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::scene;
 use crate::shapes::Shape;
+use crate::shapes::cone::Cone;
 use crate::shapes::cuboid::cuboid_faces;
 use crate::shapes::cylinder::Cylinder;
 use crate::shapes::disk::Disk;
@@ -84,6 +85,53 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             v(xf.transform_vector3(w)),
         )?))
     };
+    // A cylinder's or cone's side (radii at base and cap) and its end caps, a cap of radius 0
+    // (a cone's point) left out.
+    let axial = |base: DVec3,
+                 cap: DVec3,
+                 (r0, r1): (f64, f64),
+                 open: bool,
+                 cone: bool|
+     -> Result<Vec<AnyShape>, String> {
+        let axis = cap - base;
+        let caps: Vec<(DVec3, DVec3, f64)> = if open {
+            vec![]
+        } else {
+            [(base, -axis, r0), (cap, axis, r1)]
+                .into_iter()
+                .filter(|c| c.2 > 0.0)
+                .collect()
+        };
+        let mut out = Vec::new();
+        match sim {
+            Some(s) => {
+                let (b, c) = (xf.transform_point3(base), xf.transform_point3(cap));
+                out.push(if cone {
+                    AnyShape::Other(Box::new(Cone::new(b, c, r0 * s, r1 * s)?))
+                } else {
+                    AnyShape::Cylinder(Cylinder::new(v(b), v(c), (r0 * s) as f32)?)
+                });
+                for (p, n, r) in caps {
+                    out.push(AnyShape::Disk(Disk::new(
+                        v(xf.transform_point3(p)),
+                        v(nmat * n),
+                        (r * s) as f32,
+                    )?));
+                }
+            }
+            None => {
+                out.push(if cone {
+                    wrap(Arc::new(Cone::new(base, cap, r0, r1)?))?
+                } else {
+                    wrap(Arc::new(Cylinder::new(v(base), v(cap), r0 as f32)?))?
+                });
+                for (p, n, r) in caps {
+                    out.push(wrap(Arc::new(Disk::new(v(p), v(n), r as f32)?))?);
+                }
+            }
+        }
+        Ok(out)
+    };
     Ok(match &obj.shape {
         scene::Shape::Sphere { center, radius } => match sim {
             Some(s) => vec![AnyShape::Sphere(Sphere::with_frame(
@@ -131,43 +179,14 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             cap,
             radius,
             open,
-        } => {
-            let axis = *cap - *base;
-            let parts: Vec<(DVec3, DVec3, bool)> = if *open {
-                vec![]
-            } else {
-                vec![(*base, -axis, true), (*cap, axis, true)]
-            };
-            let mut out = Vec::new();
-            match sim {
-                Some(s) => {
-                    let (b, c) = (xf.transform_point3(*base), xf.transform_point3(*cap));
-                    out.push(AnyShape::Cylinder(Cylinder::new(
-                        v(b),
-                        v(c),
-                        (radius * s) as f32,
-                    )?));
-                    for (p, n, _) in parts {
-                        out.push(AnyShape::Disk(Disk::new(
-                            v(xf.transform_point3(p)),
-                            v(nmat * n),
-                            (radius * s) as f32,
-                        )?));
-                    }
-                }
-                None => {
-                    out.push(wrap(Arc::new(Cylinder::new(
-                        v(*base),
-                        v(*cap),
-                        *radius as f32,
-                    )?))?);
-                    for (p, n, _) in parts {
-                        out.push(wrap(Arc::new(Disk::new(v(p), v(n), *radius as f32)?))?);
-                    }
-                }
-            }
-            out
-        }
+        } => axial(*base, *cap, (*radius, *radius), *open, false)?,
+        scene::Shape::Cone {
+            base,
+            base_radius,
+            cap,
+            cap_radius,
+            open,
+        } => axial(*base, *cap, (*base_radius, *cap_radius), *open, true)?,
         scene::Shape::Triangle { vertices } => {
             let mut p = vertices.map(|q| v(xf.transform_point3(q)));
             if mirrored {

@@ -281,6 +281,16 @@ pub enum Shape {
         /// No end caps.
         open: bool,
     },
+    /// A cone frustum (POV-Ray's `cone`): radius `base_radius` at `base`, `cap_radius` at
+    /// `cap`, either 0 for a point.
+    Cone {
+        base: DVec3,
+        base_radius: f64,
+        cap: DVec3,
+        cap_radius: f64,
+        /// No end caps.
+        open: bool,
+    },
     Disk {
         center: DVec3,
         normal: DVec3,
@@ -317,6 +327,7 @@ impl Shape {
             Shape::Quad { .. } => "quad",
             Shape::Box { .. } => "box",
             Shape::Cylinder { .. } => "cylinder",
+            Shape::Cone { .. } => "cone",
             Shape::Disk { .. } => "disk",
             Shape::Triangle { .. } => "triangle",
             Shape::Mesh { .. } => "mesh",

@@ -326,6 +326,19 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             len(*radius, "radius")?;
             len((*cap - *base).length(), "length")?;
         }
+        Shape::Cone {
+            base,
+            base_radius,
+            cap,
+            cap_radius,
+            ..
+        } => {
+            at(*base)?;
+            at(*cap)?;
+            // One radius may be 0 (a pointed cone): the larger one sets the size.
+            len(base_radius.max(*cap_radius), "radius")?;
+            len((*cap - *base).length(), "length")?;
+        }
         Shape::Disk { center, radius, .. } => {
             // A disk may be squashed along its own normal: only its largest stretch.
             at(*center)?;

@@ -237,6 +237,7 @@ pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
     }
 }
 
+pub mod cone;
 pub mod csg;
 pub mod cuboid;
 pub mod cylinder;

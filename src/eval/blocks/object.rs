@@ -76,6 +76,7 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "quad",
     "box",
     "cylinder",
+    "cone",
     "disk",
     "triangle",
     "mesh",
@@ -349,7 +350,7 @@ impl Sink for ObjectBuilder {
     }
     fn props(&self) -> &'static [PropSpec] {
         match self.kind {
-            "cylinder" => &CYL_PROPS,
+            "cylinder" | "cone" => &CYL_PROPS,
             "area_light" => &AREA_PROPS,
             "revolve" => &REVOLVE_PROPS,
             "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,

@@ -9,9 +9,18 @@
 //! that lookup waited on memory for a third of the photon pass.)
 //!
 //! The cells are a little over `2 r_max` wide, so the photons within `r <= r_max` of a point
-//! lie in the 2x2x2 cells nearest to it. A photon is stored once, in the cell that holds it;
-//! the entries of a bucket are contiguous, positions (all the distance test reads) in one array
-//! and the photon's direction and flux in a parallel one.
+//! lie in the 2x2x2 cells nearest to it. A photon is stored once per level (below), in the cell
+//! that holds it; the entries of a bucket are contiguous, positions (all the distance test
+//! reads) in one array and the photon's direction and flux in a parallel one.
+//!
+//! Radii can span orders of magnitude (each pixel's radius follows the distance to its visible
+//! point: an infinite floor seen up to the horizon). Cells sized by the largest radius would
+//! then put every photon near the camera into a few cells, each scanned by every point there
+//! (15x the time of the same scene with a finite floor). So the points are split into levels
+//! by radius, a factor [`LEVEL_FACTOR`] apart, each level with its own cells over its own
+//! points; a photon is filed in every level whose points it may reach, and a point looks up its
+//! own level only. Radii within that factor of the largest make one level: the grid of one
+//! level is the grid of all points.
 
 use arrayvec::ArrayVec;
 use glam::{Vec3, Vec3A};
@@ -30,9 +39,24 @@ pub(super) struct PhotonHit {
     pub(super) beta: Vec3A,
 }
 
-/// The cell geometry of one iteration, from its visible points.
-#[derive(Clone, Copy, Debug)]
+/// Radius ratio between neighbouring levels.
+const LEVEL_FACTOR: f32 = 4.0;
+
+/// Most levels: radii below `r_max / LEVEL_FACTOR^(MAX_LEVELS - 1)` share the last.
+const MAX_LEVELS: usize = 8;
+
+/// The cell geometry of one iteration's visible points, one [`Level`] per radius class.
+#[derive(Clone, Debug)]
 pub(super) struct Cells {
+    /// The largest radius: level `k` holds the radii in `(r_max / F^(k+1), r_max / F^k]`
+    /// (the last level everything below), `F` = [`LEVEL_FACTOR`].
+    r_max: f32,
+    levels: Vec<Option<Level>>,
+}
+
+/// The cell geometry of the points of one level.
+#[derive(Clone, Copy, Debug)]
+struct Level {
     /// The points' bounds grown by the largest radius: no photon outside reaches a point.
     bounds: Aabb,
     inv_cell: f32,
@@ -65,11 +89,56 @@ fn floor_i32(x: f32) -> i32 {
 }
 
 impl Cells {
-    /// The cells for visible points at `(position, radius)`; `None` without a point of positive
-    /// radius.
+    /// The cells for visible points at `(position, radius)`; `None` without a point of finite
+    /// positive radius.
     pub(super) fn new(points: impl Iterator<Item = (Vec3A, f32)>) -> Option<Cells> {
+        // (A point without a finite positive radius gathers nothing.)
+        let points: Vec<(Vec3A, f32)> = points.filter(|(_, r)| *r > 0.0 && r.is_finite()).collect();
+        let r_max = points.iter().fold(0.0f32, |m, (_, r)| m.max(*r));
+        if points.is_empty() {
+            return None;
+        }
+        let mut cells = Cells {
+            r_max,
+            levels: Vec::new(),
+        };
+        let mut members: Vec<Vec<(Vec3A, f32)>> = vec![Vec::new(); MAX_LEVELS];
+        for &(p, r) in &points {
+            members[cells.level_of(r)].push((p, r));
+        }
+        while members.last().is_some_and(Vec::is_empty) {
+            members.pop();
+        }
+        cells.levels = members
+            .into_iter()
+            .map(|m| Level::new(m.into_iter()))
+            .collect();
+        Some(cells)
+    }
+
+    /// The level of a point of radius `r` (the same arithmetic wherever it is asked).
+    #[inline]
+    fn level_of(&self, r: f32) -> usize {
+        let (mut k, mut bound) = (0, self.r_max / LEVEL_FACTOR);
+        while k + 1 < MAX_LEVELS && r <= bound {
+            k += 1;
+            bound /= LEVEL_FACTOR;
+        }
+        k
+    }
+
+    /// Whether a photon at `p` can be within reach of a point (photons outside are not kept).
+    #[cfg(test)]
+    pub(super) fn contains(&self, p: Vec3A) -> bool {
+        self.levels.iter().flatten().any(|l| l.contains(p))
+    }
+}
+
+impl Level {
+    /// The cells for the points of one level; `None` without a point.
+    fn new(points: impl Iterator<Item = (Vec3A, f32)>) -> Option<Level> {
         let (mut n, mut max_r, mut bounds) = (0usize, 0.0f32, Aabb::EMPTY);
-        for (p, r) in points.filter(|(_, r)| *r > 0.0) {
+        for (p, r) in points {
             n += 1;
             max_r = max_r.max(r);
             bounds = bounds.with_point(p);
@@ -91,7 +160,7 @@ impl Cells {
         let res = [0, 1, 2].map(|a| ((diag[a] * inv_cell) as i32 + 1).max(1));
         let bits = (2 * n).next_power_of_two().trailing_zeros().max(1);
         let table = (1usize << bits) + res[0] as usize;
-        Some(Cells {
+        Some(Level {
             bounds,
             inv_cell,
             res,
@@ -101,9 +170,9 @@ impl Cells {
         })
     }
 
-    /// Whether a photon at `p` can be within reach of a point (photons outside are not kept).
+    /// Whether a photon at `p` can be within reach of a point of the level.
     #[inline]
-    pub(super) fn contains(&self, p: Vec3A) -> bool {
+    fn contains(&self, p: Vec3A) -> bool {
         !(p.cmplt(self.bounds.min).any() || p.cmpgt(self.bounds.max).any())
     }
 
@@ -135,7 +204,7 @@ impl Cells {
     /// a bucket (two rows hashed close together) are merged, so that no entry is listed twice
     /// (the point would take that photon twice).
     #[inline]
-    pub(super) fn bucket_runs(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
+    fn bucket_runs(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
         let mut out = ArrayVec::new();
         if !self.contains(p) {
             return out;
@@ -200,7 +269,8 @@ struct Filed {
 /// iteration) so that its memory is reused: fresh pages cost a fault each.
 #[derive(Default)]
 pub(super) struct HitChunk {
-    slabs: Vec<Vec<Filed>>,
+    /// Per level, per slab.
+    slabs: Vec<Vec<Vec<Filed>>>,
     /// Surfaces the chunk's photons reached (filed or not): its ray casts.
     pub(super) segments: u64,
 }
@@ -208,42 +278,56 @@ pub(super) struct HitChunk {
 impl HitChunk {
     /// Empties the chunk for a round over `cells`.
     pub(super) fn reset(&mut self, cells: &Cells) {
-        self.slabs.resize_with(cells.slabs(), Vec::new);
+        self.slabs.resize_with(cells.levels.len(), Vec::new);
+        for (slabs, level) in self.slabs.iter_mut().zip(&cells.levels) {
+            slabs.resize_with(level.map_or(0, |l| l.slabs()), Vec::new);
+        }
         self.clear();
     }
 
     /// Drops the hits and the count (a pass that files nothing here).
     pub(super) fn clear(&mut self) {
-        for slab in &mut self.slabs {
+        for slab in self.slabs.iter_mut().flatten() {
             slab.clear();
         }
         self.segments = 0;
     }
 
-    /// Files `hit`, or drops it if no visible point can be within reach.
+    /// Files `hit` in every level whose points it may reach (none: dropped).
     #[inline]
     pub(super) fn push(&mut self, cells: &Cells, hit: PhotonHit) {
-        if !cells.contains(hit.p) {
-            return;
+        for (slabs, level) in self.slabs.iter_mut().zip(&cells.levels) {
+            let Some(level) = level else { continue };
+            if !level.contains(hit.p) {
+                continue;
+            }
+            let bucket = level.bucket(hit.p);
+            slabs[(bucket >> level.slab_shift) as usize].push(Filed {
+                p: hit.p.into(),
+                bucket,
+                wi: hit.wi,
+                beta: hit.beta,
+            });
         }
-        let bucket = cells.bucket(hit.p);
-        self.slabs[(bucket >> cells.slab_shift) as usize].push(Filed {
-            p: hit.p.into(),
-            bucket,
-            wi: hit.wi,
-            beta: hit.beta,
-        });
     }
 
+    /// Hits filed (a hit filed in two levels counts twice: the memory it takes).
     pub(super) fn len(&self) -> usize {
-        self.slabs.iter().map(Vec::len).sum()
+        self.slabs.iter().flatten().map(Vec::len).sum()
     }
 }
 
-/// The photons of one gather round, by cell. Its arrays are reused by the next build.
+/// The photons of one gather round, by level and cell. Its arrays are reused by the next build.
 #[derive(Default)]
 pub(super) struct PhotonGrid {
     cells: Option<Cells>,
+    levels: Vec<LevelGrid>,
+}
+
+/// The photons of one level, by cell.
+#[derive(Default)]
+struct LevelGrid {
+    cells: Option<Level>,
     /// Bucket `b`'s entries are `starts[b]..starts[b + 1]`.
     starts: Vec<u32>,
     /// Per entry: the photon's position.
@@ -255,10 +339,37 @@ pub(super) struct PhotonGrid {
 impl PhotonGrid {
     /// Rebuilds the grid over the photons filed in `chunks` under `cells`; within a bucket the
     /// photons keep their order (chunk after chunk, then as pushed).
-    pub(super) fn build(&mut self, cells: Cells, chunks: &[HitChunk]) {
+    pub(super) fn build(&mut self, cells: &Cells, chunks: &[HitChunk]) {
+        self.levels
+            .resize_with(cells.levels.len(), LevelGrid::default);
+        for (k, (grid, level)) in self.levels.iter_mut().zip(&cells.levels).enumerate() {
+            match level {
+                Some(level) => grid.build(*level, chunks, k),
+                None => grid.cells = None,
+            }
+        }
+        self.cells = Some(cells.clone());
+    }
+
+    /// Calls `f(wi, flux)` for every photon within `r` of `p`, for a point of radius `r` that
+    /// was among the points `cells` were made from, each once, in entry order.
+    #[inline]
+    pub(super) fn for_each_within(&self, p: Vec3A, r: f32, f: impl FnMut(Vec3A, Vec3A)) {
+        let Some(cells) = &self.cells else {
+            return;
+        };
+        if let Some(grid) = self.levels.get(cells.level_of(r)) {
+            grid.for_each_within(p, r * r, f);
+        }
+    }
+}
+
+impl LevelGrid {
+    /// [`PhotonGrid::build`] for level `k`.
+    fn build(&mut self, cells: Level, chunks: &[HitChunk], k: usize) {
         let (size, width) = (cells.table_size(), cells.slab_width() as usize);
         let totals: Vec<usize> = (0..cells.slabs())
-            .map(|s| chunks.iter().map(|c| c.slabs[s].len()).sum())
+            .map(|s| chunks.iter().map(|c| c.slabs[k][s].len()).sum())
             .collect();
         let n: usize = totals.iter().sum();
         // Rounds hold a few million hits (`ROUND_HITS`); entry indices are u32.
@@ -285,7 +396,7 @@ impl PhotonGrid {
             .enumerate()
             .for_each(|(s, (starts, (base, points, flux)))| {
                 let first = s * width;
-                let filed = || chunks.iter().flat_map(|c| &c.slabs[s]);
+                let filed = || chunks.iter().flat_map(|c| &c.slabs[k][s]);
                 starts.fill(0);
                 for h in filed() {
                     starts[h.bucket as usize - first] += 1;
@@ -305,10 +416,10 @@ impl PhotonGrid {
             });
     }
 
-    /// Calls `f(wi, flux)` for every photon within `radius^2 = r2` of `p` (`r <= r_max`), each
-    /// once, in entry order.
+    /// Calls `f(wi, flux)` for every photon within `radius^2 = r2` of `p` (`r` at most the
+    /// level's largest radius), each once, in entry order.
     #[inline]
-    pub(super) fn for_each_within(&self, p: Vec3A, r2: f32, mut f: impl FnMut(Vec3A, Vec3A)) {
+    fn for_each_within(&self, p: Vec3A, r2: f32, mut f: impl FnMut(Vec3A, Vec3A)) {
         let Some(cells) = &self.cells else {
             return;
         };
@@ -325,118 +436,4 @@ impl PhotonGrid {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sampling::Rng;
-
-    fn random_in(rng: &mut Rng, size: f32) -> Vec3A {
-        Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * size
-    }
-
-    /// A gather must find every photon within the point's radius (the grid is only a filter;
-    /// a photon it misses loses its flux there), each once, and in photon order within a
-    /// bucket (what makes the f64 sums independent of the thread count). Checked against brute
-    /// force with mixed radii, points on cell borders, photons everywhere (also outside the
-    /// points' bounds) spread over several chunks, and with few points, where the table is
-    /// small, cells often share a bucket and every slab is one bucket wide.
-    #[test]
-    fn gathers_find_every_photon_within_the_radius_once() {
-        let mut rng = Rng::new(3);
-        for (n_points, size) in [(3usize, 1.0f32), (40, 1.0), (2000, 4.0)] {
-            let mut radii: Vec<f32> = (0..n_points).map(|_| 0.05 + 0.2 * rng.f32()).collect();
-            let mut points: Vec<Vec3A> = (0..n_points).map(|_| random_in(&mut rng, size)).collect();
-            // Two corners fix the bounds and the largest radius fixes the cells' size, so that
-            // moving the other points inside the box below leaves the cells as they are.
-            (points[0], points[1], radii[0]) = (Vec3A::ZERO, Vec3A::splat(size), 0.25);
-            let pairs = |points: &[Vec3A]| -> Vec<(Vec3A, f32)> {
-                points.iter().copied().zip(radii.iter().copied()).collect()
-            };
-            let before = Cells::new(pairs(&points).into_iter()).unwrap();
-            // Every other point moves onto a border between cells (integer cell coordinates)
-            // or between a lookup's choices of cells (an integer plus 0.5).
-            for (i, p) in points.iter_mut().enumerate().skip(2).step_by(2) {
-                let c = (*p - before.bounds.min) * before.inv_cell;
-                let shift = if i % 4 == 0 { 0.0 } else { 0.5 };
-                let q = before.bounds.min + (c.floor() + Vec3A::splat(shift)) / before.inv_cell;
-                *p = q.clamp(Vec3A::ZERO, Vec3A::splat(size));
-            }
-            let cells = Cells::new(pairs(&points).into_iter()).unwrap();
-            assert_eq!(
-                (cells.bounds, cells.inv_cell, cells.res, cells.bits),
-                (before.bounds, before.inv_cell, before.res, before.bits)
-            );
-            // Photon `k` carries its index in its flux.
-            let photons: Vec<PhotonHit> = (0..20_000)
-                .map(|k| {
-                    let p = if k % 3 == 0 {
-                        points[k % n_points] + (random_in(&mut rng, 0.6) - Vec3A::splat(0.3))
-                    } else {
-                        random_in(&mut rng, size * 1.4) - Vec3A::splat(size * 0.2)
-                    };
-                    PhotonHit {
-                        p,
-                        wi: Vec3A::Z,
-                        beta: Vec3A::splat(k as f32),
-                    }
-                })
-                .collect();
-            let mut chunks: Vec<HitChunk> = (0..7).map(|_| HitChunk::default()).collect();
-            for (c, chunk) in chunks.iter_mut().enumerate() {
-                chunk.reset(&cells);
-                for h in photons.iter().skip(c * 3000).take(3000) {
-                    chunk.push(&cells, *h);
-                }
-            }
-            let mut grid = PhotonGrid::default();
-            grid.build(cells, &chunks);
-            let mut found = 0;
-            for (p, r) in points.iter().zip(&radii) {
-                let mut got = Vec::new();
-                grid.for_each_within(*p, r * r, |_, beta| got.push(beta.x as usize));
-                let mut sorted = got.clone();
-                sorted.sort_unstable();
-                sorted.dedup();
-                assert_eq!(sorted.len(), got.len(), "a photon found twice at {p:?}");
-                let want: Vec<usize> = (0..photons.len())
-                    .filter(|&k| (photons[k].p - *p).length_squared() <= r * r)
-                    .collect();
-                assert_eq!(sorted, want, "at {p:?} ({n_points} points)");
-                found += got.len();
-            }
-            // The points do gather photons (the test is not vacuous).
-            assert!(found > 1000, "{found} finds for {n_points} points");
-        }
-    }
-
-    /// Within each bucket the photons keep their order: chunk after chunk, then as pushed.
-    #[test]
-    fn a_bucket_keeps_the_photons_in_order() {
-        let cells = Cells::new([(Vec3A::ZERO, 1.0)].into_iter()).unwrap();
-        let mut rng = Rng::new(9);
-        let mut chunks: Vec<HitChunk> = (0..5).map(|_| HitChunk::default()).collect();
-        let mut k = 0;
-        for chunk in &mut chunks {
-            chunk.reset(&cells);
-            for _ in 0..200 {
-                let p = random_in(&mut rng, 2.0) - Vec3A::ONE;
-                chunk.push(
-                    &cells,
-                    PhotonHit {
-                        p,
-                        wi: Vec3A::Z,
-                        beta: Vec3A::splat(k as f32),
-                    },
-                );
-                k += 1;
-            }
-        }
-        let mut grid = PhotonGrid::default();
-        grid.build(cells, &chunks);
-        for b in 0..cells.table_size() {
-            let run = grid.starts[b] as usize..grid.starts[b + 1] as usize;
-            let order: Vec<f32> = grid.flux[run].iter().map(|(_, beta)| beta.x).collect();
-            assert!(order.is_sorted(), "bucket {b}: {order:?}");
-        }
-        assert_eq!(grid.points.len(), 1000);
-    }
-}
+mod tests;

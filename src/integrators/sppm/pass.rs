@@ -171,12 +171,12 @@ impl PhotonPass {
             if cancelled() {
                 return deposits;
             }
-            if let Some(cells) = cells {
+            if let Some(cells) = &cells {
                 self.grid.build(cells, &self.chunks[..used]);
                 deposits += gather(&self.grid, pixels, sums);
             }
             if let (Some(cells), Some(points), Some(sums)) =
-                (gather_cells, gather_points, gather_sums.as_deref_mut())
+                (&gather_cells, gather_points, gather_sums.as_deref_mut())
             {
                 self.gather_grid.build(cells, &self.gather_chunks[..used]);
                 deposits += gather(&self.gather_grid, points, sums);
@@ -277,13 +277,14 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
                 return 0;
             };
             let r = px.radius as f32;
-            // Points without a positive radius gather nothing (they also left the cells out).
-            if r.is_nan() || r <= 0.0 {
+            // Points without a finite positive radius gather nothing (they also left the cells
+            // out).
+            if !(r > 0.0 && r.is_finite()) {
                 return 0;
             }
             let receiver = Receiver::new(vp);
             let mut found = 0;
-            grid.for_each_within(vp.p, r * r, |wi, beta| {
+            grid.for_each_within(vp.p, r, |wi, beta| {
                 let f = receiver.f(wi);
                 if f != Vec3A::ZERO {
                     found += 1;

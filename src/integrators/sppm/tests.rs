@@ -463,14 +463,14 @@ mod census {
             );
         }
         let mut grid = PhotonGrid::default();
-        grid.build(cells, std::slice::from_ref(&chunk));
+        grid.build(&cells, std::slice::from_ref(&chunk));
         let mut used = vec![false; hits as usize + 1];
         let mut per_point = Vec::with_capacity(vps.len());
         for (vp, r) in &vps {
             // Every photon within the radius (the BSDF keeps those on the point's side: on walls
             // nearly all).
             let mut found = 0u64;
-            grid.for_each_within(vp.p, r * r, |tag, _| {
+            grid.for_each_within(vp.p, *r, |tag, _| {
                 found += 1;
                 used[tag.x as usize] = true;
             });

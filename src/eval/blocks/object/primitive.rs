@@ -1,4 +1,4 @@
-//! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `disk`, `triangle`,
+//! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `cone`, `disk`, `triangle`,
 //! `mesh`): their positional values and the checks on them.
 
 use crate::diag::short_number;
@@ -21,6 +21,12 @@ fn signature(kind: &str) -> &'static [(&'static str, char)] {
         "quad" => &[("corner", 'v'), ("first edge", 'v'), ("second edge", 'v')],
         "box" => &[("first corner", 'v'), ("opposite corner", 'v')],
         "cylinder" => &[("base point", 'v'), ("cap point", 'v'), ("radius", 'n')],
+        "cone" => &[
+            ("base point", 'v'),
+            ("base radius", 'n'),
+            ("cap point", 'v'),
+            ("cap radius", 'n'),
+        ],
         "disk" => &[("center", 'v'), ("normal", 'v'), ("radius", 'n')],
         "triangle" => &[
             ("first vertex", 'v'),
@@ -39,6 +45,7 @@ fn example(kind: &str) -> &'static str {
         "quad" => "quad { <-1, 0, -1>, <2, 0, 0>, <0, 0, 2> }",
         "box" => "box { <-1, 0, -1>, <1, 1, 1> }",
         "cylinder" => "cylinder { <0, 0, 0>, <0, 1, 0>, 0.1 }",
+        "cone" => "cone { <0, 0, 0>, 0.5, <0, 1, 0>, 0 }",
         "disk" => "disk { <0, 0, 0>, <0, 1, 0>, 1 }",
         "triangle" => "triangle { <0, 0, 0>, <1, 0, 0>, <0, 1, 0> }",
         "mesh" => "mesh { \"bunny.obj\" }",
@@ -168,6 +175,41 @@ impl ObjectBuilder {
                     base: vs[0].0,
                     cap: vs[1].0,
                     radius: radius(ns[0])?,
+                    open: self.open,
+                }
+            }
+            "cone" => {
+                if vs[0].0 == vs[1].0 {
+                    return Err(vec![
+                        Error::new("the cone's base and cap are the same point")
+                            .label("zero height")
+                            .at(vs[1].1),
+                    ]);
+                }
+                for &(r, s) in &ns[..2] {
+                    if r.is_nan() || r < 0.0 {
+                        return Err(range_error(
+                            s,
+                            format!(
+                                "a cone's radius must be at least 0, found {}",
+                                short_number(r)
+                            ),
+                            "use 0 for a pointed end, a positive radius otherwise",
+                        ));
+                    }
+                }
+                if ns[0].0 == 0.0 && ns[1].0 == 0.0 {
+                    return Err(range_error(
+                        ns[1].1,
+                        "both radii of this cone are 0: it would be a line".to_string(),
+                        "give the base or the cap a positive radius",
+                    ));
+                }
+                Shape::Cone {
+                    base: vs[0].0,
+                    base_radius: ns[0].0,
+                    cap: vs[1].0,
+                    cap_radius: ns[1].0,
                     open: self.open,
                 }
             }
