@@ -37,6 +37,8 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
     let shapes = [
         ("cylinder { <0, -0.8, 0>, <0.3, 0.8, 0.2>, 0.6 }", false),
         ("cone { <0, -0.8, 0>, 0.7, <0.2, 0.8, 0.1>, 0.2 }", false),
+        ("torus { 0.8, 0.4 rotate <30, 0, 10> }", false),
+        ("torus { 0.7, 0.35 scale <1, 2, 1> }", false),
         (
             "cone { <0, 0.8, 0>, 0, <0, -0.8, 0>, 0.9 scale <1, 0.8, 1.3> }",
             false,

@@ -211,6 +211,15 @@ fn cones_as_in_pov_ray() {
     assert_eq!(s.objects[1].shape.kind(), "cone");
 }
 
+/// POV-Ray's `torus { major, minor }` about the y axis.
+#[test]
+fn a_torus_as_in_pov_ray() {
+    let s = scene("torus { 1, 0.25 translate <0, 0.25, 0> }");
+    assert!(
+        matches!(s.objects[0].shape, Shape::Torus { major, minor } if major == 1.0 && minor == 0.25)
+    );
+}
+
 #[test]
 fn expressions_and_builtins() {
     let s = scene(

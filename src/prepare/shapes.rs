@@ -20,6 +20,7 @@ use crate::shapes::primitive::AnyShape;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
+use crate::shapes::torus::Torus;
 use crate::shapes::transformed::Transformed;
 use crate::shapes::triangle::Triangle;
 
@@ -187,6 +188,9 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             cap_radius,
             open,
         } => axial(*base, *cap, (*base_radius, *cap_radius), *open, true)?,
+        scene::Shape::Torus { major, minor } => {
+            vec![wrap(Arc::new(Torus::new(*major, *minor)?))?]
+        }
         scene::Shape::Triangle { vertices } => {
             let mut p = vertices.map(|q| v(xf.transform_point3(q)));
             if mirrored {

@@ -16,7 +16,7 @@ pub const MAX_CSG_DEPTH: usize = 64;
 pub const MAX_CSG_LEAVES: usize = 4096;
 
 /// The help of every "not closed" diagnostic.
-pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, cylinder or cone without `open`, a revolve \
+pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, cylinder or cone without `open`, a revolve \
      whose profile starts and ends on the axis, a watertight mesh, a plane), or `union`, which \
      needs no inside";
 
@@ -102,7 +102,11 @@ impl Csg {
 /// Why a shape does not enclose a volume, or `None` when it does.
 pub fn why_open(shape: &Shape) -> Option<String> {
     match shape {
-        Shape::Sphere { .. } | Shape::Box { .. } | Shape::Plane { .. } | Shape::Csg(_) => None,
+        Shape::Sphere { .. }
+        | Shape::Box { .. }
+        | Shape::Plane { .. }
+        | Shape::Torus { .. }
+        | Shape::Csg(_) => None,
         Shape::Cylinder { open: true, .. } => Some("an `open` cylinder has no caps".into()),
         Shape::Cylinder { .. } => None,
         Shape::Cone { open: true, .. } => Some("an `open` cone has no caps".into()),

@@ -296,6 +296,12 @@ pub enum Shape {
         normal: DVec3,
         radius: f64,
     },
+    /// A torus about the object-space y axis (POV-Ray's `torus`): `major` from the axis to the
+    /// tube's centre, `minor` the tube's radius.
+    Torus {
+        major: f64,
+        minor: f64,
+    },
     Triangle {
         vertices: [DVec3; 3],
     },
@@ -328,6 +334,7 @@ impl Shape {
             Shape::Box { .. } => "box",
             Shape::Cylinder { .. } => "cylinder",
             Shape::Cone { .. } => "cone",
+            Shape::Torus { .. } => "torus",
             Shape::Disk { .. } => "disk",
             Shape::Triangle { .. } => "triangle",
             Shape::Mesh { .. } => "mesh",

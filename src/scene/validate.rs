@@ -339,6 +339,11 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             len(base_radius.max(*cap_radius), "radius")?;
             len((*cap - *base).length(), "length")?;
         }
+        Shape::Torus { major, minor } => {
+            at(DVec3::ZERO)?;
+            len(*major + *minor, "size")?;
+            len(*minor, "minor radius")?;
+        }
         Shape::Disk { center, radius, .. } => {
             // A disk may be squashed along its own normal: only its largest stretch.
             at(*center)?;

@@ -249,5 +249,6 @@ pub mod primitive;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
+pub mod torus;
 pub mod transformed;
 pub mod triangle;

@@ -156,13 +156,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "POV-Ray's `lathe` and `sor` are `revolve { profile spline { <r, h>, ... } }` here",
     ),
     pov(
-        "torus",
-        "there is no `torus` here; a `revolve` of a circle comes close: its profile four cubic \
-         arcs (control points 0.5523 r along the tangents) around the tube's centre, e.g. \
-         `revolve { profile bezier { <R + r, 0>, <R + r, 0.5523 * r>, <R + 0.5523 * r, r>, \
-         <R, r>, ... } }`",
-    ),
-    pov(
         "bicubic_patch",
         "POV-Ray's `bicubic_patch` is `bezier_patch { 16 points }` here",
     ),

@@ -77,6 +77,7 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "box",
     "cylinder",
     "cone",
+    "torus",
     "disk",
     "triangle",
     "mesh",

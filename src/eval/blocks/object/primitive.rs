@@ -1,5 +1,5 @@
-//! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `cone`, `disk`, `triangle`,
-//! `mesh`): their positional values and the checks on them.
+//! The primitive shapes (`sphere`, `plane`, `quad`, `box`, `cylinder`, `cone`, `torus`, `disk`,
+//! `triangle`, `mesh`): their positional values and the checks on them.
 
 use crate::diag::short_number;
 use glam::{DAffine3, DVec3};
@@ -28,6 +28,7 @@ fn signature(kind: &str) -> &'static [(&'static str, char)] {
             ("cap radius", 'n'),
         ],
         "disk" => &[("center", 'v'), ("normal", 'v'), ("radius", 'n')],
+        "torus" => &[("major radius", 'n'), ("minor radius", 'n')],
         "triangle" => &[
             ("first vertex", 'v'),
             ("second vertex", 'v'),
@@ -47,6 +48,7 @@ fn example(kind: &str) -> &'static str {
         "cylinder" => "cylinder { <0, 0, 0>, <0, 1, 0>, 0.1 }",
         "cone" => "cone { <0, 0, 0>, 0.5, <0, 1, 0>, 0 }",
         "disk" => "disk { <0, 0, 0>, <0, 1, 0>, 1 }",
+        "torus" => "torus { 1, 0.25 }",
         "triangle" => "triangle { <0, 0, 0>, <1, 0, 0>, <0, 1, 0> }",
         "mesh" => "mesh { \"bunny.obj\" }",
         _ => "",
@@ -212,6 +214,22 @@ impl ObjectBuilder {
                     cap_radius: ns[1].0,
                     open: self.open,
                 }
+            }
+            "torus" => {
+                let (major, minor) = (radius(ns[0])?, radius(ns[1])?);
+                if minor >= major {
+                    return Err(range_error(
+                        ns[1].1,
+                        format!(
+                            "a torus's minor radius must be below its major radius ({}), found {}",
+                            short_number(major),
+                            short_number(minor)
+                        ),
+                        "the first value is the distance from the axis to the tube's centre, \
+                         the second the tube's radius: e.g. `torus { 1, 0.25 }`",
+                    ));
+                }
+                Shape::Torus { major, minor }
             }
             "disk" => Shape::Disk {
                 center: vs[0].0,
