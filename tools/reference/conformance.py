@@ -162,6 +162,49 @@ def write_assets(d):
     # non-uniform scale (it keeps a radius), so ellipsoids are compared against this mesh.
     for name, nu, nv in (('fine_n.obj', 256, 128), ('ball_n.obj', 8, 6), ('ball.obj', 8, 6)):
         write_ball(os.path.join(d, name), nu, nv, name.endswith('_n.obj'))
+    # Mitsuba has no cone and no torus: fine meshes with their analytic normals stand in.
+    write_cone_side(os.path.join(d, 'cone_side.obj'), 0.5, 0.1, 0.9, 512)
+    write_torus(os.path.join(d, 'torus.obj'), 0.5, 0.18, 512, 256)
+
+
+def write_cone_side(path, r0, r1, h, nu):
+    """The side of a cone frustum about +y from radius r0 at y = 0 to r1 at y = h, nu quads
+    around, with the cone's normals."""
+    k = (r1 - r0) / h
+    s = math.sqrt(1 + k * k)
+    with open(path, 'w') as f:
+        for i in range(nu):
+            ph = 2 * math.pi * i / nu
+            c, sn = math.cos(ph), math.sin(ph)
+            for y, r in ((0.0, r0), (h, r1)):
+                f.write('v %.7f %.7f %.7f\n' % (r * c, y, r * sn))
+                f.write('vn %.7f %.7f %.7f\n' % (c / s, -k / s, sn / s))
+        for i in range(nu):
+            a, b = 2 * i + 1, 2 * ((i + 1) % nu) + 1
+            # Outward winding (counter-clockwise seen from outside).
+            f.write(f'f {a}//{a} {a + 1}//{a + 1} {b + 1}//{b + 1}\n')
+            f.write(f'f {a}//{a} {b + 1}//{b + 1} {b}//{b}\n')
+
+
+def write_torus(path, big, small, nu, nv):
+    """A torus about +y (major radius big, minor small), nu x nv quads, with its normals."""
+    with open(path, 'w') as f:
+        for i in range(nu):
+            ph = 2 * math.pi * i / nu
+            for j in range(nv):
+                th = 2 * math.pi * j / nv
+                n = (math.cos(th) * math.sin(ph), math.sin(th), math.cos(th) * math.cos(ph))
+                ring = big + small * math.cos(th)
+                f.write('v %.7f %.7f %.7f\n' % (ring * math.sin(ph), small * math.sin(th), ring * math.cos(ph)))
+                f.write('vn %.7f %.7f %.7f\n' % n)
+        for i in range(nu):
+            for j in range(nv):
+                a = i * nv + j + 1
+                b = ((i + 1) % nu) * nv + j + 1
+                c = i * nv + (j + 1) % nv + 1
+                e = ((i + 1) % nu) * nv + (j + 1) % nv + 1
+                f.write(f'f {a}//{a} {b}//{b} {e}//{e}\n')
+                f.write(f'f {a}//{a} {e}//{e} {c}//{c}\n')
 
 
 def write_ball(path, nu, nv, with_n):
@@ -378,6 +421,17 @@ def define_cases(d):
         'shape_cylinder_open': ('cylinder { <-0.6, 0.1, 0>, <0.6, 0.7, 0.3>, 0.35 open material { diffuse 0.7 } }',
                                 dict(c={'type': 'cylinder', 'p0': [-0.6, 0.1, 0], 'p1': [0.6, 0.7, 0.3], 'radius': 0.35,
                                         'bsdf': lambert(0.7)})),
+        'shape_cone': ('cone { <0, 0.1, 0.1>, 0.5, <0, 1.0, 0.1>, 0.1 material { diffuse 0.7 } }',
+                       dict(side={'type': 'obj', 'filename': p('cone_side.obj'), 'bsdf': lambert(0.7),
+                                  'to_world': T().translate([0, 0.1, 0.1])},
+                            c0=disk([0, 0.1, 0.1], [0, -1, 0], 0.5, bsdf=lambert(0.7)),
+                            c1=disk([0, 1.0, 0.1], [0, 1, 0], 0.1, bsdf=lambert(0.7)))),
+        'shape_cone_open': ('cone { <0, 0.1, 0.1>, 0.5, <0, 1.0, 0.1>, 0.1 open rotate <-25, 0, 0> material { diffuse 0.7 } }',
+                            dict(side={'type': 'obj', 'filename': p('cone_side.obj'), 'bsdf': lambert(0.7),
+                                       'to_world': T().rotate([1, 0, 0], -25).translate([0, 0.1, 0.1])})),
+        'shape_torus': ('torus { 0.5, 0.18 rotate <60, 0, 0> translate <0, 0.6, 0.2> material { diffuse 0.7 } }',
+                        dict(t={'type': 'obj', 'filename': p('torus.obj'), 'bsdf': lambert(0.7),
+                                'to_world': T().translate([0, 0.6, 0.2]).rotate([1, 0, 0], 60)})),
         'shape_disk': ('disk { <0, 0.6, 0.3>, <0.2, 0.5, -1>, 0.6 material { diffuse 0.7 } }',
                        dict(dk=disk([0, 0.6, 0.3], [0.2, 0.5, -1], 0.6, bsdf=lambert(0.7)))),
         'shape_box': ('box { <-0.5, 0, -0.4>, <0.7, 0.9, 0.5> material { diffuse 0.7 } }',
