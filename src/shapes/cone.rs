@@ -132,7 +132,7 @@ impl SplitShape for Cone {
     fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         let (o, d, [t0, t1]) = self.roots(ray)?;
         let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-        [near, far, t0, t1].into_iter().find_map(|t| {
+        [near, far].into_iter().find_map(|t| {
             let z = o.z + d.z * t;
             let tf = t as f32;
             (tf > t_min && tf < t_max && (0.0..=self.height).contains(&z)).then_some(tf)
