@@ -7,6 +7,37 @@ fn random_in(rng: &mut Rng, size: f32) -> Vec3A {
     Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * size
 }
 
+/// The grid of `photons` filed under `cells` by `tasks` chunks in photon order.
+fn grid_of(cells: &Cells, photons: &[PhotonHit], tasks: usize) -> PhotonGrid {
+    let per = photons.len().div_ceil(tasks);
+    let mut chunks: Vec<HitChunk> = (0..tasks).map(|_| HitChunk::default()).collect();
+    for (c, chunk) in chunks.iter_mut().enumerate() {
+        chunk.reset(cells);
+        for h in photons.iter().skip(c * per).take(per) {
+            chunk.push(cells, *h);
+        }
+    }
+    let mut grid = PhotonGrid::default();
+    grid.build(cells, &chunks);
+    grid
+}
+
+/// The photons the grid finds within `r` of `p` (their indices, carried in the flux) are
+/// exactly those within `r` by brute force, each once; returns how many.
+fn assert_gathers_exactly(grid: &PhotonGrid, photons: &[PhotonHit], p: Vec3A, r: f32) -> usize {
+    let mut got = Vec::new();
+    grid.for_each_within(p, r, |_, beta| got.push(beta.x as usize));
+    let mut sorted = got.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    assert_eq!(sorted.len(), got.len(), "a photon found twice at {p:?}");
+    let want: Vec<usize> = (0..photons.len())
+        .filter(|&k| (photons[k].p - p).length_squared() <= r * r)
+        .collect();
+    assert_eq!(sorted, want, "at {p:?}, radius {r}");
+    got.len()
+}
+
 /// A gather must find every photon within the point's radius (the grid is only a filter;
 /// a photon it misses loses its flux there), each once, and in photon order within a
 /// bucket (what makes the f64 sums independent of the thread count). Checked against brute
@@ -58,28 +89,10 @@ fn gathers_find_every_photon_within_the_radius_once() {
                 }
             })
             .collect();
-        let mut chunks: Vec<HitChunk> = (0..7).map(|_| HitChunk::default()).collect();
-        for (c, chunk) in chunks.iter_mut().enumerate() {
-            chunk.reset(&cells);
-            for h in photons.iter().skip(c * 3000).take(3000) {
-                chunk.push(&cells, *h);
-            }
-        }
-        let mut grid = PhotonGrid::default();
-        grid.build(&cells, &chunks);
+        let grid = grid_of(&cells, &photons, 7);
         let mut found = 0;
         for (p, r) in points.iter().zip(&radii) {
-            let mut got = Vec::new();
-            grid.for_each_within(*p, *r, |_, beta| got.push(beta.x as usize));
-            let mut sorted = got.clone();
-            sorted.sort_unstable();
-            sorted.dedup();
-            assert_eq!(sorted.len(), got.len(), "a photon found twice at {p:?}");
-            let want: Vec<usize> = (0..photons.len())
-                .filter(|&k| (photons[k].p - *p).length_squared() <= r * r)
-                .collect();
-            assert_eq!(sorted, want, "at {p:?} ({n_points} points)");
-            found += got.len();
+            found += assert_gathers_exactly(&grid, &photons, *p, *r);
         }
         // The points do gather photons (the test is not vacuous).
         assert!(found > 1000, "{found} finds for {n_points} points");
@@ -157,28 +170,10 @@ fn levels_find_every_photon_across_radii_of_many_sizes() {
             }
         })
         .collect();
-    let mut chunks: Vec<HitChunk> = (0..3).map(|_| HitChunk::default()).collect();
-    for (c, chunk) in chunks.iter_mut().enumerate() {
-        chunk.reset(&cells);
-        for h in photons.iter().skip(c * 10_000).take(10_000) {
-            chunk.push(&cells, *h);
-        }
-    }
-    let mut grid = PhotonGrid::default();
-    grid.build(&cells, &chunks);
+    let grid = grid_of(&cells, &photons, 3);
     let (mut found, mut scanned) = (0usize, 0usize);
     for (p, r) in points.iter().zip(&radii) {
-        let mut got = Vec::new();
-        grid.for_each_within(*p, *r, |_, beta| got.push(beta.x as usize));
-        let mut sorted = got.clone();
-        sorted.sort_unstable();
-        sorted.dedup();
-        assert_eq!(sorted.len(), got.len(), "a photon found twice at {p:?}");
-        let want: Vec<usize> = (0..photons.len())
-            .filter(|&k| (photons[k].p - *p).length_squared() <= r * r)
-            .collect();
-        assert_eq!(sorted, want, "at {p:?}, radius {r}");
-        found += got.len();
+        found += assert_gathers_exactly(&grid, &photons, *p, *r);
         // What the lookup read: the entries of its level's runs.
         let level = &grid.levels[cells.level_of(*r)];
         let runs = level.cells.unwrap().bucket_runs(*p);
