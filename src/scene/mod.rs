@@ -297,7 +297,7 @@ pub enum Shape {
         radius: f64,
     },
     /// A torus about the object-space y axis (POV-Ray's `torus`): `major` from the axis to the
-    /// tube's centre, `minor` the tube's radius.
+    /// tube's centre, `minor` the tube's radius; `minor < major <= TORUS_MAX_ASPECT * minor`.
     Torus {
         major: f64,
         minor: f64,
@@ -323,6 +323,10 @@ pub enum Shape {
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
+
+/// The most a torus's major radius may exceed its minor radius (see `shapes::torus`: beyond
+/// it the intersector's quartic loses the precision to place hits on the surface).
+pub const TORUS_MAX_ASPECT: f64 = 1000.0;
 
 impl Shape {
     /// The keyword that declares this shape, for messages and summaries.

@@ -9,7 +9,7 @@ use crate::diag::{At, Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::range_error;
 use crate::eval::value::{Part, ShapeDef, Value};
-use crate::scene::Shape;
+use crate::scene::{Shape, TORUS_MAX_ASPECT};
 use crate::span::Span;
 
 /// What each primitive's positional values are: (name, kind) with kind `v` vector, `n` number,
@@ -227,6 +227,18 @@ impl ObjectBuilder {
                         ),
                         "the first value is the distance from the axis to the tube's centre, \
                          the second the tube's radius: e.g. `torus { 1, 0.25 }`",
+                    ));
+                }
+                if major > TORUS_MAX_ASPECT * minor {
+                    return Err(range_error(
+                        ns[1].1,
+                        format!(
+                            "this torus's tube is too thin for its ring: major / minor = {}, at \
+                             most {} can be intersected reliably",
+                            short_number(major / minor),
+                            short_number(TORUS_MAX_ASPECT)
+                        ),
+                        "make the minor radius at least the major radius / 1000",
                     ));
                 }
                 Shape::Torus { major, minor }
