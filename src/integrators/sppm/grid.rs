@@ -90,29 +90,27 @@ fn floor_i32(x: f32) -> i32 {
 
 impl Cells {
     /// The cells for visible points at `(position, radius)`; `None` without a point of finite
-    /// positive radius.
-    pub(super) fn new(points: impl Iterator<Item = (Vec3A, f32)>) -> Option<Cells> {
-        // (A point without a finite positive radius gathers nothing.)
-        let points: Vec<(Vec3A, f32)> = points.filter(|(_, r)| *r > 0.0 && r.is_finite()).collect();
-        let r_max = points.iter().fold(0.0f32, |m, (_, r)| m.max(*r));
-        if points.is_empty() {
+    /// positive radius (a point without one gathers nothing). Two passes over the points, no
+    /// copy of them (an image's worth of points is large).
+    pub(super) fn new(points: impl Iterator<Item = (Vec3A, f32)> + Clone) -> Option<Cells> {
+        let valid = |(_, r): &(Vec3A, f32)| *r > 0.0 && r.is_finite();
+        let r_max = points
+            .clone()
+            .filter(valid)
+            .fold(0.0f32, |m, (_, r)| m.max(r));
+        if r_max <= 0.0 {
             return None;
         }
         let mut cells = Cells {
             r_max,
             levels: Vec::new(),
         };
-        let mut members: Vec<Vec<(Vec3A, f32)>> = vec![Vec::new(); MAX_LEVELS];
-        for &(p, r) in &points {
-            members[cells.level_of(r)].push((p, r));
+        let mut stats = [LevelStats::default(); MAX_LEVELS];
+        for (p, r) in points.filter(valid) {
+            stats[cells.level_of(r)].add(p, r);
         }
-        while members.last().is_some_and(Vec::is_empty) {
-            members.pop();
-        }
-        cells.levels = members
-            .into_iter()
-            .map(|m| Level::new(m.into_iter()))
-            .collect();
+        let used = stats.iter().rposition(|s| s.n > 0).map_or(0, |k| k + 1);
+        cells.levels = stats[..used].iter().map(Level::new).collect();
         Some(cells)
     }
 
@@ -134,15 +132,36 @@ impl Cells {
     }
 }
 
+/// The number, largest radius and bounds of one level's points.
+#[derive(Clone, Copy)]
+struct LevelStats {
+    n: usize,
+    max_r: f32,
+    bounds: Aabb,
+}
+
+impl Default for LevelStats {
+    fn default() -> Self {
+        LevelStats {
+            n: 0,
+            max_r: 0.0,
+            bounds: Aabb::EMPTY,
+        }
+    }
+}
+
+impl LevelStats {
+    fn add(&mut self, p: Vec3A, r: f32) {
+        self.n += 1;
+        self.max_r = self.max_r.max(r);
+        self.bounds = self.bounds.with_point(p);
+    }
+}
+
 impl Level {
     /// The cells for the points of one level; `None` without a point.
-    fn new(points: impl Iterator<Item = (Vec3A, f32)>) -> Option<Level> {
-        let (mut n, mut max_r, mut bounds) = (0usize, 0.0f32, Aabb::EMPTY);
-        for (p, r) in points {
-            n += 1;
-            max_r = max_r.max(r);
-            bounds = bounds.with_point(p);
-        }
+    fn new(stats: &LevelStats) -> Option<Level> {
+        let LevelStats { n, max_r, bounds } = *stats;
         if n == 0 {
             return None;
         }
