@@ -90,7 +90,19 @@ impl Evaluator {
         }
         known.extend(CONSTANTS);
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if let Some(hint) = crate::syntax::povray_hint(name, "") {
+        if super::blocks::is_block_name(name) {
+            // `material Shiny`: a block written without its braces.
+            e = Error::new(format!("`{name}` without a body"))
+                .label("a block name, but no `{ ... }` follows")
+                .help(format!(
+                    "a block's contents go in braces: `{name} {{ ... }}`{}",
+                    if name == "material" {
+                        ", e.g. `material { Name }` for a declared material `Name`"
+                    } else {
+                        ""
+                    }
+                ));
+        } else if let Some(hint) = crate::syntax::povray_hint(name, "") {
             e = e.help(hint);
         } else if let Some(file) = super::stdlib::declaring(name) {
             e = e.help(format!(

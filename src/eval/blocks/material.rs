@@ -217,11 +217,25 @@ impl Sink for MaterialBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
             Value::Material(m) if self.base.is_none() => {
                 self.base = Some(m);
                 Ok(())
+            }
+            // A colour declared and then used as a material (POV-Ray's `pigment { Red }`).
+            Value::Color(_) | Value::Texture(_) | Value::Num(_) => {
+                let what = ev.sources.snippet(span);
+                Err(unexpected(
+                    self,
+                    &v,
+                    span,
+                    &format!(
+                        "`{what}` is {}, not a material: write `material {{ diffuse {what} }}` \
+                         for a matte surface of that colour (or `glossy {what}`)",
+                        v.type_name()
+                    ),
+                ))
             }
             v => Err(unexpected(
                 self,
