@@ -387,13 +387,18 @@ impl Evaluator {
             }
             Item::Expr(e) => {
                 // An undeclared name followed by a value reads as a misspelt property
-                // (`difuse 0.5`, POV-Ray's `right x*4/3`): say so, with the nearest properties.
+                // (`difuse 0.5`, POV-Ray's `right x*4/3`, `foo 1`): say so, with the nearest
+                // properties. Not when it is close to a declared name or a block follows
+                // (`sphere { C, Radus material { ... } }`: a misspelt value).
                 if let ExprKind::Ident(name) = &e.kind
-                    && matches!(items.get(*i), Some(Item::Expr(_)))
+                    && let Some(Item::Expr(next)) = items.get(*i)
                     && self.lookup_quiet(name).is_none()
                     && !self.poisoned.contains(name)
+                    && !blocks::is_block_name(name)
                     && (crate::syntax::povray_hint(name, &sink.kind()).is_some()
-                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some())
+                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some()
+                        || !(matches!(next.kind, ExprKind::Block { .. })
+                            || self.near_a_known_name(name)))
                 {
                     while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
                         *i += 1;
