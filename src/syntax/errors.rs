@@ -172,7 +172,36 @@ pub(super) fn syntax_error(
     if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
         d = d.with_help("a directive is not closed: add `#end`");
     }
+    if let Some(format) = other_renderer(text) {
+        d = d.with_help(format!(
+            "this looks like {format}: sppm-lang reads its own POV-Ray-like language \
+             (docs/language.md), e.g. `sphere {{ <0, 0, 0>, 1 }}`; write the scene in it"
+        ));
+    }
     d
+}
+
+/// The scene format of another renderer that `text` is written in, if it looks like one: a
+/// Mitsuba XML file or a pbrt file (both fail to parse early, on their first line).
+fn other_renderer(text: &str) -> Option<&'static str> {
+    let body = text.trim_start_matches('\u{feff}').trim_start();
+    if body.starts_with("<?xml") || body.starts_with("<scene") {
+        return Some("a Mitsuba XML scene");
+    }
+    let pbrt = [
+        "WorldBegin",
+        "LookAt ",
+        "Camera \"",
+        "Film \"",
+        "Sampler \"",
+        "Integrator \"",
+        "Shape \"",
+        "LightSource \"",
+        "AttributeBegin",
+    ];
+    text.lines()
+        .any(|l| pbrt.iter().any(|w| l.trim_start().starts_with(w)))
+        .then_some("a pbrt scene")
 }
 
 fn error_pos(e: &pest::error::Error<Rule>) -> usize {

@@ -52,6 +52,20 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "perspective",
         "the camera is always a perspective (pinhole or thin-lens) camera here: remove `perspective`",
     ),
+    pov_in(
+        "light",
+        "color",
+        "POV-Ray's light `color C` is `intensity C` here, in W/sr and falling off with the \
+         squared distance d (POV-Ray's lights do not fade): `intensity` π·d² times the colour \
+         gives POV-Ray's brightness at distance d",
+    ),
+    pov_in(
+        "light",
+        "colour",
+        "POV-Ray's light `colour C` is `intensity C` here, in W/sr and falling off with the \
+         squared distance d (POV-Ray's lights do not fade): `intensity` π·d² times the colour \
+         gives POV-Ray's brightness at distance d",
+    ),
     pov(
         "light_source",
         "POV-Ray's `light_source { <pos> color ... }` is `light { <pos> intensity rgb <...> }` here \
