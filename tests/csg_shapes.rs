@@ -106,3 +106,43 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         }
     }
 }
+
+/// Coincident faces read as the scene means them: a cutter flush with the top opens its hole, a
+/// cutter as tall as the solid leaves a tunnel, boxes merged along a shared face show no face
+/// between them, and a solid minus itself is empty. (Hits at the same distance: every leaf
+/// counts a hair larger, a subtracted one larger still.)
+#[test]
+fn coincident_faces_read_as_meant() {
+    let dir = tempfile::tempdir().unwrap();
+    let first_hit = |objects: &str, o: Vec3A, d: Vec3A| {
+        let s = load(dir.path(), objects);
+        let p = PreparedScene::new(&s).unwrap();
+        p.intersect(&Ray::new(o, d), f32::INFINITY).map(|h| h.hit.t)
+    };
+    let (down, up) = (Vec3A::new(0.0, -1.0, 0.0), Vec3A::Y);
+    let above = Vec3A::new(0.1, 3.0, 0.2);
+    let below = Vec3A::new(0.1, -3.0, 0.2);
+    let solid = "box { <-1, 0, -1>, <1, 1, 1> }";
+    let pit = format!("difference {{ {solid} box {{ <-0.5, 0.5, -0.5>, <0.5, 1, 0.5> }} }}");
+    let t = first_hit(&pit, above, down).expect("the pit's floor");
+    assert!(
+        (t - 2.5).abs() < 1e-5,
+        "hit at y = {}, not the pit's floor",
+        3.0 - t
+    );
+    let tunnel = format!("difference {{ {solid} box {{ <-0.5, 0, -0.5>, <0.5, 1, 0.5> }} }}");
+    assert_eq!(first_hit(&tunnel, above, down), None);
+    assert_eq!(first_hit(&tunnel, below, up), None);
+    let pair = "merge { box { <0, 0, 0>, <1, 1, 1> } box { <1, 0, 0>, <2, 1, 1> } }";
+    let t = first_hit(pair, Vec3A::splat(0.5), Vec3A::X).expect("the far face");
+    assert!(
+        (t - 1.5).abs() < 1e-5,
+        "hit at x = {}, not the far face",
+        0.5 + t
+    );
+    let nothing = "difference { sphere { <0, 0, 0>, 1 } sphere { <0, 0, 0>, 1 } }";
+    assert_eq!(
+        first_hit(nothing, Vec3A::new(0.0, 0.0, -3.0), Vec3A::Z),
+        None
+    );
+}
