@@ -145,7 +145,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     ev.include_stack.push(canonical(path));
     match parse(file, &text) {
         Ok(items) => {
-            let mut top = TopSink;
+            let mut top = TopSink::default();
             ev.run_top(&items, &mut top);
         }
         Err(d) => ev.errors.extend(d),
