@@ -148,11 +148,20 @@ impl Evaluator {
         }
     }
 
-    /// The help for a file named at `span` (a string) that cannot be read: where its path is
-    /// resolved from, and, when the path as written names a file relative to the current
-    /// folder instead (written from where the command runs), that it should be written from the
-    /// file's folder.
+    /// The help for a file named at `span` (a string) that cannot be read: to write `/` for a
+    /// backslash (a Windows path, whose `\t` became a tab); else where its path is resolved
+    /// from, and, when the path as written names a file relative to the current folder instead
+    /// (written from where the command runs), that it should be written from the file's folder.
     pub(crate) fn path_help(&self, span: Span) -> String {
+        let written = self.sources.snippet(span).trim_matches('"');
+        if written.contains('\\') {
+            // A Windows path: `"tex\tiles.png"` reads as "tex", a tab, "iles.png".
+            let slashes = written.replace("\\\\", "/").replace('\\', "/");
+            return format!(
+                "write paths with `/`: `\"{slashes}\"` (in a string `\\` starts an escape: \
+                 `\\t` is a tab, `\\n` a line break)"
+            );
+        }
         let dir = self
             .sources
             .get(span.file)
@@ -162,7 +171,6 @@ impl Evaluator {
         let Some(dir) = dir else {
             return "the path is resolved relative to the folder of the file that names it".into();
         };
-        let written = self.sources.snippet(span).trim_matches('"');
         let mut help = format!(
             "the path is resolved relative to the folder of the file that names it, `{dir}`"
         );
