@@ -388,8 +388,9 @@ impl Evaluator {
             Item::Expr(e) => {
                 // An undeclared name followed by a value reads as a misspelt property
                 // (`difuse 0.5`, POV-Ray's `right x*4/3`, `foo 1`): say so, with the nearest
-                // properties. Not when it is close to a declared name or a block follows
-                // (`sphere { C, Radus material { ... } }`: a misspelt value).
+                // properties. A name far from every property only when a literal follows and
+                // it is not close to a declared name: `Radus material { ... }` or
+                // `union { Wheel Body }` are misspelt or undeclared values.
                 if let ExprKind::Ident(name) = &e.kind
                     && let Some(Item::Expr(next)) = items.get(*i)
                     && self.lookup_quiet(name).is_none()
@@ -397,8 +398,14 @@ impl Evaluator {
                     && !blocks::is_block_name(name)
                     && (crate::syntax::povray_hint(name, &sink.kind()).is_some()
                         || suggest(name, sink.props().iter().map(|p| p.name)).is_some()
-                        || !(matches!(next.kind, ExprKind::Block { .. })
-                            || self.near_a_known_name(name)))
+                        || (matches!(
+                            next.kind,
+                            ExprKind::Number(_)
+                                | ExprKind::Vector(_)
+                                | ExprKind::Unary(..)
+                                | ExprKind::Str(_)
+                                | ExprKind::Bool(_)
+                        ) && !self.near_a_known_name(name)))
                 {
                     while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
                         *i += 1;
