@@ -12,6 +12,14 @@ use sppm_lang::scene::Scene;
 const CUBE: &str = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
 f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
 
+/// The same cube as a modeller exports it flat-shaded: quads whose corners carry a normal and a
+/// texture coordinate per face, so `tobj` gives every face its own four vertices. Its surface is
+/// still closed (the edges meet by position).
+const FLAT_CUBE: &str = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 -1\nvn 0 0 1\nvn 0 -1 0\nvn 0 1 0\nvn -1 0 0\nvn 1 0 0\n\
+f 1/1/1 4/2/1 3/3/1 2/4/1\nf 5/1/2 6/2/2 7/3/2 8/4/2\nf 1/1/3 2/2/3 6/3/3 5/4/3\n\
+f 4/1/4 8/2/4 7/3/4 3/4/4\nf 1/1/5 5/2/5 8/3/5 4/4/5\nf -7/1/-1 -6/2/-1 -2/3/-1 -3/4/-1\n";
+
 fn load(dir: &std::path::Path, objects: &str) -> Scene {
     let path = dir.join("s.scn");
     std::fs::write(&path, objects).unwrap();
@@ -33,6 +41,7 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         })
         .collect();
     std::fs::write(dir.path().join("inward.obj"), inward).unwrap();
+    std::fs::write(dir.path().join("flat.obj"), FLAT_CUBE).unwrap();
     // (shape, whether its own normals point into it)
     let shapes = [
         ("cylinder { <0, -0.8, 0>, <0.3, 0.8, 0.2>, 0.6 }", false),
@@ -51,6 +60,7 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         ("plane { <0.2, 1, 0.1>, 0.3 }", false),
         ("mesh { \"cube.obj\" scale 0.7 }", false),
         ("mesh { \"inward.obj\" scale 0.7 }", true),
+        ("mesh { \"flat.obj\" scale 0.7 }", false),
         (
             "revolve { profile bezier { <0, -0.6>, <0.9, -0.6>, <0.9, 0.6>, <0, 0.6> } }",
             false,
@@ -102,4 +112,44 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
             );
         }
     }
+}
+
+/// Coincident faces read as the scene means them: a cutter flush with the top opens its hole, a
+/// cutter as tall as the solid leaves a tunnel, boxes merged along a shared face show no face
+/// between them, and a solid minus itself is empty. (Hits at the same distance: every leaf
+/// counts a hair larger, a subtracted one larger still.)
+#[test]
+fn coincident_faces_read_as_meant() {
+    let dir = tempfile::tempdir().unwrap();
+    let first_hit = |objects: &str, o: Vec3A, d: Vec3A| {
+        let s = load(dir.path(), objects);
+        let p = PreparedScene::new(&s).unwrap();
+        p.intersect(&Ray::new(o, d), f32::INFINITY).map(|h| h.hit.t)
+    };
+    let (down, up) = (Vec3A::new(0.0, -1.0, 0.0), Vec3A::Y);
+    let above = Vec3A::new(0.1, 3.0, 0.2);
+    let below = Vec3A::new(0.1, -3.0, 0.2);
+    let solid = "box { <-1, 0, -1>, <1, 1, 1> }";
+    let pit = format!("difference {{ {solid} box {{ <-0.5, 0.5, -0.5>, <0.5, 1, 0.5> }} }}");
+    let t = first_hit(&pit, above, down).expect("the pit's floor");
+    assert!(
+        (t - 2.5).abs() < 1e-5,
+        "hit at y = {}, not the pit's floor",
+        3.0 - t
+    );
+    let tunnel = format!("difference {{ {solid} box {{ <-0.5, 0, -0.5>, <0.5, 1, 0.5> }} }}");
+    assert_eq!(first_hit(&tunnel, above, down), None);
+    assert_eq!(first_hit(&tunnel, below, up), None);
+    let pair = "merge { box { <0, 0, 0>, <1, 1, 1> } box { <1, 0, 0>, <2, 1, 1> } }";
+    let t = first_hit(pair, Vec3A::splat(0.5), Vec3A::X).expect("the far face");
+    assert!(
+        (t - 1.5).abs() < 1e-5,
+        "hit at x = {}, not the far face",
+        0.5 + t
+    );
+    let nothing = "difference { sphere { <0, 0, 0>, 1 } sphere { <0, 0, 0>, 1 } }";
+    assert_eq!(
+        first_hit(nothing, Vec3A::new(0.0, 0.0, -3.0), Vec3A::Z),
+        None
+    );
 }

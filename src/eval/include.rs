@@ -147,6 +147,43 @@ impl Evaluator {
             None => p.to_path_buf(),
         }
     }
+
+    /// The help for a file named at `span` (a string) that cannot be read: to write `/` for a
+    /// backslash (a Windows path, whose `\t` became a tab); else where its path is resolved
+    /// from, and, when the path as written names a file relative to the current folder instead
+    /// (written from where the command runs), that it should be written from the file's folder.
+    pub(crate) fn path_help(&self, span: Span) -> String {
+        let written = self.sources.snippet(span).trim_matches('"');
+        if written.contains('\\') {
+            // A Windows path: `"tex\tiles.png"` reads as "tex", a tab, "iles.png".
+            let slashes = written.replace("\\\\", "/").replace('\\', "/");
+            return format!(
+                "write paths with `/`: `\"{slashes}\"` (in a string `\\` starts an escape: \
+                 `\\t` is a tab, `\\n` a line break)"
+            );
+        }
+        let dir = self
+            .sources
+            .get(span.file)
+            .and_then(|f| f.path.parent())
+            .map(|d| d.display().to_string())
+            .filter(|d| !d.is_empty());
+        let Some(dir) = dir else {
+            return "the path is resolved relative to the folder of the file that names it".into();
+        };
+        let mut help = format!(
+            "the path is resolved relative to the folder of the file that names it, `{dir}`"
+        );
+        if Path::new(written).is_relative()
+            && Path::new(written).is_file()
+            && !self.resolve_path(written, span).exists()
+        {
+            help += &format!(
+                ", not the current folder (where `{written}` is): write the path from `{dir}`"
+            );
+        }
+        help
+    }
 }
 
 pub(super) fn canonical(p: &Path) -> PathBuf {

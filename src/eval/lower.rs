@@ -272,7 +272,7 @@ impl Evaluator {
             vec![
                 Error::new(e)
                     .label("cannot load this image")
-                    .help("the path is resolved relative to the scene file")
+                    .help(self.path_help(span))
                     .at(span),
             ]
         })?;
@@ -290,7 +290,7 @@ impl Evaluator {
             vec![
                 Error::new(e)
                     .label("cannot load this mesh")
-                    .help("the path is resolved relative to the scene file")
+                    .help(self.path_help(span))
                     .at(span),
             ]
         })?;

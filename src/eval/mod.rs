@@ -145,7 +145,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     ev.include_stack.push(canonical(path));
     match parse(file, &text) {
         Ok(items) => {
-            let mut top = TopSink;
+            let mut top = TopSink::default();
             ev.run_top(&items, &mut top);
         }
         Err(d) => ev.errors.extend(d),
@@ -387,13 +387,25 @@ impl Evaluator {
             }
             Item::Expr(e) => {
                 // An undeclared name followed by a value reads as a misspelt property
-                // (`difuse 0.5`, POV-Ray's `right x*4/3`): say so, with the nearest properties.
+                // (`difuse 0.5`, POV-Ray's `right x*4/3`, `foo 1`): say so, with the nearest
+                // properties. A name far from every property only when a literal follows and
+                // it is not close to a declared name: `Radus material { ... }` or
+                // `union { Wheel Body }` are misspelt or undeclared values.
                 if let ExprKind::Ident(name) = &e.kind
-                    && matches!(items.get(*i), Some(Item::Expr(_)))
+                    && let Some(Item::Expr(next)) = items.get(*i)
                     && self.lookup_quiet(name).is_none()
                     && !self.poisoned.contains(name)
+                    && !blocks::is_block_name(name)
                     && (crate::syntax::povray_hint(name, &sink.kind()).is_some()
-                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some())
+                        || suggest(name, sink.props().iter().map(|p| p.name)).is_some()
+                        || (matches!(
+                            next.kind,
+                            ExprKind::Number(_)
+                                | ExprKind::Vector(_)
+                                | ExprKind::Unary(..)
+                                | ExprKind::Str(_)
+                                | ExprKind::Bool(_)
+                        ) && !self.near_a_known_name(name)))
                 {
                     while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
                         *i += 1;

@@ -77,6 +77,21 @@ impl Evaluator {
         builtins::constant(name)
     }
 
+    /// The names a lookup can find here: globals, the current macro's locals, constants.
+    fn known_names(&self) -> Vec<&str> {
+        let mut known: Vec<&str> = self.globals.keys().map(String::as_str).collect();
+        if let Some(f) = self.frames.last() {
+            known.extend(f.vars.keys().map(String::as_str));
+        }
+        known.extend(CONSTANTS);
+        known
+    }
+
+    /// Whether an undeclared `name` is close to a name a lookup can find (a misspelt one).
+    pub(super) fn near_a_known_name(&self, name: &str) -> bool {
+        suggest(name, self.known_names()).is_some()
+    }
+
     pub(super) fn lookup(&mut self, name: &str, span: Span) -> SourceResult<Value> {
         if let Some(v) = self.lookup_quiet(name) {
             return Ok(v);
@@ -84,13 +99,21 @@ impl Evaluator {
         if self.poisoned.contains(name) {
             return Err(silent());
         }
-        let mut known: Vec<&str> = self.globals.keys().map(String::as_str).collect();
-        if let Some(f) = self.frames.last() {
-            known.extend(f.vars.keys().map(String::as_str));
-        }
-        known.extend(CONSTANTS);
+        let known = self.known_names();
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if let Some(hint) = crate::syntax::povray_hint(name, "") {
+        if super::blocks::is_block_name(name) {
+            // `material Shiny`: a block written without its braces.
+            e = Error::new(format!("`{name}` without a body"))
+                .label("a block name, but no `{ ... }` follows")
+                .help(format!(
+                    "a block's contents go in braces: `{name} {{ ... }}`{}",
+                    if name == "material" {
+                        ", e.g. `material { Name }` for a declared material `Name`"
+                    } else {
+                        ""
+                    }
+                ));
+        } else if let Some(hint) = crate::syntax::povray_hint(name, "") {
             e = e.help(hint);
         } else if let Some(file) = super::stdlib::declaring(name) {
             e = e.help(format!(

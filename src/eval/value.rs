@@ -93,6 +93,13 @@ impl Value {
             Value::Vec2(_) => Err(self
                 .mismatch("a 3-D vector")
                 .help("give three components: `<x, y, z>`")),
+            Value::Num(n) => {
+                let n = crate::diag::short_number(*n);
+                Err(self.mismatch("a vector `<x, y, z>`").help(format!(
+                    "write `<{n}, {n}, {n}>`: a number does not stand for a vector here (as \
+                     POV-Ray's `{n}` does)"
+                )))
+            }
             v => Err(v.mismatch("a vector `<x, y, z>`")),
         }
     }

@@ -8,6 +8,7 @@
 use std::collections::HashMap;
 
 use super::{MeshData, Object, Shape};
+use crate::diag::short_number as short;
 
 /// Deepest nesting of CSG operations: the renderer classifies a hit by walking the tree.
 pub const MAX_CSG_DEPTH: usize = 64;
@@ -135,10 +136,24 @@ pub fn why_open(shape: &Shape) -> Option<String> {
 }
 
 /// A mesh encloses a volume when it is a closed, consistently oriented surface: every directed
-/// edge `a -> b` of a triangle is matched by exactly one `b -> a` of another.
+/// edge `a -> b` of a triangle is matched by exactly one `b -> a` of another. Vertices are
+/// compared by position: an OBJ corner with its own normal or texture coordinate (a cube with
+/// flat faces) is a vertex of its own in [`MeshData`], yet the same point of the surface.
 fn mesh_why_open(mesh: &MeshData) -> Option<String> {
+    let mut first_at: HashMap<[u64; 3], u32> = HashMap::with_capacity(mesh.positions.len());
+    // `+ 0.0` makes -0 and 0 one key.
+    let point: Vec<u32> = (0u32..)
+        .zip(&mesh.positions)
+        .map(|(i, p)| {
+            *first_at
+                .entry((*p + 0.0).to_array().map(f64::to_bits))
+                .or_insert(i)
+        })
+        .collect();
+    let corner = |i: u32| point.get(i as usize).copied().unwrap_or(i);
     let mut edges: HashMap<(u32, u32), i32> = HashMap::with_capacity(mesh.indices.len() * 3);
     for t in &mesh.indices {
+        let t = t.map(corner);
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             if a == b {
@@ -151,6 +166,7 @@ fn mesh_why_open(mesh: &MeshData) -> Option<String> {
     let bad = mesh
         .indices
         .iter()
+        .map(|t| t.map(corner))
         .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
         .filter(|&(a, b)| a != b)
         .map(|e| (e, edges[&e]))
@@ -158,12 +174,20 @@ fn mesh_why_open(mesh: &MeshData) -> Option<String> {
     match bad {
         None if !edges.is_empty() => None,
         None => Some(format!("mesh `{}` has no triangles", mesh.path.display())),
-        Some(((a, b), _)) => Some(format!(
-            "mesh `{}` is not watertight: its edge between vertices {} and {} is not shared by \
-             exactly two consistently oriented triangles",
-            mesh.path.display(),
-            a + 1,
-            b + 1
-        )),
+        Some(((a, b), _)) => {
+            // The mesh's vertices are numbered as the faces use them, not as the file's `v`
+            // lines: name the edge by its end points.
+            let at = |i: u32| {
+                let p = mesh.positions.get(i as usize).copied().unwrap_or_default();
+                format!("<{}, {}, {}>", short(p.x), short(p.y), short(p.z))
+            };
+            Some(format!(
+                "mesh `{}` is not watertight: its edge from {} to {} is not shared by exactly \
+                 two consistently oriented triangles",
+                mesh.path.display(),
+                at(a),
+                at(b)
+            ))
+        }
     }
 }

@@ -59,6 +59,9 @@ struct Leaf {
     bounds: Aabb,
     /// Node of this leaf.
     node: u32,
+    /// The leaf's solid counts negated in the tree's (a subtracted child of a difference, or
+    /// under `inverse`, an odd number of times): see [`Csg::walk`] on hits at the same distance.
+    negated: bool,
 }
 
 struct Node {
@@ -111,7 +114,28 @@ impl Csg {
         };
         let (surface, _) = csg.add(root, NO_PARENT)?;
         csg.surface = surface;
+        for i in 0..csg.leaves.len() {
+            csg.leaves[i].negated = csg.negated(csg.leaves[i].node);
+        }
         Ok(csg)
+    }
+
+    /// Whether node `c`'s solid counts negated in the whole tree's.
+    fn negated(&self, mut c: u32) -> bool {
+        let mut negated = false;
+        loop {
+            let a = self.nodes[c as usize].parent;
+            if a == NO_PARENT {
+                return negated;
+            }
+            let node = &self.nodes[a as usize];
+            match node.op {
+                Some(CsgOp::Difference) if self.kids(node)[0] != c => negated = !negated,
+                Some(CsgOp::Inverse) => negated = !negated,
+                _ => {}
+            }
+            c = a;
+        }
     }
 
     /// Adds a subtree; returns its surface bounds (where its kept hits lie) and volume bounds
@@ -139,6 +163,7 @@ impl Csg {
                     id: leaf.id,
                     bounds,
                     node: index,
+                    negated: false,
                 });
                 Ok((bounds, bounds))
             }
@@ -314,13 +339,34 @@ impl Csg {
     }
 
     /// Visits the hits in order until one is kept.
+    ///
+    /// Hits at the same distance (coincident faces: a cutter flush with the surface it cuts,
+    /// two merged boxes sharing a face) are visited as if every leaf were a hair larger, and a
+    /// negated one (a cutter) larger still: hits that enter a leaf before hits that leave one,
+    /// a cutter entered first and left last. So a flush cutter opens its hole, a cutter the
+    /// same as the solid leaves nothing, and merged neighbours show no face between them,
+    /// which is what such a scene means (in POV-Ray they render as speckles).
     fn walk(&self, ray: &Ray, inv_d: Vec3A, t_max: f32, slots: &mut [Slot]) -> Option<(Hit, u32)> {
+        let order = |i: usize, h: &Hit| {
+            let enters = h.n.dot(ray.d) < 0.0;
+            let negated = self.leaves[i].negated;
+            match (enters, negated) {
+                (true, true) => 0u8,
+                (true, false) => 1,
+                (false, false) => 2,
+                (false, true) => 3,
+            }
+        };
         for _ in 0..MAX_STEPS {
             let (i, h) = slots
                 .iter()
                 .enumerate()
                 .filter_map(|(i, s)| s.next.map(|h| (i, h)))
-                .min_by(|a, b| a.1.t.total_cmp(&b.1.t))?;
+                .min_by(|a, b| {
+                    a.1.t
+                        .total_cmp(&b.1.t)
+                        .then_with(|| order(a.0, &a.1).cmp(&order(b.0, &b.1)))
+                })?;
             if h.t >= t_max {
                 return None;
             }

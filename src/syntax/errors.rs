@@ -55,11 +55,18 @@ fn describe(rule: Rule) -> &'static str {
     }
 }
 
-pub(super) fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>) -> Diagnostic {
-    let pos = match e.location {
-        pest::error::InputLocation::Pos(p) => p,
-        pest::error::InputLocation::Span((s, _)) => s,
-    };
+/// The syntax error of a failed parse; `stray` is the first character outside ASCII that
+/// stands outside strings and comments ([`check_nesting`]).
+pub(super) fn syntax_error(
+    file: FileId,
+    text: &str,
+    e: pest::error::Error<Rule>,
+    stray: Option<usize>,
+) -> Diagnostic {
+    let pos = error_pos(&e);
+    if let Some(at) = stray.filter(|&at| at >= pos && caused_by(text, at, pos)) {
+        return not_ascii(file, text, at);
+    }
     let found = found_at(text, pos);
     let len = if pos >= text.len() {
         0
@@ -165,7 +172,90 @@ pub(super) fn syntax_error(file: FileId, text: &str, e: pest::error::Error<Rule>
     if pos >= text.len() && (text.matches("#end").count() < count_openers(text)) {
         d = d.with_help("a directive is not closed: add `#end`");
     }
+    if let Some(format) = other_renderer(text) {
+        d = d.with_help(format!(
+            "this looks like {format}: sppm-lang reads its own POV-Ray-like language \
+             (docs/language.md), e.g. `sphere {{ <0, 0, 0>, 1 }}`; write the scene in it"
+        ));
+    }
     d
+}
+
+/// The scene format of another renderer that `text` is written in, if it looks like one: a
+/// Mitsuba XML file or a pbrt file (both fail to parse early, on their first line).
+fn other_renderer(text: &str) -> Option<&'static str> {
+    let body = text.trim_start_matches('\u{feff}').trim_start();
+    if body.starts_with("<?xml") || body.starts_with("<scene") {
+        return Some("a Mitsuba XML scene");
+    }
+    let pbrt = [
+        "WorldBegin",
+        "LookAt ",
+        "Camera \"",
+        "Film \"",
+        "Sampler \"",
+        "Integrator \"",
+        "Shape \"",
+        "LightSource \"",
+        "AttributeBegin",
+    ];
+    text.lines()
+        .any(|l| pbrt.iter().any(|w| l.trim_start().starts_with(w)))
+        .then_some("a pbrt scene")
+}
+
+fn error_pos(e: &pest::error::Error<Rule>) -> usize {
+    match e.location {
+        pest::error::InputLocation::Pos(p) => p,
+        pest::error::InputLocation::Span((s, _)) => s,
+    }
+}
+
+/// Whether the parse that failed at `pos` failed because of the character at `at`: with it
+/// and the rest of its word written as `_` (a name's character), the text parses, or fails
+/// further on. (The parser backtracks: `#declare Größe = 1` fails at `#declare`, not at `ö`.)
+fn caused_by(text: &str, at: usize, pos: usize) -> bool {
+    let mut end = at;
+    let mut word = String::new();
+    for c in text[at..].chars() {
+        if end > at && !(c.is_alphanumeric() || c == '_') {
+            break;
+        }
+        word.extend(std::iter::repeat_n(
+            if c.is_ascii() { c } else { '_' },
+            c.len_utf8(),
+        ));
+        end += c.len_utf8();
+    }
+    let patched = format!("{}{word}{}", &text[..at], &text[end..]);
+    SceneParser::parse(Rule::file, &patched).map_or_else(|e| error_pos(&e) > pos, |_| true)
+}
+
+/// A character outside ASCII where the grammar takes none: in a name, or pasted from a
+/// document (typographic quotes, a non-breaking space).
+fn not_ascii(file: FileId, text: &str, at: usize) -> Diagnostic {
+    let c = text[at..].chars().next().unwrap_or(' ');
+    let span = Span::new(file, at as u32, (at + c.len_utf8()) as u32);
+    let help = match c {
+        '\u{201c}' | '\u{201d}' | '\u{201e}' | '\u{ab}' | '\u{bb}' => {
+            "a string is written with straight double quotes: `\"file.png\"`".to_string()
+        }
+        '\u{2018}' | '\u{2019}' => "strings take straight double quotes: `\"...\"`".to_string(),
+        '\u{2212}' | '\u{2013}' | '\u{2014}' => "write the minus sign as `-`".to_string(),
+        c if c.is_whitespace() => "replace it with a plain space".to_string(),
+        _ => "names are ASCII letters, digits and `_` (other characters may stand in strings \
+              and comments): e.g. `Grosse` for `Größe`"
+            .to_string(),
+    };
+    Diagnostic::error(
+        span,
+        format!(
+            "syntax error: `{c}` (U+{:04X}) is not part of the language",
+            c as u32
+        ),
+    )
+    .with_label("not an ASCII character")
+    .with_help(help)
 }
 
 /// The name before position `pos`, skipping blanks and one `[...]` (`array[3] {`): what a
@@ -353,11 +443,14 @@ fn found_at(text: &str, pos: usize) -> String {
 }
 
 /// Rejects input nested deeper than [`MAX_NESTING`] before the recursive parser sees it.
-pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
+/// Otherwise returns where the first character outside ASCII stands outside strings and
+/// comments (after a byte order mark), for [`syntax_error`]: the grammar accepts none there.
+pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<Option<usize>> {
     let bytes = text.as_bytes();
     let mut depth = 0usize;
     let mut prefix_run = 0usize;
-    let mut i = 0;
+    let mut stray = None;
+    let mut i = if text.starts_with('\u{feff}') { 3 } else { 0 };
     while i < bytes.len() {
         let c = bytes[i];
         // `rgb` is a prefix operator too: a chain of them nests like `- - - 1`.
@@ -409,6 +502,7 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
                     depth = depth.saturating_sub(1);
                 }
             }
+            128.. if stray.is_none() => stray = Some(i),
             _ => {}
         }
         if matches!(c, b'-' | b'+' | b'!') {
@@ -421,7 +515,7 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<()> {
         }
         i += 1;
     }
-    Ok(())
+    Ok(stray)
 }
 
 fn too_deep(span: Span) -> Diagnostic {

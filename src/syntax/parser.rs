@@ -46,9 +46,9 @@ static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
 
 /// Parses one file. On failure returns one syntax error.
 pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
-    check_nesting(file, text)?;
-    let mut pairs =
-        SceneParser::parse(Rule::file, text).map_err(|e| vec![syntax_error(file, text, e)])?;
+    let stray = check_nesting(file, text)?;
+    let mut pairs = SceneParser::parse(Rule::file, text)
+        .map_err(|e| vec![syntax_error(file, text, e, stray)])?;
     let file_pair = pairs.next().expect("file rule");
     let items = file_pair.into_inner().next().expect("items");
     let cx = Cx {

@@ -27,6 +27,11 @@ const fn pov_in(context: &'static str, word: &'static str, hint: &'static str) -
     }
 }
 
+/// A light's `color` (or `colour`).
+const LIGHT_COLOR: &str = "POV-Ray's light colour `color C` is `intensity C` here, in W/sr and \
+     falling off with the squared distance d (POV-Ray's lights do not fade): `intensity` π·d² \
+     times the colour gives POV-Ray's brightness at distance d";
+
 /// The table, context-bound entries first (they win over a general one of the same word).
 pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov_in(
@@ -52,6 +57,8 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "perspective",
         "the camera is always a perspective (pinhole or thin-lens) camera here: remove `perspective`",
     ),
+    pov_in("light", "color", LIGHT_COLOR),
+    pov_in("light", "colour", LIGHT_COLOR),
     pov(
         "light_source",
         "POV-Ray's `light_source { <pos> color ... }` is `light { <pos> intensity rgb <...> }` here \
@@ -154,6 +161,16 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "sor",
         "POV-Ray's `lathe` and `sor` are `revolve { profile spline { <r, h>, ... } }` here",
+    ),
+    pov(
+        "cone",
+        "POV-Ray's `cone` is a `revolve` here: `revolve { profile bezier { degree 1 <0, 0>, \
+         <r1, 0>, <r2, h>, <0, h> } corner }` is a closed cone from radius r1 at y = 0 to r2 at y = h",
+    ),
+    pov(
+        "torus",
+        "POV-Ray's `torus` has no counterpart: a `revolve` whose profile is a closed loop \
+         (a circle of radius r around <R, 0>) makes one",
     ),
     pov(
         "bicubic_patch",

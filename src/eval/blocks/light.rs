@@ -153,7 +153,11 @@ impl Sink for LightBuilder {
     }
     fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         if self.position.is_some() {
-            return Err(unexpected(self, &v, span, "a light has one position"));
+            let help = match v {
+                Value::Color(_) => "a light has one position; its colour is `intensity <color>`",
+                _ => "a light has one position",
+            };
+            return Err(unexpected(self, &v, span, help));
         }
         self.position = Some(v.vec3().at(span)?);
         Ok(())

@@ -5,7 +5,7 @@ use crate::diag::short_number;
 use std::rc::Rc;
 
 use super::{Sink, unexpected};
-use crate::diag::{Error, SourceResult};
+use crate::diag::{Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
@@ -154,6 +154,31 @@ impl MaterialBuilder {
     }
 }
 
+/// A surface's colour (`diffuse`, `mirror`, `glossy`); a constant above 1 gives a warning: such
+/// a surface reflects more light than reaches it (POV-Ray users brighten a colour this way).
+fn reflectance(ev: &mut Evaluator, a: &Arg) -> SourceResult<ColorDef> {
+    let def = color_def(a)?;
+    if let ColorDef::Const(c) = &def
+        && c.max_element() > 1.0
+    {
+        ev.warn(
+            Diagnostic::warning(
+                a.span,
+                format!(
+                    "a reflectance of {} reflects more light than reaches the surface",
+                    short_number(c.max_element())
+                ),
+            )
+            .with_label("above 1")
+            .with_help(
+                "use components from 0 to 1; for a brighter picture raise the lights or \
+                 `settings { exposure k }`",
+            ),
+        );
+    }
+    Ok(def)
+}
+
 impl Sink for MaterialBuilder {
     fn kind(&self) -> String {
         "a material".into()
@@ -161,23 +186,23 @@ impl Sink for MaterialBuilder {
     fn props(&self) -> &'static [PropSpec] {
         &MAT_PROPS
     }
-    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+    fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         self.touched = true;
         match kw.text.as_str() {
             "diffuse" => {
                 self.set_kind("diffuse", kw.span)?;
-                self.albedo = Some(color_def(&args[0])?);
+                self.albedo = Some(reflectance(ev, &args[0])?);
             }
             "mirror" => {
                 self.set_kind("mirror", kw.span)?;
                 if let Some(a) = args.first() {
-                    self.tint_def = Some(color_def(a)?);
+                    self.tint_def = Some(reflectance(ev, a)?);
                 }
             }
             "glass" => self.set_kind("glass", kw.span)?,
             "glossy" => {
                 self.set_kind("glossy", kw.span)?;
-                self.albedo = Some(color_def(&args[0])?);
+                self.albedo = Some(reflectance(ev, &args[0])?);
             }
             "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
             "absorb" => {
@@ -217,11 +242,25 @@ impl Sink for MaterialBuilder {
         }
         Ok(())
     }
-    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+    fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
             Value::Material(m) if self.base.is_none() => {
                 self.base = Some(m);
                 Ok(())
+            }
+            // A colour declared and then used as a material (POV-Ray's `pigment { Red }`).
+            Value::Color(_) | Value::Texture(_) | Value::Num(_) => {
+                let what = ev.sources.snippet(span);
+                Err(unexpected(
+                    self,
+                    &v,
+                    span,
+                    &format!(
+                        "`{what}` is {}, not a material: write `material {{ diffuse {what} }}` \
+                         for a matte surface of that colour (or `glossy {what}`)",
+                        v.type_name()
+                    ),
+                ))
             }
             v => Err(unexpected(
                 self,

@@ -67,6 +67,11 @@ pub(super) fn unexpected<S: Sink + ?Sized>(
     ]
 }
 
+/// Whether `name` is the name of a kind of block (`material`, `sphere`, ...).
+pub(super) fn is_block_name(name: &str) -> bool {
+    OBJECT_BLOCKS.contains(&name) || VALUE_BLOCKS.contains(&name)
+}
+
 /// The blocks that are not objects (those are [`OBJECT_BLOCKS`]).
 const VALUE_BLOCKS: &[&str] = &[
     "material",

@@ -155,7 +155,13 @@ impl ObjectBuilder {
                 if self.parts.is_empty() {
                     ev.warn(
                         Diagnostic::warning(self.span, format!("empty {}", self.kind))
-                            .with_label("contains no objects"),
+                            .with_label("contains no objects")
+                            .with_help(if self.kind == "object" {
+                                "`object { Name ... }` places a declared object (`#declare Name \
+                                 = sphere { ... }`); a declared material goes in `material { ... }`"
+                            } else {
+                                "put objects in it, or remove it"
+                            }),
                     );
                 }
                 std::mem::take(&mut self.parts)

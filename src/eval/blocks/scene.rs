@@ -1,7 +1,7 @@
 //! The top level: the scene itself as a sink (objects, lights, camera, settings, background).
 
 use super::{Sink, unexpected};
-use crate::diag::SourceResult;
+use crate::diag::{Diagnostic, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, surface_color};
 use crate::eval::props::{PropSpec, p};
@@ -10,7 +10,28 @@ use crate::scene::Background;
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
-pub(crate) struct TopSink;
+#[derive(Default)]
+pub(crate) struct TopSink {
+    /// Where the background (`background` or `environment`) was last set.
+    background: Option<Span>,
+}
+
+impl TopSink {
+    /// Records a background set at `span`; one set before is replaced, with a warning.
+    fn set_background(&mut self, ev: &mut Evaluator, span: Span) {
+        if let Some(before) = self.background.replace(span) {
+            ev.warn(
+                Diagnostic::warning(span, "this background replaces an earlier one")
+                    .with_label("this one is used")
+                    .with_extra(before, "replaced")
+                    .with_help(
+                        "keep one `background rgb <...>` or `environment { ... }`: the scene has \
+                         one background, and an environment lights the scene by itself",
+                    ),
+            );
+        }
+    }
+}
 
 static TOP_PROPS: [PropSpec; 1] = [p("background", 1, 1, "a color", "rgb <0.1, 0.1, 0.2>")];
 
@@ -21,8 +42,9 @@ impl Sink for TopSink {
     fn props(&self) -> &'static [PropSpec] {
         &TOP_PROPS
     }
-    fn property(&mut self, ev: &mut Evaluator, _kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+    fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         ev.scene.background = Background::Color(surface_color(&args[0])?);
+        self.set_background(ev, kw.span.join(args[0].span));
         Ok(())
     }
     fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
@@ -47,6 +69,7 @@ impl Sink for TopSink {
                     intensity: e.intensity,
                     transform: e.transform,
                 };
+                self.set_background(ev, span);
                 Ok(())
             }
             v => Err(unexpected(

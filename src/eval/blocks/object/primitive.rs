@@ -129,6 +129,7 @@ impl ObjectBuilder {
                 return Err(vec![
                     Error::new(format!("the {what} is a zero vector"))
                         .label("zero length")
+                        .help(format!("the {what} needs a direction, e.g. `<0, 1, 0>`"))
                         .at(s),
                 ]);
             }
