@@ -163,16 +163,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "POV-Ray's `lathe` and `sor` are `revolve { profile spline { <r, h>, ... } }` here",
     ),
     pov(
-        "cone",
-        "POV-Ray's `cone` is a `revolve` here: `revolve { profile bezier { degree 1 <0, 0>, \
-         <r1, 0>, <r2, h>, <0, h> } corner }` is a closed cone from radius r1 at y = 0 to r2 at y = h",
-    ),
-    pov(
-        "torus",
-        "POV-Ray's `torus` has no counterpart: a `revolve` whose profile is a closed loop \
-         (a circle of radius r around <R, 0>) makes one",
-    ),
-    pov(
         "bicubic_patch",
         "POV-Ray's `bicubic_patch` is `bezier_patch { 16 points }` here",
     ),
