@@ -83,7 +83,7 @@ impl Sink for SettingsBuilder {
                 }
                 s.resolution = (w as u32, h as u32);
             }
-            "iterations" => s.iterations = count(&args[0], "iterations", 1e7)? as u32,
+            "iterations" => s.iterations = count(&args[0], "iterations", 1e8)? as u32,
             "photons" => s.photons = Some(count(&args[0], "photons", 1e10)? as u64),
             "radius" => s.radius = Some(positive(&args[0], "radius")?),
             "alpha" => {

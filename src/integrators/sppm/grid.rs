@@ -19,8 +19,8 @@
 //! (15x the time of the same scene with a finite floor). So the points are split into levels
 //! by radius, a factor [`LEVEL_FACTOR`] apart, each level with its own cells over its own
 //! points; a photon is filed in every level whose points it may reach, and a point looks up its
-//! own level only. Radii within that factor of the largest make one level: the grid of one
-//! level is the grid of all points.
+//! own level only. Radii above a quarter of the largest make one level: the grid of one level
+//! is the grid of all points.
 
 use arrayvec::ArrayVec;
 use glam::{Vec3, Vec3A};
@@ -112,6 +112,11 @@ impl Cells {
         let used = stats.iter().rposition(|s| s.n > 0).map_or(0, |k| k + 1);
         cells.levels = stats[..used].iter().map(Level::new).collect();
         Some(cells)
+    }
+
+    /// The number of levels that hold points.
+    pub(super) fn levels(&self) -> usize {
+        self.levels.iter().flatten().count()
     }
 
     /// The level of a point of radius `r` (the same arithmetic wherever it is asked).

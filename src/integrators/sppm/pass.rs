@@ -22,8 +22,9 @@ const PHOTON_CHUNK: u64 = 4096;
 /// this many hits, has used [`ROUND_CHUNKS`] chunks, or the iteration's photons are done. A
 /// group is sized from the mean hits per photon of everything traced so far, so that it fills
 /// the round without overshooting it much (a statistical bound, not a hard one; the first group
-/// of a render assumes `max_depth` hits per photon, the most there can be). Every size comes
-/// from counts that do not depend on the thread count, so the rounds do not either.
+/// of a render assumes `max_depth` hits per photon, each filed in every level of every grid, the
+/// most there can be). Every size comes from counts that do not depend on the thread count, so
+/// the rounds do not either.
 pub(super) const ROUND_HITS: usize = 1 << 21;
 /// The most chunks in one round: bounds the per-chunk bookkeeping (a slab list each) where
 /// photons leave few hits near the visible points (an open scene, a narrow view).
@@ -42,9 +43,9 @@ pub(super) struct PhotonPass {
     gather_chunks: Vec<HitChunk>,
     gather_grid: PhotonGrid,
     /// Photons traced and hits filed so far, over the whole render: their ratio sizes the
-    /// groups. Before any photon, the estimate is `max_depth` hits per photon (see
-    /// [`Self::group_size`]), the most there can be, so that the first group cannot overfill a
-    /// round by much.
+    /// groups. Before any photon, the estimate is `max_depth` hits per photon, each filed in
+    /// every level (see [`Self::group_size`]), the most there can be, so that the first group
+    /// cannot overfill a round by much.
     pub(super) traced: u64,
     filed: u64,
     round_hits: usize,
@@ -73,10 +74,11 @@ impl PhotonPass {
 
     /// The photons of the next group of a round that holds `held` hits in `used` chunks: enough
     /// for the hits the round still misses, in whole chunks, at least one chunk, at most
-    /// [`PHOTON_GROUP`] and at most the chunks the round has left.
-    fn group_size(&self, held: usize, used: usize, max_depth: u32) -> u64 {
+    /// [`PHOTON_GROUP`] and at most the chunks the round has left. `filings`: the most times
+    /// one hit is filed (the levels of the grids it goes to).
+    fn group_size(&self, held: usize, used: usize, max_depth: u32, filings: usize) -> u64 {
         let per_photon = if self.traced == 0 {
-            f64::from(max_depth.max(1))
+            f64::from(max_depth.max(1)) * filings.max(1) as f64
         } else {
             (self.filed as f64 / self.traced as f64).max(1e-3)
         };
@@ -126,6 +128,8 @@ impl PhotonPass {
             return 0;
         }
         let caustic_only = gather_sums.is_some();
+        let filings = cells.as_ref().map_or(0, Cells::levels)
+            + gather_cells.as_ref().map_or(0, Cells::levels);
         let cancelled = || cancel.load(Ordering::Relaxed);
         let (mut next, mut deposits) = (0, 0);
         while next < photons {
@@ -135,7 +139,7 @@ impl PhotonPass {
                     return deposits;
                 }
                 let hi = next
-                    .saturating_add(self.group_size(held, used, settings.max_depth))
+                    .saturating_add(self.group_size(held, used, settings.max_depth, filings))
                     .min(photons);
                 let n = (hi - next).div_ceil(PHOTON_CHUNK) as usize;
                 for chunks in [&mut self.chunks, &mut self.gather_chunks] {

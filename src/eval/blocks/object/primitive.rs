@@ -190,11 +190,11 @@ impl ObjectBuilder {
                     ]);
                 }
                 for &(r, s) in &ns[..2] {
-                    if r.is_nan() || r < 0.0 {
+                    if !r.is_finite() || r < 0.0 {
                         return Err(range_error(
                             s,
                             format!(
-                                "a cone's radius must be at least 0, found {}",
+                                "a cone's radius must be finite and at least 0, found {}",
                                 short_number(r)
                             ),
                             "use 0 for a pointed end, a positive radius otherwise",
