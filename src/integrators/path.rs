@@ -13,7 +13,6 @@ use super::common::attenuate_inside;
 use super::common::direct::direct_lighting;
 use super::common::progressive;
 use super::{Integrator, RenderOutput};
-use crate::accel::spawn_ray;
 use crate::camera::Camera;
 use crate::materials::TransportMode;
 use crate::prepare::PreparedScene;
@@ -85,7 +84,7 @@ fn radiance(
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             break;
         }
-        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+        ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
     }
     l
 }

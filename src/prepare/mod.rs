@@ -11,7 +11,7 @@ mod lights;
 mod settings;
 mod shapes;
 
-use crate::accel::Bvh;
+use crate::accel::{self, Bvh};
 use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light};
@@ -74,6 +74,8 @@ pub struct PreparedScene<'a> {
     /// Per material: whether any of its parameters is a texture (its lobes, or a glass's
     /// absorption), so that hits on it need their `uv`.
     textured: Vec<bool>,
+    /// The floor of a spawned ray's offset, from the scene's extent ([`accel::offset_floor`]).
+    offset_floor: f32,
 }
 
 /// A surface hit with the primitive it belongs to.
@@ -270,7 +272,15 @@ impl<'a> PreparedScene<'a> {
             prim_material,
             const_lobes: Vec::new(),
             textured: scene.materials.iter().map(eval::has_texture).collect(),
+            offset_floor: 0.0,
         };
+        // The scene's extent: its finite objects and its camera (infinite planes have none).
+        let b = prepared.bvh.bounds();
+        let extent = [b.min.abs().max_element(), b.max.abs().max_element()]
+            .into_iter()
+            .filter(|e| e.is_finite())
+            .fold(scene.camera.location.abs().max_element() as f32, f32::max);
+        prepared.offset_floor = accel::offset_floor(extent);
         // A constant material gives the same lobes at every hit: the hit is not looked at.
         let dummy = SurfaceHit {
             hit: Hit {
@@ -289,6 +299,20 @@ impl<'a> PreparedScene<'a> {
             .map(|m| eval::is_constant(m).then(|| prepared.lobes(m, &dummy)))
             .collect();
         Ok(prepared)
+    }
+
+    /// A ray leaving the surface point `p` (geometric normal `n`) in direction `dir`, its origin
+    /// moved off the surface ([`accel::spawn_ray`]).
+    #[inline]
+    pub fn spawn_ray(&self, p: Vec3A, n: Vec3A, dir: Vec3A) -> Ray {
+        accel::spawn_ray(p, n, dir, self.offset_floor)
+    }
+
+    /// A shadow ray from `p` to `target` (on a surface with normal `nt`), `t` up to the returned
+    /// bound ([`accel::spawn_ray_to`]).
+    #[inline]
+    pub fn spawn_ray_to(&self, p: Vec3A, n: Vec3A, target: Vec3A, nt: Vec3A) -> (Ray, f32) {
+        accel::spawn_ray_to(p, n, target, nt, self.offset_floor)
     }
 
     /// Not inlined: one copy of the traversal, called from every integrator's loop (inlined

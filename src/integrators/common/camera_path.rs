@@ -6,7 +6,6 @@ use glam::{Vec2, Vec3A};
 
 use super::attenuate_inside;
 use super::direct::direct_lighting;
-use crate::accel::spawn_ray;
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::materials::{Bsdf, TransportMode};
@@ -127,7 +126,7 @@ pub(crate) fn gather_path(
         distance: vp.distance,
         gather: true,
     };
-    let ray = spawn_ray(vp.p, vp.bsdf.ng, s.wi);
+    let ray = scene.spawn_ray(vp.p, vp.bsdf.ng, s.wi);
     follow(scene, ray, settings, rng, start, |_| {})
 }
 
@@ -199,7 +198,7 @@ fn follow(
         if beta.max_element() <= 0.0 {
             break;
         }
-        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+        ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
     }
     (l, None)
 }

@@ -5,7 +5,6 @@
 
 use glam::Vec3A;
 
-use crate::accel::{spawn_ray, spawn_ray_to};
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::{PreparedScene, SurfaceHit};
 use crate::sampling::{Rng, power_heuristic};
@@ -32,7 +31,7 @@ pub fn direct_lighting(
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(bsdf.frame.n).abs();
         if f != Vec3A::ZERO {
-            let (ray, t_max) = spawn_ray_to(p, n, ls.p, ls.n);
+            let (ray, t_max) = scene.spawn_ray_to(p, n, ls.p, ls.n);
             let t_max = if ls.delta { t_max * 0.9999 } else { t_max };
             if !scene.occluded(&ray, t_max) {
                 let w = if ls.delta {
@@ -50,7 +49,7 @@ pub fn direct_lighting(
     if let Some(bs) = bsdf.sample(wo, uc, ub, TransportMode::Radiance)
         && !bs.specular
     {
-        let ray = spawn_ray(p, n, bs.wi);
+        let ray = scene.spawn_ray(p, n, bs.wi);
         match scene.intersect(&ray, f32::INFINITY) {
             Some(h2) => {
                 if let Some((li, al)) = scene.area_light(h2.prim) {

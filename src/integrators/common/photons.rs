@@ -5,7 +5,6 @@
 use glam::Vec3A;
 
 use super::attenuate_inside;
-use crate::accel::spawn_ray;
 use crate::geometry::Ray;
 use crate::materials::TransportMode;
 use crate::prepare::{PreparedScene, SurfaceHit};
@@ -43,7 +42,7 @@ pub(crate) fn trace_classified_photon(
     let mut ray = if ps.n == Vec3A::ZERO {
         Ray::new(ps.p, ps.dir)
     } else {
-        spawn_ray(ps.p, ps.n, ps.dir)
+        scene.spawn_ray(ps.p, ps.n, ps.dir)
     };
     let mut all_specular = true;
     for depth in 0..max_depth {
@@ -68,6 +67,6 @@ pub(crate) fn trace_classified_photon(
         if !beta.is_finite() || beta.max_element() <= 0.0 {
             return;
         }
-        ray = spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+        ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
     }
 }

@@ -1,0 +1,60 @@
+//! A scene renders the same at any scale: the same scene scaled by 1e-4 and by 1e4 gives
+//! SPPM the same photon deposits and the same image mean as at scale 1. A fixed absolute offset
+//! of spawned rays (1e-6, 2 % of the balls' radii at 1e-4) lost a third of the deposits there.
+
+use std::sync::atomic::AtomicBool;
+
+use sppm_lang::render::{RenderOptions, render};
+use sppm_lang::{EvalOptions, load_source};
+
+fn scene_at(s: f64) -> String {
+    format!(
+        "#declare S = {s};
+         settings {{ resolution <64, 64> seed 3 }}
+         camera {{ location <0, 1.2, -4> * S look_at <0, 0.6, 0> * S }}
+         area_light {{ quad {{ <-0.5, 3, -0.5>, <1, 0, 0>, <0, 0, 1> }} radiance 20 scale S }}
+         union {{
+           plane {{ y, 0 material {{ diffuse 0.7 }} }}
+           sphere {{ <-0.9, 0.5, 0>, 0.5 material {{ glass }} }}
+           difference {{ box {{ <-0.4, 0, -0.4>, <0.4, 0.8, 0.4> }} sphere {{ <0, 0.8, 0>, 0.35 }}
+                        material {{ diffuse rgb <0.8, 0.3, 0.2> }} translate <0.9, 0, 0> }}
+           intersection {{ sphere {{ <0, -0.3, 0>, 0.5 }} sphere {{ <0, 0.3, 0>, 0.5 }}
+                           material {{ glass }} translate <0, 0.5, -0.5> }}
+           scale S
+         }}"
+    )
+}
+
+/// (deposits, image mean) of an SPPM render of the scene at scale `s`.
+fn sppm(s: f64) -> (u64, f64) {
+    let l = load_source("scale.scn", &scene_at(s), &EvalOptions::default());
+    assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    let scene = l.scene.unwrap();
+    let opts = RenderOptions {
+        iterations: Some(4),
+        photons: Some(50_000),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let out = render(&scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
+    let px = &out.image.pixels;
+    let mean = px.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).sum::<f64>() / px.len() as f64;
+    (out.stats.deposits, mean)
+}
+
+#[test]
+fn sppm_renders_the_same_at_any_scale() {
+    let (d1, m1) = sppm(1.0);
+    assert!(d1 > 10_000, "{d1} deposits");
+    for s in [1e-4, 1e4] {
+        let (d, m) = sppm(s);
+        assert!(
+            (d as f64 / d1 as f64 - 1.0).abs() < 0.02,
+            "scale {s}: {d} deposits against {d1} at scale 1"
+        );
+        assert!(
+            (m / m1 - 1.0).abs() < 0.01,
+            "scale {s}: mean {m} against {m1}"
+        );
+    }
+}
