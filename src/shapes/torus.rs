@@ -173,9 +173,8 @@ fn bernstein_on(power: &[f64; 5], u0: f64, u1: f64) -> Option<Bernstein> {
         [1.0, 3.0, 3.0, 1.0, 0.0],
         [1.0, 4.0, 6.0, 4.0, 1.0],
     ];
-    let b: Vec<f64> = (0..5)
-        .map(|k| (0..=k).map(|i| BINOM[k][i] / BINOM[4][i] * c[i]).sum())
-        .collect();
+    let b: [f64; 5] =
+        std::array::from_fn(|k| (0..=k).map(|i| BINOM[k][i] / BINOM[4][i] * c[i]).sum());
     Bernstein::new(&b)
 }
 
