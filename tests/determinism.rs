@@ -168,3 +168,58 @@ fn the_automatic_photon_count_is_independent_of_the_thread_count() {
         assert!(run.1 == runs[0].1, "pixels differ with {threads} threads");
     }
 }
+
+/// Where the camera part's noise dominates (textures.scn: an environment map's sun), SPPM
+/// moves ray casts from the photon pass to the camera pass once both parts' noise is known
+/// (`sppm/balance.rs`): fewer photons per iteration than at first. The split, the counts and
+/// the image are the same on 1, 2 and 3 threads.
+#[test]
+fn the_camera_photon_split_is_independent_of_the_thread_count() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/textures.scn");
+    let mut scene = sppm_lang::load_file(&path, &sppm_lang::EvalOptions::default())
+        .unwrap()
+        .scene
+        .expect("textures.scn loads");
+    // Large enough for the photon count to span several chunks of 4096.
+    scene.settings.resolution = (128, 96);
+    scene.settings.photons = None;
+    let runs: Vec<(Vec<u64>, Vec<[u64; 3]>)> = [1, 2, 3]
+        .into_iter()
+        .map(|threads| {
+            let opts = RenderOptions {
+                iterations: Some(6),
+                seed: Some(3),
+                threads: Some(threads),
+                ..Default::default()
+            };
+            let mut totals = Vec::new();
+            let out = render(&scene, &opts, &AtomicBool::new(false), &mut |p| {
+                totals.push(p.stats.photons)
+            })
+            .unwrap();
+            let per_iteration = totals
+                .iter()
+                .scan(0, |before, &t| {
+                    let n = t - *before;
+                    *before = t;
+                    Some(n)
+                })
+                .collect();
+            let bits = out.image.pixels.iter().map(|p| p.map(f64::to_bits));
+            (per_iteration, bits.collect())
+        })
+        .collect();
+    let counts = &runs[0].0;
+    println!("photons per iteration: {counts:?}");
+    assert!(
+        counts[3..].iter().all(|&n| n < counts[1]),
+        "the camera pass took no casts from the photons: {counts:?}"
+    );
+    for (threads, run) in [(2, &runs[1]), (3, &runs[2])] {
+        assert_eq!(
+            &run.0, counts,
+            "photon counts differ with {threads} threads"
+        );
+        assert!(run.1 == runs[0].1, "pixels differ with {threads} threads");
+    }
+}

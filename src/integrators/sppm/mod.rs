@@ -48,7 +48,7 @@ mod receiver;
 #[cfg(test)]
 mod tests;
 
-use balance::SampleStats;
+use balance::{PhotonNoise, SampleStats};
 pub use pass::photon_flux;
 use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use photon_count::PhotonCount;
@@ -133,6 +133,7 @@ pub(crate) fn render_with(
         pixels,
         photon_pass: PhotonPass::new(ROUND_HITS, ROUND_CHUNKS),
         samples: vec![SampleStats::default(); (w * h) as usize],
+        noise: PhotonNoise::default(),
         extra: vec![0; (w * h) as usize],
         photon_segments: 0,
     };
@@ -230,6 +231,13 @@ pub(crate) fn render_with(
         //    choose its photon count.
         let photon_rays = st.photon_pass.segments - st.photon_segments;
         st.photon_segments = st.photon_pass.segments;
+        if balanced {
+            let parts = [
+                (&st.pixels[..], &mut st.gathered.phi2[..]),
+                (&st.gather[..], &mut st.gather_gathered.phi2[..]),
+            ];
+            st.noise.observe(parts, photons);
+        }
         let g = &mut st.gathered;
         update(&mut st.pixels, &lds, &mut g.phi, &mut g.m, settings.alpha);
         if final_gather {
@@ -238,7 +246,19 @@ pub(crate) fn render_with(
         }
         st.photon_count.record(photons, photon_rays);
         if balanced {
-            balance::allocate(&st.samples, photon_rays, &mut st.extra);
+            // The camera pass's casts: the photon pass's times the ratio that balances the two
+            // parts' noise (1 until both are known, and where the photons' noise dominates).
+            let spp = st.photon_count.segments_per_photon();
+            let ratio = balance::camera_share(&st.samples, &st.noise, spp).unwrap_or(1.0);
+            st.photon_count.set_camera_ratio(ratio);
+            let mut camera_rays = photon_rays;
+            if ratio > 1.0 {
+                // The next photon pass's casts, from this one's per photon.
+                let next = st.photon_count.next() as f64;
+                let per_photon = photon_rays as f64 / photons.max(1) as f64;
+                camera_rays = (ratio * next * per_photon).min(u64::MAX as f64) as u64;
+            }
+            balance::allocate(&st.samples, camera_rays, &mut st.extra);
         }
         st.emitted += photons;
         stats.camera_paths += extra_paths;
@@ -274,6 +294,8 @@ struct State {
     /// Each pixel's camera samples so far and its extra samples in the next iteration.
     samples: Vec<SampleStats>,
     extra: Vec<u32>,
+    /// The photon part's noise, for the split of the casts between the two passes.
+    noise: PhotonNoise,
     /// The photon pass's ray casts before this iteration.
     photon_segments: u64,
 }

@@ -255,10 +255,13 @@ fn trace_photons(
 }
 
 /// What each pixel's visible point gathered in an iteration: the flux (f64, summed in the
-/// grid's photon order) and the number of photons.
+/// grid's photon order), the number of photons, and the sum of the squared luminances of the
+/// photons' contributions to the pixel (their flux times the visible point's throughput: the
+/// photon part's own noise, [`super::balance::PhotonNoise`]).
 pub(super) struct Gathered {
     pub(super) phi: Vec<DVec3>,
     pub(super) m: Vec<u64>,
+    pub(super) phi2: Vec<f64>,
 }
 
 impl Gathered {
@@ -266,6 +269,7 @@ impl Gathered {
         Gathered {
             phi: vec![DVec3::ZERO; pixels],
             m: vec![0; pixels],
+            phi2: vec![0.0; pixels],
         }
     }
 }
@@ -276,7 +280,8 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
     points
         .par_iter()
         .zip(sums.phi.par_iter_mut().zip(sums.m.par_iter_mut()))
-        .map(|(px, (ph, mm))| {
+        .zip(sums.phi2.par_iter_mut())
+        .map(|((px, (ph, mm)), ph2)| {
             let Some(vp) = px.vp.as_ref() else {
                 return 0;
             };
@@ -287,6 +292,7 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
                 return 0;
             }
             let receiver = Receiver::new(vp);
+            let weight = vp.beta * Vec3A::new(0.2126, 0.7152, 0.0722);
             let mut found = 0;
             grid.for_each_within(vp.p, r, |wi, beta| {
                 let f = receiver.f(wi);
@@ -296,6 +302,7 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
                     if d.is_finite() {
                         *ph += d.as_dvec3();
                         *mm += 1;
+                        *ph2 += f64::from(d.dot(weight)).powi(2);
                     }
                 }
             });

@@ -15,7 +15,10 @@
 //! `N = PHOTON_RAYS * RAYS_PER_CAMERA_SAMPLE * pixels / segments per photon`,
 //!
 //! the segments per photon counted over all photons so far (the first iteration assumes
-//! [`FIRST_SEGMENTS`]), in whole chunks of [`CHUNK`] photons. On the Cornell box at 256 x 256
+//! [`FIRST_SEGMENTS`]), in whole chunks of [`CHUNK`] photons. Where the camera part's noise
+//! outweighs the photons' (`balance.rs`), the camera pass casts `ratio > 1` times the photon
+//! pass's rays, and the photons get `2 / (1 + ratio)` of that count: the two passes' casts
+//! together stay twice the count's. On the Cornell box at 256 x 256
 //! (1.9 segments per photon) that is about 200 000 photons, the count chosen there by hand;
 //! at a quarter of the resolution it is a quarter of that, and a scene whose photons bounce
 //! longer gets fewer. Only counts enter: the same on any thread count and machine load.
@@ -38,6 +41,8 @@ pub(super) struct PhotonCount {
     /// Photons traced and their segments, over the whole render.
     photons: u64,
     segments: u64,
+    /// The camera pass's ray casts over the photon pass's.
+    camera_ratio: f64,
 }
 
 impl PhotonCount {
@@ -48,21 +53,36 @@ impl PhotonCount {
             pixels: pixels as u64,
             photons: 0,
             segments: 0,
+            camera_ratio: 1.0,
         }
     }
 
     /// Photons of the coming iteration.
     pub(super) fn next(&self) -> u64 {
         self.fixed.unwrap_or_else(|| {
-            let segments = if self.photons == 0 {
-                FIRST_SEGMENTS
-            } else {
-                // A photon that leaves the scene at once still cast a ray.
-                (self.segments as f64 / self.photons as f64).max(1.0)
-            };
-            let rays = PHOTON_RAYS * RAYS_PER_CAMERA_SAMPLE * self.pixels as f64;
+            let segments = self.segments_per_photon();
+            // The photons' share of the two passes' casts: half of them while the camera pass
+            // casts as many (ratio 1, [`super::balance::camera_share`]).
+            let share = 2.0 / (1.0 + self.camera_ratio);
+            let rays = share * PHOTON_RAYS * RAYS_PER_CAMERA_SAMPLE * self.pixels as f64;
             whole_chunks(rays / segments)
         })
+    }
+
+    /// The segments per photon counted so far (the first iteration's assumption before any).
+    pub(super) fn segments_per_photon(&self) -> f64 {
+        if self.photons == 0 {
+            FIRST_SEGMENTS
+        } else {
+            // A photon that leaves the scene at once still cast a ray.
+            (self.segments as f64 / self.photons as f64).max(1.0)
+        }
+    }
+
+    /// Sets the ratio of the camera pass's ray casts to the photon pass's
+    /// ([`super::balance::camera_share`]); 1 until set.
+    pub(super) fn set_camera_ratio(&mut self, ratio: f64) {
+        self.camera_ratio = ratio;
     }
 
     /// After an iteration of `photons` photons whose pass cast `segments` rays.
