@@ -219,9 +219,13 @@ fn method_statistics(method: Integrator, stats: &RenderStats, secs: f64) -> Stri
         )
     };
     match method {
-        Integrator::Sppm | Integrator::Ppm => {
-            format!("{}, {} deposits", photons(), stats.deposits)
-        }
+        Integrator::Sppm => format!(
+            "{}, {} deposits, camera/photon casts {:.2}",
+            photons(),
+            stats.deposits,
+            stats.camera_ratio
+        ),
+        Integrator::Ppm => format!("{}, {} deposits", photons(), stats.deposits),
         Integrator::PhotonMap => photons(),
         Integrator::Path | Integrator::Whitted => String::new(),
     }

@@ -39,6 +39,9 @@ pub struct RenderStats {
     /// the photons, the grid builds and the visible points' gathers; photon mapping: the map
     /// builds).
     pub photon_time: Duration,
+    /// SPPM: the camera pass's ray casts over the photon pass's chosen after the last
+    /// iteration (1 until both parts' noise is known; `sppm/balance.rs`); 0 for the others.
+    pub camera_ratio: f64,
 }
 
 /// Reported after every finished iteration.

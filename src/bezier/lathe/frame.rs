@@ -114,7 +114,7 @@ impl RayFrame {
     ///
     /// `prune = Some((t_min, t_max))`: the caller keeps only candidates with
     /// `t_min < t < t_max`, and work that provably cannot give one is skipped: a side whose every
-    /// candidate lies outside (bounds of `t` over the bracket, see [`RayFrame::side_ranges`]),
+    /// candidate lies outside (bounds of `t` over the bracket, see [`RayFrame::ranges_of`]),
     /// and the scan of a factor that keeps one sign on the whole bracket (bounds of its computed
     /// value). A skipped side's candidate is NaN where the full search may give one outside the
     /// window; the candidates inside are the same, bit for bit. The reference passes `None`
@@ -274,16 +274,12 @@ impl RayFrame {
 
 impl RayFrame {
     /// Intervals containing the `t` of every candidate [`RayFrame::candidates`] can compute
-    /// from an `s` in `[lo, hi]`: for steep rays one interval (the second is empty), for flat
-    /// rays one per side `sigma = +1, -1`. The candidates' `t` are computed from `r(s)` or `h(s)`
-    /// by a chain of correctly rounded operations, each monotone in its input, so the same
-    /// chain applied to the ends of an interval containing the computed `r(s)` or `h(s)`
-    /// ([`Segment::value_range`]) bounds the computed `t`, rounding included.
-    pub fn side_ranges(&self, seg: &Segment, lo: f64, hi: f64) -> [(f64, f64); 2] {
-        self.ranges_of(&self.bracket_bounds(seg, lo, hi))
-    }
-
-    /// [`RayFrame::side_ranges`] from the bracket's bounds.
+    /// from an `s` of a bracket with bounds `b` ([`RayFrame::bracket_bounds`]): for steep rays
+    /// one interval (the second is empty), for flat rays one per side `sigma = +1, -1`. The
+    /// candidates' `t` are computed from `r(s)` or `h(s)` by a chain of correctly rounded
+    /// operations, each monotone in its input, so the same chain applied to the ends of an
+    /// interval containing the computed `r(s)` or `h(s)` ([`Segment::value_range`]) bounds the
+    /// computed `t`, rounding included.
     fn ranges_of(&self, b: &BracketBounds) -> [(f64, f64); 2] {
         if self.steep {
             let t_at = |h: f64| self.t0 + (h - self.oc.y) / self.dn.y;

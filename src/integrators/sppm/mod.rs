@@ -237,6 +237,9 @@ pub(crate) fn render_with(
                 (&st.gather[..], &mut st.gather_gathered.phi2[..]),
             ];
             st.noise.observe(parts, photons);
+        } else {
+            // PPM: no split, nothing to keep.
+            st.gathered.phi2.fill(0.0);
         }
         let g = &mut st.gathered;
         update(&mut st.pixels, &lds, &mut g.phi, &mut g.m, settings.alpha);
@@ -251,6 +254,7 @@ pub(crate) fn render_with(
             let spp = st.photon_count.segments_per_photon();
             let ratio = balance::camera_share(&st.samples, &st.noise, spp).unwrap_or(1.0);
             st.photon_count.set_camera_ratio(ratio);
+            stats.camera_ratio = ratio;
             let mut camera_rays = photon_rays;
             if ratio > 1.0 {
                 // The next photon pass's casts, from this one's per photon.

@@ -292,7 +292,7 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
                 return 0;
             }
             let receiver = Receiver::new(vp);
-            let weight = vp.beta * Vec3A::new(0.2126, 0.7152, 0.0722);
+            let weight = (vp.beta * Vec3A::new(0.2126, 0.7152, 0.0722)).as_dvec3();
             let mut found = 0;
             grid.for_each_within(vp.p, r, |wi, beta| {
                 let f = receiver.f(wi);
@@ -302,7 +302,7 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
                     if d.is_finite() {
                         *ph += d.as_dvec3();
                         *mm += 1;
-                        *ph2 += f64::from(d.dot(weight)).powi(2);
+                        *ph2 += d.as_dvec3().dot(weight).powi(2);
                     }
                 }
             });
