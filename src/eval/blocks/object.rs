@@ -376,8 +376,13 @@ impl Sink for ObjectBuilder {
             "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),
             "axis" => self.axis = Some((vec3(&args[0])?, args[0].span)),
             "method" => self.method = Some(word(&args[0], &["robust", "newton"])?),
-            "iterations" => self.iterations = count(&args[0], "iterations", 1000.0)? as u32,
-            "starts" => self.starts = count(&args[0], "starts", 64.0)? as u32,
+            "iterations" => {
+                self.iterations =
+                    count(&args[0], "iterations", f64::from(MAX_NEWTON_ITERATIONS))? as u32
+            }
+            "starts" => {
+                self.starts = count(&args[0], "starts", f64::from(MAX_NEWTON_STARTS))? as u32
+            }
             "angle" => {
                 let (a, b) = (num(&args[0])?, num(&args[1])?);
                 if !(a < b && b - a <= 360.0) {
