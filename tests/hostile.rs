@@ -534,6 +534,36 @@ fn hostile_flags_are_refused_or_bounded() {
             &[2],
         ),
         ("scene is /dev/zero", vec!["check", "/dev/zero"], &[1, 2]),
+        (
+            // A limit raised past what the process can have (its 2 GB address space here): the
+            // estimate (about 32 GB) passes, the allocation cannot be made.
+            "--memory-limit 100G --resolution 11585x11585",
+            vec![
+                "render",
+                scene,
+                "-o",
+                png_s,
+                "--memory-limit",
+                "100G",
+                "--resolution",
+                "11585x11585",
+                "--time-limit",
+                "1",
+            ],
+            &[1],
+        ),
+        (
+            "check --memory-limit 100G --resolution 11585x11585",
+            vec![
+                "check",
+                scene,
+                "--memory-limit",
+                "100G",
+                "--resolution",
+                "11585x11585",
+            ],
+            &[1],
+        ),
     ];
     for (label, args, accepted) in &cases {
         let o = run(args, TIMEOUT);

@@ -210,7 +210,7 @@ pub fn check_memory(
         .map(|i| i.bytes)
         .fold(0u64, u64::saturating_add);
     if total <= limit {
-        return Ok(());
+        return allocatable(total);
     }
     let parts: Vec<String> = items
         .iter()
@@ -224,6 +224,27 @@ pub fn check_memory(
         mib(limit),
         parts.join(", ")
     )))
+}
+
+/// Whether the process can have `bytes` at all: reserved (address space only; nothing is
+/// touched) and given back. A limit raised past what the machine or the process may have
+/// (`--memory-limit 100G` on 16 GB, or under `ulimit -v`) lets an estimate pass that no
+/// allocation can meet, and a failed allocation aborts the process mid-render.
+fn allocatable(bytes: u64) -> Result<(), RenderError> {
+    let reserved = usize::try_from(bytes)
+        .map_err(|_| ())
+        .and_then(|n| Vec::<u8>::new().try_reserve_exact(n).map_err(|_| ()));
+    reserved.map_err(|()| RenderError {
+        help: Some(
+            "lower the resolution, photons or object count: `--memory-limit` bounds the \
+             estimate, it does not give the process more memory"
+                .into(),
+        ),
+        ..RenderError::new(format!(
+            "this render needs about {} of memory, and this process cannot allocate that much",
+            mib(bytes)
+        ))
+    })
 }
 
 fn mib(bytes: u64) -> String {
