@@ -42,7 +42,10 @@ impl Evaluator {
         }
         if self.include_stack.len() > 64 {
             return Err(vec![
-                Error::new("includes nested more than 64 deep").at(span),
+                Error::new("includes nested more than 64 deep")
+                    .label("the 65th nested include")
+                    .help("include the files one after another from the scene, not each from the last")
+                    .at(span),
             ]);
         }
         // Recorded before the read so that `watch` also waits for a file that is missing.

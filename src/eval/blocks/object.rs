@@ -284,7 +284,12 @@ impl ObjectBuilder {
             t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
         }
         if t.matrix3.determinant().abs() < 1e-300 {
-            return Err(vec![Error::new("the transform is singular").at(self.span)]);
+            return Err(vec![
+                Error::new("the transform is singular (it flattens the object to nothing)")
+                    .label("its scales multiply to about 0")
+                    .help("keep the product of the scales applied to the object above 1e-300")
+                    .at(self.span),
+            ]);
         }
         for part in &mut parts {
             part.transform = t * part.transform;
