@@ -190,7 +190,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         "vnormalize" => {
             let a = v(args, 0)?;
             if a.length_squared() == 0.0 {
-                return Err((0, Error::new("cannot normalize a zero-length vector")));
+                return Err((
+                    0,
+                    Error::new("cannot normalize a zero-length vector")
+                        .help("a zero vector has no direction: check its length first"),
+                ));
             }
             Ok(Value::Vec3(a.normalize()))
         }

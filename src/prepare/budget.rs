@@ -217,13 +217,19 @@ pub fn check_memory(
         .filter(|i| i.bytes > 0)
         .map(|i| format!("{} {}", i.what, mib(i.bytes)))
         .collect();
-    Err(RenderError::new(format!(
-        "this render needs about {} of memory, more than the limit of {} ({}); lower the \
-         resolution, photons or object count, or raise the limit with --memory-limit",
-        mib(total),
-        mib(limit),
-        parts.join(", ")
-    )))
+    Err(RenderError {
+        help: Some(
+            "lower the resolution, photons or object count, or raise the limit with \
+             --memory-limit"
+                .into(),
+        ),
+        ..RenderError::new(format!(
+            "this render needs about {} of memory, more than the limit of {} ({})",
+            mib(total),
+            mib(limit),
+            parts.join(", ")
+        ))
+    })
 }
 
 /// Whether the process can have `bytes` at all: reserved (address space only; nothing is
@@ -279,7 +285,12 @@ mod tests {
             "{}",
             e.message
         );
-        assert!(e.message.contains("--memory-limit"), "{}", e.message);
+        assert!(
+            e.help
+                .as_ref()
+                .is_some_and(|h| h.contains("--memory-limit")),
+            "{e:?}"
+        );
         scene.settings.resolution = (512, 512);
         check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap();
     }
