@@ -191,7 +191,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         Integrator::Path | Integrator::Whitted => 0,
     };
     items.push(MemoryItem {
-        what: "photons of one iteration",
+        what: PHOTONS,
         bytes: photons,
     });
     items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
@@ -210,7 +210,14 @@ pub fn check_memory(
         .map(|i| i.bytes)
         .fold(0u64, u64::saturating_add);
     if total <= limit {
-        return allocatable(total);
+        // Photons are stored as they are traced: a time limit may end the render long
+        // before they fill what the estimate allows.
+        let upfront = items
+            .iter()
+            .filter(|i| i.what != PHOTONS)
+            .map(|i| i.bytes)
+            .fold(0u64, u64::saturating_add);
+        return allocatable(upfront);
     }
     let parts: Vec<String> = items
         .iter()
@@ -232,6 +239,9 @@ pub fn check_memory(
     })
 }
 
+/// What the estimate calls the photons one iteration stores.
+const PHOTONS: &str = "photons of one iteration";
+
 /// Whether the process can have `bytes` at all: reserved (address space only; nothing is
 /// touched) and given back. A limit raised past what the machine or the process may have
 /// (`--memory-limit 100G` on 16 GB, or under `ulimit -v`) lets an estimate pass that no
@@ -247,7 +257,8 @@ fn allocatable(bytes: u64) -> Result<(), RenderError> {
                 .into(),
         ),
         ..RenderError::new(format!(
-            "this render needs about {} of memory, and this process cannot allocate that much",
+            "this render needs about {} of memory before its first photon, and this process \
+             cannot allocate that much",
             mib(bytes)
         ))
     })
