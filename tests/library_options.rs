@@ -10,8 +10,9 @@ use common::{add_material, add_object, furnace_emitting};
 use glam::{DVec2, DVec3};
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::{
-    ColorParam, IntersectMethod, Material, Profile, ScalarParam, Scene, Shape, TextureId,
+    ColorParam, IntersectMethod, Light, Material, Profile, ScalarParam, Scene, Shape, TextureId,
 };
+use sppm_lang::span::Span;
 
 #[test]
 fn absurd_overrides_are_errors() {
@@ -191,4 +192,39 @@ fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
         let err = refused(&scene);
         assert!(err.contains("Newton"), "{err}");
     }
+}
+
+/// A spot light's angles as the language bounds them: a cone of 200 degrees (more than all
+/// directions) or a falloff outside the cone rendered without a word; a NaN intensity is
+/// refused with a fix.
+#[test]
+fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
+    let spot = |cone_angle: f64, falloff_angle: f64, intensity: f64| Light::Spot {
+        position: DVec3::new(0.0, 0.5, 0.0),
+        direction: DVec3::NEG_Y,
+        intensity: DVec3::splat(intensity),
+        cone_angle,
+        falloff_angle,
+        span: Span::detached(),
+    };
+    for light in [
+        spot(200.0, 100.0, 1.0),
+        spot(0.0, 0.0, 1.0),
+        spot(30.0, 40.0, 1.0),
+        spot(30.0, -1.0, 1.0),
+        spot(30.0, 20.0, f64::NAN),
+    ] {
+        let mut scene = furnace_emitting(4);
+        scene.lights.push(light);
+        let err = refused(&scene);
+        assert!(err.contains("spot light"), "{err}");
+    }
+    let mut scene = furnace_emitting(4);
+    scene.lights.push(spot(90.0, 90.0, 1.0));
+    let ok = RenderOptions {
+        iterations: Some(1),
+        photons: Some(1000),
+        ..Default::default()
+    };
+    render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
 }
