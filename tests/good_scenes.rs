@@ -572,3 +572,24 @@ fn standard_library_colors_and_materials() {
             .all(|p| !p.to_string_lossy().contains("std/"))
     );
 }
+
+/// `mirror` is also a material keyword: `wrap mirror` was read as `wrap` with no value ("`wrap`
+/// needs `repeat`, `clamp` or `mirror`"), though it is one of the three words it names.
+#[test]
+fn every_wrap_word_is_read_even_one_that_is_a_keyword() {
+    for (word, want) in [
+        ("repeat", Wrap::Repeat),
+        ("clamp", Wrap::Clamp),
+        ("mirror", Wrap::Mirror),
+    ] {
+        let s = scene(&format!(
+            "sphere {{ <0, 0, 0>, 1 material {{ diffuse texture {{ \
+             image \"examples/textures/world.png\" wrap {word} map spherical }} }} }}"
+        ));
+        match &s.textures[0].pattern {
+            Pattern::Image { wrap, .. } => assert_eq!(*wrap, want, "wrap {word}"),
+            p => panic!("wrap {word}: {p:?}"),
+        }
+        assert_eq!(s.textures[0].mapping, Mapping::Spherical, "wrap {word}");
+    }
+}

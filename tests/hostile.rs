@@ -5,7 +5,8 @@
 //! 20000x20000 pixels), and hazardous command-line flags. Each child runs under a 2 GB
 //! address-space limit (`prlimit`) and is killed after 60 s. A case passes when the process did
 //! not panic or die of a signal, exited as expected, located its error (file:line:column) when
-//! it exited 1, printed no control character from the scene raw (a terminal would obey it),
+//! it exited 1 and suggested a fix (`help:`, unless the text is the scene's own `#error`), printed
+//! no control character from the scene raw (a terminal would obey it),
 //! left no `.sppm-*` temporary file and, for `ok`, wrote a PNG. All failures are
 //! reported together, one line per case.
 
@@ -367,6 +368,10 @@ fn judge(
             if n == 1 && !has_span(&outcome.stderr, name) {
                 return fail("no file:line:column in the message");
             }
+            // Every error suggests a fix, except the scene's own `#error` text.
+            if n == 1 && !outcome.stderr.contains("help:") && !name.contains("error_message") {
+                return fail("no suggested fix (`help:`) in the message");
+            }
         }
     }
     None
@@ -534,6 +539,36 @@ fn hostile_flags_are_refused_or_bounded() {
             &[2],
         ),
         ("scene is /dev/zero", vec!["check", "/dev/zero"], &[1, 2]),
+        (
+            // A limit raised past what the process can have (its 2 GB address space here): the
+            // estimate (about 32 GB) passes, the allocation cannot be made.
+            "--memory-limit 100G --resolution 11585x11585",
+            vec![
+                "render",
+                scene,
+                "-o",
+                png_s,
+                "--memory-limit",
+                "100G",
+                "--resolution",
+                "11585x11585",
+                "--time-limit",
+                "1",
+            ],
+            &[1],
+        ),
+        (
+            "check --memory-limit 100G --resolution 11585x11585",
+            vec![
+                "check",
+                scene,
+                "--memory-limit",
+                "100G",
+                "--resolution",
+                "11585x11585",
+            ],
+            &[1],
+        ),
     ];
     for (label, args, accepted) in &cases {
         let o = run(args, TIMEOUT);

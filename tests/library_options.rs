@@ -6,8 +6,13 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
-use common::furnace_emitting;
+use common::{add_material, add_object, furnace_emitting};
+use glam::{DVec2, DVec3};
 use sppm_lang::render::{RenderOptions, render};
+use sppm_lang::scene::{
+    ColorParam, IntersectMethod, Light, Material, Profile, ScalarParam, Scene, Shape, TextureId,
+};
+use sppm_lang::span::Span;
 
 #[test]
 fn absurd_overrides_are_errors() {
@@ -78,4 +83,148 @@ fn absurd_overrides_are_errors() {
     };
     let out = render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
     assert_eq!(out.iterations_done, 1);
+}
+
+/// The error `render` gives for `scene` with default options (panics if it renders).
+fn refused(scene: &Scene) -> String {
+    match render(
+        scene,
+        &RenderOptions::default(),
+        &AtomicBool::new(false),
+        &mut |_| {},
+    ) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => {
+            assert!(e.help.is_some(), "{e}: no help");
+            e.to_string()
+        }
+    }
+}
+
+/// A scene built by hand holds any count: its own settings are checked like the options (the
+/// language refuses the same numbers). Before, `iterations: u32::MAX` or `photons: u64::MAX`
+/// rendered for ever and `iterations: 0` rendered nothing without a word.
+#[test]
+fn absurd_settings_of_a_hand_built_scene_are_errors() {
+    type Breaks = fn(&mut Scene);
+    let cases: [(&str, Breaks); 6] = [
+        ("iterations", |s| s.settings.iterations = u32::MAX),
+        ("iterations", |s| s.settings.iterations = 0),
+        ("photons", |s| s.settings.photons = Some(u64::MAX)),
+        ("radius scale", |s| s.settings.radius_scale = f64::NAN),
+        ("radius scale", |s| s.settings.radius_scale = 0.0),
+        ("radius scale", |s| s.settings.radius_scale = f64::INFINITY),
+    ];
+    for (what, break_it) in cases {
+        let mut scene = furnace_emitting(4);
+        break_it(&mut scene);
+        let err = refused(&scene);
+        assert!(err.contains(what), "{what}: {err}");
+    }
+    // With a time limit to end it, the scene's iteration count may be as large as it likes.
+    let mut scene = furnace_emitting(4);
+    scene.settings.iterations = u32::MAX;
+    scene.settings.time_limit = Some(0.2);
+    scene.settings.photons = Some(1000);
+    render(
+        &scene,
+        &RenderOptions::default(),
+        &AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap();
+}
+
+/// A material may name a texture the scene does not have (it panicked on an index out of
+/// bounds), and a curved shape may ask Newton's method for 2^32 iterations from 2^32 starts
+/// per ray (it never finished); both are refused before rendering.
+#[test]
+fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
+    let textures: [fn(TextureId) -> Material; 3] = [
+        |t| Material::Diffuse {
+            albedo: ColorParam::Texture(t),
+        },
+        |t| Material::Glass {
+            ior: 1.5,
+            absorb: ColorParam::Texture(t),
+            tint: DVec3::ONE,
+        },
+        |t| Material::Glossy {
+            albedo: ColorParam::Const(DVec3::splat(0.5)),
+            specular: ColorParam::Const(DVec3::splat(0.5)),
+            roughness: ScalarParam::Texture(t),
+        },
+    ];
+    for material in textures {
+        let mut scene = furnace_emitting(4);
+        scene.materials.push(material(TextureId(5)));
+        let err = refused(&scene);
+        assert!(err.contains("texture 5"), "{err}");
+    }
+    let newton = IntersectMethod::Newton {
+        iterations: u32::MAX,
+        starts: u32::MAX,
+    };
+    let shapes = [
+        Shape::Revolve {
+            profile: Profile {
+                segments: vec![vec![DVec2::new(0.5, -0.5), DVec2::new(0.5, 0.5)]],
+            },
+            sweep: None,
+            method: newton,
+        },
+        Shape::BezierPatch {
+            points: Box::new(std::array::from_fn(|i| {
+                DVec3::new((i / 4) as f64 * 0.2, (i % 4) as f64 * 0.2, 0.5)
+            })),
+            method: newton,
+        },
+    ];
+    for shape in shapes {
+        let mut scene = furnace_emitting(4);
+        let m = add_material(
+            &mut scene,
+            Material::Diffuse {
+                albedo: ColorParam::Const(DVec3::splat(0.5)),
+            },
+        );
+        add_object(&mut scene, shape, m, None);
+        let err = refused(&scene);
+        assert!(err.contains("Newton"), "{err}");
+    }
+}
+
+/// A spot light's angles as the language bounds them: a cone of 200 degrees (more than all
+/// directions) or a falloff outside the cone rendered without a word; a NaN intensity is
+/// refused with a fix.
+#[test]
+fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
+    let spot = |cone_angle: f64, falloff_angle: f64, intensity: f64| Light::Spot {
+        position: DVec3::new(0.0, 0.5, 0.0),
+        direction: DVec3::NEG_Y,
+        intensity: DVec3::splat(intensity),
+        cone_angle,
+        falloff_angle,
+        span: Span::detached(),
+    };
+    for light in [
+        spot(200.0, 100.0, 1.0),
+        spot(0.0, 0.0, 1.0),
+        spot(30.0, 40.0, 1.0),
+        spot(30.0, -1.0, 1.0),
+        spot(30.0, 20.0, f64::NAN),
+    ] {
+        let mut scene = furnace_emitting(4);
+        scene.lights.push(light);
+        let err = refused(&scene);
+        assert!(err.contains("spot light"), "{err}");
+    }
+    let mut scene = furnace_emitting(4);
+    scene.lights.push(spot(90.0, 90.0, 1.0));
+    let ok = RenderOptions {
+        iterations: Some(1),
+        photons: Some(1000),
+        ..Default::default()
+    };
+    render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
 }

@@ -176,6 +176,13 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         };
         let message = format!("{why}; `{}` is left as it was", output.display());
         let mut e = sppm_lang::render::RenderError::new(message);
+        if !out.cancelled {
+            e.help = Some(
+                "give more time (`time_limit` in the settings or `--time-limit`), or lower the \
+                 resolution or photons so that one iteration fits"
+                    .into(),
+            );
+        }
         if !out.cancelled && args.time_limit.is_none() {
             // The limit came from the scene's settings: point at them.
             e = e.at(scene.settings.span);

@@ -78,6 +78,8 @@ pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
                     choices.join(", "),
                     v.type_name()
                 ))
+                .label("not a word")
+                .help(format!("write one of the words, e.g. `{}`", choices[0]))
                 .at(a.span),
             ]);
         }
@@ -87,9 +89,10 @@ pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
     }
     let mut e =
         Error::new(format!("`{s}` is not one of {}", choices.join(", "))).label("unknown choice");
-    if let Some(c) = suggest(&s, choices.iter().copied()) {
-        e = e.help(format!("did you mean `{c}`?"));
-    }
+    e = match suggest(&s, choices.iter().copied()) {
+        Some(c) => e.help(format!("did you mean `{c}`?")),
+        None => e.help(format!("write one of them, e.g. `{}`", choices[0])),
+    };
     Err(vec![e.at(a.span)])
 }
 
@@ -102,6 +105,8 @@ pub(super) fn file_name(a: &Arg) -> SourceResult<&str> {
                 "expected a file name string, found {}",
                 v.type_name()
             ))
+            .label("not a string")
+            .help("write the file name in double quotes, e.g. `\"model.obj\"`")
             .at(a.span),
         ]),
     }

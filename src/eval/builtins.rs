@@ -103,7 +103,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if !(-1.0..=1.0).contains(&x) {
                 return Err((
                     0,
-                    Error::new(format!("`{name}` needs an argument in [-1, 1], found {x}")),
+                    Error::new(format!("`{name}` needs an argument in [-1, 1], found {x}"))
+                        .help(format!("clamp it first: `{name}(clamp(x, -1, 1))`")),
                 ));
             }
             num(if name == "asin" { x.asin() } else { x.acos() })
@@ -115,7 +116,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if x < 0.0 {
                 return Err((
                     0,
-                    Error::new(format!("`sqrt` of a negative number ({})", short_number(x))),
+                    Error::new(format!("`sqrt` of a negative number ({})", short_number(x)))
+                        .help("check the sign first (`#if (x >= 0)`), or take `sqrt(abs(x))`"),
                 ));
             }
             num(x.sqrt())
@@ -127,7 +129,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if x <= 0.0 {
                 return Err((
                     0,
-                    Error::new(format!("`{name}` needs a positive number, found {x}")),
+                    Error::new(format!("`{name}` needs a positive number, found {x}"))
+                        .help("a logarithm is defined above 0 only: check the argument first"),
                 ));
             }
             num(if name == "ln" { x.ln() } else { x.log10() })
@@ -187,7 +190,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         "vnormalize" => {
             let a = v(args, 0)?;
             if a.length_squared() == 0.0 {
-                return Err((0, Error::new("cannot normalize a zero-length vector")));
+                return Err((
+                    0,
+                    Error::new("cannot normalize a zero-length vector")
+                        .help("a zero vector has no direction: check its length first"),
+                ));
             }
             Ok(Value::Vec3(a.normalize()))
         }

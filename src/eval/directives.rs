@@ -129,6 +129,7 @@ impl Evaluator {
                     return Err(vec![
                         Error::new("a `#for` loop needs a finite, non-zero step")
                             .label("this step never ends the loop")
+                            .help("give a finite step other than 0, e.g. `#for (I, 0, 10, 1)`")
                             .at(span),
                     ]);
                 }

@@ -146,7 +146,8 @@ fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
                     UnOp::Rgb => "rgb",
                 },
                 v.type_name()
-            )));
+            ))
+            .help("it applies to numbers and vectors (`!` to conditions)"));
         }
     })
 }
@@ -162,6 +163,10 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
             b.type_name()
         ))
         .label("type mismatch")
+        .help(
+            "arithmetic takes numbers and vectors of one size (a number scales a vector); \
+             `+` joins two strings, `str(x)` makes a number a string",
+        )
     };
     if matches!(op, Div) {
         let zero = match &b {
@@ -171,7 +176,9 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
             _ => false,
         };
         if zero {
-            return Err(Error::new("division by zero").label("this divides by zero"));
+            return Err(Error::new("division by zero")
+                .label("this divides by zero")
+                .help("check the divisor first, e.g. `#if (N != 0)`"));
         }
     }
     let arith = |x: f64, y: f64| match op {
@@ -210,7 +217,8 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
                         "the joined string would be {} bytes, more than the limit of {} bytes",
                         x.len() + y.len(),
                         super::MAX_STRING_BYTES
-                    )));
+                    ))
+                    .help("is a string doubled in a loop? build only what the scene needs"));
                 }
                 Str(Rc::from(format!("{x}{y}")))
             }

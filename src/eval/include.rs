@@ -42,7 +42,10 @@ impl Evaluator {
         }
         if self.include_stack.len() > 64 {
             return Err(vec![
-                Error::new("includes nested more than 64 deep").at(span),
+                Error::new("includes nested more than 64 deep")
+                    .label("the 65th nested include")
+                    .help("include the files one after another from the scene, not each from the last")
+                    .at(span),
             ]);
         }
         // Recorded before the read so that `watch` also waits for a file that is missing.
@@ -69,7 +72,15 @@ impl Evaluator {
                 crate::files::FileError::Io(_) => "cannot be read",
                 crate::files::FileError::Refused(_) => "not a readable scene file",
             };
-            let help = match stdlib::povray_include(path) {
+            // POV-Ray's files only where the file is missing (one that exists but cannot be
+            // read, a FIFO say, is the scene's own).
+            let povray = match &e {
+                crate::files::FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+                    stdlib::povray_include(path)
+                }
+                _ => None,
+            };
+            let help = match povray {
                 Some(h) => format!("POV-Ray's `{path}`: {h}"),
                 None => format!(
                     "the path is resolved relative to the including file: {}",

@@ -369,6 +369,14 @@ impl Evaluator {
                             });
                             j = k + 1;
                         }
+                        // A word that is also a property keyword (`wrap mirror`).
+                        Some(Item::Keyword(w)) if spec.word => {
+                            args.push(Arg {
+                                value: Value::Str(Rc::from(w.text.as_str())),
+                                span: w.span,
+                            });
+                            j = k + 1;
+                        }
                         _ => break,
                     }
                 }

@@ -97,10 +97,19 @@ pub(super) fn transform_prop(kw: &str, args: &[Arg], t: &mut DAffine3) -> Source
                 DVec3::new(xs[6], xs[7], xs[8]),
                 DVec3::new(xs[9], xs[10], xs[11]),
             );
-            if m.matrix3.determinant().abs() < 1e-12 {
+            // Flat means the determinant is small next to the columns' own lengths (the volume
+            // of the box they span against its largest possible value): a matrix that only
+            // scales the object down uniformly, by 1e-5 say, is not flat.
+            let c = m.matrix3;
+            let volume = c.x_axis.length() * c.y_axis.length() * c.z_axis.length();
+            if !(volume.is_finite() && m.matrix3.determinant().abs() > 1e-12 * volume) {
                 return Err(vec![
                     Error::new("this matrix is singular (it flattens the object)")
-                        .label("determinant 0")
+                        .label("flat")
+                        .help(
+                            "its first three columns (a,b,c / d,e,f / g,h,i) must not lie in \
+                             one plane; `scale` by a small non-zero number shrinks an object",
+                        )
                         .at(span),
                 ]);
             }

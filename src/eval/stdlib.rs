@@ -39,10 +39,62 @@ pub(crate) fn povray_include(name: &str) -> Option<&'static str> {
             "common materials (glasses with measured IORs, metals, diffuse albedos) are \
              `#include \"std/materials.scn\"` here"
         }
-        _ if file.ends_with(".inc") => {
+        _ if POVRAY_INCLUDES.contains(&file) => {
             "POV-Ray's include files are not available here; the built-in ones are \
              `std/colors.scn` and `std/materials.scn`"
         }
         _ => return None,
     })
+}
+
+/// The other include files POV-Ray 3.7 installs. Any other `.inc` is the scene's own file.
+const POVRAY_INCLUDES: &[&str] = &[
+    "arrays.inc",
+    "chars.inc",
+    "consts.inc",
+    "debug.inc",
+    "functions.inc",
+    "glass_old.inc",
+    "logo.inc",
+    "makegrass.inc",
+    "math.inc",
+    "meshmaker.inc",
+    "rad_def.inc",
+    "rand.inc",
+    "screen.inc",
+    "shapes.inc",
+    "shapes2.inc",
+    "shapes3.inc",
+    "shapes_old.inc",
+    "shapesq.inc",
+    "skies.inc",
+    "stage1.inc",
+    "stars.inc",
+    "stdcam.inc",
+    "stdinc.inc",
+    "stoneold.inc",
+    "strings.inc",
+    "sunpos.inc",
+    "transforms.inc",
+    "woodmaps.inc",
+];
+
+#[cfg(test)]
+mod tests {
+    use super::povray_include;
+
+    #[test]
+    fn only_povray_s_own_include_files_get_the_povray_hint() {
+        for name in [
+            "colors.inc",
+            "metals.inc",
+            "shapes.inc",
+            "../povray/skies.inc",
+        ] {
+            assert!(povray_include(name).is_some(), "{name}");
+        }
+        for name in ["walls.inc", "scene/parts.inc", "shapes.scn"] {
+            assert_eq!(povray_include(name), None, "{name}");
+        }
+    }
 }

@@ -83,7 +83,13 @@ impl Value {
     pub fn num(&self) -> Result<f64, Error> {
         match self {
             Value::Num(n) => Ok(*n),
-            v => Err(v.mismatch("a number")),
+            Value::Vec2(_) | Value::Vec3(_) | Value::Color(_) => Err(self
+                .mismatch("a number")
+                .help("take one component (`V.x`) or the length (`vlength(V)`) of the vector")),
+            Value::Str(_) => Err(self
+                .mismatch("a number")
+                .help("write the number without quotes, e.g. `1.5`")),
+            v => Err(v.mismatch("a number").help("write a number, e.g. `1.5`")),
         }
     }
 
@@ -100,14 +106,18 @@ impl Value {
                      POV-Ray's `{n}` does)"
                 )))
             }
-            v => Err(v.mismatch("a vector `<x, y, z>`")),
+            v => Err(v
+                .mismatch("a vector `<x, y, z>`")
+                .help("write three components, e.g. `<0, 1, 0>`")),
         }
     }
 
     pub fn vec2(&self) -> Result<DVec2, Error> {
         match self {
             Value::Vec2(v) => Ok(*v),
-            v => Err(v.mismatch("a 2-D vector `<u, v>`")),
+            v => Err(v
+                .mismatch("a 2-D vector `<u, v>`")
+                .help("write two components, e.g. `<0.5, 1>`")),
         }
     }
 
@@ -116,7 +126,9 @@ impl Value {
         match self {
             Value::Color(c) | Value::Vec3(c) => Ok(*c),
             Value::Num(n) => Ok(DVec3::splat(*n)),
-            v => Err(v.mismatch("a color `rgb <r, g, b>`")),
+            v => Err(v
+                .mismatch("a color `rgb <r, g, b>`")
+                .help("write e.g. `rgb <1, 0.5, 0.2>`")),
         }
     }
 
@@ -124,7 +136,9 @@ impl Value {
         match self {
             Value::Bool(b) => Ok(*b),
             Value::Num(n) => Ok(*n != 0.0),
-            v => Err(v.mismatch("a boolean")),
+            v => Err(v
+                .mismatch("a boolean")
+                .help("write a comparison such as `N > 0`, or `true` / `false`")),
         }
     }
 }

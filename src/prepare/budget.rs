@@ -191,7 +191,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         Integrator::Path | Integrator::Whitted => 0,
     };
     items.push(MemoryItem {
-        what: "photons of one iteration",
+        what: PHOTONS,
         bytes: photons,
     });
     items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
@@ -210,20 +210,58 @@ pub fn check_memory(
         .map(|i| i.bytes)
         .fold(0u64, u64::saturating_add);
     if total <= limit {
-        return Ok(());
+        // Photons are stored as they are traced: a time limit may end the render long
+        // before they fill what the estimate allows.
+        let upfront = items
+            .iter()
+            .filter(|i| i.what != PHOTONS)
+            .map(|i| i.bytes)
+            .fold(0u64, u64::saturating_add);
+        return allocatable(upfront);
     }
     let parts: Vec<String> = items
         .iter()
         .filter(|i| i.bytes > 0)
         .map(|i| format!("{} {}", i.what, mib(i.bytes)))
         .collect();
-    Err(RenderError::new(format!(
-        "this render needs about {} of memory, more than the limit of {} ({}); lower the \
-         resolution, photons or object count, or raise the limit with --memory-limit",
-        mib(total),
-        mib(limit),
-        parts.join(", ")
-    )))
+    Err(RenderError {
+        help: Some(
+            "lower the resolution, photons or object count, or raise the limit with \
+             --memory-limit"
+                .into(),
+        ),
+        ..RenderError::new(format!(
+            "this render needs about {} of memory, more than the limit of {} ({})",
+            mib(total),
+            mib(limit),
+            parts.join(", ")
+        ))
+    })
+}
+
+/// What the estimate calls the photons one iteration stores.
+const PHOTONS: &str = "photons of one iteration";
+
+/// Whether the process can have `bytes` at all: reserved (address space only; nothing is
+/// touched) and given back. A limit raised past what the machine or the process may have
+/// (`--memory-limit 100G` on 16 GB, or under `ulimit -v`) lets an estimate pass that no
+/// allocation can meet, and a failed allocation aborts the process mid-render.
+fn allocatable(bytes: u64) -> Result<(), RenderError> {
+    let reserved = usize::try_from(bytes)
+        .map_err(|_| ())
+        .and_then(|n| Vec::<u8>::new().try_reserve_exact(n).map_err(|_| ()));
+    reserved.map_err(|()| RenderError {
+        help: Some(
+            "lower the resolution, photons or object count: `--memory-limit` bounds the \
+             estimate, it does not give the process more memory"
+                .into(),
+        ),
+        ..RenderError::new(format!(
+            "this render needs about {} of memory before its first photon, and this process \
+             cannot allocate that much",
+            mib(bytes)
+        ))
+    })
 }
 
 fn mib(bytes: u64) -> String {
@@ -258,7 +296,12 @@ mod tests {
             "{}",
             e.message
         );
-        assert!(e.message.contains("--memory-limit"), "{}", e.message);
+        assert!(
+            e.help
+                .as_ref()
+                .is_some_and(|h| h.contains("--memory-limit")),
+            "{e:?}"
+        );
         scene.settings.resolution = (512, 512);
         check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap();
     }

@@ -28,7 +28,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                         message: "point light: position and intensity must be finite, intensity non-negative".into(),
                         span: Some(*span),
                         label: String::new(),
-                        help: None,
+                        help: Some("give a finite position and an intensity of finite numbers of at least 0".into()),
                     });
                 }
                 lights.push(Light::Point(PointLight {
@@ -47,16 +47,23 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                 if !(position.is_finite()
                     && intensity.is_finite()
                     && intensity.min_element() >= 0.0
+                    && direction.is_finite()
                     && direction.length() > 0.0
-                    && cone_angle.is_finite()
-                    && falloff_angle.is_finite())
+                    && *cone_angle > 0.0
+                    && *cone_angle <= 90.0
+                    && (0.0..=*cone_angle).contains(falloff_angle))
                 {
                     return Err(RenderError {
                         message: "spot light: invalid position, direction, intensity or angle"
                             .into(),
                         span: Some(*span),
                         label: String::new(),
-                        help: None,
+                        help: Some(
+                            "give a finite position, a non-zero direction, an intensity of at \
+                             least 0, a cone angle in (0, 90] degrees and a falloff from 0 to it \
+                             (as the language does)"
+                                .into(),
+                        ),
                     });
                 }
                 lights.push(Light::Spot(SpotLight::new(

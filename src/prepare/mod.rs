@@ -104,6 +104,23 @@ pub fn prepare<'a>(
     Ok((settings, prepared))
 }
 
+/// How to mend a shape that cannot be built (the evaluator catches most of these first).
+fn shape_help(shape: &scene::Shape) -> &'static str {
+    use scene::Shape as S;
+    match shape {
+        S::Triangle { .. } => "give three points that do not lie on one line",
+        S::Box { .. } => {
+            "give two opposite corners that differ in x, y and z, e.g. `box { <-1, -1, -1>, <1, 1, 1> }`"
+        }
+        S::Mesh { .. } => {
+            "the OBJ file needs faces (`f` lines) of three distinct vertices that span an area"
+        }
+        S::Revolve { .. } => "give the profile points away from the axis (a radius above 0)",
+        S::Csg(_) => "check the sizes and transforms of the CSG's children",
+        _ => "check the shape's sizes and its transform (scale, matrix) for zero or huge values",
+    }
+}
+
 impl<'a> PreparedScene<'a> {
     /// What is legal but probably not what the author meant, as render errors used as
     /// warnings (message and help): a scene with nothing that emits light.
@@ -143,10 +160,13 @@ impl<'a> PreparedScene<'a> {
                 message: format!("{}: {message}", obj.shape.kind()),
                 span: Some(obj.span),
                 label: String::new(),
-                help: None,
+                help: Some(shape_help(&obj.shape).into()),
             };
             if obj.material.0 as usize >= scene.materials.len() {
-                return Err(err("unknown material".into()));
+                return Err(RenderError {
+                    help: Some("refer to an entry of `Scene::materials`".into()),
+                    ..err("unknown material".into())
+                });
             }
             objects.push(ObjectInfo::new(obj.material, &obj.transform));
             if let scene::Shape::Csg(_) = &obj.shape {
@@ -158,7 +178,10 @@ impl<'a> PreparedScene<'a> {
                 prim_light.push(NO_LIGHT);
                 for part in parts {
                     if part.material.0 as usize >= scene.materials.len() {
-                        return Err(err("unknown material".into()));
+                        return Err(RenderError {
+                            help: Some("refer to an entry of `Scene::materials`".into()),
+                            ..err("unknown material".into())
+                        });
                     }
                     prim_object.push((scene.objects.len() + csg_parts.len()) as u32);
                     prim_light.push(NO_LIGHT);
@@ -173,7 +196,10 @@ impl<'a> PreparedScene<'a> {
             if let Some(e) = obj.emission
                 && !(e.radiance.is_finite() && e.radiance.min_element() >= 0.0)
             {
-                return Err(err("emission must be finite and non-negative".into()));
+                return Err(RenderError {
+                    help: Some("give a radiance of finite numbers of at least 0".into()),
+                    ..err("emission must be finite and non-negative".into())
+                });
             }
             // A mesh that is neither instanced nor a light: one primitive, its triangles kept
             // in the BVH's compact form.
@@ -217,11 +243,18 @@ impl<'a> PreparedScene<'a> {
                     let ls = ls.next().expect("same shapes twice");
                     let area = ls.area();
                     if !(area.is_finite() && area > 0.0) || ls.sample(glam::Vec2::ZERO).is_none() {
-                        return Err(err(
-                            "this emissive shape cannot be sampled as a light (infinite, or a \
-                             transform other than translate/rotate/uniform scale)"
-                                .into(),
-                        ));
+                        return Err(RenderError {
+                            help: Some(
+                                "make the light a finite shape (a quad, disk, sphere, ...) under \
+                                 translate, rotate and uniform scale only"
+                                    .into(),
+                            ),
+                            ..err(
+                                "this emissive shape cannot be sampled as a light (infinite, or \
+                                 a transform other than translate/rotate/uniform scale)"
+                                    .into(),
+                            )
+                        });
                     }
                     light = lights.len() as u32;
                     lights.push(Light::Area(AreaLight {

@@ -167,7 +167,8 @@ pub fn effective_settings(
             "resolution {width}x{height} is out of range (1..={MAX_SIDE} per side, at most {MAX_PIXELS} pixels)"
         )));
     }
-    // The scene's own numbers are checked by `Scene::validate`; here only the overrides.
+    // The scene's own numbers are checked by `Scene::validate`; here the overrides, and the
+    // counts as overridden (a scene built by hand may hold any count).
     let time_limit = o.time_limit.or(s.time_limit);
     if let Some(t) = o.time_limit
         && !(t > 0.0 && t.is_finite())
@@ -184,26 +185,36 @@ pub fn effective_settings(
         )));
     }
     // More iterations only under a time limit, which then ends the render (`reference`).
-    if let Some(n) = o.iterations
-        && (n == 0 || (n > MAX_ITERATIONS && time_limit.is_none()))
-    {
-        return Err(RenderError::new(format!(
-            "iterations must be from 1 to {MAX_ITERATIONS}, got {n}"
-        )));
+    let iterations = o.iterations.unwrap_or(s.iterations);
+    if iterations == 0 || (iterations > MAX_ITERATIONS && time_limit.is_none()) {
+        return Err(RenderError {
+            help: Some(format!(
+                "ask for 1 to {MAX_ITERATIONS} iterations, or set a time limit to end the render"
+            )),
+            ..RenderError::new(format!(
+                "iterations must be from 1 to {MAX_ITERATIONS}, got {iterations}"
+            ))
+        });
     }
     // 0 is allowed: methods without photons are run with it.
-    if let Some(n) = o.photons
+    let photons = o.photons.or(s.photons);
+    if let Some(n) = photons
         && n > MAX_PHOTONS
     {
-        return Err(RenderError::new(format!(
-            "photons per iteration must be at most {MAX_PHOTONS}, got {n}"
-        )));
+        return Err(RenderError {
+            help: Some(format!(
+                "ask for at most {MAX_PHOTONS} photons per iteration (more iterations add more)"
+            )),
+            ..RenderError::new(format!(
+                "photons per iteration must be at most {MAX_PHOTONS}, got {n}"
+            ))
+        });
     }
     Ok(EffectiveSettings {
         width,
         height,
-        iterations: o.iterations.unwrap_or(s.iterations),
-        photons: o.photons.or(s.photons),
+        iterations,
+        photons,
         radius: s.radius,
         radius_scale: s.radius_scale,
         alpha: s.alpha,

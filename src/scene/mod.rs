@@ -357,6 +357,11 @@ pub struct Profile {
     pub segments: Vec<Vec<DVec2>>,
 }
 
+/// Most iterations of [`IntersectMethod::Newton`] per start, and most starts (the language's
+/// bounds; each ray pays their product).
+pub const MAX_NEWTON_ITERATIONS: u32 = 1000;
+pub const MAX_NEWTON_STARTS: u32 = 64;
+
 /// How curved surfaces are intersected.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum IntersectMethod {

@@ -11,8 +11,9 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use super::{
-    Background, CLOSED_HELP, Camera, Csg, CsgOp, Light, MAX_CSG_DEPTH, MAX_CSG_LEAVES, Object,
-    Scene, Settings, Shape, why_open,
+    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light, MAX_CSG_DEPTH,
+    MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS, Material, Object, ScalarParam, Scene,
+    Settings, Shape, why_open,
 };
 use crate::span::Span;
 
@@ -178,6 +179,14 @@ impl Settings {
                 "use an exposure above 0 and at most 1e9",
             ));
         }
+        if !(self.radius_scale > 0.0 && self.radius_scale.is_finite()) {
+            return Err(invalid(
+                span,
+                format!("radius scale {} is out of range", fmt(self.radius_scale)),
+                "out of range",
+                "use a positive, finite scale of the initial radius (1: as chosen)",
+            ));
+        }
         if !(self.alpha > 0.0 && self.alpha <= 1.0) {
             return Err(invalid(
                 span,
@@ -226,6 +235,9 @@ impl Scene {
     pub fn validate(&self) -> Result<(), Invalid> {
         self.camera.validate()?;
         self.settings.validate()?;
+        for (i, m) in self.materials.iter().enumerate() {
+            textures_exist(m, i, self.textures.len())?;
+        }
         for obj in &self.objects {
             if let Shape::Csg(csg) = &obj.shape {
                 csg_limits(csg, obj.span)?;
@@ -365,12 +377,16 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(*p)?;
             }
         }
-        Shape::Revolve { profile, .. } => {
+        Shape::Revolve {
+            profile, method, ..
+        } => {
+            newton_bounds(*method, kind, span)?;
             for p in profile.segments.iter().flatten() {
                 at(DVec3::new(p.x, p.y, p.x))?;
             }
         }
-        Shape::BezierPatch { points, .. } => {
+        Shape::BezierPatch { points, method } => {
+            newton_bounds(*method, kind, span)?;
             for p in points.iter() {
                 at(*p)?;
             }
@@ -378,6 +394,60 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
         Shape::Csg(csg) => validate_csg(csg, t, span)?,
     }
     Ok(())
+}
+
+/// Newton's iterations and starts within the language's bounds (each ray pays their product).
+fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), Invalid> {
+    match method {
+        IntersectMethod::Newton { iterations, starts }
+            if iterations > MAX_NEWTON_ITERATIONS || starts > MAX_NEWTON_STARTS =>
+        {
+            Err(invalid(
+                span,
+                format!(
+                    "this {kind}'s Newton method asks for {iterations} iterations from {starts} \
+                     starts, more than {MAX_NEWTON_ITERATIONS} and {MAX_NEWTON_STARTS}"
+                ),
+                "too many iterations",
+                "use at most `iterations 1000 starts 64`, or `method robust`",
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Every texture material `index` refers to is one of the scene's `count` textures.
+fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invalid> {
+    let color = |p: &ColorParam| match p {
+        ColorParam::Texture(t) => Some(t.0),
+        ColorParam::Const(_) => None,
+    };
+    let ids = match m {
+        Material::Diffuse { albedo } => [color(albedo), None, None],
+        Material::Mirror { tint } => [color(tint), None, None],
+        Material::Glass { absorb, .. } => [color(absorb), None, None],
+        Material::Glossy {
+            albedo,
+            specular,
+            roughness,
+        } => [
+            color(albedo),
+            color(specular),
+            match roughness {
+                ScalarParam::Texture(t) => Some(t.0),
+                ScalarParam::Const(_) => None,
+            },
+        ],
+    };
+    match ids.into_iter().flatten().find(|&t| t as usize >= count) {
+        Some(t) => Err(invalid(
+            Span::detached(),
+            format!("material {index} uses texture {t}, but the scene has {count} textures"),
+            "unknown texture",
+            "push the texture onto `Scene::textures` and refer to it by its index",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The size of a CSG tree; checked before anything walks it recursively.

@@ -17,12 +17,16 @@ pub struct Transformed {
 }
 
 impl Transformed {
+    /// Fails only when the transform has no f32 inverse. How flat or small a transform may be
+    /// is decided before (the evaluator's matrix check, the scene's size limits): a bound on
+    /// the determinant here would refuse a uniformly small object (`scale 1e-4` has
+    /// determinant 1e-12) that renders like a large one.
     pub fn new(inner: Arc<dyn Shape>, to_world: Affine3A) -> Result<Self, String> {
         let det = to_world.matrix3.determinant();
-        if !(det.is_finite() && det.abs() > 1e-12) {
+        let to_object = to_world.inverse();
+        if !(det.is_finite() && det != 0.0 && to_object.is_finite()) {
             return Err("the object's transform is singular (a zero scale?)".into());
         }
-        let to_object = to_world.inverse();
         Ok(Self {
             inner,
             to_world,
@@ -106,5 +110,46 @@ impl Shape for Transformed {
 
     fn sample(&self, _u: Vec2) -> Option<AreaSample> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::sphere::Sphere;
+    use glam::Vec3A;
+
+    /// A unit sphere scaled by `s` about the origin, hit from `<0, 0, -3 s>` along +z.
+    fn hit_scaled(s: f32) -> Result<Option<Hit>, String> {
+        let sphere = Arc::new(Sphere::new(Vec3A::ZERO, 1.0)?);
+        let t = Transformed::new(sphere, Affine3A::from_scale(glam::Vec3::splat(s)))?;
+        let ray = Ray::new(Vec3A::new(0.0, 0.0, -3.0 * s), Vec3A::Z);
+        Ok(t.intersect(&ray, 0.0, f32::INFINITY))
+    }
+
+    #[test]
+    fn a_small_uniform_scale_is_not_singular() {
+        // Determinants 1e-12 to 1e-27: each a well-conditioned transform.
+        for s in [1e-4f32, 1e-5, 1e-7, 1e-9] {
+            let h = hit_scaled(s)
+                .unwrap_or_else(|e| panic!("scale {s}: {e}"))
+                .unwrap_or_else(|| panic!("scale {s}: the ray missed"));
+            assert!((h.t / s - 2.0).abs() < 1e-5, "scale {s}: t = {}", h.t);
+            assert!(
+                (h.n - Vec3A::NEG_Z).length() < 1e-5,
+                "scale {s}: n = {}",
+                h.n
+            );
+        }
+    }
+
+    #[test]
+    fn a_transform_without_an_f32_inverse_is_refused() {
+        assert!(hit_scaled(0.0).is_err());
+        // Determinant 1e-45 (subnormal): its inverse overflows f32.
+        assert!(hit_scaled(1e-15).is_err());
+        let flat = Affine3A::from_scale(glam::Vec3::new(1.0, 0.0, 1.0));
+        let sphere = Arc::new(Sphere::new(Vec3A::ZERO, 1.0).unwrap());
+        assert!(Transformed::new(sphere, flat).is_err());
     }
 }

@@ -178,6 +178,16 @@ pub(super) fn syntax_error(
              (docs/language.md), e.g. `sphere {{ <0, 0, 0>, 1 }}`; write the scene in it"
         ));
     }
+    if d.help.is_none() {
+        // No better guess: what would fit, or where the cause usually is.
+        d = d.with_help(if pos >= text.len() {
+            format!("the file ends too early: add {expected_text}")
+        } else if expected.is_empty() {
+            format!("remove {found}, or look before it for something left open (`<`, `(`, `{{`)")
+        } else {
+            format!("write {expected_text} here, or remove {found}")
+        });
+    }
     d
 }
 

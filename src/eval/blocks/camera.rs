@@ -50,7 +50,12 @@ impl Sink for CameraBuilder {
             "up" => {
                 let u = vec3(&args[0])?;
                 if u.length_squared() == 0.0 {
-                    return Err(vec![Error::new("`up` is a zero vector").at(args[0].span)]);
+                    return Err(vec![
+                        Error::new("`up` is a zero vector")
+                            .label("zero vector")
+                            .help("give the direction that is up in the image, e.g. `up <0, 1, 0>`")
+                            .at(args[0].span),
+                    ]);
                 }
                 c.up = u;
             }

@@ -93,7 +93,10 @@ impl LightBuilder {
         };
         if target == position {
             return Err(vec![
-                Error::new("the spotlight points at its own position").at(span),
+                Error::new("the spotlight points at its own position")
+                    .label("`point_at` is the light's position")
+                    .help("point it at what it lights, e.g. `point_at <0, 0, 0>` for a light above")
+                    .at(span),
             ]);
         }
         let (cone, cspan) = self.angle.unwrap_or((30.0, span));

@@ -86,6 +86,9 @@ impl MaterialBuilder {
                 Some(s) => Err(vec![
                     Error::new(format!("`{what}` does not apply to a {kind_name} material"))
                         .label("not used by this kind")
+                        .help(format!(
+                            "drop `{what}`, or use the kind of material it belongs to"
+                        ))
                         .at(s),
                 ]),
                 None => Ok(()),

@@ -284,7 +284,12 @@ impl ObjectBuilder {
             t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
         }
         if t.matrix3.determinant().abs() < 1e-300 {
-            return Err(vec![Error::new("the transform is singular").at(self.span)]);
+            return Err(vec![
+                Error::new("the transform is singular (it flattens the object to nothing)")
+                    .label("its scales multiply to about 0")
+                    .help("keep the product of the scales applied to the object above 1e-300")
+                    .at(self.span),
+            ]);
         }
         for part in &mut parts {
             part.transform = t * part.transform;
@@ -376,8 +381,13 @@ impl Sink for ObjectBuilder {
             "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),
             "axis" => self.axis = Some((vec3(&args[0])?, args[0].span)),
             "method" => self.method = Some(word(&args[0], &["robust", "newton"])?),
-            "iterations" => self.iterations = count(&args[0], "iterations", 1000.0)? as u32,
-            "starts" => self.starts = count(&args[0], "starts", 64.0)? as u32,
+            "iterations" => {
+                self.iterations =
+                    count(&args[0], "iterations", f64::from(MAX_NEWTON_ITERATIONS))? as u32
+            }
+            "starts" => {
+                self.starts = count(&args[0], "starts", f64::from(MAX_NEWTON_STARTS))? as u32
+            }
             "angle" => {
                 let (a, b) = (num(&args[0])?, num(&args[1])?);
                 if !(a < b && b - a <= 360.0) {

@@ -48,6 +48,8 @@ impl ProfileBuilder {
                         "a spline needs at least 2 points, found {}",
                         pts.len()
                     ))
+                    .label("too few points")
+                    .help("give the points the curve passes through, e.g. `spline { <0.5, 0>, <0.5, 1> }`")
                     .at(span),
                 ]);
             }

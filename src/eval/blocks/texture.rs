@@ -82,6 +82,7 @@ impl TextureBuilder {
             return Err(vec![
                 Error::new(format!("a texture has one pattern: {old} or {k}, not both"))
                     .label("second pattern")
+                    .help("keep one of the two patterns (a texture shows one)")
                     .at(span)
                     .with_extra(old_span, "first pattern here"),
             ]);
@@ -202,6 +203,8 @@ impl Sink for TextureBuilder {
                             if d.length_squared() == 0.0 {
                                 return Err(vec![
                                     Error::new("the gradient direction is a zero vector")
+                                        .label("zero vector")
+                                        .help("give the direction the colours change along, e.g. `gradient <0, 1, 0>`")
                                         .at(a.span),
                                 ]);
                             }

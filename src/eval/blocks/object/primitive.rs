@@ -108,6 +108,8 @@ impl ObjectBuilder {
                                 "expected a file name string, found {}",
                                 v.type_name()
                             ))
+                            .label("not a string")
+                            .help("write the file name in double quotes, e.g. `\"model.obj\"`")
                             .at(*s),
                         ]);
                     }
@@ -153,6 +155,7 @@ impl ObjectBuilder {
                     return Err(vec![
                         Error::new("the quad's edges are parallel (it has no area)")
                             .label("parallel to the first edge")
+                            .help("give two edges in different directions, e.g. `<1, 0, 0>, <0, 1, 0>`")
                             .at(vs[2].1),
                     ]);
                 }
@@ -171,6 +174,7 @@ impl ObjectBuilder {
                     return Err(vec![
                         Error::new("the cylinder's base and cap are the same point")
                             .label("zero height")
+                            .help("move the cap away from the base, e.g. `<0, 1, 0>` above `<0, 0, 0>`")
                             .at(vs[1].1),
                     ]);
                 }
@@ -186,6 +190,7 @@ impl ObjectBuilder {
                     return Err(vec![
                         Error::new("the cone's base and cap are the same point")
                             .label("zero height")
+                            .help("move the cap away from the base, e.g. `<0, 1, 0>` above `<0, 0, 0>`")
                             .at(vs[1].1),
                     ]);
                 }
