@@ -250,7 +250,7 @@ pub(crate) fn render_with(
         st.photon_count.record(photons, photon_rays);
         if balanced {
             // The camera pass's casts: the photon pass's times the ratio that balances the two
-            // parts' noise (1 until both are known, and where the photons' noise dominates).
+            // parts' noise (1 until both are known, then 2 to 8).
             let spp = st.photon_count.segments_per_photon();
             let ratio = balance::camera_share(&st.samples, &st.noise, spp).unwrap_or(1.0);
             st.photon_count.set_camera_ratio(ratio);
