@@ -130,32 +130,7 @@ fn every_integrator_is_independent_of_the_thread_count() {
 fn the_automatic_photon_count_is_independent_of_the_thread_count() {
     let scene = common::cornell_glass(48);
     assert_eq!(scene.settings.photons, None);
-    let runs: Vec<(Vec<u64>, Vec<[u64; 3]>)> = [1, 2, 3]
-        .into_iter()
-        .map(|threads| {
-            let opts = RenderOptions {
-                iterations: Some(8),
-                seed: Some(5),
-                threads: Some(threads),
-                ..Default::default()
-            };
-            let mut totals = Vec::new();
-            let out = render(&scene, &opts, &AtomicBool::new(false), &mut |p| {
-                totals.push(p.stats.photons)
-            })
-            .unwrap();
-            let per_iteration = totals
-                .iter()
-                .scan(0, |before, &t| {
-                    let n = t - *before;
-                    *before = t;
-                    Some(n)
-                })
-                .collect();
-            let bits = out.image.pixels.iter().map(|p| p.map(f64::to_bits));
-            (per_iteration, bits.collect())
-        })
-        .collect();
+    let runs = counts_and_pixels_on_1_2_3_threads(&scene, 8, 5);
     println!("photons per iteration: {:?}", runs[0].0);
     // 2 x 3 rays per pixel, 2 segments per photon assumed at first: 6912, in chunks of 4096.
     assert_eq!(runs[0].0[0], 8192);
@@ -183,17 +158,40 @@ fn the_camera_photon_split_is_independent_of_the_thread_count() {
     // Large enough for the photon count to span several chunks of 4096.
     scene.settings.resolution = (128, 96);
     scene.settings.photons = None;
-    let runs: Vec<(Vec<u64>, Vec<[u64; 3]>)> = [1, 2, 3]
+    let runs = counts_and_pixels_on_1_2_3_threads(&scene, 6, 3);
+    let counts = &runs[0].0;
+    println!("photons per iteration: {counts:?}");
+    assert!(
+        counts[3..].iter().all(|&n| n < counts[1]),
+        "the camera pass took no casts from the photons: {counts:?}"
+    );
+    for (threads, run) in [(2, &runs[1]), (3, &runs[2])] {
+        assert_eq!(
+            &run.0, counts,
+            "photon counts differ with {threads} threads"
+        );
+        assert!(run.1 == runs[0].1, "pixels differ with {threads} threads");
+    }
+}
+
+/// Renders `scene` on 1, 2 and 3 threads: each run's photons per iteration and its pixels'
+/// bits.
+fn counts_and_pixels_on_1_2_3_threads(
+    scene: &sppm_lang::scene::Scene,
+    iterations: u32,
+    seed: u64,
+) -> Vec<(Vec<u64>, Vec<[u64; 3]>)> {
+    [1, 2, 3]
         .into_iter()
         .map(|threads| {
             let opts = RenderOptions {
-                iterations: Some(6),
-                seed: Some(3),
+                iterations: Some(iterations),
+                seed: Some(seed),
                 threads: Some(threads),
                 ..Default::default()
             };
             let mut totals = Vec::new();
-            let out = render(&scene, &opts, &AtomicBool::new(false), &mut |p| {
+            let out = render(scene, &opts, &AtomicBool::new(false), &mut |p| {
                 totals.push(p.stats.photons)
             })
             .unwrap();
@@ -208,18 +206,5 @@ fn the_camera_photon_split_is_independent_of_the_thread_count() {
             let bits = out.image.pixels.iter().map(|p| p.map(f64::to_bits));
             (per_iteration, bits.collect())
         })
-        .collect();
-    let counts = &runs[0].0;
-    println!("photons per iteration: {counts:?}");
-    assert!(
-        counts[3..].iter().all(|&n| n < counts[1]),
-        "the camera pass took no casts from the photons: {counts:?}"
-    );
-    for (threads, run) in [(2, &runs[1]), (3, &runs[2])] {
-        assert_eq!(
-            &run.0, counts,
-            "photon counts differ with {threads} threads"
-        );
-        assert!(run.1 == runs[0].1, "pixels differ with {threads} threads");
-    }
+        .collect()
 }
