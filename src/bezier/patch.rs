@@ -473,6 +473,37 @@ impl Patch {
     }
 }
 
+/// Where Newton's method starts in a sub-patch that meets the ray at most once, in the
+/// sub-patch's own parameters: the point where the bilinear map through its four projected
+/// corners (points of the surface) covers the origin, by three Newton steps on that map from
+/// the centre. Near the hit the sub-patch is close to that map, so the patch's own Newton
+/// iterations (each an evaluation of the patch) start closer than from the centre. The centre
+/// itself where the steps fail or leave the sub-patch.
+fn bilinear_start(q: &[DVec3; 16]) -> DVec2 {
+    let xy = |k: usize| DVec2::new(q[k].x, q[k].y);
+    // Corners: (u, v) = (0, 0), (1, 0), (0, 1), (1, 1).
+    let (a, b, c, d) = (xy(0), xy(12), xy(3), xy(15));
+    let centre = DVec2::splat(0.5);
+    let mut st = centre;
+    for _ in 0..3 {
+        let (s, t) = (st.x, st.y);
+        let f =
+            a * ((1.0 - s) * (1.0 - t)) + b * (s * (1.0 - t)) + c * ((1.0 - s) * t) + d * (s * t);
+        let fs = (b - a) * (1.0 - t) + (d - c) * t;
+        let ft = (c - a) * (1.0 - s) + (d - b) * s;
+        let det = fs.x * ft.y - fs.y * ft.x;
+        if det == 0.0 || !det.is_finite() {
+            return centre;
+        }
+        st -= DVec2::new(ft.y * f.x - ft.x * f.y, fs.x * f.y - fs.y * f.x) / det;
+    }
+    if st.is_finite() && st.cmpge(DVec2::ZERO).all() && st.cmple(DVec2::ONE).all() {
+        st
+    } else {
+        centre
+    }
+}
+
 /// One ray's subdivision of a patch: the ray's frame, the tolerances, and the nearest hit found.
 /// Sub-patches are visited depth first, the nearer half of each split first, each net on the
 /// call stack of its visit (the depth is bounded: a split halves `u` or `v`, and a parameter
@@ -534,7 +565,8 @@ impl Search<'_> {
             let lo = DVec2::new(u.0, v.0) - 0.5 * w;
             let hi = DVec2::new(u.1, v.1) + 0.5 * w;
             let keep = (lo.max(DVec2::ZERO), hi.min(DVec2::ONE));
-            if let Some((uv, t)) = patch.newton(self.o, self.frame, c, 12, keep) {
+            let start = DVec2::new(u.0, v.0) + w * bilinear_start(q);
+            if let Some((uv, t)) = patch.newton(self.o, self.frame, start, 12, keep) {
                 self.offer(uv, t);
                 if uv.x >= u.0 && uv.x <= u.1 && uv.y >= v.0 && uv.y <= v.1 {
                     return;
