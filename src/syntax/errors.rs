@@ -150,6 +150,14 @@ pub(super) fn syntax_error(
             Some(hint) => d = d.with_help(hint),
             None => d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`"),
         }
+    } else if rest.starts_with('}') && !open_blocks(&text[..pos]).iter().any(|o| o.1 == 1) {
+        d.message = "syntax error: unmatched `}`".into();
+        d.label = "no block is open here".into();
+        d = d.with_help(
+            "remove this `}`, or look above for a block closed twice (`{` and `}` must pair up)",
+        );
+    } else if let Some(hint) = super::povray_hint(&text[pos..pos + len], "") {
+        d = d.with_help(hint);
     } else if rest.starts_with('=') && !rest.starts_with("==") {
         d = d.with_help(
             "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
@@ -286,6 +294,12 @@ fn word_before(text: &str, pos: usize) -> &str {
 /// The innermost `{` or block directive (`#if`, `#switch`, `#while`, ...: what `#end` closes)
 /// still open at the end of the text, as its start and length (comments and strings skipped).
 fn unclosed(text: &str) -> Option<(usize, usize)> {
+    open_blocks(text).pop()
+}
+
+/// Every `{` and block directive still open at the end of the text, outermost first, as in
+/// [`unclosed`].
+fn open_blocks(text: &str) -> Vec<(usize, usize)> {
     let bytes = text.as_bytes();
     let mut open: Vec<(usize, usize)> = Vec::new();
     let mut i = 0;
@@ -336,7 +350,7 @@ fn unclosed(text: &str) -> Option<(usize, usize)> {
         }
         i += 1;
     }
-    open.pop()
+    open
 }
 
 /// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a
