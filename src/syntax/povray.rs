@@ -57,6 +57,42 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "perspective",
         "the camera is always a perspective (pinhole or thin-lens) camera here: remove `perspective`",
     ),
+    pov_in(
+        "spotlight",
+        "radius",
+        "POV-Ray's spotlight `radius` (the cone of full intensity) is `falloff` here, and its \
+         `falloff` (the outer cone) is `angle` here: `angle a falloff f` with f ≤ a, half-angles \
+         in degrees",
+    ),
+    pov_in(
+        "spotlight",
+        "tightness",
+        "POV-Ray's `tightness` has no counterpart: the intensity is full inside `falloff` and \
+         fades to nothing at `angle`; remove `tightness`",
+    ),
+    pov_in(
+        "light",
+        "fade_distance",
+        "lights always fade with the squared distance here (physically); remove `fade_distance` \
+         and `fade_power`",
+    ),
+    pov_in(
+        "light",
+        "fade_power",
+        "lights always fade with the squared distance here (physically); remove `fade_distance` \
+         and `fade_power`",
+    ),
+    pov_in(
+        "light",
+        "shadowless",
+        "every light casts shadows here; remove `shadowless`",
+    ),
+    pov_in(
+        "light",
+        "parallel",
+        "there are no parallel (directional) lights here: a `light` far away, or an \
+         `environment`, comes close; remove `parallel`",
+    ),
     pov_in("light", "color", LIGHT_COLOR),
     pov_in("light", "colour", LIGHT_COLOR),
     pov(
