@@ -135,6 +135,11 @@ pub(super) fn syntax_error(
             d = d.with_help(format!(
                 "`#{word}` stands only directly inside `#switch (value) ... #end`"
             ));
+        } else if let Some(form) = directive_form(&word) {
+            // A directive of the language whose head does not parse: how it is written.
+            d.message = format!("syntax error: malformed `#{word}`");
+            d.label = "not the form of this directive".into();
+            d = d.with_help(format!("write it as {form}"));
         } else if let Some(s) = crate::diag::suggest(&word, known) {
             d = d.with_help(format!("did you mean `#{s}`?"));
         }
@@ -197,6 +202,28 @@ pub(super) fn syntax_error(
         });
     }
     d
+}
+
+/// How the head of directive `#word` is written (`None` for a word that is no directive, and
+/// for those handled on their own: `#end`, `#else`, `#elif`, `#case`, `#range`).
+fn directive_form(word: &str) -> Option<&'static str> {
+    Some(match word {
+        "declare" => "`#declare Name = value;`",
+        "local" => "`#local Name = value;`",
+        "if" => "`#if (condition) ... #end`, the condition in parentheses",
+        "while" => "`#while (condition) ... #end`, the condition in parentheses",
+        "for" => "`#for (I, from, to) ... #end` (or `#for (I, from, to, step)`)",
+        "macro" => "`#macro Name(A, B) ... #end`, the parameters in parentheses",
+        "include" => "`#include \"file.scn\"`, the file name in quotes",
+        "ifdef" => "`#ifdef (Name) ... #end`, the name in parentheses",
+        "ifndef" => "`#ifndef (Name) ... #end`, the name in parentheses",
+        "undef" => "`#undef Name`",
+        "switch" => "`#switch (value) #case (v) ... #end`, the value in parentheses",
+        "debug" => "`#debug \"text\"` (a string, or a value to show)",
+        "warning" => "`#warning \"text\"` (a string, or a value to show)",
+        "error" => "`#error \"text\"` (a string, or a value to show)",
+        _ => return None,
+    })
 }
 
 /// The scene format of another renderer that `text` is written in, if it looks like one: a
