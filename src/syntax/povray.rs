@@ -224,6 +224,11 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          of photons per iteration is `settings { photons n }`)",
     ),
     pov(
+        "image_map",
+        "POV-Ray's `image_map { png \"f.png\" }` is `texture { image \"f.png\" }` here, standing \
+         for a colour: `material { diffuse texture { image \"f.png\" } }`",
+    ),
+    pov(
         "smooth_triangle",
         "POV-Ray's `smooth_triangle` has no counterpart: write `triangle { <a>, <b>, <c> }` (flat), \
          or load a mesh with vertex normals: `mesh { \"file.obj\" }`",
