@@ -78,10 +78,31 @@ pub fn call(name: &str, args: &[Value]) -> Option<Result<Value, (usize, Error)>>
                 "`{name}` takes {arity} argument{}, found {}",
                 if arity == 1 { "" } else { "s" },
                 args.len()
-            )),
+            ))
+            .help(match name {
+                "str" => "write `str(x)`: it shows the number as written (POV-Ray's width and \
+                          precision arguments are not taken); strings join with `+`"
+                    .to_string(),
+                _ => format!("call it as `{}`", signature(name)),
+            }),
         )));
     }
     Some(dispatch(name, args))
+}
+
+/// How a built-in function with a fixed number of arguments is called.
+fn signature(name: &str) -> String {
+    match name {
+        "atan2" => "atan2(y, x)".into(),
+        "pow" => "pow(base, exponent)".into(),
+        "mod" => "mod(a, b)".into(),
+        "vdot" | "vcross" => format!("{name}(a, b)"),
+        "vrotate" => "vrotate(v, <ax, ay, az>)".into(),
+        "clamp" => "clamp(x, lo, hi)".into(),
+        "len" => "len(array or string)".into(),
+        n if n.starts_with('v') => format!("{n}(v)"),
+        n => format!("{n}(x)"),
+    }
 }
 
 fn n(args: &[Value], i: usize) -> Result<f64, (usize, Error)> {
@@ -143,7 +164,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if args.is_empty() {
                 return Err((
                     usize::MAX,
-                    Error::new(format!("`{name}` needs at least one argument")),
+                    Error::new(format!("`{name}` needs at least one argument"))
+                        .help(format!("call it with numbers, e.g. `{name}(a, b)`")),
                 ));
             }
             let mut acc = n(args, 0)?;
@@ -166,7 +188,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
                         "`clamp` bounds are reversed ({} > {})",
                         short_number(lo),
                         short_number(hi)
-                    )),
+                    ))
+                    .help("write `clamp(x, lo, hi)` with lo ≤ hi"),
                 ));
             }
             num(x.clamp(lo, hi))
@@ -177,7 +200,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         "mod" => {
             let b = n(args, 1)?;
             if b == 0.0 {
-                return Err((1, Error::new("`mod` by zero")));
+                return Err((
+                    1,
+                    Error::new("`mod` by zero")
+                        .help("the divisor must not be 0: check it first (`#if (B != 0)`)"),
+                ));
             }
             num(n(args, 0)? % b)
         }
@@ -211,7 +238,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
                 Error::new(format!(
                     "`len` needs an array or a string, found {}",
                     o.type_name()
-                )),
+                ))
+                .help("`len(A)` counts an array's elements or a string's characters"),
             )),
         },
         "str" => match &args[0] {
@@ -219,7 +247,10 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             Value::Str(s) => Ok(Value::Str(s.clone())),
             o => Err((
                 0,
-                Error::new(format!("`str` needs a number, found {}", o.type_name())),
+                Error::new(format!("`str` needs a number, found {}", o.type_name())).help(
+                    "`str(x)` writes a number as a string; a vector's components are `V.x`, \
+                     `V.y`, `V.z` (`#debug V` shows a whole vector)",
+                ),
             )),
         },
         _ => unreachable!("builtin {name}"),

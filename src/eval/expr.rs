@@ -83,8 +83,16 @@ impl Evaluator {
                             .map(|(n, _)| n.clone())
                             .collect();
                         cands.extend(macros.iter().map(String::as_str));
-                        if let Some(s) = suggest(&name.text, cands) {
+                        if let Some(hint) = crate::syntax::povray_hint(&name.text, "") {
+                            err = err.help(hint);
+                        } else if let Some(s) = suggest(&name.text, cands) {
                             err = err.help(format!("did you mean `{s}`?"));
+                        } else {
+                            err = err.help(format!(
+                                "the built-in functions are {}; a macro is called as a \
+                                 statement",
+                                FUNCTIONS.join(" ")
+                            ));
                         }
                         return Err(vec![err.at(name.span)]);
                     }

@@ -270,9 +270,17 @@ impl Evaluator {
         self.dependencies.push(path.to_path_buf());
         let img = load_image(path, space).map_err(|e| {
             vec![
-                Error::new(e)
+                Error::new(e.clone())
                     .label("cannot load this image")
-                    .help(self.path_help(span))
+                    .help(if path.is_file() && e.starts_with("cannot decode image") {
+                        format!(
+                            "the file `{}` was found but could not be decoded: give a PNG, JPEG, \
+                             EXR or Radiance HDR image",
+                            path.display()
+                        )
+                    } else {
+                        self.path_help(span)
+                    })
                     .at(span),
             ]
         })?;
@@ -288,9 +296,20 @@ impl Evaluator {
         self.dependencies.push(path.clone());
         let m = load_obj(path).map_err(|e| {
             vec![
-                Error::new(e)
+                Error::new(e.clone())
                     .label("cannot load this mesh")
-                    .help(self.path_help(span))
+                    .help(
+                        if path.is_file() && !e.contains("(os error") && !e.contains("mesh: ") {
+                            format!(
+                                "the file `{}` was found but is not a mesh that can be read: a \
+                             Wavefront OBJ with `v x y z` vertices and `f i j k` faces, whose \
+                             indices count the `v` lines from 1 (or back from -1)",
+                                path.display()
+                            )
+                        } else {
+                            self.path_help(span)
+                        },
+                    )
                     .at(span),
             ]
         })?;

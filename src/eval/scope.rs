@@ -101,7 +101,25 @@ impl Evaluator {
         }
         let known = self.known_names();
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
-        if super::blocks::is_block_name(name) {
+        if name == "area_light" {
+            // `light_source { <p> color C area_light <u>, <v>, n, m }`
+            e = Error::new("`area_light` without a body")
+                .label("a block name, but no `{ ... }` follows")
+                .help(
+                    "POV-Ray's `light_source { ... area_light <u>, <v>, n, m }` is a block of \
+                     its own here: `area_light { quad { <corner>, <u>, <v> } radiance rgb \
+                     <...> }` (one-sided: it shines along u × v)",
+                );
+        } else if name == "spotlight" {
+            // `light_source { <p> color C spotlight point_at <t> ... }`
+            e = Error::new("`spotlight` without a body")
+                .label("a block name, but no `{ ... }` follows")
+                .help(
+                    "POV-Ray's `light_source { <p> ... spotlight point_at <t> }` is a block of \
+                     its own here: `spotlight { <p> point_at <t> intensity rgb <...> angle a \
+                     falloff f }`",
+                );
+        } else if super::blocks::is_block_name(name) {
             // `material Shiny`: a block written without its braces.
             e = Error::new(format!("`{name}` without a body"))
                 .label("a block name, but no `{ ... }` follows")

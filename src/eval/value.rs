@@ -106,6 +106,14 @@ impl Value {
                      POV-Ray's `{n}` does)"
                 )))
             }
+            Value::Array(a) if a.len() >= 4 && a.iter().all(|v| v.num().is_ok()) => {
+                Err(Error::new(format!(
+                    "expected a vector `<x, y, z>`, found {} components",
+                    a.len()
+                ))
+                .label("a vector has three components")
+                .help("write three components, e.g. `<0, 1, 0>`"))
+            }
             v => Err(v
                 .mismatch("a vector `<x, y, z>`")
                 .help("write three components, e.g. `<0, 1, 0>`")),
@@ -126,6 +134,18 @@ impl Value {
         match self {
             Value::Color(c) | Value::Vec3(c) => Ok(*c),
             Value::Num(n) => Ok(DVec3::splat(*n)),
+            Value::Array(a) if (4..=5).contains(&a.len()) && a.iter().all(|v| v.num().is_ok()) => {
+                Err(Error::new(format!(
+                    "expected a color `rgb <r, g, b>`, found {} components",
+                    a.len()
+                ))
+                .label("a color has three components")
+                .help(
+                    "POV-Ray's filter and transmit components are not part of a colour here: \
+                     write `rgb <r, g, b>`; transparency is a material, `material { glass ior \
+                     1.5 tint rgb <...> }`",
+                ))
+            }
             v => Err(v
                 .mismatch("a color `rgb <r, g, b>`")
                 .help("write e.g. `rgb <1, 0.5, 0.2>`")),

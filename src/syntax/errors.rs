@@ -135,6 +135,11 @@ pub(super) fn syntax_error(
             d = d.with_help(format!(
                 "`#{word}` stands only directly inside `#switch (value) ... #end`"
             ));
+        } else if let Some(form) = directive_form(&word) {
+            // A directive of the language whose head does not parse: how it is written.
+            d.message = format!("syntax error: malformed `#{word}`");
+            d.label = "not the form of this directive".into();
+            d = d.with_help(format!("write it as {form}"));
         } else if let Some(s) = crate::diag::suggest(&word, known) {
             d = d.with_help(format!("did you mean `#{s}`?"));
         }
@@ -150,6 +155,14 @@ pub(super) fn syntax_error(
             Some(hint) => d = d.with_help(hint),
             None => d = d.with_help("a block needs a name before `{`, e.g. `sphere { ... }`"),
         }
+    } else if rest.starts_with('}') && !open_blocks(&text[..pos]).iter().any(|o| o.1 == 1) {
+        d.message = "syntax error: unmatched `}`".into();
+        d.label = "no block is open here".into();
+        d = d.with_help(
+            "remove this `}`, or look above for a block closed twice (`{` and `}` must pair up)",
+        );
+    } else if let Some(hint) = super::povray_hint(&text[pos..pos + len], "") {
+        d = d.with_help(hint);
     } else if rest.starts_with('=') && !rest.starts_with("==") {
         d = d.with_help(
             "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
@@ -189,6 +202,28 @@ pub(super) fn syntax_error(
         });
     }
     d
+}
+
+/// How the head of directive `#word` is written (`None` for a word that is no directive, and
+/// for those handled on their own: `#end`, `#else`, `#elif`, `#case`, `#range`).
+fn directive_form(word: &str) -> Option<&'static str> {
+    Some(match word {
+        "declare" => "`#declare Name = value;`",
+        "local" => "`#local Name = value;`",
+        "if" => "`#if (condition) ... #end`, the condition in parentheses",
+        "while" => "`#while (condition) ... #end`, the condition in parentheses",
+        "for" => "`#for (I, from, to) ... #end` (or `#for (I, from, to, step)`)",
+        "macro" => "`#macro Name(A, B) ... #end`, the parameters in parentheses",
+        "include" => "`#include \"file.scn\"`, the file name in quotes",
+        "ifdef" => "`#ifdef (Name) ... #end`, the name in parentheses",
+        "ifndef" => "`#ifndef (Name) ... #end`, the name in parentheses",
+        "undef" => "`#undef Name`",
+        "switch" => "`#switch (value) #case (v) ... #end`, the value in parentheses",
+        "debug" => "`#debug \"text\"` (a string, or a value to show)",
+        "warning" => "`#warning \"text\"` (a string, or a value to show)",
+        "error" => "`#error \"text\"` (a string, or a value to show)",
+        _ => return None,
+    })
 }
 
 /// The scene format of another renderer that `text` is written in, if it looks like one: a
@@ -286,6 +321,12 @@ fn word_before(text: &str, pos: usize) -> &str {
 /// The innermost `{` or block directive (`#if`, `#switch`, `#while`, ...: what `#end` closes)
 /// still open at the end of the text, as its start and length (comments and strings skipped).
 fn unclosed(text: &str) -> Option<(usize, usize)> {
+    open_blocks(text).pop()
+}
+
+/// Every `{` and block directive still open at the end of the text, outermost first, as in
+/// [`unclosed`].
+fn open_blocks(text: &str) -> Vec<(usize, usize)> {
     let bytes = text.as_bytes();
     let mut open: Vec<(usize, usize)> = Vec::new();
     let mut i = 0;
@@ -336,7 +377,7 @@ fn unclosed(text: &str) -> Option<(usize, usize)> {
         }
         i += 1;
     }
-    open.pop()
+    open
 }
 
 /// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a

@@ -57,6 +57,42 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "perspective",
         "the camera is always a perspective (pinhole or thin-lens) camera here: remove `perspective`",
     ),
+    pov_in(
+        "spotlight",
+        "radius",
+        "POV-Ray's spotlight `radius` (the cone of full intensity) is `falloff` here, and its \
+         `falloff` (the outer cone) is `angle` here: `angle a falloff f` with f ≤ a, half-angles \
+         in degrees",
+    ),
+    pov_in(
+        "spotlight",
+        "tightness",
+        "POV-Ray's `tightness` has no counterpart: the intensity is full inside `falloff` and \
+         fades to nothing at `angle`; remove `tightness`",
+    ),
+    pov_in(
+        "light",
+        "fade_distance",
+        "lights always fade with the squared distance here (physically); remove `fade_distance` \
+         and `fade_power`",
+    ),
+    pov_in(
+        "light",
+        "fade_power",
+        "lights always fade with the squared distance here (physically); remove `fade_distance` \
+         and `fade_power`",
+    ),
+    pov_in(
+        "light",
+        "shadowless",
+        "every light casts shadows here; remove `shadowless`",
+    ),
+    pov_in(
+        "light",
+        "parallel",
+        "there are no parallel (directional) lights here: a `light` far away, or an \
+         `environment`, comes close; remove `parallel`",
+    ),
     pov_in("light", "color", LIGHT_COLOR),
     pov_in("light", "colour", LIGHT_COLOR),
     pov(
@@ -181,6 +217,127 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "clock",
         "there is no animation `clock` here; declare a value instead: `#declare Clock = 0.5;`",
+    ),
+    pov(
+        "photons",
+        "caustics are always photon-mapped here; remove POV-Ray's `photons { ... }` (the number \
+         of photons per iteration is `settings { photons n }`)",
+    ),
+    pov(
+        "image_map",
+        "POV-Ray's `image_map { png \"f.png\" }` is `texture { image \"f.png\" }` here, standing \
+         for a colour: `material { diffuse texture { image \"f.png\" } }`",
+    ),
+    pov(
+        "smooth_triangle",
+        "POV-Ray's `smooth_triangle` has no counterpart: write `triangle { <a>, <b>, <c> }` (flat), \
+         or load a mesh with vertex normals: `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "polygon",
+        "POV-Ray's `polygon` has no counterpart: build it from `triangle { <a>, <b>, <c> }`s or a \
+         `quad { <corner>, <edge_u>, <edge_v> }`",
+    ),
+    pov(
+        "prism",
+        "POV-Ray's `prism` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "height_field",
+        "POV-Ray's `height_field` has no counterpart: model the terrain as a mesh, \
+         `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "text",
+        "POV-Ray's `text` objects have no counterpart: model the letters as a mesh, \
+         `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "blob",
+        "POV-Ray's `blob` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`, or \
+         `merge` spheres",
+    ),
+    pov(
+        "superellipsoid",
+        "POV-Ray's `superellipsoid` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "isosurface",
+        "POV-Ray's `isosurface` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
+    ),
+    pov(
+        "sphere_sweep",
+        "POV-Ray's `sphere_sweep` has no counterpart: chain `cylinder`s and `sphere`s in a `merge`",
+    ),
+    pov(
+        "fog",
+        "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
+    ),
+    pov(
+        "media",
+        "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
+    ),
+    pov(
+        "atmosphere",
+        "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
+    ),
+    pov(
+        "orthographic",
+        "the camera is always a perspective (pinhole or thin-lens) camera here: remove \
+         `orthographic` (a far camera with a small `fov` comes close)",
+    ),
+    pov(
+        "fisheye",
+        "the camera is always a perspective (pinhole or thin-lens) camera here: remove `fisheye`",
+    ),
+    pov(
+        "panoramic",
+        "the camera is always a perspective (pinhole or thin-lens) camera here: remove `panoramic`",
+    ),
+    pov(
+        "bounded_by",
+        "bounds are automatic here: remove `bounded_by`",
+    ),
+    pov(
+        "clipped_by",
+        "POV-Ray's `clipped_by` has no counterpart; `intersection { A B }` keeps what is inside \
+         both (closing the cut)",
+    ),
+    pov(
+        "concat",
+        "POV-Ray's `concat(a, b)` is `a + b` here: strings join with `+`",
+    ),
+    pov(
+        "vstr",
+        "there is no `vstr` here: `#debug` shows a vector as written (`#debug V`), and \
+         `str(V.x)` gives one component",
+    ),
+    pov("strlen", "POV-Ray's `strlen(s)` is `len(s)` here"),
+    pov(
+        "dimension_size",
+        "POV-Ray's `dimension_size(A, 1)` is `len(A)` here",
+    ),
+    pov(
+        "int",
+        "POV-Ray's `int(x)` (towards zero) is `floor(x)` for x ≥ 0 here (`ceil(x)` below 0)",
+    ),
+    pov(
+        "div",
+        "POV-Ray's `div(a, b)` is `floor(a / b)` for a / b ≥ 0 here",
+    ),
+    pov(
+        "vaxis_rotate",
+        "there is no `vaxis_rotate` here: `vrotate(v, <ax, ay, az>)` turns about x, then y, then z",
+    ),
+    pov(
+        "seed",
+        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
+         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
+    ),
+    pov(
+        "rand",
+        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
+         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
     ),
     pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
     pov(

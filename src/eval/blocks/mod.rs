@@ -162,8 +162,11 @@ impl Evaluator {
                 let blocks = OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied();
                 if let Some(hint) = crate::syntax::povray_hint(k, "") {
                     e = e.help(hint);
-                } else if let Some(s) = suggest(k, blocks) {
+                } else if let Some(s) = suggest(k, blocks.clone()) {
                     e = e.help(format!("did you mean `{s}`?"));
+                } else {
+                    let names: Vec<String> = blocks.map(|b| format!("`{b}`")).collect();
+                    e = e.help(format!("the blocks are {}", names.join(", ")));
                 }
                 Err(vec![e.at(kind.span)])
             }

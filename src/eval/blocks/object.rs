@@ -26,6 +26,7 @@ pub(super) struct ObjectBuilder {
     parts: Vec<Part>,
     transform: DAffine3,
     material: Option<Rc<MaterialDef>>,
+    material_span: Span,
     radiance: Option<(Color, Span)>,
     two_sided: bool,
     open: bool,
@@ -107,6 +108,7 @@ impl ObjectBuilder {
             parts: Vec::new(),
             transform: DAffine3::IDENTITY,
             material: None,
+            material_span: span,
             radiance: None,
             two_sided: false,
             open: false,
@@ -291,6 +293,25 @@ impl ObjectBuilder {
                     .at(self.span),
             ]);
         }
+        if matches!(self.kind, "union" | "group" | "object")
+            && self.material.is_some()
+            && !parts.is_empty()
+            && parts.iter().all(|p| p.material.is_some())
+        {
+            ev.warn(
+                Diagnostic::warning(
+                    self.material_span,
+                    format!("this material is used by no part of the {}", self.kind),
+                )
+                .with_label("every part has its own material")
+                .with_help(
+                    "a material here goes only to the parts without one (unlike POV-Ray's \
+                     `object { Name pigment { ... } }`, it does not replace theirs): declare \
+                     the object without a material and give one in each `object { ... }`, or \
+                     remove this one",
+                ),
+            );
+        }
         for part in &mut parts {
             part.transform = t * part.transform;
             if part.material.is_none() {
@@ -419,6 +440,7 @@ impl Sink for ObjectBuilder {
         match v {
             Value::Material(m) => {
                 self.material = Some(m);
+                self.material_span = span;
                 Ok(())
             }
             Value::Object(o) if let Some(op) = self.csg() => self.csg_child(ev, op, &o, span),
