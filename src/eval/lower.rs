@@ -270,12 +270,12 @@ impl Evaluator {
         self.dependencies.push(path.to_path_buf());
         let img = load_image(path, space).map_err(|e| {
             vec![
-                Error::new(e.clone())
+                Error::new(e.message)
                     .label("cannot load this image")
-                    .help(if path.is_file() && e.starts_with("cannot decode image") {
+                    .help(if e.read {
                         format!(
-                            "the file `{}` was found but could not be decoded: give a PNG, JPEG, \
-                             EXR or Radiance HDR image",
+                            "the file `{}` was found but is not an image that can be used: give \
+                             a PNG, JPEG, EXR or Radiance HDR image",
                             path.display()
                         )
                     } else {
@@ -296,20 +296,18 @@ impl Evaluator {
         self.dependencies.push(path.clone());
         let m = load_obj(path).map_err(|e| {
             vec![
-                Error::new(e.clone())
+                Error::new(e.message)
                     .label("cannot load this mesh")
-                    .help(
-                        if path.is_file() && !e.contains("(os error") && !e.contains("mesh: ") {
-                            format!(
-                                "the file `{}` was found but is not a mesh that can be read: a \
+                    .help(if e.read {
+                        format!(
+                            "the file `{}` was found but is not a mesh that can be read: a \
                              Wavefront OBJ with `v x y z` vertices and `f i j k` faces, whose \
                              indices count the `v` lines from 1 (or back from -1)",
-                                path.display()
-                            )
-                        } else {
-                            self.path_help(span)
-                        },
-                    )
+                            path.display()
+                        )
+                    } else {
+                        self.path_help(span)
+                    })
                     .at(span),
             ]
         })?;

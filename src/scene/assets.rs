@@ -46,18 +46,64 @@ pub struct MeshData {
     pub indices: Vec<[u32; 3]>,
 }
 
+/// Why an image or mesh file could not be loaded: a message fit for a diagnostic, and whether
+/// the file itself was read (its content was refused) or not (missing, unreadable, special or
+/// too large), which decides what the diagnostic suggests.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AssetError {
+    pub message: String,
+    pub read: bool,
+}
+
+impl AssetError {
+    fn unread(message: String) -> Self {
+        Self {
+            message,
+            read: false,
+        }
+    }
+
+    fn content(message: String) -> Self {
+        Self {
+            message,
+            read: true,
+        }
+    }
+}
+
+impl From<AssetError> for String {
+    fn from(e: AssetError) -> Self {
+        e.message
+    }
+}
+
+impl std::fmt::Display for AssetError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
 /// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
-/// float formats (EXR, HDR) are always linear. The error is a message fit for a diagnostic.
-pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, String> {
+/// float formats (EXR, HDR) are always linear.
+pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, AssetError> {
     let bytes =
         crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
             crate::files::FileError::Io(e) => {
-                format!("cannot open image `{}`: {e}", path.display())
+                AssetError::unread(format!("cannot open image `{}`: {e}", path.display()))
             }
-            refused => format!("cannot open image: {refused}"),
+            refused => AssetError::unread(format!("cannot open image: {refused}")),
         })?;
+    decode_image(&bytes, path, space).map_err(AssetError::content)
+}
+
+/// The image in a file's `bytes`.
+fn decode_image(
+    bytes: &[u8],
+    path: &std::path::Path,
+    space: ColorSpace,
+) -> Result<ImageData, String> {
     let reader = || {
-        let mut r = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+        let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| format!("cannot read image `{}`: {e}", path.display()))?;
         let mut limits = image::Limits::default();
@@ -132,20 +178,25 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-/// Reads a Wavefront OBJ file (all models merged, faces triangulated). The error is a message
-/// fit for a diagnostic. Files of the common form are read on every core
-/// ([`super::obj::parse`]); the others, and every file with an error, by `tobj`.
-pub fn load_obj(path: &std::path::Path) -> Result<MeshData, String> {
+/// Reads a Wavefront OBJ file (all models merged, faces triangulated). Files of the common
+/// form are read on every core ([`super::obj::parse`]); the others, and every file with an
+/// error, by `tobj`.
+pub fn load_obj(path: &std::path::Path) -> Result<MeshData, AssetError> {
     let bytes = crate::files::read_bytes_parallel(path, crate::files::MAX_ASSET_BYTES).map_err(
         |e| match e {
             crate::files::FileError::Io(e) => {
-                format!("cannot read OBJ mesh `{}`: {e}", path.display())
+                AssetError::unread(format!("cannot read OBJ mesh `{}`: {e}", path.display()))
             }
-            refused => format!("cannot read OBJ mesh: {refused}"),
+            refused => AssetError::unread(format!("cannot read OBJ mesh: {refused}")),
         },
     )?;
+    parse_obj(&bytes, path).map_err(AssetError::content)
+}
+
+/// The mesh in an OBJ file's `bytes`.
+fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
     // A UTF-8 byte order mark (Windows tools write one) would hide the first line.
-    let body = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&bytes);
+    let body = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mesh = match super::obj::parse(body) {
         Some(mesh) => MeshData {
             path: path.to_path_buf(),
@@ -249,7 +300,12 @@ mod tests {
     #[test]
     fn missing_files_are_errors_not_panics() {
         let missing = std::path::Path::new("/nonexistent/x.obj");
-        assert!(load_obj(missing).unwrap_err().contains("cannot read OBJ"));
+        assert!(
+            load_obj(missing)
+                .unwrap_err()
+                .message
+                .contains("cannot read OBJ")
+        );
         let missing = std::path::Path::new("/nonexistent/x.png");
         assert!(load_image(missing, ColorSpace::Srgb).is_err());
     }
@@ -309,11 +365,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("bomb.png");
         std::fs::write(&p, png_header_only(20_000, 20_000)).unwrap();
-        let e = load_image(&p, ColorSpace::Srgb).unwrap_err();
+        let e = load_image(&p, ColorSpace::Srgb).unwrap_err().message;
         assert!(e.contains("20000") || e.contains("limit"), "{e}");
         // Within the side limit but too many pixels in all.
         std::fs::write(&p, png_header_only(16_000, 16_000)).unwrap();
-        let e = load_image(&p, ColorSpace::Srgb).unwrap_err();
+        let e = load_image(&p, ColorSpace::Srgb).unwrap_err().message;
         assert!(e.contains("more than the limit"), "{e}");
     }
 
@@ -325,7 +381,7 @@ mod tests {
             let mut img = image::Rgb32FImage::from_pixel(4, 2, image::Rgb([0.5, 1.0, 2.0]));
             img.put_pixel(3, 1, image::Rgb([0.5, bad, 2.0]));
             img.save(&p).unwrap();
-            let e = load_image(&p, ColorSpace::Linear).unwrap_err();
+            let e = load_image(&p, ColorSpace::Linear).unwrap_err().message;
             assert!(
                 e.contains(&format!("{count} pixel that is NaN or infinite")),
                 "{e}"
@@ -351,13 +407,27 @@ mod tests {
     fn special_files_are_not_read_as_assets() {
         let dir = tempfile::tempdir().unwrap();
         let e = load_obj(dir.path()).unwrap_err();
-        assert!(e.contains("directory"), "{e}");
+        assert!(e.message.contains("directory") && !e.read, "{e}");
         #[cfg(unix)]
         {
             let e = load_obj(std::path::Path::new("/dev/zero")).unwrap_err();
-            assert!(e.contains("device"), "{e}");
+            assert!(e.message.contains("device") && !e.read, "{e}");
             let e = load_image(std::path::Path::new("/dev/zero"), ColorSpace::Srgb).unwrap_err();
-            assert!(e.contains("device"), "{e}");
+            assert!(e.message.contains("device") && !e.read, "{e}");
         }
+    }
+
+    /// A file that was read but whose content is refused says so (`read`), which the
+    /// diagnostic's help follows; a missing file is not read.
+    #[test]
+    fn a_refused_content_is_told_from_an_unread_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let obj = dir.path().join("bad.obj");
+        std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+        assert!(load_obj(&obj).unwrap_err().read);
+        let png = dir.path().join("text.png");
+        std::fs::write(&png, "not an image").unwrap();
+        assert!(load_image(&png, ColorSpace::Srgb).unwrap_err().read);
+        assert!(!load_obj(&dir.path().join("missing.obj")).unwrap_err().read);
     }
 }

@@ -12,7 +12,9 @@ mod csg;
 mod obj;
 mod validate;
 
-pub use assets::{ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear};
+pub use assets::{
+    AssetError, ColorSpace, ImageData, MeshData, load_image, load_obj, srgb_to_linear,
+};
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
 
