@@ -10,7 +10,7 @@ use glam::{DVec3, Vec2, Vec3A};
 
 use super::{AreaSample, BoxedHit, Deferred, Shape, solver_of};
 use crate::bezier::Solver;
-use crate::bezier::lathe::{Lathe, LatheHit, NearestHit, Part, Parts};
+use crate::bezier::lathe::{CoarseShell, Lathe, LatheHit, NearestHit, Part, Parts};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::{IntersectMethod, Profile};
 
@@ -22,6 +22,8 @@ pub struct Revolve {
     bounds: Aabb,
     /// The side area of the whole surface, `None` for a part (which is not sampled).
     area: Option<f64>,
+    /// The f32 test that ends most misses before the f64 work (see [`CoarseShell`]).
+    coarse: Option<CoarseShell>,
 }
 
 /// f32 bounds that contain the f64 box (rounded outward).
@@ -46,8 +48,10 @@ impl Revolve {
         let lathe = Lathe::new(&profile.segments, sweep)?;
         let (lo, hi) = lathe.bounds();
         let area = lathe.area();
+        let parts = lathe.all_parts();
         Ok(Self {
-            parts: lathe.all_parts(),
+            coarse: coarse_of(&lathe, &parts),
+            parts,
             lathe: Arc::new(lathe),
             solver: solver_of(method),
             bounds: outward_box(lo, hi),
@@ -66,6 +70,7 @@ impl Revolve {
             .map(|parts| {
                 let (lo, hi) = self.lathe.parts_bounds(&parts);
                 Revolve {
+                    coarse: coarse_of(&self.lathe, &parts),
                     lathe: Arc::clone(&self.lathe),
                     parts,
                     solver: self.solver,
@@ -82,10 +87,20 @@ impl Revolve {
     }
 }
 
+/// The coarse test of some parts of a lathe.
+fn coarse_of(lathe: &Lathe, parts: &Parts) -> Option<CoarseShell> {
+    CoarseShell::new(&lathe.parts_shell(parts)?, lathe.size())
+}
+
 impl Revolve {
     /// The nearest hit with `t_min < t < t_max` and its `t` in f32 (the conversion must not
     /// move the hit outside the caller's interval).
     fn nearest(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(NearestHit, f32)> {
+        if let Some(c) = &self.coarse
+            && !c.may_meet(ray.o, ray.d, t_min, t_max)
+        {
+            return None;
+        }
         let h = self.lathe.nearest(
             self.parts.clone(),
             ray.o.as_dvec3(),

@@ -21,11 +21,13 @@ use std::f64::consts::TAU;
 
 use glam::{DVec2, DVec3};
 
+mod coarse;
 mod frame;
 mod hit;
 mod segment;
 mod shell;
 
+pub use coarse::CoarseShell;
 pub use frame::RayFrame;
 
 thread_local! {
@@ -272,6 +274,25 @@ impl Lathe {
         }
         let (rmax, hmin, hmax) = extent(&self.segs[parts.segs.clone()]);
         self.sector_box(rmax, hmin, hmax)
+    }
+
+    /// The union of the shells of the segments in `parts` (those of nonzero area), for the
+    /// coarse test ([`CoarseShell`]); `None` for parts with the caps of a partial sweep (not
+    /// inside the shells) or with no segment of nonzero area.
+    pub fn parts_shell(&self, parts: &Parts) -> Option<Shell> {
+        if parts.caps {
+            return None;
+        }
+        self.segs[parts.segs.clone()]
+            .iter()
+            .filter(|s| !s.degenerate)
+            .map(|s| s.shell)
+            .reduce(|a, b| Shell {
+                rmin: a.rmin.min(b.rmin),
+                rmax: a.rmax.max(b.rmax),
+                hmin: a.hmin.min(b.hmin),
+                hmax: a.hmax.max(b.hmax),
+            })
     }
 
     /// Nearest hit with `t_min < t < t_max` on the parts given: the segments in `parts.segs`

@@ -1,0 +1,227 @@
+//! A coarse test in f32, before any f64 work: does the ray come near a lathe part's union shell
+//! at all?
+//!
+//! Most rays that reach a segment's BVH box pass through the hole of its annulus or above or
+//! below its heights (the box of a ring holds the disk inside it). The f64 test of the union
+//! shell ([`RayFrame::shells_entered`](super::RayFrame::shells_entered)) rejects them, but only
+//! after the ray's frame is made: a chain of square roots and divisions, each waiting for the
+//! last. This test takes the renderer's f32 ray as it is, with two independent divisions, and
+//! pads the shell far beyond its own rounding: by `1e-4` of the lathe's size and of the ray
+//! origin's largest coordinate (f32 rounding is about `6e-8` of the magnitudes involved). So it
+//! rejects a ray only where the f64 test would (whose padding is `1e-7` of the size): it changes
+//! no hit, only how soon a miss is known.
+
+use glam::Vec3A;
+
+use super::Shell;
+
+/// Padding relative to the lathe's size and to the ray origin's magnitude.
+const COARSE_PAD: f32 = 1e-4;
+
+/// A union shell for the coarse test: heights and radii padded by [`COARSE_PAD`] of the size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoarseShell {
+    h0: f32,
+    h1: f32,
+    r0: f32,
+    r1: f32,
+    size: f32,
+}
+
+impl CoarseShell {
+    /// The shell `s` of a lathe of size `size`. `None` where f32 cannot hold it (a value beyond
+    /// f32's range): the caller then skips the coarse test.
+    pub fn new(s: &Shell, size: f64) -> Option<Self> {
+        // The f64 values rounded to f32 move by at most an ulp of f32 (6e-8 relative), far
+        // inside the padding of each value's own magnitude added here.
+        let pad = |v: f64| f64::from(COARSE_PAD) * (size + v.abs());
+        let c = Self {
+            h0: (s.hmin - pad(s.hmin)) as f32,
+            h1: (s.hmax + pad(s.hmax)) as f32,
+            r0: (s.rmin - pad(s.rmin)).max(0.0) as f32,
+            r1: (s.rmax + pad(s.rmax)) as f32,
+            size: size as f32,
+        };
+        [c.h0, c.h1, c.r0, c.r1, c.size]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some(c)
+    }
+
+    /// Whether the ray `o + t d` may come within the shell for some `t` in `(t_min, t_max)`:
+    /// `false` only where it certainly does not (then the f64 test finds no hit either). Rays
+    /// the test cannot judge in f32 (a direction too small for a finite reciprocal, a
+    /// non-finite origin) are let through.
+    #[inline]
+    pub fn may_meet(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> bool {
+        // Every position computed below is off by a few f32 ulps of the origin's and the
+        // shell's magnitudes at most: `slack` covers that a thousand times over.
+        let slack = COARSE_PAD * (o.abs().max_element() + self.size);
+        if !slack.is_finite() {
+            return true;
+        }
+        let (h0, h1) = (self.h0 - slack, self.h1 + slack);
+        let (mut ta, mut tb) = (t_min, t_max);
+        if d.y != 0.0 {
+            let inv = 1.0 / d.y;
+            if !inv.is_finite() {
+                return true;
+            }
+            let (u, v) = ((h0 - o.y) * inv, (h1 - o.y) * inv);
+            ta = ta.max(u.min(v));
+            tb = tb.min(u.max(v));
+        } else if !(o.y >= h0 && o.y <= h1) {
+            return false;
+        }
+        // The slab's ends carry the rounding of a product and a quotient: widen them.
+        let (ta, tb) = (ta - COARSE_PAD * ta.abs(), tb + COARSE_PAD * tb.abs());
+        // `ta <= tb` is false also where either is NaN (an infinite window end widened).
+        let nonempty = ta <= tb;
+        if !nonempty {
+            return false;
+        }
+        // Squared distance from the axis at `t`.
+        let q = |t: f32| {
+            let (x, z) = (o.x + t * d.x, o.z + t * d.z);
+            x * x + z * z
+        };
+        let dh2 = d.x * d.x + d.z * d.z;
+        let (qmin, qmax) = if dh2 >= f32::MIN_POSITIVE {
+            // The nearest approach to the axis, clamped into the interval: the smallest
+            // distance there (the interval widened above contains the exact one, so its
+            // minimum is no larger).
+            let tc = -(o.x * d.x + o.z * d.z) / dh2;
+            let c = tc.max(ta).min(tb);
+            let far = if tb.is_finite() {
+                q(ta).max(q(tb))
+            } else {
+                f32::INFINITY
+            };
+            (q(c), far)
+        } else if d.x == 0.0 && d.z == 0.0 {
+            let q0 = o.x * o.x + o.z * o.z;
+            (q0, q0)
+        } else {
+            // A horizontal component too small to square: not judged here.
+            return true;
+        };
+        let r1 = self.r1 + slack;
+        let r0 = (self.r0 - slack).max(0.0);
+        // NaN (an infinite origin) fails both comparisons: let through.
+        !(qmin > r1 * r1 || qmax < r0 * r0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::*;
+    use crate::bezier::Solver;
+    use crate::bezier::lathe::Lathe;
+    use crate::sampling::Rng;
+
+    /// A profile with a flat disk, a bulge, an annulus, a cusp and a pole, and a thin ring far
+    /// from the origin (whose f32 coordinates round coarsely).
+    fn lathes() -> Vec<Lathe> {
+        let p = |pts: &[(f64, f64)]| pts.iter().map(|&(r, h)| DVec2::new(r, h)).collect();
+        let mixed = Lathe::new(
+            &[
+                p(&[(0.0, 0.0), (0.3, 0.0), (0.6, 0.0)]),
+                p(&[(0.6, 0.0), (0.6, 0.3), (0.2, 0.4), (0.5, 0.6)]),
+                p(&[(0.5, 0.6), (0.3, 0.6)]),
+                p(&[(0.3, 0.6), (0.6, 0.9), (0.3, 0.9), (0.6, 0.6)]),
+                p(&[(0.6, 0.6), (0.6, 1.0), (0.3, 1.2), (0.0, 1.2)]),
+            ],
+            None,
+        )
+        .unwrap();
+        let far_ring = Lathe::new(
+            &[p(&[
+                (3000.0, 5000.0),
+                (3000.2, 5000.1),
+                (3000.1, 5000.3),
+                (3000.0, 5000.2),
+            ])],
+            None,
+        )
+        .unwrap();
+        vec![mixed, far_ring]
+    }
+
+    /// Every hit the f64 intersector finds on a part, the coarse test lets through: rays at
+    /// random, from the surface (as secondary rays leave it), grazing the shells' cylinders and
+    /// slabs, horizontal, vertical, along the axis, from far away, with tiny directions and
+    /// short windows. Both outcomes occur, so the test also shows that it rejects.
+    #[test]
+    fn the_coarse_test_lets_every_hit_through() {
+        let mut rng = Rng::new(3);
+        let mut f = move || rng.f32();
+        let mut counts = [0usize; 3];
+        for lathe in lathes() {
+            let (lo, hi) = lathe.bounds();
+            let (lo, hi) = (lo.as_vec3a(), hi.as_vec3a());
+            let size = (hi - lo).max_element();
+            let parts = lathe.separate_parts();
+            let coarse: Vec<CoarseShell> = parts
+                .iter()
+                .map(|p| CoarseShell::new(&lathe.parts_shell(p).unwrap(), lathe.size()).unwrap())
+                .collect();
+            for case in 0..200_000 {
+                let inside = lo + (hi - lo) * Vec3A::new(f(), f(), f());
+                let dir = Vec3A::new(f() - 0.5, f() - 0.5, f() - 0.5).normalize_or(Vec3A::X);
+                let (mut o, mut d) = (inside - dir * size * 2.0, dir);
+                match case % 8 {
+                    // From the surface, in any direction.
+                    0 => {
+                        let (p, _) = lathe.sample(DVec2::new(f() as f64, f() as f64)).unwrap();
+                        o = p.as_vec3a();
+                    }
+                    1 => d.y = 0.0,
+                    2 => d = Vec3A::new(0.0, if f() < 0.5 { 1.0 } else { -1.0 }, 0.0),
+                    // Along the axis, or close to it.
+                    3 => o = Vec3A::new(0.0, o.y, (f() - 0.5) * 1e-6 * size),
+                    4 => {
+                        o = inside - dir * size * 1e4;
+                        d *= 1e-3;
+                    }
+                    // Grazing a part's shell cylinder at its inner or outer radius.
+                    5 => {
+                        let s = lathe.parts_shell(&parts[case / 8 % parts.len()]).unwrap();
+                        let r = if f() < 0.5 { s.rmin } else { s.rmax } as f32;
+                        let r = r * (1.0 + (f() - 0.5) * 1e-5);
+                        let y = (s.hmin + (s.hmax - s.hmin) * f() as f64) as f32;
+                        o = Vec3A::new(r, y, -2.0 * size - 3000.0);
+                        d = Vec3A::new((f() - 0.5) * 1e-4, (f() - 0.5) * 1e-4, 1.0);
+                    }
+                    6 => d *= 1e-20,
+                    _ => {}
+                }
+                let (t_min, t_max) = if case % 3 == 0 {
+                    (0.0, f32::INFINITY)
+                } else {
+                    let a = f() * 4.0 * size / d.length();
+                    (a, a + f() * size / d.length())
+                };
+                for (part, c) in parts.iter().zip(&coarse) {
+                    let hit = lathe.intersect_parts(
+                        part.clone(),
+                        o.as_dvec3(),
+                        d.as_dvec3(),
+                        t_min as f64,
+                        t_max as f64,
+                        Solver::Robust,
+                    );
+                    let meets = c.may_meet(o, d, t_min, t_max);
+                    assert!(
+                        meets || hit.is_none(),
+                        "case {case}: o {o}, d {d}, t in ({t_min}, {t_max}): rejected a hit {hit:?}"
+                    );
+                    counts[hit.is_some() as usize + meets as usize] += 1;
+                }
+            }
+        }
+        // Rejected, let through without a hit, let through with one: each often.
+        assert!(counts.iter().all(|&n| n > 20_000), "{counts:?}");
+    }
+}
