@@ -149,9 +149,17 @@ fn sign_changes(c: &[f64]) -> usize {
 /// `p(1)` the opposite one. Returns the root, its final bracket and the number of evaluations.
 fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    let cn = p.coeffs()[p.degree()];
-    // Regula falsi start.
-    let mut t = (c0 / (c0 - cn)).clamp(0.0, 1.0);
+    let c = p.coeffs();
+    let n = p.degree();
+    // Start where the control polygon crosses zero (its one sign change): after the
+    // subdivision that isolated the root the polygon lies close to the curve, closer than the
+    // chord between the end values (which is where a zero coefficient leaves the start).
+    let mut t = match c.windows(2).position(|w| (w[0] < 0.0) != (w[1] < 0.0)) {
+        Some(k) if c[k] != 0.0 && c[k + 1] != 0.0 => {
+            ((k as f64 + c[k] / (c[k] - c[k + 1])) / n as f64).clamp(0.0, 1.0)
+        }
+        _ => (c0 / (c0 - c[n])).clamp(0.0, 1.0),
+    };
     let mut evals = 0;
     for _ in 0..200 {
         let (v, dv) = p.eval_with_derivative(t);
