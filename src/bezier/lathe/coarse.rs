@@ -18,6 +18,12 @@ use super::Shell;
 /// Padding relative to the lathe's size and to the ray origin's magnitude.
 const COARSE_PAD: f32 = 1e-4;
 
+/// The magnitudes the test works with: a lathe's size and its shells' values, the ray origin's
+/// coordinates and the largest component of its direction. Within `1 / TAME..TAME` no product
+/// or square below can overflow or fall into f32's subnormal range where it matters; outside it
+/// the test does not judge (the lathe gets no coarse test, the ray is let through).
+const TAME: f32 = 1e15;
+
 /// A union shell for the coarse test: heights and radii padded by [`COARSE_PAD`] of the size.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CoarseShell {
@@ -29,58 +35,73 @@ pub struct CoarseShell {
 }
 
 impl CoarseShell {
-    /// The shell `s` of a lathe of size `size`. `None` where f32 cannot hold it (a value beyond
-    /// f32's range): the caller then skips the coarse test.
+    /// The shell `s` of a lathe of size `size`. `None` for a lathe whose size or shell lies
+    /// outside the magnitudes the f32 test judges ([`TAME`]): the caller then skips the coarse
+    /// test.
     pub fn new(s: &Shell, size: f64) -> Option<Self> {
-        // The f64 values rounded to f32 move by at most an ulp of f32 (6e-8 relative), far
-        // inside the padding of each value's own magnitude added here.
+        let tame = f64::from(TAME);
+        let judged = (1.0 / tame..=tame).contains(&size)
+            && [s.hmin, s.hmax, s.rmin, s.rmax]
+                .iter()
+                .all(|v| v.abs() <= tame);
+        if !judged {
+            return None;
+        }
+        // The f64 values rounded to f32 move by at most an ulp of f32 (6e-8 relative, normal
+        // numbers at these magnitudes), far inside the padding of each value's own magnitude.
         let pad = |v: f64| f64::from(COARSE_PAD) * (size + v.abs());
-        let c = Self {
+        Some(Self {
             h0: (s.hmin - pad(s.hmin)) as f32,
             h1: (s.hmax + pad(s.hmax)) as f32,
             r0: (s.rmin - pad(s.rmin)).max(0.0) as f32,
             r1: (s.rmax + pad(s.rmax)) as f32,
             size: size as f32,
-        };
-        [c.h0, c.h1, c.r0, c.r1, c.size]
-            .iter()
-            .all(|v| v.is_finite())
-            .then_some(c)
+        })
     }
 
     /// Whether the ray `o + t d` may come within the shell for some `t` in `(t_min, t_max)`:
     /// `false` only where it certainly does not (then the f64 test finds no hit either). Rays
-    /// the test cannot judge in f32 (a direction too small for a finite reciprocal, a
-    /// non-finite origin) are let through.
+    /// the test does not judge are let through: an origin or direction outside [`TAME`]'s
+    /// magnitudes, an infinite `t_min`, and any whose slab ends or nearest approach to the
+    /// axis do not come out finite.
     #[inline]
     pub fn may_meet(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> bool {
-        // Every position computed below is off by a few f32 ulps of the origin's and the
-        // shell's magnitudes at most: `slack` covers that a thousand times over.
-        let slack = COARSE_PAD * (o.abs().max_element() + self.size);
-        if !slack.is_finite() {
+        let (om, dm) = (o.abs().max_element(), d.abs().max_element());
+        // `max_element` skips a NaN lane as `f32::max` does: test the lanes too.
+        let judged = om <= TAME
+            && (1.0 / TAME..=TAME).contains(&dm)
+            && o.is_finite()
+            && d.is_finite()
+            && t_min.is_finite();
+        if !judged {
             return true;
         }
+        // Every position computed below is off by a few f32 ulps of the origin's and the
+        // shell's magnitudes at most: `slack` covers that a thousand times over.
+        let slack = COARSE_PAD * (om + self.size);
         let (h0, h1) = (self.h0 - slack, self.h1 + slack);
         let (mut ta, mut tb) = (t_min, t_max);
         if d.y != 0.0 {
             let inv = 1.0 / d.y;
-            if !inv.is_finite() {
+            let (u, v) = ((h0 - o.y) * inv, (h1 - o.y) * inv);
+            // A reciprocal or slab end that overflows (a tiny `d_y`): not judged here.
+            if !(u.is_finite() && v.is_finite()) {
                 return true;
             }
-            let (u, v) = ((h0 - o.y) * inv, (h1 - o.y) * inv);
             ta = ta.max(u.min(v));
             tb = tb.min(u.max(v));
         } else if !(o.y >= h0 && o.y <= h1) {
             return false;
         }
-        // The slab's ends carry the rounding of a product and a quotient: widen them.
+        // The slab's ends carry the rounding of a product and a quotient: widen them. (`ta` is
+        // finite: `t_min` is, and so are the slab's ends.)
         let (ta, tb) = (ta - COARSE_PAD * ta.abs(), tb + COARSE_PAD * tb.abs());
-        // `ta <= tb` is false also where either is NaN (an infinite window end widened).
-        let nonempty = ta <= tb;
-        if !nonempty {
+        if ta > tb {
             return false;
         }
-        // Squared distance from the axis at `t`.
+        // Squared distance from the axis at `t`: finite or a true overflow (`|o| <= TAME`, so
+        // an infinite `t d` component means a point far beyond the shell), never NaN for a
+        // finite `t`.
         let q = |t: f32| {
             let (x, z) = (o.x + t * d.x, o.z + t * d.z);
             x * x + z * z
@@ -91,6 +112,9 @@ impl CoarseShell {
             // distance there (the interval widened above contains the exact one, so its
             // minimum is no larger).
             let tc = -(o.x * d.x + o.z * d.z) / dh2;
+            if !tc.is_finite() {
+                return true;
+            }
             let c = tc.max(ta).min(tb);
             let far = if tb.is_finite() {
                 q(ta).max(q(tb))
@@ -107,7 +131,6 @@ impl CoarseShell {
         };
         let r1 = self.r1 + slack;
         let r0 = (self.r0 - slack).max(0.0);
-        // NaN (an infinite origin) fails both comparisons: let through.
         !(qmin > r1 * r1 || qmax < r0 * r0)
     }
 }
@@ -151,8 +174,8 @@ mod tests {
 
     /// Every hit the f64 intersector finds on a part, the coarse test lets through: rays at
     /// random, from the surface (as secondary rays leave it), grazing the shells' cylinders and
-    /// slabs, horizontal, vertical, along the axis, from far away, with tiny directions and
-    /// short windows. Both outcomes occur, so the test also shows that it rejects.
+    /// slabs, horizontal, vertical, along the axis, from far away, with directions of lengths
+    /// from 1e-20 to 1e18, and short windows. Both outcomes occur, so the test also shows that it rejects.
     #[test]
     fn the_coarse_test_lets_every_hit_through() {
         let mut rng = Rng::new(3);
@@ -194,7 +217,9 @@ mod tests {
                         o = Vec3A::new(r, y, -2.0 * size - 3000.0);
                         d = Vec3A::new((f() - 0.5) * 1e-4, (f() - 0.5) * 1e-4, 1.0);
                     }
-                    6 => d *= 1e-20,
+                    // Directions far from unit length, inside and outside the magnitudes
+                    // the test judges.
+                    6 => d *= [1e-20, 1e-12, 1e12, 1e18][case / 8 % 4],
                     _ => {}
                 }
                 let (t_min, t_max) = if case % 3 == 0 {
@@ -223,5 +248,90 @@ mod tests {
         }
         // Rejected, let through without a hit, let through with one: each often.
         assert!(counts.iter().all(|&n| n > 20_000), "{counts:?}");
+    }
+
+    /// Inputs that overflowed or underflowed an earlier version of the test into rejecting a
+    /// hit: a horizontal direction of 1e20 (its square overflows), an origin at 1e20 (the dot
+    /// product overflows), an infinite `t_min` (infinity times a zero component), a lathe of
+    /// size 1e-44 (f32's subnormal steps exceed the padding), a slab beyond f32's range
+    /// (`d_y` of 1.5e-38). Each either has no coarse test, is let through, or has no hit.
+    #[test]
+    fn extreme_magnitudes_are_let_through() {
+        let p = |pts: &[(f64, f64)]| -> Vec<Vec<DVec2>> {
+            vec![pts.iter().map(|&(r, h)| DVec2::new(r, h)).collect()]
+        };
+        let cylinder = Lathe::new(&p(&[(0.5, 0.0), (0.5, 1.0)]), None).unwrap();
+        let huge = Lathe::new(&p(&[(1e17, -1e17), (1e17, 1e17)]), None).unwrap();
+        let cone = Lathe::new(&p(&[(1.0, -1.0), (1.5, 1.0)]), None).unwrap();
+        let tiny_h = 1.49 * f64::from(f32::from_bits(1));
+        let tiny = Lathe::new(&p(&[(0.0, tiny_h), (1e-44, tiny_h)]), None).unwrap();
+        let disk = Lathe::new(&p(&[(0.0, 0.0), (1.0, 0.0)]), None).unwrap();
+        let inf = f32::INFINITY;
+        let sub = f32::from_bits(1);
+        let cases: [(&Lathe, Vec3A, Vec3A, f32, f32); 7] = [
+            (
+                &cylinder,
+                Vec3A::new(-1.0, 0.5, 0.0),
+                Vec3A::new(1e20, 0.0, 0.0),
+                0.0,
+                inf,
+            ),
+            (
+                &cylinder,
+                Vec3A::new(-1.0, 0.5, 0.0),
+                Vec3A::new(1e20, 1e19, 0.0),
+                0.0,
+                1.0,
+            ),
+            (
+                &huge,
+                Vec3A::new(-1e20, 0.0, 0.0),
+                Vec3A::new(1e19, 0.0, 0.0),
+                0.0,
+                100.0,
+            ),
+            (&cone, Vec3A::ZERO, Vec3A::Z, -inf, 0.5),
+            (
+                &tiny,
+                Vec3A::new(3.0 * sub, 0.0, 0.0),
+                Vec3A::new(0.0, 0.25, 0.0),
+                5.0 * sub,
+                1.0,
+            ),
+            (
+                &disk,
+                Vec3A::new(0.5, -10.0, 0.0),
+                Vec3A::new(0.0, 1.5e-38, 0.0),
+                0.0,
+                inf,
+            ),
+            (
+                &cylinder,
+                Vec3A::new(-1.0, 0.5, 0.0),
+                Vec3A::new(1.0, 0.0, 1e-30),
+                0.0,
+                inf,
+            ),
+        ];
+        for (k, (lathe, o, d, t_min, t_max)) in cases.into_iter().enumerate() {
+            for part in lathe.separate_parts() {
+                let Some(c) = CoarseShell::new(&lathe.parts_shell(&part).unwrap(), lathe.size())
+                else {
+                    continue;
+                };
+                let hit = lathe.intersect_parts(
+                    part,
+                    o.as_dvec3(),
+                    d.as_dvec3(),
+                    t_min as f64,
+                    t_max as f64,
+                    Solver::Robust,
+                );
+                assert!(
+                    c.may_meet(o, d, t_min, t_max) || hit.is_none(),
+                    "case {k}: rejected a hit {hit:?}"
+                );
+            }
+        }
     }
 }
