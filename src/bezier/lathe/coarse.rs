@@ -66,16 +66,17 @@ impl CoarseShell {
     /// axis do not come out finite.
     #[inline]
     pub fn may_meet(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> bool {
-        let (om, dm) = (o.abs().max_element(), d.abs().max_element());
-        // `max_element` skips a NaN lane as `f32::max` does: test the lanes too.
-        let judged = om <= TAME
-            && (1.0 / TAME..=TAME).contains(&dm)
-            && o.is_finite()
-            && d.is_finite()
+        let (oa, da) = (o.abs(), d.abs());
+        let tame = Vec3A::splat(TAME);
+        // Lane by lane (a NaN lane fails its comparison; `max_element` would skip it).
+        let judged = oa.cmple(tame).all()
+            && da.cmple(tame).all()
+            && da.max_element() >= 1.0 / TAME
             && t_min.is_finite();
         if !judged {
             return true;
         }
+        let om = oa.max_element();
         // Every position computed below is off by a few f32 ulps of the origin's and the
         // shell's magnitudes at most: `slack` covers that a thousand times over.
         let slack = COARSE_PAD * (om + self.size);
@@ -93,9 +94,13 @@ impl CoarseShell {
         } else if !(o.y >= h0 && o.y <= h1) {
             return false;
         }
-        // The slab's ends carry the rounding of a product and a quotient: widen them. (`ta` is
-        // finite: `t_min` is, and so are the slab's ends.)
+        // The slab's ends carry the rounding of a product and a quotient: widen them. (`ta`
+        // came out finite, `t_min` and the slab's ends being finite, but the widening can
+        // overflow for a `t_min` near `-f32::MAX`: not judged.)
         let (ta, tb) = (ta - COARSE_PAD * ta.abs(), tb + COARSE_PAD * tb.abs());
+        if !ta.is_finite() {
+            return true;
+        }
         if ta > tb {
             return false;
         }
@@ -116,10 +121,12 @@ impl CoarseShell {
                 return true;
             }
             let c = tc.max(ta).min(tb);
-            let far = if tb.is_finite() {
-                q(ta).max(q(tb))
-            } else {
+            // (`q` of a finite `t` is never NaN, see above; a NaN would count as infinite.)
+            let (qa, qb) = (q(ta), if tb.is_finite() { q(tb) } else { f32::NAN });
+            let far = if qa.is_nan() || qb.is_nan() {
                 f32::INFINITY
+            } else {
+                qa.max(qb)
             };
             (q(c), far)
         } else if d.x == 0.0 && d.z == 0.0 {
@@ -252,9 +259,9 @@ mod tests {
 
     /// Inputs that overflowed or underflowed an earlier version of the test into rejecting a
     /// hit: a horizontal direction of 1e20 (its square overflows), an origin at 1e20 (the dot
-    /// product overflows), an infinite `t_min` (infinity times a zero component), a lathe of
-    /// size 1e-44 (f32's subnormal steps exceed the padding), a slab beyond f32's range
-    /// (`d_y` of 1.5e-38). Each either has no coarse test, is let through, or has no hit.
+    /// product overflows), an infinite `t_min` or one near `-f32::MAX` (infinity times a zero
+    /// component), a lathe of size 1e-44 (f32's subnormal steps exceed the padding), a slab
+    /// beyond f32's range (`d_y` of 1.5e-38). Each either has no coarse test, is let through, or has no hit.
     #[test]
     fn extreme_magnitudes_are_let_through() {
         let p = |pts: &[(f64, f64)]| -> Vec<Vec<DVec2>> {
@@ -268,7 +275,22 @@ mod tests {
         let disk = Lathe::new(&p(&[(0.0, 0.0), (1.0, 0.0)]), None).unwrap();
         let inf = f32::INFINITY;
         let sub = f32::from_bits(1);
-        let cases: [(&Lathe, Vec3A, Vec3A, f32, f32); 7] = [
+        let cases: [(&Lathe, Vec3A, Vec3A, f32, f32); 9] = [
+            // `t_min` finite but its widening overflows.
+            (
+                &cylinder,
+                Vec3A::new(0.0, 0.5, 0.0),
+                Vec3A::Z,
+                f32::MIN,
+                0.1,
+            ),
+            (
+                &cylinder,
+                Vec3A::new(0.0, 0.5, 0.0),
+                Vec3A::X,
+                -3.4025e38,
+                0.1,
+            ),
             (
                 &cylinder,
                 Vec3A::new(-1.0, 0.5, 0.0),
