@@ -182,7 +182,8 @@ mod tests {
     /// Every hit the f64 intersector finds on a part, the coarse test lets through: rays at
     /// random, from the surface (as secondary rays leave it), grazing the shells' cylinders and
     /// slabs, horizontal, vertical, along the axis, from far away, with directions of lengths
-    /// from 1e-20 to 1e18, and short windows. Both outcomes occur, so the test also shows that it rejects.
+    /// from 1e-20 to 1e18, and short windows. Both outcomes occur, so the test also shows that
+    /// it rejects.
     #[test]
     fn the_coarse_test_lets_every_hit_through() {
         let mut rng = Rng::new(3);
@@ -261,7 +262,8 @@ mod tests {
     /// hit: a horizontal direction of 1e20 (its square overflows), an origin at 1e20 (the dot
     /// product overflows), an infinite `t_min` or one near `-f32::MAX` (infinity times a zero
     /// component), a lathe of size 1e-44 (f32's subnormal steps exceed the padding), a slab
-    /// beyond f32's range (`d_y` of 1.5e-38). Each either has no coarse test, is let through, or has no hit.
+    /// beyond f32's range (`d_y` of 1.5e-38). Each either has no coarse test, is let through,
+    /// or has no hit.
     #[test]
     fn extreme_magnitudes_are_let_through() {
         let p = |pts: &[(f64, f64)]| -> Vec<Vec<DVec2>> {

@@ -152,8 +152,8 @@ fn polish(p: &Bernstein, c0: f64) -> (f64, f64, f64, u32) {
     let c = p.coeffs();
     let n = p.degree();
     // Start where the control polygon crosses zero (its one sign change): after the
-    // subdivision that isolated the root the polygon lies close to the curve, closer than the
-    // chord between the end values (which is where a zero coefficient leaves the start).
+    // subdivision that isolated the root the polygon lies closer to the curve than the chord
+    // between the end values, the start where a coefficient at the crossing is zero.
     let mut t = match c.windows(2).position(|w| (w[0] < 0.0) != (w[1] < 0.0)) {
         Some(k) if c[k] != 0.0 && c[k + 1] != 0.0 => {
             ((k as f64 + c[k] / (c[k] - c[k + 1])) / n as f64).clamp(0.0, 1.0)
