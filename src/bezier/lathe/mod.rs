@@ -287,12 +287,7 @@ impl Lathe {
             .iter()
             .filter(|s| !s.degenerate)
             .map(|s| s.shell)
-            .reduce(|a, b| Shell {
-                rmin: a.rmin.min(b.rmin),
-                rmax: a.rmax.max(b.rmax),
-                hmin: a.hmin.min(b.hmin),
-                hmax: a.hmax.max(b.hmax),
-            })
+            .reduce(Shell::union)
     }
 
     /// Nearest hit with `t_min < t < t_max` on the parts given: the segments in `parts.segs`

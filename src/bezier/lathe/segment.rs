@@ -82,12 +82,7 @@ impl Segment {
         }
         let degenerate = points.iter().all(|p| *p == points[0]);
         let shells = Shell::of_segment(&r, &h);
-        let shell = shells.iter().fold(shells[0], |a, b| Shell {
-            rmin: a.rmin.min(b.rmin),
-            rmax: a.rmax.max(b.rmax),
-            hmin: a.hmin.min(b.hmin),
-            hmax: a.hmax.max(b.hmax),
-        });
+        let shell = shells.iter().fold(shells[0], |a, &b| a.union(b));
         let rr = r.mul(&r).expect("degree <= 7");
         let mut seg = Self {
             rr_max: rr.max_abs(),

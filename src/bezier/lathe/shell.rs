@@ -21,6 +21,16 @@ pub struct Shell {
 }
 
 impl Shell {
+    /// The smallest shell holding both.
+    pub fn union(self, o: Shell) -> Shell {
+        Shell {
+            rmin: self.rmin.min(o.rmin),
+            rmax: self.rmax.max(o.rmax),
+            hmin: self.hmin.min(o.hmin),
+            hmax: self.hmax.max(o.hmax),
+        }
+    }
+
     /// The shells of the [`PIECES`] pieces of the segment `(r, h)`.
     pub fn of_segment(r: &Bernstein, h: &Bernstein) -> [Shell; PIECES] {
         std::array::from_fn(|k| {
