@@ -683,16 +683,17 @@ mod tests {
         }
     }
 
-    /// The oriented box drops only rays that miss: on pieces of a bumpy, a flat, a tiny and a
-    /// far-away patch, rays aimed at surface points (the pieces' corners among them, which lie on
-    /// the box's faces), rays leaving surface points, rays in a surface point's tangent plane
-    /// and random rays through the axis-aligned box get the same answer, bit for bit, as the
-    /// subdivision without the box; and the box does drop a share of the random rays.
+    /// A random unit direction.
     fn dir(rng: &mut Rng) -> DVec3 {
         let d = DVec3::new(f(rng) - 0.5, f(rng) - 0.5, f(rng) - 0.5);
         d.try_normalize().unwrap_or(DVec3::X)
     }
 
+    /// The oriented box drops only rays that miss: on pieces of a bumpy, a flat, a tiny and a
+    /// far-away patch, rays aimed at surface points (the pieces' corners among them, which lie on
+    /// the box's faces), rays leaving surface points, rays in a surface point's tangent plane
+    /// and random rays through the axis-aligned box get the same answer, bit for bit, as the
+    /// subdivision without the box; and the box does drop a share of the random rays.
     #[test]
     fn the_oriented_box_drops_only_rays_that_miss() {
         let flat = Patch::new(&std::array::from_fn(|k| {
