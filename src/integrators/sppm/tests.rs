@@ -291,6 +291,75 @@ fn initial_radii_follow_the_footprint_at_the_first_visible_point() {
     }
 }
 
+/// Where the camera looks cannot change the image: `smallppm_far` (look_at 100 units ahead,
+/// the objects about 235 away) with look_at moved onto the objects along the same line of sight
+/// renders the same image (within a thousandth of the mean square difference two seeds make).
+/// The earlier default, one footprint at the look-at distance (given here as the scene's
+/// `radius`), changes with look_at: its two images differ by about 2 % of the seeds'
+/// difference, and the test checks that the same bound would catch it.
+#[test]
+fn moving_look_at_along_the_line_of_sight_leaves_the_image_as_it_is() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/smallppm_far.scn");
+    let base = load_file(&path, &EvalOptions::default())
+        .unwrap()
+        .scene
+        .unwrap();
+    let (w, h) = (48, 36);
+    let render = |ahead: f64, seed: u64, look_at_rule: bool| {
+        let mut scene = base.clone();
+        scene.settings.resolution = (w, h);
+        let eye = scene.camera.location;
+        let dir = (scene.camera.look_at - eye).normalize();
+        scene.camera.look_at = eye + ahead * dir;
+        if look_at_rule {
+            let pixel = 2.0 * (0.5 * scene.camera.fov.to_radians()).tan() / f64::from(h);
+            scene.settings.radius = Some(ahead * pixel);
+        }
+        let options = RenderOptions {
+            iterations: Some(4),
+            photons: Some(20_000),
+            seed: Some(seed),
+            ..Default::default()
+        };
+        let settings = effective_settings(&scene, &options).unwrap();
+        let prepared = PreparedScene::new(&scene).unwrap();
+        let cancel = AtomicBool::new(false);
+        let job = Job {
+            scene: &prepared,
+            settings: &settings,
+            cancel: &cancel,
+            on_progress: &mut |_| {},
+        };
+        render_with(job, camera_path, true).0.image
+    };
+    let msd = |a: &crate::film::Image, b: &crate::film::Image| {
+        let n = (a.pixels.len() * 3) as f64;
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>())
+            .sum::<f64>()
+            / n
+    };
+    // The eye is 2.956 units from the back wall; look_at 1 unit ahead (the example's) and 2.35
+    // (the objects' distance).
+    let (near, far) = (1.0, 2.35);
+    let noise = msd(&render(near, 1, false), &render(near, 2, false));
+    let moved = msd(&render(near, 1, false), &render(far, 1, false));
+    let old_noise = msd(&render(near, 1, true), &render(near, 2, true));
+    let old_moved = msd(&render(near, 1, true), &render(far, 1, true));
+    println!(
+        "mean square difference: seeds {noise:.3e}, look_at moved {moved:.3e}; look-at rule: \
+         seeds {old_noise:.3e}, look_at moved {old_moved:.3e}"
+    );
+    let bound = 1e-3 * noise;
+    assert!(moved < bound, "{moved} against {noise}");
+    assert!(
+        old_moved > bound,
+        "the look-at rule passes too: {old_moved}"
+    );
+}
+
 /// The extra camera samples are what makes a directly visible light's edge converge: on the
 /// Cornell box (64 px, 8 iterations, 20 000 photons per iteration) the seed-to-seed difference
 /// in a window over the light and its edge is 1.8x smaller in mean square with them than with
