@@ -20,6 +20,45 @@ pub fn write_atomic(
     let dir = folder_of(path);
     check_target(path)?;
     remove_stale(dir);
+    let mut tmp = temp_in(dir, path)?;
+    let tmp_path = tmp.path().to_path_buf();
+    fill(&tmp_path, tmp.as_file_mut())?;
+    // Checked again just before the rename: the path may have changed while `fill` ran.
+    check_target(path)?;
+    tmp.persist(path)
+        .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
+    Ok(())
+}
+
+/// How [`write_atomic_group`] fills one file (as `write_atomic`'s `fill`).
+pub type Fill<'a> = Box<dyn FnOnce(&Path, &mut File) -> Result<(), String> + 'a>;
+
+/// Writes several files all or none: each is filled into its own temporary file first, and
+/// only when every one is complete are they renamed over their targets. A failure while
+/// filling (a full disk) leaves every target as it was and no temporary behind. (A rename
+/// failing after others succeeded, which a full disk cannot cause, would leave the earlier
+/// targets replaced.)
+pub fn write_atomic_group(files: Vec<(&Path, Fill<'_>)>) -> Result<(), String> {
+    let mut done = Vec::with_capacity(files.len());
+    for (path, fill) in files {
+        let dir = folder_of(path);
+        check_target(path)?;
+        remove_stale(dir);
+        let mut tmp = temp_in(dir, path)?;
+        let tmp_path = tmp.path().to_path_buf();
+        fill(&tmp_path, tmp.as_file_mut())?;
+        done.push((path, tmp));
+    }
+    for (path, tmp) in done {
+        check_target(path)?;
+        tmp.persist(path)
+            .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
+    }
+    Ok(())
+}
+
+/// A new temporary file in `dir` for the target `path` (its extension kept, readable by all).
+fn temp_in(dir: &Path, path: &Path) -> Result<tempfile::NamedTempFile, String> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
     let suffix = format!(".{ext}");
     let prefix = format!("{TEMP_PREFIX}{}-", std::process::id());
@@ -30,16 +69,9 @@ pub fn write_atomic(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut tmp = builder
+    builder
         .tempfile_in(dir)
-        .map_err(|e| cannot_create_in(dir, &e))?;
-    let tmp_path = tmp.path().to_path_buf();
-    fill(&tmp_path, tmp.as_file_mut())?;
-    // Checked again just before the rename: the path may have changed while `fill` ran.
-    check_target(path)?;
-    tmp.persist(path)
-        .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
-    Ok(())
+        .map_err(|e| cannot_create_in(dir, &e))
 }
 
 const TEMP_PREFIX: &str = ".sppm-";
@@ -281,6 +313,39 @@ mod tests {
         assert!(!stale.exists(), "a dead process's temporary file is left");
         assert!(live.exists(), "a live process's temporary file was removed");
         assert!(other.exists());
+    }
+
+    /// A group whose second file fails leaves both targets as they were (the first one not
+    /// replaced by its new, complete content) and no temporary file; a group that succeeds
+    /// replaces both.
+    #[test]
+    fn a_group_is_written_all_or_none() {
+        use std::io::Write;
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.json"));
+        std::fs::write(&a, "old a").unwrap();
+        std::fs::write(&b, "old b").unwrap();
+        let put = |text: &'static str| -> Fill<'static> {
+            Box::new(move |_, f| f.write_all(text.as_bytes()).map_err(|e| e.to_string()))
+        };
+        let fail: Fill<'static> = Box::new(|_, f| {
+            f.write_all(b"half").unwrap();
+            Err("no space left".to_string())
+        });
+        assert!(
+            write_atomic_group(vec![(a.as_path(), put("new a")), (b.as_path(), fail)]).is_err()
+        );
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "old b");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+        write_atomic_group(vec![
+            (a.as_path(), put("new a")),
+            (b.as_path(), put("new b")),
+        ])
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]

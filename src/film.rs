@@ -1,6 +1,7 @@
 //! The image: linear RGB in f64, and writing it to PNG (sRGB, exposure) or EXR (linear).
 //! Files are written atomically: a temporary file in the target directory, then a rename.
 
+use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
@@ -40,38 +41,42 @@ impl Image {
     /// Writes the image; the format follows the extension (`.png`, `.exr`). `exposure`
     /// multiplies PNG values before the sRGB curve; EXR is written linear and unscaled.
     pub fn write(&self, path: &Path, exposure: f64) -> Result<(), String> {
+        crate::atomic_file::write_atomic(path, |_, file| self.encode(path, exposure, file))
+    }
+
+    /// The image encoded into `file` in the format of `path`'s extension (see
+    /// [`Image::write`]; `path` names the file in messages).
+    pub fn encode(&self, path: &Path, exposure: f64, file: &mut File) -> Result<(), String> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        crate::atomic_file::write_atomic(path, |_, file| {
-            let mut w = BufWriter::new(file);
-            match ext.as_str() {
-                "png" => {
-                    let img = RgbImage::from_fn(self.width, self.height, |x, y| {
-                        let p = self.get(x, y);
-                        Rgb(p.map(|v| encode_srgb(v * exposure)))
-                    });
-                    img.write_to(&mut w, ImageFormat::Png)
-                }
-                "exr" => {
-                    let img = Rgb32FImage::from_fn(self.width, self.height, |x, y| {
-                        Rgb(self.get(x, y).map(|v| v as f32))
-                    });
-                    img.write_to(&mut w, ImageFormat::OpenExr)
-                }
-                _ => {
-                    return Err(format!(
-                        "unknown image format `.{ext}` for `{}`: use .png or .exr",
-                        path.display()
-                    ));
-                }
+        let mut w = BufWriter::new(file);
+        match ext.as_str() {
+            "png" => {
+                let img = RgbImage::from_fn(self.width, self.height, |x, y| {
+                    let p = self.get(x, y);
+                    Rgb(p.map(|v| encode_srgb(v * exposure)))
+                });
+                img.write_to(&mut w, ImageFormat::Png)
             }
-            .map_err(|e| format!("cannot encode `{}`: {e}", path.display()))?;
-            w.flush()
-                .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
-        })
+            "exr" => {
+                let img = Rgb32FImage::from_fn(self.width, self.height, |x, y| {
+                    Rgb(self.get(x, y).map(|v| v as f32))
+                });
+                img.write_to(&mut w, ImageFormat::OpenExr)
+            }
+            _ => {
+                return Err(format!(
+                    "unknown image format `.{ext}` for `{}`: use .png or .exr",
+                    path.display()
+                ));
+            }
+        }
+        .map_err(|e| format!("cannot encode `{}`: {e}", path.display()))?;
+        w.flush()
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
     }
 }
 

@@ -1,5 +1,21 @@
 //! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
 
+/// `eprintln!` that never panics: a message to a standard error that cannot be written (a full
+/// disk, a closed pipe) is lost, and the command goes on to its own exit status.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+/// `eprint!` that never panics (see [`say!`]).
+macro_rules! say_inline {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod chart;
 mod check;
 mod live;

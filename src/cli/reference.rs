@@ -68,7 +68,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
     {
-        eprintln!(
+        say!(
             "error: the reference `{}` must be an .exr (linear)",
             args.output.display()
         );
@@ -78,13 +78,13 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     let outputs = [args.output.as_path(), &noise_exr, &noise_json];
     // Before the load, against the scene; after it, against every file it read.
     if let Err(e) = super::check_not_an_input(&outputs, std::slice::from_ref(&args.scene)) {
-        eprintln!("error: {e}");
+        say!("error: {e}");
         return ExitCode::from(EXIT_USAGE);
     }
     let (mut scene, sources) = match load_scene(&args.scene, &args.limits.options()) {
         Ok(loaded) => {
             if let Err(e) = super::check_not_an_input(&outputs, &loaded.dependencies) {
-                eprintln!("error: {e}");
+                say!("error: {e}");
                 return ExitCode::from(EXIT_USAGE);
             }
             (loaded.scene, loaded.sources)
@@ -109,7 +109,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     let a = match half(seed, None, Some(args.time / 2.0)) {
         Ok(out) if out.iterations_done > 0 => out,
         Ok(_) => {
-            eprintln!(
+            say!(
                 "error: no iteration of the path tracer finished in {} s; give more --time",
                 args.time / 2.0
             );
@@ -124,7 +124,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     let b = match half(seed.wrapping_add(1), None, Some(left)) {
         Ok(out) if out.iterations_done > 0 => out,
         Ok(_) => {
-            eprintln!(
+            say!(
                 "error: no iteration of the second half finished in {left:.3} s; give more --time"
             );
             return ExitCode::from(EXIT_SCENE_ERROR);
@@ -139,7 +139,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
     let estimate = match floor_of(&mean, &noise) {
         Ok(e) => e,
         Err(e) => {
-            eprintln!("error: {e}");
+            say!("error: {e}");
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
@@ -153,20 +153,29 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         estimate.rmse,
         estimate.rel_mse
     );
-    let written = mean
-        .write(&args.output, 1.0)
-        .and_then(|_| noise.write(&noise_exr, 1.0))
-        .and_then(|_| {
-            sppm_lang::atomic_file::write_atomic(&noise_json, |_, f| {
+    // The three files together or none of them (a full disk leaves the old ones whole).
+    let written = sppm_lang::atomic_file::write_atomic_group(vec![
+        (
+            args.output.as_path(),
+            Box::new(|_, f| mean.encode(&args.output, 1.0, f)),
+        ),
+        (
+            noise_exr.as_path(),
+            Box::new(|_, f| noise.encode(&noise_exr, 1.0, f)),
+        ),
+        (
+            noise_json.as_path(),
+            Box::new(|_, f| {
                 f.write_all(json.as_bytes())
                     .map_err(|e| format!("cannot write `{}`: {e}", noise_json.display()))
-            })
-        });
+            }),
+        ),
+    ]);
     if let Err(e) = written {
-        eprintln!("error: {e}");
+        say!("error: {e}");
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
-    eprintln!(
+    say!(
         "wrote {} ({} path-traced iterations in two halves of {na} and {nb}, {seconds:.1} s); its noise: \
          RMSE {:.3e}, relative MSE {:.3e} (in {} and {})",
         args.output.display(),

@@ -63,14 +63,14 @@ pub fn run(args: RenderArgs) -> ExitCode {
     let output = match super::output_path(args.output.as_deref(), &args.scene) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("error: {e}");
+            say!("error: {e}");
             return ExitCode::from(EXIT_USAGE);
         }
     };
     match load_scene(&args.scene, &args.limits.options()) {
         Ok(loaded) => {
             if let Err(e) = super::check_not_an_input(&[&output], &loaded.dependencies) {
-                eprintln!("error: {e}");
+                say!("error: {e}");
                 return ExitCode::from(EXIT_USAGE);
             }
             let code = render_scene(&loaded.scene, &args, &loaded.sources, &output);
@@ -158,7 +158,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         b.finish_and_clear();
     }
     if let Some(e) = snapshot_error {
-        eprintln!("warning: snapshot: {e}");
+        say!("warning: snapshot: {e}");
     }
     let (out, prepared) = match result {
         Ok(o) => o,
@@ -191,14 +191,14 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
     if let Err(e) = out.image.write(output, exposure) {
-        eprintln!("error: {e}");
+        say!("error: {e}");
         return ExitCode::from(EXIT_SCENE_ERROR);
     }
     // Written: the process ends after this command, and the exit frees the prepared scene's
     // buffers (BVH, mesh) at once; freeing them one by one first is serial work for nothing.
     std::mem::forget(prepared);
     let secs = out.elapsed.as_secs_f64().max(1e-9);
-    eprintln!(
+    say!(
         "{} {}: {} iterations{} in {:.2}s{}",
         if out.cancelled {
             "interrupted,"

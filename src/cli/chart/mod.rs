@@ -192,7 +192,7 @@ pub fn run(args: &ChartArgs) -> ExitCode {
     match chart(args) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e}");
+            say!("error: {e}");
             ExitCode::from(EXIT_USAGE)
         }
     }
@@ -269,7 +269,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         if wanted.as_ref().is_some_and(|w| !w.contains(&m.label)) {
             continue;
         }
-        eprintln!("chart: {} ({budget} s)", m.label);
+        say!("chart: {} ({budget} s)", m.label);
         let mut s: Scene = scene.clone();
         s.settings.integrator = m.integrator;
         if let Some(a) = m.alpha {
@@ -287,10 +287,10 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         }
         let measured = measure(&s, budget, ref_view, window)?;
         if measured.is_empty() {
-            eprintln!("warning: chart: {} finished no iteration", m.label);
+            say!("warning: chart: {} finished no iteration", m.label);
         }
         for (iterations, seconds, whole, window) in measured {
-            eprintln!(
+            say!(
                 "  {iterations:>6} it {seconds:>8.2} s  rmse {:.5}  relmse {:.5}{}",
                 whole.rmse,
                 whole.rel_mse,
@@ -393,7 +393,7 @@ fn reference_floors(
 ) -> Result<Floors, String> {
     let (noise_path, _) = noise_paths(reference_path);
     if !noise_path.is_file() {
-        eprintln!(
+        say!(
             "warning: chart: no noise estimate `{}` beside the reference, so the chart cannot \
              mark the error floor and a method better than the reference cannot be told from \
              it; make the reference with `sppm-lang reference`",
@@ -407,7 +407,7 @@ fn reference_floors(
     let win = window
         .map(|w| floor_in(ref_view, noise_view, Some(w)))
         .transpose()?;
-    eprintln!(
+    say!(
         "chart: the reference's noise: RMSE {:.3e}, relative MSE {:.3e}{}",
         whole.rmse,
         whole.rel_mse,
@@ -425,7 +425,7 @@ fn reference_floors(
 /// Warns of each method whose last error is at the reference's noise floor.
 fn warn_at_floor(rows: &[Row], floors: &Floors) {
     for w in at_floor(rows, floors) {
-        eprintln!("warning: chart: {w}");
+        say!("warning: chart: {w}");
     }
 }
 

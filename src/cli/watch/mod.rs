@@ -105,13 +105,13 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             }
             _ => e.with_path(&args.scene),
         };
-        eprintln!("error: {why} (watch needs an existing scene to start)");
+        say!("error: {why} (watch needs an existing scene to start)");
         return ExitCode::from(EXIT_USAGE);
     }
     let output = match super::output_path(args.output.as_deref(), &args.scene) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("error: {e}");
+            say!("error: {e}");
             return ExitCode::from(EXIT_USAGE);
         }
     };
@@ -119,14 +119,14 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     {
         let flag = interrupted.clone();
         if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-            eprintln!("error: cannot install the Ctrl-C handler: {e}");
+            say!("error: cannot install the Ctrl-C handler: {e}");
             return ExitCode::from(EXIT_USAGE);
         }
     }
     let mut watcher = match DependencyWatcher::new() {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("error: {e}");
+            say!("error: {e}");
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
@@ -139,7 +139,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         match live::Server::start(args.port, hub.clone()) {
             Ok(server) => status(&format!("serving the live view on {}", server.url)),
             Err(e) => {
-                eprintln!("error: {e}");
+                say!("error: {e}");
                 return ExitCode::from(EXIT_USAGE);
             }
         }
@@ -158,7 +158,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     let mut saved_at = None;
     loop {
         if clear {
-            eprint!("\x1b[2J\x1b[H");
+            say_inline!("\x1b[2J\x1b[H");
         }
         let loaded = load(&args.scene, &options);
         if let Err(e) = watcher.set_dependencies(&loaded.dependencies) {
