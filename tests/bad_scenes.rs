@@ -42,3 +42,85 @@ fn bad_scenes_give_spanned_diagnostics() {
         insta::assert_snapshot!(name, text);
     }
 }
+
+/// The first error of `text` (message, help).
+fn first_error(text: &str) -> (String, String) {
+    let l = sppm_lang::load_source("habit.scn", text, &EvalOptions::default());
+    let d = l
+        .diagnostics
+        .iter()
+        .find(|d| d.is_error())
+        .unwrap_or_else(|| panic!("no error for {text:?}"));
+    (d.message.clone(), d.help.clone().unwrap_or_default())
+}
+
+/// POV-Ray habits and near-misses that parsed as something else, or got the wrong advice: a
+/// directive's word is a whole word (`#elseif` was `#else` followed by a call `if(...)`, and the
+/// scene was accepted), bare POV-Ray words get their spelling here, and `right -x*4/3` (a
+/// subtraction to the parser) is recognised by its first word.
+#[test]
+fn pov_habits_get_their_spelling_here() {
+    let cases: [(&str, &str); 10] = [
+        (
+            "#declare A = 1;\n#if (A == 1) sphere { <0,0,0>, 1 } #elseif (A == 2) box { <0,0,0>, <1,1,1> } #end\n",
+            "`#elif (condition)`",
+        ),
+        ("#if (1) sphere { <0,0,0>, 1 }\n#endif\n", "is `#end` here"),
+        (
+            "#if (0) sphere { <0,0,0>, 1 } #elsebox { <0,0,0>, <1,1,1> } #end\n",
+            "write `#else box`",
+        ),
+        ("#declareX = 1;\n", "write `#declare X`"),
+        (
+            "light { <0, 5, 0> intensity 10 shadowless }\n",
+            "remove `shadowless`",
+        ),
+        (
+            "camera { location <0, 0, -5> right -x*4/3 }\n",
+            "remove `right`",
+        ),
+        (
+            "camera { location <0, 0, -5> perspective }\n",
+            "perspective",
+        ),
+        (
+            "settings { max_trace_level 5 }\n",
+            "`settings { max_depth N }`",
+        ),
+        ("light { <0, 5, 0> intensity 10 jitter }\n", "area_light"),
+        ("#declare M = [[0 0.5] [1 0.25]];\n", "separated by commas"),
+    ];
+    for (text, want) in cases {
+        let (message, help) = first_error(text);
+        assert!(
+            help.contains(want),
+            "{text:?}: {message} / help: {help} (wanted {want:?})"
+        );
+        assert!(!help.contains("declare it first"), "{text:?}: {help}");
+    }
+    // A well-formed `#else` and `#end` still parse, with and without space after them.
+    let ok = sppm_lang::load_source(
+        "ok.scn",
+        "#if (0) sphere { <0,0,0>, 1 } #else sphere { <0,0,0>, 2 } #end\n\
+         #if(1)#if(1)sphere { <0,0,0>, 3 }#end#end\n",
+        &EvalOptions::default(),
+    );
+    assert!(!ok.has_errors(), "{:?}", ok.diagnostics);
+}
+
+/// Block comments nest, as in POV-Ray; one left open is named as such, and nesting them
+/// deeper than the parser's bound is an error, not a stack overflow.
+#[test]
+fn block_comments_nest() {
+    let l = sppm_lang::load_source(
+        "c.scn",
+        "/* outer /* inner */ still a comment */ sphere { <0, 0, 0>, 1 }\n",
+        &EvalOptions::default(),
+    );
+    assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    let (message, _) = first_error("/* outer /* inner */ sphere { <0, 0, 0>, 1 }\n");
+    assert!(message.contains("never closed"), "{message}");
+    let deep = format!("{} sphere {{ <0, 0, 0>, 1 }}", "/* ".repeat(100_000));
+    let (message, _) = first_error(&deep);
+    assert!(message.contains("nesting deeper"), "{message}");
+}

@@ -109,7 +109,76 @@ fn deep_block_nesting_in_recursion_is_an_error_not_a_stack_overflow() {
     let e = errors(&l);
     assert_eq!(
         e,
-        ["blocks and macro calls nested deeper than 100000"],
+        ["blocks, directive bodies and macro calls nested deeper than 100000"],
         "{e:?}"
     );
+}
+
+/// A macro whose body nests `ifs` `#if`s around its recursive call, called with depth `n`.
+fn nested_ifs(ifs: usize, n: usize) -> String {
+    format!(
+        "#macro M(N)\n{}#if (N > 0) M(N - 1) #end\n{}#end\nM({n})\nsphere {{ <0,0,0>, 1 }}\n",
+        "#if (1) ".repeat(ifs),
+        "#end ".repeat(ifs)
+    )
+}
+
+#[test]
+fn deep_directive_nesting_in_recursion_is_an_error_not_a_stack_overflow() {
+    // 11 directive bodies per call: 99 000 calls are 1.1 million levels.
+    let opts = EvalOptions {
+        max_depth: 100_000,
+        ..EvalOptions::default()
+    };
+    let e = errors(&load(&nested_ifs(10, 99_000), &opts));
+    assert_eq!(
+        e,
+        ["blocks, directive bodies and macro calls nested deeper than 100000"],
+        "{e:?}"
+    );
+    // Just within the bound (196 levels per call, 500 calls: 98 500 levels) the evaluation
+    // thread's stack holds them.
+    let l = load(&nested_ifs(195, 500), &opts);
+    assert!(errors(&l).is_empty(), "{:?}", errors(&l));
+}
+
+/// The budget counts the work a step does on large values, not only the steps: a string of
+/// 1 MiB joined, compared or measured in a loop, an array of 4 000 numbers made in a loop, a
+/// macro of 5 000 arguments called in a loop, and strings of 1 MiB gathered into an array (the
+/// memory a loop holds) each run out of a 10^7-step budget within a few hundred iterations,
+/// where counting statements alone would have let each loop run its million iterations
+/// (hours, or tens of gigabytes).
+#[test]
+fn work_on_large_values_counts_against_the_budget() {
+    let opts = EvalOptions {
+        max_steps: 10_000_000,
+        ..EvalOptions::default()
+    };
+    let big = "#declare S = \"0123456789abcdef\";\n#for (I, 1, 16) #declare S = S + S; #end\n";
+    let args = vec!["1"; 5000].join(", ");
+    let params: Vec<String> = (0..5000).map(|i| format!("P{i}")).collect();
+    let cases = [
+        format!("{big}#for (I, 1, 1000000) #declare U = S + \"x\"; #end\n"),
+        format!("{big}#declare T = S;\n#for (I, 1, 1000000) #if (S == T) #end #end\n"),
+        format!("{big}#for (I, 1, 1000000) #declare N = len(S); #end\n"),
+        format!(
+            "#for (I, 1, 1000000) #declare A = [{}]; #end\n",
+            vec!["I"; 4000].join(", ")
+        ),
+        format!(
+            "#macro M({})\n#end\n#for (I, 1, 1000000) M({args}) #end\n",
+            params.join(", ")
+        ),
+        format!("{big}#declare L = [0];\n#for (I, 1, 1000000) #declare L = [S + \"x\", L]; #end\n"),
+    ];
+    for text in &cases {
+        let l = load(text, &opts);
+        let e = errors(&l);
+        assert_eq!(
+            e,
+            ["the evaluation took more than 10000000 steps"],
+            "{e:?} for {}",
+            &text[text.len().saturating_sub(80)..]
+        );
+    }
 }

@@ -162,6 +162,13 @@ impl<T> At<T> for Result<T, String> {
     }
 }
 
+/// Names longer than this get no suggestion (and are suggested for none): a typo is looked for
+/// among names a person writes, and the edit distance costs the product of the two lengths.
+const MAX_SUGGEST_LEN: usize = 64;
+/// The most cells of edit-distance tables one suggestion computes (about 0.1 s): a scope of
+/// many thousands of names is searched only in part.
+const MAX_SUGGEST_WORK: usize = 20_000_000;
+
 /// The closest candidate to `name` by edit distance, if it is close enough to be a likely typo.
 pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     suggest_all(name, candidates, 1).into_iter().next()
@@ -173,10 +180,23 @@ pub fn suggest_all<'a>(
     candidates: impl IntoIterator<Item = &'a str>,
     n: usize,
 ) -> Vec<&'a str> {
-    let limit = (name.chars().count() / 3).max(1);
+    let len = name.chars().count();
+    if len > MAX_SUGGEST_LEN {
+        return Vec::new();
+    }
+    let limit = (len / 3).max(1);
+    let mut work = 0usize;
     let mut close: Vec<(usize, &str)> = candidates
         .into_iter()
-        .map(|c| (edit_distance(name, c), c))
+        .filter(|c| c.len().abs_diff(name.len()) <= 4 * limit)
+        .map(|c| (c, c.chars().count()))
+        // The edit distance is at least the difference in length.
+        .filter(|&(_, n)| n.abs_diff(len) <= limit && n <= MAX_SUGGEST_LEN)
+        .take_while(|&(_, n)| {
+            work += (len + 1) * (n + 1);
+            work <= MAX_SUGGEST_WORK
+        })
+        .map(|(c, _)| (edit_distance(name, c), c))
         .filter(|&(d, _)| d <= limit)
         .collect();
     close.sort();
@@ -193,6 +213,35 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A suggestion costs a bounded amount of work: a 100 000-character name is compared with
+    /// nothing (its table would have 10^10 cells), and among 50 000 names of 60 characters only
+    /// the first few thousand are compared (a typo of the last one is not found; one of the
+    /// tenth is). Short names still find their typos.
+    #[test]
+    fn suggestions_are_bounded_in_work() {
+        let long = "a".repeat(100_000);
+        assert!(suggest(&format!("b{long}"), [long.as_str()]).is_none());
+        // 60 pseudo-random letters each (far apart from one another).
+        let mut x = 1u64;
+        let names: Vec<String> = (0..50_000)
+            .map(|_| {
+                (0..60)
+                    .map(|_| {
+                        x = x
+                            .wrapping_mul(6364136223846793005)
+                            .wrapping_add(1442695040888963407);
+                        char::from(b'a' + ((x >> 33) % 26) as u8)
+                    })
+                    .collect()
+            })
+            .collect();
+        let typo = |i: usize| format!("{}Z", &names[i][..59]);
+        let all = || names.iter().map(|s| s.as_str());
+        assert_eq!(suggest(&typo(10), all()), Some(names[10].as_str()));
+        assert!(suggest(&typo(49_990), all()).is_none());
+        assert_eq!(suggest("ligth", ["light", "sphere"]), Some("light"));
+    }
 
     #[test]
     fn numbers_are_shown_as_written() {

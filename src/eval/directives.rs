@@ -15,6 +15,27 @@ use crate::syntax::ast::*;
 
 impl Evaluator {
     pub(super) fn directive(&mut self, d: &Directive, sink: &mut dyn Sink) -> SourceResult<()> {
+        // A directive with a body nests like a block: `#if` inside `#if` inside a recursive
+        // macro counts against the same bound as blocks and calls.
+        let nests = matches!(
+            d.kind,
+            DirectiveKind::If { .. }
+                | DirectiveKind::IfDef { .. }
+                | DirectiveKind::Switch { .. }
+                | DirectiveKind::While { .. }
+                | DirectiveKind::For { .. }
+        );
+        if !nests {
+            return self.directive_in_place(d, sink);
+        }
+        self.check_nesting(d.span)?;
+        self.block_depth += 1;
+        let r = self.directive_in_place(d, sink);
+        self.block_depth -= 1;
+        r
+    }
+
+    fn directive_in_place(&mut self, d: &Directive, sink: &mut dyn Sink) -> SourceResult<()> {
         match &d.kind {
             DirectiveKind::Bind { name, value, local } => {
                 let v = match self.eval(value) {
@@ -310,6 +331,7 @@ impl Evaluator {
                 .with_extra(m.name.span, "macro defined here"),
             ]);
         }
+        self.charge(args.len() as u64 * super::STEPS_PER_ELEMENT, call_span)?;
         if self.frames.len() >= self.options.max_depth {
             return Err(vec![
                 Error::new(format!(

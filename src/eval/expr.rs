@@ -32,6 +32,9 @@ impl Evaluator {
             ExprKind::Str(s) => Value::Str(s.clone()),
             ExprKind::Ident(name) => self.lookup(name, e.span)?,
             ExprKind::Vector(parts) => {
+                if parts.len() > 3 {
+                    self.charge(parts.len() as u64 * super::STEPS_PER_ELEMENT, e.span)?;
+                }
                 let mut xs = Vec::with_capacity(parts.len());
                 for p in parts {
                     xs.push(self.eval(p)?.num().at(p.span)?);
@@ -43,6 +46,7 @@ impl Evaluator {
                 }
             }
             ExprKind::Array(parts) => {
+                self.charge(parts.len() as u64 * super::STEPS_PER_ELEMENT, e.span)?;
                 let mut xs = Vec::with_capacity(parts.len());
                 for p in parts {
                     xs.push(self.eval(p)?);
@@ -63,6 +67,14 @@ impl Evaluator {
                 for a in args {
                     vals.push(self.eval(a)?);
                 }
+                // A string argument is scanned (`len`, `str`); an array is not (`dim`): strings
+                // only.
+                let work: u64 = vals
+                    .iter()
+                    .filter(|v| matches!(v, Value::Str(_)))
+                    .map(super::work_of)
+                    .sum();
+                self.charge(work, e.span)?;
                 match builtins::call(&name.text, &vals) {
                     Some(Ok(v)) => v,
                     Some(Err((i, mut err))) => {
@@ -113,6 +125,8 @@ impl Evaluator {
                     return Ok(Value::Bool(self.eval(b)?.truthy().at(b.span)?));
                 }
                 let vb = self.eval(b)?;
+                // Strings are joined or compared whole: the work of both operands.
+                self.charge(super::work_of(&va) + super::work_of(&vb), e.span)?;
                 binary(*op, va, vb).at(e.span)?
             }
             ExprKind::Index(base, index) => {

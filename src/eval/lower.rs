@@ -268,7 +268,14 @@ impl Evaluator {
         };
         // Recorded before the read so that `watch` also waits for a file that is missing.
         self.dependencies.push(path.to_path_buf());
-        let img = load_image(path, space).map_err(|e| {
+        let loaded: u64 = self
+            .assets
+            .images
+            .values()
+            .map(|i| i.width as u64 * i.height as u64)
+            .sum();
+        let room = MAX_TOTAL_IMAGE_PIXELS.saturating_sub(loaded);
+        let img = load_image_within(path, space, room).map_err(|e| {
             vec![
                 Error::new(e.message)
                     .label("cannot load this image")

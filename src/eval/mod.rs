@@ -66,6 +66,25 @@ pub const MAX_EVAL_NESTING: usize = 100_000;
 pub const MAX_MESSAGES: usize = 1000;
 /// Longest string a scene may build (bytes).
 pub const MAX_STRING_BYTES: usize = 1 << 24;
+/// Bytes of string built, compared or scanned that count as one evaluation step.
+pub const STRING_BYTES_PER_STEP: usize = 16;
+/// Evaluation steps per array element built, and per macro argument bound.
+pub const STEPS_PER_ELEMENT: u64 = 4;
+
+/// The steps that work on `v` costs beyond the expression's own: its string bytes (a string
+/// joined, compared or measured is copied or scanned whole) and its array elements (made one
+/// by one). So the budget bounds what a loop builds, not only how often it runs: a string of
+/// 8 MiB joined a million times, or an array of 4 000 numbers made a million times, runs out
+/// of steps instead of running for an hour, and what a scene can build in all (about 800 MB of
+/// strings or 12 million array elements at the default budget) bounds its memory too.
+pub(crate) fn work_of(v: &Value) -> u64 {
+    match v {
+        Value::Str(s) => (s.len() / STRING_BYTES_PER_STEP) as u64,
+        Value::Array(xs) => xs.len() as u64 * STEPS_PER_ELEMENT,
+        _ => 0,
+    }
+}
+
 /// Stack of the evaluation thread. Reserved, not touched: only what the nesting uses is paid.
 const EVAL_STACK: usize = 1 << 30;
 
@@ -221,6 +240,18 @@ fn not_a_property(sink: &dyn Sink, word: &str, span: Span) -> Diagnostic {
     e.at(span)
 }
 
+/// The name an expression starts with, if it is a name or a chain of binary operations whose
+/// first operand is one.
+fn leftmost_name(mut e: &Expr) -> Option<&str> {
+    loop {
+        match &e.kind {
+            ExprKind::Ident(name) => return Some(name),
+            ExprKind::Binary(_, a, _) => e = a,
+            _ => return None,
+        }
+    }
+}
+
 /// `a`, `a or b`, `a, b or c`.
 fn or_list(xs: &[String]) -> String {
     match xs {
@@ -290,10 +321,16 @@ impl Evaluator {
 
     /// Counts one step against the budget; the error when it has run out.
     pub(crate) fn tick(&mut self, span: Span) -> SourceResult<()> {
+        self.charge(1, span)
+    }
+
+    /// Counts `steps` steps against the budget: work whose cost grows with the size of its
+    /// values (see [`work_of`]).
+    pub(crate) fn charge(&mut self, steps: u64, span: Span) -> SourceResult<()> {
         if self.exhausted {
             return Err(silent());
         }
-        self.steps += 1;
+        self.steps = self.steps.saturating_add(steps);
         if self.steps > self.options.max_steps {
             self.exhausted = true;
             return Err(vec![
@@ -317,7 +354,8 @@ impl Evaluator {
         if self.block_depth + self.frames.len() >= MAX_EVAL_NESTING {
             return Err(vec![
                 Error::new(format!(
-                    "blocks and macro calls nested deeper than {MAX_EVAL_NESTING}"
+                    "blocks, directive bodies and macro calls nested deeper than \
+                     {MAX_EVAL_NESTING}"
                 ))
                 .label("one level too deep")
                 .help("make sure the recursion stops (e.g. `#if (Depth > 0)`)")
@@ -399,6 +437,19 @@ impl Evaluator {
                 // properties. A name far from every property only when a literal follows and
                 // it is not close to a declared name: `Radus material { ... }` or
                 // `union { Wheel Body }` are misspelt or undeclared values.
+                // A POV-Ray word of this block that is no name here, standing alone
+                // (`shadowless`, `perspective`) or heading an expression (`right -x*4/3` reads
+                // as a subtraction): its hint.
+                if let Some(name) = leftmost_name(e)
+                    && self.lookup_quiet(name).is_none()
+                    && !self.poisoned.contains(name)
+                    && crate::syntax::povray_hint(name, &sink.kind()).is_some()
+                {
+                    while let Some(Item::Expr(_) | Item::Comma(_)) = items.get(*i) {
+                        *i += 1;
+                    }
+                    return Err(vec![not_a_property(sink, name, e.span)]);
+                }
                 if let ExprKind::Ident(name) = &e.kind
                     && let Some(Item::Expr(next)) = items.get(*i)
                     && self.lookup_quiet(name).is_none()

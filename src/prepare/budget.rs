@@ -60,10 +60,19 @@ fn primitives(shape: &Shape) -> u64 {
 /// own allocation).
 fn held_bytes(shape: &Shape) -> u64 {
     match shape {
-        Shape::BezierPatch { .. } => size_of::<BezierPatch>() as u64,
+        // The piece in its `Arc` and the boxed transform around it, each a heap allocation
+        // (with its header and the `Arc`'s counts): measured 1.33 KB per piece in all against
+        // 0.92 KB counted without them.
+        Shape::BezierPatch { .. } => {
+            (size_of::<BezierPatch>() + size_of::<crate::shapes::transformed::Transformed>()) as u64
+                + WRAP_OVERHEAD
+        }
         _ => 0,
     }
 }
+
+/// Heap headers and reference counts of a shape held in an `Arc` inside a `Box`.
+const WRAP_OVERHEAD: u64 = 64;
 
 /// Bytes per primitive: the shape record, its share of the BVH (at most two nodes of 32 bytes
 /// per primitive), the per-primitive object, light and material indices, and the build's
@@ -152,11 +161,15 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         what: "primitives and their BVH",
         bytes: shapes,
     }];
+    // Each image once, however many textures use it (they share its pixels).
+    let mut seen = HashSet::new();
     let mut image_pixels: u64 = scene
         .textures
         .iter()
         .filter_map(|t| match &t.pattern {
-            Pattern::Image { image, .. } => Some(image.width as u64 * image.height as u64),
+            Pattern::Image { image, .. } if seen.insert(std::sync::Arc::as_ptr(image)) => {
+                Some(image.width as u64 * image.height as u64)
+            }
             _ => None,
         })
         .sum();
@@ -181,8 +194,16 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         bytes: pixels.saturating_mul(per_pixel),
     });
     let photons = match settings.integrator {
-        // Rounds of at most 2^21 photon hits (32 bytes), filed twice while the grid is built.
-        Integrator::Sppm | Integrator::Ppm => 64u64 << 21,
+        // Rounds of at most 2^21 photon hits (32 bytes), filed twice while the grid is built;
+        // fewer where the photons of an iteration cannot store that many (at most `max_depth`
+        // hits each; the automatic count is taken as the most).
+        Integrator::Sppm | Integrator::Ppm => {
+            let hits = settings.photons.map_or(1 << 21, |n| {
+                n.saturating_mul(u64::from(settings.max_depth).max(1))
+                    .min(1 << 21)
+            });
+            hits.saturating_mul(64)
+        }
         // Three stored hits of 48 bytes per photon, in the list and in the kd-tree.
         Integrator::PhotonMap => settings
             .photons

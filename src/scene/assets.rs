@@ -12,6 +12,9 @@ use rayon::prelude::*;
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// Largest image accepted: 2^25 pixels (8192x4096); decoded to linear RGB that is 400 MB.
 pub const MAX_IMAGE_PIXELS: u64 = 1 << 25;
+/// Most pixels of all the images one scene loads together (2^27: 1.5 GiB decoded): each image
+/// is checked against what is left before it is decoded, from its header.
+pub const MAX_TOTAL_IMAGE_PIXELS: u64 = 1 << 27;
 /// Most memory the image decoder may allocate for one file.
 pub const MAX_IMAGE_DECODE_BYTES: u64 = 1 << 30;
 
@@ -86,6 +89,16 @@ impl std::fmt::Display for AssetError {
 /// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
 /// float formats (EXR, HDR) are always linear.
 pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, AssetError> {
+    load_image_within(path, space, MAX_IMAGE_PIXELS)
+}
+
+/// [`load_image`] of an image that may have at most `room` pixels (what is left of
+/// [`MAX_TOTAL_IMAGE_PIXELS`] after the images loaded before), refused from its header.
+pub fn load_image_within(
+    path: &std::path::Path,
+    space: ColorSpace,
+    room: u64,
+) -> Result<ImageData, AssetError> {
     let bytes =
         crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
             crate::files::FileError::Io(e) => {
@@ -93,7 +106,7 @@ pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData
             }
             refused => AssetError::unread(format!("cannot open image: {refused}")),
         })?;
-    decode_image(&bytes, path, space).map_err(AssetError::content)
+    decode_image(&bytes, path, space, room).map_err(AssetError::content)
 }
 
 /// The image in a file's `bytes`.
@@ -101,6 +114,7 @@ fn decode_image(
     bytes: &[u8],
     path: &std::path::Path,
     space: ColorSpace,
+    room: u64,
 ) -> Result<ImageData, String> {
     let reader = || {
         let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
@@ -121,6 +135,13 @@ fn decode_image(
         return Err(format!(
             "image `{}` is {w}x{h} pixels, more than the limit of {MAX_IMAGE_PIXELS} pixels \
              (for example 8192x4096)",
+            path.display()
+        ));
+    }
+    if w as u64 * h as u64 > room {
+        return Err(format!(
+            "image `{}` is {w}x{h} pixels, more than the {room} pixels left of the limit of \
+             {MAX_TOTAL_IMAGE_PIXELS} pixels for all the scene's images together",
             path.display()
         ));
     }

@@ -32,6 +32,7 @@ fn describe(rule: Rule) -> &'static str {
         Rule::debug_d => "`#debug`",
         Rule::warning_d => "`#warning`",
         Rule::error_d => "`#error`",
+        Rule::dword => "a directive",
         Rule::params => "parameter names",
         Rule::keyword => "a property keyword",
         Rule::expr | Rule::vexpr | Rule::iexpr => "an expression",
@@ -121,11 +122,10 @@ pub(super) fn syntax_error(
             "error",
         ];
         if let Some(hint) = super::povray_hint(&format!("#{word}"), "") {
+            // What could stand here instead matters less than the spelling to write.
             d = d.with_help(hint);
-            if expected_text == "something else" {
-                d.message = format!("syntax error: unexpected {found}");
-                d.label = "a POV-Ray directive".into();
-            }
+            d.message = format!("syntax error: unexpected {found}");
+            d.label = "a POV-Ray directive".into();
         } else if matches!(word.as_str(), "end" | "else" | "elif") {
             d = d.with_help(format!(
                 "`#{word}` without a matching `#if`, `#ifdef`, `#switch`, `#while`, `#for` or \
@@ -140,6 +140,16 @@ pub(super) fn syntax_error(
             d.message = format!("syntax error: malformed `#{word}`");
             d.label = "not the form of this directive".into();
             d = d.with_help(format!("write it as {form}"));
+        } else if let Some(head) = known
+            .iter()
+            .filter(|k| word.len() > k.len() && word.starts_with(*k))
+            .max_by_key(|k| k.len())
+        {
+            // `#elsebox`, `#declareX`: a directive's word ends where its name does.
+            d = d.with_help(format!(
+                "a directive's word stands alone: write `#{head} {}`",
+                &word[head.len()..]
+            ));
         } else if let Some(s) = crate::diag::suggest(&word, known) {
             d = d.with_help(format!("did you mean `#{s}`?"));
         }
@@ -168,9 +178,19 @@ pub(super) fn syntax_error(
             "POV-Ray's comparison `=` is `==` here (`=` stands only in `#declare Name = value`)",
         );
     }
-    if rest.starts_with('*') && text[..pos].ends_with('/') && !rest[1..].contains("*/") {
+    // The parser stops at the comment's `/` or just after it.
+    let comment_at = if rest.starts_with("/*") {
+        Some(pos)
+    } else if rest.starts_with('*') && text[..pos].ends_with('/') {
+        Some(pos - 1)
+    } else {
+        None
+    };
+    if let Some(at) = comment_at
+        && !block_comment(text.as_bytes(), at).closed
+    {
         return Diagnostic::error(
-            Span::new(file, pos as u32 - 1, pos as u32 + 1),
+            Span::new(file, at as u32, at as u32 + 2),
             "syntax error: a `/* ... */` comment is never closed",
         )
         .with_label("this `/*` is never closed")
@@ -189,6 +209,19 @@ pub(super) fn syntax_error(
         d = d.with_help(format!(
             "this looks like {format}: sppm-lang reads its own POV-Ray-like language \
              (docs/language.md), e.g. `sphere {{ <0, 0, 0>, 1 }}`; write the scene in it"
+        ));
+    }
+    if d.help.is_none()
+        && pos < text.len()
+        && innermost_bracket(&text[..pos]) == Some(b'[')
+        && text[..pos].trim_end().ends_with(|c: char| {
+            c.is_ascii_alphanumeric() || matches!(c, '_' | ')' | ']' | '>' | '"')
+        })
+    {
+        // `[0 Red]`: POV-Ray's colour-map entries are written without a comma.
+        d = d.with_help(format!(
+            "the items of `[...]` are separated by commas: add `,` before {found} (e.g. \
+             `[0, Red]`)"
         ));
     }
     if d.help.is_none() {
@@ -338,11 +371,8 @@ fn open_blocks(text: &str) -> Vec<(usize, usize)> {
                 }
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i += 2;
-                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
-                    i += 1;
-                }
-                i += 1;
+                i = block_comment(bytes, i).end;
+                continue;
             }
             b'"' => {
                 i += 1;
@@ -420,6 +450,13 @@ fn last_char(file: FileId, text: &str) -> Span {
 /// everything that could stand there. The second value says that the position follows an
 /// operand: the message then leaves out the tokens that could merely continue the expression.
 fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
+    // A failure at the file's first item is reported as the whole file failing there: what could
+    // stand there is any item, as after a comma.
+    let positives: &[Rule] = if positives == [Rule::file] {
+        &[Rule::comma, Rule::dword]
+    } else {
+        positives
+    };
     let mut rules: Vec<Rule> = positives
         .iter()
         .copied()
@@ -527,11 +564,11 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<Option<usi
                 continue;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i += 2;
-                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
-                    i += 1;
+                let c = block_comment(bytes, i);
+                if let Some(at) = c.too_deep {
+                    return Err(vec![too_deep(Span::new(file, at as u32, (at + 2) as u32))]);
                 }
-                i += 2;
+                i = c.end;
                 continue;
             }
             b'"' => {
@@ -567,6 +604,82 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<Option<usi
         i += 1;
     }
     Ok(stray)
+}
+
+/// The innermost of `(`, `[` and `{` still open at the end of `text` (outside strings and
+/// comments).
+fn innermost_bracket(text: &str) -> Option<u8> {
+    let bytes = text.as_bytes();
+    let mut open = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i = block_comment(bytes, i).end;
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            c @ (b'(' | b'[' | b'{') => open.push(c),
+            b')' | b']' | b'}' => {
+                open.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    open.pop()
+}
+
+/// A `/* ... */` comment starting at `start`, where comments nest as in POV-Ray (`/* a /* b */
+/// c */` is one comment).
+struct BlockComment {
+    /// Just past its closing `*/`, or the end of the text.
+    end: usize,
+    closed: bool,
+    /// Where an opening `/*` nests deeper than [`MAX_NESTING`] (the parser would recurse).
+    too_deep: Option<usize>,
+}
+
+fn block_comment(bytes: &[u8], start: usize) -> BlockComment {
+    let (mut depth, mut i, mut too_deep) = (0usize, start, None);
+    while i + 1 < bytes.len() {
+        match (bytes[i], bytes[i + 1]) {
+            (b'/', b'*') => {
+                depth += 1;
+                if depth > MAX_NESTING && too_deep.is_none() {
+                    too_deep = Some(i);
+                }
+                i += 2;
+            }
+            (b'*', b'/') => {
+                depth -= 1;
+                i += 2;
+                if depth == 0 {
+                    return BlockComment {
+                        end: i,
+                        closed: true,
+                        too_deep,
+                    };
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    BlockComment {
+        end: bytes.len(),
+        closed: false,
+        too_deep,
+    }
 }
 
 fn too_deep(span: Span) -> Diagnostic {

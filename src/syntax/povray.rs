@@ -340,6 +340,82 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
     ),
     pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
+    pov_in(
+        "light",
+        "jitter",
+        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
+         needed here: an `area_light { quad { ... } radiance ... }` is sampled over its whole \
+         surface; remove it",
+    ),
+    pov_in(
+        "light",
+        "circular",
+        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
+         needed here: a round area light is `area_light { disk { ... } radiance ... }`; remove it",
+    ),
+    pov_in(
+        "light",
+        "orient",
+        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
+         needed here: an `area_light { sphere { ... } }` is sampled by the cone it subtends; \
+         remove it",
+    ),
+    pov_in(
+        "light",
+        "adaptive",
+        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
+         needed here: an `area_light { quad { ... } radiance ... }` is sampled over its whole \
+         surface; remove it",
+    ),
+    pov_in(
+        "light",
+        "tightness",
+        "POV-Ray's `tightness` has no counterpart (and a `light` shines alike in every \
+         direction; a cone of light is `spotlight { ... angle a falloff f }`); remove it",
+    ),
+    pov_in(
+        "camera",
+        "focal_point",
+        "POV-Ray's `focal_point <p>` is `focus_distance d` here: the distance from the camera \
+         to the plane in focus (with `aperture`)",
+    ),
+    pov(
+        "max_trace_level",
+        "POV-Ray's `max_trace_level` is `settings { max_depth N }` here",
+    ),
+    pov(
+        "assumed_gamma",
+        "there is no `assumed_gamma` here: colours are linear, images are read and written as \
+         sRGB; remove it",
+    ),
+    pov(
+        "looks_like",
+        "POV-Ray's `looks_like` has no counterpart: a visible emitter is an \
+         `area_light { sphere { ... } radiance ... }` here; remove it",
+    ),
+    pov(
+        "no_image",
+        "POV-Ray's `no_image` has no counterpart: every object is seen, reflected and casts \
+         shadows here; remove it",
+    ),
+    pov(
+        "no_reflection",
+        "POV-Ray's `no_reflection` has no counterpart: every object is seen, reflected and \
+         casts shadows here; remove it",
+    ),
+    pov(
+        "double_illuminate",
+        "POV-Ray's `double_illuminate` has no counterpart: light through thin surfaces is a \
+         material's business here; remove it",
+    ),
+    pov(
+        "sturm",
+        "every root is isolated robustly here (no `sturm` needed); remove it",
+    ),
+    pov(
+        "#endif",
+        "POV-Ray's `#endif` is `#end` here (every block directive closes with `#end`)",
+    ),
     pov(
         "#default",
         "POV-Ray's `#default` has no counterpart: an object without a material is diffuse gray 0.5; \

@@ -370,7 +370,8 @@ impl ObjectBuilder {
 }
 
 fn article(kind: &str) -> &'static str {
-    if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+    // `union` begins with a vowel letter, not a vowel sound.
+    if kind.starts_with(['a', 'e', 'i', 'o', 'u']) && !kind.starts_with("uni") {
         "an"
     } else {
         "a"
