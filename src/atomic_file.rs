@@ -17,17 +17,7 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&Path, &mut File) -> Result<(), String>,
 ) -> Result<(), String> {
-    let dir = folder_of(path);
-    check_target(path)?;
-    remove_stale(dir);
-    let mut tmp = temp_in(dir, path)?;
-    let tmp_path = tmp.path().to_path_buf();
-    fill(&tmp_path, tmp.as_file_mut())?;
-    // Checked again just before the rename: the path may have changed while `fill` ran.
-    check_target(path)?;
-    tmp.persist(path)
-        .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;
-    Ok(())
+    write_atomic_group(vec![(path, Box::new(fill))])
 }
 
 /// How [`write_atomic_group`] fills one file (as `write_atomic`'s `fill`).
@@ -50,6 +40,7 @@ pub fn write_atomic_group(files: Vec<(&Path, Fill<'_>)>) -> Result<(), String> {
         done.push((path, tmp));
     }
     for (path, tmp) in done {
+        // Checked again just before the rename: the path may have changed while `fill` ran.
         check_target(path)?;
         tmp.persist(path)
             .map_err(|e| format!("cannot write `{}`: {}", path.display(), e.error))?;

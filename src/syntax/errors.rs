@@ -364,22 +364,11 @@ fn open_blocks(text: &str) -> Vec<(usize, usize)> {
     let mut open: Vec<(usize, usize)> = Vec::new();
     let mut i = 0;
     while i < bytes.len() {
+        if let Some(next) = after_comment_or_string(bytes, i) {
+            i = next;
+            continue;
+        }
         match bytes[i] {
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i = block_comment(bytes, i).end;
-                continue;
-            }
-            b'"' => {
-                i += 1;
-                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
-                    i += if bytes[i] == b'\\' { 2 } else { 1 };
-                }
-            }
             b'{' => open.push((i, 1)),
             b'}' => {
                 if let Some(k) = open.iter().rposition(|o| o.1 == 1) {
@@ -613,22 +602,11 @@ fn innermost_bracket(text: &str) -> Option<u8> {
     let mut open = Vec::new();
     let mut i = 0;
     while i < bytes.len() {
+        if let Some(next) = after_comment_or_string(bytes, i) {
+            i = next;
+            continue;
+        }
         match bytes[i] {
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i = block_comment(bytes, i).end;
-                continue;
-            }
-            b'"' => {
-                i += 1;
-                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
-                    i += if bytes[i] == b'\\' { 2 } else { 1 };
-                }
-            }
             c @ (b'(' | b'[' | b'{') => open.push(c),
             b')' | b']' | b'}' => {
                 open.pop();
@@ -638,6 +616,28 @@ fn innermost_bracket(text: &str) -> Option<u8> {
         i += 1;
     }
     open.pop()
+}
+
+/// Where the comment or string starting at `i` ends (just past it; at the end of its line for
+/// a line comment and an unclosed string), or `None` when none starts there.
+fn after_comment_or_string(bytes: &[u8], mut i: usize) -> Option<usize> {
+    match (bytes[i], bytes.get(i + 1)) {
+        (b'/', Some(b'/')) => {
+            while i < bytes.len() && bytes[i] != b'\n' {
+                i += 1;
+            }
+            Some(i)
+        }
+        (b'/', Some(b'*')) => Some(block_comment(bytes, i).end),
+        (b'"', _) => {
+            i += 1;
+            while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                i += if bytes[i] == b'\\' { 2 } else { 1 };
+            }
+            Some((i + 1).min(bytes.len()))
+        }
+        _ => None,
+    }
 }
 
 /// A `/* ... */` comment starting at `start`, where comments nest as in POV-Ray (`/* a /* b */

@@ -11,6 +11,11 @@ pub struct PovSpelling {
     pub hint: &'static str,
 }
 
+/// POV-Ray's area-light options that have no counterpart.
+const AREA_LIGHT_OPTIONS: &str = "POV-Ray's area-light options (`jitter`, `circular`, `orient`, \
+     `adaptive`) are not needed here: an `area_light { quad { ... } radiance ... }` is sampled \
+     over its whole surface; remove it";
+
 const fn pov(word: &'static str, hint: &'static str) -> PovSpelling {
     PovSpelling {
         word,
@@ -340,13 +345,7 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
     ),
     pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
-    pov_in(
-        "light",
-        "jitter",
-        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
-         needed here: an `area_light { quad { ... } radiance ... }` is sampled over its whole \
-         surface; remove it",
-    ),
+    pov_in("light", "jitter", AREA_LIGHT_OPTIONS),
     pov_in(
         "light",
         "circular",
@@ -360,13 +359,7 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          needed here: an `area_light { sphere { ... } }` is sampled by the cone it subtends; \
          remove it",
     ),
-    pov_in(
-        "light",
-        "adaptive",
-        "POV-Ray's area-light options (`jitter`, `circular`, `orient`, `adaptive`) are not \
-         needed here: an `area_light { quad { ... } radiance ... }` is sampled over its whole \
-         surface; remove it",
-    ),
+    pov_in("light", "adaptive", AREA_LIGHT_OPTIONS),
     pov_in(
         "light",
         "tightness",

@@ -291,6 +291,22 @@ fn initial_radii_follow_the_footprint_at_the_first_visible_point() {
     }
 }
 
+/// The image of an SPPM render (with or without the extra camera samples).
+fn image_of(
+    prepared: &PreparedScene,
+    settings: &EffectiveSettings,
+    balanced: bool,
+) -> crate::film::Image {
+    let cancel = AtomicBool::new(false);
+    let job = Job {
+        scene: prepared,
+        settings,
+        cancel: &cancel,
+        on_progress: &mut |_| {},
+    };
+    render_with(job, camera_path, balanced).0.image
+}
+
 /// Where the camera looks cannot change the image: `smallppm_far` (look_at 100 units ahead,
 /// the objects about 235 away) with look_at moved onto the objects along the same line of sight
 /// renders the same image (within a thousandth of the mean square difference two seeds make).
@@ -322,15 +338,7 @@ fn moving_look_at_along_the_line_of_sight_leaves_the_image_as_it_is() {
             ..Default::default()
         };
         let settings = effective_settings(&scene, &options).unwrap();
-        let prepared = PreparedScene::new(&scene).unwrap();
-        let cancel = AtomicBool::new(false);
-        let job = Job {
-            scene: &prepared,
-            settings: &settings,
-            cancel: &cancel,
-            on_progress: &mut |_| {},
-        };
-        render_with(job, camera_path, true).0.image
+        image_of(&PreparedScene::new(&scene).unwrap(), &settings, true)
     };
     let msd = |a: &crate::film::Image, b: &crate::film::Image| {
         let n = (a.pixels.len() * 3) as f64;
@@ -378,14 +386,7 @@ fn extra_camera_samples_calm_the_light_edge() {
             seed,
             ..settings.clone()
         };
-        let cancel = AtomicBool::new(false);
-        let job = Job {
-            scene: &prepared,
-            settings: &settings,
-            cancel: &cancel,
-            on_progress: &mut |_| {},
-        };
-        render_with(job, camera_path, balanced).0.image
+        image_of(&prepared, &settings, balanced)
     };
     // The light spans about columns 26-38 and rows 8-11 at 64 px: the window is it and its edge.
     let window_msd = |a: &crate::film::Image, b: &crate::film::Image| {
