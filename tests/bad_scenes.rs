@@ -124,3 +124,41 @@ fn block_comments_nest() {
     let (message, _) = first_error(&deep);
     assert!(message.contains("nesting deeper"), "{message}");
 }
+
+/// A material property its kind does not use is an error, not silently dropped: `glass
+/// roughness 0.3` is not frosted glass, and `diffuse ... specular` is not a highlight. A
+/// material that extends a declared one takes the properties of the declared one's kind.
+#[test]
+fn a_material_property_belongs_to_its_kind() {
+    for (body, what, kind) in [
+        ("glass roughness 0.3", "roughness", "glass"),
+        ("glass specular rgb 0.1", "specular", "glass"),
+        ("diffuse rgb 0.5 specular rgb 0.1", "specular", "diffuse"),
+        ("diffuse rgb 0.5 tint rgb 1", "tint", "diffuse"),
+        ("mirror roughness 0.2", "roughness", "mirror"),
+        ("glossy rgb 0.5 ior 1.5", "ior", "glossy"),
+        ("glossy rgb 0.5 absorb rgb 0.1", "absorb", "glossy"),
+    ] {
+        let text = format!("sphere {{ <0, 0, 0>, 1 material {{ {body} }} }}\n");
+        let (message, _) = first_error(&text);
+        assert_eq!(
+            message,
+            format!("`{what}` does not apply to a {kind} material"),
+            "{text}"
+        );
+    }
+    let ok = sppm_lang::load_source(
+        "ok.scn",
+        "#declare G = material { glass ior 1.5 }\n\
+         #declare R = material { glossy rgb 0.5 roughness 0.3 }\n\
+         sphere { <0, 0, 0>, 1 material { G ior 1.33 absorb rgb 0.1 tint rgb 0.9 } }\n\
+         sphere { <2, 0, 0>, 1 material { R specular rgb 0.1 } }\n\
+         sphere { <4, 0, 0>, 1 material { mirror tint rgb 0.9 } }\n",
+        &EvalOptions::default(),
+    );
+    assert!(!ok.has_errors(), "{:?}", ok.diagnostics);
+    let (message, _) = first_error(
+        "#declare D = material { diffuse rgb 0.5 }\nsphere { <0, 0, 0>, 1 material { D ior 1.5 } }\n",
+    );
+    assert_eq!(message, "`ior` does not apply to a diffuse material");
+}

@@ -25,7 +25,20 @@ pub(super) struct MaterialBuilder {
     tint_def: Option<ColorDef>,
     specular: Option<ColorDef>,
     roughness: Option<ColorDef>,
+    /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
+    /// `roughness`), with their keywords' spans: each must belong to the material's kind.
+    written: Vec<(&'static str, Span)>,
     touched: bool,
+}
+
+/// The properties each kind uses beyond its colour.
+fn uses(kind: &str) -> &'static [&'static str] {
+    match kind {
+        "mirror" => &["tint"],
+        "glass" => &["ior", "absorb", "tint"],
+        "glossy" => &["specular", "roughness"],
+        _ => &[],
+    }
 }
 
 /// Smallest glossy roughness: below it the lobe's width underflows (use `mirror` instead).
@@ -94,10 +107,18 @@ impl MaterialBuilder {
                 None => Ok(()),
             }
         };
+        // A property the kind does not use would be dropped without a word (`glass roughness
+        // 0.3` is not frosted glass): refused, as POV-Ray users expect a finish to matter.
+        if let Some(&(what, s)) = self
+            .written
+            .iter()
+            .find(|w| !uses(kind_name).contains(&w.0))
+        {
+            misplaced(what, Some(s))?;
+        }
         let one = ColorDef::Const(Color::ONE);
         let kind = match kind_name {
             "diffuse" => {
-                misplaced("ior", self.ior.map(|i| i.1))?;
                 let base_albedo = match base {
                     Some(MatKind::Diffuse(a)) => Some(a),
                     _ => None,
@@ -108,10 +129,7 @@ impl MaterialBuilder {
                         .unwrap_or(ColorDef::Const(Color::splat(0.5))),
                 )
             }
-            "mirror" => {
-                misplaced("ior", self.ior.map(|i| i.1))?;
-                MatKind::Mirror(self.tint_def.or(self.albedo).unwrap_or(one))
-            }
+            "mirror" => MatKind::Mirror(self.tint_def.or(self.albedo).unwrap_or(one)),
             "glass" => {
                 let (mut ior, mut absorb, mut tint) =
                     (1.5, ColorDef::Const(Color::ZERO), Color::ONE);
@@ -191,6 +209,12 @@ impl Sink for MaterialBuilder {
     }
     fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         self.touched = true;
+        if let Some(&w) = ["ior", "absorb", "tint", "specular", "roughness"]
+            .iter()
+            .find(|w| **w == kw.text)
+        {
+            self.written.push((w, kw.span));
+        }
         match kw.text.as_str() {
             "diffuse" => {
                 self.set_kind("diffuse", kw.span)?;
