@@ -175,6 +175,11 @@ impl Bvh {
         self.bounds
     }
 
+    /// How many shapes have no finite bounds (infinite planes), outside [`Bvh::bounds`].
+    pub fn unbounded_len(&self) -> usize {
+        self.unbounded.len()
+    }
+
     /// Shapes and mesh triangles.
     pub fn len(&self) -> usize {
         self.leaves.shapes.len() + self.unbounded.len() + self.meshes.triangles()

@@ -35,9 +35,18 @@ pub fn print_diagnostics(loaded: &Loaded) {
 
 /// Prints a render failure: as a diagnostic at its span when it has one.
 pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
+    print_render_diagnostic(sources, e, false);
+}
+
+/// A render error or warning, at its span when it has one, else about the whole scene.
+fn print_render_diagnostic(sources: &SourceMap, e: &RenderError, warning: bool) {
     match e.span {
         Some(span) if sources.get(span.file).is_some() => {
-            let mut d = Diagnostic::error(span, e.message.clone());
+            let mut d = if warning {
+                Diagnostic::warning(span, e.message.clone())
+            } else {
+                Diagnostic::error(span, e.message.clone())
+            };
             d.label = e.label.clone();
             d.help = e.help.clone();
             let loaded = Loaded {
@@ -48,7 +57,7 @@ pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
             print_diagnostics(&loaded);
         }
         // No declaration to point at (e.g. a default the file never wrote): name the file.
-        _ => print_unplaced(sources, "error", e),
+        _ => print_unplaced(sources, if warning { "warning" } else { "error" }, e),
     }
 }
 
@@ -91,9 +100,9 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
     }
 }
 
-/// Prints a warning the prepare stage found (it has no span: it is about the whole scene).
+/// Prints a warning the prepare stage found: at its span, or about the whole scene.
 pub fn print_render_warning(sources: &SourceMap, w: &RenderError) {
-    print_unplaced(sources, "warning", w);
+    print_render_diagnostic(sources, w, true);
 }
 
 /// What the prepare stage decided: mesh sizes, the focus distance, the initial radius.

@@ -3,11 +3,12 @@
 
 use glam::Vec3A;
 
-use super::RenderError;
 use super::shapes::v;
+use super::{PreparedScene, RenderError};
 use crate::accel::Bvh;
 use crate::lights::{EnvironmentLight, Light, PointLight, Sky, SpotLight};
 use crate::scene::{self, Scene};
+use crate::shapes::Shape;
 use crate::textures;
 
 /// Appends the scene's point and spot lights to `lights`.
@@ -110,4 +111,212 @@ pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>
         sky, center, radius,
     )));
     Some(lights.len() - 1)
+}
+
+/// Warnings for the one-sided flat area lights (quads, disks, triangles) with nothing on their
+/// emitting side: all finite geometry lies behind or in the light's plane, and so does every
+/// infinite plane (parallel to it). Such a light lights nothing; its normal was most likely
+/// meant the other way. A light of several pieces (an emissive mesh) is named once, when none
+/// of its pieces faces anything. The test uses the scene's bounding box, so it never warns
+/// about a light that lights something; a tilted light beside a scene of scattered objects
+/// may go unnamed.
+pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
+    let scene = prepared.scene;
+    let b = prepared.bvh.bounds();
+    // Infinite planes, as (unit normal, a point), in world space; an unbounded shape that is
+    // not a plane object (a CSG part) could be anywhere: then no warning at all.
+    let mut planes = Vec::new();
+    for o in &scene.objects {
+        if let scene::Shape::Plane { normal, offset } = o.shape {
+            let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
+            planes.push((n, o.transform.transform_point3(normal * offset)));
+        }
+    }
+    if planes.len() != prepared.bvh.unbounded_len() {
+        return Vec::new();
+    }
+    let corners: Vec<glam::DVec3> = if b.is_empty() {
+        Vec::new()
+    } else {
+        (0..8)
+            .map(|k| {
+                let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+                glam::DVec3::new(
+                    pick(1, b.min.x, b.max.x) as f64,
+                    pick(2, b.min.y, b.max.y) as f64,
+                    pick(4, b.min.z, b.max.z) as f64,
+                )
+            })
+            .collect()
+    };
+    let extent = corners
+        .iter()
+        .chain(planes.iter().map(|p| &p.1))
+        .fold(1.0f64, |m, c| m.max(c.abs().max_element()));
+    let tol = 1e-5 * extent;
+    // Per object: whether one of its pieces faces something, and whether any was tested.
+    let mut verdict: Vec<Option<bool>> = vec![None; scene.objects.len()];
+    for (prim, &li) in prepared.prim_light.iter().enumerate() {
+        let Some(Light::Area(light)) = prepared.lights.get(li as usize) else {
+            continue;
+        };
+        let oi = prepared.prim_object[prim] as usize;
+        if light.two_sided || verdict.get(oi).copied().flatten() == Some(true) {
+            continue;
+        }
+        let samples: Vec<_> = [[0.2, 0.3], [0.7, 0.2], [0.4, 0.8]]
+            .iter()
+            .filter_map(|u| light.shape.sample(glam::Vec2::from(*u)))
+            .collect();
+        let Some(first) = samples.first() else {
+            continue;
+        };
+        let n = first.n.as_dvec3();
+        let flat = samples.len() == 3
+            && samples.iter().all(|s| {
+                s.n.as_dvec3().dot(n) > 1.0 - 1e-6 && (s.p - first.p).as_dvec3().dot(n).abs() <= tol
+            });
+        let p = first.p.as_dvec3();
+        let faces_something = !flat
+            || corners.iter().any(|c| n.dot(*c - p) > tol)
+            || planes
+                .iter()
+                .any(|(pn, pp)| pn.dot(n).abs() < 1.0 - 1e-9 || n.dot(*pp - p) > tol);
+        if let Some(v) = verdict.get_mut(oi) {
+            *v = Some(faces_something);
+        }
+    }
+    verdict
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v == Some(false))
+        .map(|(oi, _)| RenderError {
+            message: "this area light faces away from everything: it emits only on the side \
+                      its normal points to, and nothing is there"
+                .into(),
+            span: Some(scene.objects[oi].span),
+            label: "lights nothing".into(),
+            help: Some(
+                "turn it around (swap a quad's two edges or a triangle's last two points; \
+                 negate a disk's normal) or add `two_sided`"
+                    .into(),
+            ),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{EvalOptions, load_source};
+
+    /// How many "faces away" warnings a scene gets.
+    fn facing_away_count(text: &str) -> usize {
+        let l = load_source("t.scn", text, &EvalOptions::default());
+        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+        let prepared = PreparedScene::new(&scene).expect("prepares");
+        let warnings = prepared.warnings();
+        warnings
+            .iter()
+            .filter(|w| w.message.contains("faces away"))
+            .inspect(|w| assert!(w.span.is_some(), "{}", w.message))
+            .count()
+    }
+
+    /// A flat light with nothing on its emitting side is named, whatever its shape and
+    /// transform; one that lights something (directly, through an infinite plane in front of it
+    /// or tilted against it, or on its other side when two-sided) is not.
+    #[test]
+    fn a_light_facing_away_from_everything_is_named() {
+        let room = "camera { location <0, 1, -4> look_at <0, 0.5, 0> }\n\
+                    sphere { <0, 0.5, 0>, 0.5 material { diffuse rgb 0.5 } }\n";
+        let floor = "plane { y, 0 material { diffuse rgb 0.8 } }\n";
+        let cases = [
+            // Quads 3 units up: normal up (edges z then x) faces away; x then z faces down.
+            (
+                "area_light { quad { <-0.5, 3, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 }",
+                true,
+                1,
+            ),
+            (
+                "area_light { quad { <-0.5, 3, -0.5>, <1, 0, 0>, <0, 0, 1> } radiance rgb 10 }",
+                true,
+                0,
+            ),
+            (
+                "area_light { quad { <-0.5, 3, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 two_sided }",
+                true,
+                0,
+            ),
+            (
+                "area_light { quad { <-0.5, 3, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 }",
+                false,
+                1,
+            ),
+            // The same quad turned over by a rotation, and moved below the floor facing up.
+            (
+                "area_light { quad { <-0.5, 0, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 rotate <180, 0, 0> translate <0, 3, 0> }",
+                true,
+                0,
+            ),
+            (
+                "area_light { quad { <-0.5, -1, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 }",
+                true,
+                0,
+            ),
+            (
+                "area_light { quad { <-0.5, -1, -0.5>, <0, 0, 1>, <1, 0, 0> } radiance rgb 10 }",
+                false,
+                0,
+            ),
+            // Disks and triangles.
+            (
+                "area_light { disk { <0, 3, 0>, <0, 1, 0>, 0.5 } radiance rgb 10 }",
+                true,
+                1,
+            ),
+            (
+                "area_light { disk { <0, 3, 0>, <0, -1, 0>, 0.5 } radiance rgb 10 }",
+                true,
+                0,
+            ),
+            (
+                "area_light { triangle { <0, 3, 0>, <0, 3, 1>, <1, 3, 0> } radiance rgb 10 }",
+                true,
+                1,
+            ),
+            (
+                "area_light { triangle { <0, 3, 0>, <1, 3, 0>, <0, 3, 1> } radiance rgb 10 }",
+                true,
+                0,
+            ),
+            // Beside the scene, facing out to the left; facing in.
+            (
+                "area_light { quad { <-3, 0, -1>, <0, 0, 2>, <0, 2, 0> } radiance rgb 10 }",
+                false,
+                1,
+            ),
+            (
+                "area_light { quad { <-3, 0, -1>, <0, 2, 0>, <0, 0, 2> } radiance rgb 10 }",
+                false,
+                0,
+            ),
+            // A sphere light is never named (it is not flat).
+            (
+                "area_light { sphere { <0, 3, 0>, 0.2 } radiance rgb 10 }",
+                true,
+                0,
+            ),
+        ];
+        for (light, with_floor, want) in cases {
+            let text = format!("{room}{}{light}\n", if with_floor { floor } else { "" });
+            assert_eq!(facing_away_count(&text), want, "{text}");
+        }
+        // A tilted floor crosses the light's side: lit.
+        let tilted = format!(
+            "{room}plane {{ <0.2, 1, 0>, 0 }}\n\
+             area_light {{ quad {{ <-0.5, 3, -0.5>, <0, 0, 1>, <1, 0, 0> }} radiance rgb 10 }}\n"
+        );
+        assert_eq!(facing_away_count(&tilted), 0);
+    }
 }

@@ -123,9 +123,10 @@ fn shape_help(shape: &scene::Shape) -> &'static str {
 
 impl<'a> PreparedScene<'a> {
     /// What is legal but probably not what the author meant, as render errors used as
-    /// warnings (message and help): a scene with nothing that emits light.
+    /// warnings (message and help): a scene with nothing that emits light, and a one-sided
+    /// flat light that faces away from everything.
     pub fn warnings(&self) -> Vec<RenderError> {
-        let mut out = Vec::new();
+        let mut out = lights::facing_away(self);
         if self.lights.is_empty() {
             out.push(RenderError {
                 help: Some(
