@@ -122,3 +122,76 @@ fn rays_through_a_merge_alternate_and_never_meet_inner_surfaces() {
         "only {separate} rays met inner surfaces of two separate balls"
     );
 }
+
+/// A closed glass surface whose normals point in (a mesh wound inward, a revolve profile drawn
+/// from the top down) renders as the same surface facing out, bit for bit, whether placed once
+/// or several times (a shared mesh); before, such glass rendered inside out.
+#[test]
+fn closed_glass_facing_in_renders_as_facing_out() {
+    let dir = std::env::temp_dir().join(format!("sppm-inward-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let v = "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\nv -0.5 1 -0.5\n\
+             v -0.5 0 0.5\nv 0.5 0 0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n";
+    // Counter-clockwise seen from outside.
+    let faces = [
+        [1, 4, 3],
+        [1, 3, 2],
+        [5, 6, 7],
+        [5, 7, 8],
+        [1, 2, 6],
+        [1, 6, 5],
+        [4, 8, 7],
+        [4, 7, 3],
+        [1, 5, 8],
+        [1, 8, 4],
+        [2, 3, 7],
+        [2, 7, 6],
+    ];
+    let obj = |inward: bool| {
+        let f: String = faces
+            .iter()
+            .map(|t| match inward {
+                false => format!("f {} {} {}\n", t[0], t[1], t[2]),
+                true => format!("f {} {} {}\n", t[0], t[2], t[1]),
+            })
+            .collect();
+        format!("{v}{f}")
+    };
+    let (out_path, in_path) = (dir.join("out.obj"), dir.join("in.obj"));
+    std::fs::write(&out_path, obj(false)).unwrap();
+    std::fs::write(&in_path, obj(true)).unwrap();
+    let cube = |p: &std::path::Path, at: &str| {
+        format!(
+            "mesh {{ \"{}\" scale 0.7 translate {at} material {{ Glass }} }}",
+            p.display()
+        )
+    };
+    let once = |p: &std::path::Path| pixels(&scene(&cube(p, "<0, 0, 0>")));
+    let twice = |p: &std::path::Path| {
+        pixels(&scene(&format!(
+            "{} {}",
+            cube(p, "<-0.5, 0, 0>"),
+            cube(p, "<0.5, 0, 0.5>")
+        )))
+    };
+    assert!(
+        once(&out_path) == once(&in_path),
+        "a glass cube wound inward differs"
+    );
+    assert!(
+        twice(&out_path) == twice(&in_path),
+        "shared glass cubes wound inward differ"
+    );
+    let revolve = |points: &str| {
+        pixels(&scene(&format!(
+            "revolve {{ profile bezier {{ degree 1 {points} }} corner material {{ Glass }} }}"
+        )))
+    };
+    let up = revolve("<0, 0>, <0.5, 0>, <0.5, 1>, <0, 1>");
+    let down = revolve("<0, 1>, <0.5, 1>, <0.5, 0>, <0, 0>");
+    assert!(
+        up == down,
+        "a glass revolve drawn from the top down differs"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

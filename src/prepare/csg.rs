@@ -3,10 +3,11 @@
 //! and a primitive id of its own, so that a hit reports the material and texture space of the
 //! shape it is on.
 
-use glam::{DAffine3, DVec2};
+use glam::DAffine3;
 
+use super::orient::{profile_area, signed_volume};
 use super::shapes::build_shapes;
-use crate::scene::{self, MaterialId, MeshData, Object, Profile};
+use crate::scene::{self, MaterialId, Object};
 use crate::shapes::csg::{Csg, CsgLeaf, CsgNode};
 use crate::shapes::primitive::AnyShape;
 
@@ -64,64 +65,4 @@ fn node(
         transform,
     });
     Ok(CsgNode::Leaf(CsgLeaf { shapes, flip, id }))
-}
-
-/// Six times the volume a closed mesh encloses, positive when its triangles wind
-/// counter-clockwise seen from outside (normals outward).
-fn signed_volume(mesh: &MeshData) -> f64 {
-    let p = |i: u32| mesh.positions.get(i as usize).copied().unwrap_or_default();
-    mesh.indices
-        .iter()
-        .map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))))
-        .sum()
-}
-
-/// Twice the signed area the profile encloses in the (radius, height) plane, closed along the
-/// axis or onto itself: positive when it runs counter-clockwise, which puts the revolve's
-/// normals (to the right of the profile's direction) outside.
-fn profile_area(profile: &Profile) -> f64 {
-    const STEPS: usize = 64;
-    let mut pts = Vec::new();
-    for seg in &profile.segments {
-        for k in 0..STEPS {
-            pts.push(de_casteljau(seg, k as f64 / STEPS as f64));
-        }
-    }
-    if let Some(last) = profile.segments.last().and_then(|s| s.last()) {
-        pts.push(*last);
-    }
-    let n = pts.len();
-    (0..n).map(|i| pts[i].perp_dot(pts[(i + 1) % n])).sum()
-}
-
-fn de_casteljau(points: &[DVec2], s: f64) -> DVec2 {
-    let mut p = points.to_vec();
-    for k in (1..p.len()).rev() {
-        for i in 0..k {
-            p[i] = p[i].lerp(p[i + 1], s);
-        }
-    }
-    p.first().copied().unwrap_or_default()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn profile_orientation() {
-        // Up the outside from the bottom of the axis to its top: counter-clockwise.
-        let out = Profile {
-            segments: vec![vec![
-                DVec2::new(0.0, 0.0),
-                DVec2::new(1.0, 0.0),
-                DVec2::new(1.0, 1.0),
-                DVec2::new(0.0, 1.0),
-            ]],
-        };
-        assert!(profile_area(&out) > 0.0);
-        let mut back = out.clone();
-        back.segments[0].reverse();
-        assert!(profile_area(&back) < 0.0);
-    }
 }

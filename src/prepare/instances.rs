@@ -48,7 +48,8 @@ pub(super) fn shared_key(obj: &Object, shared: &HashSet<usize>) -> Option<usize>
 /// Builds the placements of shared meshes, each mesh's BVH once.
 pub(super) struct Instancer {
     shared: HashSet<usize>,
-    built: HashMap<usize, Arc<Bvh>>,
+    /// Each shared mesh's BVH, by the mesh and whether its triangles are rewound.
+    built: HashMap<(usize, bool), Arc<Bvh>>,
 }
 
 impl Instancer {
@@ -60,20 +61,25 @@ impl Instancer {
     }
 
     /// The one primitive that places `obj`'s mesh, or `None` when the object is not a shared
-    /// mesh (or its transform is too close to singular for an f32 inverse: it is then baked).
-    pub(super) fn placement(&mut self, obj: &Object) -> Result<Option<AnyShape>, String> {
+    /// mesh (or its transform is too close to singular for an f32 inverse: it is then baked);
+    /// its triangles rewound if `reverse`.
+    pub(super) fn placement(
+        &mut self,
+        obj: &Object,
+        reverse: bool,
+    ) -> Result<Option<AnyShape>, String> {
         let (Some(mesh), Some(id)) = (placed_mesh(obj), shared_key(obj, &self.shared)) else {
             return Ok(None);
         };
-        let bvh = match self.built.get(&id) {
+        let bvh = match self.built.get(&(id, reverse)) {
             Some(b) => b.clone(),
             None => {
-                let tris = TriangleMesh::new(mesh, &DAffine3::IDENTITY)?;
+                let tris = TriangleMesh::with_winding(mesh, &DAffine3::IDENTITY, reverse)?;
                 if tris.is_empty() {
                     return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
                 }
                 let bvh = Arc::new(Bvh::with_meshes(Vec::new(), vec![(tris, 0)]));
-                self.built.insert(id, bvh.clone());
+                self.built.insert((id, reverse), bvh.clone());
                 bvh
             }
         };

@@ -8,6 +8,7 @@ mod budget;
 mod csg;
 mod instances;
 mod lights;
+mod orient;
 mod settings;
 mod shapes;
 
@@ -154,6 +155,7 @@ impl<'a> PreparedScene<'a> {
         let mut lights = Vec::new();
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instancer = instances::Instancer::new(scene);
+        let mut orientation = orient::Orientation::default();
         // The parts of CSG objects, after the scene's objects.
         let mut csg_parts = Vec::new();
         for (oi, obj) in scene.objects.iter().enumerate() {
@@ -190,7 +192,17 @@ impl<'a> PreparedScene<'a> {
                 }
                 continue;
             }
-            let placed = instancer.placement(obj).map_err(err)?;
+            // Closed glass facing in is turned outward (`orient`).
+            let faces_in = orientation.faces_in(scene, obj);
+            let turned;
+            let obj = match faces_in.then(|| orient::outward_revolve(obj)).flatten() {
+                Some(t) => {
+                    turned = t;
+                    &turned
+                }
+                None => obj,
+            };
+            let placed = instancer.placement(obj, faces_in).map_err(err)?;
             let emission = obj
                 .emission
                 .filter(|e| e.radiance.is_finite() && e.radiance.max_element() > 0.0);
@@ -206,7 +218,7 @@ impl<'a> PreparedScene<'a> {
             // in the BVH's compact form.
             if let (None, None, scene::Shape::Mesh { mesh }) = (&placed, emission, &obj.shape) {
                 meshes.push((
-                    build_mesh(obj, mesh).map_err(err)?,
+                    build_mesh(obj, mesh, faces_in).map_err(err)?,
                     prim_object.len() as u32,
                 ));
                 prim_object.push(oi as u32);

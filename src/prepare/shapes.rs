@@ -50,13 +50,14 @@ fn determinant(obj: &scene::Object) -> Result<f64, String> {
     Ok(det)
 }
 
-/// The world-space mesh of a mesh object.
+/// The world-space mesh of a mesh object, its triangles rewound if `reverse`.
 pub(super) fn build_mesh(
     obj: &scene::Object,
     mesh: &scene::MeshData,
+    reverse: bool,
 ) -> Result<TriangleMesh, String> {
     determinant(obj)?;
-    let m = TriangleMesh::new(mesh, &obj.transform)?;
+    let m = TriangleMesh::with_winding(mesh, &obj.transform, reverse)?;
     if m.is_empty() {
         return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
     }
@@ -198,7 +199,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             }
             vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
         }
-        scene::Shape::Mesh { mesh } => build_mesh(obj, mesh)?
+        scene::Shape::Mesh { mesh } => build_mesh(obj, mesh, false)?
             .triangles()
             .into_par_iter()
             .map(AnyShape::Triangle)

@@ -23,9 +23,16 @@ impl TriangleMesh {
     /// `mesh` under `xf`; a mirroring transform swaps two vertices of each triangle so that its
     /// winding (and so its normal) stays consistent.
     pub fn new(mesh: &MeshData, xf: &DAffine3) -> Result<Self, String> {
+        Self::with_winding(mesh, xf, false)
+    }
+
+    /// [`TriangleMesh::new`], with every triangle's winding (and so its normal) reversed when
+    /// `reverse` is set: a closed glass mesh wound inward is turned outward.
+    pub fn with_winding(mesh: &MeshData, xf: &DAffine3, reverse: bool) -> Result<Self, String> {
         let n = mesh.positions.len();
         let nmat = xf.matrix3.inverse().transpose();
-        let mirrored = xf.matrix3.determinant() < 0.0;
+        // A mirroring transform reverses the winding as well.
+        let rewind = (xf.matrix3.determinant() < 0.0) != reverse;
         // In parallel: a large mesh's set-up is part of the render's wall time.
         let positions: Vec<[f32; 3]> = mesh
             .positions
@@ -67,7 +74,7 @@ impl TriangleMesh {
             .par_iter()
             .map(|tri| {
                 let mut idx = *tri;
-                if mirrored {
+                if rewind {
                     idx.swap(1, 2);
                 }
                 idx
