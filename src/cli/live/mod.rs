@@ -32,6 +32,15 @@ pub use view::{DiagnosticView, diagnostics_view};
 const PAGE: &str = include_str!("page.html");
 /// Most event streams (browser tabs) served at once; more get "503 busy".
 const MAX_STREAMS: usize = 64;
+
+/// Largest request body `tiny_http` reads into memory itself (a larger one it skips when the
+/// request is dropped by allocating the declared length at once, which a hostile length turns
+/// into an abort).
+const BUFFERED_BODY: usize = 1024;
+
+/// Requests with a larger declared body (the page sends none) are left unanswered; after this
+/// many the server stops (each keeps its connection), and `watch` goes on without the page.
+const MAX_BODY_REQUESTS: usize = 64;
 /// How often an idle event stream sends a comment (finds closed tabs, keeps proxies open).
 const KEEP_ALIVE: Duration = Duration::from_secs(5);
 
@@ -186,7 +195,18 @@ impl Server {
 
 fn serve(server: tiny_http::Server, hub: Arc<Hub>) {
     let streams = Arc::new(AtomicUsize::new(0));
+    let mut with_body = 0;
     for request in server.incoming_requests() {
+        if request.body_length().is_some_and(|n| n > BUFFERED_BODY) {
+            // Neither answered nor dropped: dropping it would make `tiny_http` allocate the
+            // declared length to skip the body.
+            std::mem::forget(request);
+            with_body += 1;
+            if with_body >= MAX_BODY_REQUESTS {
+                return;
+            }
+            continue;
+        }
         let path = request.url().split('?').next().unwrap_or("").to_string();
         let result = match path.as_str() {
             "/" | "/index.html" => request.respond(with_headers(
@@ -301,6 +321,30 @@ mod tests {
         assert_eq!(bytes.len(), 16 + 2 * 12);
         // Nothing newer: the reader waits (then sends a keep-alive).
         assert!(hub.wait_newer(seq, Duration::from_millis(10)).is_none());
+    }
+
+    /// A request declaring a huge body (which `tiny_http` would allocate at once to skip) does
+    /// not take the server down: the page is still served after it.
+    #[test]
+    fn a_request_with_a_huge_declared_body_is_left_alone() {
+        use std::io::Read;
+        let server = Server::start(0, Hub::new("s.scn".into())).unwrap();
+        let addr = server
+            .url
+            .trim_start_matches("http://")
+            .trim_end_matches('/');
+        let mut hostile = std::net::TcpStream::connect(addr).unwrap();
+        hostile
+            .write_all(b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: 99999999999\r\n\r\n")
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        drop(hostile);
+        let mut ok = std::net::TcpStream::connect(addr).unwrap();
+        ok.write_all(b"GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+            .unwrap();
+        let mut text = String::new();
+        ok.read_to_string(&mut text).unwrap();
+        assert!(text.starts_with("HTTP/1.1 200"), "{text:.80}");
     }
 
     #[test]
