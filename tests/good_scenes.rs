@@ -593,3 +593,36 @@ fn every_wrap_word_is_read_even_one_that_is_a_keyword() {
         assert_eq!(s.textures[0].mapping, Mapping::Spherical, "wrap {word}");
     }
 }
+
+/// Directions of vectors far from unit length come out unit length: `vnormalize` and the
+/// normals of planes and disks scale by the largest component before squaring (the squared
+/// length of `<1e160, 0, 0>` overflows and that of `<1e-160, 0, 0>` underflows).
+#[test]
+fn directions_of_huge_and_tiny_vectors_are_unit() {
+    let s = scene(
+        "#declare A = vnormalize(<1e160, 1e160, 1e160>);\n\
+         #declare B = vnormalize(<3e-162, 4e-162, 0>);\n\
+         sphere { A, 1 }\n\
+         sphere { B, 1 }\n\
+         plane { <1e200, 0, 0>, 0 }\n\
+         disk { <0, 0, 0>, <1e-200, 1e-200, 0>, 1 }\n",
+    );
+    let third = 1.0 / 3f64.sqrt();
+    let mut found = 0;
+    for o in &s.objects {
+        match o.shape {
+            Shape::Sphere { center, .. } => {
+                let want = [DVec3::splat(third), DVec3::new(0.6, 0.8, 0.0)][found];
+                assert!(close(center, want), "{center} != {want}");
+                found += 1;
+            }
+            Shape::Plane { normal, .. } => assert!(close(normal, DVec3::X), "{normal}"),
+            Shape::Disk { normal, .. } => {
+                let h = 0.5f64.sqrt();
+                assert!(close(normal, DVec3::new(h, h, 0.0)), "{normal}");
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(found, 2);
+}

@@ -42,6 +42,18 @@ pub const FUNCTIONS: &[&str] = &[
     "str",
 ];
 
+/// The unit vector along `v`, scaled by its largest component first so that neither its
+/// squared length overflows (`<1e160, 0, 0>`) nor underflows (`<1e-160, 0, 0>`); `None` for a
+/// zero vector (or one with a component that is not finite).
+pub(crate) fn unit(v: DVec3) -> Option<DVec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    let s = v / m;
+    Some(s / s.length())
+}
+
 /// Names of the built-in constants.
 pub const CONSTANTS: &[&str] = &["pi", "x", "y", "z"];
 
@@ -216,14 +228,14 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         },
         "vnormalize" => {
             let a = v(args, 0)?;
-            if a.length_squared() == 0.0 {
-                return Err((
+            match unit(a) {
+                Some(u) => Ok(Value::Vec3(u)),
+                None => Err((
                     0,
                     Error::new("cannot normalize a zero-length vector")
                         .help("a zero vector has no direction: check its length first"),
-                ));
+                )),
             }
-            Ok(Value::Vec3(a.normalize()))
         }
         "vdot" => num(v(args, 0)?.dot(v(args, 1)?)),
         "vcross" => Ok(Value::Vec3(v(args, 0)?.cross(v(args, 1)?))),

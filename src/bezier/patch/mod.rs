@@ -15,7 +15,7 @@ use glam::{DVec2, DVec3};
 
 use super::Solver;
 use net::{OrientedBox, bern3, net_bounds, restrict4};
-use search::Search;
+use search::{MAX_VISITS, Search};
 
 mod net;
 mod search;
@@ -267,6 +267,18 @@ impl Patch {
         leaf: f64,
         polish: bool,
     ) -> Option<(DVec2, f64)> {
+        self.search(o, frame, (tmin, tmax), leaf, polish).best
+    }
+
+    /// [`Patch::subdivide`]'s search, finished.
+    fn search(
+        &self,
+        o: DVec3,
+        frame: [DVec3; 3],
+        (tmin, tmax): (f64, f64),
+        leaf: f64,
+        polish: bool,
+    ) -> Search<'_> {
         let [e1, e2, dn] = frame;
         let q: [DVec3; 16] = std::array::from_fn(|k| {
             let r = self.p[k] - o;
@@ -284,11 +296,13 @@ impl Patch {
             polish,
             best: None,
             best_t: tmax,
+            // The reference (measurement only) may visit as many as it needs.
+            visits_left: if polish { MAX_VISITS } else { u32::MAX },
         };
         let (lo, hi) = net_bounds(&q);
         if search.may_hit(lo, hi) && search.bands(&q) {
             search.visit(&q, (0.0, 1.0), (0.0, 1.0), lo, hi);
         }
-        search.best
+        search
     }
 }

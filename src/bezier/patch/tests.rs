@@ -213,3 +213,49 @@ fn pieces_hit_where_the_whole_patch_does() {
         );
     }
 }
+
+/// A net whose control points differ by eleven orders of magnitude (two of them 1e11 from a
+/// unit patch) made one ray's search visit sub-patches without end: each ray's robust search
+/// now stops at [`MAX_VISITS`], which the bumpy patch's rays stay far below (the stress tests'
+/// worst ray needs about 150).
+#[test]
+fn a_ray_visits_a_bounded_number_of_sub_patches() {
+    let mut p: [DVec3; 16] = std::array::from_fn(|k| {
+        let (i, j) = (k / 4, k % 4);
+        DVec3::new(
+            -1.0 + 2.0 * i as f64 / 3.0,
+            -1.0 + 2.0 * j as f64 / 3.0,
+            0.0,
+        )
+    });
+    (p[4].y, p[9].y) = (-1e11, 1e11);
+    let wild = Patch::new(&p).unwrap();
+    let frame = |o: DVec3, at: DVec3| {
+        let dn = (at - o).normalize();
+        let (e1, e2) = dn.any_orthonormal_pair();
+        [e1, e2, dn]
+    };
+    let mut rng = Rng::new(9);
+    let mut capped = 0;
+    for _ in 0..16 {
+        let o = DVec3::new(0.0, 0.0, -5.0);
+        let at = DVec3::new(2.0 * f(&mut rng) - 1.0, 2.0 * f(&mut rng) - 1.0, 0.0);
+        let s = wild.search(o, frame(o, at), (0.0, f64::INFINITY), LEAF, true);
+        capped += usize::from(s.visits_left == 0);
+    }
+    assert!(
+        capped > 0,
+        "no ray reached the bound: the case no longer tests it"
+    );
+    let bumpy = bumpy();
+    for _ in 0..200 {
+        let o = DVec3::new(1.5, 1.5, -6.0);
+        let at = DVec3::new(3.0 * f(&mut rng), 3.0 * f(&mut rng), 0.0);
+        let s = bumpy.search(o, frame(o, at), (0.0, f64::INFINITY), LEAF, true);
+        assert!(
+            MAX_VISITS - s.visits_left < 500,
+            "{}",
+            MAX_VISITS - s.visits_left
+        );
+    }
+}

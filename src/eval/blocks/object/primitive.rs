@@ -8,6 +8,7 @@ use super::{ObjectBuilder, article};
 use crate::diag::{At, Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::range_error;
+use crate::eval::builtins::unit;
 use crate::eval::value::{Part, ShapeDef, Value};
 use crate::scene::{Shape, TORUS_MAX_ASPECT};
 use crate::span::Span;
@@ -127,7 +128,7 @@ impl ObjectBuilder {
             Ok(r)
         };
         let nonzero = |(v, s): (DVec3, Span), what: &str| -> SourceResult<DVec3> {
-            if v.length_squared() == 0.0 {
+            if v.abs().max_element() == 0.0 {
                 return Err(vec![
                     Error::new(format!("the {what} is a zero vector"))
                         .label("zero length")
@@ -143,7 +144,7 @@ impl ObjectBuilder {
                 radius: radius(ns[0])?,
             },
             "plane" => Shape::Plane {
-                normal: nonzero(vs[0], "normal")?.normalize(),
+                normal: unit(nonzero(vs[0], "normal")?).unwrap_or(DVec3::Y),
                 offset: ns[0].0,
             },
             "quad" => {
@@ -251,7 +252,7 @@ impl ObjectBuilder {
             }
             "disk" => Shape::Disk {
                 center: vs[0].0,
-                normal: nonzero(vs[1], "normal")?.normalize(),
+                normal: unit(nonzero(vs[1], "normal")?).unwrap_or(DVec3::Y),
                 radius: radius(ns[0])?,
             },
             "triangle" => {
