@@ -395,11 +395,17 @@ fn ctrl_c_during_a_render_writes_the_finished_iterations_and_exits_0() {
 
 #[test]
 fn an_empty_save_keeps_the_last_image_and_the_next_save_renders() {
-    // Editors truncate a file before writing it; the empty scene is not rendered over the image.
+    // Editors truncate a file before writing it; the empty scene (or one of comments alone) is
+    // not rendered over the image.
     let (dir, scene, out, mut w) = watching_a_red_scene("scene");
     let before = fs::read(&out).unwrap();
     fs::write(&scene, "").unwrap();
     w.expect("is empty; the last image is kept");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
+    // Only a comment and blanks: nothing declared, nothing rendered over the image either.
+    fs::write(&scene, "// saving...\n\n").unwrap();
+    w.expect("declares no object and no light; the last image is kept");
     std::thread::sleep(Duration::from_millis(300));
     assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
     fs::write(&scene, scene_text([0, 0, 255])).unwrap();

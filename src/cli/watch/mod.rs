@@ -214,7 +214,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             }
             None => {
                 let (state, message) = if loaded.empty {
-                    ("empty", "the scene file is empty; the last image is kept")
+                    (
+                        "empty",
+                        "the scene file is empty or declares nothing; the last image is kept",
+                    )
                 } else if output_ok.is_err() && scene_ok {
                     let m = "the output cannot be written; the last image is kept";
                     status(m);
@@ -265,7 +268,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
 
 /// What one load gives the watch loop.
 struct Load {
-    /// The file was empty (already reported).
+    /// The file was empty or declared nothing, no object and no light (already reported).
     empty: bool,
     scene: Option<Scene>,
     dependencies: Vec<PathBuf>,
@@ -305,9 +308,21 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
             } else {
                 loaded.scene
             };
+            // Only blanks and comments (a save caught half-written, or a file cleared to start
+            // again): nothing to render over the last image either.
+            let bare = scene
+                .as_ref()
+                .is_some_and(|s| s.objects.is_empty() && s.lights.is_empty());
+            if bare {
+                status(&format!(
+                    "`{}` declares no object and no light; the last image is kept (waiting for \
+                     the next save)",
+                    path.display()
+                ));
+            }
             Load {
-                empty: false,
-                scene,
+                empty: bare,
+                scene: scene.filter(|_| !bare),
                 dependencies: loaded.dependencies,
                 sources: loaded.sources,
                 diagnostics: loaded.diagnostics,
