@@ -57,10 +57,11 @@ fn first_error(text: &str) -> (String, String) {
 /// POV-Ray habits and near-misses that parsed as something else, or got the wrong advice: a
 /// directive's word is a whole word (`#elseif` was `#else` followed by a call `if(...)`, and the
 /// scene was accepted), bare POV-Ray words get their spelling here, and `right -x*4/3` (a
-/// subtraction to the parser) is recognised by its first word.
+/// subtraction to the parser) is recognised by its first word; the built-in constants cannot
+/// be declared.
 #[test]
 fn pov_habits_get_their_spelling_here() {
-    let cases: [(&str, &str); 10] = [
+    let cases: [(&str, &str); 13] = [
         (
             "#declare A = 1;\n#if (A == 1) sphere { <0,0,0>, 1 } #elseif (A == 2) box { <0,0,0>, <1,1,1> } #end\n",
             "`#elif (condition)`",
@@ -89,6 +90,10 @@ fn pov_habits_get_their_spelling_here() {
         ),
         ("light { <0, 5, 0> intensity 10 jitter }\n", "area_light"),
         ("#declare M = [[0 0.5] [1 0.25]];\n", "separated by commas"),
+        // Built-in constants are not names to declare (POV-Ray refuses them too).
+        ("#for (x, 0, 3) #end\n", "choose another name"),
+        ("#declare pi = 3;\n", "choose another name"),
+        ("#macro M(y) #end\n", "choose another name"),
     ];
     for (text, want) in cases {
         let (message, help) = first_error(text);

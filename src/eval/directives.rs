@@ -38,6 +38,7 @@ impl Evaluator {
     fn directive_in_place(&mut self, d: &Directive, sink: &mut dyn Sink) -> SourceResult<()> {
         match &d.kind {
             DirectiveKind::Bind { name, value, local } => {
+                Self::bindable(name)?;
                 let v = match self.eval(value) {
                     Ok(v) => v,
                     Err(e) => {
@@ -49,6 +50,10 @@ impl Evaluator {
                 Ok(())
             }
             DirectiveKind::Macro(m) => {
+                Self::bindable(&m.name)?;
+                for p in &m.params {
+                    Self::bindable(p)?;
+                }
                 self.bind(&m.name, Value::Macro(m.clone()), true);
                 Ok(())
             }
@@ -139,6 +144,7 @@ impl Evaluator {
                 step,
                 body,
             } => {
+                Self::bindable(var)?;
                 let a = self.eval(from)?.num().at(from.span)?;
                 let b = self.eval(to)?.num().at(to.span)?;
                 let s = match step {

@@ -46,6 +46,32 @@ impl Evaluator {
         self.poisoned.remove(&name.text);
     }
 
+    /// Refuses to bind a built-in constant's name (`x`, `y`, `z`, `pi`), as POV-Ray does: a
+    /// `#for (x, ...)` would silently change every later `x` (a `scale 1 + x` scaling by the
+    /// loop's last value).
+    pub(super) fn bindable(name: &Name) -> SourceResult<()> {
+        if !CONSTANTS.contains(&name.text.as_str()) {
+            return Ok(());
+        }
+        let what = match builtins::constant(&name.text) {
+            Some(Value::Vec3(v)) => format!("the vector <{}, {}, {}>", v.x, v.y, v.z),
+            _ => "the number π".to_string(),
+        };
+        Err(vec![
+            Error::new(format!(
+                "`{}` is a built-in constant ({what}) and cannot be declared",
+                name.text
+            ))
+            .label("built-in name")
+            .help(format!(
+                "choose another name, e.g. `{}1` or `{}`",
+                name.text.to_uppercase(),
+                name.text.to_uppercase()
+            ))
+            .at(name.span),
+        ])
+    }
+
     /// Removes a binding (the innermost: the current macro's, else the global one); `false`
     /// when there was none.
     pub(super) fn unbind(&mut self, name: &str) -> bool {
