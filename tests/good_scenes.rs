@@ -420,8 +420,9 @@ fn sphere_xs(s: &Scene) -> Vec<f64> {
         .collect()
 }
 
-/// `#switch`: `#case` by equality, `#range` inclusive at both ends, fall-through to the next
-/// clause's test without `#break`, `#else` when the clause before it did not match.
+/// `#switch`: `#case` by equality, `#range` inclusive at both ends; from the first match on,
+/// every following clause and `#else` run untested until a `#break` (POV-Ray 3.7's
+/// fall-through, checked against `povray` itself); `#else` also when nothing matched.
 #[test]
 fn switch_case_range_break_else() {
     let run = |v: &str| {
@@ -438,19 +439,19 @@ fn switch_case_range_break_else() {
         )))
     };
     assert_eq!(run("1"), [1.0]);
-    // Falls through from `#case (2)` into the test of `#range (2, 3)`, which holds 2 too.
-    assert_eq!(run("2"), [2.0, 3.0, 9.0]);
+    // Falls through from `#case (2)` into every later body, `#else` included.
+    assert_eq!(run("2"), [2.0, 3.0, 4.0, 9.0]);
     // `#range` is inclusive; the `#break` inside an `#if` leaves the switch.
     assert_eq!(run("3"), [3.0]);
-    assert_eq!(run("2.5"), [3.0, 9.0]);
+    assert_eq!(run("2.5"), [3.0, 4.0, 9.0]);
     assert_eq!(run("0.1 + 0.2 + 0.7"), [1.0], "equal within 1e-10");
     assert_eq!(run("7"), [9.0]);
-    // `#else` right after a matching clause does not run.
+    // A matching clause without `#break` falls into `#else` as well.
     let s = scene(
         "#switch (1) #case (1) sphere { <1,0,0>, 1 } #else sphere { <9,0,0>, 1 } #end
          #switch (5) #else sphere { <5,0,0>, 1 } #end",
     );
-    assert_eq!(sphere_xs(&s), [1.0, 5.0]);
+    assert_eq!(sphere_xs(&s), [1.0, 9.0, 5.0]);
 }
 
 /// `#break` leaves the innermost loop; inside a block or a macro body it refers to that body.

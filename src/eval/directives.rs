@@ -199,11 +199,10 @@ impl Evaluator {
         r
     }
 
-    /// `#switch`, as in POV-Ray: the clauses are tested in order; a clause whose `#case` value
-    /// equals the switch value (within 1e-10) or whose `#range (lo, hi)` holds it (inclusive)
-    /// runs its body, and the next clauses are still tested unless a `#break` ended the switch
-    /// (so a clause without `#break` falls through to the test of the next one). `#else` runs
-    /// when the clause just before it did not match (also when there is none).
+    /// `#switch`, as in POV-Ray: the clauses are tested in order until one matches (its
+    /// `#case` value equals the switch value within 1e-10, or its `#range (lo, hi)` holds it,
+    /// inclusive); from there every body runs, `#else`'s included, until a `#break`. `#else`
+    /// also runs when nothing matched.
     fn switch(
         &mut self,
         value: &Expr,
@@ -212,9 +211,17 @@ impl Evaluator {
         sink: &mut dyn Sink,
     ) -> SourceResult<()> {
         let v = self.eval(value)?.num().at(value.span)?;
-        let mut last_matched = false;
+        // Once a clause matched, the following clauses (and `#else`) run without their tests
+        // until a `#break`: POV-Ray's (and C's) fall-through.
+        let mut falling = false;
         for clause in clauses {
-            last_matched = match &clause.test {
+            if falling {
+                if self.run_breakable(&clause.body, sink)? {
+                    return Ok(());
+                }
+                continue;
+            }
+            falling = match &clause.test {
                 ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
                 ClauseTest::Range(lo, hi) => {
                     let a = self.eval(lo)?.num().at(lo.span)?;
@@ -234,13 +241,14 @@ impl Evaluator {
                     a <= v && v <= b
                 }
             };
-            if last_matched && self.run_breakable(&clause.body, sink)? {
+            if falling && self.run_breakable(&clause.body, sink)? {
                 return Ok(());
             }
         }
+        // Reached without a `#break`: nothing matched, or the last clause fell through.
         match otherwise {
-            Some(body) if !last_matched => self.run_breakable(body, sink).map(|_| ()),
-            _ => Ok(()),
+            Some(body) => self.run_breakable(body, sink).map(|_| ()),
+            None => Ok(()),
         }
     }
 
