@@ -175,8 +175,9 @@ impl MaterialBuilder {
     }
 }
 
-/// A surface's colour (`diffuse`, `mirror`, `glossy`); a constant above 1 gives a warning: such
-/// a surface reflects more light than reaches it (POV-Ray users brighten a colour this way).
+/// A surface's colour (`diffuse`, `mirror`, `glossy`); a constant above 1 gives a warning: the
+/// renderer clamps it to 1, since no surface reflects more light than reaches it (POV-Ray users
+/// brighten a colour this way).
 fn reflectance(ev: &mut Evaluator, a: &Arg) -> SourceResult<ColorDef> {
     let def = color_def(a)?;
     if let ColorDef::Const(c) = &def
@@ -186,7 +187,8 @@ fn reflectance(ev: &mut Evaluator, a: &Arg) -> SourceResult<ColorDef> {
             Diagnostic::warning(
                 a.span,
                 format!(
-                    "a reflectance of {} reflects more light than reaches the surface",
+                    "a reflectance of {} is clamped to 1: a surface cannot reflect more light \
+                     than reaches it",
                     short_number(c.max_element())
                 ),
             )
