@@ -167,3 +167,27 @@ fn a_material_property_belongs_to_its_kind() {
     );
     assert_eq!(message, "`ior` does not apply to a diffuse material");
 }
+
+/// The help for an `up` parallel to the view direction names an axis across it (`up <0, 0, 1>`
+/// for a camera looking along z would be refused in turn), and that `up` is accepted.
+#[test]
+fn a_parallel_up_gets_an_up_that_works() {
+    let text = |camera: &str| format!("camera {{ {camera} }}\nsphere {{ <0, 0, 0>, 1 }}\n");
+    for (bad, want) in [
+        (
+            "location <0, 1, 5> look_at <0, 1, 0> up <0, 0, 1>",
+            "up <0, 1, 0>",
+        ),
+        ("location <0, 5, 0> look_at <0, 0, 0>", "up <0, 0, 1>"),
+    ] {
+        let (message, help) = first_error(&text(bad));
+        assert!(message.contains("parallel"), "{bad}: {message}");
+        assert!(help.contains(&format!("`{want}`")), "{bad}: {help}");
+        let fixed = match bad.find(" up ") {
+            Some(i) => format!("{} {want}", &bad[..i]),
+            None => format!("{bad} {want}"),
+        };
+        let l = sppm_lang::load_source("up.scn", &text(&fixed), &EvalOptions::default());
+        assert!(!l.has_errors(), "{fixed}: {:?}", l.diagnostics);
+    }
+}

@@ -196,8 +196,10 @@ pub fn suggest_all<'a>(
             work += (len + 1) * (n + 1);
             work <= MAX_SUGGEST_WORK
         })
-        .map(|(c, _)| (edit_distance(name, c), c))
-        .filter(|&(d, _)| d <= limit)
+        .map(|(c, n)| (edit_distance(name, c), c, n))
+        // Replacing every character is no typo (`R` is not a misspelt `x`).
+        .filter(|&(d, _, n)| d <= limit && d < len.max(n))
+        .map(|(d, c, _)| (d, c))
         .collect();
     close.sort();
     close.dedup();
@@ -271,5 +273,10 @@ mod tests {
         assert_eq!(suggest("xyzzy", c), None);
         assert_eq!(suggest("ligth", ["light", "spotlight"]), Some("light"));
         assert_eq!(suggest("difuse", ["diffuse", "mirror"]), Some("diffuse"));
+        // A name with no character in common is no typo, however short.
+        assert_eq!(suggest("R", ["x", "y", "z", "pi"]), None);
+        assert_eq!(suggest("P", ["pi"]), None);
+        assert_eq!(suggest("p", ["pi"]), Some("pi"));
+        assert_eq!(suggest("ab", ["ac"]), Some("ac"));
     }
 }

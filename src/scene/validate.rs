@@ -112,11 +112,17 @@ impl Camera {
         if dir.cross(self.up).length_squared()
             < 1e-18 * dir.length_squared() * self.up.length_squared().max(1e-300)
         {
+            // Suggest an axis across the view direction.
+            let across = if dir.z.abs() >= dir.x.abs().max(dir.y.abs()) {
+                "`up <0, 1, 0>`"
+            } else {
+                "`up <0, 0, 1>`"
+            };
             return Err(invalid(
                 span,
                 "the camera's `up` is parallel to its view direction".into(),
                 "cannot orient the camera",
-                "choose another `up`, e.g. `up <0, 0, 1>`",
+                &format!("choose another `up`, e.g. {across}"),
             ));
         }
         if !(self.fov > 0.0 && self.fov < 180.0) {
