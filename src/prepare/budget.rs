@@ -163,7 +163,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
     }];
     // Each image once, however many textures use it (they share its pixels).
     let mut seen = HashSet::new();
-    let mut image_pixels: u64 = scene
+    let image_pixels: u64 = scene
         .textures
         .iter()
         .filter_map(|t| match &t.pattern {
@@ -173,13 +173,18 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
             _ => None,
         })
         .sum();
-    if let Background::Environment { image, .. } = &scene.background {
-        // The map and its sampling distribution.
-        image_pixels += 2 * image.width as u64 * image.height as u64;
-    }
+    // An environment map, per pixel at its peak while it is built: the scene's decoded image
+    // (f32 RGB, 12 bytes), the map's own scaled copy (12), the filtered luminance (f64, 8) and
+    // the sampling distribution (f32 value, cdf and pmf, 12).
+    let environment_pixels = match &scene.background {
+        Background::Environment { image, .. } => image.width as u64 * image.height as u64,
+        _ => 0,
+    };
     items.push(MemoryItem {
         what: "images",
-        bytes: image_pixels.saturating_mul(12),
+        bytes: image_pixels
+            .saturating_mul(12)
+            .saturating_add(environment_pixels.saturating_mul(44)),
     });
     // Per pixel: the film's sums and the image snapshots (f32 RGB twice), plus the method's own
     // state (SPPM: the pixel record, its visible point and its grid entry; with final gathering

@@ -121,6 +121,9 @@ impl EnvironmentMap {
                     glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * texel_solid_angle;
             }
         }
+        // (The luminance goes before the distribution is built: the memory estimate counts
+        // one of them at a time.)
+        drop(lum);
         let distribution = PiecewiseConstant2D::new(&func, w, h);
         let integral = distribution.mean() as f32;
 
