@@ -797,6 +797,58 @@ fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
     assert!(!out_png.exists());
 }
 
+/// A table with no point a log-log chart can draw is refused before anything is written: the
+/// CSV and charts of an earlier run with the same name stay as they were (the CSV was replaced
+/// and the charts left stale), and a new name leaves no file. A table whose times are tiny
+/// (fast iterations) keeps them in its CSV, so it redraws.
+#[test]
+fn a_chart_that_cannot_be_drawn_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.csv");
+    std::fs::write(
+        &good,
+        "method,iterations,seconds,rmse,rel_mse,window_rmse,window_rel_mse\n\
+         path,1,0.0004,0.5,0.2,,\npath,2,0.0008,0.3,0.1,,\n",
+    )
+    .unwrap();
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "method,iterations,seconds,rmse,rel_mse,window_rmse,window_rel_mse\n\
+         path,1,0,0,0,,\npath,2,0,0,0,,\n",
+    )
+    .unwrap();
+    let chart = |csv: &std::path::Path, png: &std::path::Path| {
+        sppm_within(
+            &[
+                "chart",
+                "--from-csv",
+                csv.to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+            ],
+            60,
+        )
+        .expect("chart ends")
+    };
+    let png = dir.path().join("c.png");
+    succeeded(&chart(&good, &png));
+    let written = std::fs::read(dir.path().join("c.csv")).unwrap();
+    // The chart's own CSV redraws.
+    let again = dir.path().join("again.png");
+    succeeded(&chart(&dir.path().join("c.csv"), &again));
+    refused(&chart(&bad, &png), "bad.csv", "nothing was written");
+    assert_eq!(std::fs::read(dir.path().join("c.csv")).unwrap(), written);
+    refused(
+        &chart(&bad, &dir.path().join("new.png")),
+        "bad.csv",
+        "nothing was written",
+    );
+    for name in ["new.png", "new.svg", "new.csv"] {
+        assert!(!dir.path().join(name).exists(), "{name} left behind");
+    }
+}
+
 /// `chart` flags that would run for ages (a budget of 1e300 s per method) or chart nothing (an
 /// unknown method, skipped silently before) are usage errors before any rendering.
 #[test]

@@ -129,7 +129,7 @@ fn csv_line(
     });
     let _ = writeln!(
         csv,
-        "{method},{iterations},{seconds:.3},{:.6e},{:.6e},{wr},{wm}",
+        "{method},{iterations},{seconds:.6e},{:.6e},{:.6e},{wr},{wm}",
         whole.rmse, whole.rel_mse
     );
 }
@@ -156,8 +156,6 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
             r.window,
         );
     }
-    let csv_path = output.with_extension("csv");
-    write_atomic(&csv_path, &csv)?;
     type Pick = fn(&Errors) -> f64;
     let rmse: Pick = |e| e.rmse;
     let rel: Pick = |e| e.rel_mse;
@@ -190,6 +188,9 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
         }
     }
     labels.sort_by_key(|l| rank_of(l));
+    // Every chart is planned before any file is written: one that cannot be drawn leaves the
+    // CSV and the charts of an earlier run as they were.
+    let mut plans = Vec::new();
     for (suffix, title, y_label, in_window, pick) in charts {
         let errors = |r: &Row| if in_window { r.window } else { Some(r.whole) };
         let series: Vec<Series> = labels
@@ -238,6 +239,20 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
                 label: "reference noise".into(),
             }),
         };
+        let drawable = series
+            .iter()
+            .flat_map(|s| &s.points)
+            .any(|(t, v)| t.is_finite() && v.is_finite());
+        if !drawable {
+            return Err(format!(
+                "no point of the {title} chart can be drawn (no finite value, or none positive \
+                 on a log axis); nothing was written"
+            ));
+        }
+        plans.push((suffix, spec, series));
+    }
+    write_atomic(&output.with_extension("csv"), &csv)?;
+    for (suffix, spec, series) in plans {
         for ext in ["png", "svg"] {
             draw(&spec, &series, &sibling(output, suffix, ext))?;
         }
