@@ -276,14 +276,15 @@ impl ObjectBuilder {
         }
         let mut t = self.transform;
         if let Some((axis, span)) = self.axis {
-            if axis.length_squared() == 0.0 {
+            let Some(dir) = crate::eval::builtins::unit(axis) else {
                 return Err(vec![
                     Error::new("the axis has zero length")
                         .label("zero vector")
+                        .help("give the axis a direction, e.g. `axis <0, 1, 0>` (the default)")
                         .at(span),
                 ]);
-            }
-            t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, axis.normalize()));
+            };
+            t *= DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Y, dir));
         }
         if t.matrix3.determinant().abs() < 1e-300 {
             return Err(vec![

@@ -137,7 +137,8 @@ impl ObjectBuilder {
         if self.parts.is_empty() {
             ev.warn(
                 Diagnostic::warning(self.span, format!("empty {}", op.name()))
-                    .with_label("contains no objects"),
+                    .with_label("contains no objects")
+                    .with_help("put objects in it, or remove it"),
             );
         }
         Ok(vec![node(op, std::mem::take(&mut self.parts), self.span)?])
