@@ -405,7 +405,7 @@ fn an_empty_save_keeps_the_last_image_and_the_next_save_renders() {
     assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
     // Only a comment and blanks: nothing declared, nothing rendered over the image either.
     fs::write(&scene, "// saving...\n\n").unwrap();
-    w.expect("declares no object and no light; the last image is kept");
+    w.expect("declares no object, no light and no background; the last image is kept");
     std::thread::sleep(Duration::from_millis(300));
     assert_eq!(fs::read(&out).unwrap(), before, "the image changed");
     fs::write(&scene, scene_text([0, 0, 255])).unwrap();

@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use clap::Args;
 use sppm_lang::files::FileError;
-use sppm_lang::scene::Scene;
+use sppm_lang::scene::{Background, Scene};
 use sppm_lang::watch::DependencyWatcher;
 use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
 
@@ -268,7 +268,8 @@ pub fn run(args: &WatchArgs) -> ExitCode {
 
 /// What one load gives the watch loop.
 struct Load {
-    /// The file was empty or declared nothing, no object and no light (already reported).
+    /// The file was empty or declared nothing: no object, no light, no background (already
+    /// reported).
     empty: bool,
     scene: Option<Scene>,
     dependencies: Vec<PathBuf>,
@@ -309,14 +310,17 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
                 loaded.scene
             };
             // Only blanks and comments (a save caught half-written, or a file cleared to start
-            // again): nothing to render over the last image either.
-            let bare = scene
-                .as_ref()
-                .is_some_and(|s| s.objects.is_empty() && s.lights.is_empty());
+            // again): nothing to render over the last image either. (A background alone, such
+            // as an environment map to look at, is something.)
+            let bare = scene.as_ref().is_some_and(|s| {
+                s.objects.is_empty()
+                    && s.lights.is_empty()
+                    && matches!(s.background, Background::Color(c) if c == glam::DVec3::ZERO)
+            });
             if bare {
                 status(&format!(
-                    "`{}` declares no object and no light; the last image is kept (waiting for \
-                     the next save)",
+                    "`{}` declares no object, no light and no background; the last image is \
+                     kept (waiting for the next save)",
                     path.display()
                 ));
             }
