@@ -103,7 +103,9 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "light_source",
         "POV-Ray's `light_source { <pos> color ... }` is `light { <pos> intensity rgb <...> }` here \
-         (intensity in W/sr), or `spotlight { <pos> point_at <target> intensity ... }`",
+         (intensity in W/sr, falling off with the squared distance d, where POV-Ray's lights do \
+         not fade: intensity π·d²·c gives POV-Ray's colour c at distance d), or \
+         `spotlight { <pos> point_at <target> intensity ... }`",
     ),
     pov(
         "pigment",
