@@ -5,7 +5,8 @@
 //! outward before they are built (the mesh's triangles rewound, the profile run backwards); the
 //! shapes of a CSG object are turned by the CSG's own leaves. Only glass: no other material
 //! depends on the side a normal points to, and an emitting surface's winding says which side
-//! emits. The check costs a closed-mesh test (one pass over the edges) per glass mesh.
+//! emits. The check costs a closed-mesh test (one pass over the edges) per glass mesh of at
+//! most 2^20 triangles; a larger one keeps its winding.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -82,7 +83,15 @@ impl Orientation {
     }
 }
 
+/// Largest glass mesh whose orientation is checked: the closed-mesh test keeps a map of every
+/// edge (about 100 bytes per triangle, which the memory estimate does not count), so a larger
+/// mesh keeps its file's winding.
+const MAX_CHECKED_TRIANGLES: usize = 1 << 20;
+
 fn inward_mesh(mesh: &Arc<MeshData>) -> bool {
+    if mesh.indices.len() > MAX_CHECKED_TRIANGLES {
+        return false;
+    }
     let shape = Shape::Mesh { mesh: mesh.clone() };
     scene::why_open(&shape).is_none() && signed_volume(mesh) < 0.0
 }
