@@ -277,39 +277,29 @@ impl Sink for MaterialBuilder {
                 self.base = Some(m);
                 Ok(())
             }
-            // `diffuse rgb 1, 0, 0`: a colour's components without their brackets (the first
-            // is taken as a gray, the others come here).
-            Value::Num(_)
-                if ev
+            // A colour declared and then used as a material (POV-Ray's `pigment { Red }`), or
+            // `diffuse rgb 1, 0, 0`: a colour's components without their brackets (the first is
+            // taken as a gray, the others come here after a comma).
+            Value::Color(_) | Value::Texture(_) | Value::Num(_) => {
+                let what = ev.sources.snippet(span);
+                let after_comma = ev
                     .sources
                     .get(span.file)
                     .and_then(|f| f.text.get(..span.start as usize))
-                    .is_some_and(|before| before.trim_end().ends_with(',')) =>
-            {
-                let what = ev.sources.snippet(span);
-                Err(unexpected(
-                    self,
-                    &v,
-                    span,
-                    &format!(
+                    .is_some_and(|before| before.trim_end().ends_with(','));
+                let help = if after_comma && matches!(v, Value::Num(_)) {
+                    format!(
                         "`{what}` follows a comma: a colour's three components go in angle \
                          brackets, e.g. `diffuse rgb <1, 0, 0>`"
-                    ),
-                ))
-            }
-            // A colour declared and then used as a material (POV-Ray's `pigment { Red }`).
-            Value::Color(_) | Value::Texture(_) | Value::Num(_) => {
-                let what = ev.sources.snippet(span);
-                Err(unexpected(
-                    self,
-                    &v,
-                    span,
-                    &format!(
+                    )
+                } else {
+                    format!(
                         "`{what}` is {}, not a material: write `material {{ diffuse {what} }}` \
                          for a matte surface of that colour (or `glossy {what}`)",
                         v.type_name()
-                    ),
-                ))
+                    )
+                };
+                Err(unexpected(self, &v, span, &help))
             }
             v => Err(unexpected(
                 self,
