@@ -64,6 +64,15 @@ pub(super) fn build_mesh(
     Ok(m)
 }
 
+/// An object-space shape under the object's transform. A concrete `S` (a revolve's part, a
+/// patch's piece) is called directly by its [`Transformed`], without a second dynamic call.
+fn placed<S: Shape + ?Sized + 'static>(s: Arc<S>, obj: &scene::Object) -> Result<AnyShape, String> {
+    Ok(AnyShape::Other(Box::new(Transformed::new(
+        s,
+        obj.transform.as_affine3a(),
+    )?)))
+}
+
 /// World-space shapes of one object.
 pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
     let xf = &obj.transform;
@@ -72,12 +81,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
     let nmat = m.inverse().transpose();
     let mirrored = det < 0.0;
     let sim = similarity_scale(&m);
-    let wrap = |s: Arc<dyn Shape>| -> Result<AnyShape, String> {
-        Ok(AnyShape::Other(Box::new(Transformed::new(
-            s,
-            xf.as_affine3a(),
-        )?)))
-    };
+    let wrap = |s: Arc<dyn Shape>| placed(s, obj);
     let quad = |o: DVec3, u: DVec3, w: DVec3| -> Result<AnyShape, String> {
         let (u, w) = if mirrored { (w, u) } else { (u, w) };
         let o2 = xf.transform_point3(o);
@@ -211,12 +215,12 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         } => Revolve::new(profile, *sweep, *method)?
             .split()
             .into_iter()
-            .map(|part| wrap(Arc::new(part)))
+            .map(|part| placed(Arc::new(part), obj))
             .collect::<Result<_, _>>()?,
         scene::Shape::BezierPatch { points, method } => BezierPatch::new(points, *method)?
             .split()
             .into_iter()
-            .map(|piece| wrap(Arc::new(piece)))
+            .map(|piece| placed(Arc::new(piece), obj))
             .collect::<Result<_, _>>()?,
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),

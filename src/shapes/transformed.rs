@@ -1,5 +1,7 @@
 //! A shape under a general affine transform: rays go to object space, hits come back. The
 //! inner shape is shared, so one object-space shape (a mesh's own BVH) can be placed many times.
+//! The inner shape's type is a parameter: `Transformed<Revolve>` calls its shape directly (no
+//! second dynamic call per ray), `Transformed` (of `dyn Shape`) holds any shape.
 
 use std::sync::Arc;
 
@@ -8,20 +10,20 @@ use glam::{Affine3A, Mat3A, Vec2};
 use super::{AreaSample, BoxedHit, Deferred, Shape};
 use crate::geometry::{Aabb, Hit, Ray};
 
-pub struct Transformed {
-    inner: Arc<dyn Shape>,
+pub struct Transformed<S: Shape + ?Sized = dyn Shape> {
+    inner: Arc<S>,
     to_world: Affine3A,
     to_object: Affine3A,
     /// Inverse transpose of the linear part: maps normals.
     normal_matrix: Mat3A,
 }
 
-impl Transformed {
+impl<S: Shape + ?Sized> Transformed<S> {
     /// Fails only when the transform has no f32 inverse. How flat or small a transform may be
     /// is decided before (the evaluator's matrix check, the scene's size limits): a bound on
     /// the determinant here would refuse a uniformly small object (`scale 1e-4` has
     /// determinant 1e-12) that renders like a large one.
-    pub fn new(inner: Arc<dyn Shape>, to_world: Affine3A) -> Result<Self, String> {
+    pub fn new(inner: Arc<S>, to_world: Affine3A) -> Result<Self, String> {
         let det = to_world.matrix3.determinant();
         let to_object = to_world.inverse();
         if !(det.is_finite() && det != 0.0 && to_object.is_finite()) {
@@ -36,7 +38,7 @@ impl Transformed {
     }
 }
 
-impl Transformed {
+impl<S: Shape + ?Sized> Transformed<S> {
     /// The ray in object space (an affine map keeps the ray parameter `t`).
     #[inline]
     fn object_ray(&self, ray: &Ray) -> Ray {
@@ -60,7 +62,7 @@ impl Transformed {
     }
 }
 
-impl Shape for Transformed {
+impl<S: Shape + ?Sized> Shape for Transformed<S> {
     fn bounds(&self) -> Aabb {
         let b = self.inner.bounds();
         if b.is_empty() {
