@@ -182,3 +182,55 @@ fn work_on_large_values_counts_against_the_budget() {
         );
     }
 }
+
+/// Under a memory limit, an image whose decoded pixels (with the images loaded before) would
+/// not fit in it is refused from its header, at the image's name, before it is decoded: a
+/// scene's images once decoded up to the fixed cap of 2^27 pixels (1.5 GiB) whatever
+/// `--memory-limit` said, and only then did the render's estimate refuse them.
+#[test]
+fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
+    let dir = tempfile::tempdir().unwrap();
+    // 1024 x 1024 pixels: 12 MiB decoded.
+    image::RgbImage::from_pixel(1024, 1024, image::Rgb([200, 100, 50]))
+        .save(dir.path().join("a.png"))
+        .unwrap();
+    let scene = dir.path().join("s.scn");
+    std::fs::write(
+        &scene,
+        "quad { <0, 0, 0>, <1, 0, 0>, <0, 1, 0> material { diffuse texture { image \"a.png\" } } }\n\
+         quad { <0, 0, 1>, <1, 0, 0>, <0, 1, 0> material { diffuse texture { image \"a.png\" linear } } }\n",
+    )
+    .unwrap();
+    let with = |limit: Option<u64>| {
+        let options = EvalOptions {
+            memory_limit: limit,
+            ..EvalOptions::default()
+        };
+        sppm_lang::load_file(&scene, &options).unwrap()
+    };
+    // Without a limit, and with room for both (24 MiB): loaded.
+    for limit in [None, Some(25 << 20)] {
+        let l = with(limit);
+        assert!(errors(&l).is_empty(), "{limit:?}: {:?}", errors(&l));
+    }
+    // Room for one: the second (the same file read as linear data) is refused at its name.
+    let l = with(Some(20 << 20));
+    let e = errors(&l);
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].contains("1024x1024") && e[0].contains("memory limit of 20 MiB"),
+        "{e:?}"
+    );
+    let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let at = d.span.start as usize;
+    assert_eq!(
+        text[..at].matches("a.png").count(),
+        1,
+        "the error is not at the second image's name: {:?}",
+        d.span
+    );
+    // Room for none.
+    let e = errors(&with(Some(4 << 20)));
+    assert!(!e.is_empty() && e.iter().all(|m| m.contains("memory limit")), "{e:?}");
+}

@@ -259,6 +259,7 @@ impl LimitArgs {
             max_iterations: self.max_iterations,
             max_depth: self.max_depth as usize,
             max_steps: self.max_steps,
+            memory_limit: self.memory_limit,
             ..EvalOptions::default()
         }
     }

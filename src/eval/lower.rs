@@ -274,7 +274,7 @@ impl Evaluator {
             .values()
             .map(|i| i.width as u64 * i.height as u64)
             .sum();
-        let room = MAX_TOTAL_IMAGE_PIXELS.saturating_sub(loaded);
+        let room = ImageRoom::after(loaded, self.options.memory_limit);
         let img = load_image_within(path, space, room).map_err(|e| {
             vec![
                 Error::new(e.message)

@@ -55,6 +55,10 @@ pub struct EvalOptions {
     /// calls, counted together) one load may take: a budget for the whole evaluation, so that
     /// nested loops or exponential recursion that each stay under their own limits still end.
     pub max_steps: u64,
+    /// The render's memory limit (bytes), as given to `prepare`: images that would not fit in
+    /// it decoded are refused from their headers, before they are decoded. `None`: only the
+    /// fixed caps on image size apply.
+    pub memory_limit: Option<u64>,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -95,6 +99,7 @@ impl Default for EvalOptions {
             max_depth: 256,
             max_objects: 1_000_000,
             max_steps: 50_000_000,
+            memory_limit: None,
         }
     }
 }

@@ -183,7 +183,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
     items.push(MemoryItem {
         what: "images",
         bytes: image_pixels
-            .saturating_mul(12)
+            .saturating_mul(crate::scene::IMAGE_BYTES_PER_PIXEL)
             .saturating_add(environment_pixels.saturating_mul(44)),
     });
     // Per pixel: the film's sums and the image snapshots (f32 RGB twice), plus the method's own

@@ -17,6 +17,36 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 25;
 pub const MAX_TOTAL_IMAGE_PIXELS: u64 = 1 << 27;
 /// Most memory the image decoder may allocate for one file.
 pub const MAX_IMAGE_DECODE_BYTES: u64 = 1 << 30;
+/// Bytes of a decoded pixel ([`ImageData::pixels`]: f32 RGB); the render's memory estimate
+/// counts each image at least this much.
+pub const IMAGE_BYTES_PER_PIXEL: u64 = std::mem::size_of::<[f32; 3]>() as u64;
+
+/// How many pixels an image may still have, and which limit says so (for the message).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageRoom {
+    pub pixels: u64,
+    /// `Some(bytes)`: the render's memory limit, not [`MAX_TOTAL_IMAGE_PIXELS`], is what is
+    /// left of.
+    pub memory_limit: Option<u64>,
+}
+
+impl ImageRoom {
+    /// The room left after `loaded` pixels of images: [`MAX_TOTAL_IMAGE_PIXELS`], or less
+    /// under a memory limit (of which each decoded pixel takes [`IMAGE_BYTES_PER_PIXEL`]).
+    pub fn after(loaded: u64, memory_limit: Option<u64>) -> Self {
+        let by_count = MAX_TOTAL_IMAGE_PIXELS.saturating_sub(loaded);
+        match memory_limit {
+            Some(limit) if limit / IMAGE_BYTES_PER_PIXEL < MAX_TOTAL_IMAGE_PIXELS => Self {
+                pixels: (limit / IMAGE_BYTES_PER_PIXEL).saturating_sub(loaded),
+                memory_limit: Some(limit),
+            },
+            _ => Self {
+                pixels: by_count,
+                memory_limit: None,
+            },
+        }
+    }
+}
 
 /// How the stored values of an image are to be read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -89,15 +119,16 @@ impl std::fmt::Display for AssetError {
 /// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
 /// float formats (EXR, HDR) are always linear.
 pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, AssetError> {
-    load_image_within(path, space, MAX_IMAGE_PIXELS)
+    load_image_within(path, space, ImageRoom::after(0, None))
 }
 
 /// [`load_image`] of an image that may have at most `room` pixels (what is left of
-/// [`MAX_TOTAL_IMAGE_PIXELS`] after the images loaded before), refused from its header.
+/// [`MAX_TOTAL_IMAGE_PIXELS`], or of a memory limit, after the images loaded before), refused
+/// from its header before it is decoded.
 pub fn load_image_within(
     path: &std::path::Path,
     space: ColorSpace,
-    room: u64,
+    room: ImageRoom,
 ) -> Result<ImageData, AssetError> {
     let bytes =
         crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
@@ -114,7 +145,7 @@ fn decode_image(
     bytes: &[u8],
     path: &std::path::Path,
     space: ColorSpace,
-    room: u64,
+    room: ImageRoom,
 ) -> Result<ImageData, String> {
     let reader = || {
         let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
@@ -138,12 +169,22 @@ fn decode_image(
             path.display()
         ));
     }
-    if w as u64 * h as u64 > room {
-        return Err(format!(
-            "image `{}` is {w}x{h} pixels, more than the {room} pixels left of the limit of \
-             {MAX_TOTAL_IMAGE_PIXELS} pixels for all the scene's images together",
-            path.display()
-        ));
+    if w as u64 * h as u64 > room.pixels {
+        let left = room.pixels;
+        return Err(match room.memory_limit {
+            None => format!(
+                "image `{}` is {w}x{h} pixels, more than the {left} pixels left of the limit \
+                 of {MAX_TOTAL_IMAGE_PIXELS} pixels for all the scene's images together",
+                path.display()
+            ),
+            Some(limit) => format!(
+                "image `{}` is {w}x{h} pixels; decoded ({IMAGE_BYTES_PER_PIXEL} bytes a pixel) \
+                 it does not fit in the {left} pixels left of the memory limit of {} MiB \
+                 (`--memory-limit`)",
+                path.display(),
+                limit >> 20
+            ),
+        });
     }
     let decoded = reader()?
         .decode()

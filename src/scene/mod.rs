@@ -13,8 +13,8 @@ mod obj;
 mod validate;
 
 pub use assets::{
-    AssetError, ColorSpace, ImageData, MAX_TOTAL_IMAGE_PIXELS, MeshData, load_image,
-    load_image_within, load_obj, srgb_to_linear,
+    AssetError, ColorSpace, IMAGE_BYTES_PER_PIXEL, ImageData, ImageRoom, MAX_TOTAL_IMAGE_PIXELS,
+    MeshData, load_image, load_image_within, load_obj, srgb_to_linear,
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
