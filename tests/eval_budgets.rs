@@ -222,6 +222,11 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
         "{e:?}"
     );
     let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
+    assert!(
+        d.help.as_deref().is_some_and(|h| h.contains("--memory-limit")),
+        "{:?}",
+        d.help
+    );
     let text = std::fs::read_to_string(&scene).unwrap();
     let at = d.span.start as usize;
     assert_eq!(
@@ -232,5 +237,8 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
     );
     // Room for none.
     let e = errors(&with(Some(4 << 20)));
-    assert!(!e.is_empty() && e.iter().all(|m| m.contains("memory limit")), "{e:?}");
+    assert!(
+        !e.is_empty() && e.iter().all(|m| m.contains("memory limit")),
+        "{e:?}"
+    );
 }

@@ -259,7 +259,12 @@ impl LimitArgs {
             max_iterations: self.max_iterations,
             max_depth: self.max_depth as usize,
             max_steps: self.max_steps,
-            memory_limit: self.memory_limit,
+            // Resolved here, so that images are checked against the limit the render will
+            // have (the machine's default included) as they are loaded.
+            memory_limit: Some(
+                self.memory_limit
+                    .unwrap_or_else(sppm_lang::prepare::default_memory_limit),
+            ),
             ..EvalOptions::default()
         }
     }

@@ -279,7 +279,9 @@ impl Evaluator {
             vec![
                 Error::new(e.message)
                     .label("cannot load this image")
-                    .help(if e.read {
+                    .help(if let Some(help) = e.help {
+                        help
+                    } else if e.read {
                         format!(
                             "the file `{}` was found but is not an image that can be used: give \
                              a PNG, JPEG, EXR or Radiance HDR image",

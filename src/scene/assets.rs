@@ -81,11 +81,13 @@ pub struct MeshData {
 
 /// Why an image or mesh file could not be loaded: a message fit for a diagnostic, and whether
 /// the file itself was read (its content was refused) or not (missing, unreadable, special or
-/// too large), which decides what the diagnostic suggests.
+/// too large), which decides what the diagnostic suggests unless `help` says it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AssetError {
     pub message: String,
     pub read: bool,
+    /// The fix, where the error knows it better than the caller (an image over a size limit).
+    pub help: Option<String>,
 }
 
 impl AssetError {
@@ -93,6 +95,7 @@ impl AssetError {
         Self {
             message,
             read: false,
+            help: None,
         }
     }
 
@@ -100,6 +103,15 @@ impl AssetError {
         Self {
             message,
             read: true,
+            help: None,
+        }
+    }
+
+    fn too_large(message: String, help: &str) -> Self {
+        Self {
+            message,
+            read: true,
+            help: Some(help.to_string()),
         }
     }
 }
@@ -137,7 +149,7 @@ pub fn load_image_within(
             }
             refused => AssetError::unread(format!("cannot open image: {refused}")),
         })?;
-    decode_image(&bytes, path, space, room).map_err(AssetError::content)
+    decode_image(&bytes, path, space, room)
 }
 
 /// The image in a file's `bytes`.
@@ -146,7 +158,8 @@ fn decode_image(
     path: &std::path::Path,
     space: ColorSpace,
     room: ImageRoom,
-) -> Result<ImageData, String> {
+) -> Result<ImageData, AssetError> {
+    let smaller = "use an image with fewer pixels (scale it down in an image editor)";
     let reader = || {
         let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
@@ -159,34 +172,57 @@ fn decode_image(
         Ok::<_, String>(r)
     };
     // The header first: a few bytes of PNG can declare a picture of gigabytes.
-    let (w, h) = reader()?
+    let (w, h) = reader()
+        .map_err(AssetError::content)?
         .into_dimensions()
-        .map_err(|e| format!("cannot decode image `{}`: {e}", path.display()))?;
+        .map_err(|e| {
+            AssetError::content(format!("cannot decode image `{}`: {e}", path.display()))
+        })?;
     if w as u64 * h as u64 > MAX_IMAGE_PIXELS {
-        return Err(format!(
-            "image `{}` is {w}x{h} pixels, more than the limit of {MAX_IMAGE_PIXELS} pixels \
-             (for example 8192x4096)",
-            path.display()
+        return Err(AssetError::too_large(
+            format!(
+                "image `{}` is {w}x{h} pixels, more than the limit of {MAX_IMAGE_PIXELS} pixels \
+                 (for example 8192x4096)",
+                path.display()
+            ),
+            smaller,
         ));
     }
     if w as u64 * h as u64 > room.pixels {
         let left = room.pixels;
         return Err(match room.memory_limit {
-            None => format!(
-                "image `{}` is {w}x{h} pixels, more than the {left} pixels left of the limit \
+            None => AssetError::too_large(
+                format!(
+                    "image `{}` is {w}x{h} pixels, more than the {left} pixels left of the limit \
                  of {MAX_TOTAL_IMAGE_PIXELS} pixels for all the scene's images together",
-                path.display()
+                    path.display()
+                ),
+                "use smaller images, or fewer different ones (an image used by several textures \
+                 is loaded once)",
             ),
-            Some(limit) => format!(
-                "image `{}` is {w}x{h} pixels; decoded ({IMAGE_BYTES_PER_PIXEL} bytes a pixel) \
-                 it does not fit in the {left} pixels left of the memory limit of {} MiB \
-                 (`--memory-limit`)",
-                path.display(),
-                limit >> 20
+            Some(limit) => AssetError::too_large(
+                format!(
+                    "image `{}` is {w}x{h} pixels; decoded ({IMAGE_BYTES_PER_PIXEL} bytes a \
+                     pixel) it does not fit in the {left} pixels left of the memory limit of {} \
+                     MiB",
+                    path.display(),
+                    limit >> 20
+                ),
+                "raise the limit with `--memory-limit` (e.g. `--memory-limit 4G`), or use a \
+                 smaller image",
             ),
         });
     }
-    let decoded = reader()?
+    decode_pixels(reader().map_err(AssetError::content)?, path, space).map_err(AssetError::content)
+}
+
+/// The pixels of an image whose header passed the size checks, in linear RGB.
+fn decode_pixels(
+    reader: image::ImageReader<std::io::Cursor<&[u8]>>,
+    path: &std::path::Path,
+    space: ColorSpace,
+) -> Result<ImageData, String> {
+    let decoded = reader
         .decode()
         .map_err(|e| format!("cannot decode image `{}`: {e}", path.display()))?;
     let is_float = matches!(
