@@ -61,7 +61,7 @@ fn first_error(text: &str) -> (String, String) {
 /// be declared.
 #[test]
 fn pov_habits_get_their_spelling_here() {
-    let cases: [(&str, &str); 14] = [
+    let cases: [(&str, &str); 16] = [
         (
             "#declare A = 1;\n#if (A == 1) sphere { <0,0,0>, 1 } #elseif (A == 2) box { <0,0,0>, <1,1,1> } #end\n",
             "`#elif (condition)`",
@@ -98,6 +98,9 @@ fn pov_habits_get_their_spelling_here() {
             "sphere { <0, 0, 0>, 1 material { diffuse rgb 1, 0, 0 } }\n",
             "go in angle brackets",
         ),
+        // A sign after a space joins two values (POV-Ray reads it so too).
+        ("sphere { <0, 1, 0> -0.5 }\n", "`<0, 1, 0>, -0.5`"),
+        ("disk { <0, 0, 0> <0, 1, 0> +1 }\n", "adds to it"),
     ];
     for (text, want) in cases {
         let (message, help) = first_error(text);

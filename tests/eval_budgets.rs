@@ -223,7 +223,9 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
     );
     let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
     assert!(
-        d.help.as_deref().is_some_and(|h| h.contains("--memory-limit")),
+        d.help
+            .as_deref()
+            .is_some_and(|h| h.contains("--memory-limit")),
         "{:?}",
         d.help
     );

@@ -56,7 +56,52 @@ fn example(kind: &str) -> &'static str {
     }
 }
 
+/// Where `text` (one value's source) has a `-` or `+` after a space and before what follows
+/// it, outside brackets: `<0, 1, 0> -0.5` is one value, a subtraction, as in POV-Ray.
+fn sign_after_space(text: &str) -> Option<usize> {
+    let b = text.as_bytes();
+    let mut depth = 0i32;
+    for (i, &c) in b.iter().enumerate() {
+        match c {
+            b'<' | b'(' | b'[' => depth += 1,
+            b'>' | b')' | b']' => depth -= 1,
+            b'-' | b'+' if depth == 0 && i > 0 => {
+                let before = b[i - 1].is_ascii_whitespace();
+                let after = b.get(i + 1).is_some_and(|n| !n.is_ascii_whitespace());
+                if before && after {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 impl ObjectBuilder {
+    /// The help for too few values when one of them is two values joined by a sign: "put a
+    /// comma before the negative value".
+    fn missing_comma(&self, ev: &Evaluator) -> Option<String> {
+        if self.values.len() >= signature(self.kind).len() {
+            return None;
+        }
+        self.values.iter().find_map(|(_, span)| {
+            let text = ev.sources.snippet(*span);
+            let at = sign_after_space(text)?;
+            let (left, right) = (text[..at].trim_end(), &text[at..]);
+            Some(format!(
+                "`{text}` is one value: a `{}` after a value {} it, as in POV-Ray; for two \
+                 values write a comma between them: `{left}, {right}`",
+                &right[..1],
+                if right.starts_with('-') {
+                    "subtracts from"
+                } else {
+                    "adds to"
+                },
+            ))
+        })
+    }
+
     pub(super) fn primitive(&mut self, ev: &mut Evaluator) -> SourceResult<Part> {
         let sig = signature(self.kind);
         let names: Vec<&str> = sig.iter().map(|(n, _)| *n).collect();
@@ -80,7 +125,10 @@ impl ObjectBuilder {
                 } else {
                     "missing values"
                 })
-                .help(format!("write e.g. `{}`", example(self.kind)))
+                .help(
+                    self.missing_comma(ev)
+                        .unwrap_or_else(|| format!("write e.g. `{}`", example(self.kind))),
+                )
                 .at(span),
             ]);
         }
