@@ -215,32 +215,8 @@ impl Evaluator {
         // until a `#break`: POV-Ray's (and C's) fall-through.
         let mut falling = false;
         for clause in clauses {
-            if falling {
-                if self.run_breakable(&clause.body, sink)? {
-                    return Ok(());
-                }
-                continue;
-            }
-            falling = match &clause.test {
-                ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
-                ClauseTest::Range(lo, hi) => {
-                    let a = self.eval(lo)?.num().at(lo.span)?;
-                    let b = self.eval(hi)?.num().at(hi.span)?;
-                    if a > b {
-                        // Would never match: a mistake, as with `clamp`'s bounds.
-                        let (a, b) = (short_number(a), short_number(b));
-                        return Err(vec![
-                            Error::new(format!("`#range` bounds are reversed ({a} > {b})"))
-                                .label("the lower bound comes first")
-                                .help(format!(
-                                    "write `#range ({b}, {a})`: a reversed range never matches"
-                                ))
-                                .at(lo.span.join(hi.span)),
-                        ]);
-                    }
-                    a <= v && v <= b
-                }
-            };
+            // (A clause's test is not evaluated once falling through.)
+            falling = falling || self.clause_matches(&clause.test, v)?;
             if falling && self.run_breakable(&clause.body, sink)? {
                 return Ok(());
             }
@@ -250,6 +226,30 @@ impl Evaluator {
             Some(body) => self.run_breakable(body, sink).map(|_| ()),
             None => Ok(()),
         }
+    }
+
+    /// Whether `#switch`'s value `v` matches a `#case` or `#range` clause.
+    fn clause_matches(&mut self, test: &ClauseTest, v: f64) -> SourceResult<bool> {
+        Ok(match test {
+            ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
+            ClauseTest::Range(lo, hi) => {
+                let a = self.eval(lo)?.num().at(lo.span)?;
+                let b = self.eval(hi)?.num().at(hi.span)?;
+                if a > b {
+                    // Would never match: a mistake, as with `clamp`'s bounds.
+                    let (a, b) = (short_number(a), short_number(b));
+                    return Err(vec![
+                        Error::new(format!("`#range` bounds are reversed ({a} > {b})"))
+                            .label("the lower bound comes first")
+                            .help(format!(
+                                "write `#range ({b}, {a})`: a reversed range never matches"
+                            ))
+                            .at(lo.span.join(hi.span)),
+                    ]);
+                }
+                a <= v && v <= b
+            }
+        })
     }
 
     /// `#debug`, `#warning` and `#error`: a message at the directive's span. `#error` stops
