@@ -292,7 +292,7 @@ pub fn load_obj(path: &std::path::Path) -> Result<MeshData, AssetError> {
 }
 
 /// The mesh in an OBJ file's `bytes`.
-fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
+pub(super) fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
     // A UTF-8 byte order mark (Windows tools write one) would hide the first line.
     let body = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mesh = match super::obj::parse(body) {
@@ -306,8 +306,12 @@ fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
         return Err(format!("OBJ mesh `{}` has no faces", path.display()));
     }
     if mesh.positions.par_iter().any(|p| !p.is_finite()) {
+        let at = super::obj_errors::first_infinite_vertex(body)
+            .map(|(n, line)| format!(", line {n} (`{line}`)"))
+            .unwrap_or_default();
         return Err(format!(
-            "OBJ mesh `{}` has a vertex that is not a finite number",
+            "OBJ mesh `{}`{at}: a vertex coordinate is not a finite number or is beyond \
+             +-3.4e38 (meshes are stored in f32)",
             path.display()
         ));
     }
@@ -327,7 +331,12 @@ pub(super) fn read_with_tobj(bytes: &[u8], path: &std::path::Path) -> Result<Mes
         tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
             Err(tobj::LoadError::OpenFileFailed)
         })
-        .map_err(|e| format!("cannot read OBJ mesh `{}`: {e}", path.display()))?;
+        .map_err(|e| {
+            let at = super::obj_errors::first_bad_line(bytes, &e)
+                .map(|(n, line)| format!(" at line {n} (`{line}`)"))
+                .unwrap_or_default();
+            format!("cannot read OBJ mesh `{}`: {e}{at}", path.display())
+        })?;
     let mut mesh = MeshData {
         path: path.to_path_buf(),
         ..MeshData::default()

@@ -10,6 +10,7 @@
 mod assets;
 mod csg;
 mod obj;
+mod obj_errors;
 mod validate;
 
 pub use assets::{
