@@ -118,7 +118,6 @@ fn shown(line: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::scene::assets::read_with_tobj;
 
     /// Each kind of error `tobj` reports is found at its line, and the line is quoted.
