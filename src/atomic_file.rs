@@ -5,8 +5,12 @@
 //!
 //! Only a regular file (or nothing) at the target is replaced: a symbolic link, a directory or
 //! a device there is refused, so `-o` can never overwrite what a link points at. Temporary
-//! files are named `.sppm-<pid>-...`; a process killed mid-write (SIGKILL, power loss) leaves
-//! one behind, and the next write into that folder removes those whose process is gone.
+//! files are named `.sppm-tmp-<pid>-<6 random letters or digits>.<ext>`; a process killed
+//! mid-write (SIGKILL, power loss) leaves one behind, and a later write into that folder
+//! removes those of exactly that form whose process is gone (on Linux, no `/proc/<pid>`) and
+//! that were last written more than [`STALE_AFTER`] ago (a process in another pid namespace,
+//! sharing the folder, is invisible in `/proc` but writes its file within seconds). No other
+//! file is touched.
 
 use std::fs::File;
 use std::path::Path;
@@ -65,7 +69,11 @@ fn temp_in(dir: &Path, path: &Path) -> Result<tempfile::NamedTempFile, String> {
         .map_err(|e| cannot_create_in(dir, &e))
 }
 
-const TEMP_PREFIX: &str = ".sppm-";
+const TEMP_PREFIX: &str = ".sppm-tmp-";
+/// Length of the random part of a temporary file's name (`tempfile`'s default).
+const RANDOM_LEN: usize = 6;
+/// Age after which a temporary file of a process that is not running is removed.
+pub const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(600);
 
 /// "cannot create a file in `dir`: <the OS's reason>" (tempfile's error names the temporary
 /// file, a name the user never chose; only the OS's reason is kept).
@@ -175,11 +183,10 @@ pub fn check_target(path: &Path) -> Result<(), String> {
     }
 }
 
-/// Removes `.sppm-<pid>-*` temporary files in `dir` whose process no longer runs (where that
-/// can be told: on Linux, by `/proc/<pid>`). Best effort; errors are ignored.
+/// Removes the temporary files in `dir` that a process which no longer runs left behind (see
+/// the module's docs). Best effort; errors are ignored.
 fn remove_stale(dir: &Path) {
-    let proc_root = Path::new("/proc/self");
-    if !proc_root.exists() {
+    if !Path::new("/proc/self").exists() {
         return;
     }
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -187,18 +194,36 @@ fn remove_stale(dir: &Path) {
     };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(TEMP_PREFIX)) else {
-            continue;
-        };
-        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+        let Some(pid) = name.to_str().and_then(temp_file_pid) else {
             continue;
         };
         let alive = Path::new("/proc").join(pid.to_string()).exists();
-        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
-        if !alive && is_file {
+        let old = entry
+            .metadata()
+            .ok()
+            .filter(|m| m.file_type().is_file())
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > STALE_AFTER);
+        if !alive && old {
             let _ = std::fs::remove_file(entry.path());
         }
     }
+}
+
+/// The process id in a temporary file's name, for names of exactly the form this module
+/// gives them: `.sppm-tmp-<pid>-<RANDOM_LEN letters or digits>.<letters or digits>`.
+fn temp_file_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(TEMP_PREFIX)?;
+    let (pid, rest) = rest.split_once('-')?;
+    let (random, ext) = rest.split_once('.')?;
+    let form = !pid.is_empty()
+        && pid.bytes().all(|b| b.is_ascii_digit())
+        && random.len() == RANDOM_LEN
+        && random.bytes().all(|b| b.is_ascii_alphanumeric())
+        && !ext.is_empty()
+        && ext.bytes().all(|b| b.is_ascii_alphanumeric());
+    if form { pid.parse().ok() } else { None }
 }
 
 #[cfg(test)]
@@ -284,6 +309,10 @@ mod tests {
         check_output(&dir.path().join("out.png"), &[&scene, &missing]).unwrap();
     }
 
+    /// Only files of exactly the temporary form, of a process that is gone, and older than
+    /// [`STALE_AFTER`] are removed: a user's file that merely starts like one (a scene named
+    /// `.sppm-99999-myscene.scn`, notes `.sppm-4000000-notes.txt`) is never touched, nor is
+    /// a fresh temporary file of a process this one cannot see.
     #[test]
     fn stale_temporary_files_of_dead_processes_are_removed() {
         if !Path::new("/proc/self").exists() {
@@ -291,19 +320,46 @@ mod tests {
             return;
         }
         let dir = tempfile::tempdir().unwrap();
+        let long_ago = std::time::SystemTime::now() - STALE_AFTER * 2;
+        let file = |name: &str, old: bool| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, "x").unwrap();
+            if old {
+                let f = std::fs::File::options().write(true).open(&p).unwrap();
+                f.set_modified(long_ago).unwrap();
+            }
+            p
+        };
         // A pid far above the kernel's maximum (4194304) belongs to no process.
-        let stale = dir.path().join(".sppm-999999999-abc.png");
-        let live = dir
-            .path()
-            .join(format!(".sppm-{}-def.png", std::process::id()));
-        let other = dir.path().join("notes.txt");
-        for p in [&stale, &live, &other] {
-            std::fs::write(p, "x").unwrap();
-        }
+        let stale = file(".sppm-tmp-999999999-aB3xY9.png", true);
+        let fresh = file(".sppm-tmp-999999999-aB3xY8.png", false);
+        let live = file(
+            &format!(".sppm-tmp-{}-def123.png", std::process::id()),
+            true,
+        );
+        let kept = [
+            file("notes.txt", true),
+            file(".sppm-4000000-notes.txt", true),
+            file(".sppm-99999-myscene.scn", true),
+            file(".sppm-tmp-999999999-toolong1.png", true),
+            file(".sppm-tmp-999999999-aB3xY9.png.bak", true),
+            file(".sppm-tmp-999999999-aB3xY9.p-g", true),
+            file(".sppm-tmp-x99-aB3xY9.png", true),
+        ];
         write_atomic(&dir.path().join("out.png"), |_, _| Ok(())).unwrap();
-        assert!(!stale.exists(), "a dead process's temporary file is left");
+        assert!(
+            !stale.exists(),
+            "a dead process's old temporary file is left"
+        );
+        assert!(fresh.exists(), "a fresh temporary file was removed");
         assert!(live.exists(), "a live process's temporary file was removed");
-        assert!(other.exists());
+        for p in &kept {
+            assert!(p.exists(), "{} was removed", p.display());
+        }
+        // The names this module gives are of the form it removes.
+        let t = temp_in(dir.path(), &dir.path().join("a.exr")).unwrap();
+        let name = t.path().file_name().unwrap().to_str().unwrap().to_string();
+        assert_eq!(temp_file_pid(&name), Some(std::process::id()), "{name}");
     }
 
     /// A group whose second file fails leaves both targets as they were (the first one not
