@@ -270,7 +270,7 @@ fn random_trees_match_a_point_membership_oracle() {
                     if got_n.dot(want_n) < 0.999 {
                         failures.push(format!("{case}: normal {got_n:?}, want {want_n:?}"));
                     }
-                    let part = prepared.material(g.prim);
+                    let part = prepared.material(g.prim).expect("a hit's primitive");
                     let want_part = Material::Diffuse {
                         albedo: ColorParam::Const(DVec3::splat(id as f64)),
                     };

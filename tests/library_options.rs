@@ -228,3 +228,52 @@ fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
     };
     render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
 }
+
+/// The prepared scene's queries take any ray and any primitive number a caller gives: a ray
+/// with an infinite or NaN component meets nothing (it panicked in the BVH's leaf), and a
+/// primitive number no primitive has has no material (it panicked on the index).
+#[test]
+fn queries_with_non_finite_rays_or_unknown_primitives_do_not_panic() {
+    use glam::Vec3A;
+    use sppm_lang::geometry::Ray;
+    use sppm_lang::prepare::PreparedScene;
+    let l = sppm_lang::load_source(
+        "q.scn",
+        "triangle { <0,0,0>, <1,0,0>, <0,1,0> }\nsphere { <3, 0, 0>, 1 }\n",
+        &sppm_lang::EvalOptions::default(),
+    );
+    let scene = l.scene.expect("the scene loads");
+    let prepared = PreparedScene::new(&scene).expect("it prepares");
+    let o = Vec3A::new(0.2, 0.2, -5.0);
+    // The ray that works, then every kind of non-finite component in origin and direction.
+    let good = Ray::new(o, Vec3A::Z);
+    let hit = prepared
+        .intersect(&good, f32::INFINITY)
+        .expect("the triangle is hit");
+    assert!(prepared.occluded(&good, f32::INFINITY));
+    assert!(prepared.material(hit.prim).is_some());
+    for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
+        for (i, k) in [0, 1, 2].into_iter().enumerate() {
+            let mut d = Vec3A::Z.to_array();
+            d[k] = bad;
+            let mut p = o.to_array();
+            p[(k + i) % 3] = bad;
+            for ray in [
+                Ray::new(o, Vec3A::from_array(d)),
+                Ray::new(Vec3A::from_array(p), Vec3A::Z),
+                Ray::new(o, Vec3A::splat(bad)),
+            ] {
+                assert!(prepared.intersect(&ray, f32::INFINITY).is_none(), "{ray:?}");
+                assert!(!prepared.occluded(&ray, f32::INFINITY), "{ray:?}");
+            }
+        }
+    }
+    // A primitive number no primitive has.
+    assert!(prepared.material(u32::MAX).is_none());
+    let made_up = sppm_lang::prepare::SurfaceHit {
+        prim: u32::MAX,
+        ..hit
+    };
+    let _ = prepared.bsdf(&made_up);
+    assert!(prepared.absorption(&made_up).is_none());
+}
