@@ -52,7 +52,28 @@ impl Image {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        let mut w = BufWriter::new(file);
+        // (The fields are public: an image built by hand may not hold what it says.)
+        if self.width == 0 || self.height == 0 {
+            return Err(format!(
+                "cannot write `{}`: the image is {}x{} pixels (it needs at least one)",
+                path.display(),
+                self.width,
+                self.height
+            ));
+        }
+        if self.pixels.len() as u64 != self.width as u64 * self.height as u64 {
+            return Err(format!(
+                "cannot write `{}`: the image says {}x{} pixels but holds {}",
+                path.display(),
+                self.width,
+                self.height,
+                self.pixels.len()
+            ));
+        }
+        let mut w = BufWriter::new(IoErrorKept {
+            inner: file,
+            error: None,
+        });
         match ext.as_str() {
             "png" => {
                 let img = RgbImage::from_fn(self.width, self.height, |x, y| {
@@ -74,9 +95,46 @@ impl Image {
                 ));
             }
         }
-        .map_err(|e| format!("cannot encode `{}`: {e}", path.display()))?;
+        .map_err(|e| {
+            // The encoders wrap the file's own error (a full disk) in messages of their own
+            // (the EXR one says "decoding"): the file's error is the one to show.
+            match w.get_ref().error.as_ref() {
+                Some(io) => format!("cannot write `{}`: {io}", path.display()),
+                None => format!("cannot encode `{}`: {e}", path.display()),
+            }
+        })?;
         w.flush()
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+    }
+}
+
+/// A writer that keeps the first error of the file it writes to.
+struct IoErrorKept<'a> {
+    inner: &'a mut File,
+    error: Option<std::io::Error>,
+}
+
+impl Write for IoErrorKept<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.inner.write(buf).inspect_err(|e| self.keep(e))
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush().inspect_err(|e| self.keep(e))
+    }
+}
+
+impl std::io::Seek for IoErrorKept<'_> {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.inner.seek(pos).inspect_err(|e| self.keep(e))
+    }
+}
+
+impl IoErrorKept<'_> {
+    fn keep(&mut self, e: &std::io::Error) {
+        if self.error.is_none() {
+            self.error = Some(std::io::Error::new(e.kind(), e.to_string()));
+        }
     }
 }
 
@@ -108,6 +166,18 @@ mod tests {
         let back = image::open(dir.path().join("a.exr")).unwrap().to_rgb32f();
         assert_eq!(back.get_pixel(1, 0).0, [0.5, 1.0, 2.0]);
         assert!(img.write(&dir.path().join("a.bmp"), 1.0).is_err());
+        // An image of no pixels, or holding fewer than it says, is refused in every format
+        // (the EXR encoder wrote a file that does not load) and leaves no file.
+        let mut short = Image::new(3, 2);
+        short.pixels.pop();
+        for bad in [Image::new(0, 5), Image::new(5, 0), short] {
+            for name in ["b.png", "b.exr"] {
+                let p = dir.path().join(name);
+                let e = bad.write(&p, 1.0).unwrap_err();
+                assert!(e.contains("cannot write"), "{e}");
+                assert!(!p.exists());
+            }
+        }
         // Only the two outputs remain: no temporary left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
         assert_eq!(encode_srgb(1.0), 255);
