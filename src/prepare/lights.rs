@@ -177,8 +177,12 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
                 s.n.as_dvec3().dot(n) > 1.0 - 1e-6 && (s.p - first.p).as_dvec3().dot(n).abs() <= tol
             });
         let p = first.p.as_dvec3();
+        // The camera counts: a sign that faces the viewer is seen, whatever it lights.
         let faces_something = !flat
-            || corners.iter().any(|c| n.dot(*c - p) > tol)
+            || corners
+                .iter()
+                .chain([&scene.camera.location])
+                .any(|c| n.dot(*c - p) > tol)
             || planes
                 .iter()
                 .any(|(pn, pp)| pn.dot(n).abs() < 1.0 - 1e-9 || n.dot(*pp - p) > tol);
@@ -318,5 +322,21 @@ mod tests {
              area_light {{ quad {{ <-0.5, 3, -0.5>, <0, 0, 1>, <1, 0, 0> }} radiance rgb 10 }}\n"
         );
         assert_eq!(facing_away_count(&tilted), 0);
+        // A sign in front of a wall, facing the camera and nothing else: it is seen, so it is
+        // not named; turned to the wall, it is.
+        let sign = |edges: &str| {
+            format!(
+                "camera {{ location <0, 0, -5> look_at <0, 0, 0> }}
+                 box {{ <-3, -3, 1>, <3, 3, 1.2> }}
+                 area_light {{ quad {{ <-1, -0.5, 0>, {edges} }} radiance rgb 4 }}
+"
+            )
+        };
+        assert_eq!(facing_away_count(&sign("<0, 1, 0>, <2, 0, 0>")), 0);
+        assert_eq!(facing_away_count(&sign("<2, 0, 0>, <0, 1, 0>")), 0);
+        let behind = sign("<2, 0, 0>, <0, 1, 0>").replace("<0, 0, -5>", "<0, 0, 5>");
+        assert_eq!(facing_away_count(&behind), 0);
+        let unseen = sign("<0, 1, 0>, <2, 0, 0>").replace("<0, 0, -5>", "<0, 0, 5>");
+        assert_eq!(facing_away_count(&unseen), 1);
     }
 }
