@@ -545,3 +545,39 @@ fn rotating_a_sphere_turns_its_uv() {
         );
     }
 }
+
+/// An 8-bit environment map is colour: its texels are sRGB-decoded, as an image texture's (it
+/// was read as linear, so a texel of 40 lit the scene 7x too much).
+#[test]
+fn an_eight_bit_environment_map_is_srgb_decoded() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbImage::from_fn(8, 4, |x, _| {
+        image::Rgb([if x < 4 { 40 } else { 220 }, 128, 0])
+    })
+    .save(dir.path().join("sky.png"))
+    .unwrap();
+    let scene_path = dir.path().join("s.scn");
+    std::fs::write(
+        &scene_path,
+        "environment { image \"sky.png\" intensity 2 }\n",
+    )
+    .unwrap();
+    let l = sppm_lang::load_file(&scene_path, &sppm_lang::EvalOptions::default()).unwrap();
+    let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+    let sppm_lang::scene::Background::Environment { image, .. } = &scene.background else {
+        panic!("no environment");
+    };
+    let decode = |c: u8| sppm_lang::scene::srgb_to_linear(c as f32 / 255.0);
+    for (x, want) in [
+        (0, [decode(40), decode(128), 0.0]),
+        (7, [decode(220), decode(128), 0.0]),
+    ] {
+        let got = image.pixels[x];
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).abs() < 1e-6,
+                "texel {x}: {got:?}, want {want:?}"
+            );
+        }
+    }
+}

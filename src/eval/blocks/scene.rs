@@ -63,7 +63,9 @@ impl Sink for TopSink {
                 Ok(())
             }
             Value::Environment(e) => {
-                let image = ev.image(&e.path, true, e.path_span)?;
+                // Colour, as an image texture's: PNG and JPEG are sRGB-decoded (as Mitsuba's
+                // `envmap` and pbrt's `imagemap` light read them); EXR and HDR are linear.
+                let image = ev.image(&e.path, false, e.path_span)?;
                 ev.scene.background = Background::Environment {
                     image,
                     intensity: e.intensity,
