@@ -39,7 +39,7 @@ fn direct_at(prepared: &PreparedScene, x: f32, z: f32, n: usize, seed: u64) -> (
     let mut rng = Rng::new(seed);
     let (mut s, mut s2) = (0.0f64, 0.0f64);
     for _ in 0..n {
-        let l = f64::from(direct_lighting(prepared, &sh, &bsdf, Vec3A::Y, &mut rng).x);
+        let l = f64::from(direct_lighting(prepared, &sh, &bsdf, Vec3A::Y, Vec3A::ZERO, &mut rng).x);
         s += l;
         s2 += l * l;
     }

@@ -180,3 +180,57 @@ fn cornell_has_no_nan_or_inf_pixel() {
     );
     assert!(m[0] > 0.1 && m[0] < 0.6);
 }
+
+/// A diffuse ball inside a concentric sphere of coloured glass of index 1 (no refraction, no
+/// reflection), lit by a uniform background, seen through the glass at its centre: the glass
+/// absorbs on the way in (to the ball, from every direction of the sky) and on the way out (to
+/// the camera), `exp(-sigma d)` each. Every segment inside the glass counts, whatever surface
+/// it ends on: the segments that end on the ball were once left out (path tracing missed the
+/// camera's, SPPM both). The ball's irradiance is the same everywhere on it, and on a sphere
+/// the gather disc is exact, so SPPM's large radius adds no bias.
+#[test]
+fn coloured_glass_absorbs_on_the_way_to_an_object_inside_it() {
+    let (big, small, albedo) = (1.0f64, 0.5f64, 0.8f64);
+    let sigma = [0.5f64, 1.0, 2.0];
+    // Irradiance on the ball: 2 pi int exp(-sigma d(theta)) cos sin dtheta, with d the distance
+    // from the ball's surface to the glass's along a direction theta from the normal.
+    let irradiance = |s: f64| {
+        let n = 4000;
+        let h = std::f64::consts::FRAC_PI_2 / n as f64;
+        let f = |t: f64| {
+            let d = -small * t.cos() + (big * big - small * small * t.sin().powi(2)).sqrt();
+            (-s * d).exp() * t.cos() * t.sin()
+        };
+        // Simpson's rule.
+        let mut sum = f(0.0) + f(std::f64::consts::FRAC_PI_2);
+        for i in 1..n {
+            sum += f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        2.0 * std::f64::consts::PI * sum * h / 3.0
+    };
+    let want =
+        sigma.map(|s| (-s * (big - small)).exp() * albedo / std::f64::consts::PI * irradiance(s));
+    for integrator in ["path", "sppm"] {
+        let text = format!(
+            "settings {{ resolution <8, 8> integrator {integrator} radius 0.2 }}\n\
+             camera {{ location <0, 0, -5> look_at <0, 0, 0> fov 1 }}\n\
+             background rgb 1\n\
+             sphere {{ <0, 0, 0>, {big} material {{ glass ior 1 absorb rgb <{}, {}, {}> }} }}\n\
+             sphere {{ <0, 0, 0>, {small} material {{ diffuse rgb {albedo} }} }}\n",
+            sigma[0], sigma[1], sigma[2]
+        );
+        let l = sppm_lang::load_source("glass.scn", &text, &sppm_lang::EvalOptions::default());
+        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+        let img = run(&scene, 256, 20_000);
+        let got = img.mean();
+        println!("{integrator}: {got:?}, want {want:?}");
+        for c in 0..3 {
+            assert!(
+                (got[c] - want[c]).abs() < 0.03 * want[c],
+                "{integrator}, channel {c}: {} against {}",
+                got[c],
+                want[c]
+            );
+        }
+    }
+}

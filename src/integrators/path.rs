@@ -9,9 +9,9 @@ use crate::integrators::Job;
 
 use glam::Vec3A;
 
-use super::common::attenuate_inside;
 use super::common::direct::direct_lighting;
 use super::common::progressive;
+use super::common::{attenuate_inside, medium_after};
 use super::{Integrator, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::TransportMode;
@@ -51,6 +51,8 @@ fn radiance(
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
     let mut specular_bounce = true;
+    // The absorption of the glass the path is inside (zero: none).
+    let mut medium = Vec3A::ZERO;
     for depth in 0..max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             // After a non-specular bounce the escaped direction was already counted by
@@ -61,17 +63,18 @@ fn radiance(
             break;
         };
         let wo = -ray.d;
-        attenuate_inside(scene, &sh, &ray, &mut beta);
+        attenuate_inside(scene, &sh, &ray, medium, &mut beta);
         if specular_bounce && let Some((_, al)) = scene.area_light(sh.prim) {
             l += beta * al.le(sh.hit.n, wo);
         }
         let bsdf = scene.bsdf(&sh);
         if !bsdf.is_specular() {
-            l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+            l += beta * direct_lighting(scene, &sh, &bsdf, wo, medium, rng);
         }
         let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
             break;
         };
+        medium = medium_after(scene, &sh, wo, s.wi, medium);
         specular_bounce = s.specular;
         beta *= s.weight;
         if depth >= RR_DEPTH {

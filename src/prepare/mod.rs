@@ -462,6 +462,16 @@ impl<'a> PreparedScene<'a> {
         eval::lobes(m, self.scene, || self.tex_coord(sh))
     }
 
+    /// For a hit on glass, its absorption coefficient (zero for clear glass); `None` for any
+    /// other material.
+    #[inline]
+    pub fn glass_absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
+        match self.material(sh.prim)? {
+            Material::Glass { .. } => Some(self.absorption(sh).unwrap_or(Vec3A::ZERO)),
+            _ => None,
+        }
+    }
+
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
     pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
         match self.material(sh.prim)? {

@@ -4,8 +4,8 @@
 
 use glam::{Vec2, Vec3A};
 
-use super::attenuate_inside;
 use super::direct::direct_lighting;
+use super::{attenuate_inside, medium_after};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::materials::{Bsdf, TransportMode};
@@ -22,6 +22,8 @@ pub(crate) struct VisiblePoint {
     pub(crate) beta: Vec3A,
     /// The length of the camera path to the point (through specular bounces).
     pub(crate) distance: f32,
+    /// The absorption of the glass the point is inside (zero: none).
+    pub(crate) medium: Vec3A,
 }
 
 /// A jittered eye path for pixel (x, y) (pixel position and lens position from `rng`): returns
@@ -95,6 +97,7 @@ fn follow_eye_ray(
         beta: Vec3A::ONE,
         distance: 0.0,
         gather: false,
+        medium: Vec3A::ZERO,
     };
     follow(scene, ray, settings, rng, start, on_hit)
 }
@@ -125,6 +128,7 @@ pub(crate) fn gather_path(
         beta,
         distance: vp.distance,
         gather: true,
+        medium: vp.medium,
     };
     let ray = scene.spawn_ray(vp.p, vp.bsdf.ng, s.wi);
     follow(scene, ray, settings, rng, start, |_| {})
@@ -136,6 +140,7 @@ struct PathStart {
     beta: Vec3A,
     distance: f32,
     gather: bool,
+    medium: Vec3A,
 }
 
 /// Follows `ray` through specular and glossy bounces (at most `max_depth` surfaces) to the
@@ -152,6 +157,7 @@ fn follow(
     let mut beta = start.beta;
     let mut l = Vec3A::ZERO;
     let mut distance = start.distance;
+    let mut medium = start.medium;
     // After a glossy bounce, direct_lighting's BSDF sample already counted emission and the
     // background the next segment meets. A gather path starts after such a sample too, and
     // the light it meets through specular bounces alone is the caustic photons' share: it
@@ -168,7 +174,7 @@ fn follow(
         let wo = -ray.d;
         on_hit(scene.prim_object[sh.prim as usize]);
         distance += sh.hit.t * ray.d.length();
-        attenuate_inside(scene, &sh, &ray, &mut beta);
+        attenuate_inside(scene, &sh, &ray, medium, &mut beta);
         if after_specular
             && counts_emission
             && let Some((_, al)) = scene.area_light(sh.prim)
@@ -177,7 +183,7 @@ fn follow(
         }
         let bsdf = scene.bsdf(&sh);
         if !bsdf.is_specular() {
-            l += beta * direct_lighting(scene, &sh, &bsdf, wo, rng);
+            l += beta * direct_lighting(scene, &sh, &bsdf, wo, medium, rng);
             counts_emission = true;
         }
         if !bsdf.is_specular() && (!bsdf.is_glossy() || depth + 1 == settings.max_depth) {
@@ -187,12 +193,14 @@ fn follow(
                 bsdf,
                 beta,
                 distance,
+                medium,
             };
             return (l, Some(vp));
         }
         let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
             break;
         };
+        medium = medium_after(scene, &sh, wo, s.wi, medium);
         after_specular = s.specular;
         beta *= s.weight;
         if beta.max_element() <= 0.0 {

@@ -5,16 +5,20 @@
 
 use glam::Vec3A;
 
+use super::transmittance;
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::{PreparedScene, SurfaceHit};
 use crate::sampling::{Rng, power_heuristic};
 
-/// Reflected direct radiance toward `wo`.
+/// Reflected direct radiance toward `wo`, at a point inside a medium of absorption `medium`
+/// (zero: none; a light sample or a BSDF sample that reaches a light crosses no surface, so
+/// the whole way to the light is in it).
 pub fn direct_lighting(
     scene: &PreparedScene,
     sh: &SurfaceHit,
     bsdf: &Bsdf,
     wo: Vec3A,
+    medium: Vec3A,
     rng: &mut Rng,
 ) -> Vec3A {
     let p = sh.hit.p;
@@ -39,7 +43,8 @@ pub fn direct_lighting(
                 } else {
                     power_heuristic(pl * ls.pdf, bsdf.pdf(wo, ls.wi))
                 };
-                l += f * ls.li * (w / (pl * ls.pdf));
+                let absorbed = transmittance(medium, t_max * ray.d.length());
+                l += f * ls.li * absorbed * (w / (pl * ls.pdf));
             }
         }
     }
@@ -57,7 +62,8 @@ pub fn direct_lighting(
                     if le != Vec3A::ZERO {
                         let light_pdf = scene.light_distr.pdf(li)
                             * al.pdf_li_from(p, h2.hit.p, h2.hit.n, on_light(li));
-                        l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
+                        let absorbed = transmittance(medium, h2.hit.t * ray.d.length());
+                        l += bs.weight * le * absorbed * power_heuristic(bs.pdf, light_pdf);
                     }
                 }
             }

@@ -13,19 +13,60 @@ use glam::Vec3A;
 use crate::geometry::Ray;
 use crate::prepare::{PreparedScene, SurfaceHit};
 
-/// Beer–Lambert absorption along a segment that ran inside an absorbing dielectric (the ray
-/// hits the surface from its inner side).
+/// Beer–Lambert absorption along the segment `ray` ran to `sh` inside an absorbing dielectric:
+/// where it hits a glass from its inner side, that glass's absorption; anywhere else, that of
+/// the `medium` the path is in (see [`medium_after`]): a path inside coloured glass is absorbed
+/// on its way to an object or a light inside the glass as well.
 #[inline]
 pub(crate) fn attenuate_inside(
     scene: &PreparedScene,
     sh: &SurfaceHit,
     ray: &Ray,
+    medium: Vec3A,
     beta: &mut Vec3A,
 ) {
-    if ray.d.dot(sh.hit.n) > 0.0
-        && let Some(sigma) = scene.absorption(sh)
-    {
+    let sigma = match scene.glass_absorption(sh) {
+        Some(glass) if ray.d.dot(sh.hit.n) > 0.0 => glass,
+        _ => medium,
+    };
+    if sigma != Vec3A::ZERO {
         let dist = sh.hit.t * ray.d.length();
-        *beta *= (-sigma * dist).exp();
+        *beta *= transmittance(sigma, dist);
+    }
+}
+
+/// Beer–Lambert transmittance through `dist` of a medium of absorption `sigma`.
+#[inline]
+pub(crate) fn transmittance(sigma: Vec3A, dist: f32) -> Vec3A {
+    if sigma == Vec3A::ZERO {
+        Vec3A::ONE
+    } else {
+        (-sigma * dist).exp()
+    }
+}
+
+/// The absorbing medium a path is in after it scattered at `sh` from `wo` into `wi` (both
+/// pointing away from the surface): passing through a glass into it, that glass's absorption;
+/// out of it, none (zero; nested glasses are not tracked: leaving the inner one leaves both);
+/// any reflection, and any other surface, keeps `medium`.
+#[inline]
+pub(crate) fn medium_after(
+    scene: &PreparedScene,
+    sh: &SurfaceHit,
+    wo: Vec3A,
+    wi: Vec3A,
+    medium: Vec3A,
+) -> Vec3A {
+    let Some(glass) = scene.glass_absorption(sh) else {
+        return medium;
+    };
+    let n = sh.hit.n;
+    let (o, i) = (wo.dot(n), wi.dot(n));
+    if o * i >= 0.0 {
+        medium
+    } else if i < 0.0 {
+        glass
+    } else {
+        Vec3A::ZERO
     }
 }

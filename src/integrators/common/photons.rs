@@ -4,7 +4,7 @@
 
 use glam::Vec3A;
 
-use super::attenuate_inside;
+use super::{attenuate_inside, medium_after};
 use crate::geometry::Ray;
 use crate::materials::TransportMode;
 use crate::prepare::{PreparedScene, SurfaceHit};
@@ -45,17 +45,22 @@ pub(crate) fn trace_classified_photon(
         scene.spawn_ray(ps.p, ps.n, ps.dir)
     };
     let mut all_specular = true;
+    // The absorption of the glass the photon is inside (zero: none; a light inside a glass
+    // starts outside of it as far as this knows, and its first segment is absorbed only where
+    // it ends on that glass).
+    let mut medium = Vec3A::ZERO;
     for depth in 0..max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             return;
         };
-        attenuate_inside(scene, &sh, &ray, &mut beta);
+        attenuate_inside(scene, &sh, &ray, medium, &mut beta);
         let wi = -ray.d;
         at_hit(depth, &sh, wi, beta, all_specular);
         let bsdf = scene.bsdf(&sh);
         let Some(s) = bsdf.sample(wi, rng.f32(), rng.vec2(), TransportMode::Importance) else {
             return;
         };
+        medium = medium_after(scene, &sh, wi, s.wi, medium);
         all_specular &= s.specular;
         let bnew = beta * s.weight;
         // Russian roulette keeps the photon's power roughly constant.

@@ -79,6 +79,7 @@ mod tests {
                 bsdf: Bsdf::new(lobes, ns, ns.any_orthonormal_vector(), ng),
                 beta: Vec3A::ONE,
                 distance: 1.0,
+                medium: Vec3A::ZERO,
             };
             let r = Receiver::new(&vp);
             assert_eq!(r.constant.is_some(), i % 2 == 0);

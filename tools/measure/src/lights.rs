@@ -116,7 +116,8 @@ pub fn run(size: u32, rounds: u32, per_round: u32, log: &dyn Fn(&str)) -> Result
                 for (i, sh) in hits.iter().enumerate() {
                     let bsdf = prepared.bsdf(sh);
                     for _ in 0..per_round {
-                        let l = direct_lighting(&prepared, sh, &bsdf, Vec3A::Y, &mut rng);
+                        let l =
+                            direct_lighting(&prepared, sh, &bsdf, Vec3A::Y, Vec3A::ZERO, &mut rng);
                         let v = f64::from(l.x + l.y + l.z) / 3.0;
                         sum[s][i] += v;
                         sum2[s][i] += v * v;
