@@ -18,7 +18,7 @@ use crate::geometry::{Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, Light};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::PiecewiseConstant1D;
-use crate::scene::{self, Material, Scene};
+use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
@@ -75,6 +75,8 @@ pub struct PreparedScene<'a> {
     /// Per material: whether any of its parameters is a texture (its lobes, or a glass's
     /// absorption), so that hits on it need their `uv`.
     textured: Vec<bool>,
+    /// Per material: whether it is glass, and its absorption where that is a constant.
+    glass: Vec<GlassAbsorption>,
     /// The floor of a spawned ray's offset, from the scene's extent ([`accel::offset_floor`]).
     offset_floor: f32,
 }
@@ -84,6 +86,31 @@ pub struct PreparedScene<'a> {
 pub struct SurfaceHit {
     pub hit: Hit,
     pub prim: u32,
+}
+
+/// A material's part in [`PreparedScene::glass_absorption`], decided once per material.
+enum GlassAbsorption {
+    NotGlass,
+    /// A constant absorption (zero for clear glass), as [`PreparedScene::absorption`] gives it.
+    Constant(Vec3A),
+    /// An absorption from a texture: evaluated at each hit.
+    Textured,
+}
+
+impl GlassAbsorption {
+    fn of(m: &Material) -> Self {
+        match m {
+            Material::Glass {
+                absorb: ColorParam::Const(c),
+                ..
+            } => {
+                let a = color3(*c).max(Vec3A::ZERO);
+                Self::Constant(if a.is_finite() { a } else { Vec3A::ZERO })
+            }
+            Material::Glass { .. } => Self::Textured,
+            _ => Self::NotGlass,
+        }
+    }
 }
 
 /// A ray the BVH can traverse: finite origin and direction (a caller's ray with an infinite or
@@ -325,6 +352,7 @@ impl<'a> PreparedScene<'a> {
             prim_material,
             const_lobes: Vec::new(),
             textured: scene.materials.iter().map(eval::has_texture).collect(),
+            glass: scene.materials.iter().map(GlassAbsorption::of).collect(),
             offset_floor: 0.0,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
@@ -466,9 +494,11 @@ impl<'a> PreparedScene<'a> {
     /// other material.
     #[inline]
     pub fn glass_absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
-        match self.material(sh.prim)? {
-            Material::Glass { .. } => Some(self.absorption(sh).unwrap_or(Vec3A::ZERO)),
-            _ => None,
+        let m = *self.prim_material.get(sh.prim as usize)?;
+        match self.glass.get(m as usize)? {
+            GlassAbsorption::NotGlass => None,
+            GlassAbsorption::Constant(sigma) => Some(*sigma),
+            GlassAbsorption::Textured => Some(self.absorption(sh).unwrap_or(Vec3A::ZERO)),
         }
     }
 

@@ -25,9 +25,10 @@ pub(crate) fn attenuate_inside(
     medium: Vec3A,
     beta: &mut Vec3A,
 ) {
-    let sigma = match scene.glass_absorption(sh) {
-        Some(glass) if ray.d.dot(sh.hit.n) > 0.0 => glass,
-        _ => medium,
+    let inner_side = ray.d.dot(sh.hit.n) > 0.0;
+    let sigma = match inner_side.then(|| scene.glass_absorption(sh)).flatten() {
+        Some(glass) => glass,
+        None => medium,
     };
     if sigma != Vec3A::ZERO {
         let dist = sh.hit.t * ray.d.length();
@@ -57,16 +58,14 @@ pub(crate) fn medium_after(
     wi: Vec3A,
     medium: Vec3A,
 ) -> Vec3A {
-    let Some(glass) = scene.glass_absorption(sh) else {
-        return medium;
-    };
     let n = sh.hit.n;
     let (o, i) = (wo.dot(n), wi.dot(n));
     if o * i >= 0.0 {
-        medium
-    } else if i < 0.0 {
-        glass
-    } else {
-        Vec3A::ZERO
+        return medium;
+    }
+    match scene.glass_absorption(sh) {
+        None => medium,
+        Some(glass) if i < 0.0 => glass,
+        Some(_) => Vec3A::ZERO,
     }
 }
