@@ -581,3 +581,47 @@ fn an_eight_bit_environment_map_is_srgb_decoded() {
         }
     }
 }
+
+/// An infinite ground plane shadows the sky however far it reaches: a vertical quad above a
+/// black plane under a sky of 1 sees the sky over half its view, radiance `0.8 / pi * pi / 2 =
+/// 0.4` exactly. Shadow rays toward the sky once stopped just beyond the finite objects, so
+/// the plane's far part let the sky through (0.448 with path tracing, 0.422 with SPPM).
+#[test]
+fn an_infinite_ground_plane_shadows_the_sky() {
+    for integrator in ["path", "sppm"] {
+        let text = format!(
+            "settings {{ resolution <32, 32> integrator {integrator} }}\n\
+             camera {{ location <0, 1, -4> look_at <0, 1, 0> fov 30 }}\n\
+             background rgb 1\n\
+             plane {{ <0, 1, 0>, 0 material {{ diffuse rgb 0 }} }}\n\
+             quad {{ <-1, 0.2, 0>, <2, 0, 0>, <0, 1.6, 0> material {{ diffuse rgb 0.8 }} }}\n"
+        );
+        let l = sppm_lang::load_source("ground.scn", &text, &sppm_lang::EvalOptions::default());
+        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+        let opts = sppm_lang::render::RenderOptions {
+            iterations: Some(128),
+            seed: Some(1),
+            ..Default::default()
+        };
+        let out = sppm_lang::render::render(
+            &scene,
+            &opts,
+            &std::sync::atomic::AtomicBool::new(false),
+            &mut |_| {},
+        )
+        .unwrap();
+        // The quad fills the image's central 16 x 16 pixels.
+        let mut sum = 0.0;
+        for y in 8..24 {
+            for x in 8..24 {
+                sum += out.image.get(x, y)[1];
+            }
+        }
+        let mean = sum / 256.0;
+        println!("{integrator}: {mean:.4}");
+        assert!(
+            (mean - 0.4).abs() < 0.006,
+            "{integrator}: {mean} against 0.4"
+        );
+    }
+}

@@ -35,7 +35,13 @@ pub fn direct_lighting(
     {
         let f = bsdf.f(wo, ls.wi) * ls.wi.dot(bsdf.frame.n).abs();
         if f != Vec3A::ZERO {
-            let (ray, t_max) = scene.spawn_ray_to(p, n, ls.p, ls.n);
+            let (ray, t_max) = if scene.environment == Some(li) {
+                // The sky is at infinity: anything along the way shadows it, an infinite
+                // plane far beyond the finite objects included.
+                (scene.spawn_ray(p, n, ls.wi), f32::INFINITY)
+            } else {
+                scene.spawn_ray_to(p, n, ls.p, ls.n)
+            };
             let t_max = if ls.delta { t_max * 0.9999 } else { t_max };
             if !scene.occluded(&ray, t_max) {
                 let w = if ls.delta {
@@ -43,7 +49,13 @@ pub fn direct_lighting(
                 } else {
                     power_heuristic(pl * ls.pdf, bsdf.pdf(wo, ls.wi))
                 };
-                let absorbed = transmittance(medium, t_max * ray.d.length());
+                // (Toward the sky the distance is unknown; a path reaches it only out of
+                // the glass it was in, as an escaping path does, unabsorbed.)
+                let absorbed = if t_max.is_finite() {
+                    transmittance(medium, t_max * ray.d.length())
+                } else {
+                    Vec3A::ONE
+                };
                 l += f * ls.li * absorbed * (w / (pl * ls.pdf));
             }
         }
