@@ -596,6 +596,24 @@ fn chart_lists_the_reference_as_required() {
     let out = sppm(&["chart", "examples/cornell.scn", "-o", "/tmp/never.png"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--reference"));
+    // An 8-bit reference holds tone-mapped codes, not radiance: refused before any render
+    // (its curves were drawn, flat and meaningless).
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("ref.png");
+    image::RgbImage::new(4, 4).save(&png).unwrap();
+    let out_png = dir.path().join("chart.png");
+    let out = sppm(&[
+        "chart",
+        "examples/cornell.scn",
+        "--reference",
+        png.to_str().unwrap(),
+        "-o",
+        out_png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("not an EXR or HDR image"), "{err}");
+    assert!(!out_png.exists());
 }
 
 /// A tiny scene that renders in milliseconds; `extra` goes after it.

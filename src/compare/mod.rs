@@ -173,6 +173,10 @@ pub fn pixel_relative_differences(
         .map(|(p, r)| {
             (0..3)
                 .map(|c| {
+                    // Equal values differ by nothing, whatever `eps` (0 / 0 would be NaN).
+                    if p[c] == r[c] {
+                        return 0.0;
+                    }
                     let d = (p[c] - r[c]).abs() / (r[c].abs() + eps);
                     if d.is_finite() { d } else { f32::INFINITY }
                 })
@@ -197,6 +201,19 @@ mod tests {
         assert_eq!(e.rmse, 0.0);
         assert_eq!(e.rel_mse, 0.0);
         assert_eq!(e.pixels, 16);
+    }
+
+    /// Equal pixels differ by 0, black ones with `eps` 0 too (0 / 0 was counted as infinite).
+    #[test]
+    fn equal_pixels_have_no_relative_difference() {
+        let px = vec![[0.0, 0.25, 1.0]; 4];
+        for eps in [0.0, 1e-3] {
+            let d = pixel_relative_differences(view(2, 2, &px), view(2, 2, &px), eps).unwrap();
+            assert_eq!(d, vec![0.0; 4], "eps {eps}");
+        }
+        let other = vec![[1.0, 0.25, 1.0]; 4];
+        let d = pixel_relative_differences(view(2, 2, &other), view(2, 2, &px), 0.0).unwrap();
+        assert!(d.iter().all(|v| v.is_infinite()), "{d:?}");
     }
 
     #[test]

@@ -86,6 +86,17 @@ impl Evaluator {
                 }
             }
             DirectiveKind::Undef(name) => {
+                if super::CONSTANTS.contains(&name.text.as_str()) {
+                    return Err(vec![
+                        Error::new(format!(
+                            "`{}` is a built-in constant and cannot be undefined",
+                            name.text
+                        ))
+                        .label("built-in name")
+                        .help("remove the `#undef`: `pi`, `x`, `y` and `z` are always defined")
+                        .at(name.span),
+                    ]);
+                }
                 if !self.unbind(&name.text) {
                     let help = match suggest(&name.text, self.globals.keys().map(String::as_str)) {
                         Some(s) => format!("did you mean `{s}`?"),

@@ -149,7 +149,20 @@ pub fn load_image_within(
             }
             refused => AssetError::unread(format!("cannot open image: {refused}")),
         })?;
-    decode_image(&bytes, path, space, room)
+    decode_image(&radiance_header(&bytes), path, space, room)
+}
+
+/// A Radiance HDR file's bytes with the magic line the decoder knows: files written with
+/// `#?RGBE` (Mitsuba 3 and others write it) instead of `#?RADIANCE` are the same format.
+fn radiance_header(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
+    match bytes.strip_prefix(b"#?RGBE") {
+        Some(rest) if rest.first() == Some(&b'\n') => {
+            let mut fixed = b"#?RADIANCE".to_vec();
+            fixed.extend_from_slice(rest);
+            std::borrow::Cow::Owned(fixed)
+        }
+        _ => std::borrow::Cow::Borrowed(bytes),
+    }
 }
 
 /// The image in a file's `bytes`.
@@ -536,5 +549,25 @@ mod tests {
         std::fs::write(&png, "not an image").unwrap();
         assert!(load_image(&png, ColorSpace::Srgb).unwrap_err().read);
         assert!(!load_obj(&dir.path().join("missing.obj")).unwrap_err().read);
+    }
+
+    /// A Radiance file whose magic line is `#?RGBE` (as Mitsuba 3 writes them) reads as the
+    /// same file with `#?RADIANCE`.
+    #[test]
+    fn an_rgbe_header_reads_as_radiance() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = image::Rgb32FImage::from_fn(3, 2, |x, y| image::Rgb([x as f32, y as f32, 0.5]));
+        let hdr = dir.path().join("a.hdr");
+        img.save(&hdr).unwrap();
+        let bytes = std::fs::read(&hdr).unwrap();
+        let radiance = load_image(&hdr, ColorSpace::Linear).unwrap();
+        let rest = bytes
+            .strip_prefix(b"#?RADIANCE")
+            .expect("the encoder's magic line");
+        let rgbe = dir.path().join("b.hdr");
+        std::fs::write(&rgbe, [&b"#?RGBE"[..], rest].concat()).unwrap();
+        let read = load_image(&rgbe, ColorSpace::Linear).unwrap();
+        assert_eq!(read.pixels, radiance.pixels);
+        assert_eq!((read.width, read.height), (3, 2));
     }
 }

@@ -229,6 +229,20 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
     let (Some(scene_path), Some(reference_path)) = (&args.scene, &args.reference) else {
         return Err("give a scene and --reference (or --from-csv)".into());
     };
+    // The curves compare radiance: an 8-bit image holds tone-mapped sRGB codes, not that.
+    let is_float = reference_path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("hdr"));
+    if !is_float {
+        return Err(format!(
+            "the reference `{}` is not an EXR or HDR image: the error curves compare linear \
+             radiance, which an 8-bit image does not hold (make one with `sppm-lang reference \
+             SCENE -o reference.exr`)",
+            reference_path.display()
+        )
+        .into());
+    }
     let reference = load_image(reference_path, ColorSpace::Linear)?;
     let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
         .map_err(|e| e.with_path(scene_path))?;
