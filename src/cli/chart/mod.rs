@@ -240,8 +240,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
              radiance, which an 8-bit image does not hold (make one with `sppm-lang reference \
              SCENE -o reference.exr`)",
             reference_path.display()
-        )
-        .into());
+        ));
     }
     let reference = load_image(reference_path, ColorSpace::Linear)?;
     let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
