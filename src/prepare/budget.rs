@@ -290,11 +290,23 @@ fn allocatable(bytes: u64) -> Result<(), RenderError> {
     })
 }
 
+/// A size for a message: bytes below 1 KiB, then KiB, MiB or GiB with three significant
+/// digits at most (rounded, so that the parts of an estimate add up to about its total).
 fn mib(bytes: u64) -> String {
-    if bytes >= 10 << 30 {
-        format!("{} GiB", bytes >> 30)
+    let b = bytes as f64;
+    let (value, unit) = match bytes {
+        1 => return "1 byte".into(),
+        0..1024 => return format!("{bytes} bytes"),
+        1024..0x10_0000 => (b / 1024.0, "KiB"),
+        0x10_0000..0x4000_0000 => (b / f64::from(1u32 << 20), "MiB"),
+        _ => (b / f64::from(1u32 << 30), "GiB"),
+    };
+    if value < 10.0 {
+        format!("{value:.2} {unit}")
+    } else if value < 100.0 {
+        format!("{value:.1} {unit}")
     } else {
-        format!("{} MiB", bytes.div_ceil(1 << 20))
+        format!("{value:.0} {unit}")
     }
 }
 
@@ -302,6 +314,18 @@ fn mib(bytes: u64) -> String {
 mod tests {
     use super::*;
     use crate::prepare::{RenderOptions, effective_settings};
+
+    /// Sizes in messages: exact bytes when small, three significant digits otherwise (a
+    /// limit of 1 byte was "1 MiB", and parts rounded up each added up past their total).
+    #[test]
+    fn sizes_are_shown_in_their_unit() {
+        assert_eq!(mib(0), "0 bytes");
+        assert_eq!(mib(1), "1 byte");
+        assert_eq!(mib(1536), "1.50 KiB");
+        assert_eq!(mib(20 << 20), "20.0 MiB");
+        assert_eq!(mib(2047 << 20), "2.00 GiB");
+        assert_eq!(mib(300 << 30), "300 GiB");
+    }
 
     fn settings_of(scene: &Scene) -> EffectiveSettings {
         effective_settings(scene, &RenderOptions::default()).unwrap()
