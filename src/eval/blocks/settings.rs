@@ -100,11 +100,18 @@ impl Sink for SettingsBuilder {
             "max_depth" => s.max_depth = count(&args[0], "max_depth", 1000.0)? as u32,
             "seed" => {
                 let x = num(&args[0])?;
-                if x < 0.0 || x.fract() != 0.0 || x > u64::MAX as f64 {
+                // Above 2^53 not every whole number is a number of the language (an f64):
+                // `seed 9007199254740993` would be read as ...992 without a word.
+                const MAX_SEED: f64 = 9_007_199_254_740_992.0;
+                if !(0.0..=MAX_SEED).contains(&x) || x.fract() != 0.0 {
                     return Err(range_error(
                         args[0].span,
-                        format!("seed must be a whole number ≥ 0, found {}", short_number(x)),
-                        "e.g. `seed 7`",
+                        format!(
+                            "seed must be a whole number from 0 to 2^53, found {}",
+                            short_number(x)
+                        ),
+                        "e.g. `seed 7`; a scene's numbers are 64-bit floats, exact as whole \
+                         numbers up to 2^53 (`--seed` takes any 64-bit seed)",
                     ));
                 }
                 s.seed = x as u64;
