@@ -146,6 +146,13 @@ impl Camera {
         }
         if let Some(f) = self.focus_distance {
             size(f, "the focus distance", span)?;
+        } else if self.aperture > 0.0 {
+            // A lens focuses at `look_at` unless told otherwise: the same bounds apply.
+            size(
+                (self.look_at - self.location).length(),
+                "the focus distance (from `location` to `look_at`, no `focus_distance` given)",
+                span,
+            )?;
         }
         Ok(())
     }
