@@ -204,3 +204,35 @@ fn a_parallel_up_gets_an_up_that_works() {
         assert!(!l.has_errors(), "{fixed}: {:?}", l.diagnostics);
     }
 }
+
+/// "Unused, remove it" only for a name the sources never mention again: one used only in an
+/// `#if` branch or a `#while` body not run this time, or in a macro not called, is used there
+/// (removing it would break the scene once the condition changes).
+#[test]
+fn a_name_used_only_where_evaluation_did_not_go_is_not_unused() {
+    let unused = |text: &str| -> Vec<String> {
+        let l = sppm_lang::load_source("u.scn", text, &EvalOptions::default());
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        l.diagnostics
+            .iter()
+            .filter(|d| d.message.starts_with("unused"))
+            .map(|d| d.message.clone())
+            .collect()
+    };
+    assert!(unused("#declare A = 1;\n#if (false) #debug str(A) #end\n").is_empty());
+    assert!(unused("#declare A = 1;\n#while (false) #debug str(A) #end\n").is_empty());
+    // (The macro itself is never called: that one is named.)
+    assert_eq!(
+        unused("#declare A = 1;\n#macro M() A #end\n"),
+        ["unused macro `M`"]
+    );
+    // Never mentioned again: still named, also beside one that is.
+    assert_eq!(
+        unused("#declare A = 1;\n#declare B = 2;\n#if (false) #debug str(A) #end\n"),
+        ["unused declaration `B`"]
+    );
+    assert_eq!(
+        unused("#declare Alpha = 1;\n"),
+        ["unused declaration `Alpha`"]
+    );
+}

@@ -223,6 +223,9 @@ pub(crate) struct Evaluator {
     parts_copied: usize,
     /// Bytes of scene text read so far (the scene and every include).
     pub(crate) source_bytes: u64,
+    /// How often each name-like word occurs in the sources read (see
+    /// [`Evaluator::warn_unused`]), and how many files it counted; made when first needed.
+    mentions: Option<(usize, HashMap<String, u32>)>,
 }
 
 /// "`word` is not a property of a material", with the POV-Ray spelling's counterpart or the
@@ -295,6 +298,7 @@ impl Evaluator {
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,
+            mentions: None,
         }
     }
 

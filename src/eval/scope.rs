@@ -181,6 +181,19 @@ impl Evaluator {
                     && !self.std_files.contains(&b.span.file)
             })
             .collect();
+        if unused.is_empty() {
+            return;
+        }
+        // A name the sources mention again is used where this evaluation did not go (an `#if`
+        // branch not taken, a macro not called): removing it would break the scene once it
+        // does. (A mention in a comment or a string counts too: the warning stays true.)
+        let files = self.sources.files().len();
+        if self.mentions.as_ref().is_none_or(|(n, _)| *n != files) {
+            self.mentions = Some((files, word_counts(self.sources.files())));
+        }
+        if let Some((_, counts)) = &self.mentions {
+            unused.retain(|(name, _)| counts.get(name).is_none_or(|&c| c <= 1));
+        }
         unused.sort_by_key(|(_, b)| (b.span.file.0, b.span.start));
         for (name, b) in unused {
             let what = match b.value {
@@ -201,4 +214,30 @@ impl Evaluator {
         let globals = std::mem::take(&mut self.globals);
         self.warn_unused(globals);
     }
+}
+
+/// How often each name-like word (`[A-Za-z_][A-Za-z0-9_]*`) occurs in `files`.
+fn word_counts(files: &[crate::diag::SourceFile]) -> HashMap<String, u32> {
+    let mut counts: HashMap<String, u32> = HashMap::new();
+    for f in files {
+        let b = f.text.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i].is_ascii_alphabetic() || b[i] == b'_' {
+                let start = i;
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                *counts.entry(f.text[start..i].to_string()).or_default() += 1;
+            } else if b[i].is_ascii_digit() {
+                // A number's digits and exponent are not a name (`1e5`, `2x`).
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+            } else {
+                i += 1;
+            }
+        }
+    }
+    counts
 }
