@@ -61,7 +61,7 @@ fn first_error(text: &str) -> (String, String) {
 /// be declared.
 #[test]
 fn pov_habits_get_their_spelling_here() {
-    let cases: [(&str, &str); 19] = [
+    let cases: [(&str, &str); 21] = [
         (
             "#declare A = 1;\n#if (A == 1) sphere { <0,0,0>, 1 } #elseif (A == 2) box { <0,0,0>, <1,1,1> } #end\n",
             "`#elif (condition)`",
@@ -96,6 +96,12 @@ fn pov_habits_get_their_spelling_here() {
         ("#macro M(y) #end\n", "choose another name"),
         ("#ifdef (pi) #end\n#undef pi\n", "always defined"),
         ("settings { seed 9007199254740994 }\n", "up to 2^53"),
+        // A string left open: named as such, not "expected an expression".
+        (
+            "#declare Name = \"abc;\nsphere { <0,0,0>, 1 }\n",
+            "cannot span lines",
+        ),
+        ("#declare P = \"a\\\"b;\n", "cannot span lines"),
         (
             "camera { location <0, 0, -5> look_at <0, 0, -4.9999999999> aperture 0.1 }\n",
             "at least 1e-9",

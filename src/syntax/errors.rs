@@ -197,6 +197,17 @@ pub(super) fn syntax_error(
         .with_extra(last_char(file, text), "the file ends here, inside it")
         .with_help("close it with `*/`");
     }
+    if rest.starts_with('"') && !string_closed(&rest[1..]) {
+        return Diagnostic::error(
+            Span::new(file, pos as u32, pos as u32 + 1),
+            "syntax error: a string is never closed",
+        )
+        .with_label("this `\"` has no closing `\"` on its line")
+        .with_help(
+            "close the string with `\"` before the end of the line (a string cannot span lines; \
+             write `\\n` for a line break in it)",
+        );
+    }
     if pos >= text.len()
         && let Some(open) = unclosed(text)
     {
@@ -397,6 +408,23 @@ fn open_blocks(text: &str) -> Vec<(usize, usize)> {
         i += 1;
     }
     open
+}
+
+/// Whether a string whose text starts at `rest` (after its opening quote) is closed on its
+/// line: a `"` before the line's end, a backslash escaping the character after it.
+fn string_closed(rest: &str) -> bool {
+    let mut chars = rest.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => return true,
+            '\n' => return false,
+            '\\' => {
+                chars.next();
+            }
+            _ => {}
+        }
+    }
+    false
 }
 
 /// "this `{` is never closed" (or `#if`, ...), at the opener, with the end of the file as a
