@@ -61,7 +61,7 @@ fn first_error(text: &str) -> (String, String) {
 /// be declared.
 #[test]
 fn pov_habits_get_their_spelling_here() {
-    let cases: [(&str, &str); 21] = [
+    let cases: [(&str, &str); 23] = [
         (
             "#declare A = 1;\n#if (A == 1) sphere { <0,0,0>, 1 } #elseif (A == 2) box { <0,0,0>, <1,1,1> } #end\n",
             "`#elif (condition)`",
@@ -102,6 +102,8 @@ fn pov_habits_get_their_spelling_here() {
             "cannot span lines",
         ),
         ("#declare P = \"a\\\"b;\n", "cannot span lines"),
+        ("#declare C = \"abc\"[0];\n", "not indexed"),
+        ("#declare C = <1, 2>.z;\n", "`.x` and `.y`"),
         (
             "camera { location <0, 0, -5> look_at <0, 0, -4.9999999999> aperture 0.1 }\n",
             "at least 1e-9",

@@ -275,7 +275,14 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
         Value::Array(a) => a.len(),
         Value::Vec2(_) => 2,
         Value::Vec3(_) | Value::Color(_) => 3,
-        o => return Err(Error::new(format!("cannot index {}", o.type_name()))),
+        o => {
+            return Err(Error::new(format!("cannot index {}", o.type_name()))
+                .label("not an array, vector or colour")
+                .help(
+                    "`[i]` takes an element of an array (`[1, 2, 3][0]`) or a component of a \
+                     vector or colour (`<1, 2, 3>[0]`); a string's characters are not indexed",
+                ));
+        }
     };
     if i < 0.0 || i.fract() != 0.0 || i as usize >= len {
         return Err(Error::new(format!(
@@ -304,5 +311,13 @@ fn field_value(v: Value, f: &str) -> Result<Value, Error> {
                 .help("components are `.x`, `.y`, `.z` (or `.r`, `.g`, `.b`)"));
         }
     };
-    index_value(v, i as f64).map_err(|_| Error::new(format!("this value has no component `.{f}`")))
+    let what = v.type_name();
+    index_value(v, i as f64).map_err(|_| {
+        Error::new(format!("{what} has no component `.{f}`"))
+            .label("no such component")
+            .help(
+                "`.x` `.y` `.z` (`.r` `.g` `.b`) read a vector's or colour's components; a 2D \
+                 vector has `.x` and `.y` (`.u` `.v`) only",
+            )
+    })
 }
