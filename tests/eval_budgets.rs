@@ -218,7 +218,7 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
     let e = errors(&l);
     assert_eq!(e.len(), 1, "{e:?}");
     assert!(
-        e[0].contains("1024x1024") && e[0].contains("memory limit of 20 MiB"),
+        e[0].contains("1024x1024") && e[0].contains("memory limit of 20.0 MiB"),
         "{e:?}"
     );
     let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();

@@ -14,6 +14,26 @@ pub use source::{SourceFile, SourceMap};
 
 use crate::span::Span;
 
+/// A size for a message: bytes below 1 KiB, then KiB, MiB or GiB with three significant
+/// digits at most (rounded, so that the parts of an estimate add up to about its total).
+pub fn size_text(bytes: u64) -> String {
+    let b = bytes as f64;
+    let (value, unit) = match bytes {
+        1 => return "1 byte".into(),
+        0..1024 => return format!("{bytes} bytes"),
+        1024..0x10_0000 => (b / 1024.0, "KiB"),
+        0x10_0000..0x4000_0000 => (b / f64::from(1u32 << 20), "MiB"),
+        _ => (b / f64::from(1u32 << 30), "GiB"),
+    };
+    if value < 10.0 {
+        format!("{value:.2} {unit}")
+    } else if value < 100.0 {
+        format!("{value:.1} {unit}")
+    } else {
+        format!("{value:.0} {unit}")
+    }
+}
+
 /// A number as a person would write it in a message: shortest round-trip form, rounded to 6
 /// significant digits when that form is long (`-0.09999999999999998` is `-0.1`), and in
 /// exponent form when very large or small (`1e300`, not 301 digits).
@@ -215,6 +235,18 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sizes in messages: exact bytes when small, three significant digits otherwise (a
+    /// limit of 1 byte was "1 MiB", and parts rounded up each added up past their total).
+    #[test]
+    fn sizes_are_shown_in_their_unit() {
+        assert_eq!(size_text(0), "0 bytes");
+        assert_eq!(size_text(1), "1 byte");
+        assert_eq!(size_text(1536), "1.50 KiB");
+        assert_eq!(size_text(20 << 20), "20.0 MiB");
+        assert_eq!(size_text(2047 << 20), "2.00 GiB");
+        assert_eq!(size_text(300 << 30), "300 GiB");
+    }
 
     /// A suggestion costs a bounded amount of work: a 100 000-character name is compared with
     /// nothing (its table would have 10^10 cells), and among 50 000 names of 60 characters only

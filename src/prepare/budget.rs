@@ -13,6 +13,7 @@ use std::mem::size_of;
 
 use super::instances::{shared_key, shared_meshes};
 use super::{EffectiveSettings, ObjectInfo, RenderError};
+use crate::diag::size_text;
 use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, Shape};
 use crate::shapes::patch::{BezierPatch, PIECES as PATCH_PIECES};
 
@@ -248,7 +249,7 @@ pub fn check_memory(
     let parts: Vec<String> = items
         .iter()
         .filter(|i| i.bytes > 0)
-        .map(|i| format!("{} {}", i.what, mib(i.bytes)))
+        .map(|i| format!("{} {}", i.what, size_text(i.bytes)))
         .collect();
     Err(RenderError {
         help: Some(
@@ -258,8 +259,8 @@ pub fn check_memory(
         ),
         ..RenderError::new(format!(
             "this render needs about {} of memory, more than the limit of {} ({})",
-            mib(total),
-            mib(limit),
+            size_text(total),
+            size_text(limit),
             parts.join(", ")
         ))
     })
@@ -285,47 +286,15 @@ fn allocatable(bytes: u64) -> Result<(), RenderError> {
         ..RenderError::new(format!(
             "this render needs about {} of memory before its first photon, and this process \
              cannot allocate that much",
-            mib(bytes)
+            size_text(bytes)
         ))
     })
-}
-
-/// A size for a message: bytes below 1 KiB, then KiB, MiB or GiB with three significant
-/// digits at most (rounded, so that the parts of an estimate add up to about its total).
-fn mib(bytes: u64) -> String {
-    let b = bytes as f64;
-    let (value, unit) = match bytes {
-        1 => return "1 byte".into(),
-        0..1024 => return format!("{bytes} bytes"),
-        1024..0x10_0000 => (b / 1024.0, "KiB"),
-        0x10_0000..0x4000_0000 => (b / f64::from(1u32 << 20), "MiB"),
-        _ => (b / f64::from(1u32 << 30), "GiB"),
-    };
-    if value < 10.0 {
-        format!("{value:.2} {unit}")
-    } else if value < 100.0 {
-        format!("{value:.1} {unit}")
-    } else {
-        format!("{value:.0} {unit}")
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::prepare::{RenderOptions, effective_settings};
-
-    /// Sizes in messages: exact bytes when small, three significant digits otherwise (a
-    /// limit of 1 byte was "1 MiB", and parts rounded up each added up past their total).
-    #[test]
-    fn sizes_are_shown_in_their_unit() {
-        assert_eq!(mib(0), "0 bytes");
-        assert_eq!(mib(1), "1 byte");
-        assert_eq!(mib(1536), "1.50 KiB");
-        assert_eq!(mib(20 << 20), "20.0 MiB");
-        assert_eq!(mib(2047 << 20), "2.00 GiB");
-        assert_eq!(mib(300 << 30), "300 GiB");
-    }
 
     fn settings_of(scene: &Scene) -> EffectiveSettings {
         effective_settings(scene, &RenderOptions::default()).unwrap()

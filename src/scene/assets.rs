@@ -216,10 +216,9 @@ fn decode_image(
             Some(limit) => AssetError::too_large(
                 format!(
                     "image `{}` is {w}x{h} pixels; decoded ({IMAGE_BYTES_PER_PIXEL} bytes a \
-                     pixel) it does not fit in the {left} pixels left of the memory limit of {} \
-                     MiB",
+                     pixel) it does not fit in the {left} pixels left of the memory limit of {}",
                     path.display(),
-                    limit >> 20
+                    crate::diag::size_text(limit)
                 ),
                 "raise the limit with `--memory-limit` (e.g. `--memory-limit 4G`), or use a \
                  smaller image",
