@@ -228,7 +228,14 @@ fn word_counts(files: &[crate::diag::SourceFile]) -> HashMap<String, u32> {
                 while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
                     i += 1;
                 }
-                *counts.entry(f.text[start..i].to_string()).or_default() += 1;
+                // (A new String only for a word not seen before.)
+                let word = &f.text[start..i];
+                match counts.get_mut(word) {
+                    Some(c) => *c += 1,
+                    None => {
+                        counts.insert(word.to_string(), 1);
+                    }
+                }
             } else if b[i].is_ascii_digit() {
                 // A number's digits and exponent are not a name (`1e5`, `2x`).
                 while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
