@@ -277,3 +277,215 @@ fn queries_with_non_finite_rays_or_unknown_primitives_do_not_panic() {
     let _ = prepared.bsdf(&made_up);
     assert!(prepared.absorption(&made_up).is_none());
 }
+
+/// Materials, emission, lights, textures and the background of a hand-built scene get the
+/// language's ranges: a glass of index 0 or NaN, a NaN albedo, a radiance of 1e308 (it
+/// rendered black: its power overflowed), an empty colour map (it panicked) or a noise of
+/// 2^32 octaves (it never finished a texture lookup) are refused, each naming what is wrong.
+#[test]
+fn appearance_values_outside_the_language_s_ranges_are_errors() {
+    use sppm_lang::scene::{Background, ColorMap, Mapping, Pattern, Texture};
+    let c = |x: f64| ColorParam::Const(DVec3::splat(x));
+    let glass = |ior: f64, absorb: f64, tint: f64| Material::Glass {
+        ior,
+        absorb: c(absorb),
+        tint: DVec3::splat(tint),
+    };
+    let glossy = |specular: f64, roughness: f64| Material::Glossy {
+        albedo: c(0.5),
+        specular: c(specular),
+        roughness: ScalarParam::Const(roughness),
+    };
+    let materials = [
+        ("ior", glass(0.0, 0.0, 1.0)),
+        ("ior", glass(f64::NAN, 0.0, 1.0)),
+        ("ior", glass(1e6, 0.0, 1.0)),
+        ("absorb", glass(1.5, -1.0, 1.0)),
+        ("tint", glass(1.5, 0.0, f64::NAN)),
+        (
+            "albedo",
+            Material::Diffuse {
+                albedo: c(f64::NAN),
+            },
+        ),
+        ("albedo", Material::Diffuse { albedo: c(-0.5) }),
+        (
+            "tint",
+            Material::Mirror {
+                tint: c(f64::INFINITY),
+            },
+        ),
+        ("specular", glossy(f64::NAN, 0.2)),
+        ("roughness", glossy(0.04, 0.0)),
+        ("roughness", glossy(0.04, f64::NAN)),
+        ("roughness", glossy(0.04, 2.0)),
+    ];
+    for (what, material) in materials {
+        let mut scene = furnace_emitting(4);
+        scene.materials[0] = material.clone();
+        let err = refused(&scene);
+        assert!(err.contains(what), "{material:?}: {err}");
+    }
+    for radiance in [1e308, f64::NAN, -1.0] {
+        let mut scene = furnace_emitting(4);
+        scene.objects[0].emission.as_mut().unwrap().radiance = DVec3::new(1.0, radiance, 1.0);
+        let err = refused(&scene);
+        assert!(err.contains("radiance"), "{radiance}: {err}");
+    }
+    let mut scene = furnace_emitting(4);
+    scene.lights.push(Light::Point {
+        position: DVec3::ZERO,
+        intensity: DVec3::splat(1e308),
+        span: Span::detached(),
+    });
+    assert!(refused(&scene).contains("intensity"));
+    for bg in [f64::NAN, -1.0, 1e300] {
+        let mut scene = furnace_emitting(4);
+        scene.background = Background::Color(DVec3::splat(bg));
+        let err = refused(&scene);
+        assert!(err.contains("background"), "{bg}: {err}");
+    }
+    let map = |entries: &[(f64, f64)]| {
+        ColorMap(entries.iter().map(|&(p, v)| (p, DVec3::splat(v))).collect())
+    };
+    let good = || map(&[(0.0, 0.0), (1.0, 1.0)]);
+    let patterns = [
+        (
+            "color map",
+            Pattern::Noise {
+                map: map(&[]),
+                octaves: 6,
+            },
+        ),
+        (
+            "color map",
+            Pattern::Noise {
+                map: map(&[(f64::NAN, 0.5), (1.0, 1.0)]),
+                octaves: 6,
+            },
+        ),
+        (
+            "color map",
+            Pattern::Noise {
+                map: map(&[(0.0, f64::NAN), (1.0, 1.0)]),
+                octaves: 6,
+            },
+        ),
+        (
+            "color map",
+            Pattern::Noise {
+                map: map(&[(1.0, 0.0), (0.0, 1.0)]),
+                octaves: 6,
+            },
+        ),
+        (
+            "octaves",
+            Pattern::Noise {
+                map: good(),
+                octaves: u32::MAX,
+            },
+        ),
+        (
+            "octaves",
+            Pattern::Wood {
+                map: good(),
+                turbulence: 1.0,
+                octaves: 0,
+            },
+        ),
+        (
+            "turbulence",
+            Pattern::Marble {
+                map: good(),
+                turbulence: f64::NAN,
+                octaves: 6,
+            },
+        ),
+        (
+            "turbulence",
+            Pattern::Marble {
+                map: good(),
+                turbulence: -1.0,
+                octaves: 6,
+            },
+        ),
+        (
+            "color",
+            Pattern::Checker {
+                a: DVec3::splat(f64::NAN),
+                b: DVec3::ONE,
+            },
+        ),
+        (
+            "color",
+            Pattern::Stripes {
+                a: DVec3::ONE,
+                b: DVec3::splat(-1.0),
+            },
+        ),
+        (
+            "gradient",
+            Pattern::Gradient {
+                direction: DVec3::ZERO,
+                map: good(),
+            },
+        ),
+        (
+            "brick",
+            Pattern::Brick {
+                brick: DVec3::ONE,
+                mortar: DVec3::ZERO,
+                size: DVec3::new(0.2, 0.0, 0.1),
+                mortar_width: 0.01,
+            },
+        ),
+        (
+            "mortar",
+            Pattern::Brick {
+                brick: DVec3::ONE,
+                mortar: DVec3::ZERO,
+                size: DVec3::new(0.2, 0.075, 0.1),
+                mortar_width: f64::NAN,
+            },
+        ),
+    ];
+    let texture = |pattern: Pattern| Texture {
+        pattern,
+        mapping: Mapping::Solid,
+        transform: glam::DAffine3::IDENTITY,
+        span: Span::detached(),
+    };
+    for (what, pattern) in patterns {
+        let mut scene = furnace_emitting(4);
+        scene.textures.push(texture(pattern.clone()));
+        scene.materials[0] = Material::Diffuse {
+            albedo: ColorParam::Texture(TextureId(0)),
+        };
+        let err = refused(&scene);
+        assert!(err.contains(what), "{pattern:?}: {err}");
+    }
+    let mut scene = furnace_emitting(4);
+    let mut t = texture(Pattern::Noise {
+        map: good(),
+        octaves: 6,
+    });
+    t.transform.translation.x = f64::NAN;
+    scene.textures.push(t);
+    assert!(refused(&scene).contains("transform"));
+    // The same textures in range render.
+    let mut scene = furnace_emitting(4);
+    scene.textures.push(texture(Pattern::Marble {
+        map: good(),
+        turbulence: 2.0,
+        octaves: 16,
+    }));
+    scene.materials[0] = Material::Diffuse {
+        albedo: ColorParam::Texture(TextureId(0)),
+    };
+    let ok = RenderOptions {
+        iterations: Some(1),
+        photons: Some(1000),
+        ..Default::default()
+    };
+    render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
+}

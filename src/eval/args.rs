@@ -5,7 +5,7 @@ use glam::DVec3;
 
 use super::value::{ColorDef, Value};
 use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
-use crate::scene::Color;
+use crate::scene::{Color, MAX_COLOR};
 use crate::span::Span;
 
 /// One argument of a property: its value and where it was written.
@@ -21,10 +21,6 @@ pub(super) fn num(a: &Arg) -> SourceResult<f64> {
 pub(super) fn vec3(a: &Arg) -> SourceResult<DVec3> {
     a.value.vec3().at(a.span)
 }
-
-/// Largest colour component accepted anywhere (reflectance, radiance, intensity): products
-/// with areas, powers and photon counts stay far inside f32 and f64.
-pub const MAX_COLOR: f64 = 1e9;
 
 pub(super) fn color(a: &Arg) -> SourceResult<Color> {
     let c = a.value.color().at(a.span)?;

@@ -18,7 +18,10 @@ pub use assets::{
     MeshData, load_image, load_image_within, load_obj, srgb_to_linear,
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
-pub use validate::{Invalid, MAX_COORD, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_SIZE};
+pub use validate::{
+    IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_OCTAVES, MAX_PIXELS, MAX_RESOLUTION_SIDE,
+    MIN_ROUGHNESS, MIN_SIZE, color_problem,
+};
 
 use std::sync::Arc;
 

@@ -7,10 +7,10 @@ use std::rc::Rc;
 use super::{Sink, unexpected};
 use crate::diag::{Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, color, color_def, num, range_error};
+use crate::eval::args::{Arg, color_def, num, range_error, surface_color};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
-use crate::scene::Color;
+use crate::scene::{Color, IOR_RANGE, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -40,9 +40,6 @@ fn uses(kind: &str) -> &'static [&'static str] {
         _ => &[],
     }
 }
-
-/// Smallest glossy roughness: below it the lobe's width underflows (use `mirror` instead).
-const MIN_ROUGHNESS: f64 = 1e-3;
 
 static MAT_PROPS: [PropSpec; 9] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
@@ -142,14 +139,14 @@ impl MaterialBuilder {
                     (ior, absorb, tint) = (i, a, t);
                 }
                 if let Some((i, s)) = self.ior {
-                    if i < 1.0 {
+                    if i < IOR_RANGE.0 {
                         return Err(range_error(
                             s,
                             format!("ior must be at least 1, found {}", short_number(i)),
                             "glass has an index of refraction ≥ 1 (1.5 for window glass)",
                         ));
                     }
-                    if i > 100.0 || i.is_nan() {
+                    if i > IOR_RANGE.1 || i.is_nan() {
                         return Err(range_error(
                             s,
                             format!("ior {} is out of range", crate::diag::short_number(i)),
@@ -248,8 +245,9 @@ impl Sink for MaterialBuilder {
                 self.absorb = Some(c);
             }
             "tint" => {
-                self.tint = Some(color(&args[0])?);
-                self.tint_def = Some(ColorDef::Const(color(&args[0])?));
+                let c = surface_color(&args[0])?;
+                self.tint = Some(c);
+                self.tint_def = Some(ColorDef::Const(c));
             }
             "specular" => self.specular = Some(color_def(&args[0])?),
             "roughness" => {

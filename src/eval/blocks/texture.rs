@@ -12,7 +12,7 @@ use crate::eval::args::{
 };
 use crate::eval::props::{PropSpec, p, transform_prop, w, with_transforms};
 use crate::eval::value::{PatternDef, TextureDef, Value};
-use crate::scene::{Color, ColorMap, Mapping, Pattern, Wrap};
+use crate::scene::{Color, ColorMap, MAX_OCTAVES, Mapping, Pattern, Wrap};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -245,7 +245,9 @@ impl Sink for TextureBuilder {
                     },
                 )
             }
-            "octaves" => self.octaves = Some(count(&args[0], "octaves", 16.0)? as u32),
+            "octaves" => {
+                self.octaves = Some(count(&args[0], "octaves", f64::from(MAX_OCTAVES))? as u32)
+            }
             "turbulence" => {
                 let t = num(&args[0])?;
                 if t < 0.0 {

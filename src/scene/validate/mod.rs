@@ -17,6 +17,10 @@ use super::{
 };
 use crate::span::Span;
 
+mod appearance;
+
+pub use appearance::{IOR_RANGE, MAX_COLOR, MAX_OCTAVES, MIN_ROUGHNESS, color_problem};
+
 /// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
 /// f32, the renderer's precision along rays.
 pub const MAX_COORD: f64 = 1e12;
@@ -251,6 +255,7 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             textures_exist(m, i, self.textures.len())?;
         }
+        appearance::validate(self)?;
         for obj in &self.objects {
             if let Shape::Csg(csg) = &obj.shape {
                 csg_limits(csg, obj.span)?;
