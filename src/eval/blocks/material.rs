@@ -177,12 +177,18 @@ impl MaterialBuilder {
 /// brighten a colour this way).
 fn reflectance(ev: &mut Evaluator, a: &Arg) -> SourceResult<ColorDef> {
     let def = color_def(a)?;
-    if let ColorDef::Const(c) = &def
-        && c.max_element() > 1.0
-    {
+    if let ColorDef::Const(c) = &def {
+        warn_above_one(ev, *c, a.span);
+    }
+    Ok(def)
+}
+
+/// The warning of [`reflectance`] for a constant colour `c` written at `span`.
+fn warn_above_one(ev: &mut Evaluator, c: Color, span: Span) {
+    if c.max_element() > 1.0 {
         ev.warn(
             Diagnostic::warning(
-                a.span,
+                span,
                 format!(
                     "a reflectance of {} is clamped to 1: a surface cannot reflect more light \
                      than reaches it",
@@ -196,7 +202,6 @@ fn reflectance(ev: &mut Evaluator, a: &Arg) -> SourceResult<ColorDef> {
             ),
         );
     }
-    Ok(def)
 }
 
 impl Sink for MaterialBuilder {
@@ -246,10 +251,11 @@ impl Sink for MaterialBuilder {
             }
             "tint" => {
                 let c = surface_color(&args[0])?;
+                warn_above_one(ev, c, args[0].span);
                 self.tint = Some(c);
                 self.tint_def = Some(ColorDef::Const(c));
             }
-            "specular" => self.specular = Some(color_def(&args[0])?),
+            "specular" => self.specular = Some(reflectance(ev, &args[0])?),
             "roughness" => {
                 if let Value::Num(r) = args[0].value
                     && !(MIN_ROUGHNESS..=1.0).contains(&r)

@@ -33,6 +33,43 @@ pub(super) struct TextureBuilder {
     mapping: Option<Mapping>,
     linear: bool,
     transform: DAffine3,
+    /// The properties only some patterns use, as written (with the keyword's span): each must
+    /// belong to the texture's pattern.
+    written: Vec<(&'static str, Span)>,
+}
+
+/// The properties only some patterns use.
+const PATTERN_PROPS: [&str; 8] = [
+    "color_map",
+    "octaves",
+    "turbulence",
+    "mortar",
+    "size",
+    "wrap",
+    "interpolate",
+    "linear",
+];
+
+/// The properties of [`PATTERN_PROPS`] that pattern `kind` uses.
+fn uses(kind: &str) -> &'static [&'static str] {
+    match kind {
+        "gradient" => &["color_map"],
+        "noise" => &["color_map", "octaves"],
+        "marble" | "wood" => &["color_map", "octaves", "turbulence"],
+        "brick" => &["mortar", "size"],
+        "image" => &["wrap", "interpolate", "linear"],
+        _ => &[],
+    }
+}
+
+/// The patterns that use property `what`, for the help of a property written for another one.
+fn users(what: &str) -> String {
+    let names: Vec<String> = ["gradient", "noise", "marble", "wood", "brick", "image"]
+        .iter()
+        .filter(|k| uses(k).contains(&what))
+        .map(|k| format!("`{k}`"))
+        .collect();
+    names.join(", ")
 }
 
 static TEX_PROPS: [PropSpec; 19] = with_transforms([
@@ -100,6 +137,19 @@ impl TextureBuilder {
                     .at(span),
             ]);
         };
+        // A property the pattern does not use would be dropped without a word (`checker ...
+        // color_map { ... }` shows two colours, not the map).
+        if let Some(&(what, at)) = self.written.iter().find(|w| !uses(kind).contains(&w.0)) {
+            return Err(vec![
+                Error::new(format!("`{what}` does not apply to a {kind} texture"))
+                    .label("not used by this pattern")
+                    .help(format!(
+                        "drop `{what}`, or use a pattern it belongs to ({})",
+                        users(what)
+                    ))
+                    .at(at),
+            ]);
+        }
         let map = self
             .map
             .map(|m| (*m).clone())
@@ -177,6 +227,9 @@ impl Sink for TextureBuilder {
     fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         if transform_prop(&kw.text, &args, &mut self.transform)? {
             return Ok(());
+        }
+        if let Some(&w) = PATTERN_PROPS.iter().find(|w| **w == kw.text) {
+            self.written.push((w, kw.span));
         }
         match kw.text.as_str() {
             k @ ("checker" | "stripes" | "brick") => {
@@ -279,6 +332,7 @@ impl Sink for TextureBuilder {
         match v {
             Value::ColorMap(m) => {
                 self.map = Some(m);
+                self.written.push(("color_map", span));
                 Ok(())
             }
             v => Err(unexpected(
