@@ -164,6 +164,51 @@ fn materials_are_deduplicated_by_declaration() {
     );
 }
 
+/// An override of a declared material keeps what it does not write, for every kind: a
+/// glossy material given a new roughness kept no colour (it came out grey), and a mirror
+/// override dropped its tint.
+#[test]
+fn overrides_of_declared_materials_keep_the_rest() {
+    let s = scene(
+        "#declare G = material { glossy rgb <1, 0, 0> specular rgb 0.1 roughness 0.3 }
+         #declare M = material { mirror rgb <0.9, 0.5, 0.2> }
+         #declare Q = material { glass ior 1.7 tint rgb <0.9, 0.9, 1> }
+         sphere { <0, 0, 0>, 1 material { G roughness 0.31 } }
+         sphere { <3, 0, 0>, 1 material { G glossy rgb <0, 1, 0> } }
+         sphere { <6, 0, 0>, 1 material { M glass ior 1.5 } }
+         sphere { <9, 0, 0>, 1 material { Q ior 1.6 } }
+         sphere { <12, 0, 0>, 1 material { M mirror } }",
+    );
+    let m = |i: usize| &s.materials[s.objects[i].material.0 as usize];
+    let c = |x: f64, y: f64, z: f64| ColorParam::Const(DVec3::new(x, y, z));
+    assert_eq!(
+        m(0),
+        &Material::Glossy {
+            albedo: c(1.0, 0.0, 0.0),
+            specular: c(0.1, 0.1, 0.1),
+            roughness: ScalarParam::Const(0.31),
+        }
+    );
+    assert_eq!(
+        m(1),
+        &Material::Glossy {
+            albedo: c(0.0, 1.0, 0.0),
+            specular: c(0.1, 0.1, 0.1),
+            roughness: ScalarParam::Const(0.3),
+        }
+    );
+    assert!(matches!(m(2), Material::Glass { ior, .. } if *ior == 1.5));
+    assert!(
+        matches!(m(3), Material::Glass { ior, tint, .. } if *ior == 1.6 && close(*tint, DVec3::new(0.9, 0.9, 1.0)))
+    );
+    assert_eq!(
+        m(4),
+        &Material::Mirror {
+            tint: c(0.9, 0.5, 0.2)
+        }
+    );
+}
+
 #[test]
 fn macros_recurse_and_count() {
     let s = scene(

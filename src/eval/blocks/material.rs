@@ -126,7 +126,13 @@ impl MaterialBuilder {
                         .unwrap_or(ColorDef::Const(Color::splat(0.5))),
                 )
             }
-            "mirror" => MatKind::Mirror(self.tint_def.or(self.albedo).unwrap_or(one)),
+            "mirror" => {
+                let base_tint = match base {
+                    Some(MatKind::Mirror(t)) => Some(t),
+                    _ => None,
+                };
+                MatKind::Mirror(self.tint_def.or(self.albedo).or(base_tint).unwrap_or(one))
+            }
             "glass" => {
                 let (mut ior, mut absorb, mut tint) =
                     (1.5, ColorDef::Const(Color::ZERO), Color::ONE);
@@ -162,11 +168,26 @@ impl MaterialBuilder {
                     tint: self.tint.unwrap_or(tint),
                 }
             }
-            _ => MatKind::Glossy {
-                albedo: self.albedo.unwrap_or(ColorDef::Const(Color::splat(0.5))),
-                specular: self.specular.unwrap_or(ColorDef::Const(Color::splat(0.04))),
-                roughness: self.roughness.unwrap_or(ColorDef::Const(Color::splat(0.2))),
-            },
+            _ => {
+                // An override of a declared glossy material keeps what it does not write.
+                let (albedo, specular, roughness) = match base {
+                    Some(MatKind::Glossy {
+                        albedo,
+                        specular,
+                        roughness,
+                    }) => (albedo, specular, roughness),
+                    _ => (
+                        ColorDef::Const(Color::splat(0.5)),
+                        ColorDef::Const(Color::splat(0.04)),
+                        ColorDef::Const(Color::splat(0.2)),
+                    ),
+                };
+                MatKind::Glossy {
+                    albedo: self.albedo.unwrap_or(albedo),
+                    specular: self.specular.unwrap_or(specular),
+                    roughness: self.roughness.unwrap_or(roughness),
+                }
+            }
         };
         Ok(Value::Material(Rc::new(MaterialDef { kind, span })))
     }
