@@ -3,11 +3,13 @@
 
 mod area;
 mod environment;
+mod ground;
 mod point;
 mod spot;
 
 pub use area::{AreaLight, LightSampling};
 pub use environment::{EnvironmentLight, Sky};
+pub use ground::GroundPhotons;
 pub use point::PointLight;
 pub use spot::SpotLight;
 

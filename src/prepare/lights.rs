@@ -6,7 +6,7 @@ use glam::Vec3A;
 use super::shapes::v;
 use super::{PreparedScene, RenderError};
 use crate::accel::Bvh;
-use crate::lights::{EnvironmentLight, Light, PointLight, Sky, SpotLight};
+use crate::lights::{EnvironmentLight, GroundPhotons, Light, PointLight, Sky, SpotLight};
 use crate::scene::{self, Scene};
 use crate::shapes::Shape;
 use crate::textures;
@@ -111,6 +111,41 @@ pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>
         sky, center, radius,
     )));
     Some(lights.len() - 1)
+}
+
+/// The far-part photon emitters ([`GroundPhotons`]) of the scene's infinite planes under the
+/// environment light `environment` (none without one). `prim_object` maps primitive ids to
+/// objects; planes inside CSG objects are not among the scene's objects and get none.
+pub(super) fn ground_photons(
+    scene: &Scene,
+    prim_object: &[u32],
+    lights: &[Light],
+    environment: Option<usize>,
+) -> Vec<GroundPhotons> {
+    let Some(Light::Environment(env)) = environment.and_then(|i| lights.get(i)) else {
+        return Vec::new();
+    };
+    let env_index = environment.unwrap_or(0);
+    prim_object
+        .iter()
+        .enumerate()
+        .filter_map(|(prim, &oi)| {
+            let o = scene.objects.get(oi as usize)?;
+            let scene::Shape::Plane { normal, offset } = o.shape else {
+                return None;
+            };
+            let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
+            let point = o.transform.transform_point3(normal * offset);
+            GroundPhotons::new(
+                env_index,
+                prim as u32,
+                v(n),
+                v(point),
+                env.center,
+                env.radius,
+            )
+        })
+        .collect()
 }
 
 /// Warnings for the one-sided flat area lights (quads, disks, triangles) with nothing on their

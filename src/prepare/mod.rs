@@ -15,7 +15,7 @@ mod shapes;
 use crate::accel::{self, Bvh};
 use crate::camera::Camera;
 use crate::geometry::{Hit, Ray};
-use crate::lights::{AreaLight, EnvironmentLight, Light};
+use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
@@ -62,8 +62,11 @@ pub struct PreparedScene<'a> {
     /// How direct lighting chooses a light: by power, except a uniform background, which is
     /// left to the BSDF sample.
     pub light_distr: PiecewiseConstant1D,
-    /// How a photon chooses the light it leaves from: by power, every light.
+    /// How a photon chooses the light it leaves from: by power, every light, then the
+    /// `ground_photons` emitters (an index past the lights is one of those).
     pub photon_distr: PiecewiseConstant1D,
+    /// Photons for the far parts of infinite planes under the environment light.
+    pub ground_photons: Vec<GroundPhotons>,
     /// Index in `lights` of the environment light, if the background (a map or a colour) is
     /// not black.
     pub environment: Option<usize>,
@@ -322,7 +325,20 @@ impl<'a> PreparedScene<'a> {
         let bvh = Bvh::with_meshes(shapes, meshes);
         let environment = lights::push_environment(scene, &bvh, &mut lights);
         let power: Vec<f64> = lights.iter().map(Light::power).collect();
-        let photon_distr = PiecewiseConstant1D::new(&power);
+        // Photons also leave the far parts of infinite planes under the environment light
+        // (`GroundPhotons`), chosen after the lights.
+        let ground_photons = lights::ground_photons(scene, &prim_object, &lights, environment);
+        let mut photon_power = power.clone();
+        if let Some(i) = environment {
+            let env = &lights[i];
+            let r = match env {
+                Light::Environment(e) => e.radius as f64,
+                _ => 1.0,
+            };
+            let integrated = env.power() / (std::f64::consts::PI * r * r);
+            photon_power.extend(ground_photons.iter().map(|g| g.power(integrated)));
+        }
+        let photon_distr = PiecewiseConstant1D::new(&photon_power);
         // Direct lighting leaves a uniform background to the BSDF sample, which draws it with
         // (nearly) no variance: by power it would take most light samples, its power counting
         // the whole disk around the scene rather than what reaches a point.
@@ -332,7 +348,7 @@ impl<'a> PreparedScene<'a> {
                 w[i] = 0.0;
                 PiecewiseConstant1D::new(&w)
             }
-            _ => photon_distr.clone(),
+            _ => PiecewiseConstant1D::new(&power),
         };
         let prim_material = prim_object
             .iter()
@@ -348,6 +364,7 @@ impl<'a> PreparedScene<'a> {
             lights,
             light_distr,
             photon_distr,
+            ground_photons,
             environment,
             prim_material,
             const_lobes: Vec::new(),
