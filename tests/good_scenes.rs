@@ -378,6 +378,32 @@ fn includes_resolve_relative_to_the_including_file() {
     assert_eq!(radius, 0.25);
 }
 
+/// An included file's top-level `#local`s are its own (they do not overwrite the scene's
+/// globals and are gone when it ends; its macros see them while it runs), and what it declares
+/// but the scene does not use is not reported unused.
+#[test]
+fn an_included_file_keeps_its_locals_and_its_spare_declarations_quietly() {
+    let l = load_file("tests/good/inc_local.scn".as_ref(), &EvalOptions::default()).unwrap();
+    assert!(
+        l.diagnostics.is_empty(),
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
+    );
+    let radii: Vec<f64> = l
+        .scene
+        .unwrap()
+        .objects
+        .iter()
+        .map(|o| match o.shape {
+            Shape::Sphere { radius, .. } => radius,
+            _ => panic!("a sphere"),
+        })
+        .collect();
+    // The library's `LibSphere(2)` (its `Step`), `Count` (the scene's 3, not the library's
+    // 100), `LibReady / 100` (the library's `Count`); no `Step` after the include.
+    assert_eq!(radii, [0.5, 3.0, 1.0]);
+}
+
 #[test]
 fn area_light_over_disk_and_sphere() {
     let s = scene(

@@ -357,13 +357,14 @@ impl Evaluator {
             ]);
         }
         self.charge(args.len() as u64 * super::STEPS_PER_ELEMENT, call_span)?;
-        if self.frames.len() >= self.options.max_depth {
+        let depth = self.macro_depth();
+        if depth >= self.options.max_depth {
             return Err(vec![
                 Error::new(format!(
                     "macro calls nested deeper than {} (recursion without end?)",
                     self.options.max_depth
                 ))
-                .label(format!("call to `{}` at depth {}", name.text, self.frames.len() + 1))
+                .label(format!("call to `{}` at depth {}", name.text, depth + 1))
                 .help("make sure the recursion stops (e.g. `#if (Depth > 0)`), or raise the limit with `--max-depth`")
                 .at(call_span),
             ]);
@@ -381,7 +382,7 @@ impl Evaluator {
                 },
             );
         }
-        self.frames.push(Frame { vars });
+        self.frames.push(Frame { vars, file: false });
         let r = self.run_body(&m.body, sink);
         let frame = self.frames.pop().expect("frame");
         self.warn_unused(frame.vars);

@@ -165,6 +165,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     let mut ev = Evaluator::new(options.clone());
     ev.source_bytes = text.len() as u64;
     let file = ev.sources.add(path, name.to_string(), text.clone());
+    ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
     match parse(file, &text) {
@@ -215,8 +216,9 @@ pub(crate) struct Evaluator {
     breaking: bool,
     /// `#debug` and `#warning` messages so far (see [`MAX_MESSAGES`]).
     messages: usize,
-    /// Files of the standard library read by this load: their unused declarations are quiet.
-    std_files: HashSet<crate::span::FileId>,
+    /// The scene's own file: only its declarations can be reported unused (an included file,
+    /// a library, declares more than one scene uses).
+    main_file: Option<crate::span::FileId>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
@@ -294,7 +296,7 @@ impl Evaluator {
             break_targets: 0,
             breaking: false,
             messages: 0,
-            std_files: HashSet::new(),
+            main_file: None,
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,
