@@ -98,7 +98,11 @@ impl Evaluator {
                     ]);
                 }
                 if !self.unbind(&name.text) {
-                    let help = match suggest(&name.text, self.globals.keys().map(String::as_str)) {
+                    let near = self
+                        .may_suggest_name()
+                        .then(|| suggest(&name.text, self.globals.keys().map(String::as_str)))
+                        .flatten();
+                    let help = match near {
                         Some(s) => format!("did you mean `{s}`?"),
                         None => "remove the `#undef`, or check the spelling of the name".into(),
                     };

@@ -88,12 +88,15 @@ impl Evaluator {
                         let mut err = Error::new(format!("unknown function `{}`", name.text))
                             .label("no built-in function or macro of this name");
                         let mut cands: Vec<&str> = FUNCTIONS.to_vec();
-                        let macros: Vec<String> = self
-                            .globals
-                            .iter()
-                            .filter(|(_, b)| matches!(b.value, Value::Macro(_)))
-                            .map(|(n, _)| n.clone())
-                            .collect();
+                        let macros: Vec<String> = if self.may_suggest_name() {
+                            self.globals
+                                .iter()
+                                .filter(|(_, b)| matches!(b.value, Value::Macro(_)))
+                                .map(|(n, _)| n.clone())
+                                .collect()
+                        } else {
+                            Vec::new()
+                        };
                         cands.extend(macros.iter().map(String::as_str));
                         if let Some(hint) = crate::syntax::povray_hint(&name.text, "") {
                             err = err.help(hint);

@@ -148,9 +148,10 @@ impl Evaluator {
         known
     }
 
-    /// Whether an undeclared `name` is close to a name a lookup can find (a misspelt one).
-    pub(super) fn near_a_known_name(&self, name: &str) -> bool {
-        suggest(name, self.known_names()).is_some()
+    /// Whether an undeclared `name` is close to a name a lookup can find (a misspelt one);
+    /// past [`super::MAX_NAME_SUGGESTIONS`] searches, taken to be.
+    pub(super) fn near_a_known_name(&mut self, name: &str) -> bool {
+        !self.may_suggest_name() || suggest(name, self.known_names()).is_some()
     }
 
     pub(super) fn lookup(&mut self, name: &str, span: Span) -> SourceResult<Value> {
@@ -160,7 +161,6 @@ impl Evaluator {
         if self.poisoned.contains(name) {
             return Err(silent());
         }
-        let known = self.known_names();
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
         if name == "area_light" {
             // `light_source { <p> color C area_light <u>, <v>, n, m }`
@@ -198,7 +198,11 @@ impl Evaluator {
             e = e.help(format!(
                 "`{name}` is declared in the standard library: add `#include \"{file}\"`"
             ));
-        } else if let Some(s) = suggest(name, known) {
+        } else if let Some(s) = self
+            .may_suggest_name()
+            .then(|| suggest(name, self.known_names()))
+            .flatten()
+        {
             e = e.help(format!("did you mean `{s}`?"));
         } else {
             e = e.help(format!("declare it first: `#declare {name} = ...`"));
