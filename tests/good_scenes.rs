@@ -542,6 +542,31 @@ fn debug_and_warning_messages() {
     );
 }
 
+/// `==` and `!=` take numbers within 1e-10 to be equal, as `#case` and POV-Ray do (a sum of
+/// tenths reaches 1, a loop until it does ends); `str` shows a number as `#debug` does.
+#[test]
+fn equality_within_rounding_and_str_as_written() {
+    let l = load(
+        "#declare A = 0.1 + 0.2;
+         #if (A == 0.3) #debug \"equal\" #end
+         #if (A != 0.3) #debug \"not equal\" #end
+         #if (A == 0.3000001) #debug \"too far\" #end
+         #declare T = 0; #declare N = 0;
+         #while (T != 1) #declare T = T + 0.1; #declare N = N + 1; #end
+         #debug \"steps \" + str(N)
+         #if (<A, 0, 1> == <0.3, 0, 1>) #debug \"vectors equal\" #end
+         #debug str(A) + \" \" + str(-0.0) + \" \" + str(-1 * 0)
+         sphere { <0,0,0>, 1 }",
+    );
+    let shown: Vec<&str> = l.diagnostics.iter().map(|d| d.message.as_str()).collect();
+    assert_eq!(
+        shown,
+        ["equal", "steps 10", "vectors equal", "0.3 0 0"],
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
+    );
+}
+
 /// A loop of `#debug` or `#warning` keeps the first messages and says the rest were left out:
 /// bounded.
 #[test]

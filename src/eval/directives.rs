@@ -246,7 +246,9 @@ impl Evaluator {
     /// Whether `#switch`'s value `v` matches a `#case` or `#range` clause.
     fn clause_matches(&mut self, test: &ClauseTest, v: f64) -> SourceResult<bool> {
         Ok(match test {
-            ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
+            ClauseTest::Case(e) => {
+                (self.eval(e)?.num().at(e.span)? - v).abs() < super::expr::EQUAL_WITHIN
+            }
             ClauseTest::Range(lo, hi) => {
                 let a = self.eval(lo)?.num().at(lo.span)?;
                 let b = self.eval(hi)?.num().at(hi.span)?;

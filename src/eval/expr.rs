@@ -177,6 +177,10 @@ fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
     })
 }
 
+/// How close two numbers are equal for `==`, `!=` and `#case`: as POV-Ray's `=`, `!=` and
+/// `#case`, `|a - b| < 1e-10`.
+pub(super) const EQUAL_WITHIN: f64 = 1e-10;
+
 fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
     use BinOp::*;
     use Value::*;
@@ -259,12 +263,16 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
             _ => return Err(mismatch(&a, &b).help("only numbers can be ordered")),
         },
         Eq | Ne => {
+            // Numbers (and components) within EQUAL_WITHIN are equal, as in POV-Ray: a sum of
+            // tenths equals the number it adds up to.
             let eq = match (&a, &b) {
-                (Num(x), Num(y)) => x == y,
+                (Num(x), Num(y)) => (x - y).abs() < EQUAL_WITHIN,
                 (Bool(x), Bool(y)) => x == y,
                 (Str(x), Str(y)) => x == y,
-                (Vec2(x), Vec2(y)) => x == y,
-                (Vec3(x) | Color(x), Vec3(y) | Color(y)) => x == y,
+                (Vec2(x), Vec2(y)) => (*x - *y).abs().max_element() < EQUAL_WITHIN,
+                (Vec3(x) | Color(x), Vec3(y) | Color(y)) => {
+                    (*x - *y).abs().max_element() < EQUAL_WITHIN
+                }
                 _ => return Err(mismatch(&a, &b)),
             };
             Bool(eq == (op == Eq))
