@@ -201,7 +201,7 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
         let zero = match &b {
             Num(x) => *x == 0.0,
             Vec2(v) => v.x == 0.0 || v.y == 0.0,
-            Vec3(v) | Color(v) => v.min_element() == 0.0 && v.abs().min_element() == 0.0,
+            Vec3(v) | Color(v) => v.abs().min_element() == 0.0,
             _ => false,
         };
         if zero {
@@ -295,13 +295,31 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
                 ));
         }
     };
-    if i < 0.0 || i.fract() != 0.0 || i as usize >= len {
+    if len == 0 {
+        return Err(
+            Error::new(format!("index {} of an empty array", exact_number(i)))
+                .label("the array is empty")
+                .help("an empty array has no elements to take: test `len(A) > 0` first"),
+        );
+    }
+    if i.fract() != 0.0 {
+        return Err(Error::new(format!(
+            "index {} is not a whole number",
+            exact_number(i)
+        ))
+        .label("not a whole number")
+        .help(format!(
+            "indices are whole numbers from 0 to {}: round it with `floor(...)` or `round(...)`",
+            len - 1
+        )));
+    }
+    if i < 0.0 || i >= len as f64 {
         return Err(Error::new(format!(
             "index {} out of range (length {len})",
             short_number(i)
         ))
         .label("out of range")
-        .help(format!("indices run from 0 to {}", len.saturating_sub(1))));
+        .help(format!("indices run from 0 to {}", len - 1)));
     }
     let i = i as usize;
     Ok(match v {
@@ -310,6 +328,17 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
         Value::Vec3(a) | Value::Color(a) => Value::Num(a[i]),
         _ => unreachable!(),
     })
+}
+
+/// A number as short as it reads, unless that form would hide its fraction
+/// (`0.9999999999999999` is not shown as `1`).
+fn exact_number(x: f64) -> String {
+    let short = short_number(x);
+    if x.fract() != 0.0 && short.parse::<f64>().is_ok_and(|s| s.fract() == 0.0) {
+        format!("{x}")
+    } else {
+        short
+    }
 }
 
 fn field_value(v: Value, f: &str) -> Result<Value, Error> {
