@@ -244,3 +244,60 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
         "{e:?}"
     );
 }
+
+/// A typo in a macro called on 100 000 lines is shown once, and the evaluation stops after
+/// `MAX_ERRORS` errors with a note at the first statement it did not evaluate.
+#[test]
+fn an_error_repeated_by_many_calls_is_shown_once_and_the_count_is_bounded() {
+    let mut text = String::from("#macro M() sphere { <0, 0, 0>, Radus } #end\n");
+    for _ in 0..100_000 {
+        text.push_str("M()\n");
+    }
+    let l = load(&text, &EvalOptions::default());
+    assert_eq!(errors(&l), ["unknown identifier `Radus`"]);
+    let notes: Vec<&str> = l
+        .diagnostics
+        .iter()
+        .filter(|d| !d.is_error())
+        .map(|d| d.message.as_str())
+        .collect();
+    let last = format!(
+        "more than {} errors: the evaluation stopped",
+        sppm_lang::eval::MAX_ERRORS
+    );
+    assert_eq!(notes, [last.as_str()]);
+    let note = l.diagnostics.iter().find(|d| !d.is_error()).unwrap();
+    // At the call after the 100th.
+    assert_eq!(
+        l.sources.line_col(note.span).0,
+        sppm_lang::eval::MAX_ERRORS + 2
+    );
+}
+
+/// Each unknown name's "did you mean" reads every declared name: with 50 000 of them and 5 000
+/// lines of unknown names, the errors stop at `MAX_ERRORS` and only the first few are searched.
+#[test]
+fn many_unknown_names_among_many_declarations_are_reported_quickly() {
+    let mut text = String::new();
+    for i in 0..50_000 {
+        text.push_str(&format!("#declare Name{i} = {i};\n"));
+    }
+    for i in 0..5_000 {
+        text.push_str(&format!("sphere {{ <0, 0, 0>, Nmae{i} }}\n"));
+    }
+    let start = std::time::Instant::now();
+    let l = load(&text, &EvalOptions::default());
+    assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
+    let e = errors(&l);
+    assert_eq!(e.len(), sppm_lang::eval::MAX_ERRORS);
+    assert_eq!(e[0], "unknown identifier `Nmae0`");
+    // The first unknown names get their nearest declared name, the later ones the plain help.
+    let helps: Vec<&str> = l
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .map(|d| d.help.as_deref().unwrap_or(""))
+        .collect();
+    assert_eq!(helps[0], "did you mean `Name0`?");
+    assert_eq!(helps[99], "declare it first: `#declare Nmae99 = ...`");
+}

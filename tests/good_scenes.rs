@@ -423,6 +423,32 @@ fn includes_resolve_relative_to_the_including_file() {
     assert_eq!(radius, 0.25);
 }
 
+/// An included file's top-level `#local`s are its own (they do not overwrite the scene's
+/// globals and are gone when it ends; its macros see them while it runs), and what it declares
+/// but the scene does not use is not reported unused.
+#[test]
+fn an_included_file_keeps_its_locals_and_its_spare_declarations_quietly() {
+    let l = load_file("tests/good/inc_local.scn".as_ref(), &EvalOptions::default()).unwrap();
+    assert!(
+        l.diagnostics.is_empty(),
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
+    );
+    let radii: Vec<f64> = l
+        .scene
+        .unwrap()
+        .objects
+        .iter()
+        .map(|o| match o.shape {
+            Shape::Sphere { radius, .. } => radius,
+            _ => panic!("a sphere"),
+        })
+        .collect();
+    // The library's `LibSphere(2)` (its `Step`), `Count` (the scene's 3, not the library's
+    // 100), `LibReady / 100` (the library's `Count`); no `Step` after the include.
+    assert_eq!(radii, [0.5, 3.0, 1.0]);
+}
+
 #[test]
 fn area_light_over_disk_and_sphere() {
     let s = scene(
@@ -558,6 +584,31 @@ fn debug_and_warning_messages() {
     assert_eq!(
         &text[d.span.start as usize..d.span.end as usize],
         "#warning \"check this\""
+    );
+}
+
+/// `==` and `!=` take numbers within 1e-10 to be equal, as `#case` and POV-Ray do (a sum of
+/// tenths reaches 1, a loop until it does ends); `str` shows a number as `#debug` does.
+#[test]
+fn equality_within_rounding_and_str_as_written() {
+    let l = load(
+        "#declare A = 0.1 + 0.2;
+         #if (A == 0.3) #debug \"equal\" #end
+         #if (A != 0.3) #debug \"not equal\" #end
+         #if (A == 0.3000001) #debug \"too far\" #end
+         #declare T = 0; #declare N = 0;
+         #while (T != 1) #declare T = T + 0.1; #declare N = N + 1; #end
+         #debug \"steps \" + str(N)
+         #if (<A, 0, 1> == <0.3, 0, 1>) #debug \"vectors equal\" #end
+         #debug str(A) + \" \" + str(-0.0) + \" \" + str(-1 * 0)
+         sphere { <0,0,0>, 1 }",
+    );
+    let shown: Vec<&str> = l.diagnostics.iter().map(|d| d.message.as_str()).collect();
+    assert_eq!(
+        shown,
+        ["equal", "steps 10", "vectors equal", "0.3 0 0"],
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
     );
 }
 

@@ -36,8 +36,11 @@ pub fn size_text(bytes: u64) -> String {
 
 /// A number as a person would write it in a message: shortest round-trip form, rounded to 6
 /// significant digits when that form is long (`-0.09999999999999998` is `-0.1`), and in
-/// exponent form when very large or small (`1e300`, not 301 digits).
+/// exponent form when very large or small (`1e300`, not 301 digits); zero without a sign
+/// (`-0` is `0`).
 pub fn short_number(x: f64) -> String {
+    // `-0.0 == 0.0`: both are shown as `0`.
+    let x = if x == 0.0 { 0.0 } else { x };
     if !x.is_finite() {
         return format!("{x}");
     }
@@ -287,6 +290,8 @@ mod tests {
         assert_eq!(short_number(1.23456789e-7), "1.23457e-7");
         assert_eq!(short_number(123456.789), "123456.789");
         assert_eq!(short_number(f64::NAN), "NaN");
+        assert_eq!(short_number(-0.0), "0");
+        assert_eq!(short_number(0.1 + 0.2), "0.3");
     }
 
     #[test]

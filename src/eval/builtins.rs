@@ -255,7 +255,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             )),
         },
         "str" => match &args[0] {
-            Value::Num(x) => Ok(Value::Str(Rc::from(format!("{x}")))),
+            // As `#debug` shows it: `str(0.1 + 0.2)` is "0.3", `str(-0.0)` is "0".
+            Value::Num(x) => Ok(Value::Str(Rc::from(short_number(*x)))),
             Value::Str(s) => Ok(Value::Str(s.clone())),
             o => Err((
                 0,

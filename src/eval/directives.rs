@@ -98,7 +98,11 @@ impl Evaluator {
                     ]);
                 }
                 if !self.unbind(&name.text) {
-                    let help = match suggest(&name.text, self.globals.keys().map(String::as_str)) {
+                    let near = self
+                        .may_suggest_name()
+                        .then(|| suggest(&name.text, self.globals.keys().map(String::as_str)))
+                        .flatten();
+                    let help = match near {
                         Some(s) => format!("did you mean `{s}`?"),
                         None => "remove the `#undef`, or check the spelling of the name".into(),
                     };
@@ -242,7 +246,9 @@ impl Evaluator {
     /// Whether `#switch`'s value `v` matches a `#case` or `#range` clause.
     fn clause_matches(&mut self, test: &ClauseTest, v: f64) -> SourceResult<bool> {
         Ok(match test {
-            ClauseTest::Case(e) => (self.eval(e)?.num().at(e.span)? - v).abs() < 1e-10,
+            ClauseTest::Case(e) => {
+                (self.eval(e)?.num().at(e.span)? - v).abs() < super::expr::EQUAL_WITHIN
+            }
             ClauseTest::Range(lo, hi) => {
                 let a = self.eval(lo)?.num().at(lo.span)?;
                 let b = self.eval(hi)?.num().at(hi.span)?;
@@ -357,13 +363,14 @@ impl Evaluator {
             ]);
         }
         self.charge(args.len() as u64 * super::STEPS_PER_ELEMENT, call_span)?;
-        if self.frames.len() >= self.options.max_depth {
+        let depth = self.macro_depth();
+        if depth >= self.options.max_depth {
             return Err(vec![
                 Error::new(format!(
                     "macro calls nested deeper than {} (recursion without end?)",
                     self.options.max_depth
                 ))
-                .label(format!("call to `{}` at depth {}", name.text, self.frames.len() + 1))
+                .label(format!("call to `{}` at depth {}", name.text, depth + 1))
                 .help("make sure the recursion stops (e.g. `#if (Depth > 0)`), or raise the limit with `--max-depth`")
                 .at(call_span),
             ]);
@@ -381,7 +388,7 @@ impl Evaluator {
                 },
             );
         }
-        self.frames.push(Frame { vars });
+        self.frames.push(Frame { vars, file: false });
         let r = self.run_body(&m.body, sink);
         let frame = self.frames.pop().expect("frame");
         self.warn_unused(frame.vars);

@@ -88,12 +88,15 @@ impl Evaluator {
                         let mut err = Error::new(format!("unknown function `{}`", name.text))
                             .label("no built-in function or macro of this name");
                         let mut cands: Vec<&str> = FUNCTIONS.to_vec();
-                        let macros: Vec<String> = self
-                            .globals
-                            .iter()
-                            .filter(|(_, b)| matches!(b.value, Value::Macro(_)))
-                            .map(|(n, _)| n.clone())
-                            .collect();
+                        let macros: Vec<String> = if self.may_suggest_name() {
+                            self.globals
+                                .iter()
+                                .filter(|(_, b)| matches!(b.value, Value::Macro(_)))
+                                .map(|(n, _)| n.clone())
+                                .collect()
+                        } else {
+                            Vec::new()
+                        };
                         cands.extend(macros.iter().map(String::as_str));
                         if let Some(hint) = crate::syntax::povray_hint(&name.text, "") {
                             err = err.help(hint);
@@ -174,6 +177,10 @@ fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
     })
 }
 
+/// How close two numbers are equal for `==`, `!=` and `#case`: as POV-Ray's `=`, `!=` and
+/// `#case`, `|a - b| < 1e-10`.
+pub(super) const EQUAL_WITHIN: f64 = 1e-10;
+
 fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
     use BinOp::*;
     use Value::*;
@@ -194,7 +201,7 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
         let zero = match &b {
             Num(x) => *x == 0.0,
             Vec2(v) => v.x == 0.0 || v.y == 0.0,
-            Vec3(v) | Color(v) => v.min_element() == 0.0 && v.abs().min_element() == 0.0,
+            Vec3(v) | Color(v) => v.abs().min_element() == 0.0,
             _ => false,
         };
         if zero {
@@ -256,12 +263,16 @@ fn binary(op: BinOp, a: Value, b: Value) -> Result<Value, Error> {
             _ => return Err(mismatch(&a, &b).help("only numbers can be ordered")),
         },
         Eq | Ne => {
+            // Numbers (and components) within EQUAL_WITHIN are equal, as in POV-Ray: a sum of
+            // tenths equals the number it adds up to.
             let eq = match (&a, &b) {
-                (Num(x), Num(y)) => x == y,
+                (Num(x), Num(y)) => (x - y).abs() < EQUAL_WITHIN,
                 (Bool(x), Bool(y)) => x == y,
                 (Str(x), Str(y)) => x == y,
-                (Vec2(x), Vec2(y)) => x == y,
-                (Vec3(x) | Color(x), Vec3(y) | Color(y)) => x == y,
+                (Vec2(x), Vec2(y)) => (*x - *y).abs().max_element() < EQUAL_WITHIN,
+                (Vec3(x) | Color(x), Vec3(y) | Color(y)) => {
+                    (*x - *y).abs().max_element() < EQUAL_WITHIN
+                }
                 _ => return Err(mismatch(&a, &b)),
             };
             Bool(eq == (op == Eq))
@@ -284,13 +295,31 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
                 ));
         }
     };
-    if i < 0.0 || i.fract() != 0.0 || i as usize >= len {
+    if len == 0 {
+        return Err(
+            Error::new(format!("index {} of an empty array", exact_number(i)))
+                .label("the array is empty")
+                .help("an empty array has no elements to take: test `len(A) > 0` first"),
+        );
+    }
+    if i.fract() != 0.0 {
+        return Err(Error::new(format!(
+            "index {} is not a whole number",
+            exact_number(i)
+        ))
+        .label("not a whole number")
+        .help(format!(
+            "indices are whole numbers from 0 to {}: round it with `floor(...)` or `round(...)`",
+            len - 1
+        )));
+    }
+    if i < 0.0 || i >= len as f64 {
         return Err(Error::new(format!(
             "index {} out of range (length {len})",
             short_number(i)
         ))
         .label("out of range")
-        .help(format!("indices run from 0 to {}", len.saturating_sub(1))));
+        .help(format!("indices run from 0 to {}", len - 1)));
     }
     let i = i as usize;
     Ok(match v {
@@ -299,6 +328,17 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
         Value::Vec3(a) | Value::Color(a) => Value::Num(a[i]),
         _ => unreachable!(),
     })
+}
+
+/// A number as short as it reads, unless that form would hide its fraction
+/// (`0.9999999999999999` is not shown as `1`).
+fn exact_number(x: f64) -> String {
+    let short = short_number(x);
+    if x.fract() != 0.0 && short.parse::<f64>().is_ok_and(|s| s.fract() == 0.0) {
+        format!("{x}")
+    } else {
+        short
+    }
 }
 
 fn field_value(v: Value, f: &str) -> Result<Value, Error> {

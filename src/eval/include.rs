@@ -1,10 +1,12 @@
 //! `#include` (of scene files and of the built-in standard library) and the resolution of file
 //! paths relative to the file that names them.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::Evaluator;
 use super::blocks::Sink;
+use super::scope::Frame;
 use super::stdlib;
 use crate::diag::{Error, SourceResult, suggest};
 use crate::span::{FileId, Span};
@@ -122,7 +124,6 @@ impl Evaluator {
             ]);
         }
         let file = self.sources.add(&key, path.to_string(), text.to_string());
-        self.std_files.insert(file);
         self.run_included(file, text, key, span, sink)
     }
 
@@ -137,7 +138,14 @@ impl Evaluator {
     ) -> SourceResult<()> {
         let items = parse(file, text)?;
         self.include_stack.push(key);
+        // The file's top-level `#local`s live in a frame of its own, gone when it ends (its
+        // unused ones are not reported: see `warn_unused`).
+        self.frames.push(Frame {
+            vars: HashMap::new(),
+            file: true,
+        });
         let r = self.run_items(&items, sink);
+        self.frames.pop();
         self.include_stack.pop();
         r.map_err(|mut ds| {
             for d in &mut ds {

@@ -68,6 +68,14 @@ pub const MAX_EVAL_NESTING: usize = 100_000;
 /// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
 /// readable and bounded); past it, one last note says the rest were left out.
 pub const MAX_MESSAGES: usize = 1000;
+/// Most errors one load counts before its evaluation stops, with a note that says so: a mistake
+/// repeated in a loop, in a macro called often or on every line of a generated file stays
+/// readable and quick to report. An error repeated at the same place (a macro's body, called
+/// again) counts each time but is shown once.
+pub const MAX_ERRORS: usize = 100;
+/// Most "did you mean" searches over the scene's own names one load makes (each reads every
+/// declared name); later errors of the kind get the plain help.
+pub const MAX_NAME_SUGGESTIONS: usize = 20;
 /// Longest string a scene may build (bytes).
 pub const MAX_STRING_BYTES: usize = 1 << 24;
 /// Bytes of string built, compared or scanned that count as one evaluation step.
@@ -165,6 +173,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
     let mut ev = Evaluator::new(options.clone());
     ev.source_bytes = text.len() as u64;
     let file = ev.sources.add(path, name.to_string(), text.clone());
+    ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
     match parse(file, &text) {
@@ -200,6 +209,12 @@ pub(crate) struct Evaluator {
     pub(crate) errors: Vec<Diagnostic>,
     pub(crate) warnings: Vec<Diagnostic>,
     warned: HashSet<(Span, String)>,
+    /// The errors shown so far, by place and message (an error repeated there is shown once).
+    reported: HashSet<(Span, String)>,
+    /// Errors raised so far, repeated ones included (see [`MAX_ERRORS`]).
+    error_count: usize,
+    /// "Did you mean" searches over the declared names so far (see [`MAX_NAME_SUGGESTIONS`]).
+    name_suggestions: usize,
     pub(crate) assets: lower::Assets,
     /// Every file read or tried: the scene, includes, images, meshes (see [`Loaded`]).
     dependencies: Vec<PathBuf>,
@@ -215,8 +230,9 @@ pub(crate) struct Evaluator {
     breaking: bool,
     /// `#debug` and `#warning` messages so far (see [`MAX_MESSAGES`]).
     messages: usize,
-    /// Files of the standard library read by this load: their unused declarations are quiet.
-    std_files: HashSet<crate::span::FileId>,
+    /// The scene's own file: only its declarations can be reported unused (an included file,
+    /// a library, declares more than one scene uses).
+    main_file: Option<crate::span::FileId>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
@@ -287,6 +303,9 @@ impl Evaluator {
             errors: Vec::new(),
             warnings: Vec::new(),
             warned: HashSet::new(),
+            reported: HashSet::new(),
+            error_count: 0,
+            name_suggestions: 0,
             assets: lower::Assets::default(),
             dependencies: Vec::new(),
             steps: 0,
@@ -294,7 +313,7 @@ impl Evaluator {
             break_targets: 0,
             breaking: false,
             messages: 0,
-            std_files: HashSet::new(),
+            main_file: None,
             block_depth: 0,
             parts_copied: 0,
             source_bytes: 0,
@@ -308,15 +327,48 @@ impl Evaluator {
         }
     }
 
-    /// Runs top-level items, collecting the errors of each item and going on.
+    /// Runs top-level items, collecting the errors of each item and going on, until
+    /// [`MAX_ERRORS`] errors were raised.
     fn run_top(&mut self, items: &[Item], sink: &mut dyn Sink) {
         let mut i = 0;
         while i < items.len() {
-            match self.step(items, &mut i, sink) {
-                Ok(()) => {}
-                Err(d) => self.errors.extend(d),
+            if let Err(ds) = self.step(items, &mut i, sink) {
+                self.report(ds);
+                if self.error_count >= MAX_ERRORS
+                    && let Some(next) = items.get(i)
+                {
+                    self.errors.push(
+                        Diagnostic::note(
+                            next.span(),
+                            format!("more than {MAX_ERRORS} errors: the evaluation stopped"),
+                        )
+                        .with_label("not evaluated from here on")
+                        .with_help(
+                            "fix the errors above first (an error repeated at the same place, \
+                             in a macro or a loop, is shown once)",
+                        ),
+                    );
+                    return;
+                }
             }
         }
+    }
+
+    /// Records errors, each place and message shown once.
+    fn report(&mut self, ds: Vec<Diagnostic>) {
+        for d in ds {
+            self.error_count += 1;
+            if self.reported.insert((d.span, d.message.clone())) {
+                self.errors.push(d);
+            }
+        }
+    }
+
+    /// Whether one more "did you mean" search over the declared names is allowed (see
+    /// [`MAX_NAME_SUGGESTIONS`]); counts it.
+    pub(crate) fn may_suggest_name(&mut self) -> bool {
+        self.name_suggestions += 1;
+        self.name_suggestions <= MAX_NAME_SUGGESTIONS
     }
 
     /// Runs a block body or directive body.

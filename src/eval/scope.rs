@@ -16,22 +16,50 @@ pub(super) struct Binding {
     pub(super) used: bool,
 }
 
-/// A macro call frame: its locals.
+/// A frame of locals: a macro call's (its parameters and `#local`s), or an included file's
+/// (the `#local`s at its top level, gone when the file ends).
 pub(super) struct Frame {
     pub(super) vars: HashMap<String, Binding>,
+    /// An included file's frame, not a macro call's.
+    pub(super) file: bool,
 }
 
 impl Evaluator {
+    /// The frame that holds `name` among those a lookup sees, innermost first: the current
+    /// macro call's, and the frames of the included files being run (each include's top-level
+    /// `#local`s); not the frames of the macro calls further out.
+    fn local_frame(&self, name: &str) -> Option<usize> {
+        let mut in_macro = false;
+        for (i, f) in self.frames.iter().enumerate().rev() {
+            if !f.file {
+                if in_macro {
+                    continue;
+                }
+                in_macro = true;
+            }
+            if f.vars.contains_key(name) {
+                return Some(i);
+            }
+        }
+        None
+    }
+
+    /// How many macro calls are running (the recursion depth).
+    pub(super) fn macro_depth(&self) -> usize {
+        self.frames.iter().filter(|f| !f.file).count()
+    }
+
     pub(super) fn bind(&mut self, name: &Name, value: Value, global: bool) {
         let b = Binding {
             value,
             span: name.span,
             used: false,
         };
-        let table = if global || self.frames.is_empty() {
-            &mut self.globals
-        } else {
-            &mut self.frames.last_mut().unwrap().vars
+        // `#local` binds in the innermost frame: the current macro call's, or the included
+        // file's being run; at the main file's top level, globally.
+        let table = match self.frames.last_mut() {
+            Some(f) if !global => &mut f.vars,
+            _ => &mut self.globals,
         };
         // Re-declaration counts the old binding as "used" for warning purposes only if it was.
         if let Some(old) = table.insert(name.text.clone(), b)
@@ -72,50 +100,58 @@ impl Evaluator {
         ])
     }
 
-    /// Removes a binding (the innermost: the current macro's, else the global one); `false`
+    /// Removes a binding (the innermost a lookup sees: a local, else the global one); `false`
     /// when there was none.
     pub(super) fn unbind(&mut self, name: &str) -> bool {
-        if let Some(f) = self.frames.last_mut()
-            && f.vars.remove(name).is_some()
-        {
-            return true;
+        if let Some(i) = self.local_frame(name) {
+            return self.frames[i].vars.remove(name).is_some();
         }
         self.globals.remove(name).is_some()
     }
 
+    /// The binding a lookup of `name` finds (a local, else the global one).
+    fn binding_mut(&mut self, name: &str) -> Option<&mut Binding> {
+        match self.local_frame(name) {
+            Some(i) => self.frames[i].vars.get_mut(name),
+            None => self.globals.get_mut(name),
+        }
+    }
+
     pub(super) fn mark_used(&mut self, name: &str) {
-        if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
-            b.used = true;
-        } else if let Some(b) = self.globals.get_mut(name) {
+        if let Some(b) = self.binding_mut(name) {
             b.used = true;
         }
     }
 
     pub(super) fn lookup_quiet(&mut self, name: &str) -> Option<Value> {
-        if let Some(b) = self.frames.last_mut().and_then(|f| f.vars.get_mut(name)) {
-            b.used = true;
-            return Some(b.value.clone());
-        }
-        if let Some(b) = self.globals.get_mut(name) {
+        if let Some(b) = self.binding_mut(name) {
             b.used = true;
             return Some(b.value.clone());
         }
         builtins::constant(name)
     }
 
-    /// The names a lookup can find here: globals, the current macro's locals, constants.
+    /// The names a lookup can find here: globals, the locals it sees, constants.
     fn known_names(&self) -> Vec<&str> {
         let mut known: Vec<&str> = self.globals.keys().map(String::as_str).collect();
-        if let Some(f) = self.frames.last() {
+        let mut in_macro = false;
+        for f in self.frames.iter().rev() {
+            if !f.file {
+                if in_macro {
+                    continue;
+                }
+                in_macro = true;
+            }
             known.extend(f.vars.keys().map(String::as_str));
         }
         known.extend(CONSTANTS);
         known
     }
 
-    /// Whether an undeclared `name` is close to a name a lookup can find (a misspelt one).
-    pub(super) fn near_a_known_name(&self, name: &str) -> bool {
-        suggest(name, self.known_names()).is_some()
+    /// Whether an undeclared `name` is close to a name a lookup can find (a misspelt one);
+    /// past [`super::MAX_NAME_SUGGESTIONS`] searches, taken to be.
+    pub(super) fn near_a_known_name(&mut self, name: &str) -> bool {
+        !self.may_suggest_name() || suggest(name, self.known_names()).is_some()
     }
 
     pub(super) fn lookup(&mut self, name: &str, span: Span) -> SourceResult<Value> {
@@ -125,7 +161,6 @@ impl Evaluator {
         if self.poisoned.contains(name) {
             return Err(silent());
         }
-        let known = self.known_names();
         let mut e = Error::new(format!("unknown identifier `{name}`")).label("not declared");
         if name == "area_light" {
             // `light_source { <p> color C area_light <u>, <v>, n, m }`
@@ -163,7 +198,11 @@ impl Evaluator {
             e = e.help(format!(
                 "`{name}` is declared in the standard library: add `#include \"{file}\"`"
             ));
-        } else if let Some(s) = suggest(name, known) {
+        } else if let Some(s) = self
+            .may_suggest_name()
+            .then(|| suggest(name, self.known_names()))
+            .flatten()
+        {
             e = e.help(format!("did you mean `{s}`?"));
         } else {
             e = e.help(format!("declare it first: `#declare {name} = ...`"));
@@ -178,7 +217,7 @@ impl Evaluator {
                 !b.used
                     && !n.starts_with('_')
                     && !b.span.is_detached()
-                    && !self.std_files.contains(&b.span.file)
+                    && Some(b.span.file) == self.main_file
             })
             .collect();
         if unused.is_empty() {

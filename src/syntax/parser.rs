@@ -362,7 +362,11 @@ impl Cx {
             Rule::number => ExprKind::Number(pair.as_str().parse().unwrap_or(f64::NAN)),
             Rule::boolean => ExprKind::Bool(pair.as_str() == "true"),
             Rule::string => ExprKind::Str(self.unescape(pair.into_inner().next().unwrap()).into()),
-            Rule::paren => return self.expr(pair.into_inner().next().unwrap()),
+            Rule::paren => {
+                // The span takes in both parentheses: a message quoting `-(1)` quotes all of it.
+                let inner = self.expr(pair.into_inner().next().unwrap());
+                return Expr { span, ..inner };
+            }
             Rule::vector => ExprKind::Vector(pair.into_inner().map(|p| self.expr(p)).collect()),
             Rule::array => ExprKind::Array(pair.into_inner().map(|p| self.expr(p)).collect()),
             Rule::named => {
@@ -448,6 +452,20 @@ mod tests {
             panic!("{e:?}")
         };
         assert!(matches!(rhs.kind, ExprKind::Binary(BinOp::Mul, _, _)));
+    }
+
+    #[test]
+    fn parenthesised_spans_take_in_both_parentheses() {
+        let text = "-(1) + (2 * 3)";
+        let items = p(text);
+        let Item::Expr(e) = &items[0] else { panic!() };
+        let ExprKind::Binary(BinOp::Add, lhs, rhs) = &e.kind else {
+            panic!("{e:?}")
+        };
+        let at = |s: Span| &text[s.start as usize..s.end as usize];
+        assert_eq!(at(e.span), text);
+        assert_eq!(at(lhs.span), "-(1)");
+        assert_eq!(at(rhs.span), "(2 * 3)");
     }
 
     #[test]
