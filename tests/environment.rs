@@ -521,6 +521,36 @@ fn image_maps_on_a_sphere_are_upright_and_not_mirrored_seen_from_outside() {
     }
 }
 
+/// A `planar` image is not mirrored seen from the default camera either (it was: `u` grew
+/// toward +x, which is on the left of the picture, and POV-Ray's `map_type 0` ported by the
+/// negate-x rule showed mirrored). The ball's square `-1..1` is scaled onto the image's unit
+/// square; the quadrants as in the test above.
+#[test]
+fn a_planar_image_is_not_mirrored_seen_from_the_camera() {
+    let (w, h) = (8u32, 4u32);
+    let pixels = grey_pixels((w, h), |c, r| match (c < w / 2, r < h / 2) {
+        (true, true) => 0.3,
+        (false, true) => 0.9,
+        (true, false) => 0.1,
+        (false, false) => 0.6,
+    });
+    let mut tex = image_texture("quadrants", (w, h), pixels, Mapping::Planar, false);
+    tex.transform = DAffine3::from_translation(DVec3::new(0.5, 0.5, 0.0))
+        * DAffine3::from_scale(DVec3::splat(0.5));
+    let img = textured_ball(tex, DAffine3::IDENTITY);
+    let (tl, tr) = (
+        block_mean(&img, 9..14, 9..14),
+        block_mean(&img, 18..23, 9..14),
+    );
+    let (bl, br) = (
+        block_mean(&img, 9..14, 18..23),
+        block_mean(&img, 18..23, 18..23),
+    );
+    println!("planar: top {tl:.3} | {tr:.3}, bottom {bl:.3} | {br:.3}");
+    assert!(tl < tr && bl < br, "planar shows the image mirrored");
+    assert!(tl > bl && tr > br, "planar shows the image upside down");
+}
+
 /// A sphere's `uv` turn with the object: `rotate <0, 90, 0>` of a uv-textured ball (baked into a
 /// world-space sphere, the rotation being a similarity) shows what the unrotated ball shows a
 /// quarter turn away, as the `spherical` mapping (which reads the object-space point) does.

@@ -177,7 +177,8 @@ fn overrides_of_declared_materials_keep_the_rest() {
          sphere { <3, 0, 0>, 1 material { G glossy rgb <0, 1, 0> } }
          sphere { <6, 0, 0>, 1 material { M glass ior 1.5 } }
          sphere { <9, 0, 0>, 1 material { Q ior 1.6 } }
-         sphere { <12, 0, 0>, 1 material { M mirror } }",
+         sphere { <12, 0, 0>, 1 material { M mirror } }
+         sphere { <15, 0, 0>, 1 material { mirror tint texture { checker rgb 1, rgb 0.5 } } }",
     );
     let m = |i: usize| &s.materials[s.objects[i].material.0 as usize];
     let c = |x: f64, y: f64, z: f64| ColorParam::Const(DVec3::new(x, y, z));
@@ -207,6 +208,13 @@ fn overrides_of_declared_materials_keep_the_rest() {
             tint: c(0.9, 0.5, 0.2)
         }
     );
+    // `mirror tint <texture>` is `mirror <texture>` (the tint was refused as "expected a color").
+    assert!(matches!(
+        m(5),
+        Material::Mirror {
+            tint: ColorParam::Texture(_)
+        }
+    ));
 }
 
 #[test]

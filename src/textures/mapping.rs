@@ -8,7 +8,7 @@
 //! |---------------|------------------------------------------------------------------------|
 //! | `Solid`       | the object-space point `(x, y, z)` itself                              |
 //! | `Uv`          | `(u, v, 0)`: the shape's own surface coordinates                       |
-//! | `Planar`      | `(x, y, 0)`: projection along z onto the x-y plane (POV-Ray map_type 0) |
+//! | `Planar`      | `(-x, y, 0)`: projection along z onto the x-y plane (map_type 0)        |
 //! | `Spherical`   | `(u, v, 0)`, `u` longitude around y, `v` latitude (POV-Ray map_type 1)  |
 //! | `Cylindrical` | `(u, y, 0)`, `u` longitude around y, height unchanged (map_type 2)      |
 //!
@@ -32,7 +32,10 @@ pub fn map(mapping: Mapping, at: &TexCoord) -> DVec3 {
     match mapping {
         Mapping::Solid => p,
         Mapping::Uv => DVec3::new(at.uv.x as f64, at.uv.y as f64, 0.0),
-        Mapping::Planar => DVec3::new(p.x, p.y, 0.0),
+        // `u` grows toward -x, to the right seen from the default camera (on -z; the camera
+        // is right-handed): the image is not mirrored from there, and sits where POV-Ray's
+        // `map_type 0` puts it once a scene is ported by negating x.
+        Mapping::Planar => DVec3::new(-p.x, p.y, 0.0),
         Mapping::Spherical => {
             // atan2 of the horizontal radius keeps its precision near the poles.
             let theta = (p.x * p.x + p.z * p.z).sqrt().atan2(p.y);
@@ -85,7 +88,7 @@ mod tests {
         let c = at([1.0, 2.0, 3.0], [0.25, 0.75]);
         assert!(close(map(Mapping::Solid, &c), DVec3::new(1.0, 2.0, 3.0)));
         assert!(close(map(Mapping::Uv, &c), DVec3::new(0.25, 0.75, 0.0)));
-        assert!(close(map(Mapping::Planar, &c), DVec3::new(1.0, 2.0, 0.0)));
+        assert!(close(map(Mapping::Planar, &c), DVec3::new(-1.0, 2.0, 0.0)));
     }
 
     #[test]

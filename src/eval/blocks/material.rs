@@ -7,7 +7,7 @@ use std::rc::Rc;
 use super::{Sink, unexpected};
 use crate::diag::{Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, color_def, num, range_error, surface_color};
+use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
 use crate::scene::{Color, IOR_RANGE, MIN_ROUGHNESS};
@@ -23,6 +23,8 @@ pub(super) struct MaterialBuilder {
     absorb: Option<ColorDef>,
     tint: Option<Color>,
     tint_def: Option<ColorDef>,
+    /// Where `tint` was given a texture (a mirror's tint may be one, a glass's may not).
+    tint_texture: Option<Span>,
     specular: Option<ColorDef>,
     roughness: Option<ColorDef>,
     /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
@@ -134,6 +136,17 @@ impl MaterialBuilder {
                 MatKind::Mirror(self.tint_def.or(self.albedo).or(base_tint).unwrap_or(one))
             }
             "glass" => {
+                if let Some(at) = self.tint_texture {
+                    return Err(vec![
+                        Error::new("a glass tint is a constant colour, not a texture")
+                            .label("a texture")
+                            .help(
+                                "write e.g. `tint rgb <0.9, 1, 0.9>`; for glass coloured by a \
+                                 texture, give the texture to `absorb`",
+                            )
+                            .at(at),
+                    ]);
+                }
                 let (mut ior, mut absorb, mut tint) =
                     (1.5, ColorDef::Const(Color::ZERO), Color::ONE);
                 if let Some(MatKind::Glass {
@@ -271,10 +284,17 @@ impl Sink for MaterialBuilder {
                 self.absorb = Some(c);
             }
             "tint" => {
-                let c = surface_color(&args[0])?;
-                warn_above_one(ev, c, args[0].span);
-                self.tint = Some(c);
-                self.tint_def = Some(ColorDef::Const(c));
+                // A mirror's tint may be a texture (as `mirror <color>`); a glass's is a
+                // constant colour, checked when the kind is known.
+                let def = reflectance(ev, &args[0])?;
+                self.tint = match &def {
+                    ColorDef::Const(c) => Some(*c),
+                    ColorDef::Tex(_) => {
+                        self.tint_texture = Some(args[0].span);
+                        None
+                    }
+                };
+                self.tint_def = Some(def);
             }
             "specular" => self.specular = Some(reflectance(ev, &args[0])?),
             "roughness" => {
