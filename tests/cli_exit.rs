@@ -77,6 +77,20 @@ fn usage_errors_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     let out = sppm(&["frobnicate"]);
     assert_eq!(out.status.code(), Some(2));
+    // An output named only by its extension, and a scene path that names no file, are told as
+    // such (both said "must end in .png or .exr").
+    for (args, says) in [
+        (
+            &["render", "examples/furnace.scn", "-o", ".png"][..],
+            "no name before its extension",
+        ),
+        (&["render", "."][..], "not a scene file name"),
+    ] {
+        let out = sppm(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
 }
 
 #[test]

@@ -489,3 +489,29 @@ fn appearance_values_outside_the_language_s_ranges_are_errors() {
     };
     render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
 }
+
+/// A bezier patch whose control points all lie at one point or on one line draws nothing: it
+/// is refused as a zero-area quad is (it rendered nothing without a word).
+#[test]
+fn a_bezier_patch_without_area_is_an_error() {
+    let flat_line = |i: usize| DVec3::new(i as f64 * 0.1, 0.0, 0.5);
+    for points in [
+        [DVec3::new(0.0, 0.0, 0.5); 16],
+        std::array::from_fn(flat_line),
+    ] {
+        let mut scene = furnace_emitting(4);
+        let m = add_material(
+            &mut scene,
+            Material::Diffuse {
+                albedo: ColorParam::Const(DVec3::splat(0.5)),
+            },
+        );
+        let shape = Shape::BezierPatch {
+            points: Box::new(points),
+            method: IntersectMethod::Robust,
+        };
+        add_object(&mut scene, shape, m, None);
+        let err = refused(&scene);
+        assert!(err.contains("no area"), "{err}");
+    }
+}

@@ -105,14 +105,31 @@ pub fn output_path(
     output: Option<&std::path::Path>,
     scene: &std::path::Path,
 ) -> Result<PathBuf, String> {
+    if output.is_none() && scene.file_stem().is_none_or(|s| s.is_empty() || s == ".") {
+        // `render .`: the image's name comes from the scene's, and this one has none.
+        return Err(format!(
+            "`{}` is not a scene file name (it names no file); give the scene's file, e.g. \
+             `scene.scn`",
+            scene.display()
+        ));
+    }
     let output = output.map_or_else(|| scene.with_extension("png"), |o| o.to_path_buf());
     match output.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr") => {}
         _ => {
-            return Err(format!(
-                "output `{}` must end in .png or .exr",
-                output.display()
-            ));
+            let name = output.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let dotfile = name.starts_with('.')
+                && [".png", ".exr"]
+                    .iter()
+                    .any(|e| name.eq_ignore_ascii_case(e));
+            return Err(if dotfile {
+                format!(
+                    "output `{}` has no name before its extension; write e.g. `image{name}`",
+                    output.display()
+                )
+            } else {
+                format!("output `{}` must end in .png or .exr", output.display())
+            });
         }
     }
     sppm_lang::atomic_file::check_output(&output, &[scene])?;

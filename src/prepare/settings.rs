@@ -4,11 +4,7 @@
 use crate::scene::{Antialias, Integrator, Scene};
 use crate::span::Span;
 
-/// Most iterations a render may be asked for ([`RenderOptions::iterations`]) without a time
-/// limit.
-pub const MAX_ITERATIONS: u32 = 100_000_000;
-/// Most photons per iteration ([`RenderOptions::photons`]; memory is checked again).
-pub const MAX_PHOTONS: u64 = 100_000_000_000;
+pub use crate::scene::{MAX_ITERATIONS, MAX_PHOTONS};
 /// Most worker threads ([`RenderOptions::threads`]).
 pub const MAX_THREADS: usize = 1024;
 

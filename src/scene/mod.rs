@@ -19,8 +19,8 @@ pub use assets::{
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{
-    IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_OCTAVES, MAX_PIXELS, MAX_RESOLUTION_SIDE,
-    MIN_ROUGHNESS, MIN_SIZE, color_problem,
+    IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS, MAX_PIXELS,
+    MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
 };
 
 use std::sync::Arc;

@@ -173,14 +173,15 @@ mod tests {
         assert_eq!(texel(&uv, &at([9.0, 9.0, 9.0], [0.3, 0.9])), (2.0, 0.0));
         assert_eq!(texel(&uv, &at([9.0, 9.0, 9.0], [0.99, 0.01])), (7.0, 3.0));
 
+        // `u = -x`: the image runs toward -x, to the right seen from the default camera.
         let planar = image_texture(Mapping::Planar, 8, 4);
         assert_eq!(
-            texel(&planar, &at([0.55, 0.3, 5.0], [0.0, 0.0])),
+            texel(&planar, &at([-0.55, 0.3, 5.0], [0.0, 0.0])),
             (4.0, 2.0)
         );
         // z is ignored by the projection.
         assert_eq!(
-            texel(&planar, &at([0.55, 0.3, -5.0], [0.0, 0.0])),
+            texel(&planar, &at([-0.55, 0.3, -5.0], [0.0, 0.0])),
             (4.0, 2.0)
         );
 

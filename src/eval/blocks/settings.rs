@@ -7,7 +7,9 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
 use crate::eval::value::Value;
-use crate::scene::{Antialias, Integrator, MAX_RESOLUTION_SIDE, Settings};
+use crate::scene::{
+    Antialias, Integrator, MAX_ITERATIONS, MAX_PHOTONS, MAX_RESOLUTION_SIDE, Settings,
+};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -83,8 +85,10 @@ impl Sink for SettingsBuilder {
                 }
                 s.resolution = (w as u32, h as u32);
             }
-            "iterations" => s.iterations = count(&args[0], "iterations", 1e8)? as u32,
-            "photons" => s.photons = Some(count(&args[0], "photons", 1e10)? as u64),
+            "iterations" => {
+                s.iterations = count(&args[0], "iterations", f64::from(MAX_ITERATIONS))? as u32
+            }
+            "photons" => s.photons = Some(count(&args[0], "photons", MAX_PHOTONS as f64)? as u64),
             "radius" => s.radius = Some(positive(&args[0], "radius")?),
             "alpha" => {
                 let a = num(&args[0])?;

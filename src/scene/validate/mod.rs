@@ -29,6 +29,12 @@ pub const MAX_RESOLUTION_SIDE: u32 = 16_384;
 /// Largest image in pixels.
 pub const MAX_PIXELS: u64 = 1 << 27;
 
+/// Most iterations a render may be asked for (by the scene's settings or the render's
+/// options) without a time limit.
+pub const MAX_ITERATIONS: u32 = 100_000_000;
+/// Most photons per iteration (memory is checked again by the render's estimate).
+pub const MAX_PHOTONS: u64 = 100_000_000_000;
+
 /// Smallest radius, length or side in world space.
 pub const MIN_SIZE: f64 = 1e-9;
 
@@ -407,6 +413,28 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             newton_bounds(*method, kind, span)?;
             for p in points.iter() {
                 at(*p)?;
+            }
+            // The surface lies in the control net's convex hull: a net whose points all lie
+            // on one line (or at one point) draws nothing, as a zero-area quad would.
+            let w: Vec<DVec3> = points.iter().map(|p| t.transform_point3(*p)).collect();
+            let area: f64 = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| {
+                    let q = |a: usize, b: usize| w[4 * a + b];
+                    0.5 * (q(i + 1, j + 1) - q(i, j))
+                        .cross(q(i, j + 1) - q(i + 1, j))
+                        .length()
+                })
+                .sum();
+            if !(area > MIN_SIZE * MIN_SIZE) {
+                return Err(invalid(
+                    span,
+                    "this bezier_patch has no area: its control points all lie on one line \
+                     or at one point"
+                        .into(),
+                    "no area",
+                    "spread the 16 points over a surface, e.g. a 4 x 4 grid",
+                ));
             }
         }
         Shape::Csg(csg) => validate_csg(csg, t, span)?,
