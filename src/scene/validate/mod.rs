@@ -426,7 +426,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                         .length()
                 })
                 .sum();
-            if !(area > MIN_SIZE * MIN_SIZE) {
+            if area.is_nan() || area <= MIN_SIZE * MIN_SIZE {
                 return Err(invalid(
                     span,
                     "this bezier_patch has no area: its control points all lie on one line \
