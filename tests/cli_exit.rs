@@ -91,6 +91,29 @@ fn usage_errors_exit_2() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(says), "{args:?}: {err}");
     }
+    // A size flag that takes an accepted scene beyond the limits is the flag's usage error
+    // (it was a scene error at the scene's `settings`, without a help).
+    let dir = tempfile::tempdir().unwrap();
+    let wide = dir.path().join("wide.scn");
+    std::fs::write(&wide, "settings { resolution <16384, 1> }\n").unwrap();
+    let wide = wide.to_str().unwrap();
+    let image = dir.path().join("w.png");
+    let image = image.to_str().unwrap();
+    for (args, says) in [
+        (
+            &["check", wide, "--scale", "64"][..],
+            "--scale makes the image",
+        ),
+        (
+            &["render", wide, "-o", image, "--resolution", "x100"][..],
+            "--resolution makes the image",
+        ),
+    ] {
+        let out = sppm(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
 }
 
 #[test]

@@ -168,7 +168,10 @@ pub fn run(
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
             let mut s = s.clone();
-            size.apply_to(&mut s);
+            if let Err(e) = size.apply_to(&mut s) {
+                err(&format!("error: {e}\n"));
+                return ExitCode::from(EXIT_USAGE);
+            }
             // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
             let (settings, prepared) = match sppm_lang::render::prepare(&s, render_options) {
                 Ok(p) => p,

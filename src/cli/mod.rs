@@ -246,9 +246,26 @@ impl SizeArgs {
         }
     }
 
-    /// Sets `scene`'s resolution as the flags ask.
-    pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) {
-        scene.settings.resolution = self.apply(scene.settings.resolution);
+    /// Sets `scene`'s resolution as the flags ask; a size beyond the render's limits is the
+    /// flag's fault (a usage error naming it), not the scene's.
+    pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) -> Result<(), String> {
+        use sppm_lang::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE};
+        let (w, h) = self.apply(scene.settings.resolution);
+        let side = w.max(h);
+        if self.is_set() && (side > MAX_RESOLUTION_SIDE || u64::from(w) * u64::from(h) > MAX_PIXELS)
+        {
+            let flag = if self.scale.is_some() {
+                "--scale"
+            } else {
+                "--resolution"
+            };
+            return Err(format!(
+                "{flag} makes the image {w}x{h}, beyond {MAX_RESOLUTION_SIDE} pixels per side or \
+                 {MAX_PIXELS} pixels in all; ask for a smaller size"
+            ));
+        }
+        scene.settings.resolution = (w, h);
+        Ok(())
     }
 }
 

@@ -92,7 +92,10 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         Err(code) => return code,
     };
     scene.settings.integrator = Integrator::Path;
-    args.size.apply_to(&mut scene);
+    if let Err(e) = args.size.apply_to(&mut scene) {
+        say!("error: {e}");
+        return ExitCode::from(EXIT_USAGE);
+    }
     let seed = args.seed.unwrap_or(scene.settings.seed);
     let start = Instant::now();
     let half = |seed: u64, iterations: Option<u32>, time_limit: Option<f64>| {

@@ -90,8 +90,11 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
     if let Some(integrator) = args.integrator {
         scene.to_mut().settings.integrator = integrator;
     }
-    if args.size.is_set() {
-        args.size.apply_to(scene.to_mut());
+    if args.size.is_set()
+        && let Err(e) = args.size.apply_to(scene.to_mut())
+    {
+        say!("error: {e}");
+        return ExitCode::from(EXIT_USAGE);
     }
     let scene = scene.as_ref();
     let options = RenderOptions {

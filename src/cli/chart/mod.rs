@@ -251,7 +251,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         _ => return Ok(ExitCode::from(EXIT_SCENE_ERROR)),
     };
     super::check_not_an_input(&outputs, &loaded.dependencies)?;
-    args.size.apply_to(&mut scene);
+    args.size.apply_to(&mut scene)?;
     let (w, h) = scene.settings.resolution;
     if (w, h) != (reference.width, reference.height) {
         return Err(format!(

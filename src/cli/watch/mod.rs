@@ -178,10 +178,20 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                 None
             }
         };
+        // A `--scale` or `--resolution` beyond the limits for this scene's size: said like the
+        // output's error, and the last image kept.
+        let scene = scene.and_then(|mut s| match args.size.apply_to(&mut s) {
+            Ok(()) => Some(s),
+            Err(e) => {
+                status(&format!("error: {e}"));
+                let d = Diagnostic::error(sppm_lang::span::Span::detached(), e);
+                diagnostics.extend(live::diagnostics_view(&loaded.sources, &[d]));
+                None
+            }
+        });
         match scene {
-            Some(mut scene) => {
+            Some(scene) => {
                 round += 1;
-                args.size.apply_to(&mut scene);
                 status(&format!(
                     "render #{round} started ({})",
                     args.scene.display()
