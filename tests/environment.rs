@@ -612,6 +612,24 @@ fn an_eight_bit_environment_map_is_srgb_decoded() {
     }
 }
 
+/// Renders scene `text` with `iterations` iterations and seed `seed`.
+fn render_text(text: &str, iterations: u32, seed: u64) -> sppm_lang::render::RenderOutput {
+    let l = sppm_lang::load_source("scene.scn", text, &sppm_lang::EvalOptions::default());
+    let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+    let opts = sppm_lang::render::RenderOptions {
+        iterations: Some(iterations),
+        seed: Some(seed),
+        ..Default::default()
+    };
+    sppm_lang::render::render(
+        &scene,
+        &opts,
+        &std::sync::atomic::AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
 /// An infinite ground plane shadows the sky however far it reaches: a vertical quad above a
 /// black plane under a sky of 1 sees the sky over half its view, radiance `0.8 / pi * pi / 2 =
 /// 0.4` exactly. Shadow rays toward the sky once stopped just beyond the finite objects, so
@@ -626,20 +644,7 @@ fn an_infinite_ground_plane_shadows_the_sky() {
              plane {{ <0, 1, 0>, 0 material {{ diffuse rgb 0 }} }}\n\
              quad {{ <-1, 0.2, 0>, <2, 0, 0>, <0, 1.6, 0> material {{ diffuse rgb 0.8 }} }}\n"
         );
-        let l = sppm_lang::load_source("ground.scn", &text, &sppm_lang::EvalOptions::default());
-        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
-        let opts = sppm_lang::render::RenderOptions {
-            iterations: Some(128),
-            seed: Some(1),
-            ..Default::default()
-        };
-        let out = sppm_lang::render::render(
-            &scene,
-            &opts,
-            &std::sync::atomic::AtomicBool::new(false),
-            &mut |_| {},
-        )
-        .unwrap();
+        let out = render_text(&text, 128, 1);
         // The quad fills the image's central 16 x 16 pixels.
         let mut sum = 0.0;
         for y in 8..24 {
@@ -672,20 +677,7 @@ fn the_far_part_of_an_infinite_ground_lights_the_objects() {
              plane {{ <0, 1, 0>, 0 material {{ diffuse rgb 0.5 }} }}\n\
              quad {{ <-0.2, 9.8, 0>, <0.4, 0, 0>, <0, 0.4, 0> material {{ diffuse rgb 0.8 }} }}\n"
         );
-        let l = sppm_lang::load_source("far.scn", &text, &sppm_lang::EvalOptions::default());
-        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
-        let opts = sppm_lang::render::RenderOptions {
-            iterations: Some(128),
-            seed: Some(1),
-            ..Default::default()
-        };
-        let out = sppm_lang::render::render(
-            &scene,
-            &opts,
-            &std::sync::atomic::AtomicBool::new(false),
-            &mut |_| {},
-        )
-        .unwrap();
+        let out = render_text(&text, 128, 1);
         // The quad fills the image's central 16 x 16 pixels.
         let mut sum = 0.0;
         for y in 8..24 {
@@ -724,20 +716,7 @@ fn the_sky_below_the_horizon_sends_no_photons_above_the_ground() {
              plane {{ <0, 1, 0>, 0 material {{ diffuse rgb 0.5 }} }}\n\
              sphere {{ <0, 1, 0>, 1 material {{ diffuse rgb 0.8 }} }}\n"
         );
-        let l = sppm_lang::load_source("ball.scn", &text, &sppm_lang::EvalOptions::default());
-        let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
-        let opts = sppm_lang::render::RenderOptions {
-            iterations: Some(iterations),
-            seed: Some(3),
-            ..Default::default()
-        };
-        let out = sppm_lang::render::render(
-            &scene,
-            &opts,
-            &std::sync::atomic::AtomicBool::new(false),
-            &mut |_| {},
-        )
-        .unwrap();
+        let out = render_text(&text, iterations, 3);
         let (mut sum, mut n) = (0.0, 0.0);
         for y in rows {
             for x in 0..32 {
