@@ -646,13 +646,7 @@ fn an_infinite_ground_plane_shadows_the_sky() {
         );
         let out = render_text(&text, 128, 1);
         // The quad fills the image's central 16 x 16 pixels.
-        let mut sum = 0.0;
-        for y in 8..24 {
-            for x in 8..24 {
-                sum += out.image.get(x, y)[1];
-            }
-        }
-        let mean = sum / 256.0;
+        let mean = block_mean(&out.image, 8..24, 8..24);
         println!("{integrator}: {mean:.4}");
         assert!(
             (mean - 0.4).abs() < 0.006,
@@ -679,13 +673,7 @@ fn the_far_part_of_an_infinite_ground_lights_the_objects() {
         );
         let out = render_text(&text, 128, 1);
         // The quad fills the image's central 16 x 16 pixels.
-        let mut sum = 0.0;
-        for y in 8..24 {
-            for x in 8..24 {
-                sum += out.image.get(x, y)[1];
-            }
-        }
-        let mean = sum / 256.0;
+        let mean = block_mean(&out.image, 8..24, 8..24);
         println!("{integrator}: {mean:.4}");
         if integrator == "photon_map" {
             // Photon mapping keeps its k-nearest-neighbour bias (about +3 % here, three seeds
@@ -717,14 +705,7 @@ fn the_sky_below_the_horizon_sends_no_photons_above_the_ground() {
              sphere {{ <0, 1, 0>, 1 material {{ diffuse rgb 0.8 }} }}\n"
         );
         let out = render_text(&text, iterations, 3);
-        let (mut sum, mut n) = (0.0, 0.0);
-        for y in rows {
-            for x in 0..32 {
-                sum += out.image.get(x, y)[1];
-                n += 1.0;
-            }
-        }
-        sum / n
+        block_mean(&out.image, 0..32, rows)
     };
     // The floor in front of the ball (the image's bottom quarter), then the whole image.
     for rows in [24..32, 0..32] {

@@ -134,13 +134,10 @@ impl GroundPhotons {
         (cos_max < 1.0).then(|| (to / d2.sqrt(), cos_max))
     }
 
-    /// A weight for choosing this emitter among the lights (any positive number keeps the
-    /// estimate unbiased): about the power the far plane sends toward the bounding sphere, for
-    /// a ground of albedo 1/2 (`2 pi albedo E radius^2`, `E` the sky's irradiance on the plane
-    /// estimated as a quarter of `integrated`, `∫ L dw` over the sphere): a quarter of the
-    /// environment light's own photon power `pi radius^2 integrated`.
-    pub fn power(&self, integrated: f64) -> f64 {
-        let r = self.radius as f64;
-        0.25 * std::f64::consts::PI * r * r * integrated
-    }
+    /// This emitter's weight among the lights, as a share of the environment light's photon
+    /// power (any positive weight keeps the estimate unbiased): about the power the far plane
+    /// sends toward the bounding sphere for a ground of albedo 1/2, `2 pi albedo E radius^2`
+    /// with the sky's irradiance `E` a quarter of `∫ L dw`, against the environment's
+    /// `pi radius^2 ∫ L dw`.
+    pub const SHARE: f64 = 0.25;
 }

@@ -330,13 +330,11 @@ impl<'a> PreparedScene<'a> {
         let ground_photons = lights::ground_photons(scene, &prim_object, &lights, environment);
         let mut photon_power = power.clone();
         if let Some(i) = environment {
-            let env = &lights[i];
-            let r = match env {
-                Light::Environment(e) => e.radius as f64,
-                _ => 1.0,
-            };
-            let integrated = env.power() / (std::f64::consts::PI * r * r);
-            photon_power.extend(ground_photons.iter().map(|g| g.power(integrated)));
+            photon_power.extend(
+                ground_photons
+                    .iter()
+                    .map(|_| GroundPhotons::SHARE * power[i]),
+            );
         }
         let photon_distr = PiecewiseConstant1D::new(&photon_power);
         // Direct lighting leaves a uniform background to the BSDF sample, which draws it with
