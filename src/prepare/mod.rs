@@ -517,6 +517,17 @@ impl<'a> PreparedScene<'a> {
         }
     }
 
+    /// Whether the glass at this hit takes its absorption from a texture (so that it differs
+    /// from point to point of the glass).
+    #[inline]
+    pub fn absorption_varies(&self, sh: &SurfaceHit) -> bool {
+        let m = self.prim_material.get(sh.prim as usize).copied();
+        matches!(
+            m.and_then(|m| self.glass.get(m as usize)),
+            Some(GlassAbsorption::Textured)
+        )
+    }
+
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
     pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
         match self.material(sh.prim)? {

@@ -14,7 +14,8 @@ use crate::geometry::Ray;
 use crate::prepare::{PreparedScene, SurfaceHit};
 
 /// Beer–Lambert absorption along the segment `ray` ran to `sh` inside an absorbing dielectric:
-/// where it hits a glass from its inner side, that glass's absorption; anywhere else, that of
+/// where it hits a glass from its inner side, that glass's absorption (a textured one averaged
+/// with the medium's, its value where the path passed in); anywhere else, that of
 /// the `medium` the path is in (see [`medium_after`]): a path inside coloured glass is absorbed
 /// on its way to an object or a light inside the glass as well.
 #[inline]
@@ -27,6 +28,10 @@ pub(crate) fn attenuate_inside(
 ) {
     let inner_side = ray.d.dot(sh.hit.n) > 0.0;
     let sigma = match inner_side.then(|| scene.glass_absorption(sh)).flatten() {
+        // A textured absorption is looked up at both ends of the segment: where the path
+        // passed into the glass (the medium it carries) and here. Their mean is the same
+        // whichever way the segment is crossed, so camera paths and photons absorb alike.
+        Some(glass) if scene.absorption_varies(sh) => 0.5 * (glass + medium),
         Some(glass) => glass,
         None => medium,
     };
