@@ -27,6 +27,10 @@ use serde_json::{Value, json};
 const FIRST_PICTURE: Duration = Duration::from_secs(60);
 /// Longest time from a save to the page showing its picture (or its diagnostic).
 const SAVE_TO_PICTURE: Duration = Duration::from_secs(10);
+/// Longest wait for a render to reach the iterations the README's picture shows: how soon it
+/// does is the machine's speed and load (a shared machine took over 10 s), not a claim of this
+/// test.
+const RENDER_PROGRESS: Duration = Duration::from_secs(90);
 
 /// The Cornell box with the back wall in `back` and the glass sphere's material named `glass`
 /// (a wrong name is the broken save).
@@ -383,7 +387,7 @@ fn the_live_page_follows_saves_in_a_real_browser() {
 
     // 5. The Cornell box as it is, for the README: the figures, the read-out under the cursor.
     save(&scene_path, &scene(WHITE, "Glass"));
-    s.wait_for("the Cornell box renders", SAVE_TO_PICTURE, |l| {
+    s.wait_for("the Cornell box renders", RENDER_PROGRESS, |l| {
         l["state"] == json!("rendering")
             && l["iteration"]
                 .as_str()
