@@ -301,3 +301,50 @@ fn many_unknown_names_among_many_declarations_are_reported_quickly() {
     assert_eq!(helps[0], "did you mean `Name0`?");
     assert_eq!(helps[99], "declare it first: `#declare Nmae99 = ...`");
 }
+
+/// A scene file or include whose text would take more memory to parse than the memory limit
+/// allows (`PARSE_BYTES_PER_BYTE` per byte: the parser's token list and syntax tree) is refused
+/// before it is parsed, at the `#include` or the file's start, with a help naming
+/// `--memory-limit`: a 40 MB array literal once took the parser past 5 GB and aborted the
+/// process under a 4 GB address-space cap.
+#[test]
+fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // 64 KiB of text: 8 MiB to parse at 128 bytes per byte.
+    let big = format!("#declare A = [{}1];\n", "1,".repeat(32 * 1024));
+    std::fs::write(dir.path().join("big.scn"), &big).unwrap();
+    let main = dir.path().join("main.scn");
+    std::fs::write(&main, "#include \"big.scn\"\n").unwrap();
+    let with = |path: &std::path::Path, limit: Option<u64>| {
+        let options = EvalOptions {
+            memory_limit: limit,
+            ..EvalOptions::default()
+        };
+        sppm_lang::load_file(path, &options).unwrap()
+    };
+    // Room to parse it (and no limit given: the default of 2 GiB): loaded.
+    for limit in [None, Some(9 << 20)] {
+        let l = with(&main, limit);
+        assert!(errors(&l).is_empty(), "{limit:?}: {:?}", errors(&l));
+    }
+    // Not enough: refused at the include, and as the scene file itself at its start.
+    for (path, at) in [(&main, "#include ".len()), (&dir.path().join("big.scn"), 0)] {
+        let l = with(path, Some(7 << 20));
+        let e = errors(&l);
+        assert_eq!(e.len(), 1, "{e:?}");
+        assert!(
+            e[0].contains("too large to parse within the memory limit")
+                && e[0].contains("7.00 MiB"),
+            "{e:?}"
+        );
+        let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
+        assert_eq!(d.span.start as usize, at, "{:?}", d.span);
+        assert!(
+            d.help
+                .as_deref()
+                .is_some_and(|h| h.contains("--memory-limit")),
+            "{:?}",
+            d.help
+        );
+    }
+}

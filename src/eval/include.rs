@@ -8,7 +8,7 @@ use super::Evaluator;
 use super::blocks::Sink;
 use super::scope::Frame;
 use super::stdlib;
-use crate::diag::{Error, SourceResult, suggest};
+use crate::diag::{Error, SourceResult, size_text, suggest};
 use crate::span::{FileId, Span};
 use crate::syntax::parse;
 
@@ -128,6 +128,52 @@ impl Evaluator {
     }
 
     /// Parses and runs an included file's text; errors inside get the include as their trace.
+    /// Parses a file's text, unless parsing it would need more memory than the load may use
+    /// ([`super::PARSE_BYTES_PER_BYTE`] per byte, against [`super::EvalOptions::memory_limit`]
+    /// or [`super::DEFAULT_PARSE_MEMORY`]): the error stands at `include` (the `#include` that
+    /// reads the file) or, for the scene file itself, at its first character.
+    pub(super) fn parse_within_memory(
+        &self,
+        file: FileId,
+        text: &str,
+        include: Option<Span>,
+    ) -> SourceResult<Vec<crate::syntax::ast::Item>> {
+        let limit = self
+            .options
+            .memory_limit
+            .unwrap_or(super::DEFAULT_PARSE_MEMORY);
+        let need = (text.len() as u64).saturating_mul(super::PARSE_BYTES_PER_BYTE);
+        if need > limit {
+            let (what, label, span) = match include {
+                Some(span) => ("this included file", "included here", span),
+                None => (
+                    "the scene file",
+                    "the file starts here",
+                    Span::new(file, 0, 0),
+                ),
+            };
+            let most = limit / super::PARSE_BYTES_PER_BYTE;
+            return Err(vec![
+                Error::new(format!(
+                    "{what} is too large to parse within the memory limit: its {} of text would need \
+                     about {} to parse, more than the {} allowed",
+                    size_text(text.len() as u64),
+                    size_text(need),
+                    size_text(limit)
+                ))
+                .label(label)
+                .help(format!(
+                    "a scene file may hold up to {} of text at this limit: raise \
+                     `--memory-limit`, or make the many objects with a `#for` loop or a mesh \
+                     file (`mesh {{ \"file.obj\" }}`) instead of writing each one out",
+                    size_text(most)
+                ))
+                .at(span),
+            ]);
+        }
+        parse(file, text)
+    }
+
     fn run_included(
         &mut self,
         file: FileId,
@@ -136,7 +182,7 @@ impl Evaluator {
         span: Span,
         sink: &mut dyn Sink,
     ) -> SourceResult<()> {
-        let items = parse(file, text)?;
+        let items = self.parse_within_memory(file, text, Some(span))?;
         self.include_stack.push(key);
         // The file's top-level `#local`s live in a frame of its own, gone when it ends (its
         // unused ones are not reported: see `warn_unused`).
