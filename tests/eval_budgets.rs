@@ -47,6 +47,38 @@ fn nested_loops_each_under_their_limit_run_out_of_steps() {
     assert_eq!(errors(&l), ["the evaluation took more than 1000000 steps"]);
 }
 
+/// Each operation of an expression and each clause tested counts: a 5 000-term sum, or a
+/// `#switch` of 20 000 clauses, evaluated in a loop once took one step per iteration, so a
+/// budget of 50 million steps allowed hours (1.3 ms per iteration of the sum).
+#[test]
+fn long_expressions_and_clause_chains_count_by_their_length() {
+    let opts = EvalOptions {
+        max_steps: 1_000_000,
+        ..EvalOptions::default()
+    };
+    let sum = format!(
+        "#for (I, 1, 1000)\n #declare X = I{};\n#end\n",
+        " + I".repeat(4999)
+    );
+    let cases = format!(
+        "#for (I, 1, 1000)\n #switch (-1)\n{} #end\n#end\n",
+        " #case (1)\n".repeat(2000)
+    );
+    let elifs = format!(
+        "#for (I, 1, 1000)\n #if (false)\n{} #end\n#end\n",
+        " #elif (false)\n".repeat(2000)
+    );
+    for text in [sum, cases, elifs] {
+        let l = load(&text, &opts);
+        assert_eq!(
+            errors(&l),
+            ["the evaluation took more than 1000000 steps"],
+            "{}",
+            &text[..60]
+        );
+    }
+}
+
 #[test]
 fn empty_loop_bodies_count_too() {
     let opts = EvalOptions {

@@ -282,7 +282,7 @@ pub struct LimitArgs {
     /// memory, whichever is less). Checked against an estimate before rendering starts.
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
     pub memory_limit: Option<u64>,
-    /// Most evaluation steps in all (statements, loop iterations, macro calls).
+    /// Most evaluation steps in all (statements, loop iterations, macro calls, operations).
     #[arg(long, default_value_t = EvalOptions::default().max_steps, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_steps: u64,
 }

@@ -62,6 +62,8 @@ impl Evaluator {
                 otherwise,
             } => {
                 for (cond, body) in branches {
+                    // Each test is a step: a chain of many `#elif`s in a loop costs its length.
+                    self.tick(cond.span)?;
                     if self.eval(cond)?.truthy().at(cond.span)? {
                         return self.run_items(body, sink);
                     }
@@ -245,6 +247,11 @@ impl Evaluator {
 
     /// Whether `#switch`'s value `v` matches a `#case` or `#range` clause.
     fn clause_matches(&mut self, test: &ClauseTest, v: f64) -> SourceResult<bool> {
+        // Each test is a step: a `#switch` of many clauses in a loop costs its length.
+        let span = match test {
+            ClauseTest::Case(e) | ClauseTest::Range(e, _) => e.span,
+        };
+        self.tick(span)?;
         Ok(match test {
             ClauseTest::Case(e) => {
                 (self.eval(e)?.num().at(e.span)? - v).abs() < super::expr::EQUAL_WITHIN

@@ -26,6 +26,14 @@ impl Evaluator {
     }
 
     fn eval_inner(&mut self, e: &Expr) -> SourceResult<Value> {
+        // Every operation is a step (a literal is none): a long expression evaluated in a loop
+        // costs its length, so the budget bounds the time it takes.
+        if !matches!(
+            e.kind,
+            ExprKind::Number(_) | ExprKind::Bool(_) | ExprKind::Str(_)
+        ) {
+            self.tick(e.span)?;
+        }
         Ok(match &e.kind {
             ExprKind::Number(n) => Value::Num(*n),
             ExprKind::Bool(b) => Value::Bool(*b),

@@ -51,8 +51,9 @@ pub struct EvalOptions {
     pub max_depth: usize,
     /// Most objects a scene may produce (guards exponential recursion).
     pub max_objects: usize,
-    /// Most evaluation steps (statements, properties, directives, loop iterations and macro
-    /// calls, counted together) one load may take: a budget for the whole evaluation, so that
+    /// Most evaluation steps (statements, properties, directives, loop iterations, macro
+    /// calls, the operations of expressions and the tests of `#if` and `#switch` clauses,
+    /// counted together) one load may take: a budget for the whole evaluation, so that
     /// nested loops or exponential recursion that each stay under their own limits still end.
     pub max_steps: u64,
     /// The render's memory limit (bytes), as given to `prepare`: images that would not fit in
