@@ -380,3 +380,43 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
         );
     }
 }
+
+/// A diagnostic keeps at most `MAX_DIAGNOSTIC_TEXT` bytes of its message, labels and help, with
+/// a note of how much it left out: 999 `#debug` messages of a 16 MiB string once held 16 GB
+/// (the load was killed at 2 GB), and an image named by such a string put it into its error.
+#[test]
+fn diagnostics_keep_a_bounded_part_of_long_strings() {
+    let max = sppm_lang::diag::MAX_DIAGNOSTIC_TEXT;
+    let l = load(
+        "#declare S = \"ab\";\n#for (I, 1, 20) #declare S = S + S; #end\n\
+         #for (I, 1, 50) #debug S #end\n\
+         sphere { <0, 0, 0>, 1 material { diffuse texture { image S } } }\n",
+        &EvalOptions::default(),
+    );
+    let notes: Vec<_> = l
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == sppm_lang::diag::Severity::Note)
+        .collect();
+    assert_eq!(notes.len(), 50);
+    for d in &notes {
+        assert!(
+            d.message.len() <= max && d.message.ends_with("MiB more not shown)"),
+            "{} bytes: {}",
+            d.message.len(),
+            &d.message[d.message.len().saturating_sub(60)..]
+        );
+    }
+    let e = l
+        .diagnostics
+        .iter()
+        .find(|d| d.is_error())
+        .expect("the image error");
+    for text in [&e.message, &e.label]
+        .into_iter()
+        .chain(e.help.as_ref())
+        .chain(e.labels.iter().map(|(_, l)| l))
+    {
+        assert!(text.len() <= max, "{} bytes", text.len());
+    }
+}

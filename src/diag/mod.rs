@@ -85,11 +85,42 @@ pub struct Diagnostic {
     pub trace: Vec<(Span, String)>,
 }
 
+/// The most bytes a diagnostic keeps of its message, a label or its help: a scene can put a
+/// string of megabytes into a message (`#debug S`, an image named by a long string), and a
+/// thousand such messages would hold gigabytes and take minutes to print.
+pub const MAX_DIAGNOSTIC_TEXT: usize = 8 << 10;
+
+/// `text` cut to at most [`MAX_DIAGNOSTIC_TEXT`] bytes (at a character boundary), ending in a
+/// note of how much was left out; copies only what it keeps.
+pub fn clip_text(text: &str) -> String {
+    if text.len() <= MAX_DIAGNOSTIC_TEXT {
+        return text.to_string();
+    }
+    // Room for the note (at most 40 bytes).
+    let mut cut = MAX_DIAGNOSTIC_TEXT - 64;
+    while !text.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    format!(
+        "{}… ({} more not shown)",
+        &text[..cut],
+        size_text((text.len() - cut) as u64)
+    )
+}
+
+fn clip(text: String) -> String {
+    if text.len() <= MAX_DIAGNOSTIC_TEXT {
+        text
+    } else {
+        clip_text(&text)
+    }
+}
+
 impl Diagnostic {
     pub fn error(span: Span, message: impl Into<String>) -> Self {
         Self {
             severity: Severity::Error,
-            message: message.into(),
+            message: clip(message.into()),
             span,
             label: String::new(),
             labels: Vec::new(),
@@ -113,17 +144,17 @@ impl Diagnostic {
     }
 
     pub fn with_label(mut self, label: impl Into<String>) -> Self {
-        self.label = label.into();
+        self.label = clip(label.into());
         self
     }
 
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
-        self.help = Some(help.into());
+        self.help = Some(clip(help.into()));
         self
     }
 
     pub fn with_extra(mut self, span: Span, label: impl Into<String>) -> Self {
-        self.labels.push((span, label.into()));
+        self.labels.push((span, clip(label.into())));
         self
     }
 
@@ -161,8 +192,8 @@ impl Error {
 
     pub fn at(self, span: Span) -> Diagnostic {
         Diagnostic {
-            label: self.label,
-            help: self.help,
+            label: clip(self.label),
+            help: self.help.map(clip),
             ..Diagnostic::error(span, self.message)
         }
     }

@@ -280,7 +280,12 @@ impl Evaluator {
     /// the load.
     fn message(&mut self, kind: MessageKind, value: &Expr, span: Span) -> SourceResult<()> {
         let v = self.eval(value)?;
-        let text = match v.show() {
+        // A string is cut to what a diagnostic keeps before it is copied (see `clip_text`).
+        let text = match &v {
+            Value::Str(s) => Some(crate::diag::clip_text(s)),
+            v => v.show(),
+        };
+        let text = match text {
             Some(t) => t,
             None => {
                 return Err(vec![
