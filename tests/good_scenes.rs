@@ -731,3 +731,44 @@ fn directions_of_huge_and_tiny_vectors_are_unit() {
     }
     assert_eq!(found, 2);
 }
+
+/// Small things a POV-Ray file does: lengths of tiny vectors (`vlength` scales as `vnormalize`
+/// does: `<1e-200, 1e-200, 0>` once had length 0), a form feed between statements (whitespace,
+/// as in POV-Ray), and `#debug` lines ending in `\n` (the message is that line, without an
+/// empty one after it).
+#[test]
+fn tiny_lengths_form_feeds_and_debug_lines() {
+    let l = load(
+        "#declare L = vlength(<3e-200, 4e-200, 0>) * 1e200;\n\u{0C}\
+         #debug \"L = \" + str(L) + \"\\n\"\n\
+         sphere { <0, 0, 0>, L }\n",
+    );
+    let s = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+    match s.objects[0].shape {
+        Shape::Sphere { radius, .. } => assert!((radius - 5.0).abs() < 1e-12, "{radius}"),
+        ref other => panic!("{other:?}"),
+    }
+    assert_eq!(l.diagnostics[0].message, "L = 5");
+}
+
+/// A string literal longer than the strings a scene may build is refused at the literal (with
+/// a memory limit that lets a file of its size be parsed).
+#[test]
+fn string_literals_beyond_the_string_limit_are_errors() {
+    let text = format!(
+        "#declare S = \"{}\";\nsphere {{ <0, 0, 0>, 1 }}\n",
+        "a".repeat(sppm_lang::eval::MAX_STRING_BYTES + 1)
+    );
+    let options = sppm_lang::EvalOptions {
+        memory_limit: Some(4 << 30),
+        ..Default::default()
+    };
+    let l = sppm_lang::load_source("test.scn", &text, &options);
+    let e = l
+        .diagnostics
+        .iter()
+        .find(|d| d.is_error())
+        .expect("an error");
+    assert!(e.message.contains("more than the limit"), "{}", e.message);
+    assert_eq!(e.span.start as usize, "#declare S = ".len());
+}

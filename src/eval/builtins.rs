@@ -42,6 +42,17 @@ pub const FUNCTIONS: &[&str] = &[
     "str",
 ];
 
+/// The length of `v`, scaled by its largest component first (as [`unit`]): `<1e-200, 1e-200,
+/// 0>` has a length, though its squared length underflows.
+fn length(v: DVec3) -> f64 {
+    let m = v.abs().max_element();
+    if m > 0.0 && m.is_finite() {
+        m * (v / m).length()
+    } else {
+        v.length()
+    }
+}
+
 /// The unit vector along `v`, scaled by its largest component first so that neither its
 /// squared length overflows (`<1e160, 0, 0>`) nor underflows (`<1e-160, 0, 0>`); `None` for a
 /// zero vector (or one with a component that is not finite).
@@ -223,8 +234,8 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
         "radians" => num(n(args, 0)?.to_radians()),
         "degrees" => num(n(args, 0)?.to_degrees()),
         "vlength" => match &args[0] {
-            Value::Vec2(a) => num(a.length()),
-            _ => num(v(args, 0)?.length()),
+            Value::Vec2(a) => num(length(a.extend(0.0))),
+            _ => num(length(v(args, 0)?)),
         },
         "vnormalize" => {
             let a = v(args, 0)?;

@@ -285,6 +285,11 @@ impl Evaluator {
             Value::Str(s) => Some(crate::diag::clip_text(s)),
             v => v.show(),
         };
+        // POV-Ray's messages end their lines with `\n`; a diagnostic is a line of its own.
+        let text = text.map(|t| match t.strip_suffix('\n') {
+            Some(line) => line.to_string(),
+            None => t,
+        });
         let text = match text {
             Some(t) => t,
             None => {

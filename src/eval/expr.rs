@@ -37,7 +37,21 @@ impl Evaluator {
         Ok(match &e.kind {
             ExprKind::Number(n) => Value::Num(*n),
             ExprKind::Bool(b) => Value::Bool(*b),
-            ExprKind::Str(s) => Value::Str(s.clone()),
+            ExprKind::Str(s) => {
+                if s.len() > super::MAX_STRING_BYTES {
+                    return Err(vec![
+                        Error::new(format!(
+                            "this string is {} bytes, more than the limit of {} bytes",
+                            s.len(),
+                            super::MAX_STRING_BYTES
+                        ))
+                        .label("too long")
+                        .help("keep long data in a file the scene reads (an image, a mesh)")
+                        .at(e.span),
+                    ]);
+                }
+                Value::Str(s.clone())
+            }
             ExprKind::Ident(name) => self.lookup(name, e.span)?,
             ExprKind::Vector(parts) => {
                 if parts.len() > 3 {

@@ -55,7 +55,11 @@ impl Evaluator {
         // All the text one load reads (the scene and every include, also the same file included
         // again in a loop) is bounded by one file's limit.
         let budget = crate::files::MAX_SOURCE_BYTES.saturating_sub(self.source_bytes);
-        if budget == 0 {
+        // A file that would fit alone but not in what is left says so (its own size is not
+        // the problem).
+        let beyond_total = budget < crate::files::MAX_SOURCE_BYTES
+            && std::fs::metadata(&resolved).is_ok_and(|m| m.is_file() && m.len() > budget);
+        if budget == 0 || beyond_total {
             return Err(vec![
                 Error::new(format!(
                     "the scene and its includes read more than {} bytes in all",
