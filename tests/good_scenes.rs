@@ -772,3 +772,34 @@ fn string_literals_beyond_the_string_limit_are_errors() {
     assert!(e.message.contains("more than the limit"), "{}", e.message);
     assert_eq!(e.span.start as usize, "#declare S = ".len());
 }
+
+/// POV-Ray's `&` and `|` are `&&` and `||`, and its conditional `c ? a : b` groups to the right
+/// and evaluates only the branch it takes; a chain too long to evaluate is refused like any
+/// long expression.
+#[test]
+fn povray_logic_operators_and_the_conditional() {
+    let l = load(
+        "#declare A = true;\n#declare B = false;\n\
+         #declare C = A & !B ? 2 : 3;\n\
+         #declare D = B | false ? 10 : B ? 20 : 30;\n\
+         #declare E = A ? 1 : 1 / 0;\n\
+         sphere { <C, D, E>, (A | B ? 1 : 2) }\n",
+    );
+    let s = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+    match s.objects[0].shape {
+        Shape::Sphere { center, radius } => {
+            assert_eq!(center, DVec3::new(2.0, 30.0, 1.0));
+            assert_eq!(radius, 1.0);
+        }
+        ref other => panic!("{other:?}"),
+    }
+    let chain = format!("#declare X = {}1;\n", "0 ? 1 : ".repeat(50_000));
+    let l = load_source("chain.scn", &chain, &EvalOptions::default());
+    let e: Vec<_> = l.diagnostics.iter().filter(|d| d.is_error()).collect();
+    assert_eq!(e.len(), 1);
+    assert!(
+        e[0].message.contains("expression too long"),
+        "{}",
+        e[0].message
+    );
+}

@@ -154,6 +154,15 @@ impl Evaluator {
                 self.charge(super::work_of(&va) + super::work_of(&vb), e.span)?;
                 binary(*op, va, vb).at(e.span)?
             }
+            ExprKind::Conditional(parts) => {
+                // Only the chosen branch is evaluated (a recursive macro's base case stops it).
+                let [cond, then, otherwise] = &**parts;
+                if self.eval(cond)?.truthy().at(cond.span)? {
+                    self.eval(then)?
+                } else {
+                    self.eval(otherwise)?
+                }
+            }
             ExprKind::Index(base, index) => {
                 let vb = self.eval(base)?;
                 let i = self.eval(index)?.num().at(index.span)?;

@@ -185,6 +185,8 @@ pub enum ExprKind {
     },
     Unary(UnOp, Box<Expr>),
     Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// `condition ? then : otherwise`.
+    Conditional(Box<[Expr; 3]>),
     Index(Box<Expr>, Box<Expr>),
     Field(Box<Expr>, Name),
 }

@@ -39,6 +39,8 @@ fn describe(rule: Rule) -> &'static str {
         Rule::add | Rule::sub | Rule::mul | Rule::div => "an operator",
         Rule::le | Rule::ge | Rule::eq | Rule::ne | Rule::lt | Rule::gt => "an operator",
         Rule::and | Rule::or => "an operator",
+        Rule::qmark => "`?`",
+        Rule::colon => "`:`",
         Rule::neg | Rule::pos | Rule::not => "an operator",
         Rule::rgb => "`rgb`",
         Rule::index => "`[`",

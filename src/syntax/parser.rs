@@ -298,6 +298,12 @@ impl Cx {
         // generated scene (most expressions are single numbers and names).
         let e = if n == 1 {
             self.primary(pair.into_inner().next().expect("one term"))
+        } else if pair
+            .clone()
+            .into_inner()
+            .any(|p| p.as_rule() == Rule::qmark)
+        {
+            self.conditional(pair.into_inner())
         } else {
             self.pratt(pair.into_inner())
         };
@@ -305,7 +311,33 @@ impl Cx {
         e
     }
 
-    fn pratt(&self, pairs: Pairs<Rule>) -> Expr {
+    /// A chain `c ? a : d ? b : e` from its terms: the parts between `?` and `:` parsed on
+    /// their own, folded from the right.
+    fn conditional(&self, pairs: Pairs<Rule>) -> Expr {
+        let mut parts = vec![Vec::new()];
+        for p in pairs {
+            match p.as_rule() {
+                Rule::qmark | Rule::colon => parts.push(Vec::new()),
+                _ => parts.last_mut().expect("a part").push(p),
+            }
+        }
+        // `cond, then, cond, then, ..., otherwise` (the grammar gives an odd count).
+        let mut parts: Vec<Expr> = parts
+            .into_iter()
+            .map(|ps| self.pratt(ps.into_iter()))
+            .collect();
+        let mut e = parts.pop().expect("the last part");
+        while let (Some(then), Some(cond)) = (parts.pop(), parts.pop()) {
+            let span = cond.span.join(e.span);
+            e = Expr {
+                kind: ExprKind::Conditional(Box::new([cond, then, e])),
+                span,
+            };
+        }
+        e
+    }
+
+    fn pratt<'a>(&self, pairs: impl Iterator<Item = Pair<'a, Rule>>) -> Expr {
         PRATT
             .map_primary(|p| self.primary(p))
             .map_prefix(|op, rhs| {
