@@ -803,3 +803,17 @@ fn povray_logic_operators_and_the_conditional() {
         e[0].message
     );
 }
+
+/// A declared camera named inside a camera block, as POV-Ray writes it, is the block's start:
+/// the properties after it change it.
+#[test]
+fn a_declared_camera_inside_a_camera_block_starts_it() {
+    let s = scene(
+        "#declare Cam = camera { location <1, 2, -3> look_at <0, 1, 0> fov 30 }\n\
+         camera { Cam fov 50 }\n\
+         sphere { <0, 0, 0>, 1 }\n",
+    );
+    assert_eq!(s.camera.location, DVec3::new(1.0, 2.0, -3.0));
+    assert_eq!(s.camera.look_at, DVec3::new(0.0, 1.0, 0.0));
+    assert_eq!(s.camera.fov, 50.0);
+}

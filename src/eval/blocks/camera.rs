@@ -89,7 +89,19 @@ impl Sink for CameraBuilder {
         }
         Ok(())
     }
+    /// A declared camera (`camera { Cam fov 30 }`, as in POV-Ray): every property is taken
+    /// from it, and the properties after it change them.
+    fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
+        match v {
+            Value::Camera(c) => {
+                self.0 = *c;
+                Ok(())
+            }
+            v => Err(super::unexpected(self, &v, span, self.positional_help())),
+        }
+    }
     fn positional_help(&self) -> &'static str {
-        "a camera takes `location`, `look_at`, `up`, `fov`, `aperture`, `focus_distance`"
+        "a camera takes a declared camera (first: it sets every property), `location`, \
+         `look_at`, `up`, `fov`, `aperture`, `focus_distance`"
     }
 }
