@@ -216,7 +216,7 @@ impl ObjectBuilder {
                                 s.kind()
                             ))
                             .label("unsupported emitter")
-                            .help("use a quad, disk, sphere or triangle")
+                            .help("use a quad, disk, sphere, triangle or mesh (or an `object` of one)")
                             .at(p.span),
                         ]);
                     }
