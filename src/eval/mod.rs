@@ -116,7 +116,7 @@ fn nesting_limit(stack: usize) -> usize {
 
 /// "1 GiB", "256 MiB": a stack size in words.
 fn stack_words(bytes: usize) -> String {
-    if bytes >= 1 << 30 && bytes % (1 << 30) == 0 {
+    if bytes >= 1 << 30 && bytes.is_multiple_of(1 << 30) {
         format!("{} GiB", bytes >> 30)
     } else {
         format!("{} MiB", bytes >> 20)
