@@ -47,7 +47,8 @@ use scope::{Binding, Frame};
 pub struct EvalOptions {
     /// Most iterations one `#while` or `#for` loop may run.
     pub max_iterations: u64,
-    /// Deepest macro call nesting (recursion depth).
+    /// Deepest macro call nesting (recursion depth). Lowered, with a word when a scene
+    /// reaches it, when the evaluation's stack had to be smaller (see [`MAX_EVAL_NESTING`]).
     pub max_depth: usize,
     /// Most objects a scene may produce (guards exponential recursion).
     pub max_objects: usize,
@@ -63,7 +64,9 @@ pub struct EvalOptions {
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
-/// build); the thread gets [`EVAL_STACK`], three times what this many levels need.
+/// build; a macro call with its `#if` body, about 2.9 KB of resident stack, dev build); the
+/// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
+/// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
 /// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
 /// readable and bounded); past it, one last note says the rest were left out.
