@@ -244,3 +244,44 @@ fn a_name_used_only_where_evaluation_did_not_go_is_not_unused() {
         ["unused declaration `Alpha`"]
     );
 }
+
+/// Numbers in messages are short (at most 6 significant digits, exponent form when huge): a
+/// value of 1e300 is not printed with 301 digits, `0.1 + 0.2` is `0.3`. A literal too large for
+/// a number is named as such (not blamed on a division or a power).
+#[test]
+fn messages_show_numbers_short() {
+    let big = format!("1{}", "0".repeat(329));
+    let cases: &[(&str, &str)] = &[
+        ("settings { max_depth 1e300 }", "found 1e300"),
+        ("settings { max_depth 0.1 + 0.2 }", "found 0.3"),
+        ("settings { resolution <1e300, 10> }", "found 1e300 x 10"),
+        (
+            "sphere { <0, 0, 0>, 1 material { diffuse texture { marble turbulence -1e300 } } }",
+            "found -1e300",
+        ),
+        (
+            "sphere { <0, 0, 0>, 1 material { diffuse texture { noise octaves 0.1 + 0.2 } } }",
+            "found 0.3",
+        ),
+        (
+            "sphere { <0, 0, 0>, 1 material { diffuse texture { gradient <0, 1, 0> color_map { [0, rgb 0] [1e300, rgb 1] } } } }",
+            "found 1e300",
+        ),
+        ("#declare A = ln(-1e300);", "found -1e300"),
+        (
+            "revolve { profile bezier { <0, 0>, <0.35, 0>, <0.4, 0.3>, <0.15, 0.6> } angle 1e300, 1 }",
+            "found 1e300, 1",
+        ),
+        ("#declare A = asin(1e300);", "found 1e300"),
+    ];
+    for (text, wanted) in cases {
+        let (message, help) = first_error(text);
+        assert!(message.contains(wanted), "{text}: {message}");
+        assert!(!message.contains("00000000"), "{text}: {message}");
+        assert!(!message.contains("0000000000004"), "{text}: {message}");
+        assert!(!help.is_empty(), "{text}: no help");
+    }
+    let (message, help) = first_error(&format!("#declare A = {big};"));
+    assert!(message.contains("too large"), "{message}");
+    assert!(!help.contains("division"), "{help}");
+}

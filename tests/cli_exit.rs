@@ -943,3 +943,47 @@ fn absurd_chart_flags_are_usage_errors_at_once() {
     // Only the reference: no chart, CSV or temporary file.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
+
+/// Under an address-space limit too low for the evaluation's 1 GiB stack (`prlimit --as`, as
+/// `ulimit -v` sets it), a smaller stack is used: scenes load as usual, and only a nesting
+/// deeper than the smaller stack holds is refused, with the reason. Skipped without `prlimit`.
+#[test]
+fn a_limited_address_space_evaluates_on_a_smaller_stack() {
+    let prlimit = std::path::Path::new("/usr/bin/prlimit");
+    if !prlimit.exists() {
+        eprintln!("skipped: no /usr/bin/prlimit");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |depth: usize| {
+        let path = dir.path().join(format!("r{depth}.scn"));
+        std::fs::write(
+            &path,
+            format!(
+                "#macro R(N) #if (N > 0) R(N - 1) #end #end\nR({depth})\n\
+                 background rgb 1\nsphere {{ <0, 0, 0>, 1 material {{ diffuse rgb 0.5 }} }}\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let check = |path: &std::path::Path| {
+        Command::new(prlimit)
+            .arg("--as=1000000000")
+            .arg(env!("CARGO_BIN_EXE_sppm-lang"))
+            .args(["check", "--max-depth", "100000"])
+            .arg(path)
+            .output()
+            .expect("run prlimit")
+    };
+    let out = check(&scene(10));
+    succeeded(&out);
+    // 30 000 macro calls and their `#if` bodies: 60 000 levels, more than 256 MiB holds.
+    let out = check(&scene(30_000));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("nested deeper than 25000"), "{err}");
+    assert!(err.contains("address space is limited"), "{err}");
+    assert!(err.contains("ulimit -v"), "{err}");
+    assert!(err.contains(":2:"), "not located: {err}");
+}

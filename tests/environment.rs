@@ -718,3 +718,32 @@ fn the_sky_below_the_horizon_sends_no_photons_above_the_ground() {
         );
     }
 }
+
+/// An environment's radiance is each pixel times `intensity`, within the colour limit: a built
+/// scene whose brightest pixel times the intensity passes 1e9 is refused when prepared (in f32
+/// the product overflows, and the map would render black), one at the limit is accepted.
+#[test]
+fn an_environment_brighter_than_the_colour_limit_is_refused() {
+    let mut s = sphere_scene(8, ColorParam::Const(DVec3::splat(0.5)), 1.0);
+    let bright = |intensity: f64| Background::Environment {
+        image: Arc::new(ImageData {
+            path: "bright".into(),
+            width: 2,
+            height: 2,
+            pixels: vec![[8.5e37, 8.5e37, 8.5e37]; 4],
+        }),
+        intensity,
+        transform: DAffine3::IDENTITY,
+    };
+    let opts = RenderOptions::default();
+    for intensity in [1e9, 1.0] {
+        s.background = bright(intensity);
+        let e = sppm_lang::render::prepare(&s, &opts)
+            .err()
+            .expect("refused");
+        assert!(e.message.contains("brightest pixel"), "{}", e.message);
+        assert!(!e.message.contains("0000000000"), "{}", e.message);
+    }
+    s.background = bright(0.5e9 / 8.5e37);
+    assert!(sppm_lang::render::prepare(&s, &opts).is_ok());
+}

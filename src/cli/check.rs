@@ -96,7 +96,7 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
             sources: loaded.sources,
             dependencies: loaded.dependencies,
         }),
-        _ => Err(ExitCode::from(EXIT_SCENE_ERROR)),
+        _ => Err(ExitCode::from(failure_code(&loaded))),
     }
 }
 
@@ -188,7 +188,17 @@ pub fn run(
             out(&text);
             ExitCode::SUCCESS
         }
-        _ => ExitCode::from(EXIT_SCENE_ERROR),
+        _ => ExitCode::from(failure_code(&loaded)),
+    }
+}
+
+/// The exit code of a load that failed: a usage error when the evaluation could not start in
+/// this environment (as for a scene file that cannot be read), else a scene error.
+pub fn failure_code(loaded: &sppm_lang::Loaded) -> u8 {
+    if loaded.environment {
+        EXIT_USAGE
+    } else {
+        EXIT_SCENE_ERROR
     }
 }
 

@@ -122,7 +122,10 @@ pub(super) fn positive(a: &Arg, what: &str) -> SourceResult<f64> {
     if x <= 0.0 {
         return Err(range_error(
             a.span,
-            format!("{what} must be positive, found {x}"),
+            format!(
+                "{what} must be positive, found {}",
+                crate::diag::short_number(x)
+            ),
             "use a number greater than 0",
         ));
     }
@@ -134,7 +137,11 @@ pub(super) fn count(a: &Arg, what: &str, max: f64) -> SourceResult<f64> {
     if x < 1.0 || x.fract() != 0.0 || x > max {
         return Err(range_error(
             a.span,
-            format!("{what} must be a whole number from 1 to {max}, found {x}"),
+            format!(
+                "{what} must be a whole number from 1 to {}, found {}",
+                crate::diag::short_number(max),
+                super::expr::exact_number(x)
+            ),
             "use a whole number in range",
         ));
     }

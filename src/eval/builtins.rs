@@ -147,8 +147,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if !(-1.0..=1.0).contains(&x) {
                 return Err((
                     0,
-                    Error::new(format!("`{name}` needs an argument in [-1, 1], found {x}"))
-                        .help(format!("clamp it first: `{name}(clamp(x, -1, 1))`")),
+                    Error::new(format!(
+                        "`{name}` needs an argument in [-1, 1], found {}",
+                        short_number(x)
+                    ))
+                    .help(format!("clamp it first: `{name}(clamp(x, -1, 1))`")),
                 ));
             }
             num(if name == "asin" { x.asin() } else { x.acos() })
@@ -173,8 +176,11 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
             if x <= 0.0 {
                 return Err((
                     0,
-                    Error::new(format!("`{name}` needs a positive number, found {x}"))
-                        .help("a logarithm is defined above 0 only: check the argument first"),
+                    Error::new(format!(
+                        "`{name}` needs a positive number, found {}",
+                        short_number(x)
+                    ))
+                    .help("a logarithm is defined above 0 only: check the argument first"),
                 ));
             }
             num(if name == "ln" { x.ln() } else { x.log10() })

@@ -381,16 +381,24 @@ impl Evaluator {
         }
         self.charge(args.len() as u64 * super::STEPS_PER_ELEMENT, call_span)?;
         let depth = self.macro_depth();
-        if depth >= self.options.max_depth {
-            return Err(vec![
-                Error::new(format!(
-                    "macro calls nested deeper than {} (recursion without end?)",
+        if depth >= self.max_macro_depth() {
+            let limit = self.max_macro_depth();
+            let label = format!("call to `{}` at depth {}", name.text, depth + 1);
+            let e = match self.stack_limit() {
+                Some((why, help)) if limit < self.options.max_depth => Error::new(format!(
+                    "macro calls nested deeper than {limit} (lowered from `--max-depth` {}: {why})",
                     self.options.max_depth
                 ))
-                .label(format!("call to `{}` at depth {}", name.text, depth + 1))
-                .help("make sure the recursion stops (e.g. `#if (Depth > 0)`), or raise the limit with `--max-depth`")
-                .at(call_span),
-            ]);
+                .help(help),
+                _ => Error::new(format!(
+                    "macro calls nested deeper than {limit} (recursion without end?)"
+                ))
+                .help(
+                    "make sure the recursion stops (e.g. `#if (Depth > 0)`), or raise the \
+                     limit with `--max-depth`",
+                ),
+            };
+            return Err(vec![e.label(label).at(call_span)]);
         }
         self.check_nesting(call_span)?;
         let mut vars = HashMap::new();

@@ -35,6 +35,17 @@ impl Evaluator {
             self.tick(e.span)?;
         }
         Ok(match &e.kind {
+            ExprKind::Number(n) if !n.is_finite() => {
+                return Err(vec![
+                    Error::new("this number is too large to be represented")
+                        .label("beyond the largest number, about 1.8e308")
+                        .help(
+                            "numbers are 64-bit floating point: write one of at most about \
+                             1.8e308 (use an exponent, e.g. `1e300`)",
+                        )
+                        .at(e.span),
+                ]);
+            }
             ExprKind::Number(n) => Value::Num(*n),
             ExprKind::Bool(b) => Value::Bool(*b),
             ExprKind::Str(s) => {
@@ -363,7 +374,7 @@ fn index_value(v: Value, i: f64) -> Result<Value, Error> {
 
 /// A number as short as it reads, unless that form would hide its fraction
 /// (`0.9999999999999999` is not shown as `1`).
-fn exact_number(x: f64) -> String {
+pub(super) fn exact_number(x: f64) -> String {
     let short = short_number(x);
     if x.fract() != 0.0 && short.parse::<f64>().is_ok_and(|s| s.fract() == 0.0) {
         format!("{x}")

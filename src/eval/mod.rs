@@ -47,7 +47,8 @@ use scope::{Binding, Frame};
 pub struct EvalOptions {
     /// Most iterations one `#while` or `#for` loop may run.
     pub max_iterations: u64,
-    /// Deepest macro call nesting (recursion depth).
+    /// Deepest macro call nesting (recursion depth). Lowered, with a word when a scene
+    /// reaches it, when the evaluation's stack had to be smaller (see [`MAX_EVAL_NESTING`]).
     pub max_depth: usize,
     /// Most objects a scene may produce (guards exponential recursion).
     pub max_objects: usize,
@@ -64,7 +65,9 @@ pub struct EvalOptions {
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
-/// build); the thread gets [`EVAL_STACK`], three times what this many levels need.
+/// build; a macro call with its `#if` body, about 2.9 KB of resident stack, dev build); the
+/// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
+/// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
 /// Memory the parser takes per byte of scene text at most, while it parses (its token list and
 /// the syntax tree): measured 126 bytes for a 10 MB array literal of one-digit numbers, the
@@ -108,6 +111,29 @@ pub(crate) fn work_of(v: &Value) -> u64 {
 /// Stack of the evaluation thread. Reserved, not touched: only what the nesting uses is paid.
 const EVAL_STACK: usize = 1 << 30;
 
+/// Stacks tried for the evaluation thread, largest first. Under an address-space limit
+/// (`ulimit -v`) the largest may not be reservable (a render's thread pool reserves its own
+/// stacks first); a smaller one holds fewer levels (see [`nesting_limit`]).
+const EVAL_STACKS: [usize; 3] = [EVAL_STACK, 1 << 28, 1 << 26];
+
+/// Stack bytes allowed per level of nesting: [`EVAL_STACK`] shared by [`MAX_EVAL_NESTING`]
+/// levels (about 10.7 KB, three times what a level of blocks takes).
+const STACK_PER_LEVEL: usize = EVAL_STACK / MAX_EVAL_NESTING;
+
+/// Deepest nesting of blocks and macro calls a stack of `stack` bytes holds.
+fn nesting_limit(stack: usize) -> usize {
+    (stack / STACK_PER_LEVEL).min(MAX_EVAL_NESTING)
+}
+
+/// "1 GiB", "256 MiB": a stack size in words.
+fn stack_words(bytes: usize) -> String {
+    if bytes >= 1 << 30 && bytes.is_multiple_of(1 << 30) {
+        format!("{} GiB", bytes >> 30)
+    } else {
+        format!("{} MiB", bytes >> 20)
+    }
+}
+
 impl Default for EvalOptions {
     fn default() -> Self {
         Self {
@@ -130,6 +156,10 @@ pub struct Loaded {
     /// Every file the load read or tried to read (the scene, includes, images, meshes), also
     /// when it failed: what `watch` watches.
     pub dependencies: Vec<PathBuf>,
+    /// The evaluation could not start in this environment (no thread with a stack could be
+    /// made, as under a low address-space limit): not the scene's fault. The diagnostics say
+    /// what failed.
+    pub environment: bool,
 }
 
 impl Loaded {
@@ -157,28 +187,95 @@ pub fn load_source(name: &str, text: &str, options: &EvalOptions) -> Loaded {
 }
 
 fn load_source_at(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
-    // Deep but bounded recursion: run on a thread whose stack holds MAX_EVAL_NESTING levels.
-    std::thread::scope(|s| {
-        std::thread::Builder::new()
-            .name("sppm-eval".into())
-            .stack_size(EVAL_STACK)
-            .spawn_scoped(s, || run(path, name, text, options))
-            .ok()
-            .and_then(|h| h.join().ok())
-    })
-    .unwrap_or_else(|| Loaded {
-        scene: None,
-        diagnostics: vec![Diagnostic::error(
-            Span::detached(),
-            "evaluation failed unexpectedly",
-        )],
-        sources: SourceMap::new(),
-        dependencies: vec![path.to_path_buf()],
+    load_with_stacks(path, name, text, options, &EVAL_STACKS)
+}
+
+/// Evaluates on a thread of the first stack size in `stacks` that can be reserved: deep but
+/// bounded recursion, each stack holding [`nesting_limit`] levels.
+fn load_with_stacks(
+    path: &Path,
+    name: &str,
+    text: String,
+    options: &EvalOptions,
+    stacks: &[usize],
+) -> Loaded {
+    on_eval_thread(path, stacks, &|stack| {
+        run(path, name, text.clone(), options, stack)
     })
 }
 
-fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
+/// Runs `work` (given the stack size) on a thread of the first stack in `stacks` that can be
+/// made. A panic in `work` becomes an internal-error diagnostic; no stack at all, an
+/// environment error.
+fn on_eval_thread(
+    path: &Path,
+    stacks: &[usize],
+    work: &(dyn Fn(usize) -> Loaded + Sync),
+) -> Loaded {
+    let failed = |d: Diagnostic, environment: bool| Loaded {
+        scene: None,
+        diagnostics: vec![d],
+        sources: SourceMap::new(),
+        dependencies: vec![path.to_path_buf()],
+        environment,
+    };
+    let mut last_error = None;
+    for &stack in stacks {
+        let outcome = std::thread::scope(|s| {
+            std::thread::Builder::new()
+                .name("sppm-eval".into())
+                .stack_size(stack)
+                .spawn_scoped(s, || work(stack))
+                .map(|h| h.join())
+        });
+        match outcome {
+            Ok(Ok(loaded)) => return loaded,
+            Ok(Err(panic)) => {
+                let what = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "no message".into());
+                return failed(
+                    Diagnostic::error(
+                        Span::detached(),
+                        format!("internal error: the evaluation panicked ({what})"),
+                    )
+                    .with_help(
+                        "this is a bug in sppm-lang, not in the scene; please report it with \
+                         the scene that shows it",
+                    ),
+                    false,
+                );
+            }
+            Err(e) => last_error = Some(e),
+        }
+    }
+    let smallest = stacks.iter().copied().min().unwrap_or(0);
+    let why = last_error.map_or_else(|| "no stack size to try".to_string(), |e| e.to_string());
+    failed(
+        Diagnostic::error(
+            Span::detached(),
+            format!(
+                "cannot start the evaluation: no thread with a stack of {} could be made ({why})",
+                stack_words(smallest)
+            ),
+        )
+        .with_help(format!(
+            "raise the address-space limit (`ulimit -v`, `prlimit --as`) or the thread limit: \
+             evaluating needs {} of address space for its stack ({} for the deepest nesting), \
+             besides the rest of the program (and, for `render`, a stack per thread of \
+             `--threads`)",
+            stack_words(smallest),
+            stack_words(EVAL_STACK)
+        )),
+        true,
+    )
+}
+
+fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usize) -> Loaded {
     let mut ev = Evaluator::new(options.clone());
+    ev.stack = stack;
     ev.source_bytes = text.len() as u64;
     let file = ev.sources.add(path, name.to_string(), text.clone());
     ev.main_file = Some(file);
@@ -202,6 +299,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions) -> Loaded {
         scene: (!has_errors).then_some(ev.scene),
         diagnostics,
         sources: ev.sources,
+        environment: false,
     }
 }
 
@@ -243,6 +341,8 @@ pub(crate) struct Evaluator {
     main_file: Option<crate::span::FileId>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
+    /// The evaluation thread's stack (bytes): it bounds the nesting ([`nesting_limit`]).
+    stack: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
     parts_copied: usize,
     /// Bytes of scene text read so far (the scene and every include).
@@ -323,6 +423,7 @@ impl Evaluator {
             messages: 0,
             main_file: None,
             block_depth: 0,
+            stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,
             mentions: None,
@@ -418,20 +519,47 @@ impl Evaluator {
         Ok(())
     }
 
-    /// Fails when one more level of blocks or macro calls would pass [`MAX_EVAL_NESTING`].
+    /// Fails when one more level of blocks or macro calls would pass [`MAX_EVAL_NESTING`], or
+    /// the lower limit of a smaller stack ([`Evaluator::stack_limit`]).
     pub(crate) fn check_nesting(&self, span: Span) -> SourceResult<()> {
-        if self.block_depth + self.frames.len() >= MAX_EVAL_NESTING {
-            return Err(vec![
-                Error::new(format!(
-                    "blocks, directive bodies and macro calls nested deeper than \
-                     {MAX_EVAL_NESTING}"
+        let limit = nesting_limit(self.stack);
+        if self.block_depth + self.frames.len() >= limit {
+            let message =
+                format!("blocks, directive bodies and macro calls nested deeper than {limit}");
+            let e = match self.stack_limit() {
+                Some((why, help)) => Error::new(format!(
+                    "{message} (lowered from {MAX_EVAL_NESTING}: {why})"
                 ))
-                .label("one level too deep")
-                .help("make sure the recursion stops (e.g. `#if (Depth > 0)`)")
-                .at(span),
-            ]);
+                .help(help),
+                None => Error::new(message)
+                    .help("make sure the recursion stops (e.g. `#if (Depth > 0)`)"),
+            };
+            return Err(vec![e.label("one level too deep").at(span)]);
         }
         Ok(())
+    }
+
+    /// When the stack is smaller than [`EVAL_STACK`] (the address space was limited): why the
+    /// nesting limit is lower than usual, and what raises it.
+    pub(crate) fn stack_limit(&self) -> Option<(String, String)> {
+        (nesting_limit(self.stack) < MAX_EVAL_NESTING).then(|| {
+            (
+                format!(
+                    "the address space is limited, so the evaluation's stack is {} instead of {}",
+                    stack_words(self.stack),
+                    stack_words(EVAL_STACK)
+                ),
+                "raise the address-space limit (`ulimit -v`, `prlimit --as`; and for `render` \
+                 use fewer `--threads`) so the full stack can be reserved, or make the \
+                 recursion stop sooner"
+                    .to_string(),
+            )
+        })
+    }
+
+    /// The deepest macro nesting allowed: `--max-depth`, unless the stack holds fewer levels.
+    pub(crate) fn max_macro_depth(&self) -> usize {
+        self.options.max_depth.min(nesting_limit(self.stack))
     }
 
     fn step(&mut self, items: &[Item], i: &mut usize, sink: &mut dyn Sink) -> SourceResult<()> {
@@ -549,5 +677,93 @@ impl Evaluator {
                 sink.positional(self, v, e.span)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stack no thread can have (beyond any address space): its spawn fails as it does
+    /// under a low `ulimit -v`.
+    const UNRESERVABLE: usize = 1 << 60;
+
+    /// A macro recursing `depth` levels (each level a macro call and an `#if` body).
+    fn recursion(depth: usize) -> String {
+        format!(
+            "#macro R(N) #if (N > 0) R(N - 1) #end #end\nR({depth})\n\
+             sphere {{ <0, 0, 0>, 1 material {{ diffuse rgb 0.5 }} }}\n"
+        )
+    }
+
+    fn load(text: &str, max_depth: usize, stacks: &[usize]) -> Loaded {
+        let options = EvalOptions {
+            max_depth,
+            ..EvalOptions::default()
+        };
+        load_with_stacks(Path::new("t.scn"), "t.scn", text.into(), &options, stacks)
+    }
+
+    #[test]
+    fn a_smaller_stack_is_used_when_the_largest_cannot_be_reserved() {
+        let l = load(&recursion(200), 256, &[UNRESERVABLE, 1 << 26]);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        assert!(l.scene.is_some() && !l.environment);
+    }
+
+    #[test]
+    fn a_smaller_stack_lowers_the_macro_depth_and_says_why_when_reached() {
+        let limit = nesting_limit(1 << 26);
+        assert!(limit < 10_000, "{limit}");
+        // Under the lowered limit: no word about it.
+        let l = load(&recursion(limit / 4), 100_000, &[UNRESERVABLE, 1 << 26]);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        assert!(l.diagnostics.is_empty(), "{:?}", l.diagnostics);
+        // Deeper: the error names the lowered limit and the address space.
+        let l = load(&recursion(10_000), 100_000, &[UNRESERVABLE, 1 << 26]);
+        assert!(l.has_errors() && !l.environment);
+        let d = &l.diagnostics[0];
+        assert!(!d.span.is_detached(), "{d:?}");
+        assert!(d.message.contains(&limit.to_string()), "{}", d.message);
+        assert!(d.message.contains("address space"), "{}", d.message);
+        assert!(d.message.contains("64 MiB"), "{}", d.message);
+        assert!(d.help.as_deref().unwrap().contains("ulimit -v"), "{d:?}");
+        // A `--max-depth` below the lowered limit is the user's own: the usual message.
+        let l = load(&recursion(10_000), 100, &[UNRESERVABLE, 1 << 26]);
+        let d = &l.diagnostics[0];
+        assert!(d.message.contains("deeper than 100 ("), "{}", d.message);
+        assert!(!d.message.contains("address space"), "{}", d.message);
+    }
+
+    #[test]
+    fn the_full_stack_keeps_the_full_limits() {
+        assert_eq!(nesting_limit(EVAL_STACK), MAX_EVAL_NESTING);
+        assert_eq!(nesting_limit(1 << 28), MAX_EVAL_NESTING / 4);
+        let l = load(&recursion(10_000), 100_000, &EVAL_STACKS);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    }
+
+    #[test]
+    fn a_panic_in_the_evaluation_is_an_internal_error() {
+        let l = on_eval_thread(Path::new("t.scn"), &EVAL_STACKS, &|_| panic!("on purpose"));
+        assert!(l.scene.is_none() && !l.environment);
+        let d = &l.diagnostics[0];
+        assert!(d.message.contains("internal error"), "{}", d.message);
+        assert!(d.message.contains("on purpose"), "{}", d.message);
+        assert!(d.help.is_some());
+    }
+
+    #[test]
+    fn no_stack_at_all_is_an_environment_error_with_help() {
+        let l = load(&recursion(2), 256, &[UNRESERVABLE]);
+        assert!(l.environment && l.scene.is_none());
+        let d = &l.diagnostics[0];
+        assert!(d.is_error());
+        assert!(
+            d.message.contains("cannot start the evaluation"),
+            "{}",
+            d.message
+        );
+        assert!(d.help.as_deref().unwrap().contains("ulimit -v"), "{d:?}");
     }
 }

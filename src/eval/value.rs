@@ -259,5 +259,7 @@ pub struct EnvDef {
     pub path: PathBuf,
     pub path_span: Span,
     pub intensity: f64,
+    /// Where `intensity` was written (`None`: the default 1).
+    pub intensity_span: Option<Span>,
     pub transform: DAffine3,
 }

@@ -66,6 +66,11 @@ pub struct ImageData {
     pub pixels: Vec<[f32; 3]>,
 }
 
+/// The largest channel value of `image` (0 for an empty one; NaN pixels are skipped).
+pub fn brightest_pixel(image: &ImageData) -> f64 {
+    image.pixels.iter().flatten().fold(0.0f32, |m, &c| m.max(c)) as f64
+}
+
 /// A triangle mesh as read from an OBJ file (all groups merged).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct MeshData {

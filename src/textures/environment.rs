@@ -48,7 +48,8 @@ pub struct EnvSample {
 /// An equirectangular environment, ready for lookups and sampling.
 #[derive(Debug, Clone)]
 pub struct EnvironmentMap {
-    /// The image times `intensity`, non-finite or negative values set to 0.
+    /// The image times `intensity`, non-finite or negative values set to 0 (validation keeps
+    /// every product within the colour limit).
     image: ImageData,
     world_to_env: Mat3A,
     env_to_world: Mat3A,

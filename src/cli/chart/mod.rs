@@ -29,7 +29,7 @@ use sppm_lang::scene::{ColorSpace, DEFAULT_PHOTONS, Integrator, Scene, load_imag
 
 use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths, to_f32};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use super::{EXIT_USAGE, LimitArgs, SizeArgs};
 use outputs::{Floors, output_files, read_csv, write_outputs};
 
 /// A method whose error ends within this factor of the reference's noise is "at the floor":
@@ -248,7 +248,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
     print_diagnostics(&loaded);
     let mut scene = match &loaded.scene {
         Some(s) if !loaded.has_errors() => s.clone(),
-        _ => return Ok(ExitCode::from(EXIT_SCENE_ERROR)),
+        _ => return Ok(ExitCode::from(super::check::failure_code(&loaded))),
     };
     super::check_not_an_input(&outputs, &loaded.dependencies)?;
     args.size.apply_to(&mut scene)?;

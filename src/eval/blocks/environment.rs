@@ -20,7 +20,7 @@ use crate::syntax::ast::Name;
 pub(super) struct EnvBuilder {
     /// The resolved image path and where it was written.
     image: Option<(PathBuf, Span)>,
-    intensity: Option<f64>,
+    intensity: Option<(f64, Span)>,
     rotation: Option<DAffine3>,
 }
 
@@ -49,7 +49,8 @@ impl EnvBuilder {
         Ok(Value::Environment(Rc::new(EnvDef {
             path,
             path_span,
-            intensity: self.intensity.unwrap_or(1.0),
+            intensity: self.intensity.map_or(1.0, |(k, _)| k),
+            intensity_span: self.intensity.map(|(_, s)| s),
             transform: self.rotation.unwrap_or(DAffine3::IDENTITY).inverse(),
         })))
     }
@@ -84,7 +85,7 @@ impl Sink for EnvBuilder {
                         "use an intensity of at most 1e9",
                     ));
                 }
-                self.intensity = Some(k);
+                self.intensity = Some((k, args[0].span));
             }
             "rotate" => {
                 self.rotation =

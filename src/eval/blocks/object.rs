@@ -417,7 +417,9 @@ impl Sink for ObjectBuilder {
                     return Err(range_error(
                         args[0].span.join(args[1].span),
                         format!(
-                            "sweep angles must satisfy start < end ≤ start + 360, found {a}, {b}"
+                            "sweep angles must satisfy start < end ≤ start + 360, found {}, {}",
+                            short_number(a),
+                            short_number(b)
                         ),
                         "e.g. `angle 0, 270`",
                     ));

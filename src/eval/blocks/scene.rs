@@ -1,12 +1,12 @@
 //! The top level: the scene itself as a sink (objects, lights, camera, settings, background).
 
 use super::{Sink, unexpected};
-use crate::diag::{Diagnostic, SourceResult};
+use crate::diag::{Diagnostic, Error, SourceResult, short_number};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, surface_color};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::Value;
-use crate::scene::Background;
+use crate::scene::{Background, MAX_COLOR};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -66,6 +66,32 @@ impl Sink for TopSink {
                 // Colour, as an image texture's: PNG and JPEG are sRGB-decoded (as Mitsuba's
                 // `envmap` and pbrt's `imagemap` light read them); EXR and HDR are linear.
                 let image = ev.image(&e.path, false, e.path_span)?;
+                // The radiance is pixel times intensity: each within the colour limit, as an
+                // emission's is (beyond it, f32 products overflow to infinity).
+                let brightest = crate::scene::brightest_pixel(&image);
+                if brightest * e.intensity > MAX_COLOR {
+                    let at = e.intensity_span.unwrap_or(e.path_span);
+                    return Err(vec![
+                        Error::new(format!(
+                            "the environment's brightest pixel ({}) times its intensity ({}) is \
+                             {}, above the colour limit 1e9",
+                            short_number(brightest),
+                            short_number(e.intensity),
+                            short_number(brightest * e.intensity)
+                        ))
+                        .label(if e.intensity_span.is_some() {
+                            "too bright for this image"
+                        } else {
+                            "this image is too bright"
+                        })
+                        .help(format!(
+                            "use an intensity of at most {} with this image (write \
+                             `intensity ...` in the environment), or scale the image down",
+                            short_number(MAX_COLOR / brightest)
+                        ))
+                        .at(at),
+                    ]);
+                }
                 ev.scene.background = Background::Environment {
                     image,
                     intensity: e.intensity,

@@ -77,7 +77,9 @@ impl Sink for SettingsBuilder {
                         return Err(range_error(
                             span,
                             format!(
-                                "resolution must be whole numbers from 1 to {MAX_RESOLUTION_SIDE}, found {w} x {h}"
+                                "resolution must be whole numbers from 1 to {MAX_RESOLUTION_SIDE}, found {} x {}",
+                                crate::eval::expr::exact_number(w),
+                                crate::eval::expr::exact_number(h)
                             ),
                             "e.g. `resolution <512, 512>`",
                         ));

@@ -306,7 +306,10 @@ impl Sink for TextureBuilder {
                 if t < 0.0 {
                     return Err(range_error(
                         args[0].span,
-                        format!("turbulence must not be negative, found {t}"),
+                        format!(
+                            "turbulence must not be negative, found {}",
+                            crate::diag::short_number(t)
+                        ),
                         "use a number ≥ 0",
                     ));
                 }
@@ -393,7 +396,10 @@ impl Sink for ColorMapBuilder {
         if !(0.0..=1.0).contains(&pos) {
             return Err(range_error(
                 span,
-                format!("color map positions must be in [0, 1], found {pos}"),
+                format!(
+                    "color map positions must be in [0, 1], found {}",
+                    crate::diag::short_number(pos)
+                ),
                 "use a position from 0 to 1",
             ));
         }

@@ -294,6 +294,29 @@ impl Scene {
                 "use an intensity from 0 to 1e9",
             ));
         }
+        if let Background::Environment {
+            image, intensity, ..
+        } = &self.background
+        {
+            let brightest = crate::scene::brightest_pixel(image);
+            if brightest * intensity > MAX_COLOR {
+                return Err(invalid(
+                    Span::detached(),
+                    format!(
+                        "the environment's brightest pixel ({}) times its intensity ({}) is {}, \
+                         above the colour limit 1e9",
+                        fmt(brightest),
+                        fmt(*intensity),
+                        fmt(brightest * intensity)
+                    ),
+                    "out of range",
+                    &format!(
+                        "use an intensity of at most {} with this image",
+                        fmt(MAX_COLOR / brightest)
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 }
