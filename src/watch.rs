@@ -84,15 +84,23 @@ impl DependencyWatcher {
         let mut wanted = HashSet::new();
         for file in files {
             let path = normalize(file.as_ref());
-            match path.parent().filter(|d| d.is_dir()) {
-                Some(dir) => {
-                    wanted.insert(dir.to_path_buf());
+            // A symbolic link's file is edited where the link points (its own folder sees no
+            // change): the target is watched too.
+            let target = std::fs::symlink_metadata(&path)
+                .ok()
+                .filter(|m| m.file_type().is_symlink())
+                .and_then(|_| path.canonicalize().ok());
+            for path in std::iter::once(path).chain(target) {
+                match path.parent().filter(|d| d.is_dir()) {
+                    Some(dir) => {
+                        wanted.insert(dir.to_path_buf());
+                    }
+                    None => {
+                        self.missing.insert(path.clone());
+                    }
                 }
-                None => {
-                    self.missing.insert(path.clone());
-                }
+                self.files.insert(path);
             }
-            self.files.insert(path);
         }
         for dir in self.dirs.difference(&wanted).cloned().collect::<Vec<_>>() {
             let _ = self.watcher.unwatch(&dir);
@@ -255,6 +263,26 @@ mod tests {
         );
         fs::write(&scene, "2").unwrap();
         assert_eq!(wait_once(&mut w), Some(vec![normalize(&scene)]));
+    }
+
+    /// A scene (or include, image, mesh) reached through a symbolic link: an edit of the
+    /// file it points to, in another folder, is a change.
+    #[cfg(unix)]
+    #[test]
+    fn edits_through_a_symbolic_link_are_seen() {
+        let dir = tempfile::tempdir().unwrap();
+        let (real, links) = (dir.path().join("real"), dir.path().join("links"));
+        fs::create_dir(&real).unwrap();
+        fs::create_dir(&links).unwrap();
+        let target = real.join("s.scn");
+        fs::write(&target, "1").unwrap();
+        let link = links.join("s.scn");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&link]).unwrap();
+        settle(&mut w);
+        fs::write(&target, "2").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&target)]));
     }
 
     #[test]
