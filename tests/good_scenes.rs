@@ -817,3 +817,20 @@ fn a_declared_camera_inside_a_camera_block_starts_it() {
     assert_eq!(s.camera.look_at, DVec3::new(0.0, 1.0, 0.0));
     assert_eq!(s.camera.fov, 50.0);
 }
+
+/// A spotlight whose `point_at` is very close to it still has that direction (the difference
+/// is scaled before it is normalised; its squared length underflowed to zero and the render
+/// refused the light with a catch-all message).
+#[test]
+fn a_spotlight_aimed_at_a_very_close_point_has_that_direction() {
+    let s = scene(
+        "spotlight { <0, 0, 0> point_at <0, -1e-300, 0> intensity 10 }\n\
+         plane { <0, 1, 0>, -2 }\n",
+    );
+    match &s.lights[0] {
+        sppm_lang::scene::Light::Spot { direction, .. } => {
+            assert_eq!(*direction, DVec3::NEG_Y)
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -199,13 +199,17 @@ fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
 /// refused with a fix.
 #[test]
 fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
-    let spot = |cone_angle: f64, falloff_angle: f64, intensity: f64| Light::Spot {
-        position: DVec3::new(0.0, 0.5, 0.0),
-        direction: DVec3::NEG_Y,
-        intensity: DVec3::splat(intensity),
-        cone_angle,
-        falloff_angle,
-        span: Span::detached(),
+    let aimed =
+        |direction: DVec3, cone_angle: f64, falloff_angle: f64, intensity: f64| Light::Spot {
+            position: DVec3::new(0.0, 0.5, 0.0),
+            direction,
+            intensity: DVec3::splat(intensity),
+            cone_angle,
+            falloff_angle,
+            span: Span::detached(),
+        };
+    let spot = |cone_angle, falloff_angle, intensity| {
+        aimed(DVec3::NEG_Y, cone_angle, falloff_angle, intensity)
     };
     for light in [
         spot(200.0, 100.0, 1.0),
@@ -227,6 +231,18 @@ fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
         ..Default::default()
     };
     render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
+    // A direction too short for f32 (or to square) is still a direction: the light shines
+    // down, as the unit one does (it was zero in f32, and the light's direction NaN).
+    let mean = |direction: DVec3| {
+        let mut scene = furnace_emitting(4);
+        scene.lights.push(aimed(direction, 60.0, 30.0, 1.0));
+        let out = render(&scene, &ok, &AtomicBool::new(false), &mut |_| {}).unwrap();
+        out.image.mean()
+    };
+    assert_eq!(mean(DVec3::NEG_Y * 1e-200), mean(DVec3::NEG_Y));
+    let mut scene = furnace_emitting(4);
+    scene.lights.push(aimed(DVec3::ZERO, 60.0, 30.0, 1.0));
+    assert!(refused(&scene).contains("spot light"));
 }
 
 /// The prepared scene's queries take any ray and any primitive number a caller gives: a ray

@@ -91,14 +91,15 @@ impl LightBuilder {
                     .at(span),
             ]);
         };
-        if target == position {
+        // (Scaled before it is normalised: a `point_at` 1e-300 away still gives a direction.)
+        let Some(direction) = crate::eval::builtins::unit(target - position) else {
             return Err(vec![
                 Error::new("the spotlight points at its own position")
                     .label("`point_at` is the light's position")
                     .help("point it at what it lights, e.g. `point_at <0, 0, 0>` for a light above")
                     .at(span),
             ]);
-        }
+        };
         let (cone, cspan) = self.angle.unwrap_or((30.0, span));
         if !(cone > 0.0 && cone <= 90.0) {
             return Err(range_error(
@@ -124,7 +125,7 @@ impl LightBuilder {
         }
         Ok(Value::Light(Box::new(Light::Spot {
             position,
-            direction: (target - position).normalize(),
+            direction,
             intensity,
             cone_angle: cone,
             falloff_angle: fall,
