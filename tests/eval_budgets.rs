@@ -253,14 +253,7 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
         e[0].contains("1024x1024") && e[0].contains("memory limit of 20.0 MiB"),
         "{e:?}"
     );
-    let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
-    assert!(
-        d.help
-            .as_deref()
-            .is_some_and(|h| h.contains("--memory-limit")),
-        "{:?}",
-        d.help
-    );
+    let d = error_naming_the_memory_limit(&l);
     let text = std::fs::read_to_string(&scene).unwrap();
     let at = d.span.start as usize;
     assert_eq!(
@@ -369,16 +362,22 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
                 && e[0].contains("7.00 MiB"),
             "{e:?}"
         );
-        let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
+        let d = error_naming_the_memory_limit(&l);
         assert_eq!(d.span.start as usize, at, "{:?}", d.span);
-        assert!(
-            d.help
-                .as_deref()
-                .is_some_and(|h| h.contains("--memory-limit")),
-            "{:?}",
-            d.help
-        );
     }
+}
+
+/// The load's first error, whose help must name `--memory-limit`.
+fn error_naming_the_memory_limit(l: &Loaded) -> &sppm_lang::Diagnostic {
+    let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
+    assert!(
+        d.help
+            .as_deref()
+            .is_some_and(|h| h.contains("--memory-limit")),
+        "{:?}",
+        d.help
+    );
+    d
 }
 
 /// A diagnostic keeps at most `MAX_DIAGNOSTIC_TEXT` bytes of its message, labels and help, with
