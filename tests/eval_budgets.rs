@@ -328,15 +328,17 @@ fn many_unknown_names_among_many_declarations_are_reported_quickly() {
 }
 
 /// A scene file or include whose text would take more memory to parse than the memory limit
-/// allows (`PARSE_BYTES_PER_BYTE` per byte: the parser's token list and syntax tree) is refused
-/// before it is parsed, at the `#include` or the file's start, with a help naming
-/// `--memory-limit`: a 40 MB array literal once took the parser past 5 GB and aborted the
-/// process under a 4 GB address-space cap.
+/// allows (`syntax::parse_memory`: its lexemes times the most the parser was measured to take
+/// per lexeme) is refused before it is parsed, at the `#include` or the file's start, with a
+/// help naming `--memory-limit`: a 40 MB array literal once took the parser past 5 GB and
+/// aborted the process under a 4 GB address-space cap.
 #[test]
 fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    // 64 KiB of text: 8 MiB to parse at 128 bytes per byte.
+    // 64 KiB of text, 65 544 lexemes: 20.0 MiB to parse at 320 bytes each.
     let big = format!("#declare A = [{}1];\n", "1,".repeat(32 * 1024));
+    let need = sppm_lang::syntax::parse_memory(&big);
+    assert_eq!(need, 65_544 * sppm_lang::syntax::PARSE_BYTES_PER_LEXEME);
     std::fs::write(dir.path().join("big.scn"), &big).unwrap();
     let main = dir.path().join("main.scn");
     std::fs::write(&main, "#include \"big.scn\"\n").unwrap();
@@ -348,18 +350,19 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
         sppm_lang::load_file(path, &options).unwrap()
     };
     // Room to parse it (and no limit given: the default of 2 GiB): loaded.
-    for limit in [None, Some(9 << 20)] {
+    for limit in [None, Some(need)] {
         let l = with(&main, limit);
         assert!(errors(&l).is_empty(), "{limit:?}: {:?}", errors(&l));
     }
     // Not enough: refused at the include, and as the scene file itself at its start.
     for (path, at) in [(&main, "#include ".len()), (&dir.path().join("big.scn"), 0)] {
-        let l = with(path, Some(7 << 20));
+        let l = with(path, Some(19 << 20));
         let e = errors(&l);
         assert_eq!(e.len(), 1, "{e:?}");
         assert!(
             e[0].contains("too large to parse within the memory limit")
-                && e[0].contains("7.00 MiB"),
+                && e[0].contains("20.0 MiB")
+                && e[0].contains("19.0 MiB"),
             "{e:?}"
         );
         let d = error_naming_the_memory_limit(&l);

@@ -131,9 +131,8 @@ impl Evaluator {
         self.run_included(file, text, key, span, sink)
     }
 
-    /// Parses and runs an included file's text; errors inside get the include as their trace.
     /// Parses a file's text, unless parsing it would need more memory than the load may use
-    /// ([`super::PARSE_BYTES_PER_BYTE`] per byte, against [`super::EvalOptions::memory_limit`]
+    /// ([`crate::syntax::parse_memory`], against [`super::EvalOptions::memory_limit`]
     /// or [`super::DEFAULT_PARSE_MEMORY`]): the error stands at `include` (the `#include` that
     /// reads the file) or, for the scene file itself, at its first character.
     pub(super) fn parse_within_memory(
@@ -146,7 +145,7 @@ impl Evaluator {
             .options
             .memory_limit
             .unwrap_or(super::DEFAULT_PARSE_MEMORY);
-        let need = (text.len() as u64).saturating_mul(super::PARSE_BYTES_PER_BYTE);
+        let need = crate::syntax::parse_memory(text);
         if need > limit {
             let (what, label, span) = match include {
                 Some(span) => ("this included file", "included here", span),
@@ -156,28 +155,29 @@ impl Evaluator {
                     Span::new(file, 0, 0),
                 ),
             };
-            let most = limit / super::PARSE_BYTES_PER_BYTE;
+            // Sizes that round to the same text are given in bytes.
+            let (need_text, limit_text) = match (size_text(need), size_text(limit)) {
+                (a, b) if a == b => (format!("{need} bytes"), format!("{limit} bytes")),
+                pair => pair,
+            };
             return Err(vec![
                 Error::new(format!(
-                    "{what} is too large to parse within the memory limit: its {} of text would need \
-                     about {} to parse, more than the {} allowed",
+                    "{what} is too large to parse within the memory limit: its {} of text would \
+                     need up to {need_text} to parse, more than the {limit_text} allowed",
                     size_text(text.len() as u64),
-                    size_text(need),
-                    size_text(limit)
                 ))
                 .label(label)
-                .help(format!(
-                    "a scene file may hold up to {} of text at this limit: raise \
-                     `--memory-limit`, or make the many objects with a `#for` loop or a mesh \
-                     file (`mesh {{ \"file.obj\" }}`) instead of writing each one out",
-                    size_text(most)
-                ))
+                .help(
+                    "raise `--memory-limit`, or make the many objects with a `#for` loop or a \
+                     mesh file (`mesh { \"file.obj\" }`) instead of writing each one out",
+                )
                 .at(span),
             ]);
         }
         parse(file, text)
     }
 
+    /// Parses and runs an included file's text; errors inside get the include as their trace.
     fn run_included(
         &mut self,
         file: FileId,

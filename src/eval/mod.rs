@@ -69,10 +69,6 @@ pub struct EvalOptions {
 /// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
 /// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
-/// Memory the parser takes per byte of scene text at most, while it parses (its token list and
-/// the syntax tree): measured 126 bytes for a 10 MB array literal of one-digit numbers, the
-/// densest text, 76 for a file of `sphere { <x, y, z>, r }` lines, 51 for `#declare` lines.
-pub const PARSE_BYTES_PER_BYTE: u64 = 128;
 /// The memory limit parsing is held to when the caller gives none
 /// ([`EvalOptions::memory_limit`]): a render's default on a machine with 4 GiB or more.
 pub const DEFAULT_PARSE_MEMORY: u64 = 2 << 30;

@@ -95,7 +95,12 @@ impl Cx {
     }
 
     fn items(&self, pair: Pair<Rule>) -> Vec<Item> {
-        pair.into_inner().map(|p| self.item(p)).collect()
+        // Sized first: a long body's vector does not double past what it holds (it took the
+        // parse of a 16 MiB body of `x,` past 2.7 GB).
+        let inner = pair.into_inner();
+        let mut items = Vec::with_capacity(inner.len());
+        items.extend(inner.map(|p| self.item(p)));
+        items
     }
 
     fn item(&self, pair: Pair<Rule>) -> Item {
