@@ -75,6 +75,9 @@ pub const DEFAULT_PARSE_MEMORY: u64 = 2 << 30;
 /// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
 /// readable and bounded); past it, one last note says the rest were left out.
 pub const MAX_MESSAGES: usize = 1000;
+/// Most warnings one load keeps (a warning repeated by a loop or on every line of a generated
+/// file stays readable, and its memory bounded); past it, one note says the rest were left out.
+pub const MAX_WARNINGS: usize = 1000;
 /// Most errors one load counts before its evaluation stops, with a note that says so: a mistake
 /// repeated in a loop, in a macro called often or on every line of a generated file stays
 /// readable and quick to report. An error repeated at the same place (a macro's body, called
@@ -335,6 +338,8 @@ pub(crate) struct Evaluator {
     /// The scene's own file: only its declarations can be reported unused (an included file,
     /// a library, declares more than one scene uses).
     main_file: Option<crate::span::FileId>,
+    /// Warnings kept so far (see [`Evaluator::warn`]).
+    warning_count: usize,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// The evaluation thread's stack (bytes): it bounds the nesting ([`nesting_limit`]).
@@ -419,6 +424,7 @@ impl Evaluator {
             messages: 0,
             main_file: None,
             block_depth: 0,
+            warning_count: 0,
             stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,
@@ -426,8 +432,24 @@ impl Evaluator {
         }
     }
 
+    /// Keeps a warning, once per place and message, up to [`MAX_WARNINGS`]; past them, one
+    /// note says the rest were left out.
     pub(crate) fn warn(&mut self, d: Diagnostic) {
+        if self.warning_count >= MAX_WARNINGS {
+            if self.warning_count == MAX_WARNINGS {
+                self.warning_count += 1;
+                self.warnings.push(
+                    Diagnostic::note(
+                        d.span,
+                        format!("more than {MAX_WARNINGS} warnings: the rest are not shown"),
+                    )
+                    .with_label("this one and the later ones"),
+                );
+            }
+            return;
+        }
         if self.warned.insert((d.span, d.message.clone())) {
+            self.warning_count += 1;
             self.warnings.push(d);
         }
     }
