@@ -816,6 +816,27 @@ fn a_declared_camera_inside_a_camera_block_starts_it() {
     assert_eq!(s.camera.location, DVec3::new(1.0, 2.0, -3.0));
     assert_eq!(s.camera.look_at, DVec3::new(0.0, 1.0, 0.0));
     assert_eq!(s.camera.fov, 50.0);
+    // A declared camera starts from the defaults, not from the scene's camera so far (whose
+    // depth of field it took, and whose look_at made this one look at its own location).
+    let s = scene(
+        "camera { location <0, 0, -10> look_at <0, 0, -5> aperture 0.5 focus_distance 2 }\n\
+         #declare Side = camera { location <0, 0, -5> }\n\
+         camera { Side }\n\
+         sphere { <0, 0, 0>, 1 }\n",
+    );
+    assert_eq!(s.camera.look_at, DVec3::ZERO);
+    assert_eq!(s.camera.aperture, 0.0);
+    assert_eq!(s.camera.focus_distance, None);
+    // After a property or another camera it would drop them: an error at it.
+    for body in ["fov 50 Cam", "Cam Cam"] {
+        let l = load_source(
+            "t.scn",
+            &format!("#declare Cam = camera {{ fov 30 }}\ncamera {{ {body} }}\n"),
+            &EvalOptions::default(),
+        );
+        let e = l.diagnostics.iter().find(|d| d.is_error()).expect(body);
+        assert!(e.message.contains("comes first"), "{body}: {}", e.message);
+    }
 }
 
 /// A spotlight whose `point_at` is very close to it still has that direction (the difference

@@ -39,7 +39,15 @@ impl Evaluator {
         match &d.kind {
             DirectiveKind::Bind { name, value, local } => {
                 Self::bindable(name)?;
-                let v = match self.eval(value) {
+                // A declared camera stands on its own (as in POV-Ray): it starts from the
+                // defaults, not from the scene's camera so far.
+                self.camera_from_defaults = matches!(
+                    &value.kind,
+                    ExprKind::Block { kind, .. } if kind.text == "camera"
+                );
+                let v = self.eval(value);
+                self.camera_from_defaults = false;
+                let v = match v {
                     Ok(v) => v,
                     Err(e) => {
                         self.poisoned.insert(name.text.clone());

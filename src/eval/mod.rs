@@ -340,6 +340,9 @@ pub(crate) struct Evaluator {
     main_file: Option<crate::span::FileId>,
     /// Warnings kept so far (see [`Evaluator::warn`]).
     warning_count: usize,
+    /// Set while the value of a `#declare`/`#local` that is a camera block is evaluated: that
+    /// block starts from the default camera (taken by the block).
+    pub(crate) camera_from_defaults: bool,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// The evaluation thread's stack (bytes): it bounds the nesting ([`nesting_limit`]).
@@ -425,6 +428,7 @@ impl Evaluator {
             main_file: None,
             block_depth: 0,
             warning_count: 0,
+            camera_from_defaults: false,
             stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,

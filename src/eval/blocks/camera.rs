@@ -11,8 +11,14 @@ use crate::scene::Camera;
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
-/// Starts from the current camera: a `camera { ... }` block changes what it names.
-pub(super) struct CameraBuilder(pub(super) Camera);
+/// Starts from the current camera (a declared one: from the defaults): a `camera { ... }`
+/// block changes what it names.
+pub(super) struct CameraBuilder {
+    pub(super) camera: Camera,
+    /// Whether a property or a declared camera was given yet: a declared camera sets every
+    /// property, so it must come first.
+    given: bool,
+}
 
 static CAMERA_PROPS: [PropSpec; 6] = [
     p("location", 1, 1, "a point", "<0, 1, -5>"),
@@ -24,14 +30,21 @@ static CAMERA_PROPS: [PropSpec; 6] = [
 ];
 
 impl CameraBuilder {
+    pub(super) fn new(camera: Camera) -> Self {
+        Self {
+            camera,
+            given: false,
+        }
+    }
+
     pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
         // The scene's own check (the one `prepare` runs), reported here at the block.
-        if let Err(e) = self.0.validate() {
+        if let Err(e) = self.camera.validate() {
             return Err(vec![
                 Error::new(e.message).label(e.label).help(e.help).at(span),
             ]);
         }
-        Ok(Value::Camera(Box::new(self.0)))
+        Ok(Value::Camera(Box::new(self.camera)))
     }
 }
 
@@ -43,7 +56,8 @@ impl Sink for CameraBuilder {
         &CAMERA_PROPS
     }
     fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
-        let c = &mut self.0;
+        self.given = true;
+        let c = &mut self.camera;
         match kw.text.as_str() {
             "location" => c.location = vec3(&args[0])?,
             "look_at" => c.look_at = vec3(&args[0])?,
@@ -93,8 +107,18 @@ impl Sink for CameraBuilder {
     /// from it, and the properties after it change them.
     fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
+            Value::Camera(_) if self.given => Err(vec![
+                Error::new("a declared camera comes first in a camera block")
+                    .label("after other properties or another camera")
+                    .help(
+                        "it sets every property, so what comes before it would be lost: move \
+                         it to the start of the block (`camera { Cam fov 30 }`)",
+                    )
+                    .at(span),
+            ]),
             Value::Camera(c) => {
-                self.0 = *c;
+                self.camera = *c;
+                self.given = true;
                 Ok(())
             }
             v => Err(super::unexpected(self, &v, span, self.positional_help())),

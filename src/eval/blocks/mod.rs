@@ -142,9 +142,14 @@ impl Evaluator {
                 b.finish(span)
             }
             "camera" => {
-                let mut b = CameraBuilder(self.scene.camera.clone());
+                let start = if std::mem::take(&mut self.camera_from_defaults) {
+                    crate::scene::Camera::default()
+                } else {
+                    self.scene.camera.clone()
+                };
+                let mut b = CameraBuilder::new(start);
                 self.run_items(items, &mut b)?;
-                b.0.span = span;
+                b.camera.span = span;
                 b.finish(span)
             }
             "light" | "spotlight" => {
