@@ -160,6 +160,11 @@ pub(super) fn syntax_error(
             "`{}` is a reserved word (a property keyword); choose another name",
             &text[pos..pos + len]
         ));
+    } else if rest.starts_with('?') {
+        d = d.with_help(
+            "a conditional `c ? a : b` stands here only in parentheses: `(c ? a : b)` (in a \
+             block's body, inside `< >`, and as the middle part of another conditional)",
+        );
     } else if pos >= text.len() && expected_text.contains("`}`") {
         d = d.with_help("a block is not closed: add `}`");
     } else if rest.starts_with('{') {
