@@ -42,28 +42,8 @@ pub const FUNCTIONS: &[&str] = &[
     "str",
 ];
 
-/// The length of `v`, scaled by its largest component first (as [`unit`]): `<1e-200, 1e-200,
-/// 0>` has a length, though its squared length underflows.
-fn length(v: DVec3) -> f64 {
-    let m = v.abs().max_element();
-    if m > 0.0 && m.is_finite() {
-        m * (v / m).length()
-    } else {
-        v.length()
-    }
-}
-
-/// The unit vector along `v`, scaled by its largest component first so that neither its
-/// squared length overflows (`<1e160, 0, 0>`) nor underflows (`<1e-160, 0, 0>`); `None` for a
-/// zero vector (or one with a component that is not finite).
-pub(crate) fn unit(v: DVec3) -> Option<DVec3> {
-    let m = v.abs().max_element();
-    if !(m > 0.0 && m.is_finite()) {
-        return None;
-    }
-    let s = v / m;
-    Some(s / s.length())
-}
+use crate::geometry::scaled_length_f64 as length;
+pub(crate) use crate::geometry::scaled_unit as unit;
 
 /// Names of the built-in constants.
 pub const CONSTANTS: &[&str] = &["pi", "x", "y", "z"];

@@ -45,15 +45,14 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                 falloff_angle,
                 span,
             } => {
-                // Scaled before it is normalised, in f64: a direction of length 1e-50 is a
-                // direction, though it is zero in f32 (and its squared length underflows).
-                let m = direction.abs().max_element();
-                let direction = &(*direction / m).normalize();
+                // Normalised in f64 first: a direction of length 1e-50 is a direction, though
+                // it is zero in f32 (and its squared length underflows).
+                let unit = crate::geometry::scaled_unit(*direction);
+                let direction = &unit.unwrap_or(glam::DVec3::ZERO);
                 if !(position.is_finite()
                     && intensity.is_finite()
                     && intensity.min_element() >= 0.0
-                    && m > 0.0
-                    && direction.is_finite()
+                    && unit.is_some()
                     && *cone_angle > 0.0
                     && *cone_angle <= 90.0
                     && (0.0..=*cone_angle).contains(falloff_angle))

@@ -509,23 +509,19 @@ impl<'a> PreparedScene<'a> {
     /// other material.
     #[inline]
     pub fn glass_absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
+        self.glass_absorption_varying(sh).map(|(sigma, _)| sigma)
+    }
+
+    /// [`Self::glass_absorption`], and whether it comes from a texture (so that it differs
+    /// from point to point of the glass): one material lookup for both.
+    #[inline]
+    pub fn glass_absorption_varying(&self, sh: &SurfaceHit) -> Option<(Vec3A, bool)> {
         let m = *self.prim_material.get(sh.prim as usize)?;
         match self.glass.get(m as usize)? {
             GlassAbsorption::NotGlass => None,
-            GlassAbsorption::Constant(sigma) => Some(*sigma),
-            GlassAbsorption::Textured => Some(self.absorption(sh).unwrap_or(Vec3A::ZERO)),
+            GlassAbsorption::Constant(sigma) => Some((*sigma, false)),
+            GlassAbsorption::Textured => Some((self.absorption(sh).unwrap_or(Vec3A::ZERO), true)),
         }
-    }
-
-    /// Whether the glass at this hit takes its absorption from a texture (so that it differs
-    /// from point to point of the glass).
-    #[inline]
-    pub fn absorption_varies(&self, sh: &SurfaceHit) -> bool {
-        let m = self.prim_material.get(sh.prim as usize).copied();
-        matches!(
-            m.and_then(|m| self.glass.get(m as usize)),
-            Some(GlassAbsorption::Textured)
-        )
     }
 
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.

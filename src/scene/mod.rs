@@ -20,7 +20,7 @@ pub use assets::{
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{
     IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS, MAX_PIXELS,
-    MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
+    MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem, environment_too_bright,
 };
 
 use std::sync::Arc;

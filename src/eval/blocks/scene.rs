@@ -6,7 +6,7 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, surface_color};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::Value;
-use crate::scene::{Background, MAX_COLOR};
+use crate::scene::{Background, environment_too_bright};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -68,28 +68,21 @@ impl Sink for TopSink {
                 let image = ev.image(&e.path, false, e.path_span)?;
                 // The radiance is pixel times intensity: each within the colour limit, as an
                 // emission's is (beyond it, f32 products overflow to infinity).
-                let brightest = crate::scene::brightest_pixel(&image);
-                if brightest * e.intensity > MAX_COLOR {
+                if let Some((message, most)) = environment_too_bright(&image, e.intensity) {
                     let at = e.intensity_span.unwrap_or(e.path_span);
                     return Err(vec![
-                        Error::new(format!(
-                            "the environment's brightest pixel ({}) times its intensity ({}) is \
-                             {}, above the colour limit 1e9",
-                            short_number(brightest),
-                            short_number(e.intensity),
-                            short_number(brightest * e.intensity)
-                        ))
-                        .label(if e.intensity_span.is_some() {
-                            "too bright for this image"
-                        } else {
-                            "this image is too bright"
-                        })
-                        .help(format!(
-                            "use an intensity of at most {} with this image (write \
-                             `intensity ...` in the environment), or scale the image down",
-                            short_number(MAX_COLOR / brightest)
-                        ))
-                        .at(at),
+                        Error::new(message)
+                            .label(if e.intensity_span.is_some() {
+                                "too bright for this image"
+                            } else {
+                                "this image is too bright"
+                            })
+                            .help(format!(
+                                "use an intensity of at most {} with this image (write \
+                                 `intensity ...` in the environment), or scale the image down",
+                                short_number(most)
+                            ))
+                            .at(at),
                     ]);
                 }
                 ev.scene.background = Background::Environment {

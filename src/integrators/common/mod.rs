@@ -27,12 +27,15 @@ pub(crate) fn attenuate_inside(
     beta: &mut Vec3A,
 ) {
     let inner_side = ray.d.dot(sh.hit.n) > 0.0;
-    let sigma = match inner_side.then(|| scene.glass_absorption(sh)).flatten() {
+    let sigma = match inner_side
+        .then(|| scene.glass_absorption_varying(sh))
+        .flatten()
+    {
         // A textured absorption is looked up at both ends of the segment: where the path
         // passed into the glass (the medium it carries) and here. Their mean is the same
         // whichever way the segment is crossed, so camera paths and photons absorb alike.
-        Some(glass) if scene.absorption_varies(sh) => 0.5 * (glass + medium),
-        Some(glass) => glass,
+        Some((glass, true)) => 0.5 * (glass + medium),
+        Some((glass, false)) => glass,
         None => medium,
     };
     if sigma != Vec3A::ZERO {

@@ -36,6 +36,27 @@ pub fn color_problem(c: DVec3) -> Option<String> {
     None
 }
 
+/// When an environment map's brightest pixel times `intensity` (its brightest radiance) is
+/// above [`MAX_COLOR`]: what is wrong, and the largest intensity that fits this image.
+pub fn environment_too_bright(
+    image: &crate::scene::ImageData,
+    intensity: f64,
+) -> Option<(String, f64)> {
+    let brightest = crate::scene::brightest_pixel(image);
+    (brightest * intensity > MAX_COLOR).then(|| {
+        (
+            format!(
+                "the environment's brightest pixel ({}) times its intensity ({}) is {}, above \
+                 the colour limit 1e9",
+                fmt(brightest),
+                fmt(intensity),
+                fmt(brightest * intensity)
+            ),
+            MAX_COLOR / brightest,
+        )
+    })
+}
+
 const COLOR_HELP: &str = "use finite components from 0 to 1e9";
 
 fn color(c: DVec3, what: &str, span: Span) -> Result<(), Invalid> {

@@ -19,7 +19,9 @@ use crate::span::Span;
 
 mod appearance;
 
-pub use appearance::{IOR_RANGE, MAX_COLOR, MAX_OCTAVES, MIN_ROUGHNESS, color_problem};
+pub use appearance::{
+    IOR_RANGE, MAX_COLOR, MAX_OCTAVES, MIN_ROUGHNESS, color_problem, environment_too_bright,
+};
 
 /// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
 /// f32, the renderer's precision along rays.
@@ -297,25 +299,14 @@ impl Scene {
         if let Background::Environment {
             image, intensity, ..
         } = &self.background
+            && let Some((message, most)) = environment_too_bright(image, *intensity)
         {
-            let brightest = crate::scene::brightest_pixel(image);
-            if brightest * intensity > MAX_COLOR {
-                return Err(invalid(
-                    Span::detached(),
-                    format!(
-                        "the environment's brightest pixel ({}) times its intensity ({}) is {}, \
-                         above the colour limit 1e9",
-                        fmt(brightest),
-                        fmt(*intensity),
-                        fmt(brightest * intensity)
-                    ),
-                    "out of range",
-                    &format!(
-                        "use an intensity of at most {} with this image",
-                        fmt(MAX_COLOR / brightest)
-                    ),
-                ));
-            }
+            return Err(invalid(
+                Span::detached(),
+                message,
+                "out of range",
+                &format!("use an intensity of at most {} with this image", fmt(most)),
+            ));
         }
         Ok(())
     }
