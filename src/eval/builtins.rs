@@ -42,8 +42,8 @@ pub const FUNCTIONS: &[&str] = &[
     "str",
 ];
 
-use crate::geometry::scaled_length_f64 as length;
-pub(crate) use crate::geometry::scaled_unit as unit;
+use crate::scene::scaled_length_f64 as length;
+pub(crate) use crate::scene::scaled_unit as unit;
 
 /// Names of the built-in constants.
 pub const CONSTANTS: &[&str] = &["pi", "x", "y", "z"];

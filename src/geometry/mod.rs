@@ -20,29 +20,6 @@ pub fn scaled_length(v: glam::Vec3A) -> f32 {
     }
 }
 
-/// The unit vector along `v` (f64), scaled by its largest component first so that neither its
-/// squared length overflows (`<1e160, 0, 0>`) nor underflows (`<1e-160, 0, 0>`); `None` for a
-/// zero vector (or one with a component that is not finite).
-pub fn scaled_unit(v: glam::DVec3) -> Option<glam::DVec3> {
-    let m = v.abs().max_element();
-    if !(m > 0.0 && m.is_finite()) {
-        return None;
-    }
-    let s = v / m;
-    Some(s / s.length())
-}
-
-/// [`scaled_length`] in f64: `<1e-200, 1e-200, 0>` has a length, though its squared length
-/// underflows.
-pub fn scaled_length_f64(v: glam::DVec3) -> f64 {
-    let m = v.abs().max_element();
-    if m > 0.0 && m.is_finite() {
-        m * (v / m).length()
-    } else {
-        v.length()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

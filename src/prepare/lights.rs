@@ -47,7 +47,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
             } => {
                 // Normalised in f64 first: a direction of length 1e-50 is a direction, though
                 // it is zero in f32 (and its squared length underflows).
-                let unit = crate::geometry::scaled_unit(*direction);
+                let unit = crate::scene::scaled_unit(*direction);
                 let direction = &unit.unwrap_or(glam::DVec3::ZERO);
                 if !(position.is_finite()
                     && intensity.is_finite()

@@ -25,6 +25,29 @@ pub use validate::{
 
 use std::sync::Arc;
 
+/// The unit vector along `v` (f64), scaled by its largest component first so that neither its
+/// squared length overflows (`<1e160, 0, 0>`) nor underflows (`<1e-160, 0, 0>`); `None` for a
+/// zero vector (or one with a component that is not finite).
+pub fn scaled_unit(v: glam::DVec3) -> Option<glam::DVec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    let s = v / m;
+    Some(s / s.length())
+}
+
+/// The length of `v` (f64), scaled by its largest component first: `<1e-200, 1e-200, 0>` has a length, though its squared length
+/// underflows.
+pub fn scaled_length_f64(v: glam::DVec3) -> f64 {
+    let m = v.abs().max_element();
+    if m > 0.0 && m.is_finite() {
+        m * (v / m).length()
+    } else {
+        v.length()
+    }
+}
+
 use glam::{DAffine3, DVec2, DVec3};
 
 use crate::span::Span;
