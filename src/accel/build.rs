@@ -45,6 +45,9 @@ pub(super) struct Item {
     pub index: usize,
     /// A mesh triangle: leaves test these four at a time (see `split`'s cost).
     pub triangle: bool,
+    /// A shape whose intersection costs far more than a box test (a boxed or CSG shape: a
+    /// revolve's segment, a patch, a transformed object): see `split`'s small nodes.
+    pub heavy: bool,
 }
 
 impl Item {
@@ -54,6 +57,7 @@ impl Item {
             centroid: bounds.centroid(),
             index,
             triangle: false,
+            heavy: false,
         }
     }
 
@@ -280,7 +284,12 @@ fn split(
         count: n as u32,
         axis: 0,
     };
-    if n <= MAX_LEAF {
+    // A small node is a leaf without a search for a split, unless it holds two or more heavy
+    // items: a leaf tests each of its shapes, where separate leaves let the wide nodes' box
+    // tests (eight at once) cull the heavy ones a ray passes by. The SAH below still keeps
+    // them together where their boxes nearly coincide (a split would cull nothing).
+    let small = n <= MAX_LEAF;
+    if small && (depth >= median_depth || items.iter().filter(|it| it.heavy).count() <= 1) {
         return (node, None);
     }
     let ext = cb.diagonal();
@@ -304,6 +313,10 @@ fn split(
         items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         n / 2
     } else if span <= 0.0 || !span.is_finite() {
+        if small {
+            // Heavy items on one centroid: a split would cull nothing.
+            return (node, None);
+        }
         n / 2
     } else {
         // Binned SAH.
@@ -328,7 +341,7 @@ fn split(
         }
         let leaf_cost = bounds.surface_area() * (cost(n) - visit);
         if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
-            if best.0.is_infinite() {
+            if best.0.is_infinite() && n > MAX_LEAF {
                 // All centroids in one bin: split in the middle of the ordering.
                 items.sort_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
                 n / 2
@@ -396,6 +409,7 @@ mod tests {
     fn copied(items: &[Item]) -> Vec<Item> {
         let copy = |it: &Item| Item {
             triangle: it.triangle,
+            heavy: it.heavy,
             ..Item::new(it.bounds, it.index)
         };
         items.iter().map(copy).collect()
@@ -458,5 +472,43 @@ mod tests {
             }
             assert_eq!(next, all.len());
         }
+    }
+
+    /// Leaf sizes of a tree built over `items`.
+    fn leaf_sizes(mut items: Vec<Item>) -> Vec<u32> {
+        let nodes = build(&mut items, usize::MAX, Parallelism::DEFAULT);
+        nodes
+            .iter()
+            .filter(|n| n.count > 0)
+            .map(|n| n.count)
+            .collect()
+    }
+
+    /// Four boxes in a row, or four copies of one box, each item heavy or not.
+    fn four(apart: bool, heavy: bool) -> Vec<Item> {
+        (0..4)
+            .map(|i| {
+                let x = if apart { 3.0 * i as f32 } else { 0.0 };
+                let b = Aabb::new(Vec3A::new(x, 0.0, 0.0), Vec3A::new(x + 1.0, 1.0, 1.0));
+                Item {
+                    heavy,
+                    ..Item::new(b, i)
+                }
+            })
+            .collect()
+    }
+
+    /// A small node of heavy items is split where their boxes differ, so that box tests cull
+    /// them one by one, and kept as one leaf where they coincide (a split culls nothing); a
+    /// small node of cheap items stays one leaf.
+    #[test]
+    fn heavy_items_get_leaves_of_their_own_where_their_boxes_differ() {
+        assert_eq!(leaf_sizes(four(true, true)), [1, 1, 1, 1]);
+        assert_eq!(leaf_sizes(four(false, true)), [4]);
+        assert_eq!(leaf_sizes(four(true, false)), [4]);
+        // One heavy item among cheap ones: one leaf.
+        let mut mixed = four(true, false);
+        mixed[2].heavy = true;
+        assert_eq!(leaf_sizes(mixed), [4]);
     }
 }

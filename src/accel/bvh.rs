@@ -117,7 +117,10 @@ impl Bvh {
         let mut items: Vec<Item> = boxes
             .par_iter()
             .enumerate()
-            .map(|(index, b)| Item::new(b.padded(1e-6), index))
+            .map(|(index, b)| Item {
+                heavy: bounded[index].0.is_heavy(),
+                ..Item::new(b.padded(1e-6), index)
+            })
             .chain(
                 triangles
                     .par_iter()

@@ -67,6 +67,13 @@ impl LazyHit {
 }
 
 impl AnyShape {
+    /// A shape whose intersection costs far more than a box test: a boxed shape (a revolve's
+    /// segment, a patch, a torus, a transformed object) or a CSG tree. The BVH gives these
+    /// leaves of their own where their boxes differ.
+    pub fn is_heavy(&self) -> bool {
+        matches!(self, AnyShape::Other(_) | AnyShape::Csg(_))
+    }
+
     /// Nearest hit with `t_min < t < t_max`, deferring the surface data where the shape can.
     #[inline]
     pub fn intersect_lazy(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {

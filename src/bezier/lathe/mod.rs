@@ -323,7 +323,7 @@ impl Lathe {
         let frame = RayFrame::new(o, d / dl, self.hmin, self.hmax);
         let (tmin, best) = (t_min * dl, t_max * dl);
         // Most rays that reach a segment's box miss its union shell: they end here, before
-        // the search's setup (the search tests the same shells again, with the same result).
+        // the search's setup (which, for one segment without caps, relies on this test).
         let (pad, slack) = (SHELL_PAD * self.size, shell_slack(self.size));
         let missed = |i: usize| {
             self.segs[i].degenerate
@@ -367,14 +367,18 @@ impl Lathe {
         let (pad, slack) = (SHELL_PAD * self.size, shell_slack(self.size));
         let ta0 = tmin - pad;
         let first = parts.segs.start;
+        // [`Lathe::nearest`] has tested the union shell of a single segment without caps (the
+        // renderer's parts) on this interval: it is entered.
+        let union_entered = !parts.caps && parts.segs.len() == 1;
         for (i, seg) in self.segs[parts.segs].iter().enumerate() {
             let i = first + i;
             let shells = &self.shells[i];
             if seg.degenerate
-                || frame
-                    .shells_entered(&shells.union, ta0, best + pad, slack)
-                    .0
-                    == 0
+                || !union_entered
+                    && frame
+                        .shells_entered(&shells.union, ta0, best + pad, slack)
+                        .0
+                        == 0
             {
                 continue;
             }
