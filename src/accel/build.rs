@@ -205,24 +205,39 @@ fn build_serial(
     idx
 }
 
-/// The bounds of the items and of their centroids, and whether all are mesh triangles (in the
-/// same pass over the items, so in parallel chunks for a large node).
-fn bounds_of(items: &[Item], par: Parallelism) -> (Aabb, Aabb, bool) {
-    let fold = |(b, c, t): (Aabb, Aabb, bool), it: &Item| {
+/// The bounds of the items and of their centroids, whether all are mesh triangles and whether
+/// two or more are heavy (in the same pass over the items, so in parallel chunks for a large
+/// node).
+fn bounds_of(items: &[Item], par: Parallelism) -> (Aabb, Aabb, bool, bool) {
+    type Acc = (Aabb, Aabb, bool, u8);
+    let fold = |(b, c, t, h): Acc, it: &Item| {
         (
             b.union(it.bounds),
             c.with_point(it.centroid),
             t & it.triangle,
+            (h + it.heavy as u8).min(2),
         )
     };
-    let empty = (Aabb::EMPTY, Aabb::EMPTY, true);
-    if items.len() < par.binning {
-        return items.iter().fold(empty, fold);
-    }
-    items
-        .par_chunks(CHUNK)
-        .map(|chunk| chunk.iter().fold(empty, fold))
-        .reduce(|| empty, |x, y| (x.0.union(y.0), x.1.union(y.1), x.2 & y.2))
+    let empty = (Aabb::EMPTY, Aabb::EMPTY, true, 0);
+    let (b, c, t, h) = if items.len() < par.binning {
+        items.iter().fold(empty, fold)
+    } else {
+        items
+            .par_chunks(CHUNK)
+            .map(|chunk| chunk.iter().fold(empty, fold))
+            .reduce(
+                || empty,
+                |x, y| {
+                    (
+                        x.0.union(y.0),
+                        x.1.union(y.1),
+                        x.2 & y.2,
+                        (x.3 + y.3).min(2),
+                    )
+                },
+            )
+    };
+    (b, c, t, h >= 2)
 }
 
 /// Each item's bin (the items of a large node, in parallel chunks), for the partition.
@@ -277,19 +292,19 @@ fn split(
     par: Parallelism,
 ) -> (BuildNode, Option<usize>) {
     let n = items.len();
-    let (bounds, cb, packets) = bounds_of(items, par);
+    let (bounds, cb, packets, heavy) = bounds_of(items, par);
     let mut node = BuildNode {
         bounds,
         offset: start as u32,
         count: n as u32,
         axis: 0,
     };
-    // A small node is a leaf without a search for a split, unless it holds two or more heavy
-    // items: a leaf tests each of its shapes, where separate leaves let the wide nodes' box
-    // tests (eight at once) cull the heavy ones a ray passes by. The SAH below still keeps
-    // them together where their boxes nearly coincide (a split would cull nothing).
-    let small = n <= MAX_LEAF;
-    if small && (depth >= median_depth || items.iter().filter(|it| it.heavy).count() <= 1) {
+    // A leaf holds at most one heavy item (above the median split's depth): a leaf tests each
+    // of its shapes, where separate leaves let the wide nodes' box tests (eight at once) cull
+    // the heavy ones a ray passes by, and let the traversal skip those whose box it enters
+    // only beyond the nearest hit found (which helps even where their boxes coincide).
+    let heavy = heavy && depth < median_depth;
+    if n <= MAX_LEAF && !heavy {
         return (node, None);
     }
     let ext = cb.diagonal();
@@ -313,10 +328,6 @@ fn split(
         items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         n / 2
     } else if span <= 0.0 || !span.is_finite() {
-        if small {
-            // Heavy items on one centroid: a split would cull nothing.
-            return (node, None);
-        }
         n / 2
     } else {
         // Binned SAH.
@@ -340,8 +351,8 @@ fn split(
             }
         }
         let leaf_cost = bounds.surface_area() * (cost(n) - visit);
-        if best.0 >= leaf_cost * 0.9 && n <= 8 || best.0.is_infinite() {
-            if best.0.is_infinite() && n > MAX_LEAF {
+        if best.0 >= leaf_cost * 0.9 && n <= 8 && !heavy || best.0.is_infinite() {
+            if best.0.is_infinite() {
                 // All centroids in one bin: split in the middle of the ordering.
                 items.sort_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
                 n / 2
@@ -498,13 +509,12 @@ mod tests {
             .collect()
     }
 
-    /// A small node of heavy items is split where their boxes differ, so that box tests cull
-    /// them one by one, and kept as one leaf where they coincide (a split culls nothing); a
-    /// small node of cheap items stays one leaf.
+    /// Heavy items get leaves of their own, apart or on one box (where the traversal may still
+    /// skip the farther one); a small node of cheap items stays one leaf.
     #[test]
-    fn heavy_items_get_leaves_of_their_own_where_their_boxes_differ() {
+    fn heavy_items_get_leaves_of_their_own() {
         assert_eq!(leaf_sizes(four(true, true)), [1, 1, 1, 1]);
-        assert_eq!(leaf_sizes(four(false, true)), [4]);
+        assert_eq!(leaf_sizes(four(false, true)), [1, 1, 1, 1]);
         assert_eq!(leaf_sizes(four(true, false)), [4]);
         // One heavy item among cheap ones: one leaf.
         let mut mixed = four(true, false);

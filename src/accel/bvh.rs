@@ -25,16 +25,10 @@ const STACK: usize = 7 * 64;
 /// deeper tree would overflow the traversal stack.
 const MEDIAN_DEPTH: usize = 32;
 
-/// A node of the binary tree the build makes (collapsed into [`WideNode`]s afterwards).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Node {
-    pub bounds: Aabb,
-    /// Leaf: first item (after packing: its leaf reference, see [`super::leaf::PACKETS`]). Interior: index of the
-    /// second child (the first follows).
-    pub offset: u32,
-    /// Items in a leaf; 0 for an interior node.
-    pub count: u16,
-}
+/// A node of the binary tree the build makes (collapsed into [`WideNode`]s afterwards), used as
+/// built (no copy: the tree is the largest thing the build holds). After packing, a leaf's
+/// `offset` is its leaf reference (see [`super::leaf::PACKETS`]).
+pub(super) use super::build::BuildNode as Node;
 
 /// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
 /// primitive index).
@@ -128,14 +122,7 @@ impl Bvh {
             )
             .collect();
         drop(triangles);
-        let mut nodes: Vec<Node> = build(&mut items, median_depth, Parallelism::DEFAULT)
-            .into_par_iter()
-            .map(|b| Node {
-                bounds: b.bounds,
-                offset: b.offset,
-                count: b.count as u16,
-            })
-            .collect();
+        let mut nodes: Vec<Node> = build(&mut items, median_depth, Parallelism::DEFAULT);
         nodes.shrink_to_fit();
         // Pack each leaf's contents; its node then names the leaf.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
@@ -143,7 +130,7 @@ impl Bvh {
         let ranges: Vec<(u32, u16)> = nodes
             .par_iter()
             .filter(|n| n.count > 0)
-            .map(|n| (n.offset, n.count))
+            .map(|n| (n.offset, n.count as u16))
             .collect();
         let refs = leaves.pack(&items, &ranges, nb, &mut slots, &meshes);
         for (node, r) in nodes.iter_mut().filter(|n| n.count > 0).zip(refs) {

@@ -408,6 +408,7 @@ mod tests {
                             bounds: Aabb::new(a, b),
                             offset: 0,
                             count: 1,
+                            axis: 0,
                         }
                     })
                     .collect();
@@ -449,6 +450,7 @@ mod tests {
             bounds: Aabb::EMPTY,
             offset: i as u32,
             count: 1,
+            axis: 0,
         });
         let bounds = if depth == 0 || (depth < 10 && rng.f32() < 0.15) {
             Aabb::new(v(rng), v(rng))
