@@ -39,6 +39,7 @@ impl Evaluator {
         match &d.kind {
             DirectiveKind::Bind { name, value, local } => {
                 Self::bindable(name)?;
+                self.kind_kept(name, false)?;
                 // A declared camera stands on its own (as in POV-Ray): it starts from the
                 // defaults, not from the scene's camera so far.
                 self.camera_from_defaults = matches!(
@@ -59,6 +60,7 @@ impl Evaluator {
             }
             DirectiveKind::Macro(m) => {
                 Self::bindable(&m.name)?;
+                self.kind_kept(&m.name, true)?;
                 for p in &m.params {
                     Self::bindable(p)?;
                 }

@@ -117,6 +117,61 @@ impl Evaluator {
         }
     }
 
+    /// What a lookup of `name` would find, without marking it used: whether it is a macro, and
+    /// where it was bound.
+    pub(super) fn bound_kind(&self, name: &str) -> Option<(bool, Span)> {
+        let b = match self.local_frame(name) {
+            Some(i) => self.frames[i].vars.get(name),
+            None => self.globals.get(name),
+        }?;
+        Some((matches!(b.value, Value::Macro(_)), b.span))
+    }
+
+    /// Refuses to bind `name` as a value where it names a macro, or as a macro where it names
+    /// a value (POV-Ray refuses both): the silent replacement turned every later call of the
+    /// macro into an error about calling a number, far from its cause. A macro may be
+    /// redefined, and `#undef` frees a name.
+    pub(super) fn kind_kept(&self, name: &Name, macro_: bool) -> SourceResult<()> {
+        match self.bound_kind(&name.text) {
+            Some((was_macro, at)) if was_macro != macro_ => {
+                let (message, label, help) = if was_macro {
+                    (
+                        format!(
+                            "`{}` is a macro and cannot also be declared as a value",
+                            name.text
+                        ),
+                        "declared as a value here",
+                        format!(
+                            "give the value another name, or `#undef {}` first to drop the macro",
+                            name.text
+                        ),
+                    )
+                } else {
+                    (
+                        format!(
+                            "`{}` is declared as a value and cannot also name a macro",
+                            name.text
+                        ),
+                        "a macro of that name",
+                        format!(
+                            "give the macro another name, or `#undef {}` first to drop the value",
+                            name.text
+                        ),
+                    )
+                };
+                let before = if was_macro { "the macro" } else { "the value" };
+                Err(vec![
+                    Error::new(message)
+                        .label(label)
+                        .help(help)
+                        .at(name.span)
+                        .with_extra(at, format!("{before} is defined here")),
+                ])
+            }
+            _ => Ok(()),
+        }
+    }
+
     pub(super) fn mark_used(&mut self, name: &str) {
         if let Some(b) = self.binding_mut(name) {
             b.used = true;
