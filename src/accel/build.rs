@@ -302,7 +302,8 @@ fn split(
     // A leaf holds at most one heavy item (above the median split's depth): a leaf tests each
     // of its shapes, where separate leaves let the wide nodes' box tests (eight at once) cull
     // the heavy ones a ray passes by, and let the traversal skip those whose box it enters
-    // only beyond the nearest hit found (which helps even where their boxes coincide).
+    // only beyond the nearest hit found (which helps even where their boxes nearly coincide,
+    // as a vase's outer and inner walls).
     let heavy = heavy && depth < median_depth;
     if n <= MAX_LEAF && !heavy {
         return (node, None);

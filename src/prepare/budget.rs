@@ -13,9 +13,11 @@ use std::mem::size_of;
 
 use super::instances::{shared_key, shared_meshes};
 use super::{EffectiveSettings, ObjectInfo, RenderError};
+use crate::bezier::lathe::Lathe;
 use crate::diag::size_text;
 use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, Shape};
 use crate::shapes::patch::{BezierPatch, PIECES as PATCH_PIECES};
+use crate::shapes::revolve::Revolve;
 
 /// The default limit: 2 GiB, or half the machine's memory when that is less.
 pub fn default_memory_limit() -> u64 {
@@ -47,6 +49,10 @@ fn primitives(shape: &Shape) -> u64 {
         Shape::Cylinder { .. } | Shape::Cone { .. } => 3,
         // Cut into pieces, each a primitive of its own.
         Shape::BezierPatch { .. } => u64::from(PATCH_PIECES * PATCH_PIECES),
+        // One primitive per profile segment, and one for the caps of a partial sweep.
+        Shape::Revolve { profile, sweep, .. } => {
+            (profile.segments.len() as u64).max(1) + u64::from(sweep.is_some())
+        }
         // Its shapes live in the one CSG primitive (an overestimate by one).
         Shape::Csg(csg) => csg
             .leaves()
@@ -57,8 +63,8 @@ fn primitives(shape: &Shape) -> u64 {
     }
 }
 
-/// Bytes a primitive of `shape` holds beyond its record (a patch piece's control net, in its
-/// own allocation).
+/// Bytes a primitive of `shape` holds beyond its record (a patch piece's control net, a
+/// revolve segment's share of its lathe, in their own allocations).
 fn held_bytes(shape: &Shape) -> u64 {
     match shape {
         // The piece in its `Arc` and the boxed transform around it, each a heap allocation
@@ -66,6 +72,14 @@ fn held_bytes(shape: &Shape) -> u64 {
         // 0.92 KB counted without them.
         Shape::BezierPatch { .. } => {
             (size_of::<BezierPatch>() + size_of::<crate::shapes::transformed::Transformed>()) as u64
+                + WRAP_OVERHEAD
+        }
+        // A segment's part in its `Arc` and boxed transform, and its share of the lathe the
+        // parts share (the segment, its tables and shells).
+        Shape::Revolve { .. } => {
+            (size_of::<Revolve>()
+                + size_of::<crate::shapes::transformed::Transformed<Revolve>>()
+                + Lathe::bytes_per_segment()) as u64
                 + WRAP_OVERHEAD
         }
         _ => 0,
@@ -81,9 +95,9 @@ const WRAP_OVERHEAD: u64 = 64;
 const PER_PRIMITIVE: u64 = 64 + 3 * 4 + 64;
 
 /// A heavy primitive's extra share of the BVH (a boxed shape: a torus, a revolve's segment, a
-/// patch's piece, a mesh's placement; or a CSG tree): it gets a leaf of its own, so about
-/// twice the binary nodes and three times the wide nodes of a primitive sharing a leaf (100 000
-/// tori: 20 MB more at the peak than with leaves of four).
+/// patch's piece, a mesh's placement; or a CSG tree): it gets a leaf of its own, so three to
+/// four times the binary and wide nodes of a primitive sharing a leaf of up to four (100 000
+/// tori: 10-20 MB more at the peak).
 const HEAVY_BVH: u64 = 200;
 
 /// Whether the primitives of `shape` are heavy in the BVH (see [`HEAVY_BVH`]). Spheres, disks
@@ -478,6 +492,36 @@ mod tests {
             primitives_of(&lit) > 4 * one,
             "{} vs {one}",
             primitives_of(&lit)
+        );
+    }
+
+    /// A revolve counts one primitive per segment (and one for a partial sweep's caps), as it
+    /// is built, each with its share of the lathe: three segments cost at least three times
+    /// a sphere's primitive plus the lathe's tables.
+    #[test]
+    fn revolves_are_counted_by_their_segments() {
+        let profile = "profile bezier { <0, 0>, <1, 0>, <1, 1>, <1, 2>, <1, 3>, <0.5, 3.5>, \
+                       <0.2, 3.8>, <0.1, 3.9>, <0.05, 3.95>, <0, 4> }";
+        for (sweep, parts) in [("", 3), ("angle 0, 90", 4)] {
+            let s = scene(&format!("revolve {{ {profile} {sweep} }}"));
+            let built = super::super::shapes::build_shapes(&s.objects[0]).unwrap();
+            assert_eq!(built.len(), parts, "{sweep}");
+            assert_eq!(primitives(&s.objects[0].shape), parts as u64, "{sweep}");
+            assert!(built.iter().all(|p| p.is_heavy()));
+        }
+        let bytes = |text: &str| {
+            let s = scene(text);
+            estimate(&s, &settings_of(&s))
+                .into_iter()
+                .find(|i| i.what == "primitives and their BVH")
+                .unwrap()
+                .bytes
+        };
+        let sphere = bytes("sphere { <0,0,0> 1 }");
+        let revolve = bytes(&format!("revolve {{ {profile} }}"));
+        assert!(
+            revolve >= 3 * (sphere + Lathe::bytes_per_segment() as u64),
+            "{revolve} vs {sphere}"
         );
     }
 

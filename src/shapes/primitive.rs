@@ -68,8 +68,8 @@ impl LazyHit {
 
 impl AnyShape {
     /// A shape whose intersection costs far more than a box test: a boxed shape (a revolve's
-    /// segment, a patch, a torus, a transformed object) or a CSG tree. The BVH gives these
-    /// leaves of their own where their boxes differ.
+    /// segment, a patch, a torus, a transformed object) or a CSG tree. The BVH gives each a
+    /// leaf of its own (above its median split's depth).
     pub fn is_heavy(&self) -> bool {
         matches!(self, AnyShape::Other(_) | AnyShape::Csg(_))
     }

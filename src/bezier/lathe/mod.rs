@@ -207,6 +207,18 @@ impl Lathe {
         (lo, hi)
     }
 
+    /// Bytes a lathe holds per profile segment (the segment with its tables and shells, and
+    /// its share of the lathe's own tables), for a memory estimate made before building one.
+    pub fn bytes_per_segment() -> usize {
+        use std::mem::size_of;
+        let f = size_of::<f64>();
+        size_of::<Segment>()
+            + 2 * (TABLE_STEPS + 1) * f
+            + size_of::<SegmentShells>()
+            + TABLE_STEPS * f
+            + f
+    }
+
     /// The size used for relative tolerances (largest of radius and height).
     pub fn size(&self) -> f64 {
         self.size
