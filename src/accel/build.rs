@@ -46,7 +46,7 @@ pub(super) struct Item {
     /// A mesh triangle: leaves test these four at a time (see `split`'s cost).
     pub triangle: bool,
     /// A shape whose intersection costs far more than a box test (a boxed or CSG shape: a
-    /// revolve's segment, a patch, a transformed object): see `split`'s small nodes.
+    /// revolve's segment, a patch, a transformed object): a leaf holds at most one (`split`).
     pub heavy: bool,
 }
 
