@@ -63,10 +63,11 @@ fn primitives(shape: &Shape) -> u64 {
     }
 }
 
-/// Bytes a primitive of `shape` holds beyond its record (a patch piece's control net, a
-/// revolve segment's share of its lathe, in their own allocations).
+/// Bytes a primitive of `shape` holds beyond its record: a patch piece's control net, a
+/// revolve segment's share of its lathe (in their own allocations), and a heavy primitive's
+/// own leaf ([`HEAVY_BVH`]).
 fn held_bytes(shape: &Shape) -> u64 {
-    match shape {
+    let own = match shape {
         // The piece in its `Arc` and the boxed transform around it, each a heap allocation
         // (with its header and the `Arc`'s counts): measured 1.33 KB per piece in all against
         // 0.92 KB counted without them.
@@ -83,7 +84,14 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + WRAP_OVERHEAD
         }
         _ => 0,
-    }
+    };
+    // Spheres, disks and cones under a transform the renderer cannot bake are heavy too, and
+    // not counted here.
+    let heavy = matches!(
+        shape,
+        Shape::Torus { .. } | Shape::Revolve { .. } | Shape::BezierPatch { .. } | Shape::Csg(_)
+    );
+    own + if heavy { HEAVY_BVH } else { 0 }
 }
 
 /// Heap headers and reference counts of a shape held in an `Arc` inside a `Box`.
@@ -99,15 +107,6 @@ const PER_PRIMITIVE: u64 = 64 + 3 * 4 + 64;
 /// four times the binary and wide nodes of a primitive sharing a leaf of up to four (100 000
 /// tori: 10-20 MB more at the peak).
 const HEAVY_BVH: u64 = 200;
-
-/// Whether the primitives of `shape` are heavy in the BVH (see [`HEAVY_BVH`]). Spheres, disks
-/// and cones under a transform the renderer cannot bake are heavy too, and not counted here.
-fn heavy(shape: &Shape) -> bool {
-    matches!(
-        shape,
-        Shape::Torus { .. } | Shape::Revolve { .. } | Shape::BezierPatch { .. } | Shape::Csg(_)
-    )
-}
 
 /// Bytes per light beyond its shape: the light record, and its power and entries in the two
 /// light distributions (f64 power, three f32 per distribution).
@@ -175,7 +174,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
             // An emissive object is built twice, as geometry and as lights (one per
             // primitive: a light record and its share of the power distributions).
             _ => {
-                let held = held_bytes(&o.shape) + if heavy(&o.shape) { HEAVY_BVH } else { 0 };
+                let held = held_bytes(&o.shape);
                 let per = if o.emission.is_some() {
                     2 * (per_primitive + held) + PER_LIGHT
                 } else {
