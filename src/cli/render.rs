@@ -104,6 +104,7 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         time_limit: args.time_limit,
         threads: args.threads,
         memory_limit: args.limits.memory_limit,
+        ..RenderOptions::default()
     };
     let cancel = Arc::new(AtomicBool::new(false));
     {

@@ -259,8 +259,10 @@ pub fn check_memory(
     scene: &Scene,
     settings: &EffectiveSettings,
     limit: u64,
+    held: Option<MemoryItem>,
 ) -> Result<(), RenderError> {
-    let items = estimate(scene, settings);
+    let mut items = estimate(scene, settings);
+    items.extend(held);
     let total = items
         .iter()
         .map(|i| i.bytes)
@@ -338,7 +340,7 @@ mod tests {
     fn a_huge_film_is_refused_and_a_small_one_is_not() {
         let mut scene = scene("sphere { <0,0,0> 1 }");
         scene.settings.resolution = (16384, 8192);
-        let e = check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap_err();
+        let e = check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap_err();
         assert!(
             e.message.contains("film and per-pixel state"),
             "{}",
@@ -351,7 +353,23 @@ mod tests {
             "{e:?}"
         );
         scene.settings.resolution = (512, 512);
-        check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap();
+        check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap();
+    }
+
+    /// What the caller holds beside the render (a live view's images) is part of the estimate.
+    #[test]
+    fn memory_held_by_the_caller_is_counted() {
+        let mut scene = scene("sphere { <0,0,0> 1 }");
+        scene.settings.resolution = (512, 512);
+        let settings = settings_of(&scene);
+        let limit = 512 << 20;
+        check_memory(&scene, &settings, limit, None).unwrap();
+        let held = MemoryItem {
+            what: "live view",
+            bytes: limit,
+        };
+        let e = check_memory(&scene, &settings, limit, Some(held)).unwrap_err();
+        assert!(e.message.contains("live view 512"), "{}", e.message);
     }
 
     #[test]
@@ -360,9 +378,9 @@ mod tests {
         scene.settings.resolution = (64, 64);
         scene.settings.photons = Some(10_000_000_000);
         scene.settings.integrator = Integrator::Sppm;
-        check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap();
+        check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap();
         scene.settings.integrator = Integrator::PhotonMap;
-        let e = check_memory(&scene, &settings_of(&scene), 2 << 30).unwrap_err();
+        let e = check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap_err();
         assert!(
             e.message.contains("photons of one iteration"),
             "{}",

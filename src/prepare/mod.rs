@@ -137,7 +137,8 @@ pub fn prepare<'a>(
     // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
-    check_memory(scene, &settings, limit).map_err(|e| e.at(scene.settings.span))?;
+    check_memory(scene, &settings, limit, options.held_memory)
+        .map_err(|e| e.at(scene.settings.span))?;
     let prepared = PreparedScene::new(scene)?;
     Ok((settings, prepared))
 }

@@ -20,6 +20,9 @@ pub struct RenderOptions {
     pub threads: Option<usize>,
     /// Most memory the render may need, in bytes; `None`: [`super::default_memory_limit`].
     pub memory_limit: Option<u64>,
+    /// Memory the caller holds beside the render while it runs (a live view's image copies),
+    /// counted in the estimate against `memory_limit`.
+    pub held_memory: Option<super::MemoryItem>,
 }
 
 /// The settings a render actually uses (scene settings with the options applied).

@@ -3,12 +3,13 @@
 //! The watch loop and its render thread publish into a [`Hub`]: the latest status (what runs,
 //! iteration, photons/s, diagnostics) and the latest image, linear RGB. Nothing is queued: a
 //! newer status or image replaces the older one, so a slow or closed browser tab never makes
-//! anything grow. The HTTP side ([`Server`], on `tiny_http`) serves
+//! anything grow. The HTTP side ([`Server`], hyper on a small tokio runtime, see [`http`] for
+//! its limits and [`access`] for who gets in) serves
 //!
 //! - `/`: the page (static HTML and JavaScript built into the binary);
 //! - `/events`: server-sent events, one `data:` line of JSON per status change (a tab that
 //!   misses some sees the latest), and a comment every few seconds so that a closed tab is
-//!   noticed and its thread ends;
+//!   noticed;
 //! - `/image`: the latest image as 16 bytes of header (width, height, full width, full height,
 //!   u32 little-endian) and then `width * height * 3` linear f32 values, row 0 at the top. A
 //!   preview is smaller than the full size; the page draws it scaled up to the full size.
@@ -16,33 +17,23 @@
 //! The page tone-maps the linear image itself (exposure slider, sRGB curve) and reads out the
 //! linear value under the cursor.
 
+mod access;
+mod http;
+mod stall;
 mod view;
 
-use std::io::Write;
 use std::net::{Ipv4Addr, SocketAddr};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Instant;
 
+use bytes::Bytes;
 use sppm_lang::film::Image;
 
+pub use access::Access;
 pub use view::{DiagnosticView, diagnostics_view};
 
 /// The page, built into the binary.
 const PAGE: &str = include_str!("page.html");
-/// Most event streams (browser tabs) served at once; more get "503 busy".
-const MAX_STREAMS: usize = 64;
-
-/// Largest request body `tiny_http` reads into memory itself (a larger one it skips when the
-/// request is dropped by allocating the declared length at once, which a hostile length turns
-/// into an abort).
-const BUFFERED_BODY: usize = 1024;
-
-/// Requests with a larger declared body (the page sends none) are left unanswered; after this
-/// many the server stops (each keeps its connection), and `watch` goes on without the page.
-const MAX_BODY_REQUESTS: usize = 64;
-/// How often an idle event stream sends a comment (finds closed tabs, keeps proxies open).
-const KEEP_ALIVE: Duration = Duration::from_secs(5);
 
 /// What the page shows besides the image.
 #[derive(Debug, Clone, Default)]
@@ -72,19 +63,22 @@ pub struct Status {
 /// The image as sent to the page.
 struct Frame {
     seq: u64,
-    bytes: Arc<Vec<u8>>,
+    bytes: Bytes,
 }
 
 struct State {
     seq: u64,
     status: Status,
     frame: Option<Frame>,
+    /// The status as an event-stream message, made once per change for every tab.
+    message: Option<(u64, Bytes)>,
 }
 
 /// The latest status and image, shared by the watch loop and the page's connections.
 pub struct Hub {
     state: Mutex<State>,
-    changed: Condvar,
+    /// The latest sequence number, for the event streams to wait on.
+    changed: tokio::sync::watch::Sender<u64>,
 }
 
 impl Hub {
@@ -99,8 +93,9 @@ impl Hub {
                     ..Status::default()
                 },
                 frame: None,
+                message: None,
             }),
-            changed: Condvar::new(),
+            changed: tokio::sync::watch::Sender::new(1),
         })
     }
 
@@ -111,39 +106,64 @@ impl Hub {
 
     /// Changes the status and wakes every event stream.
     pub fn update(&self, change: impl FnOnce(&mut Status)) {
-        let mut s = self.lock();
-        change(&mut s.status);
-        s.seq += 1;
-        self.changed.notify_all();
+        let seq = {
+            let mut s = self.lock();
+            change(&mut s.status);
+            s.seq += 1;
+            s.seq
+        };
+        self.changed.send_replace(seq);
     }
 
     /// Replaces the image (shown at `full` size) and changes the status in one step.
     pub fn publish(&self, image: &Image, full: (u32, u32), change: impl FnOnce(&mut Status)) {
-        let bytes = Arc::new(encode(image, full));
+        let bytes = Bytes::from(encode(image, full));
+        let seq = {
+            let mut s = self.lock();
+            let seq = s.seq + 1;
+            s.frame = Some(Frame { seq, bytes });
+            change(&mut s.status);
+            s.seq = seq;
+            seq
+        };
+        self.changed.send_replace(seq);
+    }
+
+    /// A receiver that wakes at every change.
+    fn subscribe(&self) -> tokio::sync::watch::Receiver<u64> {
+        self.changed.subscribe()
+    }
+
+    /// The latest status as an event-stream message (`data: {json}`), with its sequence number.
+    fn event(&self) -> (u64, Bytes) {
         let mut s = self.lock();
-        let seq = s.seq + 1;
-        s.frame = Some(Frame { seq, bytes });
-        change(&mut s.status);
-        s.seq = seq;
-        self.changed.notify_all();
+        if let Some((seq, message)) = &s.message
+            && *seq == s.seq
+        {
+            return (*seq, message.clone());
+        }
+        let image = s.frame.as_ref().map_or(0, |f| f.seq);
+        let message = Bytes::from(format!("data: {}\n\n", view::status_json(&s.status, image)));
+        s.message = Some((s.seq, message.clone()));
+        (s.seq, message)
     }
 
-    /// The status JSON once it is newer than `seen` (or `None` after `timeout`).
-    fn wait_newer(&self, seen: u64, timeout: Duration) -> Option<(u64, String)> {
-        let guard = self.lock();
-        let (s, _) = self
-            .changed
-            .wait_timeout_while(guard, timeout, |s| s.seq <= seen)
-            .unwrap_or_else(|e| e.into_inner());
-        (s.seq > seen).then(|| {
-            let image = s.frame.as_ref().map_or(0, |f| f.seq);
-            (s.seq, view::status_json(&s.status, image))
-        })
-    }
-
-    fn frame(&self) -> Option<(u64, Arc<Vec<u8>>)> {
+    fn frame(&self) -> Option<(u64, Bytes)> {
         self.lock().frame.as_ref().map(|f| (f.seq, f.bytes.clone()))
     }
+}
+
+/// Memory the live view may hold for an image of `width` x `height` pixels, beside the render:
+/// the hub's image, the one being encoded, one per image answer in flight, and every
+/// connection's buffers and event-stream message.
+pub fn reserved_memory(width: u32, height: u32) -> u64 {
+    let frame = (u64::from(width) * u64::from(height))
+        .saturating_mul(12)
+        .saturating_add(16);
+    let frames = (2 + http::MAX_IMAGE_SENDS as u64).saturating_mul(frame);
+    let connections = http::MAX_CONNECTIONS as u64 * http::PER_CONNECTION
+        + http::MAX_STREAMS as u64 * view::MAX_STATUS_BYTES;
+    frames.saturating_add(connections)
 }
 
 /// The `/image` body: the header, then linear RGB as f32 little-endian.
@@ -162,18 +182,17 @@ fn encode(image: &Image, full: (u32, u32)) -> Vec<u8> {
 
 /// The HTTP server, answering on its own thread until the process ends.
 pub struct Server {
+    /// The URL to open (with the token, when one is required).
     pub url: String,
 }
 
 impl Server {
-    /// Listens on 127.0.0.1:`port` (0: any free port) and serves `hub`.
-    pub fn start(port: u16, hub: Arc<Hub>) -> Result<Server, String> {
+    /// Listens on 127.0.0.1:`port` (0: any free port) and serves `hub`; `token`: whether a
+    /// request must show the random token of this run (`--no-token` turns it off).
+    pub fn start(port: u16, token: bool, hub: Arc<Hub>) -> Result<Server, String> {
         let addr = SocketAddr::from((Ipv4Addr::LOCALHOST, port));
-        let server = tiny_http::Server::http(addr).map_err(|e| {
-            let taken = e
-                .downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::AddrInUse);
-            if taken {
+        let listener = std::net::TcpListener::bind(addr).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::AddrInUse {
                 format!(
                     "cannot serve the page on {addr}: the port is in use (another program, or \
                      another `watch --serve`); choose another with --port, or --port 0 for any \
@@ -183,115 +202,22 @@ impl Server {
                 format!("cannot serve the page on {addr}: {e}")
             }
         })?;
-        let bound = server.server_addr().to_ip().map_or(port, |a| a.port());
-        let url = format!("http://127.0.0.1:{bound}/");
+        listener
+            .set_nonblocking(true)
+            .map_err(|e| format!("cannot serve the page on {addr}: {e}"))?;
+        let bound = listener.local_addr().map_or(port, |a| a.port());
+        let token = if token {
+            Some(Access::random_token()?)
+        } else {
+            None
+        };
+        let access = Access::new(bound, token);
+        let url = access.url();
         std::thread::Builder::new()
             .name("live-server".into())
-            .spawn(move || serve(server, hub))
+            .spawn(move || http::serve(listener, hub, access))
             .map_err(|e| format!("cannot start the page's server thread: {e}"))?;
         Ok(Server { url })
-    }
-}
-
-fn serve(server: tiny_http::Server, hub: Arc<Hub>) {
-    let streams = Arc::new(AtomicUsize::new(0));
-    let mut with_body = 0;
-    for request in server.incoming_requests() {
-        if request.body_length().is_some_and(|n| n > BUFFERED_BODY) {
-            // Neither answered nor dropped: dropping it would make `tiny_http` allocate the
-            // declared length to skip the body.
-            std::mem::forget(request);
-            with_body += 1;
-            if with_body >= MAX_BODY_REQUESTS {
-                return;
-            }
-            continue;
-        }
-        let path = request.url().split('?').next().unwrap_or("").to_string();
-        let result = match path.as_str() {
-            "/" | "/index.html" => request.respond(with_headers(
-                tiny_http::Response::from_string(PAGE),
-                &[("Content-Type", "text/html; charset=utf-8")],
-            )),
-            "/image" => match hub.frame() {
-                Some((seq, bytes)) => request.respond(with_headers(
-                    tiny_http::Response::from_data(bytes.as_slice()),
-                    &[
-                        ("Content-Type", "application/octet-stream"),
-                        ("Cache-Control", "no-store"),
-                        ("X-Image-Seq", &seq.to_string()),
-                    ],
-                )),
-                None => request.respond(tiny_http::Response::empty(204)),
-            },
-            "/events" => {
-                if streams.fetch_add(1, Ordering::SeqCst) >= MAX_STREAMS {
-                    streams.fetch_sub(1, Ordering::SeqCst);
-                    request.respond(tiny_http::Response::from_string("busy").with_status_code(503))
-                } else {
-                    let (hub, count) = (hub.clone(), streams.clone());
-                    let spawned = std::thread::Builder::new()
-                        .name("live-events".into())
-                        .spawn(move || {
-                            stream_events(request.into_writer(), &hub);
-                            count.fetch_sub(1, Ordering::SeqCst);
-                        });
-                    if spawned.is_err() {
-                        // The request went with the closure; its connection is closed.
-                        streams.fetch_sub(1, Ordering::SeqCst);
-                    }
-                    Ok(())
-                }
-            }
-            _ => {
-                request.respond(tiny_http::Response::from_string("not found").with_status_code(404))
-            }
-        };
-        // A browser that went away mid-answer is not an error of the server.
-        let _ = result;
-    }
-}
-
-/// `response` with the headers that are valid (all of them here: ASCII constants and numbers).
-fn with_headers<R: std::io::Read>(
-    mut response: tiny_http::Response<R>,
-    headers: &[(&str, &str)],
-) -> tiny_http::Response<R> {
-    for (name, value) in headers {
-        if let Ok(h) = tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes()) {
-            response.add_header(h);
-        }
-    }
-    response
-}
-
-/// One tab's event stream: the latest status whenever it changes; returns when the tab is gone.
-fn stream_events(mut out: Box<dyn Write + Send>, hub: &Hub) {
-    let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
-                Connection: close\r\n\r\nretry: 1000\n\n";
-    if out
-        .write_all(head.as_bytes())
-        .and_then(|_| out.flush())
-        .is_err()
-    {
-        return;
-    }
-    let mut seen = 0;
-    loop {
-        let message = match hub.wait_newer(seen, KEEP_ALIVE) {
-            Some((seq, json)) => {
-                seen = seq;
-                format!("data: {json}\n\n")
-            }
-            None => ": alive\n\n".to_string(),
-        };
-        if out
-            .write_all(message.as_bytes())
-            .and_then(|_| out.flush())
-            .is_err()
-        {
-            return;
-        }
     }
 }
 
@@ -304,59 +230,56 @@ mod tests {
     #[test]
     fn a_late_reader_sees_only_the_latest() {
         let hub = Hub::new("s.scn".into());
+        let mut changes = hub.subscribe();
         for i in 1..=3u32 {
             let mut img = Image::new(2, 1);
             img.pixels[0] = [f64::from(i), 0.0, 0.0];
             hub.publish(&img, (4, 2), |s| s.iteration = i);
         }
-        let (seq, json) = hub.wait_newer(0, Duration::from_millis(10)).unwrap();
-        assert!(json.contains("\"iteration\":3"), "{json}");
+        assert!(changes.has_changed().unwrap());
+        assert_eq!(*changes.borrow_and_update(), 4);
+        let (seq, message) = hub.event();
+        let text = std::str::from_utf8(&message).unwrap();
+        assert!(
+            text.starts_with("data: {") && text.ends_with("}\n\n"),
+            "{text}"
+        );
+        assert!(text.contains("\"iteration\":3"), "{text}");
         let (image_seq, bytes) = hub.frame().unwrap();
         assert_eq!(image_seq, seq);
-        assert!(json.contains(&format!("\"image\":{image_seq}")), "{json}");
+        assert!(text.contains(&format!("\"image\":{image_seq}")), "{text}");
         // Header: 2x1 shown at 4x2; then the first pixel's red is the third image's.
         let word = |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
         assert_eq!([word(0), word(1), word(2), word(3)], [2, 1, 4, 2]);
         assert_eq!(f32::from_le_bytes(bytes[16..20].try_into().unwrap()), 3.0);
         assert_eq!(bytes.len(), 16 + 2 * 12);
-        // Nothing newer: the reader waits (then sends a keep-alive).
-        assert!(hub.wait_newer(seq, Duration::from_millis(10)).is_none());
-    }
-
-    /// A request declaring a huge body (which `tiny_http` would allocate at once to skip) does
-    /// not take the server down: the page is still served after it.
-    #[test]
-    fn a_request_with_a_huge_declared_body_is_left_alone() {
-        use std::io::Read;
-        let server = Server::start(0, Hub::new("s.scn".into())).unwrap();
-        let addr = server
-            .url
-            .trim_start_matches("http://")
-            .trim_end_matches('/');
-        let mut hostile = std::net::TcpStream::connect(addr).unwrap();
-        hostile
-            .write_all(b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: 99999999999\r\n\r\n")
-            .unwrap();
-        std::thread::sleep(Duration::from_millis(100));
-        drop(hostile);
-        let mut ok = std::net::TcpStream::connect(addr).unwrap();
-        ok.write_all(b"GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
-            .unwrap();
-        let mut text = String::new();
-        ok.read_to_string(&mut text).unwrap();
-        assert!(text.starts_with("HTTP/1.1 200"), "{text:.80}");
+        // The message is made once per change and shared.
+        let (_, again) = hub.event();
+        assert_eq!(again.as_ptr(), message.as_ptr());
+        assert!(!changes.has_changed().unwrap());
     }
 
     #[test]
     fn a_port_in_use_is_a_clear_error() {
         let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
         let port = taken.local_addr().unwrap().port();
-        let Err(e) = Server::start(port, Hub::new("s.scn".into())) else {
+        let Err(e) = Server::start(port, true, Hub::new("s.scn".into())) else {
             panic!("bound a port in use");
         };
         assert!(
             e.contains("the port is in use") && e.contains("--port"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn the_reserve_counts_every_image_copy() {
+        let small = reserved_memory(1, 1);
+        let big = reserved_memory(1000, 1000);
+        assert_eq!(
+            big - small,
+            (2 + http::MAX_IMAGE_SENDS as u64) * 12 * (1_000_000 - 1)
+        );
+        assert_eq!(reserved_memory(u32::MAX, u32::MAX), u64::MAX);
     }
 }

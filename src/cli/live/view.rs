@@ -11,6 +11,11 @@ use super::Status;
 const CONTEXT_LINES: usize = 2;
 /// Longest excerpt line sent (characters); longer lines are cut around the span.
 const MAX_LINE: usize = 160;
+/// Longest message, label or help sent (characters); the terminal shows them whole.
+const MAX_TEXT: usize = 2000;
+/// Most bytes of one status message: diagnostics past it are counted, not sent (a scene that
+/// prints a thousand long `#debug` lines makes each tab's message no larger).
+pub const MAX_STATUS_BYTES: u64 = 256 * 1024;
 
 /// A line of an excerpt: its number, its text, and the highlighted character range in it.
 pub type ExcerptLine = (usize, String, Option<(usize, usize)>);
@@ -116,8 +121,23 @@ pub fn status_json(s: &Status, image: u64) -> String {
     field(&mut o, "since_save", &since.map_or("null".into(), number));
     field(&mut o, "exposure", &number(s.exposure));
     field(&mut o, "image", &image.to_string());
-    let diags: Vec<String> = s.diagnostics.iter().map(diagnostic_json).collect();
-    field(&mut o, "diagnostics", &format!("[{}]", diags.join(",")));
+    // Diagnostics in order while they fit; the page says how many more there are.
+    let mut diags = String::from("[");
+    let mut shown = 0;
+    for d in &s.diagnostics {
+        let json = diagnostic_json(d);
+        if (o.len() + diags.len() + json.len() + 64) as u64 > MAX_STATUS_BYTES {
+            break;
+        }
+        if shown > 0 {
+            diags.push(',');
+        }
+        diags.push_str(&json);
+        shown += 1;
+    }
+    diags.push(']');
+    field(&mut o, "diagnostics", &diags);
+    field(&mut o, "more", &(s.diagnostics.len() - shown).to_string());
     o.pop();
     o.push('}');
     o
@@ -126,12 +146,14 @@ pub fn status_json(s: &Status, image: u64) -> String {
 fn diagnostic_json(d: &DiagnosticView) -> String {
     let mut o = String::from("{");
     field(&mut o, "error", &d.error.to_string());
-    field(&mut o, "message", &string(&d.message));
-    field(&mut o, "label", &string(&d.label));
+    field(&mut o, "message", &string(short(&d.message)));
+    field(&mut o, "label", &string(short(&d.label)));
     field(
         &mut o,
         "help",
-        &d.help.as_deref().map_or("null".into(), string),
+        &d.help
+            .as_deref()
+            .map_or("null".into(), |h| string(short(h))),
     );
     field(&mut o, "location", &string(&d.location));
     let lines: Vec<String> = d
@@ -146,6 +168,13 @@ fn diagnostic_json(d: &DiagnosticView) -> String {
     o.pop();
     o.push('}');
     o
+}
+
+/// `text` cut to [`MAX_TEXT`] characters.
+fn short(text: &str) -> &str {
+    text.char_indices()
+        .nth(MAX_TEXT)
+        .map_or(text, |(i, _)| &text[..i])
 }
 
 fn field(o: &mut String, name: &str, value: &str) {
@@ -192,6 +221,32 @@ mod tests {
         let mut map = SourceMap::new();
         let id = map.add(std::path::Path::new("t.scn"), "t.scn".into(), text);
         excerpt(map.get(id).unwrap(), start, end)
+    }
+
+    /// A thousand long diagnostics make a message no larger than the cap, and say how many
+    /// were left out.
+    #[test]
+    fn a_status_message_is_bounded() {
+        let d = DiagnosticView {
+            message: "\u{2028}".repeat(50_000),
+            label: "<".repeat(50_000),
+            help: Some("x".repeat(50_000)),
+            lines: vec![(1, "y".repeat(MAX_LINE), Some((0, 3))); 5],
+            ..DiagnosticView::default()
+        };
+        let status = Status {
+            diagnostics: vec![d; 1000],
+            ..Status::default()
+        };
+        let json = status_json(&status, 7);
+        assert!(json.len() as u64 <= MAX_STATUS_BYTES, "{}", json.len());
+        let shown = json.matches("\"message\":\"\\u2028").count();
+        assert!(shown >= 1, "no diagnostic shown");
+        assert!(
+            json.ends_with(&format!("\"more\":{}}}", 1000 - shown)),
+            "{}",
+            &json[json.len() - 40..]
+        );
     }
 
     #[test]

@@ -64,6 +64,10 @@ pub struct WatchArgs {
     /// The page's port (0: any free port).
     #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
     pub port: u16,
+    /// Answer any local client without the page's access token (then every user of this
+    /// machine, and any program, can read the scene and its image).
+    #[arg(long, requires = "serve")]
+    pub no_token: bool,
     #[command(flatten)]
     pub size: SizeArgs,
     #[command(flatten)]
@@ -136,7 +140,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             |n| n.to_string_lossy().into_owned(),
         );
         let hub = Hub::new(name);
-        match live::Server::start(args.port, hub.clone()) {
+        match live::Server::start(args.port, !args.no_token, hub.clone()) {
             Ok(server) => status(&format!("serving the live view on {}", server.url)),
             Err(e) => {
                 say!("error: {e}");

@@ -71,6 +71,11 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
         let options = RenderOptions {
             threads: r.threads,
             memory_limit: r.memory_limit,
+            // The page's copies of the image, at the full size whatever the stage.
+            held_memory: r.hub.as_ref().map(|_| sppm_lang::prepare::MemoryItem {
+                what: "live view",
+                bytes: live::reserved_memory(full_size.0, full_size.1),
+            }),
             ..RenderOptions::default()
         };
         let exposure = scene.settings.exposure;
