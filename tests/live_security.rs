@@ -615,3 +615,64 @@ fn connections_past_the_cap_are_refused_and_idle_ones_are_closed() {
         live.watch.log.join("\n")
     );
 }
+
+/// Tabs that never read while the scene prints a thousand long messages: each tab holds at
+/// most one status message (bounded in size and shared), so memory stays flat.
+#[test]
+fn event_streams_that_do_not_read_hold_little() {
+    /// Each stalled stream may hold one status message (at most 256 KiB) and its buffers.
+    const MARGIN: u64 = 32 << 20;
+    let dir = tempfile::tempdir().unwrap();
+    let mut live = Live::start(16, &[]);
+    live.wait_for_image();
+    let before = rss(live.pid());
+    let token = live.token.clone().unwrap();
+    // Every stream slot but one (the reading tab below takes it).
+    let mut stalled = Vec::new();
+    for _ in 0..31 {
+        let mut s = TcpStream::connect(&live.addr).unwrap();
+        s.write_all(
+            format!(
+                "GET /events?token={token} HTTP/1.1\r\nHost: {}\r\n\r\n",
+                live.addr
+            )
+            .as_bytes(),
+        )
+        .unwrap();
+        stalled.push(s);
+    }
+    // A save that prints 1 000 messages of 8 000 characters, then a few more status changes.
+    let loud = format!(
+        "#declare Long = \"{}\";\n#for (I, 1, 1000) #debug Long + str(I) #end\n{}",
+        "x".repeat(8000),
+        scene(16)
+    );
+    let scene_path = live._dir.path().join("s.scn");
+    std::fs::write(&scene_path, &loud).unwrap();
+    live.watch
+        .expect("render #2 started", Duration::from_secs(60));
+    std::thread::sleep(Duration::from_secs(3));
+    let after = rss(live.pid());
+    println!(
+        "31 stalled event streams, 1000 messages of 8 KB: resident {} MiB before, {} MiB after",
+        before >> 20,
+        after >> 20
+    );
+    assert!(
+        after <= before + MARGIN,
+        "grew by {} MiB",
+        (after - before) >> 20
+    );
+    // A reading tab still gets the status, with the messages that fit and the count of the
+    // rest.
+    let head = format!(
+        "GET /events?token={token} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n",
+        live.addr
+    );
+    let (status, text) = first_event(&live.addr, &head, Duration::from_secs(5));
+    assert_eq!(status, 200);
+    assert!(text.contains("\"more\":"), "{:.200}", text);
+    drop(stalled);
+    drop(dir);
+    live.assert_alive();
+}
