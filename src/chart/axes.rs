@@ -221,7 +221,7 @@ fn steps(lo: f64, hi: f64, step: f64, most: usize) -> Vec<f64> {
     let mut out: Vec<f64> = Vec::new();
     for i in 0..=most {
         let v = (first + i as f64) * step;
-        if !(v <= hi) || out.len() == most {
+        if v.is_nan() || v > hi || out.len() == most {
             break;
         }
         if v >= lo && out.last().is_none_or(|&last| v > last) {

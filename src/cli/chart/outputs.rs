@@ -79,7 +79,8 @@ pub fn read_csv(path: &Path) -> Result<Table, String> {
             let time = col == 2 && !is_floor;
             if !v.is_finite() || v < 0.0 || (time && v == 0.0) {
                 return Err(format!(
-                    "{}:{}: column {} ({}) holds `{text}`, which a chart cannot draw: {} must                      be a finite number {}",
+                    "{}:{}: column {} ({}) holds `{text}`, which a chart cannot draw: {} must \
+                     be a finite number {}",
                     path.display(),
                     n + 1,
                     col + 1,
