@@ -165,7 +165,7 @@ fn scene_and_reference(dir: &Path, settings: &str) -> (PathBuf, PathBuf) {
 /// The scene asks for the most photons per iteration there may be, so `sppm-photons4x` asks
 /// for four times too many: refused before any method renders (the first, `sppm`, has a
 /// 20 s budget and the refusal comes well before it would end), at the scene's settings,
-/// naming the method; nothing is written.
+/// naming the method; nothing is written. Every refused method is named at once.
 #[test]
 fn a_variant_past_the_photon_limit_is_refused_before_any_render() {
     let dir = tempfile::tempdir().unwrap();
@@ -199,6 +199,27 @@ fn a_variant_past_the_photon_limit_is_refused_before_any_render() {
         "{err}"
     );
     assert!(err.contains("scene.scn:1:"), "not at the settings: {err}");
+    assert!(!err.contains("chart: sppm ("), "a method started: {err}");
+    // All methods: each refused one is reported (photon mapping would store too many
+    // photons), none rendered.
+    let out = sppm_within(
+        &[
+            "chart",
+            scene.to_str().unwrap(),
+            "--reference",
+            reference.to_str().unwrap(),
+            "--budget",
+            "20",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        60,
+    )
+    .expect("chart ends");
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("method `photon_map`"), "{err}");
+    assert!(err.contains("method `sppm-photons4x`"), "{err}");
     assert!(!err.contains("chart: sppm ("), "a method started: {err}");
     for name in ["c.png", "c.svg", "c.csv"] {
         assert!(!dir.path().join(name).exists(), "{name} written");

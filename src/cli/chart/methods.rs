@@ -104,41 +104,50 @@ impl Method {
 /// Prepares every chosen method's scene as its render will prepare it (the settings, the
 /// memory estimate, the scene's validation: what `check` runs), before any is rendered, so
 /// that a method the render would refuse stops the chart before it spends the budgets of the
-/// others. The error names the method and keeps the span (the scene's `settings`).
-pub fn validate(chosen: &[(Method, Scene)], options: &RenderOptions) -> Result<(), RenderError> {
-    for (m, scene) in chosen {
-        if let Err(e) = prepare(scene, options) {
-            return Err(RenderError {
+/// others. One error per refused method, naming it, with the span kept (the scene's
+/// `settings`); the help names the methods that pass.
+pub fn validate(chosen: &[(Method, Scene)], options: &RenderOptions) -> Vec<RenderError> {
+    let results: Vec<Result<(), RenderError>> = chosen
+        .iter()
+        .map(|(_, scene)| prepare(scene, options).map(|_| ()))
+        .collect();
+    let passing: Vec<&str> = chosen
+        .iter()
+        .zip(&results)
+        .filter(|(_, r)| r.is_ok())
+        .map(|((m, _), _)| m.label.as_str())
+        .collect();
+    let leave_out = if passing.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "leave the method out with `--methods` (e.g. `--methods {}`)",
+            passing.join(",")
+        )
+    };
+    chosen
+        .iter()
+        .zip(results)
+        .filter_map(|((m, _), r)| r.err().map(|e| (m, e)))
+        .map(|(m, e)| {
+            let help = match (e.help.clone(), leave_out.is_empty()) {
+                (Some(h), false) => Some(format!("{h}; or {leave_out}")),
+                (Some(h), true) => Some(h),
+                (None, false) => Some(leave_out.clone()),
+                (None, true) => None,
+            };
+            RenderError {
                 message: format!(
                     "the chart's method `{}` ({}) cannot render this scene: {}",
                     m.label,
                     m.describe(),
                     e.message
                 ),
-                help: Some(format!(
-                    "{}leave the method out with `--methods` (e.g. `--methods {}`)",
-                    e.help.map_or(String::new(), |h| format!("{h}; or ")),
-                    others(chosen, &m.label)
-                )),
+                help,
                 ..e
-            });
-        }
-    }
-    Ok(())
-}
-
-/// The labels of `chosen` but `label`, comma-separated (`sppm` when none is left).
-fn others(chosen: &[(Method, Scene)], label: &str) -> String {
-    let rest: Vec<&str> = chosen
-        .iter()
-        .map(|(m, _)| m.label.as_str())
-        .filter(|l| *l != label)
-        .collect();
-    if rest.is_empty() {
-        "sppm".into()
-    } else {
-        rest.join(",")
-    }
+            }
+        })
+        .collect()
 }
 
 /// Where the method labelled `label` comes in [`methods`] (others after them).
@@ -212,7 +221,9 @@ mod tests {
                 .collect()
         };
         let options = RenderOptions::default();
-        let e = validate(&chosen(&["sppm", "sppm-photons4x"]), &options).unwrap_err();
+        let errors = validate(&chosen(&["sppm", "sppm-photons4x"]), &options);
+        assert_eq!(errors.len(), 1);
+        let e = &errors[0];
         assert!(e.message.contains("`sppm-photons4x`"), "{}", e.message);
         assert!(
             e.message.contains("4x the scene's photons"),
@@ -221,7 +232,20 @@ mod tests {
         );
         assert!(e.message.contains("at most 100000000000"), "{}", e.message);
         assert!(e.span.is_some(), "the settings block is where it points");
-        assert!(e.help.unwrap().contains("--methods sppm`"));
-        validate(&chosen(&["sppm", "sppm-photons0.25x", "path"]), &options).unwrap();
+        let help = e.help.as_deref().unwrap();
+        assert!(help.contains("--methods sppm`"), "{help}");
+        // Every method is checked: photon mapping stores its photons, too many for memory.
+        let labels = ["sppm", "photon_map", "sppm-photons4x", "path"];
+        let errors = validate(&chosen(&labels), &options);
+        let named: Vec<bool> = ["`photon_map`", "`sppm-photons4x`"]
+            .iter()
+            .zip(&errors)
+            .map(|(l, e)| e.message.contains(l))
+            .collect();
+        assert_eq!(named, [true, true], "{} errors", errors.len());
+        let help = errors[0].help.as_deref().unwrap();
+        assert!(help.contains("--methods sppm,path`"), "{help}");
+        let fine = validate(&chosen(&["sppm", "sppm-photons0.25x", "path"]), &options);
+        assert!(fine.is_empty());
     }
 }

@@ -211,8 +211,11 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             (m, s)
         })
         .collect();
-    if let Err(e) = methods::validate(&chosen, &options) {
-        print_render_error(&loaded.sources, &e);
+    let refused = methods::validate(&chosen, &options);
+    if !refused.is_empty() {
+        for e in &refused {
+            print_render_error(&loaded.sources, e);
+        }
         return Ok(ExitCode::from(EXIT_SCENE_ERROR));
     }
     let stop = Stop::on_interrupt();
