@@ -114,7 +114,15 @@ pub fn read_csv(path: &Path) -> Result<Table, String> {
         }
         table.rows.push(Row {
             method: f[0].to_string(),
-            iterations: f[1].parse().map_err(|_| bad())?,
+            iterations: f[1].trim().parse().map_err(|_| {
+                format!(
+                    "{}:{}: column 2 (iterations) holds `{}`, which is not a whole number of 0 \
+                     or more",
+                    path.display(),
+                    n + 1,
+                    f[1]
+                )
+            })?,
             seconds,
             whole,
             window,
