@@ -99,8 +99,8 @@ fn extreme_values_in_a_csv_are_charted_in_bounded_time() {
 }
 
 /// A value a chart cannot draw (NaN, infinite, a negative error, a time of 0 or less) or an
-/// iteration count that is not a whole number is a
-/// usage error naming the file, its line and the column, and nothing is written.
+/// iteration count that is not a whole number is a usage error naming the file, its line and
+/// the column, and nothing is written.
 #[test]
 fn values_a_chart_cannot_draw_are_refused_naming_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
