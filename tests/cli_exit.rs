@@ -852,9 +852,9 @@ fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
     assert!(!out_png.exists());
 }
 
-/// A table with no point a log-log chart can draw is refused before anything is written: the
-/// CSV and charts of an earlier run with the same name stay as they were (the CSV was replaced
-/// and the charts left stale), and a new name leaves no file. A table whose times are tiny
+/// A table with no point a log-log chart can draw (every error 0) is refused before anything
+/// is written: the CSV and charts of an earlier run with the same name stay as they were (the
+/// CSV was replaced and the charts left stale), and a new name leaves no file. A table whose times are tiny
 /// (fast iterations) keeps them in its CSV, so it redraws.
 #[test]
 fn a_chart_that_cannot_be_drawn_writes_nothing() {
@@ -870,7 +870,7 @@ fn a_chart_that_cannot_be_drawn_writes_nothing() {
     std::fs::write(
         &bad,
         "method,iterations,seconds,rmse,rel_mse,window_rmse,window_rel_mse\n\
-         path,1,0,0,0,,\npath,2,0,0,0,,\n",
+         path,1,0.5,0,0,,\npath,2,1,0,0,,\n",
     )
     .unwrap();
     let chart = |csv: &std::path::Path, png: &std::path::Path| {

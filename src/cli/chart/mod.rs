@@ -13,24 +13,25 @@
 //! `sppm-lang reference`, its noise image beside it gives that floor (for the whole image and
 //! the window); the chart draws it and warns of methods that reach it.
 
+mod methods;
 mod outputs;
+mod run;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 use clap::Args;
-use sppm_lang::chart::Dash;
+use sppm_lang::SourceMap;
 use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
-use sppm_lang::film::Image;
-use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings, render};
-use sppm_lang::scene::{ColorSpace, DEFAULT_PHOTONS, Integrator, Scene, load_image};
+use sppm_lang::render::{InitialRadius, RenderError, RenderOptions, effective_settings};
+use sppm_lang::scene::{ColorSpace, Scene, load_image};
 
-use super::check::print_diagnostics;
-use super::reference::{floor_in, noise_paths, to_f32};
-use super::{EXIT_USAGE, LimitArgs, SizeArgs};
+use super::check::{print_diagnostics, print_render_error};
+use super::reference::{floor_in, noise_paths};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use methods::{Method, methods, parse_methods, rank_of, style_of};
 use outputs::{Floors, output_files, read_csv, write_outputs};
+use run::{Failure, Stop, measure, run_methods};
 
 /// A method whose error ends within this factor of the reference's noise is "at the floor":
 /// its own error is at most about the reference's (sqrt(1.5^2 - 1) = 1.1 times it).
@@ -75,73 +76,6 @@ pub struct ChartArgs {
     pub limits: LimitArgs,
 }
 
-/// A method on the chart: an integrator and its parameter changes, and how it is drawn.
-struct Method {
-    label: String,
-    integrator: Integrator,
-    alpha: Option<f64>,
-    radius_factor: f64,
-    photon_factor: f64,
-    /// Index in the chart's palette.
-    colour: usize,
-    dash: Dash,
-    /// The earlier default radius: one pixel footprint at the look-at distance for every pixel.
-    look_at_radius: bool,
-}
-
-/// The methods: the integrators as they are (solid lines, one colour each), then SPPM's
-/// variations (one line style per parameter; the colour says lower, middle or higher).
-fn methods() -> Vec<Method> {
-    let m = |label: &str, integrator, alpha, radius_factor, photon_factor, colour, dash| Method {
-        label: label.into(),
-        integrator,
-        alpha,
-        radius_factor,
-        photon_factor,
-        colour,
-        dash,
-        look_at_radius: false,
-    };
-    use Dash::{Dashed, Dotted, Solid};
-    use Integrator::{Path, PhotonMap, Ppm, Sppm, Whitted};
-    // Palette: 0 blue, 1 orange, 2 red, 3 green, 4 teal, 5 purple, 6 brown, 7 gold, 8 pink.
-    vec![
-        m("sppm", Sppm, None, 1.0, 1.0, 0, Solid),
-        Method {
-            look_at_radius: true,
-            ..m("sppm-lookat", Sppm, None, 1.0, 1.0, 0, Dashed)
-        },
-        m("ppm", Ppm, None, 1.0, 1.0, 1, Solid),
-        m("photon_map", PhotonMap, None, 1.0, 1.0, 2, Solid),
-        m("path", Path, None, 1.0, 1.0, 3, Solid),
-        m("whitted", Whitted, None, 1.0, 1.0, 6, Solid),
-        m("sppm-alpha0.5", Sppm, Some(0.5), 1.0, 1.0, 4, Dashed),
-        m("sppm-alpha0.7", Sppm, Some(0.7), 1.0, 1.0, 5, Dashed),
-        m("sppm-alpha0.9", Sppm, Some(0.9), 1.0, 1.0, 8, Dashed),
-        m("sppm-radius0.5x", Sppm, None, 0.5, 1.0, 4, Dotted),
-        m("sppm-radius2x", Sppm, None, 2.0, 1.0, 5, Dotted),
-        m("sppm-radius4x", Sppm, None, 4.0, 1.0, 8, Dotted),
-        m("sppm-photons0.25x", Sppm, None, 1.0, 0.25, 7, Dashed),
-        m("sppm-photons4x", Sppm, None, 1.0, 4.0, 7, Dotted),
-    ]
-}
-
-/// Where the method labelled `label` comes in [`methods`] (others after them).
-fn rank_of(label: &str) -> usize {
-    methods()
-        .iter()
-        .position(|m| m.label == label)
-        .unwrap_or(usize::MAX)
-}
-
-/// The colour and line style of the method labelled `label` (`None`: not one of ours).
-fn style_of(label: &str) -> Option<(usize, Dash)> {
-    methods()
-        .into_iter()
-        .find(|m| m.label == label)
-        .map(|m| (m.colour, m.dash))
-}
-
 /// One measurement.
 pub struct Row {
     method: String,
@@ -170,22 +104,6 @@ impl From<ErrorStats> for Errors {
 /// A number of seconds as [`super::parse_seconds`] takes it, with an optional `s`.
 fn parse_budget(text: &str) -> Result<f64, String> {
     super::parse_seconds(text.trim().trim_end_matches('s'))
-}
-
-/// The methods `--methods` names (comma-separated labels); an unknown label is an error
-/// naming the known ones (it would otherwise be skipped, and the chart end up empty).
-fn parse_methods(text: &str) -> Result<Vec<String>, String> {
-    let known: Vec<String> = methods().into_iter().map(|m| m.label).collect();
-    let wanted: Vec<String> = text.split(',').map(|s| s.trim().to_string()).collect();
-    for w in &wanted {
-        if !known.contains(w) {
-            return Err(format!(
-                "--methods: unknown method `{w}`; the methods are {}",
-                known.join(", ")
-            ));
-        }
-    }
-    Ok(wanted)
 }
 
 pub fn run(args: &ChartArgs) -> ExitCode {
@@ -265,137 +183,115 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         error(ref_view, ref_view, Some(win))?;
     }
     let floors = reference_floors(reference_path, ref_view, window)?;
+    // Stopped by the budget or an interruption.
+    let options = RenderOptions {
+        iterations: Some(crate::cli::MAX_ITERATIONS),
+        memory_limit: args.limits.memory_limit,
+        ..Default::default()
+    };
     // The earlier default initial radius, one pixel footprint at the look-at distance, for the
     // `sppm-lookat` method.
-    let look_at_radius = {
-        let settings =
-            effective_settings(&scene, &RenderOptions::default()).map_err(|e| e.message)?;
-        match settings.initial_radius(&scene.camera) {
+    let look_at_radius = match effective_settings(&scene, &options) {
+        Ok(settings) => match settings.initial_radius(&scene.camera) {
             InitialRadius::Fixed(r) => r,
             InitialRadius::Footprint { per_distance } => {
                 per_distance * (scene.camera.look_at - scene.camera.location).length()
             }
+        },
+        Err(e) => {
+            print_render_error(&loaded.sources, &e.at(scene.settings.span));
+            return Ok(ExitCode::from(EXIT_SCENE_ERROR));
         }
     };
-    let mut rows = Vec::new();
-    for m in methods() {
-        if wanted.as_ref().is_some_and(|w| !w.contains(&m.label)) {
-            continue;
+    let chosen: Vec<(Method, Scene)> = methods()
+        .into_iter()
+        .filter(|m| wanted.as_ref().is_none_or(|w| w.contains(&m.label)))
+        .map(|m| {
+            let s = m.scene(&scene, look_at_radius);
+            (m, s)
+        })
+        .collect();
+    let refused = methods::validate(&chosen, &options);
+    if !refused.is_empty() {
+        for e in &refused {
+            print_render_error(&loaded.sources, e);
         }
-        say!("chart: {} ({budget} s)", m.label);
-        let mut s: Scene = scene.clone();
-        s.settings.integrator = m.integrator;
-        if let Some(a) = m.alpha {
-            s.settings.alpha = a;
-        }
-        if m.look_at_radius {
-            s.settings.radius = Some(look_at_radius);
-        }
-        s.settings.radius_scale = m.radius_factor;
-        // The photon variants scale the scene's count, or the fixed default where the scene
-        // leaves the count to SPPM.
-        if m.photon_factor != 1.0 {
-            let n = s.settings.photons.unwrap_or(DEFAULT_PHOTONS) as f64 * m.photon_factor;
-            s.settings.photons = Some((n as u64).max(1));
-        }
-        let measured = measure(&s, budget, ref_view, window)?;
-        if measured.is_empty() {
-            say!("warning: chart: {} finished no iteration", m.label);
-        }
-        for (iterations, seconds, whole, window) in measured {
-            say!(
-                "  {iterations:>6} it {seconds:>8.2} s  rmse {:.5}  relmse {:.5}{}",
-                whole.rmse,
-                whole.rel_mse,
-                window.map_or(String::new(), |w| format!(
-                    "  window rmse {:.5} relmse {:.5}",
-                    w.rmse, w.rel_mse
-                ))
-            );
-            rows.push(Row {
-                method: m.label.clone(),
-                iterations,
-                seconds,
-                whole,
-                window,
-            });
-        }
+        return Ok(ExitCode::from(EXIT_SCENE_ERROR));
     }
-    warn_at_floor(&rows, &floors);
+    let stop = Stop::on_interrupt();
     let name = |p: &std::path::Path| {
         p.file_name().map_or_else(
             || p.display().to_string(),
             |n| n.to_string_lossy().into_owned(),
         )
     };
-    let table = outputs::Table {
+    let mut table = outputs::Table {
         scene: name(scene_path),
         reference: name(reference_path),
-        rows,
+        rows: Vec::new(),
         floors,
         has_window: window.is_some(),
     };
-    write_outputs(&args.output, &table)?;
-    Ok(ExitCode::SUCCESS)
+    let failure = run_methods(&chosen, budget, &mut table.rows, |s| {
+        measure(s, &options, budget, &stop, ref_view, window)
+    });
+    finish(&args.output, &table, failure, &loaded.sources)
 }
 
-/// One measurement: iterations, seconds of rendering, errors on the whole image and window.
-type Measured = (u32, f64, Errors, Option<Errors>);
-
-/// Renders `scene` until the first iteration that ends past `budget` seconds, measuring the
-/// error at the checkpoints and at the last iteration.
-fn measure(
-    scene: &Scene,
-    budget: f64,
-    ref_view: ImageView<'_>,
-    window: Option<Window>,
-) -> Result<Vec<Measured>, String> {
-    // Stopped by `stop` once past the budget.
-    let opts = RenderOptions {
-        iterations: Some(crate::cli::MAX_ITERATIONS),
-        ..Default::default()
-    };
-    let checkpoints: Vec<f64> = (0..6).rev().map(|k| budget / f64::from(1 << k)).collect();
-    let errors = |img: &Image| -> Result<(Errors, Option<Errors>), String> {
-        let pix = to_f32(img);
-        let v = ImageView::new(img.width, img.height, &pix)?;
-        let whole = error(v, ref_view, None)?;
-        let win = window.map(|w| error(v, ref_view, Some(w))).transpose()?;
-        Ok((whole.into(), win.map(Errors::from)))
-    };
-    let stop = AtomicBool::new(false);
-    let mut next = 0usize;
-    let mut overhead = 0.0f64;
-    let mut measured = Vec::new();
-    let mut failure = None;
-    let mut on_progress = |p: &sppm_lang::render::Progress| {
-        let t = p.elapsed.as_secs_f64() - overhead;
-        if next < checkpoints.len() && t >= checkpoints[next] {
-            let t0 = Instant::now();
-            while next < checkpoints.len() && t >= checkpoints[next] {
-                next += 1;
-            }
-            match errors(&p.image()) {
-                Ok((whole, win)) => measured.push((p.iteration, t, whole, win)),
-                Err(e) => failure = Some(e),
-            }
-            overhead += t0.elapsed().as_secs_f64();
+/// Writes the table and its charts, then reports the method that did not finish, if one did
+/// not. The rows of the methods that finished before it are written (a failure or an
+/// interruption late in a long chart keeps them); with none, nothing is written, so the files
+/// of an earlier run stay. An interruption with rows written exits 0, as `render` does.
+fn finish(
+    output: &std::path::Path,
+    table: &outputs::Table,
+    failure: Option<(String, Failure)>,
+    sources: &SourceMap,
+) -> Result<ExitCode, String> {
+    let finished: Vec<&str> = table.rows.iter().fold(Vec::new(), |mut seen, r| {
+        if !seen.contains(&r.method.as_str()) {
+            seen.push(&r.method);
         }
-        if t >= budget {
-            stop.store(true, Ordering::Relaxed);
-        }
+        seen
+    });
+    let Some((label, failure)) = failure else {
+        warn_at_floor(&table.rows, &table.floors);
+        write_outputs(output, table)?;
+        return Ok(ExitCode::SUCCESS);
     };
-    let out = render(scene, &opts, &stop, &mut on_progress).map_err(|e| e.message)?;
-    if let Some(e) = failure {
-        return Err(e);
+    let kept = if finished.is_empty() {
+        "no method had finished before it, so nothing was written".to_string()
+    } else {
+        warn_at_floor(&table.rows, &table.floors);
+        write_outputs(output, table).map_err(|e| {
+            format!("chart: method `{label}` did not finish, and writing the others failed: {e}")
+        })?;
+        format!(
+            "the rows of the methods that finished ({}) were written to `{}` and its charts",
+            finished.join(", "),
+            output.with_extension("csv").display()
+        )
+    };
+    match failure {
+        Failure::Interrupted => {
+            say!("chart: interrupted during method `{label}`; {kept}");
+            Ok(if finished.is_empty() {
+                ExitCode::from(EXIT_SCENE_ERROR)
+            } else {
+                ExitCode::SUCCESS
+            })
+        }
+        Failure::Render(e) => {
+            let e = RenderError {
+                message: format!("the chart's method `{label}` failed: {}", e.message),
+                ..e
+            };
+            print_render_error(sources, &e);
+            say!("chart: {kept}");
+            Ok(ExitCode::from(EXIT_SCENE_ERROR))
+        }
+        Failure::Other(e) => Err(format!("chart: method `{label}` failed: {e}; {kept}")),
     }
-    // The last iteration is always measured (the render may stop between checkpoints).
-    if measured.last().is_none_or(|r| r.0 != out.iterations_done) && out.iterations_done > 0 {
-        let (whole, win) = errors(&out.image)?;
-        let t = out.elapsed.as_secs_f64() - overhead;
-        measured.push((out.iterations_done, t, whole, win));
-    }
-    Ok(measured)
 }
 
 /// The reference's noise floors (whole image, window) from the noise image beside it.
@@ -510,18 +406,71 @@ mod tests {
         assert!(at_floor(&rows, &Floors::default()).is_empty());
     }
 
+    /// Three methods whose second fails: the third is not run, the first one's rows are
+    /// written (CSV and charts) and the error names the failed method and the written one.
+    /// An interruption of the first method writes nothing, and leaves the files there.
     #[test]
-    fn every_method_has_its_own_colour_and_style() {
-        let all = methods();
-        for (i, a) in all.iter().enumerate() {
-            for b in &all[i + 1..] {
-                assert!(
-                    (a.colour, a.dash) != (b.colour, b.dash),
-                    "{} and {} look the same",
-                    a.label,
-                    b.label
-                );
+    fn a_later_method_that_fails_leaves_the_earlier_rows_written() {
+        let src = "settings { resolution <4, 4> }\nlight { <0, 5, -5> intensity 10 }\n";
+        let scene = sppm_lang::load_source("t.scn", src, &Default::default())
+            .scene
+            .expect("the scene loads");
+        let chosen: Vec<(Method, Scene)> = methods()
+            .into_iter()
+            .filter(|m| ["sppm", "path", "whitted"].contains(&m.label.as_str()))
+            .map(|m| (m, scene.clone()))
+            .collect();
+        let e = Errors {
+            rmse: 0.1,
+            rel_mse: 0.01,
+        };
+        let mut calls = 0;
+        let mut rows = Vec::new();
+        let failure = run_methods(&chosen, 1.0, &mut rows, |_| {
+            calls += 1;
+            if calls == 2 {
+                Err(Failure::Other("the disk is on fire".into()))
+            } else {
+                Ok(vec![(1, 0.5, e, None), (2, 1.0, e, None)])
             }
+        });
+        assert_eq!(calls, 2, "the method after the failed one ran");
+        let failure = failure.expect("a failure");
+        assert_eq!(failure.0, "path");
+        let dir = tempfile::tempdir().unwrap();
+        let output = dir.path().join("c.png");
+        let table = outputs::Table {
+            scene: "t.scn".into(),
+            reference: "r.exr".into(),
+            rows,
+            floors: Floors::default(),
+            has_window: false,
+        };
+        let err = finish(&output, &table, Some(failure), &SourceMap::default()).unwrap_err();
+        assert!(
+            err.contains("method `path` failed: the disk is on fire"),
+            "{err}"
+        );
+        assert!(err.contains("finished (sppm) were written"), "{err}");
+        let csv = std::fs::read_to_string(dir.path().join("c.csv")).unwrap();
+        assert_eq!(csv.lines().filter(|l| l.starts_with("sppm,")).count(), 2);
+        assert!(!csv.contains("path,") && !csv.contains("whitted,"), "{csv}");
+        for chart in ["c.png", "c.svg", "c_relmse.png", "c_relmse.svg"] {
+            assert!(dir.path().join(chart).is_file(), "{chart} missing");
         }
+        let before = std::fs::read(dir.path().join("c.csv")).unwrap();
+        let empty = outputs::Table {
+            rows: Vec::new(),
+            ..table
+        };
+        let code = finish(
+            &output,
+            &empty,
+            Some(("sppm".into(), Failure::Interrupted)),
+            &SourceMap::default(),
+        )
+        .unwrap();
+        assert_eq!(code, ExitCode::from(EXIT_SCENE_ERROR));
+        assert_eq!(std::fs::read(dir.path().join("c.csv")).unwrap(), before);
     }
 }

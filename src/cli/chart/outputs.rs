@@ -13,6 +13,17 @@ use sppm_lang::chart::{ChartSpec, Floor, Series, draw};
 
 use super::{Errors, Row, rank_of, style_of};
 
+/// The CSV's columns.
+const COLUMNS: [&str; 7] = [
+    "method",
+    "iterations",
+    "seconds",
+    "rmse",
+    "rel_mse",
+    "window_rmse",
+    "window_rel_mse",
+];
+
 /// The CSV row that holds the reference's noise floor.
 pub const FLOOR_ROW: &str = "reference-noise";
 
@@ -59,21 +70,42 @@ pub fn read_csv(path: &Path) -> Result<Table, String> {
         if f.len() != 7 {
             return Err(bad());
         }
-        let num = |s: &str| s.parse::<f64>().map_err(|_| bad());
+        let is_floor = f[0] == FLOOR_ROW;
+        // A time is positive (the floor row's is 0); an error is 0 or more (0: the images were
+        // equal, a point the log-log chart leaves off).
+        let num = |col: usize| -> Result<f64, String> {
+            let text = f[col].trim();
+            let v: f64 = text.parse().map_err(|_| bad())?;
+            let time = col == 2 && !is_floor;
+            if !v.is_finite() || v < 0.0 || (time && v == 0.0) {
+                return Err(format!(
+                    "{}:{}: column {} ({}) holds `{text}`, which a chart cannot draw: {} must \
+                     be a finite number {}",
+                    path.display(),
+                    n + 1,
+                    col + 1,
+                    COLUMNS[col],
+                    if time { "a time" } else { "an error" },
+                    if time { "above 0" } else { "of 0 or more" },
+                ));
+            }
+            Ok(v)
+        };
         let window = if f[5].is_empty() {
             None
         } else {
             table.has_window = true;
             Some(Errors {
-                rmse: num(f[5])?,
-                rel_mse: num(f[6])?,
+                rmse: num(5)?,
+                rel_mse: num(6)?,
             })
         };
         let whole = Errors {
-            rmse: num(f[3])?,
-            rel_mse: num(f[4])?,
+            rmse: num(3)?,
+            rel_mse: num(4)?,
         };
-        if f[0] == FLOOR_ROW {
+        let seconds = num(2)?;
+        if is_floor {
             table.floors = Floors {
                 whole: Some(whole),
                 window,
@@ -82,8 +114,16 @@ pub fn read_csv(path: &Path) -> Result<Table, String> {
         }
         table.rows.push(Row {
             method: f[0].to_string(),
-            iterations: f[1].parse().map_err(|_| bad())?,
-            seconds: num(f[2])?,
+            iterations: f[1].trim().parse().map_err(|_| {
+                format!(
+                    "{}:{}: column 2 (iterations) holds `{}`, which is not a whole number of 0 \
+                     or more",
+                    path.display(),
+                    n + 1,
+                    f[1]
+                )
+            })?,
+            seconds,
             whole,
             window,
         });
@@ -137,8 +177,7 @@ fn csv_line(
 /// Writes the CSV beside `output` and the charts: RMSE and relative MSE, on the whole image
 /// and (when measured) the window.
 pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
-    let mut csv =
-        String::from("method,iterations,seconds,rmse,rel_mse,window_rmse,window_rel_mse\n");
+    let mut csv = COLUMNS.join(",") + "\n";
     // Commas would split the comment's field in a spreadsheet; they are not in file names we
     // write, and a name with one still reads back (the comment is one line).
     let _ = writeln!(csv, "# scene: {}", table.scene);

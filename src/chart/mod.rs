@@ -8,9 +8,12 @@
 //! mark a floor: a horizontal line below which its values cannot go (e.g. the noise of the
 //! reference the errors were measured against).
 
+mod axes;
+
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::prelude::*;
 
 /// One curve: a label for the legend and its points in drawing order.
@@ -165,83 +168,54 @@ fn write(path: &Path, size: (u32, u32), what: &impl Paint) -> Result<(), String>
     })
 }
 
-/// Axis range covering the finite points (positive ones only on a log axis), padded.
-fn range(values: impl Iterator<Item = f64>, log: bool) -> Result<(f64, f64), String> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite() && (!log || *v > 0.0))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if !lo.is_finite() {
-        return Err(
-            "no point can be drawn (no finite value, or none positive on a log axis)".into(),
-        );
-    }
-    Ok(if log {
-        let (lo, hi) = if hi / lo < 1.0001 {
-            (lo / 2.0, hi * 2.0)
-        } else {
-            (lo, hi)
-        };
-        (lo / 1.25, hi * 1.25)
-    } else {
-        let pad = ((hi - lo) * 0.05).max(hi.abs() * 1e-3).max(1e-12);
-        (lo - pad, hi + pad)
-    })
-}
+type Axis<C> = plotters::coord::combinators::WithKeyPoints<C>;
 
-/// A tick label with at most three significant digits and no float noise.
-fn tick(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let mag = v.abs().log10().floor() as i32;
-    if !(-3..=5).contains(&mag) {
-        return format!("{v:.2e}");
-    }
-    let decimals = (2 - mag).max(0) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
-
-/// Tick values of a log axis over `[lo, hi]`: labelled ones (1, 2, 5 times a power of ten, or
-/// every integer multiple when fewer than four of those fall inside) and grid-only ones (every
-/// integer multiple). plotters' own log ticks leave a range that does not span a whole decade,
-/// or the part below its first power of ten, without labels.
-fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
-    let mut all = Vec::new();
-    let mut decade = 10f64.powf(lo.log10().floor());
-    while decade <= hi && all.len() < 1000 {
-        for m in 1..=9 {
-            let v = m as f64 * decade;
-            if v >= lo && v <= hi {
-                all.push((m, v));
-            }
-        }
-        decade *= 10.0;
-    }
-    let nice: Vec<f64> = all
-        .iter()
-        .filter(|(m, _)| matches!(m, 1 | 2 | 5))
-        .map(|&(_, v)| v)
-        .collect();
-    let every: Vec<f64> = all.iter().map(|&(_, v)| v).collect();
-    let labelled = if nice.len() >= 4 { nice } else { every.clone() };
-    (labelled, every)
-}
-
-fn log_axis(
-    (lo, hi): (f64, f64),
-) -> plotters::coord::combinators::WithKeyPoints<plotters::coord::combinators::LogCoord<f64>> {
-    let (bold, light) = log_ticks(lo, hi);
+/// A log axis over `[lo, hi]` with the ticks of [`axes::log_ticks`].
+fn log_axis((lo, hi): (f64, f64)) -> Axis<plotters::coord::combinators::LogCoord<f64>> {
+    let (bold, light) = axes::log_ticks(lo, hi);
     (lo..hi)
         .log_scale()
         .with_key_points(bold)
         .with_light_points(light)
+}
+
+/// A linear axis with the ticks of [`axes::linear_ticks`]. (plotters' `WithKeyPoints` over its
+/// linear `f64` axis has no label formatting, so the axis is its own type.)
+struct Linear {
+    coord: plotters::coord::types::RangedCoordf64,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+/// A linear axis over `[lo, hi]`.
+fn linear_axis((lo, hi): (f64, f64)) -> Linear {
+    let (bold, light) = axes::linear_ticks(lo, hi);
+    Linear {
+        coord: (lo..hi).into(),
+        bold,
+        light,
+    }
+}
+
+impl Ranged for Linear {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.coord.map(value, limit)
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.coord.range()
+    }
 }
 
 fn plot<DB: DrawingBackend>(
@@ -262,11 +236,11 @@ where
         .floor
         .as_ref()
         .filter(|f| f.value.is_finite() && (!spec.log_y || f.value > 0.0));
-    let xs = range(
+    let xs = axes::range(
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         spec.log_x,
     )?;
-    let ys = range(
+    let ys = axes::range(
         series
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.1))
@@ -286,8 +260,8 @@ where
                 .configure_mesh()
                 .x_desc(&spec.x_label)
                 .y_desc(&spec.y_label)
-                .x_label_formatter(&|v| tick(*v))
-                .y_label_formatter(&|v| tick(*v))
+                .x_label_formatter(&|v| axes::tick(*v))
+                .y_label_formatter(&|v| axes::tick(*v))
                 .draw()
                 .map_err(err)?;
             if let Some(f) = floor {
@@ -338,17 +312,17 @@ where
         ),
         (true, false) => body!(
             builder
-                .build_cartesian_2d(log_axis(xs), ys.0..ys.1)
+                .build_cartesian_2d(log_axis(xs), linear_axis(ys))
                 .map_err(err)?
         ),
         (false, true) => body!(
             builder
-                .build_cartesian_2d(xs.0..xs.1, log_axis(ys))
+                .build_cartesian_2d(linear_axis(xs), log_axis(ys))
                 .map_err(err)?
         ),
         (false, false) => body!(
             builder
-                .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
+                .build_cartesian_2d(linear_axis(xs), linear_axis(ys))
                 .map_err(err)?
         ),
     }
@@ -414,19 +388,6 @@ fn draw_legend<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn log_ticks_label_ranges_that_miss_a_power_of_ten() {
-        let (bold, light) = log_ticks(0.0165, 0.44);
-        let want = [0.02, 0.05, 0.1, 0.2];
-        assert_eq!(bold.len(), want.len(), "{bold:?}");
-        assert!(bold.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12));
-        assert_eq!(light.len(), 8 + 4, "0.02..0.09 and 0.1..0.4: {light:?}");
-        // Less than a decade: every integer multiple is labelled.
-        let (bold, _) = log_ticks(0.25, 0.9);
-        assert_eq!(bold.len(), 7);
-        assert!((bold[0] - 0.3).abs() < 1e-12 && (bold[6] - 0.9).abs() < 1e-12);
-    }
 
     fn spec() -> ChartSpec {
         ChartSpec {
@@ -498,14 +459,36 @@ mod tests {
         assert!(draw_panels(&[], 2, &png).is_err());
     }
 
+    /// Subnormal, huge and equal values on log axes, and values near ±f64::MAX on linear
+    /// ones, are drawn (plotters' own tick search never ended on some of these).
     #[test]
-    fn tick_labels_have_no_float_noise() {
-        assert_eq!(tick(0.30000000000000004), "0.3");
-        assert_eq!(tick(0.1 + 0.2), "0.3");
-        assert_eq!(tick(12.5), "12.5");
-        assert_eq!(tick(1234.0), "1234");
-        assert_eq!(tick(0.000123), "1.23e-4");
-        assert_eq!(tick(2.0), "2");
+    fn extreme_values_are_drawn() {
+        let dir = tempfile::tempdir().unwrap();
+        let one = |points: Vec<(f64, f64)>| {
+            vec![Series {
+                label: "x".into(),
+                points,
+                ..Series::default()
+            }]
+        };
+        let cases = [
+            (true, vec![(5e-324, 5e-324), (1e-310, 1.0)]),
+            (true, vec![(1e-300, 1e-300), (1e300, f64::MAX)]),
+            (true, vec![(5e-324, 2.0), (f64::MAX, 2.0)]),
+            (true, vec![(7.0, 7.0)]),
+            (false, vec![(-f64::MAX, 0.0), (f64::MAX, 5e-324)]),
+            (false, vec![(1.0, 1.0)]),
+        ];
+        for (i, (log, points)) in cases.into_iter().enumerate() {
+            let spec = ChartSpec {
+                log_x: log,
+                log_y: log,
+                ..spec()
+            };
+            let path = dir.path().join(format!("{i}.svg"));
+            draw(&spec, &one(points.clone()), &path).unwrap_or_else(|e| panic!("{points:?}: {e}"));
+            assert!(std::fs::metadata(&path).unwrap().len() > 0);
+        }
     }
 
     #[test]
