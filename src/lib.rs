@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! source text → syntax (pest parse, AST with spans) → eval (interpreter) → scene::Scene (plain data)
-//!             → render (prepared scene: BVH, light sampler) → integrators → film → image files
+//!             → prepare (validated: BVH, lights, camera, budgets) → integrators → film → image files
 //! ```
 //!
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
