@@ -313,7 +313,7 @@ fn only_the_user_gets_in() {
     assert_eq!(a.header("location").as_deref(), Some("/"));
     let cookie = a.header("set-cookie").expect("a cookie");
     assert!(
-        cookie.contains("HttpOnly") && cookie.contains("SameSite=Strict"),
+        cookie.contains("HttpOnly") && cookie.contains("SameSite=Lax"),
         "{cookie}"
     );
     let pair = cookie.split(';').next().unwrap().to_string();

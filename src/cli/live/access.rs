@@ -87,7 +87,7 @@ impl Access {
     pub fn set_cookie(&self) -> Option<String> {
         self.token.as_ref().map(|t| {
             format!(
-                "{}={t}; Path=/; HttpOnly; SameSite=Strict",
+                "{}={t}; Path=/; HttpOnly; SameSite=Lax",
                 self.cookie_name()
             )
         })
