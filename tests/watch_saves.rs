@@ -143,7 +143,6 @@ fn a_save_that_leaves_the_scene_as_it_was_does_not_restart_the_render() {
     let line = w.expect("unchanged", STEP_TIMEOUT);
     assert!(line.contains("render #2 goes on"), "{line}");
     let mut after = 0;
-    let mut seen = Vec::new();
     while after < 3 {
         let line = w.expect("render #", STEP_TIMEOUT);
         assert!(
@@ -153,7 +152,6 @@ fn a_save_that_leaves_the_scene_as_it_was_does_not_restart_the_render() {
         if line.contains("render #2 full iteration") {
             after += 1;
         }
-        seen.push(line);
     }
 }
 
@@ -180,6 +178,52 @@ fn a_broken_save_after_a_no_op_save_keeps_the_finished_image() {
         converged,
         "the finished image was replaced"
     );
+    // Back to the scene as it was: its finished image is still the one on disk.
+    fs::write(&path, &text).unwrap();
+    let line = w.expect("unchanged", STEP_TIMEOUT);
+    assert!(line.contains("render #1 stays"), "{line}");
+    assert_eq!(fs::read(&out).unwrap(), converged);
+}
+
+/// A texture rewritten with the same pixels (a new file renamed over it, as an image editor
+/// saves) leaves the scene as it was; one different pixel does not.
+#[test]
+fn a_texture_saved_with_the_same_pixels_does_not_restart_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tex.scn");
+    let tex = dir.path().join("tex.png");
+    let out = dir.path().join("tex-out.png");
+    let save_texture = |corner: image::Rgb<u8>| {
+        let mut img = image::RgbImage::from_pixel(4, 4, image::Rgb([255, 0, 0]));
+        img.put_pixel(0, 0, corner);
+        let tmp = dir.path().join("tex.tmp.png");
+        img.save(&tmp).unwrap();
+        fs::rename(&tmp, &tex).unwrap();
+    };
+    save_texture(image::Rgb([255, 0, 0]));
+    fs::write(
+        &path,
+        scene(
+            RED,
+            3,
+            "quad { <-5, -5, 0>, <0, 10, 0>, <10, 0, 0>\n\
+               material { diffuse texture { image \"tex.png\" } } }",
+        ),
+    )
+    .unwrap();
+    let mut w = watch(
+        dir.path(),
+        &["tex.scn", "-o", "tex-out.png", "--no-preview"],
+    );
+    w.expect("render #1 full finished", STEP_TIMEOUT);
+    let image = fs::read(&out).unwrap();
+    save_texture(image::Rgb([255, 0, 0]));
+    w.expect("changed: ", STEP_TIMEOUT);
+    let line = w.expect("unchanged", STEP_TIMEOUT);
+    assert!(line.contains("render #1 stays"), "{line}");
+    assert_eq!(fs::read(&out).unwrap(), image);
+    save_texture(image::Rgb([0, 0, 255]));
+    w.expect("render #2 started", STEP_TIMEOUT);
 }
 
 /// A render cancelled by a broken save, then the same scene saved again: the new render of it
@@ -219,9 +263,17 @@ fn a_restarted_render_of_the_same_scene_writes_only_once_it_caught_up() {
         image,
         "the image of {on_disk} iterations was replaced before render #2 caught up"
     );
-    let first = w.expect("written to", STEP_TIMEOUT);
+    w.expect("render #2 full iteration", STEP_TIMEOUT);
+    // Every image render #2 wrote (each says so), up to its first one.
+    let writes: Vec<&String> = w
+        .log
+        .iter()
+        .filter(|l| l.contains("render #2") && l.contains("written to"))
+        .collect();
     assert!(
-        first.contains("render #2 full iteration") && iteration_of(&first) >= on_disk,
-        "render #2 wrote before it had {on_disk} iterations: {first}"
+        writes
+            .iter()
+            .all(|l| l.contains("full iteration") && iteration_of(l) >= on_disk),
+        "render #2 wrote before it had {on_disk} iterations: {writes:?}"
     );
 }

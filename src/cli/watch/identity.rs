@@ -2,12 +2,12 @@
 //! same [`SceneId`], so a save that changes nothing (the same text, a comment, a file rewritten
 //! with the same bytes) does not restart a render.
 //!
-//! The identity is a 128-bit hash of everything the renderer reads: the scene's `Debug` text
+//! The identity is a 64-bit hash of everything the renderer reads: the scene's `Debug` text
 //! (plain data, no hash maps: deterministic) with two exceptions. Spans are left out (they
 //! only place diagnostics; a comment moves them), and the decoded pixels of images and the
 //! arrays of meshes are hashed as raw numbers rather than formatted, which is far faster. The
 //! scene holds every file it read by value (decoded images, parsed meshes), so their contents
-//! are part of the identity.
+//! are part of the identity. The hash (SipHash with fixed keys) is only compared within one run.
 
 use std::fmt::Write as _;
 use std::hash::{DefaultHasher, Hasher};
@@ -18,57 +18,54 @@ use sppm_lang::span::Span;
 
 /// What a scene renders, as a hash (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SceneId(u64, u64);
+pub struct SceneId(u64);
 
 impl SceneId {
     pub fn of(scene: &Scene) -> SceneId {
-        let mut h = Hash128::new();
+        let mut h = Hashing::default();
         let stripped = stripped(scene, &mut h);
         // Writing into a hash cannot fail.
         let _ = write!(h, "{stripped:?}");
-        h.finish()
+        h.flush();
+        SceneId(h.hasher.finish())
     }
 }
 
-/// Two independent 64-bit hashes of the same bytes.
-struct Hash128(DefaultHasher, DefaultHasher);
+/// A hash fed through a buffer: `Debug` writes many short pieces, each call of the hash costs.
+#[derive(Default)]
+struct Hashing {
+    hasher: DefaultHasher,
+    buffer: Vec<u8>,
+}
 
-impl Hash128 {
-    fn new() -> Self {
-        let (mut a, mut b) = (DefaultHasher::new(), DefaultHasher::new());
-        a.write_u8(1);
-        b.write_u8(2);
-        Self(a, b)
-    }
+impl Hashing {
+    const BLOCK: usize = 1 << 16;
 
     fn bytes(&mut self, bytes: &[u8]) {
-        self.0.write(bytes);
-        self.1.write(bytes);
+        self.buffer.extend_from_slice(bytes);
+        if self.buffer.len() >= Self::BLOCK {
+            self.flush();
+        }
     }
 
-    /// Numbers as their little-endian bytes, a block at a time, followed by their count (so that
-    /// the arrays of one image or mesh cannot run into the next).
+    fn flush(&mut self) {
+        self.hasher.write(&self.buffer);
+        self.buffer.clear();
+    }
+
+    /// Numbers as their little-endian bytes, followed by their count (so that the arrays of
+    /// one image or mesh cannot run into the next).
     fn numbers<const N: usize>(&mut self, values: impl Iterator<Item = [u8; N]>) {
-        let mut block = Vec::with_capacity(4096);
         let mut count = 0u64;
         for v in values {
-            block.extend_from_slice(&v);
+            self.bytes(&v);
             count += 1;
-            if block.len() >= 4096 {
-                self.bytes(&block);
-                block.clear();
-            }
         }
-        self.bytes(&block);
         self.bytes(&count.to_le_bytes());
-    }
-
-    fn finish(&self) -> SceneId {
-        SceneId(self.0.finish(), self.1.finish())
     }
 }
 
-impl std::fmt::Write for Hash128 {
+impl std::fmt::Write for Hashing {
     fn write_str(&mut self, s: &str) -> std::fmt::Result {
         self.bytes(s.as_bytes());
         Ok(())
@@ -77,7 +74,7 @@ impl std::fmt::Write for Hash128 {
 
 /// A copy of `scene` without spans, its images and meshes emptied after their numbers went into
 /// `h` (in the order the scene holds them).
-fn stripped(scene: &Scene, h: &mut Hash128) -> Scene {
+fn stripped(scene: &Scene, h: &mut Hashing) -> Scene {
     let mut s = scene.clone();
     s.settings.span = Span::detached();
     s.camera.span = Span::detached();
@@ -101,7 +98,7 @@ fn stripped(scene: &Scene, h: &mut Hash128) -> Scene {
     s
 }
 
-fn strip_object(o: &mut Object, h: &mut Hash128) {
+fn strip_object(o: &mut Object, h: &mut Hashing) {
     o.span = Span::detached();
     match &mut o.shape {
         Shape::Mesh { mesh } => *mesh = strip_mesh(mesh, h),
@@ -115,7 +112,7 @@ fn strip_object(o: &mut Object, h: &mut Hash128) {
     }
 }
 
-fn strip_image(image: &ImageData, h: &mut Hash128) -> Arc<ImageData> {
+fn strip_image(image: &ImageData, h: &mut Hashing) -> Arc<ImageData> {
     h.numbers(
         image
             .pixels
@@ -131,7 +128,7 @@ fn strip_image(image: &ImageData, h: &mut Hash128) -> Arc<ImageData> {
     })
 }
 
-fn strip_mesh(mesh: &MeshData, h: &mut Hash128) -> Arc<MeshData> {
+fn strip_mesh(mesh: &MeshData, h: &mut Hashing) -> Arc<MeshData> {
     for vectors in [&mesh.positions, &mesh.normals] {
         h.numbers(
             vectors
