@@ -179,19 +179,16 @@ impl DependencyWatcher {
     /// Moves the events already queued into the pending batch (without waiting).
     fn collect_pending(&mut self) {
         while let Ok(event) = self.events.try_recv() {
-            match event {
-                Ok(event) => {
-                    if !self.is_relevant(&event) {
-                        continue;
-                    }
-                    for p in event.paths {
-                        if self.files.contains(&p) {
-                            self.pending.insert(p);
-                        }
+            // As in `wait_batch`: an error is a change.
+            if let Ok(event) = event {
+                if !self.is_relevant(&event) {
+                    continue;
+                }
+                for p in event.paths {
+                    if self.files.contains(&p) {
+                        self.pending.insert(p);
                     }
                 }
-                // As in `wait_batch`: an error is a change.
-                Err(_) => {}
             }
             self.pending_since.get_or_insert_with(Instant::now);
         }
