@@ -183,6 +183,11 @@ fn a_broken_save_after_a_no_op_save_keeps_the_finished_image() {
     let line = w.expect("unchanged", STEP_TIMEOUT);
     assert!(line.contains("render #1 stays"), "{line}");
     assert_eq!(fs::read(&out).unwrap(), converged);
+    // The image deleted by hand: the same save renders it again.
+    fs::remove_file(&out).unwrap();
+    fs::write(&path, &text).unwrap();
+    w.expect("render #2 full finished", STEP_TIMEOUT);
+    assert_eq!(fs::read(&out).unwrap(), converged, "the same render, again");
 }
 
 /// A texture rewritten with the same pixels (a new file renamed over it, as an image editor

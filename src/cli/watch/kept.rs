@@ -36,15 +36,17 @@ pub struct OnDisk(Arc<Mutex<Option<Written>>>);
 
 impl OnDisk {
     /// Writes with `write` when `image` may replace what is on disk, and records it when that
-    /// succeeds; `Ok(false)` when the image on disk is kept.
+    /// succeeds; `Ok(false)` when the image on disk is kept. When the file is gone
+    /// (`!present`: deleted by hand), any image is better than none.
     pub fn write_if_better<E>(
         &self,
         image: Written,
+        present: bool,
         write: impl FnOnce() -> Result<(), E>,
     ) -> Result<bool, E> {
         // A panic elsewhere while holding the lock leaves plain data.
         let mut last = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        if !image.replaces(last.as_ref()) {
+        if present && !image.replaces(last.as_ref()) {
             return Ok(false);
         }
         write()?;
@@ -102,13 +104,28 @@ mod tests {
             *n += 1;
             Ok::<(), ()>(())
         };
-        assert_eq!(disk.write_if_better(full(10), || ok(&mut writes)), Ok(true));
-        assert_eq!(disk.write_if_better(full(3), || ok(&mut writes)), Ok(false));
+        assert_eq!(
+            disk.write_if_better(full(10), true, || ok(&mut writes)),
+            Ok(true)
+        );
+        assert_eq!(
+            disk.write_if_better(full(3), true, || ok(&mut writes)),
+            Ok(false)
+        );
         assert_eq!(writes, 1, "the image of 3 iterations was not written");
         // A failed write is not recorded: the next image of fewer iterations than it still
         // compares with the 10 on disk.
-        assert_eq!(disk.write_if_better(full(20), || Err(())), Err(()));
-        assert_eq!(disk.write_if_better(full(12), || ok(&mut writes)), Ok(true));
+        assert_eq!(disk.write_if_better(full(20), true, || Err(())), Err(()));
+        assert_eq!(
+            disk.write_if_better(full(12), true, || ok(&mut writes)),
+            Ok(true)
+        );
         assert_eq!(writes, 2);
+        // The file deleted: the image of fewer iterations is written after all.
+        assert_eq!(
+            disk.write_if_better(full(1), false, || ok(&mut writes)),
+            Ok(true)
+        );
+        assert_eq!(writes, 3);
     }
 }

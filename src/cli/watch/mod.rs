@@ -245,7 +245,9 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         });
         let scene = scene.map(|s| (SceneId::of(&s), s));
         let unchanged = match (&scene, current.as_mut()) {
-            (Some((id, _)), Some(c)) => c.serves(*id).then_some((c.number, c.job.is_some())),
+            // A finished image deleted by hand is rendered again.
+            (Some((id, _)), Some(c)) => (c.serves(*id) && (c.job.is_some() || output.exists()))
+                .then_some((c.number, c.job.is_some())),
             _ => None,
         };
         match (unchanged, scene) {

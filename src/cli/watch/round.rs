@@ -72,7 +72,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                    written: Written,
                    change: &dyn Fn(&mut live::Status)|
      -> Result<bool, String> {
-        let wrote = r.on_disk.write_if_better(written, || {
+        let wrote = r.on_disk.write_if_better(written, output.exists(), || {
             if (image.width, image.height) == full_size {
                 image.write(output, exposure)
             } else {
