@@ -8,6 +8,11 @@
 //! (backup files `file~`, `.#file`, swap files, our own output images) are ignored. A dependency
 //! whose directory does not exist yet is polled, so creating it triggers a change.
 //!
+//! No save is lost while an evaluation runs: the caller keeps the previous set watched during
+//! it, and replacing the set keeps the events that arrived meanwhile (for the old set or the
+//! new one) for the next wait. A file in a folder the old set did not cover is reported when
+//! it was modified after the evaluation began ([`DependencyWatcher::set_dependencies_after`]).
+//!
 //! Events are batched: after the first relevant event the watcher waits until the files have been
 //! quiet for [`QUIET`] or [`MAX_BATCH`] has passed since the first event, so one save (which
 //! editors often turn into several events) is one change.
@@ -15,7 +20,7 @@
 use std::collections::{BTreeSet, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use notify::{EventKind, RecommendedWatcher, RecursiveMode, Watcher};
 
@@ -25,6 +30,9 @@ pub const QUIET: Duration = Duration::from_millis(100);
 pub const MAX_BATCH: Duration = Duration::from_millis(500);
 /// How often dependencies in directories that do not exist yet are looked for.
 pub const POLL: Duration = Duration::from_millis(250);
+/// How far a file's modification time may lag the clock (file systems stamp times with a
+/// coarse clock, some to 2 s): see [`DependencyWatcher::set_dependencies_after`].
+pub const CLOCK_MARGIN: Duration = Duration::from_secs(2);
 
 /// One batch of changes.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +62,9 @@ pub struct DependencyWatcher {
     dirs: HashSet<PathBuf>,
     /// Dependencies whose directory is missing: polled.
     missing: BTreeSet<PathBuf>,
+    /// Changes seen outside a wait (see `set_dependencies`), and when the first was seen.
+    pending: BTreeSet<PathBuf>,
+    pending_since: Option<Instant>,
 }
 
 impl DependencyWatcher {
@@ -69,18 +80,45 @@ impl DependencyWatcher {
             files: HashSet::new(),
             dirs: HashSet::new(),
             missing: BTreeSet::new(),
+            pending: BTreeSet::new(),
+            pending_since: None,
         })
     }
 
     /// Replaces the watched set by `files`: new directories are watched, directories no
-    /// dependency lives in any more are dropped.
+    /// dependency lives in any more are dropped. Events that arrived since the last wait, for a
+    /// file of the old set or of the new one, are kept: the next wait reports them.
     pub fn set_dependencies<I, P>(&mut self, files: I) -> Result<(), String>
     where
         I: IntoIterator<Item = P>,
         P: AsRef<Path>,
     {
-        self.files.clear();
-        self.missing.clear();
+        self.replace(files, None)
+    }
+
+    /// Like [`set_dependencies`](Self::set_dependencies), for the files an evaluation that
+    /// started at `read_from` read. Until now a folder not watched before was not watched: a
+    /// file in it modified since `read_from` (less [`CLOCK_MARGIN`]) may have changed after the
+    /// evaluation read it, so it is reported as changed by the next wait.
+    pub fn set_dependencies_after<I, P>(
+        &mut self,
+        files: I,
+        read_from: SystemTime,
+    ) -> Result<(), String>
+    where
+        I: IntoIterator<Item = P>,
+        P: AsRef<Path>,
+    {
+        self.replace(files, Some(read_from))
+    }
+
+    fn replace<I, P>(&mut self, files: I, read_from: Option<SystemTime>) -> Result<(), String>
+    where
+        I: IntoIterator<Item = P>,
+        P: AsRef<Path>,
+    {
+        let mut new_files = HashSet::new();
+        let mut missing = BTreeSet::new();
         let mut wanted = HashSet::new();
         for file in files {
             let path = normalize(file.as_ref());
@@ -96,25 +134,64 @@ impl DependencyWatcher {
                         wanted.insert(dir.to_path_buf());
                     }
                     None => {
-                        self.missing.insert(path.clone());
+                        missing.insert(path.clone());
                     }
                 }
-                self.files.insert(path);
+                new_files.insert(path);
             }
         }
+        // Events queued while the files were being read belong to the next batch.
+        self.files.extend(new_files.iter().cloned());
+        self.collect_pending();
+        self.files = new_files;
+        self.missing = missing;
         for dir in self.dirs.difference(&wanted).cloned().collect::<Vec<_>>() {
             let _ = self.watcher.unwatch(&dir);
             self.dirs.remove(&dir);
         }
+        let mut newly = HashSet::new();
         for dir in wanted {
             if !self.dirs.contains(&dir) {
                 self.watcher
                     .watch(&dir, RecursiveMode::NonRecursive)
                     .map_err(|e| format!("cannot watch `{}`: {e}", dir.display()))?;
-                self.dirs.insert(dir);
+                self.dirs.insert(dir.clone());
+                newly.insert(dir);
+            }
+        }
+        if let Some(read_from) = read_from {
+            let since = read_from.checked_sub(CLOCK_MARGIN).unwrap_or(UNIX_EPOCH);
+            let late = self.files.iter().filter(|f| {
+                f.parent().is_some_and(|d| newly.contains(d))
+                    && std::fs::metadata(f)
+                        .and_then(|m| m.modified())
+                        .is_ok_and(|t| t >= since)
+            });
+            let late: Vec<PathBuf> = late.cloned().collect();
+            if !late.is_empty() {
+                self.pending.extend(late);
+                self.pending_since.get_or_insert_with(Instant::now);
             }
         }
         Ok(())
+    }
+
+    /// Moves the events already queued into the pending batch (without waiting).
+    fn collect_pending(&mut self) {
+        while let Ok(event) = self.events.try_recv() {
+            // As in `wait_batch`: an error is a change.
+            if let Ok(event) = event {
+                if !self.is_relevant(&event) {
+                    continue;
+                }
+                for p in event.paths {
+                    if self.files.contains(&p) {
+                        self.pending.insert(p);
+                    }
+                }
+            }
+            self.pending_since.get_or_insert_with(Instant::now);
+        }
     }
 
     /// The files being watched (normalised), sorted.
@@ -142,8 +219,9 @@ impl DependencyWatcher {
         deadline: Option<Instant>,
         stop: &dyn Fn() -> bool,
     ) -> Option<Batch> {
-        let mut changed = BTreeSet::new();
-        let mut first: Option<Instant> = None;
+        // Changes seen while the dependencies were replaced open the batch.
+        let mut changed = std::mem::take(&mut self.pending);
+        let mut first = self.pending_since.take();
         loop {
             if stop() {
                 return None;
@@ -375,6 +453,64 @@ mod tests {
         );
         fs::write(&a, "2").unwrap();
         assert_eq!(wait_once(&mut w), Some(vec![normalize(&a)]));
+    }
+
+    /// An evaluation reads the files while the old set is still watched; a save during it
+    /// (of a file in the old set, or of one only the new set has) is reported by the next wait.
+    #[test]
+    fn saves_during_an_evaluation_are_kept_across_set_dependencies() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.scn"), dir.path().join("b.scn"));
+        fs::write(&a, "1").unwrap();
+        fs::write(&b, "1").unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&a]).unwrap();
+        settle(&mut w);
+        // "Evaluating": the save's events queue up, nobody waits.
+        fs::write(&a, "2").unwrap();
+        std::thread::sleep(Duration::from_millis(300));
+        w.set_dependencies([&a]).unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&a)]));
+        fs::write(&b, "2").unwrap();
+        std::thread::sleep(Duration::from_millis(300));
+        w.set_dependencies([&a, &b]).unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&b)]));
+    }
+
+    /// A file in a folder that nothing watched while the evaluation read it: reported when it
+    /// was modified after the evaluation began, not when it is older.
+    #[test]
+    fn a_file_of_a_new_folder_modified_during_the_evaluation_is_reported() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("s.scn");
+        let (fresh, old) = (dir.path().join("new"), dir.path().join("old"));
+        fs::create_dir(&fresh).unwrap();
+        fs::create_dir(&old).unwrap();
+        let (inc, tex) = (fresh.join("inc.scn"), old.join("tex.png"));
+        fs::write(&scene, "1").unwrap();
+        fs::write(&tex, "x").unwrap();
+        let hour_ago = SystemTime::now() - Duration::from_secs(3600);
+        fs::File::options()
+            .write(true)
+            .open(&tex)
+            .unwrap()
+            .set_modified(hour_ago)
+            .unwrap();
+        let mut w = DependencyWatcher::new().unwrap();
+        w.set_dependencies([&scene]).unwrap();
+        settle(&mut w);
+        let began = SystemTime::now();
+        fs::write(&inc, "edited after the evaluation read it").unwrap();
+        w.set_dependencies_after([&scene, &inc, &tex], began)
+            .unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&inc)]));
+        // Both folders are watched from now on; nothing else is pending.
+        assert_eq!(
+            w.wait(Some(Instant::now() + Duration::from_millis(500)), &|| false),
+            None
+        );
+        fs::write(&tex, "y").unwrap();
+        assert_eq!(wait_once(&mut w), Some(vec![normalize(&tex)]));
     }
 
     #[test]

@@ -2,33 +2,44 @@
 //!
 //! Each round: load the scene, watch exactly the files the load read, render (a quick preview
 //! first, then the full settings) on a worker thread that writes progressive snapshots
-//! atomically, and wait for the next change. A change cancels the render in flight. A scene
-//! with errors prints its diagnostics and leaves the last good image untouched.
+//! atomically, and wait for the next change. A scene with errors prints its diagnostics and
+//! leaves the last good image untouched.
+//!
+//! No save is lost and no work is thrown away for nothing: the files of the previous load stay
+//! watched while the next one runs (the scene itself from the start), and a save during a load
+//! starts another round. The render in flight goes on during the load; it is cancelled only
+//! when the new load gives another scene ([`identity::SceneId`]) or errors. A save that leaves
+//! the scene as it was keeps the render going (or finished). A render never replaces a more
+//! converged image of the same scene ([`kept`]).
 //!
 //! With `--serve`, the same events also go to a local web page (see `super::live`).
 //!
 //! Status lines go to stderr. When stderr is not a terminal they are plain lines starting with
 //! `[watch]`, one per event, which the integration tests read.
 
+mod identity;
+mod kept;
+mod load;
 mod round;
 
 use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Instant, SystemTime};
 
 use clap::Args;
+use sppm_lang::Diagnostic;
 use sppm_lang::files::FileError;
-use sppm_lang::scene::{Background, Scene};
 use sppm_lang::watch::DependencyWatcher;
-use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
 
-use super::check::print_diagnostics;
 use super::live::{self, Hub};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use identity::SceneId;
+use kept::OnDisk;
+use load::load;
 use round::{Round, start};
 
 #[derive(Debug, Clone, Args)]
@@ -78,9 +89,12 @@ pub struct WatchArgs {
 pub const DEFAULT_PORT: u16 = 8421;
 
 /// How a render round ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Outcome {
     Finished,
     Cancelled,
+    /// The renderer refused the scene or failed (a save of the same scene tries again).
+    Failed,
 }
 
 struct Job {
@@ -95,7 +109,39 @@ impl Job {
     fn stop(self, keep_image: bool) -> Outcome {
         self.keep.store(keep_image, Ordering::SeqCst);
         self.cancel.store(true, Ordering::SeqCst);
-        self.handle.join().unwrap_or(Outcome::Cancelled)
+        self.handle.join().unwrap_or(Outcome::Failed)
+    }
+}
+
+/// The latest round that rendered: its scene and how it is going.
+struct Current {
+    number: u32,
+    scene: SceneId,
+    /// `None` once the render ended and `outcome` says how.
+    job: Option<Job>,
+    outcome: Option<Outcome>,
+}
+
+impl Current {
+    /// Whether a load that gave `scene` can leave this round as it is: the same scene, still
+    /// rendering or finished.
+    fn serves(&mut self, scene: SceneId) -> bool {
+        if self.job.as_ref().is_some_and(|j| j.handle.is_finished()) {
+            self.stop(false);
+        }
+        self.scene == scene && (self.job.is_some() || self.outcome == Some(Outcome::Finished))
+    }
+
+    /// Stops the render if it is still going; `keep_image` writes its finished iterations
+    /// (Ctrl-C), otherwise a cancellation is said.
+    fn stop(&mut self, keep_image: bool) {
+        if let Some(job) = self.job.take() {
+            let outcome = job.stop(keep_image);
+            if outcome == Outcome::Cancelled && !keep_image {
+                status(&format!("render #{} cancelled", self.number));
+            }
+            self.outcome = Some(outcome);
+        }
     }
 }
 
@@ -155,17 +201,25 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     let clear = terminal && !args.no_clear;
     let preview = !args.no_preview;
     let options = args.limits.options();
-    let mut job: Option<Job> = None;
+    let on_disk = OnDisk::default();
+    let mut current: Option<Current> = None;
     let mut round = 0u32;
     let mut changed_at = Instant::now();
     // The first round follows no save.
     let mut saved_at = None;
+    // Watched from before the first load, so that a save during it starts the next round.
+    if let Err(e) = watcher.set_dependencies([&args.scene]) {
+        status(&format!("cannot watch the scene's files: {e}"));
+    }
     loop {
         if clear {
             say_inline!("\x1b[2J\x1b[H");
         }
+        // The previous files stay watched (and the render in flight goes on) during the load.
+        let load_started = SystemTime::now();
         let loaded = load(&args.scene, &options);
-        if let Err(e) = watcher.set_dependencies(&loaded.dependencies) {
+        let watched = loaded.dependencies.iter().chain([&args.scene]);
+        if let Err(e) = watcher.set_dependencies_after(watched, load_started) {
             status(&format!("cannot watch the scene's files: {e}"));
         }
         let mut diagnostics = live::diagnostics_view(&loaded.sources, &loaded.diagnostics);
@@ -193,8 +247,39 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                 None
             }
         });
-        match scene {
-            Some(scene) => {
+        let scene = scene.map(|s| (SceneId::of(&s), s));
+        let unchanged = match (&scene, current.as_mut()) {
+            // A finished image deleted by hand is rendered again.
+            (Some((id, _)), Some(c)) => (c.serves(*id) && (c.job.is_some() || output.exists()))
+                .then_some((c.number, c.job.is_some())),
+            _ => None,
+        };
+        match (unchanged, scene) {
+            (Some((number, true)), _) => {
+                status(&format!(
+                    "unchanged: the scene is as before; render #{number} goes on"
+                ));
+            }
+            (Some((number, false)), _) => {
+                status(&format!(
+                    "unchanged: the scene is as before; the image of render #{number} stays"
+                ));
+                // A save with errors may have come in between: the page shows the finished
+                // render again.
+                if let Some(hub) = &hub {
+                    hub.update(|s| {
+                        s.state = "finished";
+                        s.message = format!("render #{number} finished; the scene is unchanged");
+                        s.saved_at = saved_at;
+                        s.diagnostics = diagnostics;
+                    });
+                }
+                status("waiting for changes");
+            }
+            (None, Some((id, scene))) => {
+                if let Some(c) = &mut current {
+                    c.stop(false);
+                }
                 round += 1;
                 status(&format!(
                     "render #{round} started ({})",
@@ -213,9 +298,11 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                         s.diagnostics = diagnostics;
                     });
                 }
-                job = Some(start(Round {
+                let job = start(Round {
                     number: round,
                     scene,
+                    identity: id,
+                    on_disk: on_disk.clone(),
                     output: output.clone(),
                     preview,
                     snapshot_every: args.snapshot_every,
@@ -224,9 +311,18 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                     changed_at,
                     sources: loaded.sources,
                     hub: hub.clone(),
-                }));
+                });
+                current = Some(Current {
+                    number: round,
+                    scene: id,
+                    job: Some(job),
+                    outcome: None,
+                });
             }
-            None => {
+            (None, None) => {
+                if let Some(c) = &mut current {
+                    c.stop(false);
+                }
                 let (state, message) = if loaded.empty {
                     (
                         "empty",
@@ -253,14 +349,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             }
         }
         let stop = || interrupted.load(Ordering::SeqCst);
-        let changes = watcher.wait_batch(None, &stop);
-        if let Some(j) = job.take() {
-            let outcome = j.stop(changes.is_none());
-            if matches!(outcome, Outcome::Cancelled) && changes.is_some() {
-                status(&format!("render #{round} cancelled"));
-            }
-        }
-        match changes {
+        match watcher.wait_batch(None, &stop) {
             Some(batch) => {
                 changed_at = batch.first_event;
                 saved_at = Some(batch.first_event);
@@ -272,7 +361,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                 status(&format!("changed: {}", names.join(", ")));
             }
             None => {
-                // A render in flight has written its finished iterations (see `start`).
+                // A render in flight writes its finished iterations (see `start`).
+                if let Some(c) = &mut current {
+                    c.stop(true);
+                }
                 status("interrupted");
                 return ExitCode::SUCCESS;
             }
@@ -280,87 +372,11 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     }
 }
 
-/// What one load gives the watch loop.
-struct Load {
-    /// The file was empty or declared nothing: no object, no light, no background (already
-    /// reported).
-    empty: bool,
-    scene: Option<Scene>,
-    dependencies: Vec<PathBuf>,
-    sources: SourceMap,
-    diagnostics: Vec<Diagnostic>,
-}
-
 /// A number of seconds from 0 to [`super::MAX_SECONDS`] (0: write every iteration).
 fn parse_interval(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(0.0) => Ok(0.0),
         _ => super::parse_seconds(text),
-    }
-}
-
-fn load(path: &Path, options: &EvalOptions) -> Load {
-    // Editors truncate a file before writing it: an empty scene is a save in progress (or a
-    // mistake), never a scene to render over the last image.
-    if std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() == 0) {
-        status(&format!(
-            "`{}` is empty; the last image is kept (waiting for the next save)",
-            path.display()
-        ));
-        return Load {
-            empty: true,
-            scene: None,
-            dependencies: vec![path.to_path_buf()],
-            sources: SourceMap::default(),
-            diagnostics: Vec::new(),
-        };
-    }
-    match sppm_lang::load_file(path, options) {
-        Ok(loaded) => {
-            print_diagnostics(&loaded);
-            let scene = if loaded.has_errors() {
-                None
-            } else {
-                loaded.scene
-            };
-            // Only blanks and comments (a save caught half-written, or a file cleared to start
-            // again): nothing to render over the last image either. (A background alone, such
-            // as an environment map to look at, is something.)
-            let bare = scene.as_ref().is_some_and(|s| {
-                s.objects.is_empty()
-                    && s.lights.is_empty()
-                    && matches!(s.background, Background::Color(c) if c == glam::DVec3::ZERO)
-            });
-            if bare {
-                status(&format!(
-                    "`{}` declares no object, no light and no background; the last image is \
-                     kept (waiting for the next save)",
-                    path.display()
-                ));
-            }
-            Load {
-                empty: bare,
-                scene: scene.filter(|_| !bare),
-                dependencies: loaded.dependencies,
-                sources: loaded.sources,
-                diagnostics: loaded.diagnostics,
-            }
-        }
-        Err(e) => {
-            // Deleted between saves (delete-and-recreate): keep watching the path.
-            let message = e.with_path(path);
-            status(&message);
-            Load {
-                empty: false,
-                scene: None,
-                dependencies: vec![path.to_path_buf()],
-                sources: SourceMap::default(),
-                diagnostics: vec![Diagnostic::error(
-                    sppm_lang::span::Span::detached(),
-                    message,
-                )],
-            }
-        }
     }
 }
 

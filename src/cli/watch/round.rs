@@ -1,5 +1,6 @@
 //! One render round of `watch` on a worker thread: an optional preview, then the full render,
-//! with snapshots to the output file (and the live page).
+//! with snapshots to the output file (and the live page). An image that is less converged than
+//! the one on disk of the same scene is not written (see `super::kept`).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -13,12 +14,18 @@ use sppm_lang::scene::Scene;
 
 use super::super::check::{print_render_error, print_render_warning};
 use super::super::live::{self, Hub};
+use super::identity::SceneId;
+use super::kept::{OnDisk, Written};
 use super::{Job, Outcome, status};
 
 /// What a round renders and where it reports.
 pub struct Round {
     pub number: u32,
     pub scene: Scene,
+    /// The identity of `scene` (before the preview is made of it).
+    pub identity: SceneId,
+    /// The image on disk, shared with the other rounds.
+    pub on_disk: OnDisk,
     pub output: PathBuf,
     pub preview: bool,
     /// Seconds between snapshots (0: every iteration).
@@ -55,17 +62,36 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
     stages.push(("full", r.scene));
     let mut first_snapshot = true;
     let output = &r.output;
+    let kept_said = AtomicBool::new(false);
     // Every image goes to the file at the full size (a preview is scaled up, so that a viewer
-    // never sees the size change) and, unscaled, to the page, which scales it itself.
-    let publish = |image: &Image, exposure: f64, change: &dyn Fn(&mut live::Status)| {
+    // never sees the size change) and, unscaled, to the page, which scales it itself; unless
+    // the image there is a more converged one of this scene (`Ok(false)`; the page gets the
+    // figures only).
+    let publish = |image: &Image,
+                   exposure: f64,
+                   written: Written,
+                   change: &dyn Fn(&mut live::Status)|
+     -> Result<bool, String> {
+        let wrote = r.on_disk.write_if_better(written, output.exists(), || {
+            if (image.width, image.height) == full_size {
+                image.write(output, exposure)
+            } else {
+                upscale(image, full_size).write(output, exposure)
+            }
+        });
         if let Some(hub) = &r.hub {
-            hub.publish(image, full_size, change);
+            match wrote {
+                Ok(false) => hub.update(change),
+                _ => hub.publish(image, full_size, change),
+            }
         }
-        if (image.width, image.height) == full_size {
-            image.write(output, exposure)
-        } else {
-            upscale(image, full_size).write(output, exposure)
+        if matches!(wrote, Ok(false)) && !kept_said.swap(true, Ordering::Relaxed) {
+            status(&format!(
+                "render #{number}: the image on disk is a more converged render of this scene; \
+                 it is kept until this render catches up"
+            ));
         }
+        wrote
     };
     for (stage, scene) in stages {
         let options = RenderOptions {
@@ -79,6 +105,11 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
             ..RenderOptions::default()
         };
         let exposure = scene.settings.exposure;
+        let image_at = |iterations| Written {
+            scene: r.identity,
+            full: stage == "full",
+            iterations,
+        };
         let mut last_write: Option<Instant> = None;
         let mut written = 0u32;
         let mut on_progress = |p: &render::Progress| {
@@ -97,8 +128,9 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                 s.elapsed = p.elapsed.as_secs_f64();
                 s.photons_per_second = rate;
             };
-            match publish(&p.image(), exposure, &progress) {
-                Ok(()) => {
+            match publish(&p.image(), exposure, image_at(p.iteration), &progress) {
+                Ok(false) => last_write = Some(Instant::now()),
+                Ok(true) => {
                     last_write = Some(Instant::now());
                     written = p.iteration;
                     let latency = if first_snapshot {
@@ -149,11 +181,15 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
         ) {
             Ok(out) if out.cancelled => {
                 if keep_image.load(Ordering::SeqCst) && out.iterations_done > 0 {
-                    match publish(&out.image, exposure, &|_| {}) {
-                        Ok(()) => status(&format!(
+                    match publish(&out.image, exposure, image_at(out.iterations_done), &|_| {}) {
+                        Ok(true) => status(&format!(
                             "render #{number} {stage} stopped after {} iterations, written to {}",
                             out.iterations_done,
                             output.display()
+                        )),
+                        Ok(false) => status(&format!(
+                            "render #{number} {stage} stopped after {} iterations",
+                            out.iterations_done
                         )),
                         Err(e) => status(&format!("cannot write the image: {e}")),
                     }
@@ -175,7 +211,8 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                 };
                 // Stopped early by a time limit: the last iterations may not be on disk yet.
                 if out.iterations_done > written {
-                    if let Err(e) = publish(&out.image, exposure, &finished) {
+                    let image = image_at(out.iterations_done);
+                    if let Err(e) = publish(&out.image, exposure, image, &finished) {
                         status(&format!("cannot write the image: {e}"));
                     }
                 } else if let Some(hub) = &r.hub {
@@ -200,7 +237,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                     });
                 }
                 status("waiting for changes");
-                return Outcome::Finished;
+                return Outcome::Failed;
             }
         }
     }
