@@ -61,6 +61,10 @@ pub struct EvalOptions {
     /// it decoded are refused from their headers, before they are decoded. `None`: only the
     /// fixed caps on image size apply.
     pub memory_limit: Option<u64>,
+    /// Raised by the caller to stop the load: the evaluation checks it at every step (and
+    /// before and after parsing, which cannot stop midway) and ends with
+    /// [`Loaded::interrupted`].
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -141,6 +145,7 @@ impl Default for EvalOptions {
             max_objects: 1_000_000,
             max_steps: 50_000_000,
             memory_limit: None,
+            cancel: crate::cancel::Cancel::default(),
         }
     }
 }
@@ -159,6 +164,9 @@ pub struct Loaded {
     /// made, as under a low address-space limit): not the scene's fault. The diagnostics say
     /// what failed.
     pub environment: bool,
+    /// The caller cancelled the load ([`EvalOptions::cancel`]): no scene, and an error
+    /// "interrupted" last among the diagnostics; not the scene's fault.
+    pub interrupted: bool,
 }
 
 impl Loaded {
@@ -217,6 +225,7 @@ fn on_eval_thread(
         sources: SourceMap::new(),
         dependencies: vec![path.to_path_buf()],
         environment,
+        interrupted: false,
     };
     let mut last_error = None;
     for &stack in stacks {
@@ -280,14 +289,22 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
     ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
-    match ev.parse_within_memory(file, &text, None) {
-        Ok(items) => {
-            let mut top = TopSink::default();
-            ev.run_top(&items, &mut top);
+    // Parsing cannot stop midway: the cancel is checked before it and at the first step after.
+    if !ev.interrupted() {
+        match ev.parse_within_memory(file, &text, None) {
+            Ok(items) => {
+                let mut top = TopSink::default();
+                ev.run_top(&items, &mut top);
+            }
+            Err(d) => ev.errors.extend(d),
         }
-        Err(d) => ev.errors.extend(d),
     }
     ev.finish_warnings();
+    let interrupted = ev.interrupted;
+    if interrupted {
+        ev.errors
+            .push(Diagnostic::error(Span::detached(), "interrupted"));
+    }
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;
     diagnostics.extend(ev.warnings);
@@ -299,6 +316,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
         diagnostics,
         sources: ev.sources,
         environment: false,
+        interrupted,
     }
 }
 
@@ -328,6 +346,8 @@ pub(crate) struct Evaluator {
     /// Set once the step budget ran out or an `#error` stopped the load: every later step fails
     /// silently, so the evaluation unwinds at once with the one error already reported.
     exhausted: bool,
+    /// Set once the caller's cancel was seen ([`Evaluator::interrupted`]).
+    interrupted: bool,
     /// `#switch`es and loops around the current item that a `#break` may leave (within one
     /// block body or macro body: blocks and macro calls start again at 0).
     pub(crate) break_targets: usize,
@@ -422,6 +442,7 @@ impl Evaluator {
             dependencies: Vec::new(),
             steps: 0,
             exhausted: false,
+            interrupted: false,
             break_targets: 0,
             breaking: false,
             messages: 0,
@@ -519,7 +540,7 @@ impl Evaluator {
     /// Counts `steps` steps against the budget: work whose cost grows with the size of its
     /// values (see [`work_of`]).
     pub(crate) fn charge(&mut self, steps: u64, span: Span) -> SourceResult<()> {
-        if self.exhausted {
+        if self.exhausted || self.interrupted() {
             return Err(silent());
         }
         self.steps = self.steps.saturating_add(steps);
@@ -539,6 +560,16 @@ impl Evaluator {
             ]);
         }
         Ok(())
+    }
+
+    /// Whether the caller cancelled the load ([`EvalOptions::cancel`]); once it has, every
+    /// later step fails silently, as when the budget ran out, and the load ends with
+    /// [`Loaded::interrupted`].
+    fn interrupted(&mut self) -> bool {
+        if !self.interrupted && self.options.cancel.is_cancelled() {
+            self.interrupted = true;
+        }
+        self.interrupted
     }
 
     /// Fails when one more level of blocks or macro calls would pass [`MAX_EVAL_NESTING`], or
@@ -773,6 +804,51 @@ mod tests {
         assert!(d.message.contains("internal error"), "{}", d.message);
         assert!(d.message.contains("on purpose"), "{}", d.message);
         assert!(d.help.is_some());
+    }
+
+    /// A load cancelled in the middle of a loop that would run for minutes returns within a
+    /// second of the cancel, with no scene and the one word "interrupted"; a load cancelled
+    /// before it starts does not evaluate at all.
+    #[test]
+    fn a_cancelled_load_stops_at_its_next_step() {
+        let endless = "#declare I = 0;\n#while (I < 1e15) #declare I = I + 1; #end\n\
+                       sphere { <0, 0, 0>, 1 }\n";
+        let cancel = crate::cancel::Cancel::new();
+        let options = EvalOptions {
+            max_iterations: u64::MAX,
+            max_steps: u64::MAX,
+            cancel: cancel.clone(),
+            ..EvalOptions::default()
+        };
+        let raised = std::thread::scope(|s| {
+            let raiser = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                cancel.cancel();
+                std::time::Instant::now()
+            });
+            let l = load_source("endless.scn", endless, &options);
+            let returned = std::time::Instant::now();
+            let raised = raiser.join().unwrap();
+            (l, returned.saturating_duration_since(raised))
+        });
+        let (l, after) = raised;
+        println!("the load returned {after:?} after the cancel");
+        assert!(after < std::time::Duration::from_secs(1), "{after:?}");
+        assert!(l.interrupted && l.scene.is_none() && !l.environment);
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        assert_eq!(l.diagnostics[0].message, "interrupted");
+        // Raised before the load: nothing is evaluated (a budget of one step would fail
+        // otherwise, with an error of its own).
+        let options = EvalOptions {
+            max_steps: 1,
+            ..options
+        };
+        let l = load_source("endless.scn", endless, &options);
+        assert!(l.interrupted && l.scene.is_none());
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        // A handle nobody raised changes nothing.
+        let l = load_source("t.scn", &recursion(3), &EvalOptions::default());
+        assert!(!l.interrupted && l.scene.is_some(), "{:?}", l.diagnostics);
     }
 
     #[test]

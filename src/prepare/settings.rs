@@ -20,6 +20,10 @@ pub struct RenderOptions {
     pub threads: Option<usize>,
     /// Most memory the render may need, in bytes; `None`: [`super::default_memory_limit`].
     pub memory_limit: Option<u64>,
+    /// Raised by the caller to stop: [`super::prepare`] checks it between its phases, per
+    /// object and inside the BVH build, and fails with [`RenderError::interrupted`]; the
+    /// render's passes stop as for their own cancel flag.
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// The settings a render actually uses (scene settings with the options applied).
@@ -55,6 +59,8 @@ pub struct RenderError {
     pub label: String,
     /// A suggested fix.
     pub help: Option<String>,
+    /// The caller cancelled the work ([`RenderOptions::cancel`]): not the scene's fault.
+    pub interrupted: bool,
 }
 
 impl RenderError {
@@ -64,6 +70,15 @@ impl RenderError {
             span: None,
             label: String::new(),
             help: None,
+            interrupted: false,
+        }
+    }
+
+    /// The error of work the caller cancelled.
+    pub fn interrupted() -> Self {
+        Self {
+            interrupted: true,
+            ..Self::new("interrupted")
         }
     }
 

@@ -150,7 +150,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     let terminal = std::io::stderr().is_terminal();
     let clear = terminal && !args.no_clear;
     let preview = !args.no_preview;
-    let options = args.limits.options();
+    let options = EvalOptions {
+        cancel: interrupted.clone().into(),
+        ..args.limits.options()
+    };
     let mut job: Option<Job> = None;
     let mut round = 0u32;
     let mut changed_at = Instant::now();
@@ -161,6 +164,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             say_inline!("\x1b[2J\x1b[H");
         }
         let loaded = load(&args.scene, &options);
+        if interrupted.load(Ordering::SeqCst) {
+            status("interrupted");
+            return ExitCode::SUCCESS;
+        }
         if let Err(e) = watcher.set_dependencies(&loaded.dependencies) {
             status(&format!("cannot watch the scene's files: {e}"));
         }
@@ -313,7 +320,9 @@ fn load(path: &Path, options: &EvalOptions) -> Load {
     }
     match sppm_lang::load_file(path, options) {
         Ok(loaded) => {
-            print_diagnostics(&loaded);
+            if !loaded.interrupted {
+                print_diagnostics(&loaded);
+            }
             let scene = if loaded.has_errors() {
                 None
             } else {
