@@ -165,7 +165,7 @@ pub struct Loaded {
     /// what failed.
     pub environment: bool,
     /// The caller cancelled the load ([`EvalOptions::cancel`]): no scene, and an error
-    /// "interrupted" last among the diagnostics; not the scene's fault.
+    /// "interrupted" after the errors found before it; not the scene's fault.
     pub interrupted: bool,
 }
 

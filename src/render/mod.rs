@@ -21,8 +21,9 @@ use std::time::{Duration, Instant};
 use crate::integrators;
 use crate::scene::Scene;
 
-/// Renders `scene`. `cancel` is checked in the prepare stage and inside every pass; `on_progress` runs after every
-/// iteration (on the calling thread's pool) and may call [`Progress::image`].
+/// Renders `scene`. `cancel` is checked in the prepare stage and inside every pass;
+/// `on_progress` runs after every iteration (on the calling thread's pool) and may call
+/// [`Progress::image`].
 pub fn render(
     scene: &Scene,
     options: &RenderOptions,
