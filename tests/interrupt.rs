@@ -73,10 +73,12 @@ fn interrupt(run: &mut Running, signal: &str) -> (ExitStatus, Duration, Vec<Stri
 }
 
 /// Starts `args` on the endless scene, signals it after a second of evaluation, and checks the
-/// exit: within [`PROMPT`], with `code`, the line `said`, no error and no file written.
+/// exit: within [`PROMPT`], with `code`, the line `said`, no error, and the image that was at
+/// the output path kept as it was, with no file beside it.
 fn endless_evaluation(command: &str, extra: &[&str], signal: &str, code: i32, said: &str) {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.scn"), ENDLESS).unwrap();
+    std::fs::write(dir.path().join("out.png"), "previous image").unwrap();
     let args = [&[command, "scene.scn"][..], extra, &LIMITS].concat();
     let mut run = start(dir.path(), &args);
     std::thread::sleep(Duration::from_secs(1));
@@ -102,11 +104,14 @@ fn endless_evaluation(command: &str, extra: &[&str], signal: &str, code: i32, sa
         "{command}:\n{}",
         log.join("\n")
     );
-    let files: Vec<String> = std::fs::read_dir(dir.path())
+    let mut files: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(files, ["scene.scn"], "{command} wrote files");
+    files.sort();
+    assert_eq!(files, ["out.png", "scene.scn"], "{command} wrote files");
+    let image = std::fs::read_to_string(dir.path().join("out.png")).unwrap();
+    assert_eq!(image, "previous image", "{command} replaced the image");
 }
 
 #[test]
