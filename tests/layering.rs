@@ -23,10 +23,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("diag", &["span"]),
     ("atomic_file", &[]),
     ("files", &[]),
+    // The caller's cancel handle, read by every stage that can take long.
+    ("cancel", &[]),
     // The language.
     ("syntax", &["span", "diag"]),
     ("scene", &["span", "diag", "files"]),
-    ("eval", &["span", "diag", "files", "syntax", "scene"]),
+    (
+        "eval",
+        &["span", "diag", "files", "cancel", "syntax", "scene"],
+    ),
     // The renderer's building blocks.
     ("geometry", &[]),
     ("sampling", &["geometry"]),
@@ -47,6 +52,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         &[
             "span",
             "diag",
+            "cancel",
             "scene",
             "geometry",
             "sampling",
@@ -78,7 +84,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     (
         "render",
-        &["span", "diag", "scene", "film", "prepare", "integrators"],
+        &[
+            "span",
+            "diag",
+            "cancel",
+            "scene",
+            "film",
+            "prepare",
+            "integrators",
+        ],
     ),
     // Tools over finished images and renders.
     ("compare", &["film", "atomic_file"]),

@@ -88,6 +88,9 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
         err(&format!("error: {}\n", e.with_path(path)));
         ExitCode::from(EXIT_USAGE)
     })?;
+    if loaded.interrupted {
+        return Err(interrupted());
+    }
     print_diagnostics(&loaded);
     let has_errors = loaded.has_errors();
     match loaded.scene {
@@ -98,6 +101,14 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
         }),
         _ => Err(ExitCode::from(failure_code(&loaded))),
     }
+}
+
+/// Ctrl-C (or SIGTERM) stopped the load or the prepare stage: said in one word, without the
+/// diagnostics of a scene that was not read to its end, with the exit status of a command that
+/// has no result.
+fn interrupted() -> ExitCode {
+    err("interrupted\n");
+    ExitCode::from(EXIT_SCENE_ERROR)
 }
 
 /// Prints a warning the prepare stage found: at its span, or about the whole scene.
@@ -157,6 +168,16 @@ pub fn run(
     render_options: &RenderOptions,
     size: &SizeArgs,
 ) -> ExitCode {
+    // First: Ctrl-C stops the load and the prepare stage at their next check.
+    let cancel = super::cancel_on_ctrl_c();
+    let options = &EvalOptions {
+        cancel: cancel.clone(),
+        ..options.clone()
+    };
+    let render_options = &RenderOptions {
+        cancel,
+        ..render_options.clone()
+    };
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
@@ -164,6 +185,9 @@ pub fn run(
             return ExitCode::from(EXIT_USAGE);
         }
     };
+    if loaded.interrupted {
+        return interrupted();
+    }
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
@@ -175,6 +199,7 @@ pub fn run(
             // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
             let (settings, prepared) = match sppm_lang::render::prepare(&s, render_options) {
                 Ok(p) => p,
+                Err(e) if e.interrupted => return interrupted(),
                 Err(e) => {
                     print_render_error(&loaded.sources, &e);
                     return ExitCode::from(EXIT_SCENE_ERROR);

@@ -61,6 +61,10 @@ pub struct EvalOptions {
     /// it decoded are refused from their headers, before they are decoded. `None`: only the
     /// fixed caps on image size apply.
     pub memory_limit: Option<u64>,
+    /// Raised by the caller to stop the load: the evaluation checks it at every step (and
+    /// before and after parsing, which cannot stop midway) and ends with
+    /// [`Loaded::interrupted`].
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -141,6 +145,7 @@ impl Default for EvalOptions {
             max_objects: 1_000_000,
             max_steps: 50_000_000,
             memory_limit: None,
+            cancel: crate::cancel::Cancel::default(),
         }
     }
 }
@@ -159,6 +164,9 @@ pub struct Loaded {
     /// made, as under a low address-space limit): not the scene's fault. The diagnostics say
     /// what failed.
     pub environment: bool,
+    /// The caller cancelled the load ([`EvalOptions::cancel`]): no scene, and an error
+    /// "interrupted" after the errors found before it; not the scene's fault.
+    pub interrupted: bool,
 }
 
 impl Loaded {
@@ -198,38 +206,73 @@ fn load_with_stacks(
     options: &EvalOptions,
     stacks: &[usize],
 ) -> Loaded {
-    on_eval_thread(path, stacks, &|stack| {
-        run(path, name, text.clone(), options, stack)
-    })
+    let (owned_path, name, owned_options) = (path.to_path_buf(), name.to_string(), options.clone());
+    let work = move |stack| run(&owned_path, &name, text.clone(), &owned_options, stack);
+    on_eval_thread(path, stacks, &options.cancel, std::sync::Arc::new(work))
 }
+
+/// How long a cancelled load may take to return by itself before it is left to finish alone.
+const CANCEL_GRACE: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// Runs `work` (given the stack size) on a thread of the first stack in `stacks` that can be
 /// made. A panic in `work` becomes an internal-error diagnostic; no stack at all, an
-/// environment error.
+/// environment error. Once `cancel` is raised the caller gets "interrupted" within
+/// [`CANCEL_GRACE`] even where the work cannot stop midway (parsing a large file): the thread
+/// then finishes by itself, its result dropped.
 fn on_eval_thread(
     path: &Path,
     stacks: &[usize],
-    work: &(dyn Fn(usize) -> Loaded + Sync),
+    cancel: &crate::cancel::Cancel,
+    work: std::sync::Arc<dyn Fn(usize) -> Loaded + Send + Sync>,
 ) -> Loaded {
-    let failed = |d: Diagnostic, environment: bool| Loaded {
+    use std::sync::mpsc::RecvTimeoutError;
+    let failed = |d: Diagnostic, environment: bool, interrupted: bool| Loaded {
         scene: None,
         diagnostics: vec![d],
         sources: SourceMap::new(),
         dependencies: vec![path.to_path_buf()],
         environment,
+        interrupted,
     };
     let mut last_error = None;
     for &stack in stacks {
-        let outcome = std::thread::scope(|s| {
-            std::thread::Builder::new()
-                .name("sppm-eval".into())
-                .stack_size(stack)
-                .spawn_scoped(s, || work(stack))
-                .map(|h| h.join())
-        });
-        match outcome {
-            Ok(Ok(loaded)) => return loaded,
-            Ok(Err(panic)) => {
+        let (done, finished) = std::sync::mpsc::channel::<()>();
+        let w = work.clone();
+        let spawned = std::thread::Builder::new()
+            .name("sppm-eval".into())
+            .stack_size(stack)
+            .spawn(move || {
+                let loaded = w(stack);
+                let _ = done.send(());
+                loaded
+            });
+        let handle = match spawned {
+            Ok(h) => h,
+            Err(e) => {
+                last_error = Some(e);
+                continue;
+            }
+        };
+        // Finished (or panicked: the sender is dropped), or cancelled and not back in time.
+        loop {
+            match finished.recv_timeout(std::time::Duration::from_millis(50)) {
+                Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
+                Err(RecvTimeoutError::Timeout) if cancel.is_cancelled() => {
+                    if finished.recv_timeout(CANCEL_GRACE).is_err() && !handle.is_finished() {
+                        return failed(
+                            Diagnostic::error(Span::detached(), "interrupted"),
+                            false,
+                            true,
+                        );
+                    }
+                    break;
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+        match handle.join() {
+            Ok(loaded) => return loaded,
+            Err(panic) => {
                 let what = panic
                     .downcast_ref::<&str>()
                     .map(|s| s.to_string())
@@ -245,9 +288,9 @@ fn on_eval_thread(
                          the scene that shows it",
                     ),
                     false,
+                    false,
                 );
             }
-            Err(e) => last_error = Some(e),
         }
     }
     let smallest = stacks.iter().copied().min().unwrap_or(0);
@@ -269,6 +312,7 @@ fn on_eval_thread(
             stack_words(EVAL_STACK)
         )),
         true,
+        false,
     )
 }
 
@@ -280,14 +324,22 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
     ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
-    match ev.parse_within_memory(file, &text, None) {
-        Ok(items) => {
-            let mut top = TopSink::default();
-            ev.run_top(&items, &mut top);
+    // Parsing cannot stop midway: the cancel is checked before it and at the first step after.
+    if !ev.interrupted() {
+        match ev.parse_within_memory(file, &text, None) {
+            Ok(items) => {
+                let mut top = TopSink::default();
+                ev.run_top(&items, &mut top);
+            }
+            Err(d) => ev.errors.extend(d),
         }
-        Err(d) => ev.errors.extend(d),
     }
     ev.finish_warnings();
+    let interrupted = ev.interrupted;
+    if interrupted {
+        ev.errors
+            .push(Diagnostic::error(Span::detached(), "interrupted"));
+    }
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;
     diagnostics.extend(ev.warnings);
@@ -299,6 +351,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
         diagnostics,
         sources: ev.sources,
         environment: false,
+        interrupted,
     }
 }
 
@@ -328,6 +381,8 @@ pub(crate) struct Evaluator {
     /// Set once the step budget ran out or an `#error` stopped the load: every later step fails
     /// silently, so the evaluation unwinds at once with the one error already reported.
     exhausted: bool,
+    /// Set once the caller's cancel was seen ([`Evaluator::interrupted`]).
+    interrupted: bool,
     /// `#switch`es and loops around the current item that a `#break` may leave (within one
     /// block body or macro body: blocks and macro calls start again at 0).
     pub(crate) break_targets: usize,
@@ -422,6 +477,7 @@ impl Evaluator {
             dependencies: Vec::new(),
             steps: 0,
             exhausted: false,
+            interrupted: false,
             break_targets: 0,
             breaking: false,
             messages: 0,
@@ -519,7 +575,7 @@ impl Evaluator {
     /// Counts `steps` steps against the budget: work whose cost grows with the size of its
     /// values (see [`work_of`]).
     pub(crate) fn charge(&mut self, steps: u64, span: Span) -> SourceResult<()> {
-        if self.exhausted {
+        if self.exhausted || self.interrupted() {
             return Err(silent());
         }
         self.steps = self.steps.saturating_add(steps);
@@ -539,6 +595,16 @@ impl Evaluator {
             ]);
         }
         Ok(())
+    }
+
+    /// Whether the caller cancelled the load ([`EvalOptions::cancel`]); once it has, every
+    /// later step fails silently, as when the budget ran out, and the load ends with
+    /// [`Loaded::interrupted`].
+    fn interrupted(&mut self) -> bool {
+        if !self.interrupted && self.options.cancel.is_cancelled() {
+            self.interrupted = true;
+        }
+        self.interrupted
     }
 
     /// Fails when one more level of blocks or macro calls would pass [`MAX_EVAL_NESTING`], or
@@ -767,12 +833,62 @@ mod tests {
 
     #[test]
     fn a_panic_in_the_evaluation_is_an_internal_error() {
-        let l = on_eval_thread(Path::new("t.scn"), &EVAL_STACKS, &|_| panic!("on purpose"));
+        let l = on_eval_thread(
+            Path::new("t.scn"),
+            &EVAL_STACKS,
+            &Default::default(),
+            std::sync::Arc::new(|_| panic!("on purpose")),
+        );
         assert!(l.scene.is_none() && !l.environment);
         let d = &l.diagnostics[0];
         assert!(d.message.contains("internal error"), "{}", d.message);
         assert!(d.message.contains("on purpose"), "{}", d.message);
         assert!(d.help.is_some());
+    }
+
+    /// A load cancelled in the middle of a loop that would run for minutes returns within a
+    /// second of the cancel, with no scene and the one word "interrupted"; a load cancelled
+    /// before it starts does not evaluate at all.
+    #[test]
+    fn a_cancelled_load_stops_at_its_next_step() {
+        let endless = "#declare I = 0;\n#while (I < 1e15) #declare I = I + 1; #end\n\
+                       sphere { <0, 0, 0>, 1 }\n";
+        let cancel = crate::cancel::Cancel::new();
+        let options = EvalOptions {
+            max_iterations: u64::MAX,
+            max_steps: u64::MAX,
+            cancel: cancel.clone(),
+            ..EvalOptions::default()
+        };
+        let raised = std::thread::scope(|s| {
+            let raiser = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                cancel.cancel();
+                std::time::Instant::now()
+            });
+            let l = load_source("endless.scn", endless, &options);
+            let returned = std::time::Instant::now();
+            let raised = raiser.join().unwrap();
+            (l, returned.saturating_duration_since(raised))
+        });
+        let (l, after) = raised;
+        println!("the load returned {after:?} after the cancel");
+        assert!(after < std::time::Duration::from_secs(1), "{after:?}");
+        assert!(l.interrupted && l.scene.is_none() && !l.environment);
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        assert_eq!(l.diagnostics[0].message, "interrupted");
+        // Raised before the load: nothing is evaluated (a budget of one step would fail
+        // otherwise, with an error of its own).
+        let options = EvalOptions {
+            max_steps: 1,
+            ..options
+        };
+        let l = load_source("endless.scn", endless, &options);
+        assert!(l.interrupted && l.scene.is_none());
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        // A handle nobody raised changes nothing.
+        let l = load_source("t.scn", &recursion(3), &EvalOptions::default());
+        assert!(!l.interrupted && l.scene.is_some(), "{:?}", l.diagnostics);
     }
 
     #[test]

@@ -30,6 +30,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                         span: Some(*span),
                         label: String::new(),
                         help: Some("give a finite position and an intensity of finite numbers of at least 0".into()),
+                        interrupted: false,
                     });
                 }
                 lights.push(Light::Point(PointLight {
@@ -68,6 +69,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                              (as the language does)"
                                 .into(),
                         ),
+                        interrupted: false,
                     });
                 }
                 lights.push(Light::Spot(SpotLight::new(
@@ -243,6 +245,7 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
                  negate a disk's normal) or add `two_sided`"
                     .into(),
             ),
+            interrupted: false,
         })
         .collect()
 }

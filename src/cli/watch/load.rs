@@ -37,7 +37,9 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
     }
     match sppm_lang::load_file(path, options) {
         Ok(loaded) => {
-            print_diagnostics(&loaded);
+            if !loaded.interrupted {
+                print_diagnostics(&loaded);
+            }
             let scene = if loaded.has_errors() {
                 None
             } else {
