@@ -21,6 +21,7 @@ use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
+pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
@@ -136,6 +137,9 @@ pub fn prepare<'a>(
 ) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
     // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
+    // The cost of each CSG first: a merge of many placements of a large mesh would otherwise
+    // be refused for its memory, which tells less.
+    csg::check_costs(scene)?;
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit).map_err(|e| e.at(scene.settings.span))?;
     let prepared = PreparedScene::new(scene)?;
@@ -182,6 +186,8 @@ impl<'a> PreparedScene<'a> {
     }
 
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+        // From counts, before validation reads a CSG's meshes once per placement.
+        csg::check_costs(scene)?;
         scene.validate()?;
         let (width, height) = scene.settings.resolution;
         let camera = Camera::new(&scene.camera, width, height)?;
