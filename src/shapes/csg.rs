@@ -31,7 +31,7 @@ use std::collections::BinaryHeap;
 use arrayvec::ArrayVec;
 use glam::{Vec2, Vec3A};
 
-use super::primitive::AnyShape;
+use super::primitive::{AnyShape, LazyHit};
 use super::{AreaSample, Shape};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::scene::CsgOp;
@@ -102,18 +102,17 @@ struct NodeState {
     count: u32,
 }
 
-/// A leaf's next hit, waiting to be visited; ordered by distance, then [`Csg::pending`]'s
+/// Where a leaf's next hit waits to be visited: ordered by distance, then [`Csg::pending`]'s
 /// order at the same distance, then by leaf.
 #[derive(Clone, Copy)]
-struct Pending {
+struct Key {
     t: f32,
     order: u8,
     leaf: u32,
-    hit: Hit,
 }
 
-impl Pending {
-    fn key(&self, other: &Self) -> std::cmp::Ordering {
+impl Key {
+    fn nearer(&self, other: &Self) -> std::cmp::Ordering {
         self.t
             .total_cmp(&other.t)
             .then(self.order.cmp(&other.order))
@@ -121,53 +120,84 @@ impl Pending {
     }
 }
 
-impl PartialEq for Pending {
+impl PartialEq for Key {
     fn eq(&self, other: &Self) -> bool {
-        self.key(other).is_eq()
+        self.nearer(other).is_eq()
     }
 }
 
-impl Eq for Pending {}
+impl Eq for Key {}
 
-impl PartialOrd for Pending {
+impl PartialOrd for Key {
     fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
         Some(self.cmp(other))
     }
 }
 
 /// Reversed: the standard heap pops its greatest, the walk wants the nearest.
-impl Ord for Pending {
+impl Ord for Key {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        other.key(self)
+        other.nearer(self)
     }
 }
+
+/// A leaf's hit as the walk sees it: `uv` left out (NaN) where the shape can fill it in later
+/// ([`LeafHit::shape`]), since most hits are never kept.
+#[derive(Clone, Copy)]
+struct LeafHit {
+    hit: Hit,
+    /// The leaf's shape hit, to complete the hit if it is kept; `u32::MAX`: it is complete.
+    shape: u32,
+}
+
+/// A placeholder in [`Heap::hits`] for a leaf with no hit waiting.
+const NO_HIT: LeafHit = LeafHit {
+    hit: Hit {
+        t: f32::INFINITY,
+        p: Vec3A::ZERO,
+        n: Vec3A::Z,
+        ns: Vec3A::Z,
+        uv: Vec2::ZERO,
+        dpdu: Vec3A::X,
+    },
+    shape: u32::MAX,
+};
 
 /// The hits waiting to be visited, at most one per leaf: a short list scanned whole in a small
-/// tree, a heap in a large one (a merge of thousands of shapes visits each hit in log time).
+/// tree, a heap of small keys in a large one (a merge of thousands of shapes visits each hit
+/// in log time, without moving the hits themselves).
 trait Queue {
-    fn push(&mut self, p: Pending);
+    fn push(&mut self, key: Key, hit: LeafHit);
     /// The nearest waiting hit.
-    fn pop(&mut self) -> Option<Pending>;
+    fn pop(&mut self) -> Option<(Key, LeafHit)>;
 }
 
-impl<const N: usize> Queue for ArrayVec<Pending, N> {
-    fn push(&mut self, p: Pending) {
-        ArrayVec::push(self, p);
+impl<const N: usize> Queue for ArrayVec<(Key, LeafHit), N> {
+    fn push(&mut self, key: Key, hit: LeafHit) {
+        ArrayVec::push(self, (key, hit));
     }
 
-    fn pop(&mut self) -> Option<Pending> {
-        let i = (0..self.len()).max_by(|&a, &b| self[a].cmp(&self[b]))?;
+    fn pop(&mut self) -> Option<(Key, LeafHit)> {
+        let i = (0..self.len()).max_by(|&a, &b| self[a].0.cmp(&self[b].0))?;
         Some(self.swap_remove(i))
     }
 }
 
-impl Queue for BinaryHeap<Pending> {
-    fn push(&mut self, p: Pending) {
-        BinaryHeap::push(self, p);
+/// The heap of keys, and each leaf's waiting hit by leaf index.
+struct Heap {
+    keys: BinaryHeap<Key>,
+    hits: Vec<LeafHit>,
+}
+
+impl Queue for Heap {
+    fn push(&mut self, key: Key, hit: LeafHit) {
+        self.hits[key.leaf as usize] = hit;
+        self.keys.push(key);
     }
 
-    fn pop(&mut self) -> Option<Pending> {
-        BinaryHeap::pop(self)
+    fn pop(&mut self) -> Option<(Key, LeafHit)> {
+        let key = self.keys.pop()?;
+        Some((key, self.hits[key.leaf as usize]))
     }
 }
 
@@ -393,8 +423,9 @@ impl Csg {
         }
     }
 
-    /// The nearest hit of leaf `i` after `t0`, its normals pointing out of the leaf's volume.
-    fn leaf_hit(&self, i: usize, ray: &Ray, inv_d: Vec3A, t0: f32) -> Option<Hit> {
+    /// The nearest hit of leaf `i` after `t0`, its normals pointing out of the leaf's volume;
+    /// an analytic shape's without its `uv` ([`Csg::complete`] fills it in).
+    fn leaf_hit(&self, i: usize, ray: &Ray, inv_d: Vec3A, t0: f32) -> Option<LeafHit> {
         let leaf = &self.leaves[i];
         let bounded = leaf.bounds.min.is_finite() && leaf.bounds.max.is_finite();
         if bounded
@@ -406,20 +437,48 @@ impl Csg {
         {
             return None;
         }
-        let mut best: Option<Hit> = None;
-        for s in &leaf.shapes {
-            let t1 = best.map_or(f32::INFINITY, |h| h.t);
-            if let Some(h) = s.intersect(ray, t0, t1) {
-                best = Some(h);
+        // The nearest `t` of an analytic shape (and which), or a boxed shape's full hit.
+        let mut best: Option<(f32, usize, Option<Hit>)> = None;
+        for (k, s) in leaf.shapes.iter().enumerate() {
+            let t1 = best.map_or(f32::INFINITY, |(t, _, _)| t);
+            match s.analytic_t(ray, t0, t1) {
+                Ok(Some(t)) => best = Some((t, k, None)),
+                Ok(None) => {}
+                Err(()) => {
+                    if let Some(h) = s.intersect(ray, t0, t1) {
+                        best = Some((h.t, k, Some(h)));
+                    }
+                }
             }
         }
-        best.map(|mut h| {
-            if leaf.flip {
-                h.n = -h.n;
-                h.ns = -h.ns;
-            }
-            h
+        let (hit, shape) = match best? {
+            (_, _, Some(h)) => (h, u32::MAX),
+            (t, k, None) => (
+                leaf.shapes[k].hit_at_uv(ray, LazyHit::T(t), false),
+                k as u32,
+            ),
+        };
+        Some(LeafHit {
+            hit: self.outward(i, hit),
+            shape,
         })
+    }
+
+    /// A hit of leaf `i` with its normals pointing out of the leaf's volume.
+    fn outward(&self, i: usize, mut h: Hit) -> Hit {
+        if self.leaves[i].flip {
+            h.n = -h.n;
+            h.ns = -h.ns;
+        }
+        h
+    }
+
+    /// The full hit of a kept [`LeafHit`] of leaf `i`: what the shape's own intersection gives.
+    fn complete(&self, i: usize, ray: &Ray, h: LeafHit) -> Hit {
+        match self.leaves[i].shapes.get(h.shape as usize) {
+            Some(s) => self.outward(i, s.hit_at(ray, LazyHit::T(h.hit.t))),
+            None => h.hit,
+        }
     }
 
     /// Whether the origin of a ray that meets leaf `i` nowhere ahead is inside it: only a
@@ -432,7 +491,7 @@ impl Csg {
         }
     }
 
-    /// A hit of leaf `i` as it waits to be visited.
+    /// Where a hit of leaf `i` waits to be visited.
     ///
     /// Hits at the same distance (coincident faces: a cutter flush with the surface it cuts,
     /// two merged boxes sharing a face) are visited as if every leaf were a hair larger, and a
@@ -441,7 +500,7 @@ impl Csg {
     /// same as the solid leaves nothing, and merged neighbours show no face between them,
     /// which is what such a scene means (in POV-Ray they render as speckles). Ties beyond that
     /// go to the leaf that comes first in the tree.
-    fn pending(&self, i: usize, hit: Hit, ray: &Ray) -> Pending {
+    fn pending(&self, i: usize, hit: &Hit, ray: &Ray) -> Key {
         let enters = hit.n.dot(ray.d) < 0.0;
         let order = match (enters, self.leaves[i].negated) {
             (true, true) => 0u8,
@@ -449,11 +508,10 @@ impl Csg {
             (false, false) => 2,
             (false, true) => 3,
         };
-        Pending {
+        Key {
             t: hit.t,
             order,
             leaf: i as u32,
-            hit,
         }
     }
 
@@ -470,12 +528,12 @@ impl Csg {
         for i in 0..self.leaves.len() {
             let next = self.leaf_hit(i, ray, inv_d, t_min);
             let inside = match next {
-                Some(h) => h.n.dot(ray.d) > 0.0,
+                Some(h) => h.hit.n.dot(ray.d) > 0.0,
                 None => self.inside_without_hit(i, ray.o),
             };
             states[self.leaves[i].node as usize].inside = inside;
             if let Some(h) = next {
-                queue.push(self.pending(i, h, ray));
+                queue.push(self.pending(i, &h.hit, ray), h);
             }
         }
         self.settle(states);
@@ -487,12 +545,15 @@ impl Csg {
         let fresh = std::iter::repeat_n(NodeState::default(), self.nodes.len());
         if self.leaves.len() <= INLINE_LEAVES && self.nodes.len() <= INLINE_NODES {
             let mut states: ArrayVec<NodeState, INLINE_NODES> = fresh.collect();
-            let mut queue = ArrayVec::<Pending, INLINE_LEAVES>::new();
+            let mut queue = ArrayVec::<(Key, LeafHit), INLINE_LEAVES>::new();
             self.start(ray, inv_d, t_min, &mut states, &mut queue);
             self.walk(ray, inv_d, t_max, &mut states, &mut queue)
         } else {
             let mut states: Vec<NodeState> = fresh.collect();
-            let mut queue = BinaryHeap::<Pending>::new();
+            let mut queue = Heap {
+                keys: BinaryHeap::new(),
+                hits: vec![NO_HIT; self.leaves.len()],
+            };
             self.start(ray, inv_d, t_min, &mut states, &mut queue);
             self.walk(ray, inv_d, t_max, &mut states, &mut queue)
         }
@@ -508,13 +569,14 @@ impl Csg {
         queue: &mut impl Queue,
     ) -> Option<(Hit, u32)> {
         for _ in 0..MAX_STEPS {
-            let Pending { leaf, hit: h, .. } = queue.pop()?;
+            let (Key { leaf, .. }, lh) = queue.pop()?;
             let i = leaf as usize;
+            let h = lh.hit;
             if h.t >= t_max {
                 return None;
             }
             if let Some(flip) = self.keep(i, states) {
-                let mut h = h;
+                let mut h = self.complete(i, ray, lh);
                 if flip {
                     h.n = -h.n;
                     h.ns = -h.ns;
@@ -523,7 +585,7 @@ impl Csg {
             }
             self.set_leaf(i, h.n.dot(ray.d) < 0.0, states);
             if let Some(next) = self.leaf_hit(i, ray, inv_d, h.t) {
-                queue.push(self.pending(i, next, ray));
+                queue.push(self.pending(i, &next.hit, ray), next);
             }
         }
         None

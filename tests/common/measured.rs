@@ -75,6 +75,16 @@ pub fn run_measured(args: &[&str], address_space: u64, timeout: Duration) -> Mea
     }
 }
 
+/// The program's stderr as one line: words joined by single spaces, without the frame the
+/// diagnostics wrap long lines in (`│`), so that a phrase matches wherever a line broke.
+pub fn flat(stderr: &str) -> String {
+    stderr
+        .split_whitespace()
+        .filter(|w| *w != "│")
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// "1.23 GB" (decimal), or "?" when unknown.
 pub fn peak_text(peak: Option<u64>) -> String {
     peak.map_or("?".into(), |b| format!("{:.3} GB", b as f64 / 1e9))
