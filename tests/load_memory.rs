@@ -25,7 +25,10 @@ fn a_chain_of_includes_each_under_the_limit_is_refused_by_their_total() {
     let limit = 512 * MIB;
     let dir = tempfile::tempdir().unwrap();
     let elements = (limit * 9 / 10 / PARSE_BYTES_PER_LEXEME / 2) as usize;
-    let filler = format!("#if (0)\n#declare A = [{}1];\n#end\n", "1,".repeat(elements));
+    let filler = format!(
+        "#if (0)\n#declare A = [{}1];\n#end\n",
+        "1,".repeat(elements)
+    );
     for k in 0..10 {
         let text = format!("#include \"chain{}.scn\"\n{filler}", k + 1);
         let need = parse_memory(&text);
@@ -70,7 +73,8 @@ fn a_chain_of_includes_each_under_the_limit_is_refused_by_their_total() {
 #[test]
 fn forty_strings_of_16_mib_are_refused_by_the_total() {
     let dir = tempfile::tempdir().unwrap();
-    let mut text = String::from("#declare S = \"x\";\n#for (I, 1, 24)\n  #declare S = S + S;\n#end\n");
+    let mut text =
+        String::from("#declare S = \"x\";\n#for (I, 1, 24)\n  #declare S = S + S;\n#end\n");
     for k in 0..40 {
         text.push_str(&format!("#declare C{k} = S + \"\";\n"));
     }
@@ -142,7 +146,11 @@ fn strings_and_images_count_in_one_total() {
         "{e:?}"
     );
     let d = l.diagnostics.iter().find(|d| d.is_error()).unwrap();
-    assert!(text[..d.span.start as usize].ends_with("image "), "{:?}", d.span);
+    assert!(
+        text[..d.span.start as usize].ends_with("image "),
+        "{:?}",
+        d.span
+    );
     assert!(d.help.as_deref().unwrap().contains("--memory-limit"));
     assert!(errors(&load(61 * MIB)).is_empty());
 }

@@ -10,10 +10,10 @@
 
 use glam::DAffine3;
 
-use super::orient::{profile_area, signed_volume};
-use super::shapes::build_shapes;
 use super::RenderError;
 use super::budget::primitives;
+use super::orient::{profile_area, signed_volume};
+use super::shapes::build_shapes;
 use crate::scene::{self, MAX_CSG_DEPTH, MaterialId, Object, Scene};
 use crate::shapes::csg::{Csg, CsgLeaf, CsgNode};
 use crate::shapes::primitive::AnyShape;
@@ -204,7 +204,7 @@ mod tests {
         };
         csg.children = placements(100);
         let cost = cost_of(&s);
-        assert!(cost > MAX_CSG_RAY_COST && cost >= 3_000_000, "{cost}");
+        assert!(cost >= 3_000_000, "{cost}");
         let e = check_costs(&s).unwrap_err();
         assert_eq!(e.span, Some(s.objects[0].span));
         assert!(
