@@ -163,6 +163,13 @@ impl Evaluator {
                 let vb = self.eval(b)?;
                 // Strings are joined or compared whole: the work of both operands.
                 self.charge(super::work_of(&va) + super::work_of(&vb), e.span)?;
+                // A joined string counts against the load's memory before it is made.
+                if let (BinOp::Add, Value::Str(x), Value::Str(y)) = (op, &va, &vb) {
+                    let bytes = x.len() + y.len();
+                    if bytes <= super::MAX_STRING_BYTES {
+                        self.hold_string(bytes as u64, e.span)?;
+                    }
+                }
                 binary(*op, va, vb).at(e.span)?
             }
             ExprKind::Conditional(parts) => {

@@ -10,6 +10,7 @@
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
 //! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
 //!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
+//! - `memory`: the memory a load holds (parsed text, strings, images) against its limit;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
@@ -20,6 +21,7 @@ mod directives;
 mod expr;
 mod include;
 mod lower;
+mod memory;
 mod props;
 mod scope;
 mod stdlib;
@@ -57,9 +59,11 @@ pub struct EvalOptions {
     /// counted together) one load may take: a budget for the whole evaluation, so that
     /// nested loops or exponential recursion that each stay under their own limits still end.
     pub max_steps: u64,
-    /// The render's memory limit (bytes), as given to `prepare`: images that would not fit in
-    /// it decoded are refused from their headers, before they are decoded. `None`: only the
-    /// fixed caps on image size apply.
+    /// The render's memory limit (bytes), as given to `prepare`. The load holds to it too: the
+    /// text it parses (every include), the strings it builds and the images it decodes count
+    /// in one running total, and the file, string or image that would pass the limit is
+    /// refused (an image from its header, before it is decoded). `None`:
+    /// [`DEFAULT_PARSE_MEMORY`].
     pub memory_limit: Option<u64>,
     /// Raised by the caller to stop the load: the evaluation checks it at every step (and
     /// before and after parsing, which cannot stop midway) and ends with
@@ -73,8 +77,9 @@ pub struct EvalOptions {
 /// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
 /// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
-/// The memory limit parsing is held to when the caller gives none
-/// ([`EvalOptions::memory_limit`]): a render's default on a machine with 4 GiB or more.
+/// The memory limit a load (its parsed text, strings and images) is held to when the caller
+/// gives none ([`EvalOptions::memory_limit`]): a render's default on a machine with 4 GiB or
+/// more.
 pub const DEFAULT_PARSE_MEMORY: u64 = 2 << 30;
 /// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
 /// readable and bounded); past it, one last note says the rest were left out.
@@ -406,6 +411,8 @@ pub(crate) struct Evaluator {
     parts_copied: usize,
     /// Bytes of scene text read so far (the scene and every include).
     pub(crate) source_bytes: u64,
+    /// The memory the load holds so far (see [`memory`]).
+    held: memory::Held,
     /// How often each name-like word occurs in the sources read (see
     /// [`Evaluator::warn_unused`]), and how many files it counted; made when first needed.
     mentions: Option<(usize, HashMap<String, u32>)>,
@@ -488,6 +495,7 @@ impl Evaluator {
             stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,
+            held: memory::Held::default(),
             mentions: None,
         }
     }

@@ -40,8 +40,9 @@ pub struct MemoryItem {
     pub bytes: u64,
 }
 
-/// Primitives each scene shape becomes in the prepared scene.
-fn primitives(shape: &Shape) -> u64 {
+/// Primitives each scene shape becomes in the prepared scene (in a CSG: the surfaces of its
+/// leaf).
+pub(super) fn primitives(shape: &Shape) -> u64 {
     match shape {
         Shape::Mesh { mesh } => mesh.indices.len() as u64,
         Shape::Box { .. } => 6,

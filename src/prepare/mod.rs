@@ -22,6 +22,7 @@ use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
+pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
     MAX_THREADS, RADIUS_FOOTPRINTS, RenderError, RenderOptions, effective_settings,
@@ -149,6 +150,9 @@ pub(crate) fn prepare_until<'a>(
     unless(stop)?;
     // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
+    // The cost of each CSG first: a merge of many placements of a large mesh would otherwise
+    // be refused for its memory, which tells less.
+    csg::check_costs(scene)?;
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit, options.held_memory)
         .map_err(|e| e.at(scene.settings.span))?;
@@ -215,6 +219,8 @@ impl<'a> PreparedScene<'a> {
     /// (asked between phases, for every object, and inside the BVH build).
     pub fn new_until(scene: &'a Scene, stop: Stop) -> Result<Self, RenderError> {
         unless(stop)?;
+        // From counts, before validation reads a CSG's meshes once per placement.
+        csg::check_costs(scene)?;
         scene.validate()?;
         unless(stop)?;
         let (width, height) = scene.settings.resolution;
