@@ -26,7 +26,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // The language.
     ("syntax", &["span", "diag"]),
     ("scene", &["span", "diag", "files"]),
-    ("eval", &["span", "diag", "files", "syntax", "scene"]),
+    // (`sampling`: the language's random streams, `seed` and `rand`, are its splitmix64.)
+    (
+        "eval",
+        &["span", "diag", "files", "syntax", "scene", "sampling"],
+    ),
     // The renderer's building blocks.
     ("geometry", &[]),
     ("sampling", &["geometry"]),

@@ -8,8 +8,9 @@
 //! - [`value`]: runtime values and the definitions they hold (imports nothing else from `eval`);
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
-//! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
-//!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
+//! - `scope`: bindings and lookups; `expr`: expressions; `random`: random streams (`seed`,
+//!   `rand`); `directives`: directives; `macros`: macro calls, as statements and as values;
+//!   `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
@@ -20,7 +21,9 @@ mod directives;
 mod expr;
 mod include;
 mod lower;
+mod macros;
 mod props;
+mod random;
 mod scope;
 mod stdlib;
 mod value;
