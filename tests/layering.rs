@@ -23,17 +23,18 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("diag", &["span"]),
     ("atomic_file", &[]),
     ("files", &[]),
+    // Leaves of the renderer's building blocks, placed before the language because they know
+    // nothing of it: the language's random streams (`seed`, `rand`) are `sampling`'s splitmix64.
+    ("geometry", &[]),
+    ("sampling", &["geometry"]),
     // The language.
     ("syntax", &["span", "diag"]),
     ("scene", &["span", "diag", "files"]),
-    // (`sampling`: the language's random streams, `seed` and `rand`, are its splitmix64.)
     (
         "eval",
         &["span", "diag", "files", "syntax", "scene", "sampling"],
     ),
     // The renderer's building blocks.
-    ("geometry", &[]),
-    ("sampling", &["geometry"]),
     ("bezier", &["geometry", "sampling"]),
     ("shapes", &["geometry", "sampling", "bezier", "scene"]),
     ("accel", &["geometry", "sampling", "shapes"]),

@@ -55,7 +55,10 @@ fn a_value_macro_stands_in_a_declaration_a_vector_and_a_property() {
     ));
     let s = spheres(&l.scene.as_ref().unwrap().objects);
     assert_eq!(s.len(), 3);
-    assert!((s[0].0 - DVec3::new(2.5, 2.0, 0.0)).length() < 1e-12, "{s:?}");
+    assert!(
+        (s[0].0 - DVec3::new(2.5, 2.0, 0.0)).length() < 1e-12,
+        "{s:?}"
+    );
     assert!((s[0].1 - 0.3).abs() < 1e-12, "{s:?}");
     assert!((s[1].1 - 0.5).abs() < 1e-12, "{s:?}");
     assert!((s[2].0.x - 1.0).abs() < 1e-12, "{s:?}");
@@ -114,13 +117,16 @@ fn value_macros_recurse() {
          #debug str(Quad(1.5)) + \" \" + str(Inner())
          sphere { <0, 0, 0>, Fact(3) }",
     );
-    assert_eq!(debug(&l), ["3.6288e+06", "610", "6 6"]);
-    // (`str` shows 6 digits: the exact value, through the radius.)
+    assert_eq!(debug(&l), ["3628800", "610", "6 6"]);
+    // A value macro as a property's value.
     let l = load(
         "#macro Fact(N) #if (N <= 1) 1 #else N * Fact(N - 1) #end #end
          sphere { <0, 0, 0>, Fact(10) }",
     );
-    assert_eq!(spheres(&l.scene.as_ref().unwrap().objects)[0].1, 3_628_800.0);
+    assert_eq!(
+        spheres(&l.scene.as_ref().unwrap().objects)[0].1,
+        3_628_800.0
+    );
 }
 
 /// A macro called as a statement still puts its objects where it stands, and a value its body
