@@ -768,6 +768,37 @@ mod tests {
         assert!(!l.has_errors(), "{:?}", l.diagnostics);
     }
 
+    /// Value macros recurse through expressions (a call inside `1 + ...` inside an `#if`
+    /// body): filling the nesting limit of a small stack fits in it, and running past it is
+    /// the nesting error, not a stack overflow.
+    #[test]
+    fn value_macro_recursion_fits_the_stack_it_is_limited_to() {
+        let stack = 1 << 26;
+        let limit = nesting_limit(stack);
+        // Each level of `Sum` is a macro call and an `#if` body: two levels of nesting.
+        let sum = |depth: usize| {
+            format!(
+                "#macro Sum(N) #if (N <= 0) 0 #else 1 + Sum(N - 1) #end #end\n\
+                 sphere {{ <0, 0, 0>, Sum({depth}) }}\n"
+            )
+        };
+        let l = load(&sum(limit / 2 - 2), 100_000, &[stack]);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        let radius = match l.scene.unwrap().objects[0].shape {
+            crate::scene::Shape::Sphere { radius, .. } => radius,
+            ref s => panic!("{s:?}"),
+        };
+        assert_eq!(radius, (limit / 2 - 2) as f64);
+        let l = load(
+            "#macro Down(N) Down(N - 1) + 1 #end\n#declare T = Down(3);\n",
+            100_000,
+            &[stack],
+        );
+        let d = &l.diagnostics[0];
+        assert!(d.message.contains(&limit.to_string()), "{}", d.message);
+        assert!(!d.span.is_detached(), "{d:?}");
+    }
+
     #[test]
     fn a_panic_in_the_evaluation_is_an_internal_error() {
         let l = on_eval_thread(Path::new("t.scn"), &EVAL_STACKS, &|_| panic!("on purpose"));

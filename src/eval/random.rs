@@ -193,7 +193,7 @@ mod tests {
     #[test]
     fn normal_deviates_have_the_right_mean_and_spread() {
         let mut r = stream(7.0);
-        let xs: Vec<f64> = (0..20_000).map(|_| normal(r)).collect();
+        let xs: Vec<f64> = (0..20_000).map(|_| normal(&mut r)).collect();
         let mean = xs.iter().sum::<f64>() / xs.len() as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64;
         // Standard errors: 0.007 for the mean, 0.01 for the variance; bounds at about 4.
