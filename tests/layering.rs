@@ -25,16 +25,20 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("files", &[]),
     // The caller's cancel handle, read by every stage that can take long.
     ("cancel", &[]),
+    // Leaves of the renderer's building blocks, placed before the language because they know
+    // nothing of it: the language's random streams (`seed`, `rand`) are `sampling`'s splitmix64.
+    ("geometry", &[]),
+    ("sampling", &["geometry"]),
     // The language.
     ("syntax", &["span", "diag"]),
     ("scene", &["span", "diag", "files"]),
     (
         "eval",
-        &["span", "diag", "files", "cancel", "syntax", "scene"],
+        &[
+            "span", "diag", "files", "cancel", "syntax", "scene", "sampling",
+        ],
     ),
     // The renderer's building blocks.
-    ("geometry", &[]),
-    ("sampling", &["geometry"]),
     ("bezier", &["geometry", "sampling"]),
     ("shapes", &["geometry", "sampling", "bezier", "scene"]),
     ("accel", &["geometry", "sampling", "shapes"]),

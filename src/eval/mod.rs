@@ -8,8 +8,9 @@
 //! - [`value`]: runtime values and the definitions they hold (imports nothing else from `eval`);
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
-//! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
-//!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
+//! - `scope`: bindings and lookups; `expr`: expressions; `random`: random streams (`seed`,
+//!   `rand`); `directives`: directives; `macros`: macro calls, as statements and as values;
+//!   `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
 //! - `memory`: the memory a load holds (parsed text, strings, images) against its limit;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
@@ -21,8 +22,10 @@ mod directives;
 mod expr;
 mod include;
 mod lower;
+mod macros;
 mod memory;
 mod props;
+mod random;
 mod scope;
 mod stdlib;
 mod value;
@@ -837,6 +840,37 @@ mod tests {
         assert_eq!(nesting_limit(1 << 28), MAX_EVAL_NESTING / 4);
         let l = load(&recursion(10_000), 100_000, &EVAL_STACKS);
         assert!(!l.has_errors(), "{:?}", l.diagnostics);
+    }
+
+    /// Value macros recurse through expressions (a call inside `1 + ...` inside an `#if`
+    /// body): filling the nesting limit of a small stack fits in it, and running past it is
+    /// the nesting error, not a stack overflow.
+    #[test]
+    fn value_macro_recursion_fits_the_stack_it_is_limited_to() {
+        let stack = 1 << 26;
+        let limit = nesting_limit(stack);
+        // Each level of `Sum` is a macro call and an `#if` body: two levels of nesting.
+        let sum = |depth: usize| {
+            format!(
+                "#macro Sum(N) #if (N <= 0) 0 #else 1 + Sum(N - 1) #end #end\n\
+                 sphere {{ <0, 0, 0>, Sum({depth}) }}\n"
+            )
+        };
+        let l = load(&sum(limit / 2 - 2), 100_000, &[stack]);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        let radius = match l.scene.unwrap().objects[0].shape {
+            crate::scene::Shape::Sphere { radius, .. } => radius,
+            ref s => panic!("{s:?}"),
+        };
+        assert_eq!(radius, (limit / 2 - 2) as f64);
+        let l = load(
+            "#macro Down(N) Down(N - 1) + 1 #end\n#declare T = Down(3);\n",
+            100_000,
+            &[stack],
+        );
+        let d = &l.diagnostics[0];
+        assert!(d.message.contains(&limit.to_string()), "{}", d.message);
+        assert!(!d.span.is_detached(), "{d:?}");
     }
 
     #[test]

@@ -336,16 +336,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "vaxis_rotate",
         "there is no `vaxis_rotate` here: `vrotate(v, <ax, ay, az>)` turns about x, then y, then z",
     ),
-    pov(
-        "seed",
-        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
-         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
-    ),
-    pov(
-        "rand",
-        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
-         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
-    ),
     pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
     pov_in("light", "jitter", AREA_LIGHT_OPTIONS),
     pov_in(
