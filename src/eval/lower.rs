@@ -37,6 +37,7 @@ pub(crate) fn empty_scene() -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         background: Background::default(),
+        backdrop: None,
     }
 }
 
@@ -221,7 +222,7 @@ impl Evaluator {
         })
     }
 
-    fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
+    pub(super) fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
         let key = Rc::as_ptr(t);
         if let Some((_, id)) = self.assets.textures.get(&key) {
             return Ok(*id);
