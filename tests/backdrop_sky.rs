@@ -266,3 +266,25 @@ fn hostile_library_skies_are_refused() {
         );
     }
 }
+
+/// POV-Ray's sky words are answered with their translation: `background { ... }` is a
+/// backdrop here, `sky_sphere { pigment { gradient ... } }` a background texture.
+#[test]
+fn povray_sky_words_get_their_translation() {
+    for (text, want) in [
+        ("background { color rgb <0.1, 0.2, 0.4> }", "`backdrop rgb"),
+        (
+            "sky_sphere { pigment { gradient y color_map { [0, rgb 1] [1, rgb 0.5] } } }",
+            "`background texture {",
+        ),
+    ] {
+        let l = load_source("pov.scn", text, &EvalOptions::default());
+        let help = l
+            .diagnostics
+            .iter()
+            .find(|d| d.is_error())
+            .and_then(|d| d.help.clone())
+            .unwrap_or_default();
+        assert!(help.contains(want), "{text}: {help}");
+    }
+}
