@@ -288,3 +288,28 @@ fn povray_sky_words_get_their_translation() {
         assert!(help.contains(want), "{text}: {help}");
     }
 }
+
+/// A baked sky and a textured backdrop give the same image for any thread count.
+#[test]
+fn sky_textures_render_the_same_on_any_thread_count() {
+    let text = format!(
+        "settings {{ resolution <24, 24> photons 3000 }}\n{VIEW}{MIRROR}\
+         background texture {{ gradient y color_map {{ [0, rgb 0.3] [1, rgb <0.2, 0.5, 1>] }} }}\n\
+         backdrop texture {{ marble color_map {{ [0, rgb 0.1] [1, rgb 0.9] }} }}\n"
+    );
+    let l = load_source("t.scn", &text, &EvalOptions::default());
+    let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
+    let image = |threads: usize| {
+        let opts = RenderOptions {
+            iterations: Some(3),
+            threads: Some(threads),
+            ..Default::default()
+        };
+        render(&scene, &opts, &AtomicBool::new(false), &mut |_| {})
+            .unwrap()
+            .image
+    };
+    let one = image(1);
+    assert!(one.mean()[0] > 0.0);
+    assert_eq!(one.pixels, image(2).pixels);
+}
