@@ -9,7 +9,7 @@ use sppm_lang::diag::short_number;
 use sppm_lang::render::{
     EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
 };
-use sppm_lang::scene::{Background, Integrator, Light, Scene, Shape};
+use sppm_lang::scene::{Background, ColorParam, Integrator, Light, Scene, Shape};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
 use super::output::{err, out};
@@ -300,6 +300,14 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
             "background: environment {} x{intensity}\n",
             image.path.display()
         )),
+        Background::Texture(id) => out.push_str(&format!("background: texture {}\n", id.0)),
+    }
+    match &s.backdrop {
+        Some(ColorParam::Const(c)) => {
+            out.push_str(&format!("backdrop: rgb <{}, {}, {}>\n", c.x, c.y, c.z))
+        }
+        Some(ColorParam::Texture(id)) => out.push_str(&format!("backdrop: texture {}\n", id.0)),
+        None => {}
     }
     out.push_str(&format!("files read: {files_read}\n"));
     out

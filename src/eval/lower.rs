@@ -40,6 +40,7 @@ pub(crate) fn empty_scene() -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         background: Background::default(),
+        backdrop: None,
     }
 }
 
@@ -233,7 +234,7 @@ impl Evaluator {
         })
     }
 
-    fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
+    pub(super) fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
         let key = Rc::as_ptr(t);
         if let Some((_, id)) = self.assets.textures.get(&key) {
             return Ok(*id);

@@ -11,6 +11,7 @@ mod lights;
 mod orient;
 mod settings;
 mod shapes;
+mod sky;
 
 use crate::accel::{self, Bvh};
 use crate::camera::Camera;
@@ -199,12 +200,13 @@ impl<'a> PreparedScene<'a> {
             out.push(RenderError {
                 help: Some(
                     "add a `light { <position> intensity <color> }`, an `area_light { ... }`, \
-                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }`"
+                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }` (a \
+                     `backdrop` is only seen, it lights nothing)"
                         .into(),
                 ),
                 ..RenderError::new(
                     "the scene has no light: no light source, no emitting object and a black \
-                     background, so it renders black",
+                     background, so its objects render black",
                 )
             });
         }

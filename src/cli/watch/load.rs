@@ -52,6 +52,7 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
                 s.objects.is_empty()
                     && s.lights.is_empty()
                     && matches!(s.background, Background::Color(c) if c == glam::DVec3::ZERO)
+                    && s.backdrop.is_none()
             });
             if bare {
                 status(&format!(
