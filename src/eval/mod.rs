@@ -23,6 +23,7 @@ mod lower;
 mod props;
 mod scope;
 mod stdlib;
+mod strings;
 mod value;
 
 use std::collections::{HashMap, HashSet};

@@ -77,6 +77,7 @@ const VALUE_BLOCKS: &[&str] = &[
     "material",
     "texture",
     "color_map",
+    "colour_map",
     "bezier",
     "spline",
     "settings",
@@ -126,7 +127,7 @@ impl Evaluator {
                 self.run_items(items, &mut b)?;
                 b.finish(self, span)
             }
-            "color_map" => {
+            "color_map" | "colour_map" => {
                 let mut b = ColorMapBuilder::default();
                 self.run_items(items, &mut b)?;
                 b.finish(span)
