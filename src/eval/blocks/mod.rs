@@ -68,8 +68,9 @@ pub(super) fn unexpected<S: Sink + ?Sized>(
 }
 
 /// Whether `name` is the name of a kind of block (`material`, `sphere`, ...).
+/// `colour_map` is POV-Ray's other spelling of `color_map` (not listed with the blocks).
 pub(super) fn is_block_name(name: &str) -> bool {
-    OBJECT_BLOCKS.contains(&name) || VALUE_BLOCKS.contains(&name)
+    OBJECT_BLOCKS.contains(&name) || VALUE_BLOCKS.contains(&name) || name == "colour_map"
 }
 
 /// The blocks that are not objects (those are [`OBJECT_BLOCKS`]).
@@ -77,7 +78,6 @@ const VALUE_BLOCKS: &[&str] = &[
     "material",
     "texture",
     "color_map",
-    "colour_map",
     "bezier",
     "spline",
     "settings",
