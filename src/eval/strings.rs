@@ -320,3 +320,86 @@ fn leading_number(s: &str) -> f64 {
     }
     t[..end].parse().unwrap_or(0.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn s(text: &str) -> Value {
+        Value::Str(Rc::from(text))
+    }
+
+    /// The `%*.*f` forms POV-Ray 3.7 prints, including ties (to even, as C rounds the exact
+    /// binary value) and precisions past what Rust's formatting takes.
+    #[test]
+    fn numbers_are_written_as_c_writes_them() {
+        let f = |x, w, p| format_number(x, w, p).unwrap().to_string();
+        assert_eq!(f(2.5, 0, 0), "2");
+        assert_eq!(f(3.5, 0, 0), "4");
+        assert_eq!(f(0.125, 0, 2), "0.12");
+        assert_eq!(f(-1.5, -7, 1), "-0001.5");
+        assert_eq!(f(-1.5, 7, 1), "   -1.5");
+        assert_eq!(f(1e20, 0, -1), "100000000000000000000.000000");
+        assert_eq!(f(1.0, 3, 1), "1.0");
+        let long = f(0.5, 0, 70_000);
+        assert_eq!(long.len(), 70_002);
+        assert!(long.starts_with("0.5") && long[3..].bytes().all(|b| b == b'0'));
+        let wide = f(7.0, 70_000, 0);
+        assert_eq!(wide.len(), 70_000);
+        assert!(wide.ends_with(" 7"));
+    }
+
+    #[test]
+    fn widths_and_joins_past_the_string_limit_are_errors() {
+        assert!(format_number(1.0, MAX_STRING_BYTES as i64 + 1, 0).is_err());
+        assert!(format_number(1.0, 0, MAX_STRING_BYTES as i64).is_err());
+        assert!(format_number(1.0, i64::MIN, i64::MAX).is_err());
+        let half = s(&"a".repeat(MAX_STRING_BYTES / 2 + 1));
+        let Some(Err((_, e))) = call("concat", &[half.clone(), half]) else {
+            panic!("concat past the limit was accepted")
+        };
+        assert!(e.message.contains("more than the limit"), "{}", e.message);
+    }
+
+    #[test]
+    fn val_reads_the_leading_number_as_atof() {
+        for (text, want) in [
+            ("3.5e2", 350.0),
+            ("  12abc", 12.0),
+            ("-.5x", -0.5),
+            ("+7.", 7.0),
+            ("1e", 1.0),
+            ("1e+", 1.0),
+            ("2E-1z", 0.2),
+            (".", 0.0),
+            ("-", 0.0),
+            ("abc", 0.0),
+            ("", 0.0),
+        ] {
+            assert_eq!(leading_number(text), want, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn substr_and_chr_bounds() {
+        let hello = s("hello");
+        let sub = |p: f64, l: f64| call("substr", &[hello.clone(), Value::Num(p), Value::Num(l)]);
+        assert!(matches!(sub(1.0, 5.0), Some(Ok(Value::Str(t))) if &*t == "hello"));
+        assert!(matches!(sub(6.0, 0.0), Some(Ok(Value::Str(t))) if t.is_empty()));
+        for (p, l) in [
+            (0.0, 1.0),
+            (5.0, 2.0),
+            (2.0, -1.0),
+            (1e300, 1.0),
+            (1.0, 1e300),
+        ] {
+            assert!(matches!(sub(p, l), Some(Err(_))), "substr({p}, {l})");
+        }
+        for code in [0.0, -1.0, 55296.0, 1_114_112.0, 1e300] {
+            assert!(
+                matches!(call("chr", &[Value::Num(code)]), Some(Err((0, _)))),
+                "chr({code})"
+            );
+        }
+    }
+}
