@@ -83,11 +83,6 @@ pub(super) fn syntax_error(
         pest::error::ErrorVariant::ParsingError { positives, .. } => expected_rules(positives),
         pest::error::ErrorVariant::CustomError { .. } => (Vec::new(), false),
     };
-    // After a vector's component only another component could follow (or a postfix `[i]`):
-    // the vector is not closed.
-    let in_vector = rules.contains(&Rule::vexpr)
-        && rules.contains(&Rule::index)
-        && rules.iter().all(|r| matches!(r, Rule::vexpr | Rule::index));
     let mut expected: Vec<&str> = rules.into_iter().map(describe).collect();
     // Say "a directive" once instead of listing every one, and leave out the tokens that could
     // merely continue an expression when there are other choices.
@@ -118,16 +113,6 @@ pub(super) fn syntax_error(
         .with_label(format!("expected {expected_text}"))
     };
     let rest = &text[pos.min(text.len())..];
-    if in_vector && !rest.starts_with('>') {
-        d.message = format!("syntax error: unexpected {found}");
-        d.label = "not expected here".into();
-        d = d.with_help(
-            "a vector `<...>` is not closed: add `>` after its last component (components are \
-             separated by commas or blanks)",
-        );
-    } else if in_vector && !joined_vector(&text[..pos]) {
-        d = d.with_help("a vector `<...>` has two or more components: `<x, y>` or `<x, y, z>`");
-    }
     if rest.starts_with('#') {
         let word: String = rest
             .strip_prefix('#')
