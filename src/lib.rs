@@ -14,6 +14,7 @@ pub mod accel;
 pub mod atomic_file;
 pub mod bezier;
 pub mod camera;
+pub mod cancel;
 pub mod chart;
 pub mod compare;
 pub mod diag;
@@ -34,6 +35,7 @@ pub mod syntax;
 pub mod textures;
 pub mod watch;
 
+pub use cancel::Cancel;
 pub use diag::SourceMap;
 pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
 pub use eval::{EvalOptions, Loaded, load_file, load_source};

@@ -341,7 +341,10 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
     assert_eq!(need, 65_544 * sppm_lang::syntax::PARSE_BYTES_PER_LEXEME);
     std::fs::write(dir.path().join("big.scn"), &big).unwrap();
     let main = dir.path().join("main.scn");
-    std::fs::write(&main, "#include \"big.scn\"\n").unwrap();
+    let main_text = "#include \"big.scn\"\n";
+    std::fs::write(&main, main_text).unwrap();
+    // The load holds the scene file's parse too: one total for every file it reads.
+    let both = need + sppm_lang::syntax::parse_memory(main_text);
     let with = |path: &std::path::Path, limit: Option<u64>| {
         let options = EvalOptions {
             memory_limit: limit,
@@ -349,11 +352,17 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
         };
         sppm_lang::load_file(path, &options).unwrap()
     };
-    // Room to parse it (and no limit given: the default of 2 GiB): loaded.
-    for limit in [None, Some(need)] {
+    // Room to parse both (and no limit given: the default of 2 GiB): loaded.
+    for limit in [None, Some(both)] {
         let l = with(&main, limit);
         assert!(errors(&l).is_empty(), "{limit:?}: {:?}", errors(&l));
     }
+    // Room for the included file alone, but not with the scene's own: refused at the include.
+    let e = errors(&with(&main, Some(both - 1)));
+    assert!(
+        e.len() == 1 && e[0].contains("the load holds") && e[0].contains("parsed text"),
+        "{e:?}"
+    );
     // Not enough: refused at the include, and as the scene file itself at its start.
     for (path, at) in [(&main, "#include ".len()), (&dir.path().join("big.scn"), 0)] {
         let l = with(path, Some(19 << 20));

@@ -70,7 +70,7 @@ fn options() -> EvalOptions {
         max_depth: 32,
         max_objects: 10_000,
         max_steps: 1_000_000,
-        memory_limit: None,
+        ..EvalOptions::default()
     }
 }
 

@@ -23,13 +23,22 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("diag", &["span"]),
     ("atomic_file", &[]),
     ("files", &[]),
+    // The caller's cancel handle, read by every stage that can take long.
+    ("cancel", &[]),
+    // Leaves of the renderer's building blocks, placed before the language because they know
+    // nothing of it: the language's random streams (`seed`, `rand`) are `sampling`'s splitmix64.
+    ("geometry", &[]),
+    ("sampling", &["geometry"]),
     // The language.
     ("syntax", &["span", "diag"]),
     ("scene", &["span", "diag", "files"]),
-    ("eval", &["span", "diag", "files", "syntax", "scene"]),
+    (
+        "eval",
+        &[
+            "span", "diag", "files", "cancel", "syntax", "scene", "sampling",
+        ],
+    ),
     // The renderer's building blocks.
-    ("geometry", &[]),
-    ("sampling", &["geometry"]),
     ("bezier", &["geometry", "sampling"]),
     ("shapes", &["geometry", "sampling", "bezier", "scene"]),
     ("accel", &["geometry", "sampling", "shapes"]),
@@ -47,6 +56,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         &[
             "span",
             "diag",
+            "cancel",
             "scene",
             "geometry",
             "sampling",
@@ -78,7 +88,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     (
         "render",
-        &["span", "diag", "scene", "film", "prepare", "integrators"],
+        &[
+            "span",
+            "diag",
+            "cancel",
+            "scene",
+            "film",
+            "prepare",
+            "integrators",
+        ],
     ),
     // Tools over finished images and renders.
     ("compare", &["film", "atomic_file"]),

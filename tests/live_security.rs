@@ -645,7 +645,8 @@ fn event_streams_that_do_not_read_hold_little() {
     let loud = format!(
         "#declare Long = \"{}\";\n#for (I, 1, 1000) #debug Long + str(I) #end\n{}",
         "x".repeat(8000),
-        scene(16)
+        // Another seed: a scene that differs, so that it is rendered (an unchanged one is not).
+        scene(16).replace("seed 1", "seed 2")
     );
     let scene_path = live._dir.path().join("s.scn");
     std::fs::write(&scene_path, &loud).unwrap();

@@ -82,13 +82,28 @@ pub(super) struct BuildNode {
     pub axis: u8,
 }
 
+/// What the build asks, at a coarse grain, to learn whether to stop.
+pub(super) type Stop<'s> = &'s (dyn Fn() -> bool + Sync);
+
 /// Builds the tree over `items` (reordered into leaf order). From depth `median_depth` on,
 /// nodes split at the object median instead of by SAH.
+#[cfg(test)]
 pub(super) fn build(items: &mut [Item], median_depth: usize, par: Parallelism) -> Vec<BuildNode> {
+    build_until(items, median_depth, par, &|| false).unwrap_or_default()
+}
+
+/// [`build`], asking `stop` before each node of [`Parallelism::join`] items or more (a subtree
+/// smaller than that takes about half a millisecond): `None` once it said yes.
+pub(super) fn build_until(
+    items: &mut [Item],
+    median_depth: usize,
+    par: Parallelism,
+    stop: Stop,
+) -> Option<Vec<BuildNode>> {
     if items.is_empty() {
-        return Vec::new();
+        return Some(Vec::new());
     }
-    let run = build_run(items, 0, 0, median_depth, par);
+    let run = build_run(items, 0, 0, median_depth, par, stop)?;
     let mut nodes = vec![
         BuildNode {
             bounds: Aabb::EMPTY,
@@ -99,7 +114,7 @@ pub(super) fn build(items: &mut [Item], median_depth: usize, par: Parallelism) -
         run.len()
     ];
     run.write(&mut nodes, 0);
-    nodes
+    Some(nodes)
 }
 
 /// The nodes of a subtree, in depth-first order, before they are placed in the final array.
@@ -153,35 +168,41 @@ impl Run {
     }
 }
 
-/// The subtree over `items` (which start at index `start` of all items).
+/// The subtree over `items` (which start at index `start` of all items); `None` when `stop`
+/// said so.
 fn build_run(
     items: &mut [Item],
     start: usize,
     depth: usize,
     median_depth: usize,
     par: Parallelism,
-) -> Run {
+    stop: Stop,
+) -> Option<Run> {
     if items.len() < par.join {
         let mut nodes = Vec::with_capacity(items.len() / 2 + 1);
         build_serial(items, start, depth, median_depth, par, &mut nodes);
-        return Run::Nodes(nodes);
+        return Some(Run::Nodes(nodes));
+    }
+    if stop() {
+        return None;
     }
     let (node, mid) = split(items, start, depth, median_depth, par);
     let Some(mid) = mid else {
-        return Run::Nodes(vec![node]);
+        return Some(Run::Nodes(vec![node]));
     };
     let (a, b) = items.split_at_mut(mid);
     let (first, second) = rayon::join(
-        || build_run(a, start, depth + 1, median_depth, par),
-        || build_run(b, start + mid, depth + 1, median_depth, par),
+        || build_run(a, start, depth + 1, median_depth, par, stop),
+        || build_run(b, start + mid, depth + 1, median_depth, par, stop),
     );
+    let (first, second) = (first?, second?);
     let len = 1 + first.len() + second.len();
-    Run::Split {
+    Some(Run::Split {
         node,
         first: Box::new(first),
         second: Box::new(second),
         len,
-    }
+    })
 }
 
 /// The subtree over `items` on this thread, appended to `nodes`; returns its root's index.
@@ -521,5 +542,37 @@ mod tests {
         let mut mixed = four(true, false);
         mixed[2].heavy = true;
         assert_eq!(leaf_sizes(mixed), [4]);
+    }
+
+    /// A build asks whether to stop about once per subtree of [`Parallelism::join`] items
+    /// (so a cancel is seen within about half a millisecond of work per thread), builds the
+    /// same tree when nothing stops it, and stops at once (asking few more times) when told.
+    #[test]
+    fn a_build_asks_at_a_coarse_grain_and_stops_when_told() {
+        use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+        let n = 200_000;
+        let all = items(&mut Rng::new(5), n);
+        let par = Parallelism::DEFAULT;
+        let asked = AtomicUsize::new(0);
+        let mut a = copied(&all);
+        let never = || {
+            asked.fetch_add(1, Relaxed);
+            false
+        };
+        let nodes = build_until(&mut a, usize::MAX, par, &never).expect("not stopped");
+        assert_eq!(
+            (nodes, a.iter().map(|it| it.index).collect()),
+            built(1, &all, usize::MAX, par)
+        );
+        let full = asked.load(Relaxed);
+        println!("a build of {n} items asked {full} times");
+        assert!(full >= n / par.join && full <= 4 * n / par.join, "{full}");
+        let asked = AtomicUsize::new(0);
+        let mut b = copied(&all);
+        let soon = || asked.fetch_add(1, Relaxed) >= 3;
+        assert!(build_until(&mut b, usize::MAX, par, &soon).is_none());
+        // Each task in flight asks once more, then gives up.
+        let stopped = asked.load(Relaxed);
+        assert!(stopped < full / 4, "{stopped} of {full}");
     }
 }

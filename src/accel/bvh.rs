@@ -5,7 +5,7 @@
 use arrayvec::ArrayVec;
 use rayon::prelude::*;
 
-use super::build::{Item, Parallelism, build};
+use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
 use super::triangles::Meshes;
 use super::wide::{
@@ -80,14 +80,26 @@ impl Bvh {
 
     /// A BVH over `shapes` and the triangles of `meshes` (each mesh with the id its hits get).
     pub fn with_meshes(shapes: Vec<(AnyShape, u32)>, meshes: Vec<(TriangleMesh, u32)>) -> Self {
-        Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH)
+        Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH, &|| false)
+            .expect("unreachable: only `stop` ends a build early, and this one never says yes")
+    }
+
+    /// [`Bvh::with_meshes`], asking `stop` between the build's phases and inside the tree's
+    /// build at a coarse grain (a subtree of a few thousand items): `None` once it said yes.
+    pub fn with_meshes_until(
+        shapes: Vec<(AnyShape, u32)>,
+        meshes: Vec<(TriangleMesh, u32)>,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<Self> {
+        Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH, stop)
     }
 
     fn with_median_depth(
         shapes: Vec<(AnyShape, u32)>,
         meshes: Vec<(TriangleMesh, u32)>,
         median_depth: usize,
-    ) -> Self {
+        stop: Stop,
+    ) -> Option<Self> {
         // Boxes in parallel; most scenes (every mesh) have only bounded shapes.
         let boxes: Vec<Aabb> = shapes.par_iter().map(|(s, _)| s.bounds()).collect();
         let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();
@@ -122,8 +134,15 @@ impl Bvh {
             )
             .collect();
         drop(triangles);
-        let mut nodes: Vec<Node> = build(&mut items, median_depth, Parallelism::DEFAULT);
+        if stop() {
+            return None;
+        }
+        let mut nodes: Vec<Node> =
+            build_until(&mut items, median_depth, Parallelism::DEFAULT, stop)?;
         nodes.shrink_to_fit();
+        if stop() {
+            return None;
+        }
         // Pack each leaf's contents; its node then names the leaf.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
         let mut leaves = Leaves::default();
@@ -137,6 +156,9 @@ impl Bvh {
             node.offset = r;
         }
         leaves.shrink_to_fit();
+        if stop() {
+            return None;
+        }
         #[cfg(test)]
         fn below(n: &[Node], i: usize) -> usize {
             if n[i].count > 0 {
@@ -145,7 +167,7 @@ impl Bvh {
                 1 + below(n, i + 1).max(below(n, n[i].offset as usize))
             }
         }
-        Self {
+        Some(Self {
             #[cfg(test)]
             binary_depth: if nodes.is_empty() {
                 0
@@ -157,7 +179,7 @@ impl Bvh {
             leaves,
             meshes,
             unbounded,
-        }
+        })
     }
 
     /// Bounds of the bounded shapes (infinite planes excluded).

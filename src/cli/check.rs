@@ -9,7 +9,7 @@ use sppm_lang::diag::short_number;
 use sppm_lang::render::{
     EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
 };
-use sppm_lang::scene::{Background, Integrator, Light, Scene, Shape};
+use sppm_lang::scene::{Background, ColorParam, Integrator, Light, Scene, Shape};
 use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
 
 use super::output::{err, out};
@@ -88,6 +88,9 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
         err(&format!("error: {}\n", e.with_path(path)));
         ExitCode::from(EXIT_USAGE)
     })?;
+    if loaded.interrupted {
+        return Err(interrupted());
+    }
     print_diagnostics(&loaded);
     let has_errors = loaded.has_errors();
     match loaded.scene {
@@ -98,6 +101,14 @@ pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, Exi
         }),
         _ => Err(ExitCode::from(failure_code(&loaded))),
     }
+}
+
+/// Ctrl-C (or SIGTERM) stopped the load or the prepare stage: said in one word, without the
+/// diagnostics of a scene that was not read to its end, with the exit status of a command that
+/// has no result.
+fn interrupted() -> ExitCode {
+    err("interrupted\n");
+    ExitCode::from(EXIT_SCENE_ERROR)
 }
 
 /// Prints a warning the prepare stage found: at its span, or about the whole scene.
@@ -157,6 +168,16 @@ pub fn run(
     render_options: &RenderOptions,
     size: &SizeArgs,
 ) -> ExitCode {
+    // First: Ctrl-C stops the load and the prepare stage at their next check.
+    let cancel = super::cancel_on_ctrl_c();
+    let options = &EvalOptions {
+        cancel: cancel.clone(),
+        ..options.clone()
+    };
+    let render_options = &RenderOptions {
+        cancel,
+        ..render_options.clone()
+    };
     let loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
@@ -164,6 +185,9 @@ pub fn run(
             return ExitCode::from(EXIT_USAGE);
         }
     };
+    if loaded.interrupted {
+        return interrupted();
+    }
     print_diagnostics(&loaded);
     match &loaded.scene {
         Some(s) if !loaded.has_errors() => {
@@ -175,6 +199,7 @@ pub fn run(
             // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
             let (settings, prepared) = match sppm_lang::render::prepare(&s, render_options) {
                 Ok(p) => p,
+                Err(e) if e.interrupted => return interrupted(),
                 Err(e) => {
                     print_render_error(&loaded.sources, &e);
                     return ExitCode::from(EXIT_SCENE_ERROR);
@@ -275,6 +300,14 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
             "background: environment {} x{intensity}\n",
             image.path.display()
         )),
+        Background::Texture(id) => out.push_str(&format!("background: texture {}\n", id.0)),
+    }
+    match &s.backdrop {
+        Some(ColorParam::Const(c)) => {
+            out.push_str(&format!("backdrop: rgb <{}, {}, {}>\n", c.x, c.y, c.z))
+        }
+        Some(ColorParam::Texture(id)) => out.push_str(&format!("backdrop: texture {}\n", id.0)),
+        None => {}
     }
     out.push_str(&format!("files read: {files_read}\n"));
     out

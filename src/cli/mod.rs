@@ -1,4 +1,5 @@
-//! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors, 2 usage errors.
+//! Command-line arguments and dispatch. Exit status: 0 ok, 1 scene errors (and work
+//! interrupted before it had a result), 2 usage errors.
 
 /// `eprintln!` that never panics: a message to a standard error that cannot be written (a full
 /// disk, a closed pipe) is lost, and the command goes on to its own exit status.
@@ -134,6 +135,17 @@ pub fn output_path(
     }
     sppm_lang::atomic_file::check_output(&output, &[scene])?;
     Ok(output)
+}
+
+/// A cancel handle that Ctrl-C and SIGTERM raise, installed before anything long starts (the
+/// load included), so that they stop the work at its next check instead of waiting for it. A
+/// handler installed earlier in this process is kept (only one can be; the commands install
+/// theirs first thing).
+pub fn cancel_on_ctrl_c() -> sppm_lang::Cancel {
+    let cancel = sppm_lang::Cancel::new();
+    let raise = cancel.clone();
+    let _ = ctrlc::set_handler(move || raise.cancel());
+    cancel
 }
 
 /// Refuses `outputs` that are among `inputs` (the files a load read): writing there would

@@ -3,14 +3,12 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use sppm_lang::SourceMap;
 use sppm_lang::render::{Progress, RenderOptions, RenderStats, prepare, render_prepared};
 use sppm_lang::scene::{Integrator, Scene};
+use sppm_lang::{Cancel, SourceMap};
 
 use super::check::{load_scene, print_render_error, print_render_warning};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
@@ -50,6 +48,8 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
+    // First: Ctrl-C stops the load and the prepare stage as it stops the passes.
+    let cancel = super::cancel_on_ctrl_c();
     // `--threads` holds for the whole command: reading a large mesh and building its BVH run
     // on rayon's global pool, the passes on the render's own. (If the global pool is already
     // running, as when a test calls this twice, the set-up keeps it.)
@@ -67,13 +67,17 @@ pub fn run(args: RenderArgs) -> ExitCode {
             return ExitCode::from(EXIT_USAGE);
         }
     };
-    match load_scene(&args.scene, &args.limits.options()) {
+    let eval_options = sppm_lang::EvalOptions {
+        cancel: cancel.clone(),
+        ..args.limits.options()
+    };
+    match load_scene(&args.scene, &eval_options) {
         Ok(loaded) => {
             if let Err(e) = super::check_not_an_input(&[&output], &loaded.dependencies) {
                 say!("error: {e}");
                 return ExitCode::from(EXIT_USAGE);
             }
-            let code = render_scene(&loaded.scene, &args, &loaded.sources, &output);
+            let code = render_scene(&loaded.scene, &args, &loaded.sources, &output, &cancel);
             // The image is written and the process ends here: freeing a large scene (a mesh's
             // millions of vertices) is left to the exit.
             std::mem::forget(loaded);
@@ -84,8 +88,14 @@ pub fn run(args: RenderArgs) -> ExitCode {
 }
 
 /// Renders an already loaded scene as `args` asks into `output`; `sources` turn render errors
-/// that carry a span into diagnostics.
-fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &Path) -> ExitCode {
+/// that carry a span into diagnostics. `cancel` stops the prepare stage and the passes.
+fn render_scene(
+    scene: &Scene,
+    args: &RenderArgs,
+    sources: &SourceMap,
+    output: &Path,
+    cancel: &Cancel,
+) -> ExitCode {
     let mut scene = std::borrow::Cow::Borrowed(scene);
     if let Some(integrator) = args.integrator {
         scene.to_mut().settings.integrator = integrator;
@@ -104,14 +114,9 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         time_limit: args.time_limit,
         threads: args.threads,
         memory_limit: args.limits.memory_limit,
+        cancel: cancel.clone(),
         ..RenderOptions::default()
     };
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        // A second handler cannot be installed (e.g. in tests); rendering works without it.
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
     let exposure = scene.settings.exposure;
     let total = options.iterations.unwrap_or(scene.settings.iterations);
     let bar = std::io::stderr().is_terminal().then(|| {
@@ -155,7 +160,13 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
         for w in prepared.warnings() {
             on_warning(&w);
         }
-        let out = render_prepared(&prepared, &settings, &options, &cancel, &mut on_progress)?;
+        let out = render_prepared(
+            &prepared,
+            &settings,
+            &options,
+            cancel.flag(),
+            &mut on_progress,
+        )?;
         Ok((out, prepared))
     });
     if let Some(b) = &bar {
@@ -164,30 +175,39 @@ fn render_scene(scene: &Scene, args: &RenderArgs, sources: &SourceMap, output: &
     if let Some(e) = snapshot_error {
         say!("warning: snapshot: {e}");
     }
+    // Interrupted before any iteration finished (while preparing, or in the first): nothing to
+    // show, and nothing wrong with the scene. The image at the output path is kept.
+    let interrupted = || {
+        say!(
+            "interrupted before the first iteration finished; `{}` is left as it was",
+            output.display()
+        );
+        ExitCode::from(EXIT_SCENE_ERROR)
+    };
     let (out, prepared) = match result {
         Ok(o) => o,
+        Err(e) if e.interrupted => return interrupted(),
         Err(e) => {
             print_render_error(sources, &e);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
+    if out.iterations_done == 0 && out.cancelled {
+        return interrupted();
+    }
     if out.iterations_done == 0 {
         // Nothing to show: keep whatever image is at the output path.
-        let why = if out.cancelled {
-            "interrupted before the first iteration finished"
-        } else {
-            "no iteration finished within the time limit"
-        };
-        let message = format!("{why}; `{}` is left as it was", output.display());
+        let message = format!(
+            "no iteration finished within the time limit; `{}` is left as it was",
+            output.display()
+        );
         let mut e = sppm_lang::render::RenderError::new(message);
-        if !out.cancelled {
-            e.help = Some(
-                "give more time (`time_limit` in the settings or `--time-limit`), or lower the \
-                 resolution or photons so that one iteration fits"
-                    .into(),
-            );
-        }
-        if !out.cancelled && args.time_limit.is_none() {
+        e.help = Some(
+            "give more time (`time_limit` in the settings or `--time-limit`), or lower the \
+             resolution or photons so that one iteration fits"
+                .into(),
+        );
+        if args.time_limit.is_none() {
             // The limit came from the scene's settings: point at them.
             e = e.at(scene.settings.span);
         }

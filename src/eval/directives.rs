@@ -1,13 +1,9 @@
 //! Directives (`#declare`, `#local`, `#undef`, `#macro`, `#if`, `#ifdef`, `#ifndef`,
-//! `#switch`, `#while`, `#for`, `#break`, `#include`, `#debug`, `#warning`, `#error`) and macro
-//! calls.
-
-use std::collections::HashMap;
-use std::rc::Rc;
+//! `#switch`, `#while`, `#for`, `#break`, `#include`, `#debug`, `#warning`, `#error`). Macro
+//! calls are in `macros`.
 
 use super::Evaluator;
 use super::blocks::Sink;
-use super::scope::{Binding, Frame};
 use super::value::Value;
 use crate::diag::{At, Diagnostic, Error, SourceResult, short_number, suggest};
 use crate::span::Span;
@@ -359,83 +355,5 @@ impl Evaluator {
         .label("this loop does not end")
         .help("check the loop condition, or raise the limit with `--max-iterations`")
         .at(span)
-    }
-
-    pub(super) fn call_macro(
-        &mut self,
-        m: &Rc<MacroDef>,
-        name: &Name,
-        args: &[Expr],
-        call_span: Span,
-        sink: &mut dyn Sink,
-    ) -> SourceResult<()> {
-        if args.len() != m.params.len() {
-            let params: Vec<&str> = m.params.iter().map(|p| p.text.as_str()).collect();
-            return Err(vec![
-                Error::new(format!(
-                    "macro `{}` takes {} argument{}, found {}",
-                    name.text,
-                    m.params.len(),
-                    if m.params.len() == 1 { "" } else { "s" },
-                    args.len()
-                ))
-                .label(format!(
-                    "{} argument{} given",
-                    args.len(),
-                    if args.len() == 1 { "" } else { "s" }
-                ))
-                .help(format!("call it as `{}({})`", name.text, params.join(", ")))
-                .at(call_span)
-                .with_extra(m.name.span, "macro defined here"),
-            ]);
-        }
-        self.charge(args.len() as u64 * super::STEPS_PER_ELEMENT, call_span)?;
-        let depth = self.macro_depth();
-        if depth >= self.max_macro_depth() {
-            let limit = self.max_macro_depth();
-            let label = format!("call to `{}` at depth {}", name.text, depth + 1);
-            let e = match self.stack_limit() {
-                Some((why, help)) if limit < self.options.max_depth => Error::new(format!(
-                    "macro calls nested deeper than {limit} (lowered from `--max-depth` {}: {why})",
-                    self.options.max_depth
-                ))
-                .help(help),
-                _ => Error::new(format!(
-                    "macro calls nested deeper than {limit} (recursion without end?)"
-                ))
-                .help(
-                    "make sure the recursion stops (e.g. `#if (Depth > 0)`), or raise the \
-                     limit with `--max-depth`",
-                ),
-            };
-            return Err(vec![e.label(label).at(call_span)]);
-        }
-        self.check_nesting(call_span)?;
-        let mut vars = HashMap::new();
-        for (p, a) in m.params.iter().zip(args) {
-            let v = self.eval(a)?;
-            vars.insert(
-                p.text.clone(),
-                Binding {
-                    value: v,
-                    span: p.span,
-                    used: true,
-                },
-            );
-        }
-        self.frames.push(Frame { vars, file: false });
-        let r = self.run_body(&m.body, sink);
-        let frame = self.frames.pop().expect("frame");
-        self.warn_unused(frame.vars);
-        r.map_err(|mut ds| {
-            for d in &mut ds {
-                // Recursion: one entry per distinct call site.
-                if d.trace.len() < 8 && d.trace.last().map(|t| t.0) != Some(call_span) {
-                    d.trace
-                        .push((call_span, format!("in macro `{}` called here", name.text)));
-                }
-            }
-            ds
-        })
     }
 }

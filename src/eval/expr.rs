@@ -7,6 +7,7 @@ use glam::{DVec2, DVec3};
 
 use super::Evaluator;
 use super::builtins::{self, FUNCTIONS};
+use super::random::RANDOM_FUNCTIONS;
 use super::value::Value;
 use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
 use crate::span::Span;
@@ -88,13 +89,11 @@ impl Evaluator {
             }
             ExprKind::Block { kind, items } => self.eval_block(kind, items, e.span)?,
             ExprKind::Call { name, args } => {
-                if let Some(Value::Macro(_)) = self.lookup_quiet(&name.text) {
-                    return Err(vec![
-                        Error::new(format!("macro `{}` cannot be used as a value", name.text))
-                            .label("a macro call must stand alone as a statement")
-                            .help("call it on its own, e.g. inside `union { ... }`")
-                            .at(e.span),
-                    ]);
+                if let Some(Value::Macro(m)) = self.lookup_quiet(&name.text) {
+                    return self.call_macro_value(&m, name, args, e.span);
+                }
+                if let Some(r) = self.call_random(name, args, e.span) {
+                    return r;
                 }
                 let mut vals = Vec::with_capacity(args.len());
                 for a in args {
@@ -125,6 +124,7 @@ impl Evaluator {
                         let mut err = Error::new(format!("unknown function `{}`", name.text))
                             .label("no built-in function or macro of this name");
                         let mut cands: Vec<&str> = FUNCTIONS.to_vec();
+                        cands.extend(RANDOM_FUNCTIONS.iter().map(|(n, _)| *n));
                         let macros: Vec<String> = if self.may_suggest_name() {
                             self.globals
                                 .iter()
@@ -135,15 +135,18 @@ impl Evaluator {
                             Vec::new()
                         };
                         cands.extend(macros.iter().map(String::as_str));
+                        let random_names: Vec<&str> =
+                            RANDOM_FUNCTIONS.iter().map(|(n, _)| *n).collect();
                         if let Some(hint) = crate::syntax::povray_hint(&name.text, "") {
                             err = err.help(hint);
                         } else if let Some(s) = suggest(&name.text, cands) {
                             err = err.help(format!("did you mean `{s}`?"));
                         } else {
                             err = err.help(format!(
-                                "the built-in functions are {}; a macro is called as a \
-                                 statement",
-                                FUNCTIONS.join(" ")
+                                "the built-in functions are {} {}; a macro is declared with \
+                                 `#macro`",
+                                FUNCTIONS.join(" "),
+                                random_names.join(" ")
                             ));
                         }
                         return Err(vec![err.at(name.span)]);
@@ -167,6 +170,13 @@ impl Evaluator {
                 let vb = self.eval(b)?;
                 // Strings are joined or compared whole: the work of both operands.
                 self.charge(super::work_of(&va) + super::work_of(&vb), e.span)?;
+                // A joined string counts against the load's memory before it is made.
+                if let (BinOp::Add, Value::Str(x), Value::Str(y)) = (op, &va, &vb) {
+                    let bytes = x.len() + y.len();
+                    if bytes <= super::MAX_STRING_BYTES {
+                        self.hold_string(bytes as u64, e.span)?;
+                    }
+                }
                 binary(*op, va, vb).at(e.span)?
             }
             ExprKind::Conditional(parts) => {

@@ -131,22 +131,21 @@ impl Evaluator {
         self.run_included(file, text, key, span, sink)
     }
 
-    /// Parses a file's text, unless parsing it would need more memory than the load may use
-    /// ([`crate::syntax::parse_memory`], against [`super::EvalOptions::memory_limit`]
-    /// or [`super::DEFAULT_PARSE_MEMORY`]): the error stands at `include` (the `#include` that
-    /// reads the file) or, for the scene file itself, at its first character.
+    /// Parses a file's text, unless parsing it would need more memory than the load has left
+    /// ([`crate::syntax::parse_memory`], against what the load holds already and
+    /// [`super::EvalOptions::memory_limit`] or [`super::DEFAULT_PARSE_MEMORY`]): the error
+    /// stands at `include` (the `#include` that reads the file) or, for the scene file itself,
+    /// at its first character. What it takes is counted as held ([`super::memory`]).
     pub(super) fn parse_within_memory(
-        &self,
+        &mut self,
         file: FileId,
         text: &str,
         include: Option<Span>,
     ) -> SourceResult<Vec<crate::syntax::ast::Item>> {
-        let limit = self
-            .options
-            .memory_limit
-            .unwrap_or(super::DEFAULT_PARSE_MEMORY);
+        let limit = self.memory_limit();
+        let left = self.memory_left();
         let need = crate::syntax::parse_memory(text);
-        if need > limit {
+        if need > left {
             let (what, label, span) = match include {
                 Some(span) => ("this included file", "included here", span),
                 None => (
@@ -156,14 +155,24 @@ impl Evaluator {
                 ),
             };
             // Sizes that round to the same text are given in bytes.
-            let (need_text, limit_text) = match (size_text(need), size_text(limit)) {
-                (a, b) if a == b => (format!("{need} bytes"), format!("{limit} bytes")),
+            let (need_text, left_text) = match (size_text(need), size_text(left)) {
+                (a, b) if a == b => (format!("{need} bytes"), format!("{left} bytes")),
                 pair => pair,
+            };
+            let room = if self.held.total() == 0 {
+                format!("the {left_text} allowed")
+            } else {
+                format!(
+                    "the {left_text} left of the {} allowed: the load holds {} already ({})",
+                    size_text(limit),
+                    size_text(self.held.total()),
+                    self.held.parts()
+                )
             };
             return Err(vec![
                 Error::new(format!(
                     "{what} is too large to parse within the memory limit: its {} of text would \
-                     need up to {need_text} to parse, more than the {limit_text} allowed",
+                     need up to {need_text} to parse, more than {room}",
                     size_text(text.len() as u64),
                 ))
                 .label(label)
@@ -174,6 +183,7 @@ impl Evaluator {
                 .at(span),
             ]);
         }
+        self.held.text += need;
         parse(file, text)
     }
 

@@ -24,6 +24,9 @@ pub(crate) struct Assets {
     textures: HashMap<*const TextureDef, (Rc<TextureDef>, TextureId)>,
     images: HashMap<(PathBuf, bool), Arc<ImageData>>,
     meshes: HashMap<PathBuf, Arc<MeshData>>,
+    /// Why each loaded mesh is not closed (`None`: it is), found once per mesh: a CSG may
+    /// place one mesh of a million triangles many times.
+    open_meshes: HashMap<PathBuf, Option<String>>,
     default_material: Option<MaterialId>,
     black_material: Option<MaterialId>,
 }
@@ -37,6 +40,7 @@ pub(crate) fn empty_scene() -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         background: Background::default(),
+        backdrop: None,
     }
 }
 
@@ -123,7 +127,16 @@ impl Evaluator {
                 for child in &c.children {
                     let object = self.lower_part(child, own)?;
                     // Meshes are known only now: is this one closed?
-                    if let Some(why) = why_open(&object.shape) {
+                    let why = match (&child.shape, &object.shape) {
+                        (ShapeDef::Mesh { path, .. }, Shape::Mesh { mesh }) => self
+                            .assets
+                            .open_meshes
+                            .entry(path.clone())
+                            .or_insert_with(|| why_open(&Shape::Mesh { mesh: mesh.clone() }))
+                            .clone(),
+                        (_, shape) => why_open(shape),
+                    };
+                    if let Some(why) = why {
                         return Err(vec![
                             Error::new(format!(
                                 "this {} has no inside, so it cannot be part of {}: {why}",
@@ -221,7 +234,7 @@ impl Evaluator {
         })
     }
 
-    fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
+    pub(super) fn texture_id(&mut self, t: &Rc<TextureDef>) -> SourceResult<TextureId> {
         let key = Rc::as_ptr(t);
         if let Some((_, id)) = self.assets.textures.get(&key) {
             return Ok(*id);
@@ -274,7 +287,8 @@ impl Evaluator {
             .values()
             .map(|i| i.width as u64 * i.height as u64)
             .sum();
-        let room = ImageRoom::after(loaded, self.options.memory_limit);
+        // Images count against the memory the whole load holds (`eval::memory`).
+        let room = ImageRoom::after(loaded, self.held.total(), Some(self.memory_limit()));
         let img = load_image_within(path, space, room).map_err(|e| {
             vec![
                 Error::new(e.message)
@@ -293,6 +307,7 @@ impl Evaluator {
                     .at(span),
             ]
         })?;
+        self.held.images += img.width as u64 * img.height as u64 * IMAGE_BYTES_PER_PIXEL;
         let img = Arc::new(img);
         self.assets.images.insert(key, img.clone());
         Ok(img)

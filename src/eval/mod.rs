@@ -8,8 +8,10 @@
 //! - [`value`]: runtime values and the definitions they hold (imports nothing else from `eval`);
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
-//! - `scope`: bindings and lookups; `expr`: expressions; `directives`: directives and macro
-//!   calls; `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
+//! - `scope`: bindings and lookups; `expr`: expressions; `random`: random streams (`seed`,
+//!   `rand`); `directives`: directives; `macros`: macro calls, as statements and as values;
+//!   `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
+//! - `memory`: the memory a load holds (parsed text, strings, images) against its limit;
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
@@ -20,7 +22,10 @@ mod directives;
 mod expr;
 mod include;
 mod lower;
+mod macros;
+mod memory;
 mod props;
+mod random;
 mod scope;
 mod stdlib;
 mod strings;
@@ -58,10 +63,16 @@ pub struct EvalOptions {
     /// counted together) one load may take: a budget for the whole evaluation, so that
     /// nested loops or exponential recursion that each stay under their own limits still end.
     pub max_steps: u64,
-    /// The render's memory limit (bytes), as given to `prepare`: images that would not fit in
-    /// it decoded are refused from their headers, before they are decoded. `None`: only the
-    /// fixed caps on image size apply.
+    /// The render's memory limit (bytes), as given to `prepare`. The load holds to it too: the
+    /// text it parses (every include), the strings it builds and the images it decodes count
+    /// in one running total, and the file, string or image that would pass the limit is
+    /// refused (an image from its header, before it is decoded). `None`:
+    /// [`DEFAULT_PARSE_MEMORY`].
     pub memory_limit: Option<u64>,
+    /// Raised by the caller to stop the load: the evaluation checks it at every step (and
+    /// before and after parsing, which cannot stop midway) and ends with
+    /// [`Loaded::interrupted`].
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -70,8 +81,9 @@ pub struct EvalOptions {
 /// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
 /// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
-/// The memory limit parsing is held to when the caller gives none
-/// ([`EvalOptions::memory_limit`]): a render's default on a machine with 4 GiB or more.
+/// The memory limit a load (its parsed text, strings and images) is held to when the caller
+/// gives none ([`EvalOptions::memory_limit`]): a render's default on a machine with 4 GiB or
+/// more.
 pub const DEFAULT_PARSE_MEMORY: u64 = 2 << 30;
 /// Most `#debug` and `#warning` messages one load keeps (a loop printing each iteration stays
 /// readable and bounded); past it, one last note says the rest were left out.
@@ -142,6 +154,7 @@ impl Default for EvalOptions {
             max_objects: 1_000_000,
             max_steps: 50_000_000,
             memory_limit: None,
+            cancel: crate::cancel::Cancel::default(),
         }
     }
 }
@@ -160,6 +173,9 @@ pub struct Loaded {
     /// made, as under a low address-space limit): not the scene's fault. The diagnostics say
     /// what failed.
     pub environment: bool,
+    /// The caller cancelled the load ([`EvalOptions::cancel`]): no scene, and an error
+    /// "interrupted" after the errors found before it; not the scene's fault.
+    pub interrupted: bool,
 }
 
 impl Loaded {
@@ -199,38 +215,73 @@ fn load_with_stacks(
     options: &EvalOptions,
     stacks: &[usize],
 ) -> Loaded {
-    on_eval_thread(path, stacks, &|stack| {
-        run(path, name, text.clone(), options, stack)
-    })
+    let (owned_path, name, owned_options) = (path.to_path_buf(), name.to_string(), options.clone());
+    let work = move |stack| run(&owned_path, &name, text.clone(), &owned_options, stack);
+    on_eval_thread(path, stacks, &options.cancel, std::sync::Arc::new(work))
 }
+
+/// How long a cancelled load may take to return by itself before it is left to finish alone.
+const CANCEL_GRACE: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// Runs `work` (given the stack size) on a thread of the first stack in `stacks` that can be
 /// made. A panic in `work` becomes an internal-error diagnostic; no stack at all, an
-/// environment error.
+/// environment error. Once `cancel` is raised the caller gets "interrupted" within
+/// [`CANCEL_GRACE`] even where the work cannot stop midway (parsing a large file): the thread
+/// then finishes by itself, its result dropped.
 fn on_eval_thread(
     path: &Path,
     stacks: &[usize],
-    work: &(dyn Fn(usize) -> Loaded + Sync),
+    cancel: &crate::cancel::Cancel,
+    work: std::sync::Arc<dyn Fn(usize) -> Loaded + Send + Sync>,
 ) -> Loaded {
-    let failed = |d: Diagnostic, environment: bool| Loaded {
+    use std::sync::mpsc::RecvTimeoutError;
+    let failed = |d: Diagnostic, environment: bool, interrupted: bool| Loaded {
         scene: None,
         diagnostics: vec![d],
         sources: SourceMap::new(),
         dependencies: vec![path.to_path_buf()],
         environment,
+        interrupted,
     };
     let mut last_error = None;
     for &stack in stacks {
-        let outcome = std::thread::scope(|s| {
-            std::thread::Builder::new()
-                .name("sppm-eval".into())
-                .stack_size(stack)
-                .spawn_scoped(s, || work(stack))
-                .map(|h| h.join())
-        });
-        match outcome {
-            Ok(Ok(loaded)) => return loaded,
-            Ok(Err(panic)) => {
+        let (done, finished) = std::sync::mpsc::channel::<()>();
+        let w = work.clone();
+        let spawned = std::thread::Builder::new()
+            .name("sppm-eval".into())
+            .stack_size(stack)
+            .spawn(move || {
+                let loaded = w(stack);
+                let _ = done.send(());
+                loaded
+            });
+        let handle = match spawned {
+            Ok(h) => h,
+            Err(e) => {
+                last_error = Some(e);
+                continue;
+            }
+        };
+        // Finished (or panicked: the sender is dropped), or cancelled and not back in time.
+        loop {
+            match finished.recv_timeout(std::time::Duration::from_millis(50)) {
+                Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
+                Err(RecvTimeoutError::Timeout) if cancel.is_cancelled() => {
+                    if finished.recv_timeout(CANCEL_GRACE).is_err() && !handle.is_finished() {
+                        return failed(
+                            Diagnostic::error(Span::detached(), "interrupted"),
+                            false,
+                            true,
+                        );
+                    }
+                    break;
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+        match handle.join() {
+            Ok(loaded) => return loaded,
+            Err(panic) => {
                 let what = panic
                     .downcast_ref::<&str>()
                     .map(|s| s.to_string())
@@ -246,9 +297,9 @@ fn on_eval_thread(
                          the scene that shows it",
                     ),
                     false,
+                    false,
                 );
             }
-            Err(e) => last_error = Some(e),
         }
     }
     let smallest = stacks.iter().copied().min().unwrap_or(0);
@@ -270,6 +321,7 @@ fn on_eval_thread(
             stack_words(EVAL_STACK)
         )),
         true,
+        false,
     )
 }
 
@@ -281,14 +333,22 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
     ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
     ev.include_stack.push(canonical(path));
-    match ev.parse_within_memory(file, &text, None) {
-        Ok(items) => {
-            let mut top = TopSink::default();
-            ev.run_top(&items, &mut top);
+    // Parsing cannot stop midway: the cancel is checked before it and at the first step after.
+    if !ev.interrupted() {
+        match ev.parse_within_memory(file, &text, None) {
+            Ok(items) => {
+                let mut top = TopSink::default();
+                ev.run_top(&items, &mut top);
+            }
+            Err(d) => ev.errors.extend(d),
         }
-        Err(d) => ev.errors.extend(d),
     }
     ev.finish_warnings();
+    let interrupted = ev.interrupted;
+    if interrupted {
+        ev.errors
+            .push(Diagnostic::error(Span::detached(), "interrupted"));
+    }
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;
     diagnostics.extend(ev.warnings);
@@ -300,6 +360,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
         diagnostics,
         sources: ev.sources,
         environment: false,
+        interrupted,
     }
 }
 
@@ -329,6 +390,8 @@ pub(crate) struct Evaluator {
     /// Set once the step budget ran out or an `#error` stopped the load: every later step fails
     /// silently, so the evaluation unwinds at once with the one error already reported.
     exhausted: bool,
+    /// Set once the caller's cancel was seen ([`Evaluator::interrupted`]).
+    interrupted: bool,
     /// `#switch`es and loops around the current item that a `#break` may leave (within one
     /// block body or macro body: blocks and macro calls start again at 0).
     pub(crate) break_targets: usize,
@@ -352,6 +415,8 @@ pub(crate) struct Evaluator {
     parts_copied: usize,
     /// Bytes of scene text read so far (the scene and every include).
     pub(crate) source_bytes: u64,
+    /// The memory the load holds so far (see [`memory`]).
+    held: memory::Held,
     /// How often each name-like word occurs in the sources read (see
     /// [`Evaluator::warn_unused`]), and how many files it counted; made when first needed.
     mentions: Option<(usize, HashMap<String, u32>)>,
@@ -423,6 +488,7 @@ impl Evaluator {
             dependencies: Vec::new(),
             steps: 0,
             exhausted: false,
+            interrupted: false,
             break_targets: 0,
             breaking: false,
             messages: 0,
@@ -433,6 +499,7 @@ impl Evaluator {
             stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,
+            held: memory::Held::default(),
             mentions: None,
         }
     }
@@ -520,7 +587,7 @@ impl Evaluator {
     /// Counts `steps` steps against the budget: work whose cost grows with the size of its
     /// values (see [`work_of`]).
     pub(crate) fn charge(&mut self, steps: u64, span: Span) -> SourceResult<()> {
-        if self.exhausted {
+        if self.exhausted || self.interrupted() {
             return Err(silent());
         }
         self.steps = self.steps.saturating_add(steps);
@@ -540,6 +607,16 @@ impl Evaluator {
             ]);
         }
         Ok(())
+    }
+
+    /// Whether the caller cancelled the load ([`EvalOptions::cancel`]); once it has, every
+    /// later step fails silently, as when the budget ran out, and the load ends with
+    /// [`Loaded::interrupted`].
+    fn interrupted(&mut self) -> bool {
+        if !self.interrupted && self.options.cancel.is_cancelled() {
+            self.interrupted = true;
+        }
+        self.interrupted
     }
 
     /// Fails when one more level of blocks or macro calls would pass [`MAX_EVAL_NESTING`], or
@@ -766,14 +843,95 @@ mod tests {
         assert!(!l.has_errors(), "{:?}", l.diagnostics);
     }
 
+    /// Value macros recurse through expressions (a call inside `1 + ...` inside an `#if`
+    /// body): filling the nesting limit of a small stack fits in it, and running past it is
+    /// the nesting error, not a stack overflow.
+    #[test]
+    fn value_macro_recursion_fits_the_stack_it_is_limited_to() {
+        let stack = 1 << 26;
+        let limit = nesting_limit(stack);
+        // Each level of `Sum` is a macro call and an `#if` body: two levels of nesting.
+        let sum = |depth: usize| {
+            format!(
+                "#macro Sum(N) #if (N <= 0) 0 #else 1 + Sum(N - 1) #end #end\n\
+                 sphere {{ <0, 0, 0>, Sum({depth}) }}\n"
+            )
+        };
+        let l = load(&sum(limit / 2 - 2), 100_000, &[stack]);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        let radius = match l.scene.unwrap().objects[0].shape {
+            crate::scene::Shape::Sphere { radius, .. } => radius,
+            ref s => panic!("{s:?}"),
+        };
+        assert_eq!(radius, (limit / 2 - 2) as f64);
+        let l = load(
+            "#macro Down(N) Down(N - 1) + 1 #end\n#declare T = Down(3);\n",
+            100_000,
+            &[stack],
+        );
+        let d = &l.diagnostics[0];
+        assert!(d.message.contains(&limit.to_string()), "{}", d.message);
+        assert!(!d.span.is_detached(), "{d:?}");
+    }
+
     #[test]
     fn a_panic_in_the_evaluation_is_an_internal_error() {
-        let l = on_eval_thread(Path::new("t.scn"), &EVAL_STACKS, &|_| panic!("on purpose"));
+        let l = on_eval_thread(
+            Path::new("t.scn"),
+            &EVAL_STACKS,
+            &Default::default(),
+            std::sync::Arc::new(|_| panic!("on purpose")),
+        );
         assert!(l.scene.is_none() && !l.environment);
         let d = &l.diagnostics[0];
         assert!(d.message.contains("internal error"), "{}", d.message);
         assert!(d.message.contains("on purpose"), "{}", d.message);
         assert!(d.help.is_some());
+    }
+
+    /// A load cancelled in the middle of a loop that would run for minutes returns within a
+    /// second of the cancel, with no scene and the one word "interrupted"; a load cancelled
+    /// before it starts does not evaluate at all.
+    #[test]
+    fn a_cancelled_load_stops_at_its_next_step() {
+        let endless = "#declare I = 0;\n#while (I < 1e15) #declare I = I + 1; #end\n\
+                       sphere { <0, 0, 0>, 1 }\n";
+        let cancel = crate::cancel::Cancel::new();
+        let options = EvalOptions {
+            max_iterations: u64::MAX,
+            max_steps: u64::MAX,
+            cancel: cancel.clone(),
+            ..EvalOptions::default()
+        };
+        let raised = std::thread::scope(|s| {
+            let raiser = s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                cancel.cancel();
+                std::time::Instant::now()
+            });
+            let l = load_source("endless.scn", endless, &options);
+            let returned = std::time::Instant::now();
+            let raised = raiser.join().unwrap();
+            (l, returned.saturating_duration_since(raised))
+        });
+        let (l, after) = raised;
+        println!("the load returned {after:?} after the cancel");
+        assert!(after < std::time::Duration::from_secs(1), "{after:?}");
+        assert!(l.interrupted && l.scene.is_none() && !l.environment);
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        assert_eq!(l.diagnostics[0].message, "interrupted");
+        // Raised before the load: nothing is evaluated (a budget of one step would fail
+        // otherwise, with an error of its own).
+        let options = EvalOptions {
+            max_steps: 1,
+            ..options
+        };
+        let l = load_source("endless.scn", endless, &options);
+        assert!(l.interrupted && l.scene.is_none());
+        assert_eq!(l.diagnostics.len(), 1, "{:?}", l.diagnostics);
+        // A handle nobody raised changes nothing.
+        let l = load_source("t.scn", &recursion(3), &EvalOptions::default());
+        assert!(!l.interrupted && l.scene.is_some(), "{:?}", l.diagnostics);
     }
 
     #[test]

@@ -39,6 +39,10 @@ pub(crate) fn povray_include(name: &str) -> Option<&'static str> {
             "common materials (glasses with measured IORs, metals, diffuse albedos) are \
              `#include \"std/materials.scn\"` here"
         }
+        "rand.inc" => {
+            "its `RRand`, `VRand`, `VRand_In_Sphere`, `VRand_On_Sphere` and `Rand_Normal` are \
+             built in here (with `seed` and `rand`): remove the `#include`"
+        }
         _ if POVRAY_INCLUDES.contains(&file) => {
             "POV-Ray's include files are not available here; the built-in ones are \
              `std/colors.scn` and `std/materials.scn`"

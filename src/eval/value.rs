@@ -1,13 +1,14 @@
 //! Runtime values of the scene language, and the definitions (materials, textures, objects,
 //! profiles, environments) that values hold until they are lowered into the scene.
 
-use std::rc::Rc;
-
+use std::cell::RefCell;
 use std::path::PathBuf;
+use std::rc::Rc;
 
 use glam::{DAffine3, DVec2, DVec3};
 
 use crate::diag::Error;
+use crate::sampling::SplitMix64;
 use crate::scene::{
     Camera, Color, ColorMap, CsgOp, Emission, Light, Mapping, Pattern, Settings, Shape, Wrap,
 };
@@ -34,6 +35,9 @@ pub enum Value {
     Light(Box<Light>),
     Environment(Rc<EnvDef>),
     Macro(Rc<MacroDef>),
+    /// A random stream (`seed(n)`): every copy of the value draws from the same stream, as
+    /// POV-Ray's stream handles do, so a macro given a stream advances the caller's.
+    Stream(Rc<RefCell<SplitMix64>>),
 }
 
 impl Value {
@@ -57,6 +61,7 @@ impl Value {
             Value::Light(_) => "a light",
             Value::Environment(_) => "an environment",
             Value::Macro(_) => "a macro",
+            Value::Stream(_) => "a random stream",
         }
     }
 

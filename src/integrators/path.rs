@@ -51,6 +51,8 @@ fn radiance(
     let mut beta = Vec3A::ONE;
     let mut l = Vec3A::ZERO;
     let mut specular_bounce = true;
+    // Every bounce so far specular: the path still sees the backdrop.
+    let mut camera_chain = true;
     // The absorption of the glass the path is inside (zero: none).
     let mut medium = Vec3A::ZERO;
     for depth in 0..max_depth {
@@ -58,7 +60,7 @@ fn radiance(
             // After a non-specular bounce the escaped direction was already counted by
             // direct_lighting's BSDF sample.
             if specular_bounce {
-                l += beta * scene.background_radiance(ray.d);
+                l += beta * scene.escaped_radiance(ray.d, camera_chain);
             }
             break;
         };
@@ -76,6 +78,7 @@ fn radiance(
         };
         medium = medium_after(scene, &sh, wo, s.wi, medium);
         specular_bounce = s.specular;
+        camera_chain &= s.specular;
         beta *= s.weight;
         if depth >= RR_DEPTH {
             let q = (1.0 - beta.max_element()).max(0.05);

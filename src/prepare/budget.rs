@@ -40,8 +40,9 @@ pub struct MemoryItem {
     pub bytes: u64,
 }
 
-/// Primitives each scene shape becomes in the prepared scene.
-fn primitives(shape: &Shape) -> u64 {
+/// Primitives each scene shape becomes in the prepared scene (in a CSG: the surfaces of its
+/// leaf).
+pub(super) fn primitives(shape: &Shape) -> u64 {
     match shape {
         Shape::Mesh { mesh } => mesh.indices.len() as u64,
         Shape::Box { .. } => 6,
@@ -208,7 +209,11 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
     // the sampling distribution (f32 value, cdf and pmf, 12).
     let environment_pixels = match &scene.background {
         Background::Environment { image, .. } => image.width as u64 * image.height as u64,
-        _ => 0,
+        // The baked image is the map's input, as a loaded one is.
+        Background::Texture(_) => {
+            crate::textures::sky::BAKE_WIDTH as u64 * crate::textures::sky::BAKE_HEIGHT as u64
+        }
+        Background::Color(_) => 0,
     };
     items.push(MemoryItem {
         what: "images",

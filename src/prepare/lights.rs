@@ -30,6 +30,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                         span: Some(*span),
                         label: String::new(),
                         help: Some("give a finite position and an intensity of finite numbers of at least 0".into()),
+                        interrupted: false,
                     });
                 }
                 lights.push(Light::Point(PointLight {
@@ -68,6 +69,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                              (as the language does)"
                                 .into(),
                         ),
+                        interrupted: false,
                     });
                 }
                 lights.push(Light::Spot(SpotLight::new(
@@ -83,7 +85,8 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
     Ok(())
 }
 
-/// Appends the environment light of a non-black background (a map, or a constant colour:
+/// Appends the environment light of a non-black background (a map, a texture over directions
+/// baked into one, or a constant colour:
 /// pbrt's uniform infinite light, so photons carry the light a path tracer gets from the
 /// background); returns its index.
 pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>) -> Option<usize> {
@@ -94,6 +97,13 @@ pub(super) fn push_environment(scene: &Scene, bvh: &Bvh, lights: &mut Vec<Light>
             transform,
         } => {
             let map = textures::EnvironmentMap::new(image, *intensity, *transform);
+            (!map.is_black()).then(|| Sky::Map(Box::new(map)))
+        }
+        // A texture over directions is baked into a map: sampled like a loaded image.
+        scene::Background::Texture(id) => {
+            let texture = scene.textures.get(id.0 as usize)?;
+            let image = textures::sky::bake(texture);
+            let map = textures::EnvironmentMap::new(&image, 1.0, glam::DAffine3::IDENTITY);
             (!map.is_black()).then(|| Sky::Map(Box::new(map)))
         }
         scene::Background::Color(c) => {
@@ -243,6 +253,7 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
                  negate a disk's normal) or add `two_sided`"
                     .into(),
             ),
+            interrupted: false,
         })
         .collect()
 }

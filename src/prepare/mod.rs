@@ -11,6 +11,7 @@ mod lights;
 mod orient;
 mod settings;
 mod shapes;
+mod sky;
 
 use crate::accel::{self, Bvh};
 use crate::camera::Camera;
@@ -22,6 +23,7 @@ use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::TexCoord;
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
+pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
     MAX_THREADS, RADIUS_FOOTPRINTS, RenderError, RenderOptions, effective_settings,
@@ -130,17 +132,45 @@ fn color3(c: DVec3) -> Vec3A {
 /// The prepare stage in one call: the settings with `options` applied, the memory estimate
 /// against `options.memory_limit` (default: [`default_memory_limit`]), then the validated,
 /// prepared scene. `check` and `render` both go through here, so they accept the same scenes.
+///
+/// Fails with [`RenderError::interrupted`] when `options.cancel` is raised: it is checked
+/// between the phases, for every object and inside the BVH build.
 pub fn prepare<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
 ) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
+    prepare_until(scene, options, &|| options.cancel.is_cancelled())
+}
+
+/// [`prepare`], stopping when `stop` says so (the render also stops for its own cancel flag).
+pub(crate) fn prepare_until<'a>(
+    scene: &'a Scene,
+    options: &RenderOptions,
+    stop: Stop,
+) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
+    unless(stop)?;
     // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
+    // The cost of each CSG first: a merge of many placements of a large mesh would otherwise
+    // be refused for its memory, which tells less.
+    csg::check_costs(scene)?;
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit, options.held_memory)
         .map_err(|e| e.at(scene.settings.span))?;
-    let prepared = PreparedScene::new(scene)?;
+    let prepared = PreparedScene::new_until(scene, stop)?;
     Ok((settings, prepared))
+}
+
+/// What the prepare stage asks to learn whether the caller cancelled.
+pub type Stop<'s> = &'s (dyn Fn() -> bool + Sync);
+
+/// [`RenderError::interrupted`] once `stop` says so.
+fn unless(stop: Stop) -> Result<(), RenderError> {
+    if stop() {
+        Err(RenderError::interrupted())
+    } else {
+        Ok(())
+    }
 }
 
 /// How to mend a shape that cannot be built (the evaluator catches most of these first).
@@ -170,12 +200,13 @@ impl<'a> PreparedScene<'a> {
             out.push(RenderError {
                 help: Some(
                     "add a `light { <position> intensity <color> }`, an `area_light { ... }`, \
-                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }`"
+                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }` (a \
+                     `backdrop` is only seen, it lights nothing)"
                         .into(),
                 ),
                 ..RenderError::new(
                     "the scene has no light: no light source, no emitting object and a black \
-                     background, so it renders black",
+                     background, so its objects render black",
                 )
             });
         }
@@ -183,7 +214,17 @@ impl<'a> PreparedScene<'a> {
     }
 
     pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+        Self::new_until(scene, &|| false)
+    }
+
+    /// [`PreparedScene::new`], stopping with [`RenderError::interrupted`] when `stop` says so
+    /// (asked between phases, for every object, and inside the BVH build).
+    pub fn new_until(scene: &'a Scene, stop: Stop) -> Result<Self, RenderError> {
+        unless(stop)?;
+        // From counts, before validation reads a CSG's meshes once per placement.
+        csg::check_costs(scene)?;
         scene.validate()?;
+        unless(stop)?;
         let (width, height) = scene.settings.resolution;
         let camera = Camera::new(&scene.camera, width, height)?;
         let mut shapes = Vec::new();
@@ -197,11 +238,14 @@ impl<'a> PreparedScene<'a> {
         // The parts of CSG objects, after the scene's objects.
         let mut csg_parts = Vec::new();
         for (oi, obj) in scene.objects.iter().enumerate() {
+            // Each object can be a CSG tree's set-up or a mesh of millions of triangles.
+            unless(stop)?;
             let err = |message: String| RenderError {
                 message: format!("{}: {message}", obj.shape.kind()),
                 span: Some(obj.span),
                 label: String::new(),
                 help: Some(shape_help(&obj.shape).into()),
+                interrupted: false,
             };
             if obj.material.0 as usize >= scene.materials.len() {
                 return Err(RenderError {
@@ -323,8 +367,12 @@ impl<'a> PreparedScene<'a> {
         }
         objects.extend(csg_parts);
         lights::push_scene_lights(scene, &mut lights)?;
-        let bvh = Bvh::with_meshes(shapes, meshes);
+        unless(stop)?;
+        let bvh =
+            Bvh::with_meshes_until(shapes, meshes, stop).ok_or_else(RenderError::interrupted)?;
+        unless(stop)?;
         let environment = lights::push_environment(scene, &bvh, &mut lights);
+        unless(stop)?;
         let power: Vec<f64> = lights.iter().map(Light::power).collect();
         // Photons also leave the far parts of infinite planes under the environment light
         // (`GroundPhotons`), chosen after the lights.
@@ -664,5 +712,49 @@ mod tests {
         assert!(kept > 1000 && left_out > 1000, "{kept} {left_out}");
         assert!(revolves.0 > 300 && revolves.1 > 300, "{revolves:?}");
         assert!(absorbing_kept > 300, "{absorbing_kept}");
+    }
+
+    /// The caller's cancel stops the prepare stage with [`RenderError::interrupted`]: raised
+    /// before it, and asked midway through the objects and inside the BVH build (a stop that
+    /// says yes from its n-th question on).
+    #[test]
+    fn a_cancel_stops_prepare_between_objects_and_inside_the_build() {
+        use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+        let text = "light { <0, 10, 0> intensity rgb 1 }\n\
+                    #for (I, 0, 19999) sphere { <mod(I, 100), floor(I / 100), 0>, 0.4 } #end\n";
+        let loaded = load_source("many.scn", text, &EvalOptions::default());
+        let scene = loaded.scene.expect("the scene loads");
+        let cancel = crate::cancel::Cancel::new();
+        let options = RenderOptions {
+            cancel: cancel.clone(),
+            ..RenderOptions::default()
+        };
+        assert!(prepare(&scene, &options).is_ok());
+        cancel.cancel();
+        let e = prepare(&scene, &options).err().expect("interrupted");
+        assert!(e.interrupted && e.message == "interrupted", "{e:?}");
+        // Every question a full prepare asks, then stops from a question on.
+        let asked = AtomicUsize::new(0);
+        let never = || {
+            asked.fetch_add(1, Relaxed);
+            false
+        };
+        assert!(PreparedScene::new_until(&scene, &never).is_ok());
+        let full = asked.load(Relaxed);
+        // One per object, a few between phases, a few dozen in the build of 20 000 boxes.
+        assert!(full > 20_000 + 4, "{full}");
+        for from in [10_000, 20_004, full - 2] {
+            let asked = AtomicUsize::new(0);
+            let stop = || asked.fetch_add(1, Relaxed) >= from;
+            let e = PreparedScene::new_until(&scene, &stop)
+                .err()
+                .expect("interrupted");
+            assert!(e.interrupted, "{e:?}");
+            let n = asked.load(Relaxed);
+            assert!(
+                n > from && n < from + 50,
+                "stopped from {from}: asked {n} times"
+            );
+        }
     }
 }

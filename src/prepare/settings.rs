@@ -23,6 +23,10 @@ pub struct RenderOptions {
     /// Memory the caller holds beside the render while it runs (a live view's image copies),
     /// counted in the estimate against `memory_limit`.
     pub held_memory: Option<super::MemoryItem>,
+    /// Raised by the caller to stop: [`super::prepare`] checks it between its phases, per
+    /// object and inside the BVH build, and fails with [`RenderError::interrupted`]; the
+    /// render's passes stop as for their own cancel flag.
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// The settings a render actually uses (scene settings with the options applied).
@@ -58,6 +62,8 @@ pub struct RenderError {
     pub label: String,
     /// A suggested fix.
     pub help: Option<String>,
+    /// The caller cancelled the work ([`RenderOptions::cancel`]): not the scene's fault.
+    pub interrupted: bool,
 }
 
 impl RenderError {
@@ -67,6 +73,15 @@ impl RenderError {
             span: None,
             label: String::new(),
             help: None,
+            interrupted: false,
+        }
+    }
+
+    /// The error of work the caller cancelled.
+    pub fn interrupted() -> Self {
+        Self {
+            interrupted: true,
+            ..Self::new("interrupted")
         }
     }
 

@@ -1,6 +1,10 @@
 //! The render API used by the CLI and `watch`: prepare a `Scene`, run its integrator with
 //! overridable settings, report progress per iteration, stop promptly on cancel.
 //!
+//! The caller's [`RenderOptions::cancel`] and the `cancel` flag of these functions stop the
+//! work alike: the prepare stage with [`RenderError::interrupted`], the passes as described
+//! below.
+//!
 //! A time limit is a deadline: when it passes, the iteration in flight is abandoned like a
 //! cancelled one (its partial work is dropped) and the output holds the iterations finished
 //! before it; `cancelled` in the output says only whether the caller cancelled.
@@ -17,8 +21,9 @@ use std::time::{Duration, Instant};
 use crate::integrators;
 use crate::scene::Scene;
 
-/// Renders `scene`. `cancel` is checked inside every pass; `on_progress` runs after every
-/// iteration (on the calling thread's pool) and may call [`Progress::image`].
+/// Renders `scene`. `cancel` is checked in the prepare stage and inside every pass;
+/// `on_progress` runs after every iteration (on the calling thread's pool) and may call
+/// [`Progress::image`].
 pub fn render(
     scene: &Scene,
     options: &RenderOptions,
@@ -37,7 +42,8 @@ pub fn render_with_warnings(
     on_warning: &mut dyn FnMut(&RenderError),
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<RenderOutput, RenderError> {
-    let (settings, prepared) = prepare(scene, options)?;
+    let stop = || options.cancel.is_cancelled() || cancel.load(Ordering::Relaxed);
+    let (settings, prepared) = crate::prepare::prepare_until(scene, options, &stop)?;
     for w in prepared.warnings() {
         on_warning(&w);
     }
@@ -61,7 +67,13 @@ pub fn render_prepared(
         .and_then(|t| Instant::now().checked_add(t));
     let stop = AtomicBool::new(false);
     let finished = AtomicBool::new(false);
-    let flag = if deadline.is_some() { &stop } else { cancel };
+    // The options' cancel is the integrator's own flag unless it is another than `cancel`:
+    // then, as for a deadline, a watchdog raises one flag for both.
+    let other = (!options.cancel.same(cancel)).then_some(options.cancel.flag());
+    let watched = deadline.is_some() || other.is_some();
+    let flag = if watched { &stop } else { cancel };
+    let cancelled =
+        || cancel.load(Ordering::Relaxed) || other.is_some_and(|o| o.load(Ordering::Relaxed));
     let mut run = || {
         integrator.render(integrators::Job {
             scene: prepared,
@@ -71,18 +83,19 @@ pub fn render_prepared(
         })
     };
     let out = std::thread::scope(|s| {
-        if let Some(end) = deadline {
+        if watched {
             // The watchdog: raises the integrator's flag at the deadline or on the caller's
             // cancel, and ends with the render.
-            let (stop, finished) = (&stop, &finished);
+            let (stop, finished, cancelled) = (&stop, &finished, &cancelled);
             s.spawn(move || {
                 while !finished.load(Ordering::Relaxed) {
                     let now = Instant::now();
-                    if now >= end || cancel.load(Ordering::Relaxed) {
+                    if deadline.is_some_and(|end| now >= end) || cancelled() {
                         stop.store(true, Ordering::Relaxed);
                         return;
                     }
-                    std::thread::sleep((end - now).min(Duration::from_millis(5)));
+                    let left = deadline.map_or(Duration::MAX, |end| end - now);
+                    std::thread::sleep(left.min(Duration::from_millis(5)));
                 }
             });
         }
@@ -105,6 +118,6 @@ pub fn render_prepared(
         }
     });
     let mut out = out?;
-    out.cancelled = cancel.load(Ordering::Relaxed);
+    out.cancelled = cancelled();
     Ok(out)
 }

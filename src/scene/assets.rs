@@ -25,25 +25,32 @@ pub const IMAGE_BYTES_PER_PIXEL: u64 = std::mem::size_of::<[f32; 3]>() as u64;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ImageRoom {
     pub pixels: u64,
-    /// `Some(bytes)`: the render's memory limit, not [`MAX_TOTAL_IMAGE_PIXELS`], is what is
-    /// left of.
+    /// `Some(bytes)`: the memory limit, not [`MAX_TOTAL_IMAGE_PIXELS`], is what is left of.
     pub memory_limit: Option<u64>,
+    /// Bytes of that limit the load holds already (parsed text, strings, decoded images).
+    pub held: u64,
 }
 
 impl ImageRoom {
     /// The room left after `loaded` pixels of images: [`MAX_TOTAL_IMAGE_PIXELS`], or less
-    /// under a memory limit (of which each decoded pixel takes [`IMAGE_BYTES_PER_PIXEL`]).
-    pub fn after(loaded: u64, memory_limit: Option<u64>) -> Self {
+    /// where what is left of `memory_limit` once the load's `held` bytes (those images
+    /// included) are taken holds fewer pixels of [`IMAGE_BYTES_PER_PIXEL`].
+    pub fn after(loaded: u64, held: u64, memory_limit: Option<u64>) -> Self {
         let by_count = MAX_TOTAL_IMAGE_PIXELS.saturating_sub(loaded);
-        match memory_limit {
-            Some(limit) if limit / IMAGE_BYTES_PER_PIXEL < MAX_TOTAL_IMAGE_PIXELS => Self {
-                pixels: (limit / IMAGE_BYTES_PER_PIXEL).saturating_sub(loaded),
-                memory_limit: Some(limit),
-            },
-            _ => Self {
-                pixels: by_count,
-                memory_limit: None,
-            },
+        if let Some(limit) = memory_limit {
+            let by_memory = limit.saturating_sub(held) / IMAGE_BYTES_PER_PIXEL;
+            if by_memory < by_count {
+                return Self {
+                    pixels: by_memory,
+                    memory_limit: Some(limit),
+                    held,
+                };
+            }
+        }
+        Self {
+            pixels: by_count,
+            memory_limit: None,
+            held,
         }
     }
 }
@@ -136,7 +143,7 @@ impl std::fmt::Display for AssetError {
 /// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
 /// float formats (EXR, HDR) are always linear.
 pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, AssetError> {
-    load_image_within(path, space, ImageRoom::after(0, None))
+    load_image_within(path, space, ImageRoom::after(0, 0, None))
 }
 
 /// [`load_image`] of an image that may have at most `room` pixels (what is left of
@@ -221,9 +228,17 @@ fn decode_image(
             Some(limit) => AssetError::too_large(
                 format!(
                     "image `{}` is {w}x{h} pixels; decoded ({IMAGE_BYTES_PER_PIXEL} bytes a \
-                     pixel) it does not fit in the {left} pixels left of the memory limit of {}",
+                     pixel) it does not fit in the {left} pixels left of the memory limit of {}{}",
                     path.display(),
-                    crate::diag::size_text(limit)
+                    crate::diag::size_text(limit),
+                    if room.held > 0 {
+                        format!(
+                            " (the load holds {} already: parsed text, strings and images)",
+                            crate::diag::size_text(room.held)
+                        )
+                    } else {
+                        String::new()
+                    }
                 ),
                 "raise the limit with `--memory-limit` (e.g. `--memory-limit 4G`), or use a \
                  smaller image",

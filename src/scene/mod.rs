@@ -74,9 +74,12 @@ pub struct Scene {
     /// Lights that are not shapes (point, spot). Emissive objects are lights too.
     pub lights: Vec<Light>,
     pub materials: Vec<Material>,
-    /// Only textures some material actually uses.
+    /// Only textures some material, the background or the backdrop actually uses.
     pub textures: Vec<Texture>,
     pub background: Background,
+    /// What camera rays that leave the scene show, directly or through mirrors and glass
+    /// alone, in place of the background; it lights nothing. `None`: they show the background.
+    pub backdrop: Option<ColorParam>,
 }
 
 impl Scene {
@@ -242,10 +245,13 @@ impl Default for Camera {
     }
 }
 
-/// What a ray that leaves the scene sees.
+/// What a ray that leaves the scene sees: the sky, which lights the scene.
 #[derive(Debug, Clone)]
 pub enum Background {
     Color(Color),
+    /// A texture over directions (looked up as `textures::sky` describes), baked into an
+    /// environment map when the scene is prepared.
+    Texture(TextureId),
     /// Equirectangular image that also lights the scene.
     Environment {
         image: Arc<ImageData>,

@@ -55,7 +55,7 @@ fn describe(rule: Rule) -> &'static str {
         Rule::number => "a number",
         Rule::boolean => "`true` or `false`",
         Rule::string | Rule::str_inner => "a string",
-        Rule::ident | Rule::ident_raw => "a name",
+        Rule::ident | Rule::ident_raw | Rule::fn_word => "a name",
         _ => "something else",
     }
 }

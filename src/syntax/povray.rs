@@ -147,7 +147,9 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "background",
-        "POV-Ray's `background { color ... }` is `background rgb <r, g, b>` here (no braces)",
+        "POV-Ray's `background { color ... }` is `backdrop rgb <r, g, b>` here (no braces): \
+         seen where rays leave the scene, lighting nothing; `background rgb <...>` here is a sky \
+         that also lights the scene",
     ),
     pov(
         "global_settings",
@@ -190,7 +192,9 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "sky_sphere",
-        "POV-Ray's `sky_sphere` is `environment { image \"sky.hdr\" }` or `background rgb <...>` here",
+        "POV-Ray's `sky_sphere { pigment { gradient y color_map { ... } } }` is `background \
+         texture { gradient y color_map { ... } }` here (a sky that lights the scene, as with \
+         POV-Ray's radiosity); an image sky is `environment { image \"sky.hdr\" }`",
     ),
     pov(
         "radiosity",
@@ -325,16 +329,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "vaxis_rotate",
         "there is no `vaxis_rotate` here: `vrotate(v, <ax, ay, az>)` turns about x, then y, then z",
-    ),
-    pov(
-        "seed",
-        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
-         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
-    ),
-    pov(
-        "rand",
-        "there are no random numbers here (`seed`, `rand`): compute the values (e.g. \
-         `mod(I * 7919, 101) / 101` in a loop) or list them in an array",
     ),
     pov("#elseif", "POV-Ray's `#elseif` is `#elif (condition)` here"),
     pov_in("light", "jitter", AREA_LIGHT_OPTIONS),

@@ -146,7 +146,7 @@ impl EnvironmentMap {
     /// `(u, v)` image coordinates (v up, as in [`lookup`]) and `sin θ` of an environment-space
     /// unit direction.
     #[inline]
-    fn coordinates(d: Vec3A) -> (f32, f32, f32) {
+    pub(super) fn coordinates(d: Vec3A) -> (f32, f32, f32) {
         let mut u = 0.5 - d.x.atan2(d.z) / (2.0 * PI);
         if !(0.0..1.0).contains(&u) {
             u = if u.is_nan() { 0.5 } else { 0.0 };

@@ -17,6 +17,7 @@ pub mod image;
 pub mod mapping;
 pub mod noise;
 pub mod patterns;
+pub mod sky;
 
 pub use environment::{EnvSample, EnvironmentMap};
 

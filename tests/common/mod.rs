@@ -26,6 +26,7 @@ pub fn empty_scene(res: (u32, u32)) -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         background: Background::Color(DVec3::ZERO),
+        backdrop: None,
     }
 }
 

@@ -17,7 +17,7 @@ fn spheres_bvh(spheres: &[Sphere], median_depth: usize) -> Bvh {
         .enumerate()
         .map(|(i, s)| (AnyShape::Sphere(*s), i as u32))
         .collect();
-    Bvh::with_median_depth(shapes, Vec::new(), median_depth)
+    Bvh::with_median_depth(shapes, Vec::new(), median_depth, &|| false).unwrap()
 }
 
 fn assert_matches_brute_force(
@@ -326,7 +326,9 @@ fn heavy_primitives_match_brute_force() {
                     make().into_iter().zip(0u32..).collect(),
                     Vec::new(),
                     median_depth,
-                );
+                    &|| false,
+                )
+                .unwrap();
                 for _ in 0..200 {
                     // From a box around the shapes toward a point near the first ones.
                     let o = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 8.0 - Vec3A::splat(4.0);

@@ -85,12 +85,9 @@ impl Access {
 
     /// The `Set-Cookie` value for a request that showed the token in its URL.
     pub fn set_cookie(&self) -> Option<String> {
-        self.token.as_ref().map(|t| {
-            format!(
-                "{}={t}; Path=/; HttpOnly; SameSite=Lax",
-                self.cookie_name()
-            )
-        })
+        self.token
+            .as_ref()
+            .map(|t| format!("{}={t}; Path=/; HttpOnly; SameSite=Lax", self.cookie_name()))
     }
 
     /// Checks a request's `Host`, `Origin`, query and `Cookie` headers (each `None` when

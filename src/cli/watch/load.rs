@@ -37,7 +37,9 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
     }
     match sppm_lang::load_file(path, options) {
         Ok(loaded) => {
-            print_diagnostics(&loaded);
+            if !loaded.interrupted {
+                print_diagnostics(&loaded);
+            }
             let scene = if loaded.has_errors() {
                 None
             } else {
@@ -50,6 +52,7 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
                 s.objects.is_empty()
                     && s.lights.is_empty()
                     && matches!(s.background, Background::Color(c) if c == glam::DVec3::ZERO)
+                    && s.backdrop.is_none()
             });
             if bare {
                 status(&format!(

@@ -31,9 +31,9 @@ use std::thread::JoinHandle;
 use std::time::{Instant, SystemTime};
 
 use clap::Args;
-use sppm_lang::Diagnostic;
 use sppm_lang::files::FileError;
 use sppm_lang::watch::DependencyWatcher;
+use sppm_lang::{Diagnostic, EvalOptions};
 
 use super::live::{self, Hub};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
@@ -200,7 +200,10 @@ pub fn run(args: &WatchArgs) -> ExitCode {
     let terminal = std::io::stderr().is_terminal();
     let clear = terminal && !args.no_clear;
     let preview = !args.no_preview;
-    let options = args.limits.options();
+    let options = EvalOptions {
+        cancel: interrupted.clone().into(),
+        ..args.limits.options()
+    };
     let on_disk = OnDisk::default();
     let mut current: Option<Current> = None;
     let mut round = 0u32;
@@ -218,6 +221,14 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         // The previous files stay watched (and the render in flight goes on) during the load.
         let load_started = SystemTime::now();
         let loaded = load(&args.scene, &options);
+        if interrupted.load(Ordering::SeqCst) {
+            // The render that went on during the load writes its finished iterations.
+            if let Some(c) = &mut current {
+                c.stop(true);
+            }
+            status("interrupted");
+            return ExitCode::SUCCESS;
+        }
         let watched = loaded.dependencies.iter().chain([&args.scene]);
         if let Err(e) = watcher.set_dependencies_after(watched, load_started) {
             status(&format!("cannot watch the scene's files: {e}"));

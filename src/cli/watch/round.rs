@@ -224,6 +224,8 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                     out.elapsed.as_secs_f64()
                 ));
             }
+            // Cancelled while preparing (a change, Ctrl-C): no image, as before any iteration.
+            Err(e) if e.interrupted => return Outcome::Cancelled,
             Err(e) => {
                 print_render_error(&r.sources, &e);
                 status(&format!("render #{number} failed"));

@@ -49,6 +49,10 @@ pub(crate) trait Sink {
     }
 }
 
+/// The label of [`unexpected`]'s refusal: a macro call standing as a statement recognises it
+/// (see `macros`).
+pub(super) const UNEXPECTED_VALUE: &str = "unexpected value";
+
 pub(super) fn unexpected<S: Sink + ?Sized>(
     sink: &S,
     v: &Value,
@@ -61,7 +65,7 @@ pub(super) fn unexpected<S: Sink + ?Sized>(
             sink.kind(),
             v.type_name()
         ))
-        .label("unexpected value")
+        .label(UNEXPECTED_VALUE)
         .help(help.to_string())
         .at(span),
     ]

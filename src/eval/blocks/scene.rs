@@ -3,10 +3,10 @@
 use super::{Sink, unexpected};
 use crate::diag::{Diagnostic, Error, SourceResult, short_number};
 use crate::eval::Evaluator;
-use crate::eval::args::{Arg, surface_color};
+use crate::eval::args::{Arg, color_def};
 use crate::eval::props::{PropSpec, p};
-use crate::eval::value::Value;
-use crate::scene::{Background, environment_too_bright};
+use crate::eval::value::{ColorDef, Value};
+use crate::scene::{Background, ColorParam, environment_too_bright};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -14,6 +14,8 @@ use crate::syntax::ast::Name;
 pub(crate) struct TopSink {
     /// Where the background (`background` or `environment`) was last set.
     background: Option<Span>,
+    /// Where the backdrop was last set.
+    backdrop: Option<Span>,
 }
 
 impl TopSink {
@@ -33,7 +35,22 @@ impl TopSink {
     }
 }
 
-static TOP_PROPS: [PropSpec; 1] = [p("background", 1, 1, "a color", "rgb <0.1, 0.1, 0.2>")];
+static TOP_PROPS: [PropSpec; 2] = [
+    p(
+        "background",
+        1,
+        1,
+        "a color or a texture",
+        "rgb <0.1, 0.1, 0.2>",
+    ),
+    p(
+        "backdrop",
+        1,
+        1,
+        "a color or a texture",
+        "rgb <0.1, 0.1, 0.2>",
+    ),
+];
 
 impl Sink for TopSink {
     fn kind(&self) -> String {
@@ -43,8 +60,30 @@ impl Sink for TopSink {
         &TOP_PROPS
     }
     fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
-        ev.scene.background = Background::Color(surface_color(&args[0])?);
-        self.set_background(ev, kw.span.join(args[0].span));
+        // A colour or a texture over directions, as a surface colour is checked (in range,
+        // not negative; a colour map's entries were checked where it was written).
+        let param = match color_def(&args[0])? {
+            ColorDef::Const(c) => ColorParam::Const(c),
+            ColorDef::Tex(t) => ColorParam::Texture(ev.texture_id(&t)?),
+        };
+        let span = kw.span.join(args[0].span);
+        if kw.text == "backdrop" {
+            ev.scene.backdrop = Some(param);
+            if let Some(before) = self.backdrop.replace(span) {
+                ev.warn(
+                    Diagnostic::warning(span, "this backdrop replaces an earlier one")
+                        .with_label("this one is used")
+                        .with_extra(before, "replaced")
+                        .with_help("keep one `backdrop`: the scene has one"),
+                );
+            }
+            return Ok(());
+        }
+        ev.scene.background = match param {
+            ColorParam::Const(c) => Background::Color(c),
+            ColorParam::Texture(id) => Background::Texture(id),
+        };
+        self.set_background(ev, span);
         Ok(())
     }
     fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {

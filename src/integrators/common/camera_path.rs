@@ -164,10 +164,12 @@ fn follow(
     // counts emission only once it has passed a glossy surface.
     let mut after_specular = !start.gather;
     let mut counts_emission = !start.gather;
+    // A camera path through specular bounces alone still sees the backdrop.
+    let mut camera_chain = !start.gather;
     for depth in 0..settings.max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             if after_specular && counts_emission {
-                l += beta * scene.background_radiance(ray.d);
+                l += beta * scene.escaped_radiance(ray.d, camera_chain);
             }
             break;
         };
@@ -202,6 +204,7 @@ fn follow(
         };
         medium = medium_after(scene, &sh, wo, s.wi, medium);
         after_specular = s.specular;
+        camera_chain &= s.specular;
         beta *= s.weight;
         if beta.max_element() <= 0.0 {
             break;

@@ -98,6 +98,9 @@ pub(super) fn validate(scene: &Scene) -> Result<(), Invalid> {
     if let Background::Color(c) = scene.background {
         color(c, "the background colour", Span::detached())?;
     }
+    if let Some(ColorParam::Const(c)) = scene.backdrop {
+        color(c, "the backdrop colour", Span::detached())?;
+    }
     Ok(())
 }
 

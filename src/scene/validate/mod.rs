@@ -263,6 +263,7 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             textures_exist(m, i, self.textures.len())?;
         }
+        sky_textures_exist(self)?;
         appearance::validate(self)?;
         for obj in &self.objects {
             if let Shape::Csg(csg) = &obj.shape {
@@ -503,6 +504,32 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
         Some(t) => Err(invalid(
             Span::detached(),
             format!("material {index} uses texture {t}, but the scene has {count} textures"),
+            "unknown texture",
+            "push the texture onto `Scene::textures` and refer to it by its index",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The background's and the backdrop's textures are among the scene's.
+fn sky_textures_exist(scene: &Scene) -> Result<(), Invalid> {
+    let count = scene.textures.len();
+    let background = match scene.background {
+        Background::Texture(t) => Some(("the background", t.0)),
+        _ => None,
+    };
+    let backdrop = match scene.backdrop {
+        Some(ColorParam::Texture(t)) => Some(("the backdrop", t.0)),
+        _ => None,
+    };
+    match [background, backdrop]
+        .into_iter()
+        .flatten()
+        .find(|&(_, t)| t as usize >= count)
+    {
+        Some((what, t)) => Err(invalid(
+            Span::detached(),
+            format!("{what} uses texture {t}, but the scene has {count} textures"),
             "unknown texture",
             "push the texture onto `Scene::textures` and refer to it by its index",
         )),
