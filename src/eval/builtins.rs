@@ -2,7 +2,6 @@
 
 use crate::diag::short_number;
 use std::f64::consts::PI;
-use std::rc::Rc;
 
 use glam::{DAffine3, DVec3};
 
@@ -38,6 +37,15 @@ pub const FUNCTIONS: &[&str] = &[
     "vdot",
     "vcross",
     "vrotate",
+    "concat",
+    "vstr",
+    "substr",
+    "strlen",
+    "chr",
+    "asc",
+    "strupr",
+    "strlwr",
+    "val",
     "len",
     "str",
 ];
@@ -67,6 +75,9 @@ pub fn rotation(deg: DVec3) -> DAffine3 {
 /// Calls built-in `name`. `Ok(None)`: no such function. Argument errors carry the index of the
 /// offending argument (or `usize::MAX` for the call as a whole).
 pub fn call(name: &str, args: &[Value]) -> Option<Result<Value, (usize, Error)>> {
+    if let Some(result) = super::strings::call(name, args) {
+        return Some(result);
+    }
     let arity = match name {
         "atan2" | "pow" | "mod" | "vdot" | "vcross" | "vrotate" => 2,
         "clamp" => 3,
@@ -82,12 +93,7 @@ pub fn call(name: &str, args: &[Value]) -> Option<Result<Value, (usize, Error)>>
                 if arity == 1 { "" } else { "s" },
                 args.len()
             ))
-            .help(match name {
-                "str" => "write `str(x)`: it shows the number as written (POV-Ray's width and \
-                          precision arguments are not taken); strings join with `+`"
-                    .to_string(),
-                _ => format!("call it as `{}`", signature(name)),
-            }),
+            .help(format!("call it as `{}`", signature(name))),
         )));
     }
     Some(dispatch(name, args))
@@ -249,18 +255,6 @@ fn dispatch(name: &str, args: &[Value]) -> Result<Value, (usize, Error)> {
                     o.type_name()
                 ))
                 .help("`len(A)` counts an array's elements or a string's characters"),
-            )),
-        },
-        "str" => match &args[0] {
-            // As `#debug` shows it: `str(0.1 + 0.2)` is "0.3", `str(-0.0)` is "0".
-            Value::Num(x) => Ok(Value::Str(Rc::from(short_number(*x)))),
-            Value::Str(s) => Ok(Value::Str(s.clone())),
-            o => Err((
-                0,
-                Error::new(format!("`str` needs a number, found {}", o.type_name())).help(
-                    "`str(x)` writes a number as a string; a vector's components are `V.x`, \
-                     `V.y`, `V.z` (`#debug V` shows a whole vector)",
-                ),
             )),
         },
         _ => unreachable!("builtin {name}"),

@@ -108,7 +108,11 @@ impl Evaluator {
                     .sum();
                 self.charge(work, e.span)?;
                 match builtins::call(&name.text, &vals) {
-                    Some(Ok(v)) => v,
+                    Some(Ok(v)) => {
+                        // A string made (`str` with a width, `concat`) costs its length.
+                        self.charge(super::work_of(&v), e.span)?;
+                        v
+                    }
                     Some(Err((i, mut err))) => {
                         if err.label.is_empty() {
                             err.label = "invalid argument".into();

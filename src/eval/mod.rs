@@ -28,6 +28,7 @@ mod props;
 mod random;
 mod scope;
 mod stdlib;
+mod strings;
 mod value;
 
 use std::collections::{HashMap, HashSet};

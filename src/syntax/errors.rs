@@ -11,7 +11,9 @@ use crate::span::{FileId, Span};
 fn describe(rule: Rule) -> &'static str {
     match rule {
         Rule::EOI => "end of file",
-        Rule::items | Rule::item => "a statement",
+        Rule::items | Rule::item | Rule::map_items => "a statement",
+        Rule::map_entry => "a colour-map entry `[pos, color]`",
+        Rule::color_word | Rule::map_word => "a name",
         Rule::comma => "`,`",
         Rule::declare => "`#declare`",
         Rule::local => "`#local`",
@@ -228,6 +230,13 @@ pub(super) fn syntax_error(
             "this looks like {format}: sppm-lang reads its own POV-Ray-like language \
              (docs/language.md), e.g. `sphere {{ <0, 0, 0>, 1 }}`; write the scene in it"
         ));
+    }
+    if d.help.is_none() && rest.starts_with('>') && joined_vector(&text[..pos]) {
+        d = d.with_help(
+            "without commas, `-` and `+` join the components on their two sides (`<1 -2 3>` is \
+             `<1 - 2, 3>`, as in POV-Ray), and a vector needs two or more: separate the \
+             components with commas, e.g. `<-1, -2, -3>`",
+        );
     }
     if d.help.is_none()
         && pos < text.len()
@@ -632,6 +641,17 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<Option<usi
 
 /// The innermost of `(`, `[` and `{` still open at the end of `text` (outside strings and
 /// comments).
+/// Whether `before` (the text up to a `>` that does not close a vector) ends in a vector
+/// opened on its line without commas whose components a blank-separated sign joined
+/// (`<-1 -2 -3`).
+fn joined_vector(before: &str) -> bool {
+    let line = &before[before.rfind('\n').map_or(0, |i| i + 1)..];
+    line.rfind('<').is_some_and(|open| {
+        let inside = &line[open + 1..];
+        !inside.contains([',', '>', '(', '[']) && (inside.contains(" -") || inside.contains(" +"))
+    })
+}
+
 fn innermost_bracket(text: &str) -> Option<u8> {
     let bytes = text.as_bytes();
     let mut open = Vec::new();

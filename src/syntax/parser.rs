@@ -108,6 +108,16 @@ impl Cx {
             Rule::keyword => Item::Keyword(self.name(pair)),
             Rule::comma => Item::Comma(self.span(&pair)),
             Rule::expr | Rule::iexpr => Item::Expr(self.expr(pair)),
+            // POV-Ray's colour-map entry: an array of its parts (`color` words dropped).
+            Rule::map_entry => Item::Expr(Expr {
+                span: self.span(&pair),
+                kind: ExprKind::Array(
+                    pair.into_inner()
+                        .filter(|p| p.as_rule() != Rule::color_word)
+                        .map(|p| self.expr(p))
+                        .collect(),
+                ),
+            }),
             _ => Item::Directive(Box::new(self.directive(pair))),
         }
     }
@@ -418,10 +428,12 @@ impl Cx {
                             kind: ExprKind::Ident(name.as_str().to_string()),
                         };
                     }
-                    Some(tail) if tail.as_rule() == Rule::items => ExprKind::Block {
-                        kind: self.name(name),
-                        items: Rc::new(self.items(tail)),
-                    },
+                    Some(tail) if matches!(tail.as_rule(), Rule::items | Rule::map_items) => {
+                        ExprKind::Block {
+                            kind: self.name(name),
+                            items: Rc::new(self.items(tail)),
+                        }
+                    }
                     Some(tail) => ExprKind::Call {
                         name: self.name(name),
                         args: tail.into_inner().map(|p| self.expr(p)).collect(),

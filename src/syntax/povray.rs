@@ -315,16 +315,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          both (closing the cut)",
     ),
     pov(
-        "concat",
-        "POV-Ray's `concat(a, b)` is `a + b` here: strings join with `+`",
-    ),
-    pov(
-        "vstr",
-        "there is no `vstr` here: `#debug` shows a vector as written (`#debug V`), and \
-         `str(V.x)` gives one component",
-    ),
-    pov("strlen", "POV-Ray's `strlen(s)` is `len(s)` here"),
-    pov(
         "dimension_size",
         "POV-Ray's `dimension_size(A, 1)` is `len(A)` here",
     ),

@@ -72,8 +72,9 @@ pub(super) fn unexpected<S: Sink + ?Sized>(
 }
 
 /// Whether `name` is the name of a kind of block (`material`, `sphere`, ...).
+/// `colour_map` is POV-Ray's other spelling of `color_map` (not listed with the blocks).
 pub(super) fn is_block_name(name: &str) -> bool {
-    OBJECT_BLOCKS.contains(&name) || VALUE_BLOCKS.contains(&name)
+    OBJECT_BLOCKS.contains(&name) || VALUE_BLOCKS.contains(&name) || name == "colour_map"
 }
 
 /// The blocks that are not objects (those are [`OBJECT_BLOCKS`]).
@@ -130,7 +131,7 @@ impl Evaluator {
                 self.run_items(items, &mut b)?;
                 b.finish(self, span)
             }
-            "color_map" => {
+            "color_map" | "colour_map" => {
                 let mut b = ColorMapBuilder::default();
                 self.run_items(items, &mut b)?;
                 b.finish(span)

@@ -376,34 +376,39 @@ impl Sink for ColorMapBuilder {
         unreachable!()
     }
     fn positional(&mut self, _ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
-        let entry = match &v {
-            Value::Array(a) if a.len() == 2 => (a[0].num(), a[1].color()),
+        // `[pos, color]`, or POV-Ray's range `[a, b, color A, color B]`: `[a, A] [b, B]`.
+        let entries = match &v {
+            Value::Array(a) if a.len() == 2 => vec![(&a[0], &a[1])],
+            Value::Array(a) if a.len() == 4 => vec![(&a[0], &a[2]), (&a[1], &a[3])],
             _ => {
                 return Err(unexpected(
                     self,
                     &v,
                     span,
-                    "entries look like `[0.5, rgb <1, 0, 0>]`",
+                    "entries look like `[0.5, rgb <1, 0, 0>]`, or POV-Ray's \
+                     `[0.2 0.6 color A color B]` (from A at 0.2 to B at 0.6)",
                 ));
             }
         };
-        let pos = entry.0.at(span)?;
-        let c = entry.1.at(span)?;
-        let c = surface_color(&Arg {
-            value: Value::Color(c),
-            span,
-        })?;
-        if !(0.0..=1.0).contains(&pos) {
-            return Err(range_error(
+        for (pos, c) in entries {
+            let pos = pos.num().at(span)?;
+            let c = c.color().at(span)?;
+            let c = surface_color(&Arg {
+                value: Value::Color(c),
                 span,
-                format!(
-                    "color map positions must be in [0, 1], found {}",
-                    crate::diag::short_number(pos)
-                ),
-                "use a position from 0 to 1",
-            ));
+            })?;
+            if !(0.0..=1.0).contains(&pos) {
+                return Err(range_error(
+                    span,
+                    format!(
+                        "color map positions must be in [0, 1], found {}",
+                        crate::diag::short_number(pos)
+                    ),
+                    "use a position from 0 to 1",
+                ));
+            }
+            self.0.push((pos, c));
         }
-        self.0.push((pos, c));
         Ok(())
     }
 }
