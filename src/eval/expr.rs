@@ -120,6 +120,8 @@ impl Evaluator {
                         let span = args.get(i).map_or(e.span, |a| a.span);
                         return Err(vec![err.at(span)]);
                     }
+                    // A macro of an include that failed to parse: its error is reported.
+                    None if self.poisoned.contains(&name.text) => return Err(super::silent()),
                     None => {
                         let mut err = Error::new(format!("unknown function `{}`", name.text))
                             .label("no built-in function or macro of this name");

@@ -196,7 +196,17 @@ impl Evaluator {
         span: Span,
         sink: &mut dyn Sink,
     ) -> SourceResult<()> {
-        let items = self.parse_within_memory(file, text, Some(span))?;
+        let items = match self.parse_within_memory(file, text, Some(span)) {
+            Ok(items) => items,
+            Err(e) => {
+                // The file is not run, so what it declares is poisoned: its uses stay quiet
+                // instead of each being an unknown identifier (its syntax errors are the cause).
+                // Read from its text, its `#declare`s and `#macro`s wherever they stand: an
+                // unknown name elsewhere is still reported.
+                self.poisoned.extend(crate::syntax::declared_names(text));
+                return Err(e);
+            }
+        };
         self.include_stack.push(key);
         // The file's top-level `#local`s live in a frame of its own, gone when it ends (its
         // unused ones are not reported: see `warn_unused`).

@@ -309,7 +309,7 @@ fn other_renderer(text: &str) -> Option<&'static str> {
         .then_some("a pbrt scene")
 }
 
-fn error_pos(e: &pest::error::Error<Rule>) -> usize {
+pub(super) fn error_pos(e: &pest::error::Error<Rule>) -> usize {
     match e.location {
         pest::error::InputLocation::Pos(p) => p,
         pest::error::InputLocation::Span((s, _)) => s,
@@ -675,7 +675,7 @@ fn innermost_bracket(text: &str) -> Option<u8> {
 
 /// Where the comment or string starting at `i` ends (just past it; at the end of its line for
 /// a line comment and an unclosed string), or `None` when none starts there.
-fn after_comment_or_string(bytes: &[u8], mut i: usize) -> Option<usize> {
+pub(super) fn after_comment_or_string(bytes: &[u8], mut i: usize) -> Option<usize> {
     match (bytes[i], bytes.get(i + 1)) {
         (b'/', Some(b'/')) => {
             while i < bytes.len() && bytes[i] != b'\n' {

@@ -4,9 +4,11 @@ pub mod ast;
 mod errors;
 mod parser;
 pub mod povray;
+mod recover;
 
 pub use crate::diag::{SourceFile, SourceMap};
 pub use parser::{MAX_EXPRESSION_TERMS, MAX_NESTING, parse};
+pub use recover::{MAX_SYNTAX_ERRORS, declared_names};
 
 /// Memory the parser may take per lexeme of scene text (a name or number, or one punctuation
 /// character: `0.5` counts as three), its token list and syntax tree alive together. Measured

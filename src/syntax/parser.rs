@@ -9,7 +9,8 @@ use pest::iterators::{Pair, Pairs};
 use pest::pratt_parser::{Assoc, Op, PrattParser};
 
 use super::ast::*;
-use super::errors::{check_nesting, syntax_error};
+use super::errors::check_nesting;
+use super::recover::all_errors;
 use crate::diag::{Diagnostic, SourceResult};
 use crate::span::{FileId, Span};
 
@@ -44,11 +45,12 @@ static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
         .op(Op::postfix(Rule::index) | Op::postfix(Rule::field))
 });
 
-/// Parses one file. On failure returns one syntax error.
+/// Parses one file. On failure returns its syntax errors, in order, up to
+/// [`MAX_SYNTAX_ERRORS`](super::recover::MAX_SYNTAX_ERRORS) ([`super::recover`]).
 pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
     let stray = check_nesting(file, text)?;
-    let mut pairs = SceneParser::parse(Rule::file, text)
-        .map_err(|e| vec![syntax_error(file, text, e, stray)])?;
+    let mut pairs =
+        SceneParser::parse(Rule::file, text).map_err(|e| all_errors(file, text, e, stray))?;
     let file_pair = pairs.next().expect("file rule");
     let items = file_pair.into_inner().next().expect("items");
     let cx = Cx {
