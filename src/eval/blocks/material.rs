@@ -500,7 +500,7 @@ impl Sink for MaterialBuilder {
                 // The lower bound depends on the kind (a conductor may be perfectly smooth):
                 // checked in `finish`.
                 if let Value::Num(r) = args[0].value {
-                    if !(r <= 1.0 && r >= 0.0) {
+                    if !(0.0..=1.0).contains(&r) {
                         return Err(range_error(
                             args[0].span,
                             format!(
