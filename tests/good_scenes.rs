@@ -855,3 +855,39 @@ fn a_spotlight_aimed_at_a_very_close_point_has_that_direction() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A conductor takes its index from a named metal (symbol or English name), from `eta` and
+/// `extinction`, or from `reflectance` and `edge_tint` (mapped so that the normal-incidence
+/// reflectance is the one written); roughness 0 is allowed (a polished metal) and an override
+/// keeps the declared metal.
+#[test]
+fn conductors_take_a_metal_an_index_or_artist_colours() {
+    let s = scene(
+        "#declare Gold = material { conductor \"Au\" roughness 0.2 }
+         sphere { <0, 0, 0>, 1 material { Gold } }
+         sphere { <3, 0, 0>, 1 material { conductor \"copper\" } }
+         sphere { <6, 0, 0>, 1 material { conductor eta rgb <0.2, 0.5, 1.4> extinction rgb <3, 2.4, 1.8> } }
+         sphere { <9, 0, 0>, 1 material { conductor reflectance rgb <0.9, 0.6, 0.5> edge_tint rgb 1 roughness 0.5 } }
+         sphere { <12, 0, 0>, 1 material { Gold roughness 0 } }",
+    );
+    let m = |i: usize| &s.materials[s.objects[i].material.0 as usize];
+    let au = metals::metal("Au").unwrap();
+    let cu = metals::metal("Cu").unwrap();
+    let Material::Conductor { eta, k, roughness } = m(0) else {
+        panic!("{:?}", m(0))
+    };
+    assert_eq!((*eta, *k, *roughness), (au.eta.into(), au.k.into(), 0.2));
+    assert!(matches!(m(1), Material::Conductor { eta, roughness, .. }
+        if *eta == DVec3::from(cu.eta) && *roughness == 0.0));
+    assert!(matches!(m(2), Material::Conductor { eta, k, .. }
+        if close(*eta, DVec3::new(0.2, 0.5, 1.4)) && close(*k, DVec3::new(3.0, 2.4, 1.8))));
+    let Material::Conductor { eta, k, roughness } = m(3) else {
+        panic!("{:?}", m(3))
+    };
+    let f0 = (*eta - 1.0) * (*eta - 1.0) + *k * *k;
+    let f0 = f0 / ((*eta + 1.0) * (*eta + 1.0) + *k * *k);
+    assert!(close(f0, DVec3::new(0.9, 0.6, 0.5)), "{f0}");
+    assert_eq!(*roughness, 0.5);
+    assert!(matches!(m(4), Material::Conductor { eta, roughness, .. }
+        if *eta == DVec3::from(au.eta) && *roughness == 0.0));
+}

@@ -221,6 +221,11 @@ impl Evaluator {
                     ColorParam::Texture(t) => ScalarParam::Texture(t),
                 },
             },
+            MatKind::Conductor { eta, k, roughness } => Material::Conductor {
+                eta: *eta,
+                k: *k,
+                roughness: *roughness,
+            },
         };
         let id = self.push_material(material);
         self.assets.materials.insert(key, (m.clone(), id));

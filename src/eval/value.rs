@@ -196,6 +196,11 @@ pub enum MatKind {
         specular: ColorDef,
         roughness: ColorDef,
     },
+    Conductor {
+        eta: Color,
+        k: Color,
+        roughness: f64,
+    },
 }
 
 #[derive(Debug)]

@@ -33,6 +33,7 @@ pub fn is_constant(m: &Material) -> bool {
             specular,
             roughness,
         } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
+        Material::Conductor { .. } => true,
     }
 }
 
@@ -87,6 +88,19 @@ pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
                 albedo: clamp01(color(albedo, scene, &tc)),
                 specular: clamp01(color(specular, scene, &tc)),
                 alpha: (r * r).max(1e-3),
+            }
+        }
+        Material::Conductor { eta, k, roughness } => {
+            let r = if roughness.is_finite() {
+                roughness.clamp(0.0, 1.0) as f32
+            } else {
+                0.0
+            };
+            let nonneg = |c: Vec3A| c.max(Vec3A::ZERO);
+            Lobes::Conductor {
+                eta: nonneg(color3(*eta)),
+                k: nonneg(color3(*k)),
+                alpha: r * r,
             }
         }
     }

@@ -1,6 +1,9 @@
 //! BSDFs. A material evaluated at a hit becomes a [`Bsdf`] (plain `Copy` data, no heap) in a
 //! shading frame. Directions are world-space unit vectors pointing away from the surface.
 
+#[cfg(test)]
+mod check;
+mod conductor;
 mod dielectric;
 mod diffuse;
 pub mod eval;
@@ -38,6 +41,12 @@ pub enum Lobes {
         specular: Vec3A,
         alpha: f32,
     },
+    /// A metal (conductor.rs): complex index `eta + i k` per channel; `alpha` 0 is smooth.
+    Conductor {
+        eta: Vec3A,
+        k: Vec3A,
+        alpha: f32,
+    },
 }
 
 /// A BSDF at a surface point.
@@ -72,7 +81,11 @@ impl Bsdf {
 
     /// Purely specular (delta) BSDFs: camera paths pass through them, photons never deposit.
     pub fn is_specular(&self) -> bool {
-        matches!(self.lobes, Lobes::Mirror { .. } | Lobes::Glass { .. })
+        match self.lobes {
+            Lobes::Mirror { .. } | Lobes::Glass { .. } => true,
+            Lobes::Conductor { alpha, .. } => alpha == 0.0,
+            Lobes::Diffuse { .. } | Lobes::Glossy { .. } => false,
+        }
     }
 
     /// A glossy lobe sharp enough (GGX alpha below 0.3, roughness below about 0.55) that a
@@ -80,7 +93,8 @@ impl Bsdf {
     /// paths through it, by BSDF sampling, to the next surface (pbrt's SPPM does so for every
     /// glossy surface).
     pub fn is_glossy(&self) -> bool {
-        matches!(self.lobes, Lobes::Glossy { alpha, .. } if alpha < 0.3)
+        matches!(self.lobes, Lobes::Glossy { alpha, .. } | Lobes::Conductor { alpha, .. }
+            if alpha > 0.0 && alpha < 0.3)
     }
 
     /// BSDF value for light arriving from `wi` and leaving toward `wo`.
@@ -99,6 +113,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::f(albedo, specular, alpha, o, i),
+            Lobes::Conductor { eta, k, alpha } => conductor::f(eta, k, alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => Vec3A::ZERO,
         }
     }
@@ -130,6 +145,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::pdf(albedo, specular, alpha, o, i),
+            Lobes::Conductor { alpha, .. } => conductor::pdf(alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => 0.0,
         }
     }
@@ -149,6 +165,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::sample(albedo, specular, alpha, o, uc, u),
+            Lobes::Conductor { eta, k, alpha } => conductor::sample(eta, k, alpha, o, u),
         }?;
         let wi = self.frame.to_world(s.wi);
         // Reject samples whose geometric side disagrees with the local decision (shading

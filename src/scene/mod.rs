@@ -9,6 +9,7 @@
 
 mod assets;
 mod csg;
+pub mod metals;
 mod obj;
 mod obj_errors;
 mod validate;
@@ -464,6 +465,13 @@ pub enum Material {
         albedo: ColorParam,
         specular: ColorParam,
         roughness: ScalarParam,
+    },
+    /// A metal: Fresnel reflection for the complex index of refraction `eta + i k` per
+    /// channel, smooth (`roughness` 0, a perfect mirror) or a GGX microfacet lobe.
+    Conductor {
+        eta: Color,
+        k: Color,
+        roughness: f64,
     },
 }
 

@@ -115,7 +115,8 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "finish",
         "POV-Ray's `finish { ... }` is the kind of material here: \
-         `material { diffuse ... }`, `mirror ...`, `glass ior n`, or `glossy ... roughness r`",
+         `material { diffuse ... }`, `mirror ...`, `glass ior n`, `glossy ... roughness r` or \
+         `conductor \"Au\"`",
     ),
     pov(
         "normal",
@@ -166,7 +167,13 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "reflection",
-        "POV-Ray's `finish { reflection ... }` is `material { mirror rgb <...> }` here",
+        "POV-Ray's `finish { reflection ... }` is `material { mirror rgb <...> }` here (a metal, \
+         with its Fresnel reflection: `material { conductor \"Au\" }`)",
+    ),
+    pov(
+        "metallic",
+        "POV-Ray's `finish { metallic ... }` is a metal here: `material { conductor \"Au\" \
+         roughness r }` or `conductor reflectance rgb <...>`",
     ),
     pov(
         "phong",

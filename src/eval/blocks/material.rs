@@ -1,15 +1,16 @@
-//! `material { ... }`: the kind (diffuse, mirror, glass, glossy), its parameters, and
+//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, conductor), its parameters, and
 //! materials that extend a declared one.
 
 use crate::diag::short_number;
 use std::rc::Rc;
 
 use super::{Sink, unexpected};
-use crate::diag::{Diagnostic, Error, SourceResult};
+use crate::diag::{Diagnostic, Error, SourceResult, suggest};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
+use crate::scene::metals::{MAX_ARTIST_REFLECTANCE, artist_to_eta_k, metal, metal_names};
 use crate::scene::{Color, IOR_RANGE, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
@@ -27,6 +28,14 @@ pub(super) struct MaterialBuilder {
     tint_texture: Option<Span>,
     specular: Option<ColorDef>,
     roughness: Option<ColorDef>,
+    /// A constant roughness as written, checked against the kind's range when it is known.
+    roughness_num: Option<(f64, Span)>,
+    /// A conductor's named metal (`conductor "Au"`), with the name's span.
+    metal: Option<(Color, Color, Span)>,
+    eta: Option<(Color, Span)>,
+    extinction: Option<(Color, Span)>,
+    reflectance: Option<(Color, Span)>,
+    edge_tint: Option<(Color, Span)>,
     /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
     /// `roughness`), with their keywords' spans: each must belong to the material's kind.
     written: Vec<(&'static str, Span)>,
@@ -39,11 +48,12 @@ fn uses(kind: &str) -> &'static [&'static str] {
         "mirror" => &["tint"],
         "glass" => &["ior", "absorb", "tint"],
         "glossy" => &["specular", "roughness"],
+        "conductor" => &["eta", "extinction", "reflectance", "edge_tint", "roughness"],
         _ => &[],
     }
 }
 
-static MAT_PROPS: [PropSpec; 9] = [
+static MAT_PROPS: [PropSpec; 14] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
@@ -53,6 +63,11 @@ static MAT_PROPS: [PropSpec; 9] = [
     p("tint", 1, 1, "a color", "rgb <1, 1, 1>"),
     p("specular", 1, 1, "a color", "rgb <0.04, 0.04, 0.04>"),
     p("roughness", 1, 1, "a number in (0, 1]", "0.2"),
+    p("conductor", 0, 1, "a metal's name (optional)", "\"Au\""),
+    p("eta", 1, 1, "a color", "rgb <0.18, 0.49, 1.38>"),
+    p("extinction", 1, 1, "a color", "rgb <3.12, 2.35, 1.83>"),
+    p("reflectance", 1, 1, "a color", "rgb <0.95, 0.64, 0.54>"),
+    p("edge_tint", 1, 1, "a color", "rgb <1, 0.9, 0.8>"),
 ];
 
 impl MaterialBuilder {
@@ -61,7 +76,7 @@ impl MaterialBuilder {
             return Err(vec![
                 Error::new(format!("a material is either {old} or {k}, not both"))
                     .label("second kind")
-                    .help("use one of diffuse, mirror, glass, glossy per material")
+                    .help("use one of diffuse, mirror, glass, glossy, conductor per material")
                     .at(span)
                     .with_extra(old_span, "first kind here"),
             ]);
@@ -82,11 +97,12 @@ impl MaterialBuilder {
                 MatKind::Mirror(_) => "mirror",
                 MatKind::Glass { .. } => "glass",
                 MatKind::Glossy { .. } => "glossy",
+                MatKind::Conductor { .. } => "conductor",
             })
         });
         let Some(kind_name) = kind_name else {
             return Err(vec![
-                Error::new("a material needs a kind: diffuse, mirror, glass or glossy")
+                Error::new("a material needs a kind: diffuse, mirror, glass, glossy or conductor")
                     .label("no kind given")
                     .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
                     .at(span),
@@ -114,6 +130,24 @@ impl MaterialBuilder {
             .find(|w| !uses(kind_name).contains(&w.0))
         {
             misplaced(what, Some(s))?;
+        }
+        if let Some((r, s)) = self.roughness_num {
+            let lowest = if kind_name == "conductor" {
+                0.0
+            } else {
+                MIN_ROUGHNESS
+            };
+            if r < lowest {
+                return Err(range_error(
+                    s,
+                    format!(
+                        "roughness must be from {} to 1, found {}",
+                        short_number(lowest),
+                        short_number(r)
+                    ),
+                    "e.g. `roughness 0.2`",
+                ));
+            }
         }
         let one = ColorDef::Const(Color::ONE);
         let kind = match kind_name {
@@ -181,6 +215,7 @@ impl MaterialBuilder {
                     tint: self.tint.unwrap_or(tint),
                 }
             }
+            "conductor" => self.conductor(base)?,
             _ => {
                 // An override of a declared glossy material keeps what it does not write.
                 let (albedo, specular, roughness) = match base {
@@ -204,6 +239,150 @@ impl MaterialBuilder {
         };
         Ok(Value::Material(Rc::new(MaterialDef { kind, span })))
     }
+}
+
+impl MaterialBuilder {
+    /// A conductor's kind: its index from exactly one of a named metal, `eta` with
+    /// `extinction`, or `reflectance` with an optional `edge_tint`; an override of a declared
+    /// conductor keeps what it does not write.
+    fn conductor(&self, base: Option<MatKind>) -> SourceResult<MatKind> {
+        let (mut eta, mut k, mut roughness) = match base {
+            Some(MatKind::Conductor { eta, k, roughness }) => (eta, k, roughness),
+            _ => {
+                let al = metal("Al").map_or([1.0; 3], |m| m.eta);
+                let al_k = metal("Al").map_or([0.0; 3], |m| m.k);
+                (Color::from(al), Color::from(al_k), 0.0)
+            }
+        };
+        let ways = [
+            self.metal.map(|m| m.2),
+            self.eta.or(self.extinction).map(|e| e.1),
+            self.reflectance.or(self.edge_tint).map(|e| e.1),
+        ];
+        let given: Vec<Span> = ways.iter().flatten().copied().collect();
+        if given.len() > 1 {
+            return Err(vec![
+                Error::new("a conductor's colour is given twice")
+                    .label("second description")
+                    .help(
+                        "give one of: a metal's name (`conductor \"Au\"`), `eta` with \
+                         `extinction`, or `reflectance` with `edge_tint`",
+                    )
+                    .at(given[1])
+                    .with_extra(given[0], "first description here"),
+            ]);
+        }
+        if let Some((e, x, _)) = self.metal {
+            (eta, k) = (e, x);
+        }
+        match (self.eta, self.extinction) {
+            (Some((e, _)), Some((x, _))) => (eta, k) = (e, x),
+            (Some((_, s)), None) | (None, Some((_, s))) => {
+                return Err(vec![
+                    Error::new("`eta` and `extinction` go together")
+                        .label("the other one is missing")
+                        .help(
+                            "a metal's complex index of refraction is `eta rgb <..> \
+                             extinction rgb <..>` (gold: eta rgb <0.18, 0.49, 1.38> \
+                             extinction rgb <3.12, 2.35, 1.83>)",
+                        )
+                        .at(s),
+                ]);
+            }
+            (None, None) => {}
+        }
+        match (self.reflectance, self.edge_tint) {
+            (Some((r, s)), g) => {
+                if r.max_element() > MAX_ARTIST_REFLECTANCE {
+                    return Err(range_error(
+                        s,
+                        format!(
+                            "a conductor's reflectance must be at most 0.99, found {}",
+                            short_number(r.max_element())
+                        ),
+                        "use components from 0 to 0.99 (polished silver is about 0.97)",
+                    ));
+                }
+                (eta, k) = artist_to_eta_k(r, g.map_or(r, |g| g.0));
+            }
+            (None, Some((_, s))) => {
+                return Err(vec![
+                    Error::new("`edge_tint` needs a `reflectance`")
+                        .label("no reflectance")
+                        .help("write e.g. `reflectance rgb <0.95, 0.64, 0.54> edge_tint rgb <1, 0.9, 0.8>`")
+                        .at(s),
+                ]);
+            }
+            (None, None) => {}
+        }
+        if let Some(ColorDef::Tex(_)) = self.roughness {
+            let at = self
+                .written
+                .iter()
+                .find(|w| w.0 == "roughness")
+                .map(|w| w.1);
+            return Err(vec![
+                Error::new("a conductor's roughness is a number, not a texture")
+                    .label("a texture")
+                    .help("write e.g. `roughness 0.2`")
+                    .at(at.unwrap_or(self.metal.map_or(Span::detached(), |m| m.2))),
+            ]);
+        }
+        if let Some((r, _)) = self.roughness_num {
+            roughness = r;
+        }
+        Ok(MatKind::Conductor { eta, k, roughness })
+    }
+}
+
+/// A constant colour from a conductor's property: not a texture, not negative.
+fn constant_color(a: &Arg) -> SourceResult<(Color, Span)> {
+    match color_def(a)? {
+        ColorDef::Const(c) if c.min_element() < 0.0 => Err(range_error(
+            a.span,
+            format!(
+                "a conductor's colour must not be negative, found {}",
+                short_number(c.min_element())
+            ),
+            "use components >= 0",
+        )),
+        ColorDef::Const(c) => Ok((c, a.span)),
+        ColorDef::Tex(_) => Err(vec![
+            Error::new("a conductor's colours are constants, not textures")
+                .label("a texture")
+                .help("write a colour, e.g. `rgb <0.95, 0.64, 0.54>`")
+                .at(a.span),
+        ]),
+    }
+}
+
+/// A named metal (`conductor "Au"`): the table's entry, or an error naming the nearest.
+fn named_metal(a: &Arg) -> SourceResult<(Color, Color, Span)> {
+    let Value::Str(name) = &a.value else {
+        return Err(vec![
+            Error::new(format!(
+                "a conductor's argument is a metal's name, found {}",
+                a.value.type_name()
+            ))
+            .label("not a name")
+            .help("write the name in quotes, e.g. `conductor \"Au\"`, or give `eta`/`extinction` or `reflectance`")
+            .at(a.span),
+        ]);
+    };
+    if let Some(m) = metal(name) {
+        return Ok((Color::from(m.eta), Color::from(m.k), a.span));
+    }
+    let known: Vec<&str> = metal_names().collect();
+    let help = match suggest(name, known.iter().copied()) {
+        Some(s) => format!("did you mean `\"{s}\"`?"),
+        None => format!("the known metals are {}", known.join(", ")),
+    };
+    Err(vec![
+        Error::new(format!("`{name}` is not a known metal"))
+            .label("unknown metal")
+            .help(help)
+            .at(a.span),
+    ])
 }
 
 /// A surface's colour (`diffuse`, `mirror`, `glossy`); a constant above 1 gives a warning: the
@@ -247,9 +426,19 @@ impl Sink for MaterialBuilder {
     }
     fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         self.touched = true;
-        if let Some(&w) = ["ior", "absorb", "tint", "specular", "roughness"]
-            .iter()
-            .find(|w| **w == kw.text)
+        if let Some(&w) = [
+            "ior",
+            "absorb",
+            "tint",
+            "specular",
+            "roughness",
+            "eta",
+            "extinction",
+            "reflectance",
+            "edge_tint",
+        ]
+        .iter()
+        .find(|w| **w == kw.text)
         {
             self.written.push((w, kw.span));
         }
@@ -269,6 +458,16 @@ impl Sink for MaterialBuilder {
                 self.set_kind("glossy", kw.span)?;
                 self.albedo = Some(reflectance(ev, &args[0])?);
             }
+            "conductor" => {
+                self.set_kind("conductor", kw.span)?;
+                if let Some(a) = args.first() {
+                    self.metal = Some(named_metal(a)?);
+                }
+            }
+            "eta" => self.eta = Some(constant_color(&args[0])?),
+            "extinction" => self.extinction = Some(constant_color(&args[0])?),
+            "reflectance" => self.reflectance = Some(constant_color(&args[0])?),
+            "edge_tint" => self.edge_tint = Some(constant_color(&args[0])?),
             "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
             "absorb" => {
                 let c = color_def(&args[0])?;
@@ -298,17 +497,21 @@ impl Sink for MaterialBuilder {
             }
             "specular" => self.specular = Some(reflectance(ev, &args[0])?),
             "roughness" => {
-                if let Value::Num(r) = args[0].value
-                    && !(MIN_ROUGHNESS..=1.0).contains(&r)
-                {
-                    return Err(range_error(
-                        args[0].span,
-                        format!(
-                            "roughness must be from 0.001 to 1, found {}",
-                            crate::diag::short_number(r)
-                        ),
-                        "e.g. `roughness 0.2`",
-                    ));
+                // The lower bound depends on the kind (a conductor may be perfectly smooth):
+                // checked in `finish`.
+                if let Value::Num(r) = args[0].value {
+                    if !(0.0..=1.0).contains(&r) {
+                        return Err(range_error(
+                            args[0].span,
+                            format!(
+                                "roughness must be from 0.001 to 1 (0 to 1 for a conductor), \
+                                 found {}",
+                                crate::diag::short_number(r)
+                            ),
+                            "e.g. `roughness 0.2`",
+                        ));
+                    }
+                    self.roughness_num = Some((r, args[0].span));
                 }
                 self.roughness = Some(color_def(&args[0])?);
             }

@@ -143,6 +143,23 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
                 _ => Ok(()),
             }
         }
+        Material::Conductor { eta, k, roughness } => {
+            color(*eta, &format!("material {index}'s eta"), span)?;
+            color(*k, &format!("material {index}'s k"), span)?;
+            if (0.0..=1.0).contains(roughness) {
+                Ok(())
+            } else {
+                Err(invalid(
+                    span,
+                    format!(
+                        "material {index}'s roughness {} is out of range",
+                        fmt(*roughness)
+                    ),
+                    "out of range",
+                    "use a roughness from 0 (a polished metal) to 1",
+                ))
+            }
+        }
     }
 }
 

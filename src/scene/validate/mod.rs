@@ -487,6 +487,7 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
         Material::Diffuse { albedo } => [color(albedo), None, None],
         Material::Mirror { tint } => [color(tint), None, None],
         Material::Glass { absorb, .. } => [color(absorb), None, None],
+        Material::Conductor { .. } => [None, None, None],
         Material::Glossy {
             albedo,
             specular,
