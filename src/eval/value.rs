@@ -196,6 +196,12 @@ pub enum MatKind {
         specular: ColorDef,
         roughness: ColorDef,
     },
+    /// No roughness: a smooth coat.
+    Coated {
+        albedo: ColorDef,
+        ior: f64,
+        roughness: Option<ColorDef>,
+    },
 }
 
 #[derive(Debug)]

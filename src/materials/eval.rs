@@ -33,6 +33,9 @@ pub fn is_constant(m: &Material) -> bool {
             specular,
             roughness,
         } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
+        Material::Coated {
+            albedo, roughness, ..
+        } => c(albedo) && matches!(roughness, ScalarParam::Const(_)),
     }
 }
 
@@ -87,6 +90,19 @@ pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
                 albedo: clamp01(color(albedo, scene, &tc)),
                 specular: clamp01(color(specular, scene, &tc)),
                 alpha: (r * r).max(1e-3),
+            }
+        }
+        Material::Coated {
+            albedo,
+            ior,
+            roughness,
+        } => {
+            // Roughness zero (none given, or a texture's black) is a smooth coat.
+            let r = scalar(roughness, scene, &tc).clamp(0.0, 1.0);
+            Lobes::Coated {
+                albedo: clamp01(color(albedo, scene, &tc)),
+                eta: (*ior as f32).clamp(1.0, super::coated::MAX_ETA),
+                alpha: r * r,
             }
         }
     }

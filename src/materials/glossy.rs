@@ -13,13 +13,13 @@ use glam::{Vec2, Vec3A};
 use super::BsdfSample;
 use crate::sampling::cosine_hemisphere;
 
-fn d_ggx(h: Vec3A, a2: f32) -> f32 {
+pub(super) fn d_ggx(h: Vec3A, a2: f32) -> f32 {
     let c2 = h.z * h.z;
     let k = (a2 - 1.0) * c2 + 1.0;
     a2 / (PI * k * k)
 }
 
-fn g1(v: Vec3A, a2: f32) -> f32 {
+pub(super) fn g1(v: Vec3A, a2: f32) -> f32 {
     let c2 = v.z * v.z;
     if c2 == 0.0 {
         return 0.0;
@@ -82,7 +82,7 @@ pub fn pdf(albedo: Vec3A, specular: Vec3A, alpha: f32, wo: Vec3A, wi: Vec3A) -> 
 /// A microfacet normal distributed as the GGX normals visible from `wo` (upper hemisphere):
 /// stretch `wo` to the unit-roughness configuration, sample the projected hemisphere there,
 /// unstretch.
-fn sample_visible_normal(wo: Vec3A, alpha: f32, u: Vec2) -> Vec3A {
+pub(super) fn sample_visible_normal(wo: Vec3A, alpha: f32, u: Vec2) -> Vec3A {
     let v = Vec3A::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
     let len2 = v.x * v.x + v.y * v.y;
     let t1 = if len2 > 0.0 {

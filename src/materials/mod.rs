@@ -1,6 +1,7 @@
 //! BSDFs. A material evaluated at a hit becomes a [`Bsdf`] (plain `Copy` data, no heap) in a
 //! shading frame. Directions are world-space unit vectors pointing away from the surface.
 
+mod coated;
 mod dielectric;
 mod diffuse;
 pub mod eval;
@@ -36,6 +37,13 @@ pub enum Lobes {
     Glossy {
         albedo: Vec3A,
         specular: Vec3A,
+        alpha: f32,
+    },
+    /// A dielectric coat of index `eta` over a Lambertian base (plastic); `alpha` zero: a
+    /// smooth coat (a delta reflection), else the coat's GGX alpha.
+    Coated {
+        albedo: Vec3A,
+        eta: f32,
         alpha: f32,
     },
 }
@@ -79,8 +87,12 @@ impl Bsdf {
     /// density estimate of the light arriving on it is noisy: photon methods follow camera
     /// paths through it, by BSDF sampling, to the next surface (pbrt's SPPM does so for every
     /// glossy surface).
+    ///
+    /// A coated surface is never specular (photons deposit on its base), and glossy when its
+    /// coat is sharp by the same measure or smooth: a smooth coat's mirror reflection is a
+    /// delta lobe that `f` leaves out, so a density estimate there would miss it.
     pub fn is_glossy(&self) -> bool {
-        matches!(self.lobes, Lobes::Glossy { alpha, .. } if alpha < 0.3)
+        matches!(self.lobes, Lobes::Glossy { alpha, .. } | Lobes::Coated { alpha, .. } if alpha < 0.3)
     }
 
     /// BSDF value for light arriving from `wi` and leaving toward `wo`.
@@ -99,6 +111,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::f(albedo, specular, alpha, o, i),
+            Lobes::Coated { albedo, eta, alpha } => coated::f(albedo, eta, alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => Vec3A::ZERO,
         }
     }
@@ -130,6 +143,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::pdf(albedo, specular, alpha, o, i),
+            Lobes::Coated { albedo, eta, alpha } => coated::pdf(albedo, eta, alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => 0.0,
         }
     }
@@ -149,6 +163,7 @@ impl Bsdf {
                 specular,
                 alpha,
             } => glossy::sample(albedo, specular, alpha, o, uc, u),
+            Lobes::Coated { albedo, eta, alpha } => coated::sample(albedo, eta, alpha, o, uc, u),
         }?;
         let wi = self.frame.to_world(s.wi);
         // Reject samples whose geometric side disagrees with the local decision (shading

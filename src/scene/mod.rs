@@ -19,8 +19,9 @@ pub use assets::{
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{
-    IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS, MAX_PIXELS,
-    MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem, environment_too_bright,
+    COAT_IOR_RANGE, IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES,
+    MAX_PHOTONS, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
+    environment_too_bright,
 };
 
 use std::sync::Arc;
@@ -463,6 +464,13 @@ pub enum Material {
     Glossy {
         albedo: ColorParam,
         specular: ColorParam,
+        roughness: ScalarParam,
+    },
+    /// A dielectric coat of index `ior` over a Lambertian base (plastic, varnish); a roughness
+    /// of zero is a smooth coat.
+    Coated {
+        albedo: ColorParam,
+        ior: f64,
         roughness: ScalarParam,
     },
 }

@@ -1,4 +1,4 @@
-//! `material { ... }`: the kind (diffuse, mirror, glass, glossy), its parameters, and
+//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, coated), its parameters, and
 //! materials that extend a declared one.
 
 use crate::diag::short_number;
@@ -10,7 +10,7 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
-use crate::scene::{Color, IOR_RANGE, MIN_ROUGHNESS};
+use crate::scene::{COAT_IOR_RANGE, Color, IOR_RANGE, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -39,15 +39,17 @@ fn uses(kind: &str) -> &'static [&'static str] {
         "mirror" => &["tint"],
         "glass" => &["ior", "absorb", "tint"],
         "glossy" => &["specular", "roughness"],
+        "coated" => &["ior", "roughness"],
         _ => &[],
     }
 }
 
-static MAT_PROPS: [PropSpec; 9] = [
+static MAT_PROPS: [PropSpec; 10] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
     p("glossy", 1, 1, "a color or texture", "rgb <0.5, 0.5, 0.5>"),
+    p("coated", 1, 1, "a color or texture", "rgb <0.8, 0.1, 0.1>"),
     p("ior", 1, 1, "a number", "1.5"),
     p("absorb", 1, 1, "a color", "rgb <0.1, 0.02, 0.02>"),
     p("tint", 1, 1, "a color", "rgb <1, 1, 1>"),
@@ -61,7 +63,7 @@ impl MaterialBuilder {
             return Err(vec![
                 Error::new(format!("a material is either {old} or {k}, not both"))
                     .label("second kind")
-                    .help("use one of diffuse, mirror, glass, glossy per material")
+                    .help("use one of diffuse, mirror, glass, glossy, coated per material")
                     .at(span)
                     .with_extra(old_span, "first kind here"),
             ]);
@@ -82,11 +84,12 @@ impl MaterialBuilder {
                 MatKind::Mirror(_) => "mirror",
                 MatKind::Glass { .. } => "glass",
                 MatKind::Glossy { .. } => "glossy",
+                MatKind::Coated { .. } => "coated",
             })
         });
         let Some(kind_name) = kind_name else {
             return Err(vec![
-                Error::new("a material needs a kind: diffuse, mirror, glass or glossy")
+                Error::new("a material needs a kind: diffuse, mirror, glass, glossy or coated")
                     .label("no kind given")
                     .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
                     .at(span),
@@ -181,6 +184,37 @@ impl MaterialBuilder {
                     tint: self.tint.unwrap_or(tint),
                 }
             }
+            "coated" => {
+                let (mut albedo, mut ior, mut roughness) =
+                    (ColorDef::Const(Color::splat(0.5)), 1.5, None);
+                if let Some(MatKind::Coated {
+                    albedo: a,
+                    ior: i,
+                    roughness: r,
+                }) = base
+                {
+                    (albedo, ior, roughness) = (a, i, r);
+                }
+                if let Some((i, s)) = self.ior {
+                    let (lo, hi) = COAT_IOR_RANGE;
+                    if !(lo..=hi).contains(&i) {
+                        return Err(range_error(
+                            s,
+                            format!(
+                                "a coat's ior must be from 1 to 3, found {}",
+                                short_number(i)
+                            ),
+                            "varnish, lacquer and glaze have an index of refraction near 1.5",
+                        ));
+                    }
+                    ior = i;
+                }
+                MatKind::Coated {
+                    albedo: self.albedo.unwrap_or(albedo),
+                    ior,
+                    roughness: self.roughness.or(roughness),
+                }
+            }
             _ => {
                 // An override of a declared glossy material keeps what it does not write.
                 let (albedo, specular, roughness) = match base {
@@ -267,6 +301,10 @@ impl Sink for MaterialBuilder {
             "glass" => self.set_kind("glass", kw.span)?,
             "glossy" => {
                 self.set_kind("glossy", kw.span)?;
+                self.albedo = Some(reflectance(ev, &args[0])?);
+            }
+            "coated" => {
+                self.set_kind("coated", kw.span)?;
                 self.albedo = Some(reflectance(ev, &args[0])?);
             }
             "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
