@@ -509,7 +509,13 @@ mod tests {
             let alpha = alphas[(k as usize / etas.len()) % alphas.len()];
             let albedo = Vec3A::new(rng.f32(), rng.f32(), rng.f32());
             // Every fourth direction grazes the surface.
-            let graze = |c: f32, k: u32| if k % 4 == 0 { c * 1e-5 } else { 2.0 * c - 1.0 };
+            let graze = |c: f32, k: u32| {
+                if k.is_multiple_of(4) {
+                    c * 1e-5
+                } else {
+                    2.0 * c - 1.0
+                }
+            };
             let wo = dir(graze(rng.f32(), k), 2.0 * PI * rng.f32()).normalize();
             let wi = dir(graze(rng.f32(), k / 2), 2.0 * PI * rng.f32()).normalize();
             let v = f(albedo, eta, alpha, wo, wi);
