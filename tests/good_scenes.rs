@@ -891,3 +891,34 @@ fn conductors_take_a_metal_an_index_or_artist_colours() {
     assert!(matches!(m(4), Material::Conductor { eta, roughness, .. }
         if *eta == DVec3::from(au.eta) && *roughness == 0.0));
 }
+
+/// `coated` gives a coated material: smooth without `roughness` (zero), the ior and roughness
+/// as written; an override of a declared coated material keeps what it does not write.
+#[test]
+fn coated_materials_hold_their_parameters() {
+    let s = scene(
+        "#declare Varnish = material { coated rgb <0.6, 0.3, 0.1> ior 1.4 }
+         sphere { <0, 0, 0>, 1 material { Varnish } }
+         sphere { <3, 0, 0>, 1 material { Varnish roughness 0.2 } }
+         sphere { <6, 0, 0>, 1 material { coated rgb <0.8, 0.1, 0.1> ior 1.5 roughness 0.1 } }",
+    );
+    let coats: Vec<_> = s
+        .materials
+        .iter()
+        .filter_map(|m| match m {
+            Material::Coated {
+                albedo: ColorParam::Const(a),
+                ior,
+                roughness: ScalarParam::Const(r),
+            } => Some((*a, *ior, *r)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(coats.len(), 3, "{:?}", s.materials);
+    assert!(close(coats[0].0, DVec3::new(0.6, 0.3, 0.1)));
+    assert_eq!((coats[0].1, coats[0].2), (1.4, 0.0));
+    assert!(close(coats[1].0, DVec3::new(0.6, 0.3, 0.1)));
+    assert_eq!((coats[1].1, coats[1].2), (1.4, 0.2));
+    assert!(close(coats[2].0, DVec3::new(0.8, 0.1, 0.1)));
+    assert_eq!((coats[2].1, coats[2].2), (1.5, 0.1));
+}

@@ -226,6 +226,21 @@ impl Evaluator {
                 k: *k,
                 roughness: *roughness,
             },
+            MatKind::Coated {
+                albedo,
+                ior,
+                roughness,
+            } => Material::Coated {
+                albedo: self.color_param(albedo)?,
+                ior: *ior,
+                roughness: match roughness {
+                    None => ScalarParam::Const(0.0),
+                    Some(r) => match self.color_param(r)? {
+                        ColorParam::Const(c) => ScalarParam::Const(c.x),
+                        ColorParam::Texture(t) => ScalarParam::Texture(t),
+                    },
+                },
+            },
         };
         let id = self.push_material(material);
         self.assets.materials.insert(key, (m.clone(), id));

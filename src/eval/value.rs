@@ -201,6 +201,12 @@ pub enum MatKind {
         k: Color,
         roughness: f64,
     },
+    /// No roughness: a smooth coat.
+    Coated {
+        albedo: ColorDef,
+        ior: f64,
+        roughness: Option<ColorDef>,
+    },
 }
 
 #[derive(Debug)]

@@ -34,6 +34,9 @@ pub fn is_constant(m: &Material) -> bool {
             roughness,
         } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
         Material::Conductor { .. } => true,
+        Material::Coated {
+            albedo, roughness, ..
+        } => c(albedo) && matches!(roughness, ScalarParam::Const(_)),
     }
 }
 
@@ -100,6 +103,19 @@ pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
             Lobes::Conductor {
                 eta: nonneg(color3(*eta)),
                 k: nonneg(color3(*k)),
+                alpha: r * r,
+            }
+        }
+        Material::Coated {
+            albedo,
+            ior,
+            roughness,
+        } => {
+            // Roughness zero (none given, or a texture's black) is a smooth coat.
+            let r = scalar(roughness, scene, &tc).clamp(0.0, 1.0);
+            Lobes::Coated {
+                albedo: clamp01(color(albedo, scene, &tc)),
+                eta: (*ior as f32).clamp(1.0, super::coated::MAX_ETA),
                 alpha: r * r,
             }
         }

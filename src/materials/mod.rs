@@ -4,6 +4,7 @@
 #[cfg(test)]
 mod check;
 mod conductor;
+mod coated;
 mod dielectric;
 mod diffuse;
 pub mod eval;
@@ -47,6 +48,13 @@ pub enum Lobes {
         k: Vec3A,
         alpha: f32,
     },
+    /// A dielectric coat of index `eta` over a Lambertian base (plastic); `alpha` zero: a
+    /// smooth coat (a delta reflection), else the coat's GGX alpha.
+    Coated {
+        albedo: Vec3A,
+        eta: f32,
+        alpha: f32,
+    },
 }
 
 /// A BSDF at a surface point.
@@ -84,7 +92,7 @@ impl Bsdf {
         match self.lobes {
             Lobes::Mirror { .. } | Lobes::Glass { .. } => true,
             Lobes::Conductor { alpha, .. } => alpha == 0.0,
-            Lobes::Diffuse { .. } | Lobes::Glossy { .. } => false,
+            Lobes::Diffuse { .. } | Lobes::Glossy { .. } | Lobes::Coated { .. } => false,
         }
     }
 
@@ -92,9 +100,13 @@ impl Bsdf {
     /// density estimate of the light arriving on it is noisy: photon methods follow camera
     /// paths through it, by BSDF sampling, to the next surface (pbrt's SPPM does so for every
     /// glossy surface).
+    ///
+    /// A coated surface is never specular (photons deposit on its base), and glossy when its
+    /// coat is sharp by the same measure or smooth: a smooth coat's mirror reflection is a
+    /// delta lobe that `f` leaves out, so a density estimate there would miss it.
     pub fn is_glossy(&self) -> bool {
-        matches!(self.lobes, Lobes::Glossy { alpha, .. } | Lobes::Conductor { alpha, .. }
-            if alpha > 0.0 && alpha < 0.3)
+        matches!(self.lobes, Lobes::Glossy { alpha, .. } | Lobes::Coated { alpha, .. } if alpha < 0.3)
+            || matches!(self.lobes, Lobes::Conductor { alpha, .. } if alpha > 0.0 && alpha < 0.3)
     }
 
     /// BSDF value for light arriving from `wi` and leaving toward `wo`.
@@ -114,6 +126,7 @@ impl Bsdf {
                 alpha,
             } => glossy::f(albedo, specular, alpha, o, i),
             Lobes::Conductor { eta, k, alpha } => conductor::f(eta, k, alpha, o, i),
+            Lobes::Coated { albedo, eta, alpha } => coated::f(albedo, eta, alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => Vec3A::ZERO,
         }
     }
@@ -146,6 +159,7 @@ impl Bsdf {
                 alpha,
             } => glossy::pdf(albedo, specular, alpha, o, i),
             Lobes::Conductor { alpha, .. } => conductor::pdf(alpha, o, i),
+            Lobes::Coated { albedo, eta, alpha } => coated::pdf(albedo, eta, alpha, o, i),
             Lobes::Mirror { .. } | Lobes::Glass { .. } => 0.0,
         }
     }
@@ -166,6 +180,7 @@ impl Bsdf {
                 alpha,
             } => glossy::sample(albedo, specular, alpha, o, uc, u),
             Lobes::Conductor { eta, k, alpha } => conductor::sample(eta, k, alpha, o, u),
+            Lobes::Coated { albedo, eta, alpha } => coated::sample(albedo, eta, alpha, o, uc, u),
         }?;
         let wi = self.frame.to_world(s.wi);
         // Reject samples whose geometric side disagrees with the local decision (shading

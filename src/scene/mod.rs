@@ -20,8 +20,9 @@ pub use assets::{
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use validate::{
-    IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS, MAX_PIXELS,
-    MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem, environment_too_bright,
+    COAT_IOR_RANGE, IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES,
+    MAX_PHOTONS, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
+    environment_too_bright,
 };
 
 use std::sync::Arc;
@@ -472,6 +473,13 @@ pub enum Material {
         eta: Color,
         k: Color,
         roughness: f64,
+    },
+    /// A dielectric coat of index `ior` over a Lambertian base (plastic, varnish); a roughness
+    /// of zero is a smooth coat.
+    Coated {
+        albedo: ColorParam,
+        ior: f64,
+        roughness: ScalarParam,
     },
 }
 

@@ -1,4 +1,4 @@
-//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, conductor), its parameters, and
+//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, conductor, coated), its parameters, and
 //! materials that extend a declared one.
 
 use crate::diag::short_number;
@@ -11,7 +11,7 @@ use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
 use crate::scene::metals::{MAX_ARTIST_REFLECTANCE, artist_to_eta_k, metal, metal_names};
-use crate::scene::{Color, IOR_RANGE, MIN_ROUGHNESS};
+use crate::scene::{COAT_IOR_RANGE, Color, IOR_RANGE, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -49,15 +49,17 @@ fn uses(kind: &str) -> &'static [&'static str] {
         "glass" => &["ior", "absorb", "tint"],
         "glossy" => &["specular", "roughness"],
         "conductor" => &["eta", "extinction", "reflectance", "edge_tint", "roughness"],
+        "coated" => &["ior", "roughness"],
         _ => &[],
     }
 }
 
-static MAT_PROPS: [PropSpec; 14] = [
+static MAT_PROPS: [PropSpec; 15] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
     p("glossy", 1, 1, "a color or texture", "rgb <0.5, 0.5, 0.5>"),
+    p("coated", 1, 1, "a color or texture", "rgb <0.8, 0.1, 0.1>"),
     p("ior", 1, 1, "a number", "1.5"),
     p("absorb", 1, 1, "a color", "rgb <0.1, 0.02, 0.02>"),
     p("tint", 1, 1, "a color", "rgb <1, 1, 1>"),
@@ -76,7 +78,7 @@ impl MaterialBuilder {
             return Err(vec![
                 Error::new(format!("a material is either {old} or {k}, not both"))
                     .label("second kind")
-                    .help("use one of diffuse, mirror, glass, glossy, conductor per material")
+                    .help("use one of diffuse, mirror, glass, glossy, conductor, coated per material")
                     .at(span)
                     .with_extra(old_span, "first kind here"),
             ]);
@@ -98,11 +100,12 @@ impl MaterialBuilder {
                 MatKind::Glass { .. } => "glass",
                 MatKind::Glossy { .. } => "glossy",
                 MatKind::Conductor { .. } => "conductor",
+                MatKind::Coated { .. } => "coated",
             })
         });
         let Some(kind_name) = kind_name else {
             return Err(vec![
-                Error::new("a material needs a kind: diffuse, mirror, glass, glossy or conductor")
+                Error::new("a material needs a kind: diffuse, mirror, glass, glossy, conductor or coated")
                     .label("no kind given")
                     .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
                     .at(span),
@@ -216,6 +219,37 @@ impl MaterialBuilder {
                 }
             }
             "conductor" => self.conductor(base)?,
+            "coated" => {
+                let (mut albedo, mut ior, mut roughness) =
+                    (ColorDef::Const(Color::splat(0.5)), 1.5, None);
+                if let Some(MatKind::Coated {
+                    albedo: a,
+                    ior: i,
+                    roughness: r,
+                }) = base
+                {
+                    (albedo, ior, roughness) = (a, i, r);
+                }
+                if let Some((i, s)) = self.ior {
+                    let (lo, hi) = COAT_IOR_RANGE;
+                    if !(lo..=hi).contains(&i) {
+                        return Err(range_error(
+                            s,
+                            format!(
+                                "a coat's ior must be from 1 to 3, found {}",
+                                short_number(i)
+                            ),
+                            "varnish, lacquer and glaze have an index of refraction near 1.5",
+                        ));
+                    }
+                    ior = i;
+                }
+                MatKind::Coated {
+                    albedo: self.albedo.unwrap_or(albedo),
+                    ior,
+                    roughness: self.roughness.or(roughness),
+                }
+            }
             _ => {
                 // An override of a declared glossy material keeps what it does not write.
                 let (albedo, specular, roughness) = match base {
@@ -468,6 +502,10 @@ impl Sink for MaterialBuilder {
             "extinction" => self.extinction = Some(constant_color(&args[0])?),
             "reflectance" => self.reflectance = Some(constant_color(&args[0])?),
             "edge_tint" => self.edge_tint = Some(constant_color(&args[0])?),
+            "coated" => {
+                self.set_kind("coated", kw.span)?;
+                self.albedo = Some(reflectance(ev, &args[0])?);
+            }
             "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
             "absorb" => {
                 let c = color_def(&args[0])?;

@@ -19,6 +19,9 @@ pub const MAX_COLOR: f64 = 1e9;
 pub const MIN_ROUGHNESS: f64 = 1e-3;
 /// Glass indices of refraction accepted (real materials lie from 1 to about 4).
 pub const IOR_RANGE: (f64, f64) = (1.0, 100.0);
+/// Coat indices of refraction accepted (varnishes and glazes lie from 1.3 to 2; the coated
+/// BSDF tabulates its coat's reflectance over this range).
+pub const COAT_IOR_RANGE: (f64, f64) = (1.0, 3.0);
 /// Most octaves of a noise-based pattern (each lookup pays one noise evaluation per octave).
 pub const MAX_OCTAVES: u32 = 16;
 
@@ -158,6 +161,33 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
                     "out of range",
                     "use a roughness from 0 (a polished metal) to 1",
                 ))
+            }
+        }
+        Material::Coated {
+            albedo,
+            ior,
+            roughness,
+        } => {
+            param(albedo, "albedo")?;
+            let (lo, hi) = COAT_IOR_RANGE;
+            if !(*ior >= lo && *ior <= hi) {
+                return Err(invalid(
+                    span,
+                    format!("material {index}'s coat ior {} is out of range", fmt(*ior)),
+                    "out of range",
+                    "a coat has an index of refraction from 1 to 3 (1.5 for varnish)",
+                ));
+            }
+            match roughness {
+                ScalarParam::Const(r) if *r != 0.0 && !(MIN_ROUGHNESS..=1.0).contains(r) => {
+                    Err(invalid(
+                        span,
+                        format!("material {index}'s roughness {} is out of range", fmt(*r)),
+                        "out of range",
+                        "use 0 for a smooth coat or a roughness from 0.001 to 1",
+                    ))
+                }
+                _ => Ok(()),
             }
         }
     }

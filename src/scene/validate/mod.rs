@@ -20,7 +20,8 @@ use crate::span::Span;
 mod appearance;
 
 pub use appearance::{
-    IOR_RANGE, MAX_COLOR, MAX_OCTAVES, MIN_ROUGHNESS, color_problem, environment_too_bright,
+    COAT_IOR_RANGE, IOR_RANGE, MAX_COLOR, MAX_OCTAVES, MIN_ROUGHNESS, color_problem,
+    environment_too_bright,
 };
 
 /// Largest coordinate or size in world space. Squares of it (distances, areas) stay far inside
@@ -488,6 +489,16 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
         Material::Mirror { tint } => [color(tint), None, None],
         Material::Glass { absorb, .. } => [color(absorb), None, None],
         Material::Conductor { .. } => [None, None, None],
+        Material::Coated {
+            albedo, roughness, ..
+        } => [
+            color(albedo),
+            None,
+            match roughness {
+                ScalarParam::Texture(t) => Some(t.0),
+                ScalarParam::Const(_) => None,
+            },
+        ],
         Material::Glossy {
             albedo,
             specular,
