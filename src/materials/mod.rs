@@ -3,8 +3,8 @@
 
 #[cfg(test)]
 mod check;
-mod conductor;
 mod coated;
+mod conductor;
 mod dielectric;
 mod diffuse;
 pub mod eval;

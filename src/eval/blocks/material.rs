@@ -78,7 +78,9 @@ impl MaterialBuilder {
             return Err(vec![
                 Error::new(format!("a material is either {old} or {k}, not both"))
                     .label("second kind")
-                    .help("use one of diffuse, mirror, glass, glossy, conductor, coated per material")
+                    .help(
+                        "use one of diffuse, mirror, glass, glossy, conductor, coated per material",
+                    )
                     .at(span)
                     .with_extra(old_span, "first kind here"),
             ]);
@@ -105,10 +107,12 @@ impl MaterialBuilder {
         });
         let Some(kind_name) = kind_name else {
             return Err(vec![
-                Error::new("a material needs a kind: diffuse, mirror, glass, glossy, conductor or coated")
-                    .label("no kind given")
-                    .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
-                    .at(span),
+                Error::new(
+                    "a material needs a kind: diffuse, mirror, glass, glossy, conductor or coated",
+                )
+                .label("no kind given")
+                .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
+                .at(span),
             ]);
         };
         let base = self.base.as_ref().map(|b| b.kind.clone());
