@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3A};
 
 use super::BsdfSample;
 use super::dielectric::fresnel;
-use super::glossy::{d_ggx, g1, sample_visible_normal};
+use super::glossy::{d_ggx, flip, g1, sample_visible_normal, unflipped_sample};
 use crate::sampling::cosine_hemisphere;
 
 /// The coat's index of refraction is kept in `[1, MAX_ETA]` (the tables' range).
@@ -201,15 +201,6 @@ fn clean(eta: f32, alpha: f32) -> (f32, f32) {
     (eta, alpha)
 }
 
-fn flip(wo: Vec3A, wi: Vec3A) -> (Vec3A, Vec3A) {
-    // Two-sided, as the other reflective lobes: evaluate in wo's hemisphere.
-    if wo.z < 0.0 {
-        (Vec3A::new(wo.x, wo.y, -wo.z), Vec3A::new(wi.x, wi.y, -wi.z))
-    } else {
-        (wo, wi)
-    }
-}
-
 /// The base's part of `f` (no cosine).
 fn base(albedo: Vec3A, eta: f32, alpha: f32, cos_o: f32, cos_i: f32) -> Vec3A {
     let t_o = 1.0 - coat_albedo(eta, alpha, cos_o);
@@ -303,12 +294,7 @@ pub fn sample(
         return None;
     }
     let value = f(albedo, eta, alpha, wof, wi);
-    Some(BsdfSample {
-        wi: unflip(wi),
-        weight: value * wi.z / p,
-        pdf: p,
-        specular: false,
-    })
+    Some(unflipped_sample(wo, wi, value, p))
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 use glam::{Vec2, Vec3A};
 
 use super::BsdfSample;
-use super::glossy::{d_ggx, flip, g1, sample_visible_normal};
+use super::glossy::{d_ggx, flip, g1, sample_visible_normal, unflipped_sample};
 
 /// GGX `alpha` below which the rough lobe's density overflows `f32` near the peak: rough
 /// lobes use at least this much (glossy.rs keeps the same floor).
@@ -94,17 +94,7 @@ pub fn sample(eta: Vec3A, k: Vec3A, alpha: f32, wo: Vec3A, u: Vec2) -> Option<Bs
         return None;
     }
     let value = f(eta, k, alpha, wof, wi);
-    let wi = if wo.z < 0.0 {
-        Vec3A::new(wi.x, wi.y, -wi.z)
-    } else {
-        wi
-    };
-    Some(BsdfSample {
-        wi,
-        weight: value * wi.z.abs() / p,
-        pdf: p,
-        specular: false,
-    })
+    Some(unflipped_sample(wo, wi, value, p))
 }
 
 #[cfg(test)]

@@ -124,17 +124,23 @@ pub fn sample(
         return None;
     }
     let value = f(albedo, specular, alpha, wof, wi);
+    Some(unflipped_sample(wo, wi, value, p))
+}
+
+/// A non-specular sample `wi` chosen in `wo`'s hemisphere (see [`flip`]), turned back to
+/// `wo`'s side, with the weight `f |cos| / pdf`.
+pub(super) fn unflipped_sample(wo: Vec3A, wi: Vec3A, value: Vec3A, pdf: f32) -> BsdfSample {
     let wi = if wo.z < 0.0 {
         Vec3A::new(wi.x, wi.y, -wi.z)
     } else {
         wi
     };
-    Some(BsdfSample {
+    BsdfSample {
         wi,
-        weight: value * wi.z.abs() / p,
-        pdf: p,
+        weight: value * wi.z.abs() / pdf,
+        pdf,
         specular: false,
-    })
+    }
 }
 
 #[cfg(test)]

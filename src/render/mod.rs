@@ -74,12 +74,20 @@ pub fn render_prepared(
     let flag = if watched { &stop } else { cancel };
     let cancelled =
         || cancel.load(Ordering::Relaxed) || other.is_some_and(|o| o.load(Ordering::Relaxed));
+    // A cancel raised from the progress callback stops the next iteration, as when the
+    // integrator watches `cancel` itself (the watchdog would see it only later).
+    let mut progress = |p: &Progress| {
+        on_progress(p);
+        if watched && cancelled() {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
     let mut run = || {
         integrator.render(integrators::Job {
             scene: prepared,
             settings,
             cancel: flag,
-            on_progress: &mut *on_progress,
+            on_progress: &mut progress,
         })
     };
     let out = std::thread::scope(|s| {
