@@ -6,26 +6,8 @@ use std::sync::atomic::AtomicBool;
 use glam::DVec3;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, Loaded, Severity, load_source};
-
-fn load(text: &str) -> Loaded {
-    let l = load_source("test.scn", text, &EvalOptions::default());
-    assert!(
-        !l.has_errors(),
-        "{}",
-        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
-    );
-    l
-}
-
-/// The `#debug` messages of a load, in order.
-fn debug(l: &Loaded) -> Vec<String> {
-    l.diagnostics
-        .iter()
-        .filter(|d| d.severity == Severity::Note)
-        .map(|d| d.message.clone())
-        .collect()
-}
+mod common;
+use common::{debug, load};
 
 /// Each sphere's centre, in scene order.
 fn centres(s: &Scene) -> Vec<DVec3> {

@@ -354,3 +354,23 @@ pub fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
     assert_eq!(out.iterations_done, iterations);
     out.image
 }
+
+/// `text` loaded as a scene file, with no errors (they are printed otherwise).
+pub fn load(text: &str) -> sppm_lang::Loaded {
+    let l = sppm_lang::load_source("test.scn", text, &sppm_lang::EvalOptions::default());
+    assert!(
+        !l.has_errors(),
+        "{}",
+        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
+    );
+    l
+}
+
+/// The `#debug` messages of a load, in order.
+pub fn debug(l: &sppm_lang::Loaded) -> Vec<String> {
+    l.diagnostics
+        .iter()
+        .filter(|d| d.severity == sppm_lang::Severity::Note)
+        .map(|d| d.message.clone())
+        .collect()
+}
