@@ -165,3 +165,84 @@ fn wide_strings_cost_their_length() {
     let l = load_source("narrow.scn", &text.replace("100000", "10"), &options);
     assert!(!l.has_errors(), "{:?}", l.diagnostics);
 }
+
+/// User functions as POV-Ray writes them: named parameters or the implicit x, y, z, the
+/// function language's maths, constants captured when the function is defined, calls of
+/// earlier functions, and calls wherever a number stands.
+#[test]
+fn user_functions_compute_where_numbers_stand() {
+    let shown = debug_lines(
+        "#declare K = 2;
+         #declare F = function(a, b) { a * K + b };
+         #declare K = 100;
+         #declare Len = function { sqrt(x*x + y*y + z*z) };
+         #declare G = function(t) { F(t, 1) * 2 + Len(t, 0, 0) };
+         #declare S = function(a) { select(a, -1, 1) + select(a, 10, 20, 30) };
+         #declare M = function(a, b) { mod(a, b) + pow(a, 2) + min(a, b, 0) + max(a, b) };
+         #declare C = function(a) { (a > 1 ? 5 : 7) + (a == 3) + atan2(0, -1) / pi + abs(-a) };
+         #declare H = function(u) { div(u, 2) + int(-u / 2) + floor(u / 2) + ceil(u / 2) };
+         #debug str(F(3, 4), 0, 3)
+         #debug str(Len(3, 4, 12), 0, 3)
+         #debug str(G(3), 0, 3)
+         #debug str(S(-2), 0, 0)
+         #debug str(S(0), 0, 0)
+         #debug str(S(2), 0, 0)
+         #debug str(M(7, 3), 0, 3)
+         #debug str(C(3), 0, 3)
+         #debug str(C(1), 0, 3)
+         #debug str(H(7), 0, 0)
+         sphere { <F(1, 0), 0, 0>, Len(0, 0.5, 0) }",
+    );
+    assert_eq!(
+        shown,
+        [
+            "10.000", "13.000", "17.000", "9", "21", "31", "57.000", "10.000", "9.000", "7"
+        ]
+    );
+}
+
+/// A function declared in a macro with `#local` sees the macro's arguments as constants; the
+/// sphere's radius and position come from function calls.
+#[test]
+fn functions_in_macros_and_objects() {
+    let l = load(
+        "#macro Scaled(S) #local F = function(a) { a * S }; F(2) #end
+         #declare Half = function(v) { v / 2 };
+         sphere { <Scaled(3), Half(4), 0>, Half(1) }
+         #debug str(Scaled(5), 0, 1)",
+    );
+    let o = &l.scene.as_ref().unwrap().objects[0];
+    let Shape::Sphere { center, radius } = o.shape else {
+        panic!("{:?}", o.shape)
+    };
+    let c = o.transform.transform_point3(center);
+    assert!((c - DVec3::new(6.0, 2.0, 0.0)).length() < 1e-12, "{c}");
+    assert!((radius * o.transform.matrix3.x_axis.length() - 0.5).abs() < 1e-12);
+}
+
+/// `function { pattern { ... } }`: the pattern's value at (x, y, z), 0 or 1 for checker,
+/// the sawtooth for gradient, with the block's transforms.
+#[test]
+fn pattern_functions_give_the_pattern_value() {
+    let shown = debug_lines(
+        "#declare P = function { pattern { checker } };
+         #declare Q = function { pattern { checker scale 2 } };
+         #declare R = function { pattern { gradient x } };
+         #declare B = function { pattern { brick size <1, 1, 1> mortar 0.2 } };
+         #declare N = function { pattern { noise octaves 3 } };
+         #declare T = function(a, b, c) { P(a, b, c) * 10 + R(a, 0, 0) };
+         #debug str(P(0.5, 0.5, 0.5), 0, 0)
+         #debug str(P(1.5, 0.5, 0.5), 0, 0)
+         #debug str(Q(1.5, 0.5, 0.5), 0, 0)
+         #debug str(R(2.25, 7, 7), 0, 2)
+         #debug str(B(0.5, 0.5, 0.25), 0, 0)
+         #debug str(B(0.5, 0.02, 0.25), 0, 0)
+         #debug str(T(1.25, 0.5, 0.5), 0, 2)
+         #declare V = N(0.3, 0.6, 0.9);
+         #if (V >= 0 & V <= 1 & V != N(1.3, 0.6, 0.9)) #debug \"noise in [0, 1]\" #end",
+    );
+    assert_eq!(
+        shown,
+        ["0", "1", "0", "0.25", "1", "0", "10.25", "noise in [0, 1]"]
+    );
+}

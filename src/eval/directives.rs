@@ -42,8 +42,11 @@ impl Evaluator {
                     &value.kind,
                     ExprKind::Block { kind, .. } if kind.text == "camera"
                 );
+                self.defining =
+                    matches!(value.kind, ExprKind::Function(_)).then(|| name.text.clone());
                 let v = self.eval(value);
                 self.camera_from_defaults = false;
+                self.defining = None;
                 let v = match v {
                     Ok(v) => v,
                     Err(e) => {

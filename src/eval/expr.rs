@@ -89,8 +89,10 @@ impl Evaluator {
             }
             ExprKind::Block { kind, items } => self.eval_block(kind, items, e.span)?,
             ExprKind::Call { name, args } => {
-                if let Some(Value::Macro(m)) = self.lookup_quiet(&name.text) {
-                    return self.call_macro_value(&m, name, args, e.span);
+                match self.lookup_quiet(&name.text) {
+                    Some(Value::Macro(m)) => return self.call_macro_value(&m, name, args, e.span),
+                    Some(Value::Function(f)) => return self.call_function(&f, name, args, e.span),
+                    _ => {}
                 }
                 if let Some(r) = self.call_random(name, args, e.span) {
                     return r;
@@ -123,6 +125,23 @@ impl Evaluator {
                     // A macro of an include that failed to parse: its error is reported.
                     None if self.poisoned.contains(&name.text) => return Err(super::silent()),
                     None => {
+                        if let Some(v) = self.lookup_quiet(&name.text) {
+                            return Err(vec![
+                                Error::new(format!(
+                                    "`{}` is {}, not a function",
+                                    name.text,
+                                    v.type_name()
+                                ))
+                                .label("called here")
+                                .help(format!(
+                                    "only macros and functions are called with `(...)`; a \
+                                     function is declared with `#declare {} = function(x, y, \
+                                     z) {{ ... }};`",
+                                    name.text
+                                ))
+                                .at(name.span),
+                            ]);
+                        }
                         let mut err = Error::new(format!("unknown function `{}`", name.text))
                             .label("no built-in function or macro of this name");
                         let mut cands: Vec<&str> = FUNCTIONS.to_vec();
@@ -199,6 +218,7 @@ impl Evaluator {
                 let vb = self.eval(base)?;
                 field_value(vb, &field.text).at(field.span)?
             }
+            ExprKind::Function(def) => self.define_function(def, e.span)?,
         })
     }
 }

@@ -20,6 +20,8 @@ mod blocks;
 mod builtins;
 mod directives;
 mod expr;
+mod function;
+mod function_pattern;
 mod include;
 mod lower;
 mod macros;
@@ -36,6 +38,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 pub use builtins::{CONSTANTS, FUNCTIONS};
+pub use function::compile_function;
 pub use value::Value;
 
 use crate::diag::{Diagnostic, Error, SourceResult, suggest};
@@ -407,6 +410,9 @@ pub(crate) struct Evaluator {
     /// Set while the value of a `#declare`/`#local` that is a camera block is evaluated: that
     /// block starts from the default camera (taken by the block).
     pub(crate) camera_from_defaults: bool,
+    /// The name a `#declare`/`#local` of a function binds, while the function is compiled: its
+    /// body may not call it.
+    pub(crate) defining: Option<String>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
     /// The evaluation thread's stack (bytes): it bounds the nesting ([`nesting_limit`]).
@@ -496,6 +502,7 @@ impl Evaluator {
             block_depth: 0,
             warning_count: 0,
             camera_from_defaults: false,
+            defining: None,
             stack: EVAL_STACK,
             parts_copied: 0,
             source_bytes: 0,

@@ -4,13 +4,15 @@
 use std::cell::RefCell;
 use std::path::PathBuf;
 use std::rc::Rc;
+use std::sync::Arc;
 
 use glam::{DAffine3, DVec2, DVec3};
 
 use crate::diag::Error;
 use crate::sampling::SplitMix64;
 use crate::scene::{
-    Camera, Color, ColorMap, CsgOp, Emission, Light, Mapping, Pattern, Settings, Shape, Wrap,
+    Camera, Color, ColorMap, CsgOp, Emission, Function, Light, Mapping, Pattern, Settings, Shape,
+    Wrap,
 };
 use crate::span::Span;
 use crate::syntax::ast::MacroDef;
@@ -38,6 +40,24 @@ pub enum Value {
     /// A random stream (`seed(n)`): every copy of the value draws from the same stream, as
     /// POV-Ray's stream handles do, so a macro given a stream advances the caller's.
     Stream(Rc<RefCell<SplitMix64>>),
+    /// A user function (`function(x, y, z) { ... }`), compiled.
+    Function(Rc<FunctionValue>),
+}
+
+/// A compiled user function with the names of its parameters (for messages) and where it was
+/// defined.
+#[derive(Debug)]
+pub struct FunctionValue {
+    pub code: Arc<Function>,
+    pub params: Vec<String>,
+    pub span: Span,
+}
+
+impl FunctionValue {
+    /// How a call is written: `F(x, y, z)`.
+    pub fn signature(&self, name: &str) -> String {
+        format!("{name}({})", self.params.join(", "))
+    }
 }
 
 impl Value {
@@ -62,6 +82,7 @@ impl Value {
             Value::Environment(_) => "an environment",
             Value::Macro(_) => "a macro",
             Value::Stream(_) => "a random stream",
+            Value::Function(_) => "a function",
         }
     }
 
@@ -94,6 +115,10 @@ impl Value {
             Value::Str(_) => Err(self
                 .mismatch("a number")
                 .help("write the number without quotes, e.g. `1.5`")),
+            Value::Function(f) => Err(self.mismatch("a number").help(format!(
+                "a function stands for its value only when called: `{}` with numbers",
+                f.signature("F")
+            ))),
             v => Err(v.mismatch("a number").help("write a number, e.g. `1.5`")),
         }
     }

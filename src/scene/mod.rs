@@ -9,9 +9,12 @@
 
 mod assets;
 mod csg;
+pub mod function;
 pub mod metals;
+pub mod noise;
 mod obj;
 mod obj_errors;
+pub mod pattern_value;
 mod validate;
 
 pub use assets::{
@@ -19,6 +22,8 @@ pub use assets::{
     MeshData, brightest_pixel, load_image, load_image_within, load_obj, srgb_to_linear,
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
+pub use function::{Function, FunctionError, Op};
+pub use pattern_value::{PatternFn, PatternKind};
 pub use validate::{
     COAT_IOR_RANGE, IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES,
     MAX_PHOTONS, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,

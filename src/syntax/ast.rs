@@ -189,4 +189,15 @@ pub enum ExprKind {
     Conditional(Box<[Expr; 3]>),
     Index(Box<Expr>, Box<Expr>),
     Field(Box<Expr>, Name),
+    /// `function(a, b) { body }` (POV-Ray's user function).
+    Function(Rc<FunctionDef>),
+}
+
+/// A user function as written: its parameters (`None`: POV-Ray's implicit `x, y, z`) and body.
+#[derive(Debug)]
+pub struct FunctionDef {
+    pub params: Option<Vec<Name>>,
+    pub body: Expr,
+    /// The `function` word.
+    pub keyword: Span,
 }

@@ -192,23 +192,7 @@ impl Cx {
                     .into_inner()
                     .map(|p| self.name(p))
                     .collect();
-                // By name (a macro may have thousands of parameters).
-                let mut seen: std::collections::HashMap<&str, &Name> = Default::default();
-                for p in &params {
-                    if let Some(first) = seen.get(p.text.as_str()).copied() {
-                        self.errors.borrow_mut().push(
-                            Diagnostic::error(
-                                p.span,
-                                format!("macro parameter `{}` is named twice", p.text),
-                            )
-                            .with_label("second parameter of this name")
-                            .with_extra(first.span, "first one")
-                            .with_help("give each parameter its own name"),
-                        );
-                    } else {
-                        seen.insert(&p.text, p);
-                    }
-                }
+                self.distinct(&params, "macro");
                 let body = self.items(inner.next().unwrap());
                 DirectiveKind::Macro(Rc::new(MacroDef { name, params, body }))
             }
@@ -423,6 +407,12 @@ impl Cx {
                 // span is the name's own (`named` also covers the blanks after it).
                 let mut i = pair.into_inner();
                 let name = i.next().unwrap();
+                if name.as_rule() == Rule::fn_kw {
+                    return Expr {
+                        span,
+                        kind: ExprKind::Function(Rc::new(self.function(name, i))),
+                    };
+                }
                 match i.next() {
                     None => {
                         return Expr {
@@ -449,6 +439,51 @@ impl Cx {
 }
 
 impl Cx {
+    /// Reports a parameter named twice (by name: a macro may have thousands of parameters).
+    fn distinct(&self, params: &[Name], what: &str) {
+        let mut seen: std::collections::HashMap<&str, &Name> = Default::default();
+        for p in params {
+            if let Some(first) = seen.get(p.text.as_str()).copied() {
+                self.errors.borrow_mut().push(
+                    Diagnostic::error(
+                        p.span,
+                        format!("{what} parameter `{}` is named twice", p.text),
+                    )
+                    .with_label("second parameter of this name")
+                    .with_extra(first.span, "first one")
+                    .with_help("give each parameter its own name"),
+                );
+            } else {
+                seen.insert(&p.text, p);
+            }
+        }
+    }
+
+    /// `function (params)? { body }` after its `function` word.
+    fn function(&self, keyword: Pair<Rule>, mut rest: Pairs<Rule>) -> FunctionDef {
+        let keyword = self.span(&keyword);
+        let mut next = rest.next().expect("function body");
+        let params = if next.as_rule() == Rule::fn_params {
+            let params: Vec<Name> = next
+                .into_inner()
+                .next()
+                .expect("params")
+                .into_inner()
+                .map(|p| self.name(p))
+                .collect();
+            self.distinct(&params, "function");
+            next = rest.next().expect("function body");
+            Some(params)
+        } else {
+            None
+        };
+        FunctionDef {
+            params,
+            body: self.expr(next),
+            keyword,
+        }
+    }
+
     /// The text of a string literal's inside (`str_inner`) with its escapes replaced: `\"`,
     /// `\\`, `\n` and `\t`. Any other backslash is an error at it (a Windows path such as
     /// `"C:\textures\wood.png"` would otherwise silently lose its backslashes).

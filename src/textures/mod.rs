@@ -15,7 +15,8 @@
 pub mod environment;
 pub mod image;
 pub mod mapping;
-pub mod noise;
+/// Perlin noise lives with the scene's pattern values (a compiled function evaluates it too).
+pub use crate::scene::noise;
 pub mod patterns;
 pub mod sky;
 

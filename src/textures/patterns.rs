@@ -10,28 +10,14 @@ use glam::{DVec3, Vec3A};
 
 use crate::scene::{Color, ColorMap};
 
-/// Offset added before taking cell indices (POV-Ray does the same for its checker).
-pub const EDGE_NUDGE: f64 = 1e-5;
-
-#[inline]
-fn cell(x: f64) -> i64 {
-    // The saturating cast keeps huge coordinates in range (and NaN is 0); parity is all that
-    // matters, and two's complement keeps it right for negatives.
-    floor_i64(x + EDGE_NUDGE) & 1
-}
-
-/// `floor` as an integer, by conversion (no libm call); saturates for huge values, NaN is 0.
-#[inline]
-pub fn floor_i64(x: f64) -> i64 {
-    let i = x as i64;
-    if (i as f64) > x { i - 1 } else { i }
-}
+pub use crate::scene::pattern_value::{EDGE_NUDGE, floor_i64};
+use crate::scene::pattern_value::{brick_joint, cell, checker_value};
 
 /// Unit cubes alternating between `a` (the cube at the origin) and `b`. On 2-D mappings
 /// (`z = 0`) a checkerboard of unit squares.
 #[inline]
 pub fn checker(p: DVec3, a: Color, b: Color) -> Vec3A {
-    if (cell(p.x) + cell(p.y) + cell(p.z)) % 2 == 0 {
+    if checker_value(p) == 0.0 {
         a.as_vec3a()
     } else {
         b.as_vec3a()
@@ -63,26 +49,7 @@ pub fn gradient(p: DVec3, direction: DVec3, map: &ColorMap) -> Vec3A {
 /// other row), so a wall in the x-y plane shows whole bricks and the side faces of a box show
 /// the bond. Sizes that are not positive and finite fall back to POV-Ray's `<8, 3, 4.5>`.
 pub fn brick(p: DVec3, brick: Color, mortar: Color, size: DVec3, mortar_width: f64) -> Vec3A {
-    let ok = |s: f64, d: f64| if s.is_finite() && s > 0.0 { s } else { d };
-    let size = DVec3::new(ok(size.x, 8.0), ok(size.y, 3.0), ok(size.z, 4.5));
-    let m = if mortar_width.is_finite() {
-        mortar_width.max(0.0)
-    } else {
-        0.0
-    };
-    let half = 0.5 * m;
-    let row = (p.y / size.y).floor();
-    let odd = (row as i64) & 1 == 1;
-    let within = |x: f64, s: f64| {
-        let f = x - s * (x / s).floor();
-        // NaN (non-finite input) reads as mortar-free brick.
-        f < half || f > s - half
-    };
-    let shift = if odd { 0.5 } else { 0.0 };
-    let joint = within(p.y, size.y)
-        || within(p.x + shift * size.x, size.x)
-        || within(p.z + (0.25 + shift) * size.z, size.z);
-    if joint {
+    if brick_joint(p, size, mortar_width) {
         mortar.as_vec3a()
     } else {
         brick.as_vec3a()
