@@ -24,11 +24,26 @@ pub struct Camera {
 impl Camera {
     /// The camera of a scene, for an image of `width` x `height` pixels. The checks are the
     /// scene's own ([`scene::Camera::validate`]): the one place a camera is validated.
-    pub fn new(c: &scene::Camera, width: u32, height: u32) -> Result<Self, scene::Invalid> {
+    ///
+    /// With `handedness` left (or a camera `right` with a positive x) the screen's x axis is
+    /// mirrored: the image is the mirror image of the right-handed camera's, which is exactly
+    /// the picture of the scene with every x coordinate negated (and every rotation, pattern,
+    /// uv and winding with it), since a mirror maps the scene's light transport onto itself.
+    pub fn new(
+        c: &scene::Camera,
+        handedness: scene::Handedness,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, scene::Invalid> {
         c.validate()?;
         let fwd = (c.look_at - c.location).normalize();
         let right = fwd.cross(c.up).normalize();
         let up = right.cross(fwd);
+        let right = if c.mirrored(handedness) {
+            -right
+        } else {
+            right
+        };
         let half_h = (c.fov.to_radians() * 0.5).tan() as f32;
         let half_w = half_h * width as f32 / height.max(1) as f32;
         let focus = c

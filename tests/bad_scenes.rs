@@ -56,9 +56,9 @@ fn first_error(text: &str) -> (String, String) {
 
 /// POV-Ray habits and near-misses that parsed as something else, or got the wrong advice: a
 /// directive's word is a whole word (`#elseif` was `#else` followed by a call `if(...)`, and the
-/// scene was accepted), bare POV-Ray words get their spelling here, and `right -x*4/3` (a
-/// subtraction to the parser) is recognised by its first word; the built-in constants cannot
-/// be declared.
+/// scene was accepted), bare POV-Ray words get their spelling here, and `direction -z*2` (a
+/// subtraction to the parser) is recognised by its first word; the built-in
+/// constants cannot be declared.
 #[test]
 fn pov_habits_get_their_spelling_here() {
     let cases: [(&str, &str); 23] = [
@@ -77,8 +77,8 @@ fn pov_habits_get_their_spelling_here() {
             "remove `shadowless`",
         ),
         (
-            "camera { location <0, 0, -5> right -x*4/3 }\n",
-            "remove `right`",
+            "camera { location <0, 0, -5> direction -z*2 }\n",
+            "`look_at <point>`",
         ),
         (
             "camera { location <0, 0, -5> perspective }\n",

@@ -140,7 +140,7 @@ fn textured_furnace_gives_albedo_per_texel() {
     scene.textures.push(tex);
     let img = run(&scene, 64, 2_000);
     let prepared = PreparedScene::new(&scene).unwrap();
-    let camera = Camera::new(&scene.camera, res, res).unwrap();
+    let camera = Camera::new(&scene.camera, scene.settings.handedness, res, res).unwrap();
     let albedo_at = |x: u32, y: u32, j: Vec2| -> Option<f32> {
         let ray = camera.ray(x, y, j, Vec2::splat(0.5));
         let sh = prepared.intersect(&ray, f32::INFINITY)?;

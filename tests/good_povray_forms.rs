@@ -245,4 +245,235 @@ fn pattern_functions_give_the_pattern_value() {
         shown,
         ["0", "1", "0", "0.25", "1", "0", "10.25", "noise in [0, 1]"]
     );
+/// The image of `text` rendered with the scene's own settings (seed, iterations, integrator).
+fn render_image(text: &str) -> sppm_lang::film::Image {
+    let scene = load(text).scene.unwrap();
+    let opts = sppm_lang::render::RenderOptions::default();
+    sppm_lang::render::render(
+        &scene,
+        &opts,
+        &std::sync::atomic::AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap()
+    .image
+}
+
+/// The largest difference of one channel of one pixel between two images of the same size.
+fn max_difference(a: &sppm_lang::film::Image, b: &sppm_lang::film::Image) -> f64 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// A POV-Ray scene as POV-Ray writes it (left-handed: x to the right of a camera looking along
+/// +z): objects off the axis, a box turned about all three axes, a checker floor and a
+/// gradient on the box (procedural patterns, which mirror by hand only with the texture),
+/// a triangle, a mirror ball and a light to one side. `extra` goes into `settings`,
+/// `camera` into the camera.
+fn povray_scene(extra: &str, camera: &str) -> String {
+    format!(
+        "settings {{ resolution <40, 30> iterations 2 seed 5 integrator whitted {extra} }}
+         camera {{ location <1.5, 2, -5> look_at <0.3, 0.6, 0> fov 45 {camera} }}
+         light {{ <3, 4, -2> intensity 60 }}
+         plane {{ y, 0 material {{ diffuse texture {{
+             checker rgb 0.8, rgb <0.1, 0.3, 0.1> scale 0.7 }} }} }}
+         box {{ <-0.5, 0, -0.5>, <0.5, 1, 0.5> rotate <10, 30, 20> translate <1.2, 0.2, 0.5>
+                material {{ diffuse texture {{ gradient x
+                    color_map {{ [0, rgb <1, 0, 0>] [1, rgb <0, 0, 1>] }} scale 0.4 }} }} }}
+         sphere {{ <-1, 0.6, 0.3>, 0.6 material {{ mirror rgb 0.8 }} }}
+         triangle {{ <-2.5, 0, 1>, <-0.8, 2, 1.5>, <0.2, 0.3, 2>
+                     material {{ diffuse rgb <0.2, 0.4, 0.8> }} }}"
+    )
+}
+
+/// The same scene mirrored by hand into right-handed coordinates: every x negated, the angles
+/// of the rotations about y and z negated, two vertices of the triangle exchanged (its facing
+/// side), and `scale <-1, 1, 1>` after each pattern's transforms (a checker and a gradient are
+/// not symmetric about x = 0).
+const HAND_MIRRORED: &str = "
+    settings { resolution <40, 30> iterations 2 seed 5 integrator whitted }
+    camera { location <-1.5, 2, -5> look_at <-0.3, 0.6, 0> fov 45 }
+    light { <-3, 4, -2> intensity 60 }
+    plane { y, 0 material { diffuse texture {
+        checker rgb 0.8, rgb <0.1, 0.3, 0.1> scale 0.7 scale <-1, 1, 1> } } }
+    box { <-0.5, 0, -0.5>, <0.5, 1, 0.5> rotate <10, -30, -20> translate <-1.2, 0.2, 0.5>
+          material { diffuse texture { gradient x
+              color_map { [0, rgb <1, 0, 0>] [1, rgb <0, 0, 1>] } scale 0.4 scale <-1, 1, 1> } } }
+    sphere { <1, 0.6, 0.3>, 0.6 material { mirror rgb 0.8 } }
+    triangle { <2.5, 0, 1>, <-0.2, 0.3, 2>, <0.8, 2, 1.5>
+               material { diffuse rgb <0.2, 0.4, 0.8> } }";
+
+/// `settings { handedness left }` renders a POV-Ray scene's numbers as the hand-mirrored
+/// right-handed twin renders: the same picture, pixel for pixel, with the same seed (the
+/// camera's rays are exact mirror images, so only rounding could differ: within 1e-6).
+/// Unmirrored, the same numbers give another picture.
+#[test]
+fn handedness_left_renders_the_hand_mirrored_twin() {
+    let left = render_image(&povray_scene("handedness left", ""));
+    let twin = render_image(HAND_MIRRORED);
+    let d = max_difference(&left, &twin);
+    assert!(d <= 1e-6, "left-handed vs hand-mirrored: {d}");
+    let right = render_image(&povray_scene("", ""));
+    let d = max_difference(&left, &right);
+    assert!(d > 0.1, "mirroring changed nothing: {d}");
+}
+
+/// A camera `right` says which way the picture faces for itself, as in POV-Ray: `right <-1.33,
+/// 0, 0>` (POV-Ray's right-handed camera) is not mirrored again under `handedness left`, and
+/// `right <1.33, 0, 0>` (POV-Ray's default) gives the left-handed picture without the setting.
+#[test]
+fn a_camera_right_vector_sets_the_handedness_once() {
+    let native = render_image(&povray_scene("", ""));
+    let right_handed = render_image(&povray_scene("handedness left", "right <-1.33, 0, 0>"));
+    assert_eq!(max_difference(&native, &right_handed), 0.0);
+    let left = render_image(&povray_scene("handedness left", ""));
+    let pov_default = render_image(&povray_scene("", "right x*4/3"));
+    assert_eq!(max_difference(&left, &pov_default), 0.0);
+    let right_left = render_image(&povray_scene("handedness right", "right -x*4/3"));
+    assert_eq!(max_difference(&native, &right_left), 0.0);
+}
+
+/// The roughness here of a POV-Ray highlight of exponent `e` (`specular`: 1 / roughness,
+/// `phong_size n`: about 4n): Walter et al.'s Beckmann alpha sqrt(2 / (e + 2)), alpha being
+/// roughness² here (docs/povray.md, "Finishes").
+fn roughness_of_exponent(e: f64) -> f64 {
+    (2.0 / (e + 2.0)).sqrt().sqrt()
+}
+
+/// The coat ior whose head-on reflection is POV-Ray's `reflection f`.
+fn ior_of_reflection(f: f64) -> f64 {
+    (1.0 + f.sqrt()) / (1.0 - f.sqrt())
+}
+
+/// The standard library's POV-Ray names: finish.inc's finishes are coats whose roughness and
+/// ior follow the documented rule from finish.inc's own numbers (to the two decimals written),
+/// an override gives one its colour, and the metals are the measured conductors.
+#[test]
+fn povray_named_materials_follow_the_finish_rule() {
+    let names = [
+        ("Dull", 1.0 / 0.15, 0.04),
+        ("Shiny", 1.0 / 0.001, 0.04),
+        ("Glossy", 1.0 / 0.0001, 0.13),
+        ("Phong_Dull", 4.0 * 1.0, 0.04),
+        ("Phong_Shiny", 4.0 * 200.0, 0.04),
+        ("Phong_Glossy", 4.0 * 300.0, 0.13),
+    ];
+    let objects: String = names
+        .iter()
+        .map(|(n, _, _)| format!("sphere {{ <0, 0, 0>, 1 material {{ {n} }} }}\n"))
+        .collect();
+    let l = load(&format!(
+        "#include \"std/materials.scn\"
+         {objects}
+         sphere {{ <0, 0, 0>, 1 material {{ Shiny coated rgb <0.6, 0, 0> }} }}
+         sphere {{ <0, 0, 0>, 1 material {{ Gold_Satin }} }}
+         sphere {{ <0, 0, 0>, 1 material {{ Gold_Metal }} }}
+         sphere {{ <0, 0, 0>, 1 material {{ Glass }} }}"
+    ));
+    assert!(l.diagnostics.is_empty(), "{:?}", l.diagnostics);
+    let s = l.scene.unwrap();
+    let m = |i: usize| s.material(s.objects[i].material).clone();
+    for (i, (name, e, f)) in names.iter().enumerate() {
+        let Material::Coated {
+            albedo: ColorParam::Const(albedo),
+            ior,
+            roughness: ScalarParam::Const(r),
+        } = m(i)
+        else {
+            panic!("{name}: {:?}", m(i))
+        };
+        assert_eq!(albedo, DVec3::splat(0.6), "{name}");
+        assert!(
+            (r - roughness_of_exponent(*e)).abs() < 0.006,
+            "{name}: roughness {r}"
+        );
+        assert!(
+            (ior - ior_of_reflection(*f)).abs() < 0.006,
+            "{name}: ior {ior}"
+        );
+    }
+    let n = names.len();
+    let Material::Coated { albedo, ior, .. } = m(n) else {
+        panic!("{:?}", m(n))
+    };
+    assert_eq!(albedo, ColorParam::Const(DVec3::new(0.6, 0.0, 0.0)));
+    assert_eq!(ior, 1.5);
+    let au = metals::metal("Au").unwrap();
+    for (i, want) in [(n + 1, 0.15), (n + 2, roughness_of_exponent(4.0 * 80.0))] {
+        let Material::Conductor { eta, k, roughness } = m(i) else {
+            panic!("{:?}", m(i))
+        };
+        assert_eq!((eta, k), (DVec3::from(au.eta), DVec3::from(au.k)));
+        assert!((roughness - want).abs() < 0.006, "roughness {roughness}");
+    }
+    assert!(matches!(m(n + 3), Material::Glass { ior, .. } if ior == 1.5));
+}
+
+/// The material and the warnings of `sphere { ... material { <mat> } }`.
+fn material_of(mat: &str) -> (Material, Vec<String>) {
+    let l = load(&format!("sphere {{ <0, 0, 0>, 1 material {{ {mat} }} }}"));
+    let warnings = l.diagnostics.iter().map(|d| d.message.clone()).collect();
+    let s = l.scene.unwrap();
+    (s.material(s.objects[0].material).clone(), warnings)
+}
+
+/// POV-Ray's `rgbf`, `rgbt`, `rgbft`, `filter` and `transmit` on a colour material: at least
+/// half the light let through makes it a glass of index 1 tinted by filter · colour +
+/// transmit, with a warning that says so; less is dropped, with a warning; none is no change.
+#[test]
+fn povray_filter_and_transmit_become_glass() {
+    let glass = |tint: DVec3| Material::Glass {
+        ior: 1.0,
+        absorb: ColorParam::Const(DVec3::ZERO),
+        tint,
+    };
+    for (mat, tint) in [
+        (
+            "diffuse rgbf <1, 0.5, 0.5, 0.9>",
+            DVec3::new(0.9, 0.45, 0.45),
+        ),
+        (
+            "diffuse rgb <1, 0.5, 0.5> filter 0.9",
+            DVec3::new(0.9, 0.45, 0.45),
+        ),
+        ("coated rgbt <1, 0, 0, 0.7>", DVec3::splat(0.7)),
+        ("glossy rgb <1, 0, 0> transmit 0.7", DVec3::splat(0.7)),
+        (
+            "diffuse rgbft <1, 0.5, 0, 0.4, 0.2>",
+            DVec3::new(0.6, 0.4, 0.2),
+        ),
+        ("mirror rgbf 1", DVec3::ONE),
+        // The property wins over the colour's component.
+        ("diffuse rgbf <1, 1, 1, 0.2> filter 0.8", DVec3::splat(0.8)),
+    ] {
+        let (m, warnings) = material_of(mat);
+        let want = glass(tint);
+        let close = match (&m, &want) {
+            (Material::Glass { tint: a, ior, .. }, Material::Glass { tint: b, .. }) => {
+                *ior == 1.0 && (*a - *b).abs().max_element() < 1e-12
+            }
+            _ => false,
+        };
+        assert!(close, "{mat}: {m:?}");
+        assert_eq!(warnings.len(), 1, "{mat}: {warnings:?}");
+        assert!(
+            warnings[0].contains("makes this a glass"),
+            "{mat}: {warnings:?}"
+        );
+    }
+    let (m, warnings) = material_of("diffuse rgb <1, 0, 0> transmit 0.2");
+    assert!(matches!(m, Material::Diffuse { .. }), "{m:?}");
+    assert!(warnings[0].contains("dropped"), "{warnings:?}");
+    let (m, warnings) = material_of("diffuse rgbf <1, 0, 0, 0>");
+    assert_eq!(
+        m,
+        Material::Diffuse {
+            albedo: ColorParam::Const(DVec3::X)
+        }
+    );
+    assert!(warnings.is_empty(), "{warnings:?}");
 }

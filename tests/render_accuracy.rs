@@ -77,7 +77,7 @@ fn furnace_c_sphere_in_emitting_enclosure() {
     let img = run(&scene, 1024, 100);
     assert_finite(&img);
     // Classify pixels by whether all four corners hit the unit sphere (or none does).
-    let cam = Camera::new(&scene.camera, res, res).unwrap();
+    let cam = Camera::new(&scene.camera, scene.settings.handedness, res, res).unwrap();
     let sphere = Sphere::new(glam::Vec3A::ZERO, 1.0).unwrap();
     let class = |x: u32, y: u32| {
         let hits = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]

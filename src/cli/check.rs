@@ -258,7 +258,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     ));
     let c = &s.camera;
     out.push_str(&format!(
-        "camera: location <{}, {}, {}> look_at <{}, {}, {}> fov {}{}\n",
+        "camera: location <{}, {}, {}> look_at <{}, {}, {}> fov {}{}{}\n",
         c.location.x,
         c.location.y,
         c.location.z,
@@ -270,6 +270,11 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
             format!(" aperture {}", c.aperture)
         } else {
             String::new()
+        },
+        if c.mirrored(s.settings.handedness) {
+            ", left-handed (+x on the right)"
+        } else {
+            ""
         }
     ));
     let st = &s.settings;

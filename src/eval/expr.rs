@@ -239,6 +239,7 @@ fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
         (UnOp::Neg, Value::Color(a)) => Value::Color(-a),
         (UnOp::Not, v) => Value::Bool(!v.truthy()?),
         (UnOp::Rgb, v) => Value::Color(v.color()?),
+        (op @ (UnOp::Rgbf | UnOp::Rgbt | UnOp::Rgbft), v) => filtered(op, v)?,
         (op, v) => {
             return Err(Error::new(format!(
                 "cannot apply `{}` to {}",
@@ -247,11 +248,52 @@ fn unary(op: UnOp, v: Value) -> Result<Value, Error> {
                     UnOp::Pos => "+",
                     UnOp::Not => "!",
                     UnOp::Rgb => "rgb",
+                    UnOp::Rgbf => "rgbf",
+                    UnOp::Rgbt => "rgbt",
+                    UnOp::Rgbft => "rgbft",
                 },
                 v.type_name()
             ))
             .help("it applies to numbers and vectors (`!` to conditions)"));
         }
+    })
+}
+
+/// POV-Ray's `rgbf <r, g, b, f>`, `rgbt <r, g, b, t>` and `rgbft <r, g, b, f, t>` (a number
+/// stands for every component, as in POV-Ray).
+fn filtered(op: UnOp, v: Value) -> Result<Value, Error> {
+    let (word, n) = match op {
+        UnOp::Rgbf => ("rgbf", 4),
+        UnOp::Rgbt => ("rgbt", 4),
+        _ => ("rgbft", 5),
+    };
+    let xs: Vec<f64> = match &v {
+        Value::Num(x) => vec![*x; n],
+        Value::Array(a) if a.len() == n => a
+            .iter()
+            .map(|x| match x {
+                Value::Num(x) => Some(*x),
+                _ => None,
+            })
+            .collect::<Option<_>>()
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    };
+    if xs.len() != n {
+        return Err(Error::new(format!(
+            "`{word}` takes {n} components, found {}",
+            v.type_name()
+        ))
+        .help(format!(
+            "write e.g. `{word} <1, 0.9, 0.9, {}>`",
+            if n == 4 { "0.8" } else { "0.5, 0.3" }
+        )));
+    }
+    let c = DVec3::new(xs[0], xs[1], xs[2]);
+    Ok(match op {
+        UnOp::Rgbf => Value::Filtered(c, xs[3], 0.0),
+        UnOp::Rgbt => Value::Filtered(c, 0.0, xs[3]),
+        _ => Value::Filtered(c, xs[3], xs[4]),
     })
 }
 

@@ -26,6 +26,10 @@ pub enum Value {
     Vec3(DVec3),
     /// A linear RGB color (`rgb <r, g, b>`).
     Color(DVec3),
+    /// POV-Ray's colour with filter and transmit (`rgbf`, `rgbt`, `rgbft`): the colour, the
+    /// filter and the transmit. Only a material's colour takes one (it makes the material a
+    /// glass, with a warning).
+    Filtered(DVec3, f64, f64),
     Array(Rc<Vec<Value>>),
     Object(Rc<ObjectDef>),
     Material(Rc<MaterialDef>),
@@ -70,6 +74,7 @@ impl Value {
             Value::Vec2(_) => "a 2-D vector",
             Value::Vec3(_) => "a vector",
             Value::Color(_) => "a color",
+            Value::Filtered(..) => "a color with filter or transmit",
             Value::Array(_) => "an array",
             Value::Object(_) => "an object",
             Value::Material(_) => "a material",

@@ -226,7 +226,7 @@ impl<'a> PreparedScene<'a> {
         scene.validate()?;
         unless(stop)?;
         let (width, height) = scene.settings.resolution;
-        let camera = Camera::new(&scene.camera, width, height)?;
+        let camera = Camera::new(&scene.camera, scene.settings.handedness, width, height)?;
         let mut shapes = Vec::new();
         let mut meshes = Vec::new();
         let mut prim_object = Vec::new();
@@ -654,7 +654,7 @@ mod tests {
             .chain([("absorbing glass", inline.scene.unwrap())])
         {
             let prepared = PreparedScene::new(&scene).unwrap();
-            let camera = Camera::new(&scene.camera, 64, 64).unwrap();
+            let camera = Camera::new(&scene.camera, scene.settings.handedness, 64, 64).unwrap();
             let bounds = prepared.bvh.bounds();
             let mut rng = Rng::new(17);
             let mut rays: Vec<Ray> = (0..64 * 64)

@@ -135,6 +135,8 @@ pub struct Settings {
     /// photons, and one BSDF-sampled gather path per pixel and iteration brings the rest from
     /// the next diffuse surface. Other integrators ignore it.
     pub final_gather: bool,
+    /// How the scene's coordinates are read (`handedness left`: POV-Ray's).
+    pub handedness: Handedness,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -157,7 +159,32 @@ impl Default for Settings {
             antialias: Antialias::Jitter,
             antialias_threshold: None,
             final_gather: false,
+            handedness: Handedness::Right,
             span: Span::detached(),
+        }
+    }
+}
+
+/// The coordinate system a scene's numbers are written in. A camera looking along +z with +y
+/// up sees +x on its left in a right-handed system and on its right in a left-handed one
+/// (POV-Ray's). Reading a scene as left-handed mirrors only the camera's screen x axis: every
+/// other number keeps its meaning, so the picture is the mirror image of the right-handed
+/// reading, as if every x coordinate (and every rotation, pattern, uv and winding with it) had
+/// been mirrored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Handedness {
+    #[default]
+    Right,
+    Left,
+}
+
+impl Handedness {
+    pub const ALL: [Handedness; 2] = [Handedness::Right, Handedness::Left];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Handedness::Right => "right",
+            Handedness::Left => "left",
         }
     }
 }
@@ -234,6 +261,11 @@ pub struct Camera {
     pub aperture: f64,
     /// Distance to the plane in focus; `None`: the distance to `look_at`.
     pub focus_distance: Option<f64>,
+    /// POV-Ray's `right` vector as written: only the sign of its x component is used, as
+    /// POV-Ray tests it against its default `up y` and `direction z` (positive: +x shows on
+    /// the right of the picture, as in a left-handed system; negative: a right-handed camera).
+    /// `None`: the scene's [`Handedness`] decides.
+    pub right: Option<DVec3>,
     /// The last `camera` block (detached when the file gave none).
     pub span: Span,
 }
@@ -247,7 +279,20 @@ impl Default for Camera {
             fov: 40.0,
             aperture: 0.0,
             focus_distance: None,
+            right: None,
             span: Span::detached(),
+        }
+    }
+}
+
+impl Camera {
+    /// Whether the picture's x axis is mirrored from the right-handed camera: the camera's own
+    /// `right` decides when it has one (so a POV-Ray camera made right-handed with
+    /// `right <-1.33, 0, 0>` is never mirrored twice), else the scene's `handedness`.
+    pub fn mirrored(&self, handedness: Handedness) -> bool {
+        match self.right {
+            Some(r) => r.x > 0.0,
+            None => handedness == Handedness::Left,
         }
     }
 }

@@ -129,6 +129,11 @@ pub enum UnOp {
     Pos,
     Not,
     Rgb,
+    /// POV-Ray's colours with filter and transmit (`rgbf <r, g, b, f>`, `rgbt <r, g, b, t>`,
+    /// `rgbft <r, g, b, f, t>`): a material's colour only.
+    Rgbf,
+    Rgbt,
+    Rgbft,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -535,7 +535,7 @@ fn expected_rules(positives: &[Rule]) -> (Vec<Rule>, bool) {
 
 fn is_keyword(word: &str) -> bool {
     SceneParser::parse(Rule::keyword, word).is_ok_and(|p| p.as_str() == word)
-        || matches!(word, "rgb" | "true" | "false")
+        || matches!(word, "rgb" | "rgbf" | "rgbt" | "rgbft" | "true" | "false")
 }
 
 fn count_openers(text: &str) -> usize {
@@ -574,19 +574,22 @@ pub(super) fn check_nesting(file: FileId, text: &str) -> SourceResult<Option<usi
     let mut i = if text.starts_with('\u{feff}') { 3 } else { 0 };
     while i < bytes.len() {
         let c = bytes[i];
-        // `rgb` is a prefix operator too: a chain of them nests like `- - - 1`.
+        // `rgb` (and `rgbf`, `rgbt`, `rgbft`) is a prefix operator too: a chain of them nests
+        // like `- - - 1`.
         let ident_byte =
             |b: Option<&u8>| b.is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_');
         if c == b'r'
-            && bytes[i..].starts_with(b"rgb")
+            && let Some(n) = [&b"rgbft"[..], b"rgbf", b"rgbt", b"rgb"]
+                .iter()
+                .find(|w| bytes[i..].starts_with(w) && !ident_byte(bytes.get(i + w.len())))
+                .map(|w| w.len())
             && !(i > 0 && ident_byte(bytes.get(i - 1)))
-            && !ident_byte(bytes.get(i + 3))
         {
             prefix_run += 1;
             if prefix_run > MAX_NESTING {
-                return Err(vec![too_deep(Span::new(file, i as u32, (i + 3) as u32))]);
+                return Err(vec![too_deep(Span::new(file, i as u32, (i + n) as u32))]);
             }
-            i += 3;
+            i += n;
             continue;
         }
         match c {

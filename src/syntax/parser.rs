@@ -347,7 +347,12 @@ impl Cx {
                     Rule::neg => UnOp::Neg,
                     Rule::pos => UnOp::Pos,
                     Rule::not => UnOp::Not,
-                    _ => UnOp::Rgb,
+                    _ => match op.as_str() {
+                        "rgbf" => UnOp::Rgbf,
+                        "rgbt" => UnOp::Rgbt,
+                        "rgbft" => UnOp::Rgbft,
+                        _ => UnOp::Rgb,
+                    },
                 };
                 Expr {
                     kind: ExprKind::Unary(op, Box::new(rhs)),

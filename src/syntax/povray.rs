@@ -47,12 +47,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov_in(
         "camera",
-        "right",
-        "POV-Ray's camera `right` is not needed here: the aspect ratio comes from \
-         `settings { resolution <w, h> }`; remove `right`",
-    ),
-    pov_in(
-        "camera",
         "direction",
         "POV-Ray's camera `direction` is `look_at <point>` and `fov degrees` here",
     ),
@@ -114,17 +108,22 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "finish",
-        "POV-Ray's `finish { ... }` is the kind of material here: \
-         `material { diffuse ... }`, `mirror ...`, `glass ior n`, `glossy ... roughness r` or \
-         `conductor \"Au\"`",
+        "POV-Ray's `finish { ... }` is the kind of material here: pigment times `diffuse` is \
+         `material { diffuse c }`; with `specular`/`phong` or a small `reflection` a coat, \
+         `coated c [ior n] roughness r`; `metallic` a metal, `conductor \"Au\" roughness r`; \
+         `reflection 1` a `mirror`; docs/povray.md (Finishes) gives the numbers, and \
+         `#include \"std/materials.scn\"` declares finish.inc's `Dull`, `Shiny`, `Glossy`",
     ),
     pov(
         "normal",
-        "POV-Ray's `normal { ... }` (bump mapping) has no counterpart here; remove it",
+        "POV-Ray's `normal { ... }` (bump mapping) has no counterpart here: remove it; fine \
+         bumps (`bumps 0.5 scale 0.01`) blur reflections, which a larger `roughness` of a \
+         `coated`, `glossy` or `conductor` material does",
     ),
     pov(
         "interior",
-        "POV-Ray's `interior { ior n }` is `material { glass ior n }` here (absorption: `absorb rgb <...>`)",
+        "POV-Ray's `interior { ior n }` is `material { glass ior n }` here, its filter colour \
+         `tint rgb <...>` (absorption, POV-Ray's `fade_color`: `absorb rgb <...>`)",
     ),
     pov(
         "color",
@@ -133,18 +132,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     pov(
         "colour",
         "POV-Ray's `colour rgb <r, g, b>` is `rgb <r, g, b>` here: leave out `colour`",
-    ),
-    pov(
-        "rgbf",
-        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
-    ),
-    pov(
-        "rgbt",
-        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
-    ),
-    pov(
-        "rgbft",
-        "colours are `rgb <r, g, b>` here; transparency is a material: `material { glass ... }`",
     ),
     pov(
         "background",
@@ -167,35 +154,41 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "reflection",
-        "POV-Ray's `finish { reflection ... }` is `material { mirror rgb <...> }` here (a metal, \
-         with its Fresnel reflection: `material { conductor \"Au\" }`)",
+        "POV-Ray's `finish { reflection f }` over a pigment is a coat here: `material { coated \
+         c ior n }` with n = (1 + √f) / (1 − √f) (0.04 is ior 1.5); `reflection 1` is \
+         `material { mirror rgb <...> }`; a metal `conductor \"Au\"`",
     ),
     pov(
         "metallic",
         "POV-Ray's `finish { metallic ... }` is a metal here: `material { conductor \"Au\" \
-         roughness r }` or `conductor reflectance rgb <...>`",
+         roughness r }` (measured Ag, Al, Au, Cr, Cu, brass, ...) or `conductor reflectance \
+         rgb <...>`; `#include \"std/materials.scn\"` has `Gold_Metal`, `Polished_Chrome`, ...",
     ),
     pov(
         "phong",
-        "POV-Ray's highlights (`phong`, `specular`) come from `material { glossy <color> \
-         roughness r }` here",
+        "POV-Ray's highlight `phong p phong_size n` is a rough coat here: `material { coated c \
+         roughness r }` with r = (2 / (4n + 2))^¼ (phong_size 40 gives 0.33); on a metal \
+         `conductor \"Au\" roughness r`",
     ),
     pov(
         "ambient",
-        "there is no ambient term here: light comes from lights and from `area_light { <shape> \
-         radiance rgb <...> }`; remove `ambient`",
+        "there is no ambient term here: light comes from lights, the sky and other surfaces; \
+         remove `ambient` (a glowing surface, `ambient 1 diffuse 0`, is `area_light { <shape> \
+         radiance rgb <...> }`)",
+    ),
+    pov(
+        "phong_size",
+        "POV-Ray's `phong_size n` is a coat's roughness here: `material { coated c roughness r }` \
+         with r = (2 / (4n + 2))^¼ (40 gives 0.33, 200 gives 0.22)",
+    ),
+    pov(
+        "brilliance",
+        "POV-Ray's `brilliance` has no counterpart: diffuse reflection is Lambertian here, and a \
+         metal's look comes from `conductor`; remove it",
     ),
     pov(
         "emission",
         "an emitting surface is `area_light { <shape> radiance rgb <...> }` here",
-    ),
-    pov(
-        "transmit",
-        "transparency is a material here: `material { glass ior n [tint rgb <...>] }`",
-    ),
-    pov(
-        "filter",
-        "transparency is a material here: `material { glass ior n [tint rgb <...>] }`",
     ),
     pov(
         "sky_sphere",

@@ -86,6 +86,7 @@ pub fn inside_camera() -> Camera {
         fov: 90.0,
         aperture: 0.0,
         focus_distance: None,
+        right: None,
         span: sppm_lang::span::Span::detached(),
     }
 }
@@ -143,6 +144,7 @@ pub fn furnace_enclosure(res: u32, a: f64) -> Scene {
         fov: 30.0,
         aperture: 0.0,
         focus_distance: None,
+        right: None,
         span: sppm_lang::span::Span::detached(),
     };
     s
@@ -258,6 +260,7 @@ pub fn cornell_glass(res: u32) -> Scene {
         fov: 40.0,
         aperture: 0.0,
         focus_distance: None,
+        right: None,
         span: sppm_lang::span::Span::detached(),
     };
     s.settings.max_depth = 16;
@@ -311,10 +314,11 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         fov: 11.4,
         aperture: 0.0,
         focus_distance: None,
+        right: None,
         span: sppm_lang::span::Span::detached(),
     };
     s.settings.max_depth = 2;
-    let cam = sppm_lang::camera::Camera::new(&s.camera, res, res).unwrap();
+    let cam = sppm_lang::camera::Camera::new(&s.camera, s.settings.handedness, res, res).unwrap();
     let analytic = move |p: glam::Vec3A| -> f64 {
         let p = p.as_dvec3();
         let term = |l: DVec3| {

@@ -20,13 +20,14 @@ pub(super) struct CameraBuilder {
     given: bool,
 }
 
-static CAMERA_PROPS: [PropSpec; 6] = [
+static CAMERA_PROPS: [PropSpec; 7] = [
     p("location", 1, 1, "a point", "<0, 1, -5>"),
     p("look_at", 1, 1, "a point", "<0, 1, 0>"),
     p("up", 1, 1, "a vector", "<0, 1, 0>"),
     p("fov", 1, 1, "an angle in degrees", "40"),
     p("aperture", 1, 1, "a lens radius", "0.05"),
     p("focus_distance", 1, 1, "a distance", "4"),
+    p("right", 1, 1, "a vector", "<-1.33, 0, 0>"),
 ];
 
 impl CameraBuilder {
@@ -99,6 +100,24 @@ impl Sink for CameraBuilder {
                 c.aperture = a;
             }
             "focus_distance" => c.focus_distance = Some(positive(&args[0], "focus distance")?),
+            // POV-Ray's `right`: its length (the aspect ratio) is the resolution's here; the
+            // sign of its x component says which way the picture faces.
+            "right" => {
+                let r = vec3(&args[0])?;
+                if !(r.x.is_finite() && r.x != 0.0) {
+                    return Err(range_error(
+                        args[0].span,
+                        format!(
+                            "`right` needs a non-zero x component, found {}",
+                            short_number(r.x)
+                        ),
+                        "`right <1.33, 0, 0>` is POV-Ray's left-handed camera, \
+                         `right <-1.33, 0, 0>` a right-handed one; the aspect ratio is the \
+                         resolution's",
+                    ));
+                }
+                c.right = Some(r);
+            }
             _ => unreachable!(),
         }
         Ok(())
@@ -126,6 +145,6 @@ impl Sink for CameraBuilder {
     }
     fn positional_help(&self) -> &'static str {
         "a camera takes a declared camera (first: it sets every property), `location`, \
-         `look_at`, `up`, `fov`, `aperture`, `focus_distance`"
+         `look_at`, `up`, `fov`, `aperture`, `focus_distance`, `right`"
     }
 }

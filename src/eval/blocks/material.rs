@@ -36,6 +36,10 @@ pub(super) struct MaterialBuilder {
     extinction: Option<(Color, Span)>,
     reflectance: Option<(Color, Span)>,
     edge_tint: Option<(Color, Span)>,
+    /// POV-Ray's filter and transmit: from `filter f`/`transmit t`, or from an `rgbf`/`rgbt`/
+    /// `rgbft` colour (the properties win), with where each was written.
+    filter: Option<(f64, Span)>,
+    transmit: Option<(f64, Span)>,
     /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
     /// `roughness`), with their keywords' spans: each must belong to the material's kind.
     written: Vec<(&'static str, Span)>,
@@ -45,16 +49,16 @@ pub(super) struct MaterialBuilder {
 /// The properties each kind uses beyond its colour.
 fn uses(kind: &str) -> &'static [&'static str] {
     match kind {
-        "mirror" => &["tint"],
+        "mirror" => &["tint", "filter", "transmit"],
         "glass" => &["ior", "absorb", "tint"],
-        "glossy" => &["specular", "roughness"],
+        "glossy" => &["specular", "roughness", "filter", "transmit"],
         "conductor" => &["eta", "extinction", "reflectance", "edge_tint", "roughness"],
-        "coated" => &["ior", "roughness"],
-        _ => &[],
+        "coated" => &["ior", "roughness", "filter", "transmit"],
+        _ => &["filter", "transmit"],
     }
 }
 
-static MAT_PROPS: [PropSpec; 15] = [
+static MAT_PROPS: [PropSpec; 17] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
@@ -70,6 +74,8 @@ static MAT_PROPS: [PropSpec; 15] = [
     p("extinction", 1, 1, "a color", "rgb <3.12, 2.35, 1.83>"),
     p("reflectance", 1, 1, "a color", "rgb <0.95, 0.64, 0.54>"),
     p("edge_tint", 1, 1, "a color", "rgb <1, 0.9, 0.8>"),
+    p("filter", 1, 1, "a number from 0 to 1", "0.9"),
+    p("transmit", 1, 1, "a number from 0 to 1", "0.9"),
 ];
 
 impl MaterialBuilder {
@@ -89,7 +95,8 @@ impl MaterialBuilder {
         Ok(())
     }
 
-    pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
+    pub(super) fn finish(self, ev: &mut Evaluator, span: Span) -> SourceResult<Value> {
+        let (filter, transmit) = (self.filter, self.transmit);
         if !self.touched
             && let Some(base) = self.base
         {
@@ -275,7 +282,127 @@ impl MaterialBuilder {
                 }
             }
         };
+        let kind = transparency(ev, filter, transmit, kind)?;
         Ok(Value::Material(Rc::new(MaterialDef { kind, span })))
+    }
+}
+
+/// POV-Ray's filter and transmit on a colour material: when they pass at least half the light,
+/// the surface becomes a glass of index 1 (POV-Ray's, without an `interior`: no refraction)
+/// tinted by what passes (`filter · colour + transmit`), and its opaque rest is dropped; below
+/// half they are dropped. A warning says which.
+fn transparency(
+    ev: &mut Evaluator,
+    filter: Option<(f64, Span)>,
+    transmit: Option<(f64, Span)>,
+    kind: MatKind,
+) -> SourceResult<MatKind> {
+    {
+        let (f, t) = (filter.map_or(0.0, |f| f.0), transmit.map_or(0.0, |t| t.0));
+        let Some(at) = filter.or(transmit).map(|x| x.1) else {
+            return Ok(kind);
+        };
+        for (x, s) in filter.iter().chain(&transmit) {
+            if !(0.0..=1.0).contains(x) {
+                return Err(range_error(
+                    *s,
+                    format!(
+                        "filter and transmit must be from 0 to 1, found {}",
+                        short_number(*x)
+                    ),
+                    "the share of the light that passes through, e.g. `rgbf <1, 1, 1, 0.9>`",
+                ));
+            }
+        }
+        if f + t <= 0.0 {
+            return Ok(kind);
+        }
+        let color = match &kind {
+            MatKind::Diffuse(c) | MatKind::Mirror(c) => c,
+            MatKind::Glossy { albedo, .. } | MatKind::Coated { albedo, .. } => albedo,
+            _ => return Ok(kind),
+        };
+        let ColorDef::Const(c) = color else {
+            return Err(vec![
+                Error::new("POV-Ray's filter and transmit over a texture have no counterpart")
+                    .label("transparency of a textured surface")
+                    .help(
+                        "transparency is a material here: use `material { glass ior n tint \
+                         rgb <...> }` (its `absorb` may be a texture), or drop the filter",
+                    )
+                    .at(at),
+            ]);
+        };
+        let words = match (f > 0.0, t > 0.0) {
+            (true, true) => format!(
+                "filter {} and transmit {}",
+                short_number(f),
+                short_number(t)
+            ),
+            (true, false) => format!("filter {}", short_number(f)),
+            _ => format!("transmit {}", short_number(t)),
+        };
+        if f + t < 0.5 {
+            ev.warn(
+                Diagnostic::warning(
+                    at,
+                    format!("POV-Ray's {words} is dropped: the surface stays opaque"),
+                )
+                .with_label("transparency dropped")
+                .with_help(
+                    "transparency is a material here, and a surface that lets through less \
+                         than half the light is kept opaque; for a clear surface write \
+                         `material { glass ior 1.5 tint rgb <...> }`",
+                ),
+            );
+            return Ok(kind);
+        }
+        let tint = (*c * f + Color::splat(t)).clamp(Color::ZERO, Color::ONE);
+        ev.warn(
+            Diagnostic::warning(
+                at,
+                format!(
+                    "POV-Ray's {words} makes this a glass here: `glass ior 1 tint rgb <{}, {}, {}>`",
+                    short_number(tint.x),
+                    short_number(tint.y),
+                    short_number(tint.z)
+                ),
+            )
+            .with_label("a transparent colour")
+            .with_help(format!(
+                "the light POV-Ray lets through (filter · colour + transmit) passes a glass of \
+                 index 1 (no refraction, as POV-Ray without `interior`) with that tint; the \
+                 opaque rest ({}) is dropped. Write `material {{ glass ior 1.5 tint rgb <...> }}` \
+                 to say it (POV-Ray's `interior {{ ior 1.5 }}`)",
+                short_number((1.0 - f - t).max(0.0))
+            )),
+        );
+        Ok(MatKind::Glass {
+            ior: 1.0,
+            absorb: ColorDef::Const(Color::ZERO),
+            tint,
+        })
+    }
+}
+
+impl MaterialBuilder {
+    /// A colour argument, with an `rgbf`/`rgbt`/`rgbft` colour's filter and transmit taken
+    /// out (kept unless the properties give them).
+    fn unfiltered(&mut self, a: &Arg) -> Arg {
+        match a.value {
+            Value::Filtered(c, f, t) => {
+                self.filter = self.filter.or(Some((f, a.span)));
+                self.transmit = self.transmit.or(Some((t, a.span)));
+                Arg {
+                    value: Value::Color(c),
+                    span: a.span,
+                }
+            }
+            _ => Arg {
+                value: a.value.clone(),
+                span: a.span,
+            },
+        }
     }
 }
 
@@ -474,6 +601,8 @@ impl Sink for MaterialBuilder {
             "extinction",
             "reflectance",
             "edge_tint",
+            "filter",
+            "transmit",
         ]
         .iter()
         .find(|w| **w == kw.text)
@@ -483,18 +612,37 @@ impl Sink for MaterialBuilder {
         match kw.text.as_str() {
             "diffuse" => {
                 self.set_kind("diffuse", kw.span)?;
-                self.albedo = Some(reflectance(ev, &args[0])?);
+                let a = self.unfiltered(&args[0]);
+                self.albedo = Some(reflectance(ev, &a)?);
             }
             "mirror" => {
                 self.set_kind("mirror", kw.span)?;
                 if let Some(a) = args.first() {
-                    self.tint_def = Some(reflectance(ev, a)?);
+                    let a = self.unfiltered(a);
+                    self.tint_def = Some(reflectance(ev, &a)?);
                 }
             }
             "glass" => self.set_kind("glass", kw.span)?,
             "glossy" => {
                 self.set_kind("glossy", kw.span)?;
-                self.albedo = Some(reflectance(ev, &args[0])?);
+                let a = self.unfiltered(&args[0]);
+                self.albedo = Some(reflectance(ev, &a)?);
+            }
+            "filter" | "transmit" => {
+                let x = num(&args[0])?;
+                if !(0.0..=1.0).contains(&x) {
+                    return Err(range_error(
+                        args[0].span,
+                        format!("{} must be from 0 to 1, found {}", kw.text, short_number(x)),
+                        "the share of the light that passes through, e.g. `filter 0.9`",
+                    ));
+                }
+                let v = Some((x, kw.span.join(args[0].span)));
+                if kw.text == "filter" {
+                    self.filter = v;
+                } else {
+                    self.transmit = v;
+                }
             }
             "conductor" => {
                 self.set_kind("conductor", kw.span)?;
@@ -508,7 +656,8 @@ impl Sink for MaterialBuilder {
             "edge_tint" => self.edge_tint = Some(constant_color(&args[0])?),
             "coated" => {
                 self.set_kind("coated", kw.span)?;
-                self.albedo = Some(reflectance(ev, &args[0])?);
+                let a = self.unfiltered(&args[0]);
+                self.albedo = Some(reflectance(ev, &a)?);
             }
             "ior" => self.ior = Some((num(&args[0])?, args[0].span)),
             "absorb" => {

@@ -124,7 +124,7 @@ impl Evaluator {
             "material" => {
                 let mut b = MaterialBuilder::default();
                 self.run_items(items, &mut b)?;
-                b.finish(span)
+                b.finish(self, span)
             }
             "texture" => {
                 let mut b = TextureBuilder::default();

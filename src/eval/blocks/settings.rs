@@ -8,14 +8,14 @@ use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
 use crate::eval::value::Value;
 use crate::scene::{
-    Antialias, Integrator, MAX_ITERATIONS, MAX_PHOTONS, MAX_RESOLUTION_SIDE, Settings,
+    Antialias, Handedness, Integrator, MAX_ITERATIONS, MAX_PHOTONS, MAX_RESOLUTION_SIDE, Settings,
 };
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
 pub(super) struct SettingsBuilder(pub(super) Settings);
 
-static SETTINGS_PROPS: [PropSpec; 13] = [
+static SETTINGS_PROPS: [PropSpec; 14] = [
     p("resolution", 1, 2, "a width and height", "<512, 512>"),
     p("iterations", 1, 1, "a number", "64"),
     p("photons", 1, 1, "a number", "200000"),
@@ -33,6 +33,7 @@ static SETTINGS_PROPS: [PropSpec; 13] = [
     w("antialias", "`jitter` or `adaptive`", "adaptive"),
     p("threshold", 1, 1, "a colour difference", "0.1"),
     w("final_gather", "`on` or `off`", "on"),
+    w("handedness", "`right` or `left`", "left"),
 ];
 
 impl SettingsBuilder {
@@ -138,6 +139,14 @@ impl Sink for SettingsBuilder {
             }
             "threshold" => s.antialias_threshold = Some(positive(&args[0], "threshold")?),
             "final_gather" => s.final_gather = word(&args[0], &["on", "off"])? == "on",
+            "handedness" => {
+                let names: Vec<&str> = Handedness::ALL.iter().map(|h| h.name()).collect();
+                let name = word(&args[0], &names)?;
+                s.handedness = *Handedness::ALL
+                    .iter()
+                    .find(|h| h.name() == name)
+                    .expect("known name");
+            }
             _ => unreachable!(),
         }
         Ok(())

@@ -27,7 +27,13 @@ fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
 /// The camera pass of iteration `iter` (seed 4), every radius 0.05.
 fn visible_points(prepared: &PreparedScene, settings: &EffectiveSettings, iter: u32) -> Vec<Pixel> {
     let (w, h) = (settings.width, settings.height);
-    let camera = Camera::new(&prepared.scene.camera, w, h).unwrap();
+    let camera = Camera::new(
+        &prepared.scene.camera,
+        prepared.scene.settings.handedness,
+        w,
+        h,
+    )
+    .unwrap();
     (0..w * h)
         .map(|i| {
             let mut rng = Stream::Camera.rng(4, iter, u64::from(i));
@@ -236,7 +242,7 @@ fn radius_over_footprint(example: &str) -> ((f64, f64, f64), f64) {
     let settings = effective_settings(&scene, &options).unwrap();
     let prepared = PreparedScene::new(&scene).unwrap();
     let (_, stats) = render_with_state(&prepared, &settings, &AtomicBool::new(false), &mut |_| {});
-    let camera = Camera::new(&scene.camera, w, h).unwrap();
+    let camera = Camera::new(&scene.camera, scene.settings.handedness, w, h).unwrap();
     let pixel = 2.0 * (0.5 * scene.camera.fov.to_radians()).tan() / f64::from(h);
     let look_at = (scene.camera.look_at - scene.camera.location).length() * pixel;
     let (mut ratios, mut old) = (Vec::new(), Vec::new());
@@ -489,7 +495,8 @@ mod census {
         let settings = effective_settings(&scene, &options).unwrap();
         let photons = settings.photons.unwrap_or(CENSUS_PHOTONS);
         let scene = PreparedScene::new(&scene).unwrap();
-        let camera = Camera::new(&scene.scene.camera, w, h).unwrap();
+        let camera =
+            Camera::new(&scene.scene.camera, scene.scene.settings.handedness, w, h).unwrap();
         let (mut vps, mut radii, mut distances) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..w * h {
             let mut rng = Stream::Camera.rng(1, 0, u64::from(i));

@@ -167,6 +167,17 @@ impl Camera {
                 span,
             )?;
         }
+        if let Some(r) = self.right
+            && !(r.x.is_finite() && r.x != 0.0)
+        {
+            return Err(invalid(
+                span,
+                "the camera's `right` has no x component to tell its handedness".into(),
+                "x component 0 or not finite",
+                "`right` says only which way the picture faces: `right <1.33, 0, 0>` is \
+                 POV-Ray's left-handed camera, `right <-1.33, 0, 0>` a right-handed one",
+            ));
+        }
         Ok(())
     }
 }
