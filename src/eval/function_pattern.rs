@@ -65,6 +65,11 @@ impl Evaluator {
                 Item::Keyword(k) => props.push((k.clone(), Vec::new())),
                 Item::Comma(_) => {}
                 Item::Expr(e) => {
+                    // A word before any keyword is a pattern the language lacks (`bozo`).
+                    if let (None, crate::syntax::ast::ExprKind::Ident(n)) = (props.last(), &e.kind)
+                    {
+                        return Err(unsupported(n, e.span));
+                    }
                     let value = self.eval(e)?;
                     match props.last_mut() {
                         Some(last) => last.1.push(Arg {
