@@ -10,6 +10,7 @@ mod profile;
 mod scene;
 mod settings;
 mod texture;
+mod transparency;
 
 use std::rc::Rc;
 
