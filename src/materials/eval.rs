@@ -84,7 +84,8 @@ pub fn choose<'a>(m: &'a Material, scene: &'a Scene, tc: impl Fn() -> TexCoord) 
         };
         let tc_key = *key.get_or_insert_with(|| point_key(&tc()));
         let w = scalar(weight, scene, &tc);
-        let u = unit_hash(tc_key ^ (u64::from(level) << 58) ^ (u64::from(a.0) << 32) ^ u64::from(b.0));
+        let u =
+            unit_hash(tc_key ^ (u64::from(level) << 58) ^ (u64::from(a.0) << 32) ^ u64::from(b.0));
         let next = if u < w { b } else { a };
         match scene.materials.get(next.0 as usize) {
             Some(n) => m = n,
@@ -223,7 +224,7 @@ mod tests {
 
     use super::*;
     use crate::sampling::Rng;
-    use crate::scene::{MaterialId, Mapping, Pattern, Texture, TextureId};
+    use crate::scene::{Mapping, MaterialId, Pattern, Texture, TextureId};
     use crate::span::Span;
 
     fn at(p: Vec3A) -> TexCoord {
@@ -305,7 +306,10 @@ mod tests {
             let p = Vec3A::new(0.25, -1.5, 3.0);
             let first = choose(&scene.materials[2], &scene, || at(p));
             for _ in 0..10 {
-                assert!(std::ptr::eq(first, choose(&scene.materials[2], &scene, || at(p))));
+                assert!(std::ptr::eq(
+                    first,
+                    choose(&scene.materials[2], &scene, || at(p))
+                ));
             }
         }
     }
@@ -334,7 +338,10 @@ mod tests {
         for (i, p) in [(0, 0.375), (1, 0.375), (2, 0.25)] {
             assert!(near(s[i], p, n), "part {i}: share {} not {p}", s[i]);
         }
-        assert_eq!(scene.blend_depths(), vec![Some(0), Some(0), Some(0), Some(1), Some(2)]);
+        assert_eq!(
+            scene.blend_depths(),
+            vec![Some(0), Some(0), Some(0), Some(1), Some(2)]
+        );
         assert!(scene.validate().is_ok());
     }
 
@@ -367,8 +374,15 @@ mod tests {
             let w = scalar(&ScalarParam::Texture(TextureId(0)), &scene, || at(p));
             let chosen = choose(&scene.materials[2], &scene, || at(p));
             let want = if w > 0.5 { 1 } else { 0 };
-            if want == 1 { white += 1 } else { black += 1 }
-            assert!(std::ptr::eq(chosen, &scene.materials[want]), "at {p}, weight {w}");
+            if want == 1 {
+                white += 1
+            } else {
+                black += 1
+            }
+            assert!(
+                std::ptr::eq(chosen, &scene.materials[want]),
+                "at {p}, weight {w}"
+            );
         }
         assert!(white > 1000 && black > 1000, "{white} white, {black} black");
     }

@@ -572,7 +572,10 @@ impl<'a> PreparedScene<'a> {
     /// the surface (SPPM deposits at every surface alike).
     #[inline]
     pub fn blend_stores_photons(&self, sh: &SurfaceHit) -> bool {
-        let m = self.prim_material.get(sh.prim as usize).map_or(usize::MAX, |&m| m as usize);
+        let m = self
+            .prim_material
+            .get(sh.prim as usize)
+            .map_or(usize::MAX, |&m| m as usize);
         matches!(self.scene.materials.get(m), Some(Material::Blend { .. }))
             && self.rough_parts.get(m) == Some(&true)
     }

@@ -451,12 +451,17 @@ fn blend_weight(a: &Arg) -> SourceResult<ColorDef> {
             let w = a
                 .value
                 .num()
-                .map_err(|e| e.help("a blend's weight is a number from 0 to 1 or a `texture { ... }`"))
+                .map_err(|e| {
+                    e.help("a blend's weight is a number from 0 to 1 or a `texture { ... }`")
+                })
                 .at(a.span)?;
             if !(0.0..=1.0).contains(&w) {
                 return Err(range_error(
                     a.span,
-                    format!("a blend's weight must be from 0 to 1, found {}", short_number(w)),
+                    format!(
+                        "a blend's weight must be from 0 to 1, found {}",
+                        short_number(w)
+                    ),
                     "0 shows only the first material, 1 only the second",
                 ));
             }

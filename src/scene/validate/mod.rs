@@ -11,9 +11,9 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use super::{
-    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light, MAX_CSG_DEPTH,
-    MAX_BLEND_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS, Material, Object, ScalarParam, Scene,
-    Settings, Shape, why_open,
+    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light,
+    MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
+    Material, Object, ScalarParam, Scene, Settings, Shape, why_open,
 };
 use crate::span::Span;
 
