@@ -328,10 +328,8 @@ fn rough_gold_renders_gold_in_every_integrator() {
 /// ground that is diffuse or a mirror under a gradient sky and a point light (each camera path
 /// meets the ground once, so the picture is linear in its material), and blend(diffuse,
 /// mirror, 0.3) agrees with 0.7 * diffuse + 0.3 * mirror within four standard errors (over
-/// four seeds) and 1 %. Photon mapping must store
-/// photons also where the ground shows its mirror part, or the diffuse part's density
-/// estimate loses 30 % (its mean would fall about 20 % short). A glass and mirror blend
-/// renders too (finite pixels, checked in `run`).
+/// four seeds) and 1 %. A glass and mirror blend renders too (finite pixels, checked in
+/// `run`).
 #[test]
 fn blend_renders_the_weighted_mean_of_its_parts_in_every_integrator() {
     let scene_for = |ground: &str| {
