@@ -226,6 +226,15 @@ impl Evaluator {
                 k: *k,
                 roughness: *roughness,
             },
+            // The parts are pushed first: a blend refers only to earlier materials.
+            MatKind::Blend { a, b, weight, .. } => Material::Blend {
+                a: self.material_id(a)?,
+                b: self.material_id(b)?,
+                weight: match self.color_param(weight)? {
+                    ColorParam::Const(c) => ScalarParam::Const(c.x),
+                    ColorParam::Texture(t) => ScalarParam::Texture(t),
+                },
+            },
             MatKind::Coated {
                 albedo,
                 ior,

@@ -237,6 +237,14 @@ pub enum MatKind {
         ior: f64,
         roughness: Option<ColorDef>,
     },
+    /// `a` or `b` per point, `b` with probability `weight`; `depth`: how deep blends nest
+    /// under this one (1 for a blend of two plain materials).
+    Blend {
+        a: Rc<MaterialDef>,
+        b: Rc<MaterialDef>,
+        weight: ColorDef,
+        depth: u32,
+    },
 }
 
 #[derive(Debug)]

@@ -77,6 +77,9 @@ pub struct PreparedScene<'a> {
     /// The lobes of each material whose parameters are all constants (no texture), computed
     /// once instead of at every hit.
     const_lobes: Vec<Option<Lobes>>,
+    /// Per material: whether some point of it scatters other than specularly
+    /// ([`Self::blend_stores_photons`]).
+    rough_parts: Vec<bool>,
     /// Per material: whether any of its parameters is a texture (its lobes, or a glass's
     /// absorption), so that hits on it need their `uv`.
     textured: Vec<bool>,
@@ -100,11 +103,14 @@ enum GlassAbsorption {
     Constant(Vec3A),
     /// An absorption from a texture: evaluated at each hit.
     Textured,
+    /// A blend with a glass among its parts: the part chosen at each hit decides.
+    Blended,
 }
 
 impl GlassAbsorption {
-    fn of(m: &Material) -> Self {
+    fn of(m: &Material, has_glass: bool) -> Self {
         match m {
+            Material::Blend { .. } if has_glass => Self::Blended,
             Material::Glass {
                 absorb: ColorParam::Const(c),
                 ..
@@ -415,8 +421,14 @@ impl<'a> PreparedScene<'a> {
             environment,
             prim_material,
             const_lobes: Vec::new(),
+            rough_parts: eval::non_specular_parts(scene),
             textured: scene.materials.iter().map(eval::has_texture).collect(),
-            glass: scene.materials.iter().map(GlassAbsorption::of).collect(),
+            glass: scene
+                .materials
+                .iter()
+                .zip(eval::glass_parts(scene))
+                .map(|(m, g)| GlassAbsorption::of(m, g))
+                .collect(),
             offset_floor: 0.0,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
@@ -554,6 +566,20 @@ impl<'a> PreparedScene<'a> {
         eval::lobes(m, self.scene, || self.tex_coord(sh))
     }
 
+    /// Whether the hit is on a blend with a part that scatters other than specularly: photon
+    /// mapping stores a photon arriving there even where the point shows a specular part, so
+    /// that the density around a point showing the rough part counts all the light reaching
+    /// the surface (SPPM deposits at every surface alike).
+    #[inline]
+    pub fn blend_stores_photons(&self, sh: &SurfaceHit) -> bool {
+        let m = self
+            .prim_material
+            .get(sh.prim as usize)
+            .map_or(usize::MAX, |&m| m as usize);
+        matches!(self.scene.materials.get(m), Some(Material::Blend { .. }))
+            && self.rough_parts.get(m) == Some(&true)
+    }
+
     /// For a hit on glass, its absorption coefficient (zero for clear glass); `None` for any
     /// other material.
     #[inline]
@@ -570,12 +596,18 @@ impl<'a> PreparedScene<'a> {
             GlassAbsorption::NotGlass => None,
             GlassAbsorption::Constant(sigma) => Some((*sigma, false)),
             GlassAbsorption::Textured => Some((self.absorption(sh).unwrap_or(Vec3A::ZERO), true)),
+            GlassAbsorption::Blended => {
+                let m = eval::choose(self.material(sh.prim)?, self.scene, || self.tex_coord(sh));
+                matches!(m, Material::Glass { .. })
+                    .then(|| (self.absorption(sh).unwrap_or(Vec3A::ZERO), true))
+            }
         }
     }
 
     /// Beer–Lambert absorption coefficient inside the material at this hit, if any.
     pub fn absorption(&self, sh: &SurfaceHit) -> Option<Vec3A> {
-        match self.material(sh.prim)? {
+        let m = self.material(sh.prim)?;
+        match eval::choose(m, self.scene, || self.tex_coord(sh)) {
             Material::Glass { absorb, .. } => {
                 let a = eval::color(absorb, self.scene, || self.tex_coord(sh)).max(Vec3A::ZERO);
                 (a != Vec3A::ZERO && a.is_finite()).then_some(a)

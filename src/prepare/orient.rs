@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use glam::DVec2;
 
-use crate::scene::{self, Material, MeshData, Object, Profile, Scene, Shape};
+use crate::scene::{self, MeshData, Object, Profile, Scene, Shape};
 
 /// Six times the volume a closed mesh encloses, positive when its triangles wind
 /// counter-clockwise seen from outside (normals outward).
@@ -57,16 +57,20 @@ fn de_casteljau(points: &[DVec2], s: f64) -> DVec2 {
 #[derive(Default)]
 pub(super) struct Orientation {
     inward_meshes: HashMap<usize, bool>,
+    /// Per material, whether it is a glass or blends one (filled on first use).
+    glass: Option<Vec<bool>>,
 }
 
 impl Orientation {
     /// Whether `obj`'s surface is closed glass whose normals point in (a mesh: its triangles
     /// are to be rewound; a revolve: see [`outward_revolve`]).
     pub(super) fn faces_in(&mut self, scene: &Scene, obj: &Object) -> bool {
-        let glass = matches!(
-            scene.materials.get(obj.material.0 as usize),
-            Some(Material::Glass { .. })
-        );
+        let glass = self
+            .glass
+            .get_or_insert_with(|| crate::materials::eval::glass_parts(scene))
+            .get(obj.material.0 as usize)
+            .copied()
+            .unwrap_or(false);
         if !glass || obj.emission.is_some() {
             return false;
         }

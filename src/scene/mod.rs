@@ -531,6 +531,42 @@ pub enum Material {
         ior: f64,
         roughness: ScalarParam,
     },
+    /// Material `a` or `b` at each shading point, `b` with probability `weight` (a number or
+    /// a texture's luminance, clamped to [0, 1]): the mix of the two in expectation (see
+    /// `materials::eval::choose`). Both come earlier in [`Scene::materials`], so blends nest
+    /// without cycles, at most [`MAX_BLEND_DEPTH`] deep.
+    Blend {
+        a: MaterialId,
+        b: MaterialId,
+        weight: ScalarParam,
+    },
+}
+
+/// The deepest blends nest (a blend of blends of ...): each level is one hash and one lookup
+/// per hit.
+pub const MAX_BLEND_DEPTH: u32 = 16;
+
+impl Scene {
+    /// How deep the blends under each material nest (0: not a blend), in one pass over
+    /// [`Scene::materials`]; `None` for a blend whose parts do not come before it (which could
+    /// loop) or are not valid themselves.
+    pub fn blend_depths(&self) -> Vec<Option<u32>> {
+        let mut depths: Vec<Option<u32>> = Vec::with_capacity(self.materials.len());
+        for (i, m) in self.materials.iter().enumerate() {
+            let d = match m {
+                Material::Blend { a, b, .. } => {
+                    let part = |id: MaterialId| {
+                        let k = id.0 as usize;
+                        if k < i { depths[k] } else { None }
+                    };
+                    part(*a).zip(part(*b)).map(|(x, y)| 1 + x.max(y))
+                }
+                _ => Some(0),
+            };
+            depths.push(d);
+        }
+        depths
+    }
 }
 
 /// A texture: a pattern evaluated at mapped coordinates.

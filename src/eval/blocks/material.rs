@@ -1,4 +1,4 @@
-//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, conductor, coated), its parameters, and
+//! `material { ... }`: the kind (diffuse, mirror, glass, glossy, conductor, coated, blend), its parameters, and
 //! materials that extend a declared one.
 
 use crate::diag::short_number;
@@ -6,13 +6,13 @@ use std::rc::Rc;
 
 use super::transparency::transparency;
 use super::{Sink, unexpected};
-use crate::diag::{Diagnostic, Error, SourceResult, suggest};
+use crate::diag::{At, Diagnostic, Error, SourceResult, suggest};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
 use crate::scene::metals::{MAX_ARTIST_REFLECTANCE, artist_to_eta_k, metal, metal_names};
-use crate::scene::{COAT_IOR_RANGE, Color, IOR_RANGE, MIN_ROUGHNESS};
+use crate::scene::{COAT_IOR_RANGE, Color, IOR_RANGE, MAX_BLEND_DEPTH, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -41,6 +41,10 @@ pub(super) struct MaterialBuilder {
     /// `rgbft` colour (the properties win), with where each was written.
     filter: Option<(f64, Span)>,
     transmit: Option<(f64, Span)>,
+    /// A blend's two materials.
+    blend: Option<(Rc<MaterialDef>, Rc<MaterialDef>)>,
+    /// A blend's weight (the share of the second material) and where it was written.
+    weight: Option<(ColorDef, Span)>,
     /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
     /// `roughness`), with their keywords' spans: each must belong to the material's kind.
     written: Vec<(&'static str, Span)>,
@@ -55,11 +59,12 @@ fn uses(kind: &str) -> &'static [&'static str] {
         "glossy" => &["specular", "roughness", "filter", "transmit"],
         "conductor" => &["eta", "extinction", "reflectance", "edge_tint", "roughness"],
         "coated" => &["ior", "roughness", "filter", "transmit"],
+        "blend" => &["weight"],
         _ => &["filter", "transmit"],
     }
 }
 
-static MAT_PROPS: [PropSpec; 17] = [
+static MAT_PROPS: [PropSpec; 19] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
@@ -77,6 +82,8 @@ static MAT_PROPS: [PropSpec; 17] = [
     p("edge_tint", 1, 1, "a color", "rgb <1, 0.9, 0.8>"),
     p("filter", 1, 1, "a number from 0 to 1", "0.9"),
     p("transmit", 1, 1, "a number from 0 to 1", "0.9"),
+    p("blend", 2, 2, "two materials", "Polish, Wood"),
+    p("weight", 1, 1, "a number in [0, 1] or a texture", "0.3"),
 ];
 
 impl MaterialBuilder {
@@ -86,7 +93,8 @@ impl MaterialBuilder {
                 Error::new(format!("a material is either {old} or {k}, not both"))
                     .label("second kind")
                     .help(
-                        "use one of diffuse, mirror, glass, glossy, conductor, coated per material",
+                        "use one of diffuse, mirror, glass, glossy, conductor, coated, blend \
+                         per material",
                     )
                     .at(span)
                     .with_extra(old_span, "first kind here"),
@@ -111,12 +119,14 @@ impl MaterialBuilder {
                 MatKind::Glossy { .. } => "glossy",
                 MatKind::Conductor { .. } => "conductor",
                 MatKind::Coated { .. } => "coated",
+                MatKind::Blend { .. } => "blend",
             })
         });
         let Some(kind_name) = kind_name else {
             return Err(vec![
                 Error::new(
-                    "a material needs a kind: diffuse, mirror, glass, glossy, conductor or coated",
+                    "a material needs a kind: diffuse, mirror, glass, glossy, conductor, coated \
+                     or blend",
                 )
                 .label("no kind given")
                 .help("write e.g. `material { diffuse rgb <0.8, 0.8, 0.8> }`")
@@ -231,6 +241,7 @@ impl MaterialBuilder {
                 }
             }
             "conductor" => self.conductor(base)?,
+            "blend" => self.blend(base, span)?,
             "coated" => {
                 let (mut albedo, mut ior, mut roughness) =
                     (ColorDef::Const(Color::splat(0.5)), 1.5, None);
@@ -310,6 +321,46 @@ impl MaterialBuilder {
 }
 
 impl MaterialBuilder {
+    /// A blend's kind: its two materials (or a declared blend's) and its weight (default 0.5),
+    /// nested at most `MAX_BLEND_DEPTH` deep.
+    fn blend(&self, base: Option<MatKind>, span: Span) -> SourceResult<MatKind> {
+        let (parts, mut weight) = match base {
+            Some(MatKind::Blend { a, b, weight, .. }) => (Some((a, b)), weight),
+            _ => (None, ColorDef::Const(Color::splat(0.5))),
+        };
+        let Some((a, b)) = self.blend.clone().or(parts) else {
+            return Err(vec![Error::new("a blend needs its two materials").at(span)]);
+        };
+        if let Some((w, _)) = &self.weight {
+            weight = w.clone();
+        }
+        let depth_of = |m: &MaterialDef| match m.kind {
+            MatKind::Blend { depth, .. } => depth,
+            _ => 0,
+        };
+        let depth = 1 + depth_of(&a).max(depth_of(&b));
+        if depth > MAX_BLEND_DEPTH {
+            let at = self.kind.map_or(span, |k| k.1);
+            return Err(vec![
+                Error::new(format!(
+                    "blends nest {depth} deep here, more than {MAX_BLEND_DEPTH}"
+                ))
+                .label("too deeply nested")
+                .help(format!(
+                    "a blend of blends may nest at most {MAX_BLEND_DEPTH} deep (each level \
+                     is a choice at every hit)"
+                ))
+                .at(at),
+            ]);
+        }
+        Ok(MatKind::Blend {
+            a,
+            b,
+            weight,
+            depth,
+        })
+    }
+
     /// A conductor's kind: its index from exactly one of a named metal, `eta` with
     /// `extinction`, or `reflectance` with an optional `edge_tint`; an override of a declared
     /// conductor keeps what it does not write.
@@ -400,6 +451,52 @@ impl MaterialBuilder {
             roughness = r;
         }
         Ok(MatKind::Conductor { eta, k, roughness })
+    }
+}
+
+/// One of a blend's materials: a declared material or a `material { ... }` block.
+fn blend_part(a: &Arg) -> SourceResult<Rc<MaterialDef>> {
+    match &a.value {
+        Value::Material(m) => Ok(m.clone()),
+        v => Err(vec![
+            Error::new(format!(
+                "a blend's parts are materials, found {}",
+                v.type_name()
+            ))
+            .label("not a material")
+            .help(
+                "write two materials, declared or as blocks: `blend Polish, material { diffuse \
+                 0.8 } weight 0.3`",
+            )
+            .at(a.span),
+        ]),
+    }
+}
+
+/// A blend's weight: a number from 0 to 1 or a texture (its luminance).
+fn blend_weight(a: &Arg) -> SourceResult<ColorDef> {
+    match &a.value {
+        Value::Texture(t) => Ok(ColorDef::Tex(t.clone())),
+        _ => {
+            let w = a
+                .value
+                .num()
+                .map_err(|e| {
+                    e.help("a blend's weight is a number from 0 to 1 or a `texture { ... }`")
+                })
+                .at(a.span)?;
+            if !(0.0..=1.0).contains(&w) {
+                return Err(range_error(
+                    a.span,
+                    format!(
+                        "a blend's weight must be from 0 to 1, found {}",
+                        short_number(w)
+                    ),
+                    "0 shows only the first material, 1 only the second",
+                ));
+            }
+            Ok(ColorDef::Const(Color::splat(w)))
+        }
     }
 }
 
@@ -506,6 +603,7 @@ impl Sink for MaterialBuilder {
             "edge_tint",
             "filter",
             "transmit",
+            "weight",
         ]
         .iter()
         .find(|w| **w == kw.text)
@@ -553,6 +651,11 @@ impl Sink for MaterialBuilder {
                     self.metal = Some(named_metal(a)?);
                 }
             }
+            "blend" => {
+                self.set_kind("blend", kw.span)?;
+                self.blend = Some((blend_part(&args[0])?, blend_part(&args[1])?));
+            }
+            "weight" => self.weight = Some((blend_weight(&args[0])?, args[0].span)),
             "eta" => self.eta = Some(constant_color(&args[0])?),
             "extinction" => self.extinction = Some(constant_color(&args[0])?),
             "reflectance" => self.reflectance = Some(constant_color(&args[0])?),

@@ -85,7 +85,10 @@ fn build_maps(
                         &mut rng,
                         |depth, sh, wi, beta| {
                             let specular = scene.bsdf(sh).is_specular();
-                            if !specular && depth > 0 && beta.is_finite() {
+                            // A blend stores photons even where this point shows its
+                            // specular part (see `blend_stores_photons`).
+                            let store = !specular || scene.blend_stores_photons(sh);
+                            if store && depth > 0 && beta.is_finite() {
                                 let ph = (sh.hit.p, Photon { wi, beta });
                                 if all_specular {
                                     caustic.push(ph);

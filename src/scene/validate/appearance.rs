@@ -163,6 +163,18 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
                 ))
             }
         }
+        Material::Blend { weight, .. } => match weight {
+            ScalarParam::Const(w) if !(0.0..=1.0).contains(w) => Err(invalid(
+                span,
+                format!(
+                    "material {index}'s blend weight {} is out of range",
+                    fmt(*w)
+                ),
+                "out of range",
+                "a blend weight is from 0 (the first material) to 1 (the second)",
+            )),
+            _ => Ok(()),
+        },
         Material::Coated {
             albedo,
             ior,

@@ -11,9 +11,9 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use super::{
-    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light, MAX_CSG_DEPTH,
-    MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS, Material, Object, ScalarParam, Scene,
-    Settings, Shape, why_open,
+    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light,
+    MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
+    Material, Object, ScalarParam, Scene, Settings, Shape, why_open,
 };
 use crate::span::Span;
 
@@ -275,6 +275,7 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             textures_exist(m, i, self.textures.len())?;
         }
+        blends_bounded(self)?;
         sky_textures_exist(self)?;
         appearance::validate(self)?;
         for obj in &self.objects {
@@ -489,6 +490,27 @@ fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), 
     }
 }
 
+/// Every blend's parts come before it in `Scene::materials` (so that following them ends) and
+/// blends nest at most `MAX_BLEND_DEPTH` deep.
+fn blends_bounded(scene: &Scene) -> Result<(), Invalid> {
+    let depths = scene.blend_depths();
+    match depths
+        .iter()
+        .position(|d| d.is_none_or(|d| d > MAX_BLEND_DEPTH))
+    {
+        Some(i) => Err(invalid(
+            Span::detached(),
+            format!(
+                "material {i} blends materials that do not come before it, or nests blends \
+                 more than {MAX_BLEND_DEPTH} deep"
+            ),
+            "blend out of order",
+            "push a blend's two materials before it, and nest at most 16 blends",
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Every texture material `index` refers to is one of the scene's `count` textures.
 fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invalid> {
     let color = |p: &ColorParam| match p {
@@ -500,6 +522,14 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
         Material::Mirror { tint } => [color(tint), None, None],
         Material::Glass { absorb, .. } => [color(absorb), None, None],
         Material::Conductor { .. } => [None, None, None],
+        Material::Blend { weight, .. } => [
+            None,
+            None,
+            match weight {
+                ScalarParam::Texture(t) => Some(t.0),
+                ScalarParam::Const(_) => None,
+            },
+        ],
         Material::Coated {
             albedo, roughness, ..
         } => [
