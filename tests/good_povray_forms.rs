@@ -245,6 +245,8 @@ fn pattern_functions_give_the_pattern_value() {
         shown,
         ["0", "1", "0", "0.25", "1", "0", "10.25", "noise in [0, 1]"]
     );
+}
+
 /// The image of `text` rendered with the scene's own settings (seed, iterations, integrator).
 fn render_image(text: &str) -> sppm_lang::film::Image {
     let scene = load(text).scene.unwrap();

@@ -106,7 +106,9 @@ impl Evaluator {
                     UnOp::Pos => return self.compile(c, inner),
                     UnOp::Neg => Unary::Neg,
                     UnOp::Not => Unary::Not,
-                    UnOp::Rgb => return Err(vec![not_a_number(e.span, "a color")]),
+                    UnOp::Rgb | UnOp::Rgbf | UnOp::Rgbt | UnOp::Rgbft => {
+                        return Err(vec![not_a_number(e.span, "a color")]);
+                    }
                 };
                 match self.compile(c, inner)? {
                     Piece::Const(x) => Piece::Const(unary(op, x)),

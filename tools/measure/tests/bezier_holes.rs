@@ -150,7 +150,7 @@ fn count(name: &str, loaded: Loaded) -> Counts {
     let curved = curved_objects(&scene);
     assert!(!curved.is_empty(), "{name} has no Bezier object");
     let prepared = PreparedScene::new(&scene).unwrap();
-    let camera = Camera::new(&scene.camera, SIZE, SIZE).unwrap();
+    let camera = Camera::new(&scene.camera, scene.settings.handedness, SIZE, SIZE).unwrap();
     let is_curved = |o: u32| curved.iter().any(|c| c.object == o);
     let ray_of = |x: u32, y: u32| camera.ray(x, y, Vec2::splat(0.5), Vec2::splat(0.5));
     let start = std::time::Instant::now();
