@@ -7,6 +7,7 @@
 //! Geometry is in f64 (`glam::DVec3`) so that the renderer chooses where precision matters.
 //! Colors are linear RGB.
 
+pub mod animation;
 mod assets;
 mod csg;
 pub mod metals;
@@ -14,6 +15,7 @@ mod obj;
 mod obj_errors;
 mod validate;
 
+pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
 pub use assets::{
     AssetError, ColorSpace, IMAGE_BYTES_PER_PIXEL, ImageData, ImageRoom, MAX_TOTAL_IMAGE_PIXELS,
     MeshData, brightest_pixel, load_image, load_image_within, load_obj, srgb_to_linear,
@@ -130,6 +132,13 @@ pub struct Settings {
     /// photons, and one BSDF-sampled gather path per pixel and iteration brings the rest from
     /// the next diffuse surface. Other integrators ignore it.
     pub final_gather: bool,
+    /// The animation's frames (`frames first, last`); `None`: a still unless the caller gives
+    /// a range.
+    pub frames: Option<(u32, u32)>,
+    /// The clock over the frames (`clock_range initial, final`); `None`: 0 to 1.
+    pub clock_range: Option<(f64, f64)>,
+    /// `cyclic on`: the frame after the last is the first again ([`FrameRange::cyclic`]).
+    pub cyclic: bool,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -152,6 +161,9 @@ impl Default for Settings {
             antialias: Antialias::Jitter,
             antialias_threshold: None,
             final_gather: false,
+            frames: None,
+            clock_range: None,
+            cyclic: false,
             span: Span::detached(),
         }
     }
