@@ -220,7 +220,6 @@ fn animate(
         frames: args.frames,
         clock: args.clock,
     };
-    let mut written = 0u32;
     let stopped = |k: u32, written: u32| {
         if written > 0 {
             say!(
@@ -234,6 +233,8 @@ fn animate(
         ExitCode::from(EXIT_SCENE_ERROR)
     };
     for k in frames.clone() {
+        // The frames before this one, all written.
+        let written = k - frames.start();
         let loaded = match sppm_lang::load_frame(&args.scene, options, &still, &over, range, k) {
             Ok(l) => l,
             Err(e) => {
@@ -271,7 +272,6 @@ fn animate(
             stopped(k, written);
             return code;
         }
-        written += 1;
         if cancel.is_cancelled() && !last {
             say!("interrupted after frame {k}; the frames after it were not rendered");
             return ExitCode::from(EXIT_SCENE_ERROR);
