@@ -38,4 +38,7 @@ pub mod watch;
 pub use cancel::Cancel;
 pub use diag::SourceMap;
 pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
-pub use eval::{EvalOptions, Loaded, load_file, load_source};
+pub use eval::{
+    EvalOptions, Loaded, RangeOverride, frame_range, load_file, load_frame, load_source,
+};
+pub use scene::{Frame, FrameRange};

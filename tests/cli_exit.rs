@@ -987,3 +987,144 @@ fn a_limited_address_space_evaluates_on_a_smaller_stack() {
     assert!(err.contains("ulimit -v"), "{err}");
     assert!(err.contains(":2:"), "not located: {err}");
 }
+
+/// A small animation: a ball that moves with the clock (frames `0..2` unless told otherwise).
+fn animation_scene(dir: &std::path::Path, extra: &str) -> std::path::PathBuf {
+    let scene = dir.join("anim.scn");
+    std::fs::write(
+        &scene,
+        format!(
+            "camera {{ location <0, 0, -4> look_at <0, 0, 0> }}\n\
+             light {{ <0, 3, -3> intensity 20 }}\n\
+             sphere {{ <clock * 2 - 1, 0, 0>, 0.6 material {{ diffuse rgb 0.8 }} }}\n\
+             settings {{ resolution <16, 12> iterations 2 photons 2000 {extra} }}\n"
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+/// The files in `dir` other than the scene, sorted.
+fn written(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.ends_with(".scn"))
+        .collect();
+    names.sort();
+    names
+}
+
+/// `render` writes one file per frame, named by `%04d`; frame K rendered alone (`--frame K`,
+/// with another thread count) is the same file byte for byte as frame K of the range, and the
+/// clock moves the ball (the frames differ).
+#[test]
+fn frame_k_of_a_range_is_frame_k_alone_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = animation_scene(dir.path(), "frames 0, 2");
+    let pattern = dir.path().join("f_%04d.png");
+    let out = render_with(
+        scene.to_str().unwrap(),
+        pattern.to_str().unwrap(),
+        &["--threads", "2"],
+    );
+    succeeded(&out);
+    assert_eq!(
+        written(dir.path()),
+        ["f_0000.png", "f_0001.png", "f_0002.png"]
+    );
+    let alone = dir.path().join("alone.png");
+    let out = render_with(
+        scene.to_str().unwrap(),
+        alone.to_str().unwrap(),
+        &["--frame", "1", "--threads", "1"],
+    );
+    succeeded(&out);
+    let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
+    assert_eq!(read("f_0001.png"), read("alone.png"));
+    assert_ne!(read("f_0000.png"), read("f_0002.png"), "the ball moves");
+    // The default name of a frame: the scene's, with the frame number.
+    let out = sppm(&["render", scene.to_str().unwrap(), "--frame", "2"]);
+    succeeded(&out);
+    assert_eq!(read("anim_0002.png"), read("f_0002.png"));
+}
+
+/// `--frames` and `--clock` animate a scene that declares no frames; frames outside the range
+/// are not written.
+#[test]
+fn frames_and_clock_flags_animate_a_still() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = animation_scene(dir.path(), "");
+    let pattern = dir.path().join("g%d.png");
+    let s = scene.to_str().unwrap();
+    let p = pattern.to_str().unwrap();
+    succeeded(&render_with(s, p, &["--frames", "4..5", "--clock", "0..0"]));
+    assert_eq!(written(dir.path()), ["g4.png", "g5.png"]);
+    let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
+    // The same clock in both frames, and the same seed: the same image.
+    assert_eq!(read("g4.png"), read("g5.png"));
+    // As the still, whose clock is 0 too.
+    succeeded(&render_with(
+        s,
+        dir.path().join("still.png").to_str().unwrap(),
+        &[],
+    ));
+    assert_eq!(read("g4.png"), read("still.png"));
+}
+
+/// Bad frame requests are usage errors before anything renders: several frames to a name
+/// without a frame number, a frame outside the range, `--frame` or `--clock` on a still, a
+/// malformed placeholder, a backwards range.
+#[test]
+fn bad_frame_requests_are_usage_errors_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let anim = animation_scene(dir.path(), "frames 0, 2");
+    let a = anim.to_str().unwrap();
+    let still = dir.path().join("still.scn");
+    std::fs::write(&still, "sphere { <0, 0, 0>, 1 }\n").unwrap();
+    let s = still.to_str().unwrap();
+    let plain = dir.path().join("plain.png");
+    let p = plain.to_str().unwrap();
+    let pat = dir.path().join("h_%03d.png");
+    let pat = pat.to_str().unwrap();
+    for args in [
+        vec!["render", a, "-o", p],
+        vec!["render", a, "-o", pat, "--frame", "3"],
+        vec!["render", s, "--frame", "0"],
+        vec!["render", s, "--clock", "0..1"],
+        vec!["render", s, "-o", pat],
+        vec!["render", a, "-o", "out_%s.png"],
+        vec!["render", a, "-o", "out_%d_%d.png"],
+        vec!["render", a, "--frames", "3..1"],
+        vec!["render", a, "--frames", "0-3"],
+        vec!["render", a, "--frame", "-1"],
+        vec!["watch", s, "--frame", "x"],
+    ] {
+        usage_error(&args);
+    }
+    assert!(written(dir.path()).is_empty(), "{:?}", written(dir.path()));
+    let out = sppm(&["render", a, "-o", p]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("%04d"), "{err}");
+}
+
+/// A frame that fails stops the animation with an error naming it; the frames before it are
+/// complete files, and nothing of the failed frame or the later ones is left.
+#[test]
+fn a_failing_frame_stops_the_animation_and_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = animation_scene(
+        dir.path(),
+        "frames 0, 3 } #if (frame_number == 2) #error \"no frame two\" #end settings {",
+    );
+    let pattern = dir.path().join("f_%04d.png");
+    let out = render_with(scene.to_str().unwrap(), pattern.to_str().unwrap(), &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("no frame two"), "{err}");
+    assert!(err.contains("frame 2 failed"), "{err}");
+    assert_eq!(written(dir.path()), ["f_0000.png", "f_0001.png"]);
+    for name in ["f_0000.png", "f_0001.png"] {
+        image::open(dir.path().join(name)).expect("a complete image");
+    }
+}

@@ -922,3 +922,110 @@ fn coated_materials_hold_their_parameters() {
     assert!(close(coats[2].0, DVec3::new(0.8, 0.1, 0.1)));
     assert_eq!((coats[2].1, coats[2].2), (1.5, 0.1));
 }
+
+/// The animation names read the frame the caller sets (`EvalOptions::frame`), as POV-Ray's do:
+/// the clock runs from the initial to the final clock over the frames, one `clock_delta` per
+/// frame; a still reads 0 everywhere and `clock_on` false.
+#[test]
+fn animation_names_read_the_frame_being_evaluated() {
+    let text = "#declare Values = [clock, clock_delta, frame_number, initial_clock, \
+                final_clock, initial_frame, final_frame, (clock_on ? 1 : 0)];\n\
+                sphere { <clock * 4, 0, 0>, 1 }\n\
+                settings { resolution <8, 8> frames 10, 14 clock_range 2, 4 }\n";
+    let at = |frame: Option<Frame>| {
+        let options = EvalOptions {
+            frame,
+            ..EvalOptions::default()
+        };
+        let l = load_source("anim.scn", text, &options);
+        assert!(!l.has_errors(), "{:?}", l.diagnostics);
+        assert!(l.animated, "the scene reads `clock`");
+        let s = l.scene.unwrap();
+        let Shape::Sphere { center, .. } = s.objects[0].shape else {
+            panic!("{:?}", s.objects[0].shape)
+        };
+        (center.x / 4.0, s)
+    };
+    let (still_clock, still) = at(None);
+    assert_eq!(still_clock, 0.0);
+    let range = sppm_lang::frame_range(&still.settings, &Default::default())
+        .unwrap()
+        .expect("the scene declares frames");
+    assert_eq!((range.first, range.last), (10, 14));
+    assert_eq!((range.initial_clock, range.final_clock), (2.0, 4.0));
+    let clocks: Vec<f64> = range.frames().map(|k| at(range.frame(k)).0).collect();
+    assert_eq!(clocks, [2.0, 2.5, 3.0, 3.5, 4.0]);
+    // Every value, through `#debug`-free reading of the declared array via a second scene.
+    let probe = |frame: Option<Frame>| -> Vec<f64> {
+        let options = EvalOptions {
+            frame,
+            ..EvalOptions::default()
+        };
+        let l = load_source(
+            "probe.scn",
+            &format!(
+                "{text}#declare I = 0;\n#while (I < 8) sphere {{ <Values[I], 0, 0>, 1 }} \
+                 #declare I = I + 1; #end\n"
+            ),
+            &options,
+        );
+        let s = l.scene.expect("scene");
+        s.objects[1..]
+            .iter()
+            .map(|o| match o.shape {
+                Shape::Sphere { center, .. } => center.x,
+                _ => f64::NAN,
+            })
+            .collect()
+    };
+    assert_eq!(probe(None), [0.0; 8]);
+    assert_eq!(
+        probe(range.frame(11)),
+        [2.5, 0.5, 11.0, 2.0, 4.0, 10.0, 14.0, 1.0]
+    );
+}
+
+/// A scene that reads no animation name is the same in every frame (`load_frame` reuses the
+/// still); one whose frame range depends on the clock is refused at its settings.
+#[test]
+fn a_frame_reloads_only_what_the_clock_changes() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let over = sppm_lang::RangeOverride::default();
+    let options = EvalOptions::default();
+    let fixed = write(
+        "fixed.scn",
+        "sphere { <0, 0, 0>, 1 } settings { frames 0, 3 }\n",
+    );
+    let still = load_file(&fixed, &options).unwrap();
+    assert!(!still.animated);
+    let range = sppm_lang::frame_range(&still.scene.as_ref().unwrap().settings, &over)
+        .unwrap()
+        .unwrap();
+    let frame = sppm_lang::load_frame(&fixed, &options, &still, &over, &range, 2).unwrap();
+    assert_eq!(format!("{:?}", frame.scene), format!("{:?}", still.scene));
+    let moving = write(
+        "moving.scn",
+        "sphere { <0, 0, 0>, 1 } settings { frames 0, 3 + (clock > 0 ? 1 : 0) }\n",
+    );
+    let still = load_file(&moving, &options).unwrap();
+    assert!(still.animated);
+    let range = sppm_lang::frame_range(&still.scene.as_ref().unwrap().settings, &over)
+        .unwrap()
+        .unwrap();
+    assert_eq!(range.last, 3);
+    // Frame 0 has clock 0, as the still: the same range, accepted.
+    let first = sppm_lang::load_frame(&moving, &options, &still, &over, &range, 0).unwrap();
+    assert!(!first.has_errors(), "{:?}", first.diagnostics);
+    let later = sppm_lang::load_frame(&moving, &options, &still, &over, &range, 2).unwrap();
+    assert!(later.scene.is_none());
+    let text = sppm_lang::render_plain(&later.sources, &later.diagnostics, 100);
+    assert!(
+        text.contains("the frame range changes with the frame"),
+        "{text}"
+    );
+}

@@ -19,6 +19,7 @@ macro_rules! say_inline {
 
 mod chart;
 mod check;
+mod frames;
 mod live;
 mod output;
 mod reference;

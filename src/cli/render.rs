@@ -8,9 +8,10 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::render::{Progress, RenderOptions, RenderStats, prepare, render_prepared};
 use sppm_lang::scene::{Integrator, Scene};
-use sppm_lang::{Cancel, SourceMap};
+use sppm_lang::{Cancel, RangeOverride, SourceMap};
 
-use super::check::{load_scene, print_render_error, print_render_warning};
+use super::check::{print_diagnostics, print_render_error, print_render_warning};
+use super::frames::{self, FramePattern};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -41,6 +42,17 @@ pub struct RenderArgs {
     /// Rendering method, overriding the scene's `settings { integrator ... }`.
     #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
+    /// Render frames A to B of an animation (both included), over the scene's
+    /// `settings { frames ... }`; the output names a file per frame (`-o out_%04d.png`).
+    #[arg(long, value_name = "A..B", value_parser = frames::parse_frames)]
+    pub frames: Option<(u32, u32)>,
+    /// Render frame K of the animation alone (the same image as frame K of the whole range).
+    #[arg(long, value_name = "K", value_parser = frames::parse_frame)]
+    pub frame: Option<u32>,
+    /// The clock at the first and the last frame (default: the scene's `clock_range`, else
+    /// 0..1).
+    #[arg(long, value_name = "A..B", value_parser = frames::parse_clock, allow_hyphen_values = true)]
+    pub clock: Option<(f64, f64)>,
     #[command(flatten)]
     pub size: SizeArgs,
     #[command(flatten)]
@@ -58,44 +70,227 @@ pub fn run(args: RenderArgs) -> ExitCode {
             .num_threads(n)
             .build_global();
     }
+    let usage = |e: String| {
+        say!("error: {e}");
+        ExitCode::from(EXIT_USAGE)
+    };
     // The output is checked before the load (which may read a large mesh) and again against
-    // the files the load read.
-    let output = match super::output_path(args.output.as_deref(), &args.scene) {
+    // the files the load read; a name with a frame number is checked as frame 0's.
+    let pattern = match args.output.as_deref().map(FramePattern::parse) {
+        Some(Err(e)) => return usage(e),
+        Some(Ok(p)) => p,
+        None => None,
+    };
+    let first_output = pattern.as_ref().map(|p| p.path(0));
+    let output = match super::output_path(
+        first_output.as_deref().or(args.output.as_deref()),
+        &args.scene,
+    ) {
         Ok(o) => o,
-        Err(e) => {
-            say!("error: {e}");
-            return ExitCode::from(EXIT_USAGE);
-        }
+        Err(e) => return usage(e),
     };
     let eval_options = sppm_lang::EvalOptions {
         cancel: cancel.clone(),
         ..args.limits.options()
     };
-    match load_scene(&args.scene, &eval_options) {
-        Ok(loaded) => {
-            if let Err(e) = super::check_not_an_input(&[&output], &loaded.dependencies) {
-                say!("error: {e}");
-                return ExitCode::from(EXIT_USAGE);
+    // Read as a still first: that gives the scene's frame range (see `sppm_lang::load_frame`).
+    let still = match sppm_lang::load_file(&args.scene, &eval_options) {
+        Ok(l) => l,
+        Err(e) => return usage(e.with_path(&args.scene)),
+    };
+    if still.interrupted {
+        say!("interrupted");
+        return ExitCode::from(EXIT_SCENE_ERROR);
+    }
+    let over = RangeOverride {
+        frames: args.frames,
+        clock: args.clock,
+    };
+    let range = match still.scene.as_ref().filter(|_| !still.has_errors()) {
+        Some(s) => sppm_lang::frame_range(&s.settings, &over),
+        None => {
+            print_diagnostics(&still);
+            return ExitCode::from(EXIT_SCENE_ERROR);
+        }
+    };
+    match range {
+        Err(e) => {
+            print_diagnostics(&still);
+            usage(e)
+        }
+        Ok(Some(range)) => animate(&args, &eval_options, still, pattern, &range, &cancel),
+        Ok(None) => {
+            let needs = if args.frame.is_some() {
+                Some("`--frame`")
+            } else if args.clock.is_some() {
+                Some("`--clock`")
+            } else if pattern.is_some() {
+                Some("an output name with a frame number")
+            } else {
+                None
+            };
+            if let Some(what) = needs {
+                return usage(format!(
+                    "{what} needs an animation, and `{}` is a still: give its frames with \
+                     `--frames A..B` or `settings {{ frames A, B }}`",
+                    args.scene.display()
+                ));
             }
-            let code = render_scene(&loaded.scene, &args, &loaded.sources, &output, &cancel);
+            print_diagnostics(&still);
+            let Some(scene) = still.scene.as_ref() else {
+                return ExitCode::from(EXIT_SCENE_ERROR);
+            };
+            if let Err(e) = super::check_not_an_input(&[&output], &still.dependencies) {
+                return usage(e);
+            }
+            let code = render_scene(scene, &args, &still.sources, &output, &cancel, true)
+                .map_or_else(|c| c, |()| ExitCode::SUCCESS);
             // The image is written and the process ends here: freeing a large scene (a mesh's
             // millions of vertices) is left to the exit.
-            std::mem::forget(loaded);
+            std::mem::forget(still);
             code
         }
-        Err(code) => code,
     }
 }
 
+/// Renders the frames of `range` that `args` asks for (`--frame K`, else all), each loaded by
+/// itself, into the files `pattern` names; stops at the first frame that fails, naming it (the
+/// frames written before it are complete files and stay).
+fn animate(
+    args: &RenderArgs,
+    options: &sppm_lang::EvalOptions,
+    still: sppm_lang::Loaded,
+    pattern: Option<FramePattern>,
+    range: &sppm_lang::FrameRange,
+    cancel: &Cancel,
+) -> ExitCode {
+    let usage = |e: String| {
+        say!("error: {e}");
+        ExitCode::from(EXIT_USAGE)
+    };
+    let frames = match args.frame {
+        Some(k) if !range.frames().contains(&k) => {
+            return usage(format!(
+                "frame {k} is outside the animation's frames {}..{}",
+                range.first, range.last
+            ));
+        }
+        Some(k) => k..=k,
+        None => range.frames(),
+    };
+    let count = frames.end() - frames.start() + 1;
+    // One frame may go to a plain name; several need a place for their numbers.
+    let output_of = |k: u32| -> Result<PathBuf, String> {
+        let path = match (&pattern, &args.output) {
+            (Some(p), _) => p.path(k),
+            (None, Some(o)) if count == 1 => o.clone(),
+            (None, Some(o)) => {
+                return Err(format!(
+                    "output `{}` has no place for the frame number, and {count} frames are to be \
+                     written: put `%04d` in its name, e.g. `frame_%04d.png`",
+                    o.display()
+                ));
+            }
+            (None, None) => FramePattern::for_scene(&args.scene)
+                .ok_or_else(|| format!("`{}` is not a scene file name", args.scene.display()))?
+                .path(k),
+        };
+        super::output_path(Some(&path), &args.scene)
+    };
+    // Every name is checked before the first frame renders.
+    for k in frames.clone() {
+        if let Err(e) =
+            output_of(k).and_then(|o| super::check_not_an_input(&[&o], &still.dependencies))
+        {
+            return usage(e);
+        }
+    }
+    if !still.animated {
+        // Every frame is the still: its warnings are said once.
+        print_diagnostics(&still);
+        if count > 1 {
+            say!(
+                "warning: `{}` reads no animation value (`clock`, `frame_number`, ...): its {count} \
+                 frames are the same image",
+                args.scene.display()
+            );
+        }
+    }
+    let over = RangeOverride {
+        frames: args.frames,
+        clock: args.clock,
+    };
+    let stopped = |k: u32, written: u32| {
+        if written > 0 {
+            say!(
+                "error: frame {k} failed; the {written} frame{} before it {} written",
+                if written == 1 { "" } else { "s" },
+                if written == 1 { "is" } else { "are" }
+            );
+        } else {
+            say!("error: frame {k} failed; no frame was written");
+        }
+        ExitCode::from(EXIT_SCENE_ERROR)
+    };
+    for k in frames.clone() {
+        // The frames before this one, all written.
+        let written = k - frames.start();
+        let loaded = match sppm_lang::load_frame(&args.scene, options, &still, &over, range, k) {
+            Ok(l) => l,
+            Err(e) => {
+                say!("error: {}", e.with_path(&args.scene));
+                return stopped(k, written);
+            }
+        };
+        if loaded.interrupted {
+            say!("interrupted at frame {k}");
+            return ExitCode::from(EXIT_SCENE_ERROR);
+        }
+        if still.animated {
+            print_diagnostics(&loaded);
+        }
+        let Some(scene) = loaded.scene.as_ref().filter(|_| !loaded.has_errors()) else {
+            return stopped(k, written);
+        };
+        let output = match output_of(k)
+            .and_then(|o| super::check_not_an_input(&[&o], &loaded.dependencies).map(|()| o))
+        {
+            Ok(o) => o,
+            Err(e) => {
+                say!("error: {e}");
+                return stopped(k, written);
+            }
+        };
+        say!(
+            "frame {k} of {}..{} (clock {})",
+            range.first,
+            range.last,
+            sppm_lang::diag::short_number(range.clock_at(k))
+        );
+        let last = k == *frames.end();
+        if let Err(code) = render_scene(scene, args, &loaded.sources, &output, cancel, last) {
+            stopped(k, written);
+            return code;
+        }
+        if cancel.is_cancelled() && !last {
+            say!("interrupted after frame {k}; the frames after it were not rendered");
+            return ExitCode::from(EXIT_SCENE_ERROR);
+        }
+    }
+    ExitCode::SUCCESS
+}
+
 /// Renders an already loaded scene as `args` asks into `output`; `sources` turn render errors
-/// that carry a span into diagnostics. `cancel` stops the prepare stage and the passes.
+/// that carry a span into diagnostics. `cancel` stops the prepare stage and the passes. `last`:
+/// the process ends after this render, which may leave its buffers to the exit.
 fn render_scene(
     scene: &Scene,
     args: &RenderArgs,
     sources: &SourceMap,
     output: &Path,
     cancel: &Cancel,
-) -> ExitCode {
+    last: bool,
+) -> Result<(), ExitCode> {
     let mut scene = std::borrow::Cow::Borrowed(scene);
     if let Some(integrator) = args.integrator {
         scene.to_mut().settings.integrator = integrator;
@@ -104,7 +299,7 @@ fn render_scene(
         && let Err(e) = args.size.apply_to(scene.to_mut())
     {
         say!("error: {e}");
-        return ExitCode::from(EXIT_USAGE);
+        return Err(ExitCode::from(EXIT_USAGE));
     }
     let scene = scene.as_ref();
     let options = RenderOptions {
@@ -186,14 +381,14 @@ fn render_scene(
     };
     let (out, prepared) = match result {
         Ok(o) => o,
-        Err(e) if e.interrupted => return interrupted(),
+        Err(e) if e.interrupted => return Err(interrupted()),
         Err(e) => {
             print_render_error(sources, &e);
-            return ExitCode::from(EXIT_SCENE_ERROR);
+            return Err(ExitCode::from(EXIT_SCENE_ERROR));
         }
     };
     if out.iterations_done == 0 && out.cancelled {
-        return interrupted();
+        return Err(interrupted());
     }
     if out.iterations_done == 0 {
         // Nothing to show: keep whatever image is at the output path.
@@ -212,15 +407,17 @@ fn render_scene(
             e = e.at(scene.settings.span);
         }
         print_render_error(sources, &e);
-        return ExitCode::from(EXIT_SCENE_ERROR);
+        return Err(ExitCode::from(EXIT_SCENE_ERROR));
     }
     if let Err(e) = out.image.write(output, exposure) {
         say!("error: {e}");
-        return ExitCode::from(EXIT_SCENE_ERROR);
+        return Err(ExitCode::from(EXIT_SCENE_ERROR));
     }
     // Written: the process ends after this command, and the exit frees the prepared scene's
     // buffers (BVH, mesh) at once; freeing them one by one first is serial work for nothing.
-    std::mem::forget(prepared);
+    if last {
+        std::mem::forget(prepared);
+    }
     let secs = out.elapsed.as_secs_f64().max(1e-9);
     say!(
         "{} {}: {} iterations{} in {:.2}s{}",
@@ -235,7 +432,7 @@ fn render_scene(
         secs,
         method_statistics(scene.settings.integrator, &out.stats, secs),
     );
-    ExitCode::SUCCESS
+    Ok(())
 }
 
 /// The figures that mean something for `method`: photons and their rate for the photon

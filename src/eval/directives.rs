@@ -97,6 +97,20 @@ impl Evaluator {
                 }
             }
             DirectiveKind::Undef(name) => {
+                if super::scope::animation_name(&name.text).is_some() {
+                    return Err(vec![
+                        Error::new(format!(
+                            "`{}` is a built-in animation value and cannot be undefined",
+                            name.text
+                        ))
+                        .label("built-in name")
+                        .help(
+                            "remove the `#undef`: the animation values are always defined (0 in \
+                             a still)",
+                        )
+                        .at(name.span),
+                    ]);
+                }
                 if super::CONSTANTS.contains(&name.text.as_str()) {
                     return Err(vec![
                         Error::new(format!(

@@ -15,6 +15,7 @@
 //! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
+mod animation;
 mod args;
 mod blocks;
 mod builtins;
@@ -37,6 +38,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
+pub use animation::{RangeOverride, frame_range, load_frame};
 pub use builtins::{CONSTANTS, FUNCTIONS};
 pub use function::compile_function;
 pub use value::Value;
@@ -76,6 +78,10 @@ pub struct EvalOptions {
     /// before and after parsing, which cannot stop midway) and ends with
     /// [`Loaded::interrupted`].
     pub cancel: crate::cancel::Cancel,
+    /// The animation frame being evaluated: what `clock`, `frame_number` and the other
+    /// animation names read ([`crate::scene::animation_value`]). `None`: a still, where they
+    /// read 0.
+    pub frame: Option<crate::scene::Frame>,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -158,6 +164,7 @@ impl Default for EvalOptions {
             max_steps: 50_000_000,
             memory_limit: None,
             cancel: crate::cancel::Cancel::default(),
+            frame: None,
         }
     }
 }
@@ -179,6 +186,9 @@ pub struct Loaded {
     /// The caller cancelled the load ([`EvalOptions::cancel`]): no scene, and an error
     /// "interrupted" after the errors found before it; not the scene's fault.
     pub interrupted: bool,
+    /// The evaluation read an animation name (`clock`, `frame_number`, ...): another frame
+    /// may give another scene. When false every frame gives this one.
+    pub animated: bool,
 }
 
 impl Loaded {
@@ -245,6 +255,7 @@ fn on_eval_thread(
         dependencies: vec![path.to_path_buf()],
         environment,
         interrupted,
+        animated: false,
     };
     let mut last_error = None;
     for &stack in stacks {
@@ -364,6 +375,7 @@ fn run(path: &Path, name: &str, text: String, options: &EvalOptions, stack: usiz
         sources: ev.sources,
         environment: false,
         interrupted,
+        animated: ev.animated,
     }
 }
 
@@ -395,6 +407,8 @@ pub(crate) struct Evaluator {
     exhausted: bool,
     /// Set once the caller's cancel was seen ([`Evaluator::interrupted`]).
     interrupted: bool,
+    /// Set once an animation name was read ([`Loaded::animated`]).
+    pub(crate) animated: bool,
     /// `#switch`es and loops around the current item that a `#break` may leave (within one
     /// block body or macro body: blocks and macro calls start again at 0).
     pub(crate) break_targets: usize,
@@ -495,6 +509,7 @@ impl Evaluator {
             steps: 0,
             exhausted: false,
             interrupted: false,
+            animated: false,
             break_targets: 0,
             breaking: false,
             messages: 0,

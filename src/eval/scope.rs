@@ -24,6 +24,14 @@ pub(super) struct Frame {
     pub(super) file: bool,
 }
 
+/// What built-in animation name `name` is (`clock`, `frame_number`, ...), if it is one.
+pub(super) fn animation_name(name: &str) -> Option<&'static str> {
+    crate::scene::ANIMATION_NAMES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, what)| *what)
+}
+
 impl Evaluator {
     /// The frame that holds `name` among those a lookup sees, innermost first: the current
     /// macro call's, and the frames of the included files being run (each include's top-level
@@ -78,6 +86,21 @@ impl Evaluator {
     /// `#for (x, ...)` would silently change every later `x` (a `scale 1 + x` scaling by the
     /// loop's last value).
     pub(super) fn bindable(name: &Name) -> SourceResult<()> {
+        if let Some(what) = animation_name(&name.text) {
+            return Err(vec![
+                Error::new(format!(
+                    "`{}` is a built-in animation value ({what}) and cannot be declared",
+                    name.text
+                ))
+                .label("built-in name")
+                .help(
+                    "the animation values come from the frame being rendered (`render --frames`, \
+                     `settings { frames ... }`); choose another name for a value of your own, \
+                     e.g. `#declare T = clock * 2;`",
+                )
+                .at(name.span),
+            ]);
+        }
         if !CONSTANTS.contains(&name.text.as_str()) {
             return Ok(());
         }
@@ -183,6 +206,14 @@ impl Evaluator {
             b.used = true;
             return Some(b.value.clone());
         }
+        if let Some(v) = crate::scene::animation_value(name, self.options.frame.as_ref()) {
+            self.animated = true;
+            return Some(if name == "clock_on" {
+                Value::Bool(v != 0.0)
+            } else {
+                Value::Num(v)
+            });
+        }
         builtins::constant(name)
     }
 
@@ -200,6 +231,7 @@ impl Evaluator {
             known.extend(f.vars.keys().map(String::as_str));
         }
         known.extend(CONSTANTS);
+        known.extend(crate::scene::ANIMATION_NAMES.iter().map(|(n, _)| *n));
         known
     }
 

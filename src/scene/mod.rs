@@ -7,6 +7,7 @@
 //! Geometry is in f64 (`glam::DVec3`) so that the renderer chooses where precision matters.
 //! Colors are linear RGB.
 
+pub mod animation;
 mod assets;
 mod csg;
 pub mod function;
@@ -17,6 +18,7 @@ mod obj_errors;
 pub mod pattern_value;
 mod validate;
 
+pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
 pub use assets::{
     AssetError, ColorSpace, IMAGE_BYTES_PER_PIXEL, ImageData, ImageRoom, MAX_TOTAL_IMAGE_PIXELS,
     MeshData, brightest_pixel, load_image, load_image_within, load_obj, srgb_to_linear,
@@ -137,6 +139,13 @@ pub struct Settings {
     pub final_gather: bool,
     /// How the scene's coordinates are read (`handedness left`: POV-Ray's).
     pub handedness: Handedness,
+    /// The animation's frames (`frames first, last`); `None`: a still unless the caller gives
+    /// a range.
+    pub frames: Option<(u32, u32)>,
+    /// The clock over the frames (`clock_range initial, final`); `None`: 0 to 1.
+    pub clock_range: Option<(f64, f64)>,
+    /// `cyclic on`: the frame after the last is the first again ([`FrameRange::cyclic`]).
+    pub cyclic: bool,
     /// The last `settings` block (detached when the file gave none): where errors about the
     /// settings point.
     pub span: Span,
@@ -160,6 +169,9 @@ impl Default for Settings {
             antialias_threshold: None,
             final_gather: false,
             handedness: Handedness::Right,
+            frames: None,
+            clock_range: None,
+            cyclic: false,
             span: Span::detached(),
         }
     }

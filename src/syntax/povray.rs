@@ -226,10 +226,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "`hollow` is not needed here (there is no participating media); remove it",
     ),
     pov(
-        "clock",
-        "there is no animation `clock` here; declare a value instead: `#declare Clock = 0.5;`",
-    ),
-    pov(
         "photons",
         "caustics are always photon-mapped here; remove POV-Ray's `photons { ... }` (the number \
          of photons per iteration is `settings { photons n }`)",

@@ -2,8 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
+use sppm_lang::files::FileError;
 use sppm_lang::scene::{Background, Scene};
-use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
+use sppm_lang::span::Span;
+use sppm_lang::{Diagnostic, EvalOptions, Loaded, RangeOverride, SourceMap};
 
 use super::super::check::print_diagnostics;
 use super::status;
@@ -19,7 +21,9 @@ pub struct Load {
     pub diagnostics: Vec<Diagnostic>,
 }
 
-pub fn load(path: &Path, options: &EvalOptions) -> Load {
+/// Loads the scene at `path`: as a still, or frame K of its animation when `frame` is
+/// `Some((over, K))`.
+pub fn load(path: &Path, options: &EvalOptions, frame: Option<(&RangeOverride, u32)>) -> Load {
     // Editors truncate a file before writing it: an empty scene is a save in progress (or a
     // mistake), never a scene to render over the last image.
     if std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() == 0) {
@@ -35,7 +39,11 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
             diagnostics: Vec::new(),
         };
     }
-    match sppm_lang::load_file(path, options) {
+    let loaded = sppm_lang::load_file(path, options).and_then(|still| match frame {
+        Some((over, k)) => load_frame(path, options, still, over, k),
+        None => Ok(still),
+    });
+    match loaded {
         Ok(loaded) => {
             if !loaded.interrupted {
                 print_diagnostics(&loaded);
@@ -85,4 +93,43 @@ pub fn load(path: &Path, options: &EvalOptions) -> Load {
             }
         }
     }
+}
+
+/// Frame `k` of the animation `still` (the scene read as a still) declares, with `over`: the
+/// still itself when it has errors, or a load whose error says why there is no such frame.
+fn load_frame(
+    path: &Path,
+    options: &EvalOptions,
+    mut still: Loaded,
+    over: &RangeOverride,
+    k: u32,
+) -> Result<Loaded, FileError> {
+    let Some(scene) = still.scene.as_ref().filter(|_| !still.has_errors()) else {
+        return Ok(still);
+    };
+    let problem = match sppm_lang::frame_range(&scene.settings, over) {
+        Ok(Some(range)) if range.frames().contains(&k) => {
+            let mut loaded = sppm_lang::load_frame(path, options, &still, over, &range, k)?;
+            for d in still.dependencies {
+                if !loaded.dependencies.contains(&d) {
+                    loaded.dependencies.push(d);
+                }
+            }
+            return Ok(loaded);
+        }
+        Ok(Some(range)) => format!(
+            "frame {k} is outside the animation's frames {}..{}",
+            range.first, range.last
+        ),
+        Ok(None) => format!(
+            "`--frame {k}` needs an animation, and the scene is a still: give its frames with \
+             `--frames A..B` or `settings {{ frames A, B }}`"
+        ),
+        Err(e) => e,
+    };
+    still.scene = None;
+    still
+        .diagnostics
+        .insert(0, Diagnostic::error(Span::detached(), problem));
+    Ok(still)
 }

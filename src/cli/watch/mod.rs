@@ -79,6 +79,15 @@ pub struct WatchArgs {
     /// machine, and any program, can read the scene and its image).
     #[arg(long, requires = "serve")]
     pub no_token: bool,
+    /// Show frame K of the scene's animation (its `settings { frames ... }`, or `--frames`).
+    #[arg(long, value_name = "K", value_parser = super::frames::parse_frame)]
+    pub frame: Option<u32>,
+    /// The animation's frames, over the scene's (with `--frame`).
+    #[arg(long, value_name = "A..B", value_parser = super::frames::parse_frames, requires = "frame")]
+    pub frames: Option<(u32, u32)>,
+    /// The clock at the first and the last frame (with `--frame`).
+    #[arg(long, value_name = "A..B", value_parser = super::frames::parse_clock, requires = "frame", allow_hyphen_values = true)]
+    pub clock: Option<(f64, f64)>,
     #[command(flatten)]
     pub size: SizeArgs,
     #[command(flatten)]
@@ -158,7 +167,27 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         say!("error: {why} (watch needs an existing scene to start)");
         return ExitCode::from(EXIT_USAGE);
     }
-    let output = match super::output_path(args.output.as_deref(), &args.scene) {
+    // A name with a frame number (`-o out_%04d.png`) names the frame shown.
+    let framed = match args
+        .output
+        .as_deref()
+        .map(super::frames::FramePattern::parse)
+    {
+        Some(Ok(Some(p))) => match args.frame {
+            Some(k) => Some(p.path(k)),
+            None => {
+                say!("error: an output name with a frame number needs `--frame K`");
+                return ExitCode::from(EXIT_USAGE);
+            }
+        },
+        Some(Err(e)) => {
+            say!("error: {e}");
+            return ExitCode::from(EXIT_USAGE);
+        }
+        _ => None,
+    };
+    let output = match super::output_path(framed.as_deref().or(args.output.as_deref()), &args.scene)
+    {
         Ok(o) => o,
         Err(e) => {
             say!("error: {e}");
@@ -220,7 +249,11 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         }
         // The previous files stay watched (and the render in flight goes on) during the load.
         let load_started = SystemTime::now();
-        let loaded = load(&args.scene, &options);
+        let over = sppm_lang::RangeOverride {
+            frames: args.frames,
+            clock: args.clock,
+        };
+        let loaded = load(&args.scene, &options, args.frame.map(|k| (&over, k)));
         if interrupted.load(Ordering::SeqCst) {
             // The render that went on during the load writes its finished iterations.
             if let Some(c) = &mut current {

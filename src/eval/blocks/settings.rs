@@ -7,15 +7,17 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
 use crate::eval::value::Value;
+use crate::scene::animation::MAX_CLOCK;
 use crate::scene::{
-    Antialias, Handedness, Integrator, MAX_ITERATIONS, MAX_PHOTONS, MAX_RESOLUTION_SIDE, Settings,
+    Antialias, Handedness, Integrator, MAX_FRAME, MAX_ITERATIONS, MAX_PHOTONS, MAX_RESOLUTION_SIDE,
+    Settings,
 };
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
 pub(super) struct SettingsBuilder(pub(super) Settings);
 
-static SETTINGS_PROPS: [PropSpec; 14] = [
+static SETTINGS_PROPS: [PropSpec; 17] = [
     p("resolution", 1, 2, "a width and height", "<512, 512>"),
     p("iterations", 1, 1, "a number", "64"),
     p("photons", 1, 1, "a number", "200000"),
@@ -34,6 +36,15 @@ static SETTINGS_PROPS: [PropSpec; 14] = [
     p("threshold", 1, 1, "a colour difference", "0.1"),
     w("final_gather", "`on` or `off`", "on"),
     w("handedness", "`right` or `left`", "left"),
+    p("frames", 2, 2, "the first and last frame numbers", "0, 99"),
+    p(
+        "clock_range",
+        2,
+        2,
+        "the clock at the first and the last frame",
+        "0, 1",
+    ),
+    w("cyclic", "`on` or `off`", "on"),
 ];
 
 impl SettingsBuilder {
@@ -50,6 +61,54 @@ impl SettingsBuilder {
         }
         Ok(Value::Settings(Box::new(self.0)))
     }
+}
+
+/// `frames first, last`: whole frame numbers from 0 to [`MAX_FRAME`], in order.
+fn frames(first: &Arg, last: &Arg) -> SourceResult<(u32, u32)> {
+    let frame = |a: &Arg| -> SourceResult<u32> {
+        let x = num(a)?;
+        if !(0.0..=f64::from(MAX_FRAME)).contains(&x) || x.fract() != 0.0 {
+            return Err(range_error(
+                a.span,
+                format!(
+                    "a frame number must be a whole number from 0 to {MAX_FRAME}, found {}",
+                    crate::eval::expr::exact_number(x)
+                ),
+                "e.g. `frames 0, 99` for a hundred frames",
+            ));
+        }
+        Ok(x as u32)
+    };
+    let (a, b) = (frame(first)?, frame(last)?);
+    if b < a {
+        return Err(range_error(
+            first.span.join(last.span),
+            format!("the frames run from {a} back to {b}: the last comes before the first"),
+            "give the first frame, then the last: e.g. `frames 0, 99`",
+        ));
+    }
+    Ok((a, b))
+}
+
+/// `clock_range initial, final`: finite numbers within [`MAX_CLOCK`] (the clock may run
+/// backwards).
+fn clock_range(initial: &Arg, last: &Arg) -> SourceResult<(f64, f64)> {
+    let clock = |a: &Arg| -> SourceResult<f64> {
+        let x = num(a)?;
+        if !x.is_finite() || x.abs() > MAX_CLOCK {
+            return Err(range_error(
+                a.span,
+                format!(
+                    "the clock must stay within ±{}, found {}",
+                    short_number(MAX_CLOCK),
+                    short_number(x)
+                ),
+                "e.g. `clock_range 0, 1` (the default)",
+            ));
+        }
+        Ok(x)
+    };
+    Ok((clock(initial)?, clock(last)?))
 }
 
 impl Sink for SettingsBuilder {
@@ -147,6 +206,9 @@ impl Sink for SettingsBuilder {
                     .find(|h| h.name() == name)
                     .expect("known name");
             }
+            "frames" => s.frames = Some(frames(&args[0], &args[1])?),
+            "clock_range" => s.clock_range = Some(clock_range(&args[0], &args[1])?),
+            "cyclic" => s.cyclic = word(&args[0], &["on", "off"])? == "on",
             _ => unreachable!(),
         }
         Ok(())
