@@ -178,7 +178,7 @@ pub fn run(
         cancel,
         ..render_options.clone()
     };
-    let loaded = match sppm_lang::load_file(scene, options) {
+    let mut loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
             err(&format!("error: {}\n", e.with_path(scene)));
@@ -189,9 +189,10 @@ pub fn run(
         return interrupted();
     }
     print_diagnostics(&loaded);
-    match &loaded.scene {
-        Some(s) if !loaded.has_errors() => {
-            let mut s = s.clone();
+    let has_errors = loaded.has_errors();
+    // Taken, not copied: a large scene's objects are tens of megabytes.
+    match loaded.scene.take() {
+        Some(mut s) if !has_errors => {
             if let Err(e) = size.apply_to(&mut s) {
                 err(&format!("error: {e}\n"));
                 return ExitCode::from(EXIT_USAGE);

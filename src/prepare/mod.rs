@@ -167,6 +167,9 @@ pub(crate) fn prepare_until<'a>(
     Ok((settings, prepared))
 }
 
+/// Shapes of one object from which they are moved into the scene's list in parallel.
+const PARALLEL_SHAPES: usize = 4096;
+
 /// What the prepare stage asks to learn whether the caller cancelled.
 pub type Stop<'s> = &'s (dyn Fn() -> bool + Sync);
 
@@ -323,13 +326,17 @@ impl<'a> PreparedScene<'a> {
                 None
             };
             if light_shapes.is_none() {
-                // Not a light: the shapes (a mesh's millions) move in parallel.
+                // Not a light: a mesh's millions of shapes move in parallel; an object's few
+                // do not (handing each of 100 000 spheres to the thread pool cost more CPU
+                // than moving them).
                 let (base, n) = (prim_object.len(), list.len());
-                shapes.par_extend(
-                    list.into_par_iter()
-                        .enumerate()
-                        .map(|(k, s)| (s, (base + k) as u32)),
-                );
+                let tag =
+                    |(k, s): (usize, crate::shapes::primitive::AnyShape)| (s, (base + k) as u32);
+                if n >= PARALLEL_SHAPES {
+                    shapes.par_extend(list.into_par_iter().enumerate().map(tag));
+                } else {
+                    shapes.extend(list.into_iter().enumerate().map(tag));
+                }
                 prim_object.resize(base + n, oi as u32);
                 prim_light.resize(base + n, NO_LIGHT);
                 continue;

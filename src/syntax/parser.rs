@@ -49,30 +49,61 @@ static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
 /// [`MAX_SYNTAX_ERRORS`](super::recover::MAX_SYNTAX_ERRORS) ([`super::recover`]).
 pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
     let stray = check_nesting(file, text)?;
+    // A byte order mark may only open the file: `chunk` does not know where it stands.
+    if !text.contains('\u{FEFF}')
+        && let Some(items) = parse_by_item(file, text)
+    {
+        return items;
+    }
+    parse_whole(file, text, stray)
+}
+
+/// The file parsed in one piece with the `file` rule; its errors are every syntax error.
+fn parse_whole(file: FileId, text: &str, stray: Option<usize>) -> SourceResult<Vec<Item>> {
     let mut pairs =
         SceneParser::parse(Rule::file, text).map_err(|e| all_errors(file, text, e, stray))?;
     let file_pair = pairs.next().expect("file rule");
     let items = file_pair.into_inner().next().expect("items");
-    let cx = Cx {
-        file,
-        terms: Cell::new(0),
-        too_long: RefCell::new(None),
-        errors: RefCell::new(Vec::new()),
-    };
+    let cx = Cx::new(file);
     let items = cx.items(items);
-    if let Some(d) = cx.too_long.into_inner() {
-        return Err(vec![d]);
+    cx.finish(items)
+}
+
+/// The file's items parsed one top-level item at a time, or `None` at a syntax error (the
+/// whole-file parse then finds and reports every error). pest's token list, 80 bytes a token
+/// and two tokens a rule matched, then holds one item instead of the whole file: that list
+/// was most of the peak memory of loading a large scene.
+fn parse_by_item(file: FileId, text: &str) -> Option<SourceResult<Vec<Item>>> {
+    let cx = Cx::new(file);
+    let mut items = Vec::new();
+    let mut at = 0;
+    loop {
+        let rest = &text[at..];
+        let item = SceneParser::parse(Rule::chunk, rest)
+            .ok()?
+            .next()?
+            .into_inner()
+            .next()?;
+        let end = item.as_span().end();
+        if item.as_rule() == Rule::EOI {
+            break;
+        }
+        if end == 0 {
+            return None;
+        }
+        cx.base.set(at);
+        items.push(cx.item(item));
+        at += end;
     }
-    let errors = cx.errors.into_inner();
-    if errors.is_empty() {
-        Ok(items)
-    } else {
-        Err(errors)
-    }
+    items.shrink_to_fit();
+    Some(cx.finish(items))
 }
 
 struct Cx {
     file: FileId,
+    /// Where the text the pairs index into starts in the file (a top-level item's offset when
+    /// the file is parsed item by item).
+    base: Cell<usize>,
     /// Terms (operands and operators) of the expressions being built, summed along the current
     /// path of nested expressions: a bound on the depth of the expression tree there.
     terms: Cell<usize>,
@@ -84,9 +115,39 @@ struct Cx {
 }
 
 impl Cx {
+    fn new(file: FileId) -> Self {
+        Cx {
+            file,
+            base: Cell::new(0),
+            terms: Cell::new(0),
+            too_long: RefCell::new(None),
+            errors: RefCell::new(Vec::new()),
+        }
+    }
+
+    /// The items, or the errors found while building them.
+    fn finish(self, items: Vec<Item>) -> SourceResult<Vec<Item>> {
+        if let Some(d) = self.too_long.into_inner() {
+            return Err(vec![d]);
+        }
+        let errors = self.errors.into_inner();
+        if errors.is_empty() {
+            Ok(items)
+        } else {
+            Err(errors)
+        }
+    }
+}
+
+impl Cx {
     fn span(&self, pair: &Pair<Rule>) -> Span {
         let s = pair.as_span();
-        Span::new(self.file, s.start() as u32, s.end() as u32)
+        let base = self.base.get();
+        Span::new(
+            self.file,
+            (base + s.start()) as u32,
+            (base + s.end()) as u32,
+        )
     }
 
     fn name(&self, pair: Pair<Rule>) -> Name {
@@ -494,7 +555,7 @@ impl Cx {
     /// `"C:\textures\wood.png"` would otherwise silently lose its backslashes).
     fn unescape(&self, pair: Pair<Rule>) -> String {
         let s = pair.as_str();
-        let base = pair.as_span().start();
+        let base = self.base.get() + pair.as_span().start();
         let mut out = String::with_capacity(s.len());
         let mut chars = s.char_indices();
         while let Some((i, c)) = chars.next() {
@@ -572,6 +633,34 @@ mod tests {
         };
         assert_eq!(items.len(), 5, "{items:?}");
         assert!(matches!(&items[3], Item::Keyword(n) if n.text == "translate"));
+    }
+
+    /// Item by item gives the tree of the whole-file parse, spans included: blanks and
+    /// comments between items, directives with bodies, strings with escapes, a last item
+    /// without a line break after it, and errors found while building the tree.
+    #[test]
+    fn item_by_item_matches_the_whole_file() {
+        let texts = [
+            "",
+            "  // only a comment\n",
+            "#declare M = material { diffuse rgb <0.7, 0.7, 0.7> }\n\
+             /* a /* nested */ comment */ sphere { <1, 2, 3>, 0.5 material { M } }\n\
+             #if (1 < 2) box { <0,0,0>, <1,1,1> } #else disk { } #end\n\
+             #macro R(A, B) #debug concat(\"a\\tb\", str(A, 0, 2)) #end R(1, 2)\n\
+             , translate -<1, 2, 3>.x * 2 ? 1 : 0 #include \"x.inc\"\tx[1]",
+            "#debug \"bad \\q escape\" #debug \"\\w\"",
+            "#macro M(A, A) #end sphere { }",
+        ];
+        for text in texts {
+            let stray = check_nesting(FileId(3), text).unwrap();
+            let whole = format!("{:?}", parse_whole(FileId(3), text, stray));
+            let by_item = parse_by_item(FileId(3), text).expect("no syntax error");
+            assert_eq!(format!("{by_item:?}"), whole, "{text}");
+        }
+        // A syntax error anywhere leaves the item-by-item parse to the whole-file one.
+        for text in ["sphere { } }", "sphere { ", "#end", "x /* open"] {
+            assert!(parse_by_item(FileId(0), text).is_none(), "{text}");
+        }
     }
 
     #[test]
