@@ -167,9 +167,12 @@ fn sppm_converges_to_the_mitsuba_reference() {
 /// +4 % and +17-25 % at roughness 0.2, 0.45 and 0.8 (the smooth coat agrees within 0.5 %).
 const MODEL_DIFFERS: [&str; 3] = ["coated 0.2", "coated 0.45", "coated 0.8"];
 
+/// The Mitsuba image, each pixel's sphere index, the spheres' names, the image size.
+type MaterialReference = (Vec<[f32; 3]>, Vec<usize>, Vec<String>, (u32, u32));
+
 /// The material reference: the Mitsuba image, each pixel's sphere (0: none, k + 1: sphere k of
 /// `materials.labels`) and the spheres' names.
-fn material_reference() -> (Vec<[f32; 3]>, Vec<usize>, Vec<String>, (u32, u32)) {
+fn material_reference() -> MaterialReference {
     let dir = Path::new("tools/reference");
     let reference = load_image(&dir.join("materials.exr"), ColorSpace::Linear)
         .expect("tools/reference/materials.exr loads");
