@@ -6,6 +6,20 @@
 //! 4N iterations, over the whole image (where the directly seen lights' edges dominate it) and
 //! over the pixels away from them (the reference and its 8 neighbours below 2: the glossy
 //! reflections and the walls they light).
+//!
+//! The material sheet reference (`tools/reference/materials.py` writes `materials.scn`, the
+//! Mitsuba render `materials.exr`, a per-pixel sphere index `materials.mask.exr` and the
+//! spheres' names `materials.labels`): rows of spheres, one material per row (`coated` against
+//! Mitsuba's `plastic`/`roughplastic`, named metals against `conductor`/`roughconductor`) at
+//! several roughnesses, under a uniform sky and a rectangle light. Each sphere's mean over the
+//! pixels well inside it must be within 1 % of Mitsuba's in every channel, for the path tracer
+//! (512 samples per pixel) and for SPPM (256 iterations of 50 000 photons), except where the
+//! two models are known to differ ([`MODEL_DIFFERS`]), and the 99.99th percentile of the
+//! per-pixel error must shrink from N to 4N iterations. The Monte Carlo error of a sphere's
+//! mean, from the spread between seeds, is about 0.7 % at 64 samples per pixel and 0.4 % at 256
+//! (path and SPPM alike; the reference's own is below 0.1 %): at 64 a correct renderer missed
+//! 1 % on a rough copper sphere (1.4 %), hence the sample counts above. A row added to the
+//! script's table is checked here without a change.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -142,4 +156,168 @@ fn path_tracing_converges_to_the_mitsuba_reference() {
 #[test]
 fn sppm_converges_to_the_mitsuba_reference() {
     check(Integrator::Sppm, 8, 100_000);
+}
+
+/// Spheres whose material is not the same function as its Mitsuba counterpart: printed, not
+/// held to 1 %. Rough `coated` against `roughplastic` (`tools/reference/coat_terms.py`): ours
+/// lets `1 - E` of the light through the coat, Mitsuba the rough interface's transmission
+/// albedo (which also loses what masking hides from the refracted ray: 0.93 against 0.98
+/// head-on at roughness 0.8, 0.75 against 0.96 at cos 0.4), and Mitsuba's internal reflectance
+/// is a plain mean over 64 nodes, about 1.6 % low. Ours comes out brighter: measured +2 %,
+/// +4 % and +17-25 % at roughness 0.2, 0.45 and 0.8 (the smooth coat agrees within 0.5 %).
+const MODEL_DIFFERS: [&str; 3] = ["coated 0.2", "coated 0.45", "coated 0.8"];
+
+/// The Mitsuba image, each pixel's sphere index, the spheres' names, the image size.
+type MaterialReference = (Vec<[f32; 3]>, Vec<usize>, Vec<String>, (u32, u32));
+
+/// The material reference: the Mitsuba image, each pixel's sphere (0: none, k + 1: sphere k of
+/// `materials.labels`) and the spheres' names.
+fn material_reference() -> MaterialReference {
+    let dir = Path::new("tools/reference");
+    let reference = load_image(&dir.join("materials.exr"), ColorSpace::Linear)
+        .expect("tools/reference/materials.exr loads");
+    let mask = load_image(&dir.join("materials.mask.exr"), ColorSpace::Linear)
+        .expect("tools/reference/materials.mask.exr loads");
+    assert_eq!(
+        (mask.width, mask.height),
+        (reference.width, reference.height)
+    );
+    let labels: Vec<String> = std::fs::read_to_string(dir.join("materials.labels"))
+        .expect("tools/reference/materials.labels reads")
+        .lines()
+        .map(str::to_owned)
+        .collect();
+    let index: Vec<usize> = mask.pixels.iter().map(|p| p[0].round() as usize).collect();
+    assert!(index.iter().all(|&k| k <= labels.len()));
+    (
+        reference.pixels,
+        index,
+        labels,
+        (reference.width, reference.height),
+    )
+}
+
+/// Per-sphere mean of each channel over the pixels `index` assigns to it.
+fn sphere_means(pixels: &[[f64; 3]], index: &[usize], spheres: usize) -> Vec<[f64; 3]> {
+    let mut sum = vec![[0.0f64; 3]; spheres];
+    let mut count = vec![0usize; spheres];
+    for (p, &k) in pixels.iter().zip(index) {
+        if k > 0 {
+            for c in 0..3 {
+                sum[k - 1][c] += p[c];
+            }
+            count[k - 1] += 1;
+        }
+    }
+    sum.iter()
+        .zip(&count)
+        .map(|(s, &n)| {
+            assert!(n > 100, "a sphere covers only {n} pixels");
+            s.map(|v| v / n as f64)
+        })
+        .collect()
+}
+
+/// Renders the material reference scene with `integrator` to `4n` iterations and checks each
+/// sphere's mean (within 1 % of Mitsuba's, per channel) and that the 99.99th percentile of the
+/// per-pixel error, over the whole image and over the spheres' pixels, shrinks from `n` to `4n`.
+fn check_materials(integrator: Integrator, n: u32, photons: u64) {
+    let (reference, index, labels, size) = material_reference();
+    let loaded = sppm_lang::load_file(
+        Path::new("tools/reference/materials.scn"),
+        &EvalOptions::default(),
+    )
+    .expect("materials.scn reads");
+    let mut scene = loaded.scene.expect("materials.scn evaluates");
+    scene.settings.integrator = integrator;
+    assert_eq!(scene.settings.resolution, size);
+    let opts = RenderOptions {
+        iterations: Some(4 * n),
+        photons: Some(photons),
+        seed: Some(11),
+        ..Default::default()
+    };
+    let reference64: Vec<[f64; 3]> = reference.iter().map(|p| p.map(f64::from)).collect();
+    let want = sphere_means(&reference64, &index, labels.len());
+    // 99.99th percentiles of the per-pixel error: whole image, spheres' pixels.
+    let tails = |img: &Image| {
+        let errors: Vec<f64> = img
+            .pixels
+            .iter()
+            .zip(&reference64)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f64>() / 3.0)
+            .collect();
+        let mut on: Vec<f64> = errors
+            .iter()
+            .zip(&index)
+            .filter(|(_, k)| **k > 0)
+            .map(|(e, _)| *e)
+            .collect();
+        (p9999(&mut errors.clone()), p9999(&mut on))
+    };
+    let mut early = None;
+    let result = render(&scene, &opts, &AtomicBool::new(false), &mut |p| {
+        if p.iteration == n {
+            early = Some(tails(&p.image()));
+        }
+    })
+    .expect("renders");
+    let late = tails(&result.image);
+    let early = early.expect("a progress report at iteration n");
+    let got = sphere_means(&result.image.pixels, &index, labels.len());
+    let mut failures = Vec::new();
+    for ((label, g), w) in labels.iter().zip(&got).zip(&want) {
+        let ratio = [0, 1, 2].map(|c| g[c] / w[c]);
+        let differs = MODEL_DIFFERS.contains(&label.as_str());
+        println!(
+            "{integrator:?} {label:>12}: ours {:.4} {:.4} {:.4}, Mitsuba {:.4} {:.4} {:.4}, \
+             ratio {:.4} {:.4} {:.4}{}",
+            g[0],
+            g[1],
+            g[2],
+            w[0],
+            w[1],
+            w[2],
+            ratio[0],
+            ratio[1],
+            ratio[2],
+            if differs { " (models differ)" } else { "" }
+        );
+        if !differs && ratio.iter().any(|r| (r - 1.0).abs() >= 0.01) {
+            failures.push(format!("{label}: ratio {ratio:.4?}"));
+        }
+    }
+    println!(
+        "{integrator:?} 99.99th percentile error: whole image {:.4} at {n} iterations, {:.4} at \
+         {}; spheres {:.4}, {:.4}",
+        early.0,
+        late.0,
+        4 * n,
+        early.1,
+        late.1
+    );
+    assert!(
+        failures.is_empty(),
+        "{integrator:?}: sphere means off Mitsuba's by 1 % or more: {failures:?}"
+    );
+    assert!(
+        late.0 < early.0 && late.1 < early.1,
+        "{integrator:?}: the 99.99th percentile error did not shrink from {n} to {} \
+         iterations: whole image {:.4} -> {:.4}, spheres {:.4} -> {:.4}",
+        4 * n,
+        early.0,
+        late.0,
+        early.1,
+        late.1
+    );
+}
+
+#[test]
+fn materials_path_tracing_matches_mitsuba_per_sphere() {
+    check_materials(Integrator::Path, 128, 0);
+}
+
+#[test]
+fn materials_sppm_matches_mitsuba_per_sphere() {
+    check_materials(Integrator::Sppm, 64, 50_000);
 }

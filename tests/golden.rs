@@ -44,6 +44,7 @@
 //! | teapot | 3.9e-3 | 0.20% | 0.22% |
 //! | csg (a dim fill light: noisy at 64 px) | 4.7e-2 | 6.6% | 2.9% |
 //! | goblet | 2.4e-3 | 0.24% | 1.0% |
+//! | materials (blessed 2026-11-29; rough metals and plastics are grainy at 64 px) | 6.2e-2 | 5.5% | 1.4% |
 //!
 //! The 2026-11-26 12:10 re-bless of `textures` only: the `planar` mapping showed its image
 //! mirrored seen from -z (`u` grew toward +x); the back wall's wood runs the other way now. The
@@ -486,6 +487,7 @@ golden!(
     teapot,
     csg,
     goblet,
+    materials,
 );
 
 /// FNV-1a over the bits of every pixel.

@@ -1,0 +1,253 @@
+"""The material reference: rows of spheres, one material per row at several roughnesses,
+rendered by Mitsuba 3 (scalar_rgb), with our scene written from the same table.
+
+Run from the repository root:
+    python3 -m venv /tmp/venv && /tmp/venv/bin/pip install mitsuba numpy
+    /tmp/venv/bin/python tools/reference/materials.py            # scene, mask and reference
+    /tmp/venv/bin/python tools/reference/materials.py --scene-only   # materials.scn and mask
+
+It writes three files beside itself:
+- `materials.scn`: our scene, generated from ROWS (never edit it by hand);
+- `materials.mask.exr`: per pixel, 1 + the index of the sphere (row-major, as in
+  `materials.labels`) whose inner disc (0.8 of the radius) the pixel centre's ray meets, else 0;
+  `tests/glossy_reference.rs` averages each sphere over these pixels;
+- `materials.labels`: one line per sphere, `<row> <roughness>`;
+- `materials.exr`: the Mitsuba render (linear RGB float, box filter).
+
+Adding a row: append a `Row` to ROWS with the material in our syntax and the Mitsuba BSDF dict
+as functions of the roughness, re-run the script (about a minute of Mitsuba per 1024 spp per
+row on two cores), and commit the four files; the test picks the new spheres up from the
+labels. The mapping of parameters belongs in README.md beside this file.
+"""
+import argparse
+import math
+import os
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+WIDTH, HEIGHT = 160, 120
+FOV = 24.0  # vertical, degrees
+EYE = (0.0, 0.0, 8.0)
+TARGET = (0.0, 0.0, 0.0)
+RADIUS = 0.4
+PITCH = 1.0  # distance between sphere centres
+ROUGHNESS = [0.0, 0.2, 0.45, 0.8]
+# A uniform sky and a rectangle light above, in front of the spheres, facing down.
+SKY = 0.5
+LIGHT_RADIANCE = 6.0
+LIGHT = dict(corner=(-1.5, 3.0, 1.0), edge_u=(3.0, 0.0, 0.0), edge_v=(0.0, 0.0, 3.0))
+MASK_SHRINK = 0.8
+
+# Named metals as src/scene/metals.rs holds them (eta, k per RGB channel).
+METALS = {
+    'Au': ([0.18267, 0.49447, 1.3761], [3.1178, 2.3515, 1.8324]),
+    'Cu': ([0.23268, 1.075714, 1.15753], [3.5315, 2.5945, 2.4473]),
+}
+
+
+def rgb(value):
+    return {'type': 'rgb', 'value': list(value)}
+
+
+def vec(v):
+    return '<' + ', '.join(f'{x:g}' for x in v) + '>'
+
+
+@dataclass
+class Row:
+    """One row of spheres: `ours(r)` is the body of our `material { }` at roughness r,
+    `mitsuba(r)` the Mitsuba BSDF dict."""
+    name: str
+    ours: Callable[[float], str]
+    mitsuba: Callable[[float], dict]
+    roughness: tuple = tuple(ROUGHNESS)
+
+
+PLASTIC_BASE = (0.7, 0.15, 0.1)
+
+
+def coated_ours(r):
+    rough = f' roughness {r:g}' if r > 0 else ''
+    return f'coated rgb {vec(PLASTIC_BASE)} ior 1.5{rough}'
+
+
+def coated_mitsuba(r):
+    # Mitsuba's ext_ior defaults to air (1.000277), int_ior to polypropylene (1.49).
+    common = {'int_ior': 1.5, 'ext_ior': 1.0, 'nonlinear': False,
+              'diffuse_reflectance': rgb(PLASTIC_BASE)}
+    if r == 0:
+        return {'type': 'plastic', **common}
+    return {'type': 'roughplastic', 'distribution': 'ggx', 'alpha': r * r, **common}
+
+
+def conductor_ours(metal):
+    def ours(r):
+        return f'conductor "{metal}" roughness {r:g}'
+    return ours
+
+
+def conductor_mitsuba(metal):
+    eta, k = METALS[metal]
+
+    def mitsuba(r):
+        if r == 0:
+            return {'type': 'conductor', 'eta': rgb(eta), 'k': rgb(k)}
+        return {'type': 'roughconductor', 'distribution': 'ggx', 'alpha': r * r,
+                'eta': rgb(eta), 'k': rgb(k)}
+    return mitsuba
+
+
+ROWS = [
+    Row('coated', coated_ours, coated_mitsuba),
+    Row('Au', conductor_ours('Au'), conductor_mitsuba('Au')),
+    Row('Cu', conductor_ours('Cu'), conductor_mitsuba('Cu')),
+    # Rows for materials being built elsewhere follow the same pattern, e.g.
+    # Row('roughglass', lambda r: f'glass ior 1.5 roughness {r:g}',
+    #     lambda r: {'type': 'roughdielectric', 'distribution': 'ggx', 'alpha': r * r,
+    #                'int_ior': 1.5, 'ext_ior': 1.0}, roughness=(0.1, 0.3, 0.6)),
+    # Row('thin', ..., lambda r: {'type': 'thindielectric', 'int_ior': 1.5, 'ext_ior': 1.0}),
+    # Row('blend', ..., lambda r: {'type': 'blendbsdf', 'weight': 0.3,
+    #                              'bsdf_0': {...}, 'bsdf_1': {...}}),
+    # Row('bump', ..., lambda r: {'type': 'bumpmap', 'arg': {texture}, 'bsdf': {...}}),
+]
+
+
+def spheres():
+    """(label, centre, row) of every sphere: rows top to bottom, roughness left to right."""
+    out = []
+    n_rows = len(ROWS)
+    for i, row in enumerate(ROWS):
+        y = PITCH * ((n_rows - 1) / 2 - i)
+        n = len(row.roughness)
+        for j, r in enumerate(row.roughness):
+            x = PITCH * (j - (n - 1) / 2)
+            out.append((f'{row.name} {r:g}', (x, y, 0.0), row, r))
+    return out
+
+
+def write_scene(path):
+    lines = [
+        '// materials.scn: written by tools/reference/materials.py (do not edit; edit ROWS there).',
+        '// Rows of spheres, one material per row at several roughnesses, under a uniform sky',
+        '// and a rectangle light; tools/reference/materials.exr is the same scene in Mitsuba 3.',
+        '',
+        f'settings {{ resolution <{WIDTH}, {HEIGHT}>  iterations 64  seed 1 }}',
+        f'camera   {{ location {vec(EYE)}  look_at {vec(TARGET)}  up <0, 1, 0>  fov {FOV:g} }}',
+        f'background rgb {SKY:g}',
+        f'area_light {{ quad {{ {vec(LIGHT["corner"])}, {vec(LIGHT["edge_u"])}, '
+        f'{vec(LIGHT["edge_v"])} }}  radiance rgb {LIGHT_RADIANCE:g} }}',
+        '',
+    ]
+    for label, c, row, r in spheres():
+        lines.append(f'sphere {{ {vec(c)}, {RADIUS:g}  material {{ {row.ours(r)} }} }}  // {label}')
+    with open(path, 'w') as f:
+        f.write('\n'.join(lines) + '\n')
+
+
+def camera_rays():
+    """Unit directions through every pixel centre, shape (HEIGHT, WIDTH, 3)."""
+    eye, target = np.array(EYE), np.array(TARGET)
+    fwd = target - eye
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    t = math.tan(math.radians(FOV) / 2)
+    xs = ((np.arange(WIDTH) + 0.5) / WIDTH * 2 - 1) * t * WIDTH / HEIGHT
+    ys = (1 - (np.arange(HEIGHT) + 0.5) / HEIGHT * 2) * t
+    d = fwd + xs[None, :, None] * right + ys[:, None, None] * up
+    return d / np.linalg.norm(d, axis=2, keepdims=True)
+
+
+def mask():
+    d = camera_rays()
+    eye = np.array(EYE)
+    out = np.zeros((HEIGHT, WIDTH), dtype=np.float32)
+    for k, (_, c, _, _) in enumerate(spheres()):
+        oc = eye - np.array(c)
+        b = d @ oc
+        disc = b * b - (oc @ oc - (MASK_SHRINK * RADIUS) ** 2)
+        out[disc > 0] = k + 1
+    return out
+
+
+def mitsuba_scene(spp):
+    import mitsuba as mi
+    black = {'type': 'diffuse', 'reflectance': rgb([0.0, 0.0, 0.0])}
+    c, u, v = (np.array(LIGHT[k]) for k in ('corner', 'edge_u', 'edge_v'))
+    n = np.cross(u, v)
+    n /= np.linalg.norm(n)
+    centre = c + (u + v) / 2
+    # `rectangle` is [-1,1]^2 in local xy with normal +z: columns u/2, v/2, n, centre.
+    to_world = mi.ScalarTransform4f([
+        [u[0] / 2, v[0] / 2, n[0], centre[0]],
+        [u[1] / 2, v[1] / 2, n[1], centre[1]],
+        [u[2] / 2, v[2] / 2, n[2], centre[2]],
+        [0, 0, 0, 1],
+    ])
+    d = {
+        'type': 'scene',
+        'integrator': {'type': 'path', 'max_depth': -1},
+        'sensor': {
+            'type': 'perspective', 'fov': FOV, 'fov_axis': 'y',
+            'to_world': mi.ScalarTransform4f().look_at(origin=EYE, target=TARGET, up=[0, 1, 0]),
+            'sampler': {'type': 'independent', 'sample_count': spp},
+            'film': {'type': 'hdrfilm', 'width': WIDTH, 'height': HEIGHT,
+                     'rfilter': {'type': 'box'}, 'pixel_format': 'rgb',
+                     'component_format': 'float32'},
+        },
+        'sky': {'type': 'constant', 'radiance': rgb([SKY] * 3)},
+        'light': {'type': 'rectangle', 'to_world': to_world, 'bsdf': black,
+                  'emitter': {'type': 'area', 'radiance': rgb([LIGHT_RADIANCE] * 3)}},
+    }
+    for k, (_, c, row, r) in enumerate(spheres()):
+        d[f'sphere{k}'] = {'type': 'sphere', 'center': list(c), 'radius': RADIUS,
+                           'bsdf': row.mitsuba(r)}
+    return d
+
+
+def write_mask_and_labels():
+    import mitsuba as mi
+    m = mask()
+    mi.Bitmap(np.repeat(m[:, :, None], 3, axis=2)).write(os.path.join(HERE, 'materials.mask.exr'))
+    with open(os.path.join(HERE, 'materials.labels'), 'w') as f:
+        for label, *_ in spheres():
+            f.write(label + '\n')
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('--spp', type=int, default=8192)
+    ap.add_argument('--chunk', type=int, default=512, help='spp per run (runs are averaged)')
+    ap.add_argument('--scene-only', action='store_true')
+    ap.add_argument('--out', default=os.path.join(HERE, 'materials.exr'))
+    a = ap.parse_args()
+    import mitsuba as mi
+    mi.set_variant('scalar_rgb')
+    write_scene(os.path.join(HERE, 'materials.scn'))
+    write_mask_and_labels()
+    if a.scene_only:
+        return
+    runs = max(1, a.spp // a.chunk)
+    sc = mi.load_dict(mitsuba_scene(a.chunk))
+    acc = None
+    for i in range(runs):
+        img = np.array(mi.render(sc, spp=a.chunk, seed=1000 + i))
+        acc = img if acc is None else acc + img
+        print(f'run {i + 1}/{runs}', flush=True)
+    img = (acc / runs).astype(np.float32)
+    mi.Bitmap(img).write(a.out)
+    m = mask()
+    for k, (label, *_) in enumerate(spheres()):
+        sel = m == k + 1
+        mean = img[sel].mean(axis=0)
+        print(f'{label:>12}: {sel.sum():4d} px, mean {mean[0]:.4f} {mean[1]:.4f} {mean[2]:.4f}')
+    print(f'wrote {a.out} ({runs * a.chunk} spp)')
+
+
+if __name__ == '__main__':
+    main()
