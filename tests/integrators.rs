@@ -373,7 +373,10 @@ fn rough_and_thin_glass_render_everywhere_and_path_agrees_with_sppm() {
              ({:.2} %)",
             100.0 * diff / pm
         );
-        assert!(diff < 4.0 * sigma + 0.01 * pm, "{name}: {diff} vs sigma {sigma}");
+        assert!(
+            diff < 4.0 * sigma + 0.01 * pm,
+            "{name}: {diff} vs sigma {sigma}"
+        );
     }
 }
 

@@ -210,10 +210,14 @@ pub(super) fn check_mode(
     // (a) Chi-square, low-expectation bins pooled.
     let (mut chi2, mut dof) = (0.0, 0usize);
     let (mut pool_exp, mut pool_obs) = (0.0, 0.0);
+    // Samples in bins where the quadrature found no density: (e) proved `pdf > 0` at each
+    // sample, so these are slivers of a lobe the quadrature did not resolve (light refracted
+    // out of glass at grazing incidence); a few join the pool, more fail.
+    let mut unresolved = 0.0;
     for (&m, &c) in mass.iter().zip(&counts) {
         let (e, o) = (m * n, c as f64);
         if e == 0.0 && o > 0.0 {
-            return Err(format!("{o} samples fell where pdf is zero"));
+            unresolved += o;
         }
         if e < 5.0 {
             pool_exp += e;
@@ -222,6 +226,9 @@ pub(super) fn check_mode(
             chi2 += (o - e) * (o - e) / e;
             dof += 1;
         }
+    }
+    if unresolved > n * 1e-4 {
+        return Err(format!("{unresolved} samples fell where pdf is zero"));
     }
     if pool_exp >= 5.0 {
         chi2 += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
@@ -266,11 +273,15 @@ fn generalized_reciprocity(b: &Bsdf, rng: &mut Rng) -> Result<(), String> {
             (x - y).abs().max_element() <= 1e-3 * x.max_element().max(y.max_element()) + 1e-6
         };
         if !close(x, y) {
-            return Err(format!("f({a}, {c}) / {na}^2 = {x} but f({c}, {a}) / {nc}^2 = {y}"));
+            return Err(format!(
+                "f({a}, {c}) / {na}^2 = {x} but f({c}, {a}) / {nc}^2 = {y}"
+            ));
         }
         let adjoint = b.f_mode(a, c, TransportMode::Importance);
         if !close(adjoint, b.f(c, a)) {
-            return Err(format!("importance f({a}, {c}) = {adjoint} but f({c}, {a}) = {y}"));
+            return Err(format!(
+                "importance f({a}, {c}) = {adjoint} but f({c}, {a}) = {y}"
+            ));
         }
         nonzero += usize::from(x != Vec3A::ZERO && a.z * c.z < 0.0);
     }

@@ -92,7 +92,10 @@ mod tests {
                     assert!((total - 1.0).abs() < 1e-6, "{cos} {side}: {total}");
                     let want = f64::from(reflectance(cos, 1.5));
                     let se = (want * (1.0 - want) / f64::from(n)).sqrt();
-                    assert!((reflected - want).abs() < 5.0 * se + 1e-4, "{cos}: {reflected}");
+                    assert!(
+                        (reflected - want).abs() < 5.0 * se + 1e-4,
+                        "{cos}: {reflected}"
+                    );
                 }
             }
         }
