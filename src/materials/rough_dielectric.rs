@@ -126,7 +126,7 @@ pub fn sample(
         wi
     };
     let (f, pdf) = eval(eta, alpha, wo, wi, mode);
-    if !(pdf > 0.0) {
+    if pdf.is_nan() || pdf <= 0.0 {
         return None;
     }
     Some(BsdfSample {
