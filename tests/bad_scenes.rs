@@ -151,13 +151,15 @@ fn block_comments_nest() {
     assert!(message.contains("nesting deeper"), "{message}");
 }
 
-/// A material property its kind does not use is an error, not silently dropped: `glass
-/// roughness 0.3` is not frosted glass, and `diffuse ... specular` is not a highlight. A
-/// material that extends a declared one takes the properties of the declared one's kind.
+/// A material property its kind does not use is an error, not silently dropped: `mirror
+/// roughness 0.2` is not a blurred mirror, and `diffuse ... specular` is not a highlight. A
+/// material that extends a declared one takes the properties of the declared one's kind;
+/// `thin` belongs to glass alone, and a thin glass takes neither `absorb` nor `roughness`.
 #[test]
 fn a_material_property_belongs_to_its_kind() {
     for (body, what, kind) in [
-        ("glass roughness 0.3", "roughness", "glass"),
+        ("diffuse rgb 0.5 thin", "thin", "diffuse"),
+        ("glossy rgb 0.5 thin", "thin", "glossy"),
         ("glass specular rgb 0.1", "specular", "glass"),
         ("diffuse rgb 0.5 specular rgb 0.1", "specular", "diffuse"),
         ("diffuse rgb 0.5 tint rgb 1", "tint", "diffuse"),
@@ -173,9 +175,30 @@ fn a_material_property_belongs_to_its_kind() {
             "{text}"
         );
     }
+    for (body, what) in [
+        ("glass thin absorb rgb 0.1", "absorb"),
+        ("glass absorb rgb 0.1 thin", "absorb"),
+        ("glass thin roughness 0.2", "roughness"),
+    ] {
+        let text = format!("sphere {{ <0, 0, 0>, 1 material {{ {body} }} }}\n");
+        let (message, _) = first_error(&text);
+        assert!(
+            message.starts_with(&format!("`{what}` does not apply to thin glass")),
+            "{text}: {message}"
+        );
+    }
+    let declared = "#declare P = material { glass thin }\n\
+                    sphere { <0, 0, 0>, 1 material { P absorb rgb 0.1 } }\n";
+    assert!(first_error(declared).0.contains("thin glass"));
     let ok = sppm_lang::load_source(
         "ok.scn",
         "#declare G = material { glass ior 1.5 }\n\
+         #declare F = material { glass ior 1.5 roughness 0.3 }\n\
+         #declare P = material { glass ior 1.5 thin }\n\
+         #declare T = texture { checker rgb 0.1, rgb 0.6 }\n\
+         sphere { <0, 4, 0>, 1 material { F absorb rgb 0.1 roughness T } }\n\
+         sphere { <2, 4, 0>, 1 material { P tint rgb 0.9 } }\n\
+         sphere { <4, 4, 0>, 1 material { glass roughness 0 } }\n\
          #declare R = material { glossy rgb 0.5 roughness 0.3 }\n\
          sphere { <0, 0, 0>, 1 material { G ior 1.33 absorb rgb 0.1 tint rgb 0.9 } }\n\
          sphere { <2, 0, 0>, 1 material { R specular rgb 0.1 } }\n\

@@ -148,6 +148,7 @@ fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
             ior: 1.5,
             absorb: ColorParam::Texture(t),
             tint: DVec3::ONE,
+            roughness: ScalarParam::Const(0.0),
         },
         |t| Material::Glossy {
             albedo: ColorParam::Const(DVec3::splat(0.5)),
@@ -306,6 +307,7 @@ fn appearance_values_outside_the_language_s_ranges_are_errors() {
         ior,
         absorb: c(absorb),
         tint: DVec3::splat(tint),
+        roughness: ScalarParam::Const(0.0),
     };
     let glossy = |specular: f64, roughness: f64| Material::Glossy {
         albedo: c(0.5),
@@ -335,6 +337,38 @@ fn appearance_values_outside_the_language_s_ranges_are_errors() {
         ("roughness", glossy(0.04, 0.0)),
         ("roughness", glossy(0.04, f64::NAN)),
         ("roughness", glossy(0.04, 2.0)),
+        (
+            "roughness",
+            Material::Glass {
+                ior: 1.5,
+                absorb: c(0.0),
+                tint: DVec3::ONE,
+                roughness: ScalarParam::Const(f64::NAN),
+            },
+        ),
+        (
+            "roughness",
+            Material::Glass {
+                ior: 1.5,
+                absorb: c(0.0),
+                tint: DVec3::ONE,
+                roughness: ScalarParam::Const(-0.1),
+            },
+        ),
+        (
+            "ior",
+            Material::ThinGlass {
+                ior: 0.5,
+                tint: DVec3::ONE,
+            },
+        ),
+        (
+            "tint",
+            Material::ThinGlass {
+                ior: 1.5,
+                tint: DVec3::splat(f64::NAN),
+            },
+        ),
     ];
     for (what, material) in materials {
         let mut scene = furnace_emitting(4);

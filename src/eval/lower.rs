@@ -204,10 +204,29 @@ impl Evaluator {
             MatKind::Mirror(t) => Material::Mirror {
                 tint: self.color_param(t)?,
             },
-            MatKind::Glass { ior, absorb, tint } => Material::Glass {
+            MatKind::Glass {
+                ior, tint, thin, ..
+            } if *thin => Material::ThinGlass {
+                ior: *ior,
+                tint: *tint,
+            },
+            MatKind::Glass {
+                ior,
+                absorb,
+                tint,
+                roughness,
+                ..
+            } => Material::Glass {
                 ior: *ior,
                 absorb: self.color_param(absorb)?,
                 tint: *tint,
+                roughness: match roughness {
+                    None => ScalarParam::Const(0.0),
+                    Some(r) => match self.color_param(r)? {
+                        ColorParam::Const(c) => ScalarParam::Const(c.x),
+                        ColorParam::Texture(t) => ScalarParam::Texture(t),
+                    },
+                },
             },
             MatKind::Glossy {
                 albedo,

@@ -216,10 +216,13 @@ pub struct MaterialDef {
 pub enum MatKind {
     Diffuse(ColorDef),
     Mirror(ColorDef),
+    /// No roughness: smooth glass; `thin`: a pane (no absorption, no roughness).
     Glass {
         ior: f64,
         absorb: ColorDef,
         tint: Color,
+        roughness: Option<ColorDef>,
+        thin: bool,
     },
     Glossy {
         albedo: ColorDef,

@@ -28,7 +28,8 @@ pub fn is_constant(m: &Material) -> bool {
     match m {
         Material::Diffuse { albedo } => c(albedo),
         Material::Mirror { tint } => c(tint),
-        Material::Glass { .. } => true,
+        Material::Glass { roughness, .. } => matches!(roughness, ScalarParam::Const(_)),
+        Material::ThinGlass { .. } => true,
         Material::Glossy {
             albedo,
             specular,
@@ -40,6 +41,16 @@ pub fn is_constant(m: &Material) -> bool {
         Material::Coated {
             albedo, roughness, ..
         } => c(albedo) && matches!(roughness, ScalarParam::Const(_)),
+    }
+}
+
+/// A glass's index as the lobes use it (1, no interface, for an index a caller's scene got
+/// wrong).
+fn glass_eta(ior: f64) -> f32 {
+    if ior.is_finite() && ior > 0.0 {
+        ior as f32
+    } else {
+        1.0
     }
 }
 
@@ -169,12 +180,27 @@ pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
         Material::Mirror { tint } => Lobes::Mirror {
             tint: clamp01(color(tint, scene, &tc)),
         },
-        Material::Glass { ior, tint, .. } => Lobes::Glass {
-            eta: if ior.is_finite() && *ior > 0.0 {
-                *ior as f32
-            } else {
-                1.0
-            },
+        Material::Glass {
+            ior,
+            tint,
+            roughness,
+            ..
+        } => {
+            // Below the rough lobe's floor (roughness 0.0316) glass is smooth.
+            let r = scalar(roughness, scene, &tc).clamp(0.0, 1.0);
+            let alpha = r * r;
+            Lobes::Glass {
+                eta: glass_eta(*ior),
+                tint: clamp01(color3(*tint)),
+                alpha: if alpha >= super::rough_dielectric::MIN_ALPHA {
+                    alpha
+                } else {
+                    0.0
+                },
+            }
+        }
+        Material::ThinGlass { ior, tint } => Lobes::ThinGlass {
+            eta: glass_eta(*ior),
             tint: clamp01(color3(*tint)),
         },
         Material::Glossy {

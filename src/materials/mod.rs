@@ -10,6 +10,8 @@ mod diffuse;
 pub mod eval;
 mod glossy;
 mod mirror;
+mod rough_dielectric;
+mod thin_dielectric;
 
 use glam::{Vec2, Vec3A};
 
@@ -32,8 +34,16 @@ pub enum Lobes {
     Mirror {
         tint: Vec3A,
     },
-    /// `eta`: inside over outside index of refraction.
+    /// `eta`: inside over outside index of refraction; `alpha` below
+    /// [`rough_dielectric::MIN_ALPHA`] is smooth glass (delta lobes), else frosted glass's
+    /// GGX alpha (rough_dielectric.rs).
     Glass {
+        eta: f32,
+        tint: Vec3A,
+        alpha: f32,
+    },
+    /// A thin pane of index `eta` (thin_dielectric.rs): reflects, or passes straight through.
+    ThinGlass {
         eta: f32,
         tint: Vec3A,
     },
@@ -90,7 +100,8 @@ impl Bsdf {
     /// Purely specular (delta) BSDFs: camera paths pass through them, photons never deposit.
     pub fn is_specular(&self) -> bool {
         match self.lobes {
-            Lobes::Mirror { .. } | Lobes::Glass { .. } => true,
+            Lobes::Mirror { .. } | Lobes::ThinGlass { .. } => true,
+            Lobes::Glass { alpha, .. } => alpha < rough_dielectric::MIN_ALPHA,
             Lobes::Conductor { alpha, .. } => alpha == 0.0,
             Lobes::Diffuse { .. } | Lobes::Glossy { .. } | Lobes::Coated { .. } => false,
         }
@@ -104,20 +115,59 @@ impl Bsdf {
     /// A coated surface is never specular (photons deposit on its base), and glossy when its
     /// coat is sharp by the same measure or smooth: a smooth coat's mirror reflection is a
     /// delta lobe that `f` leaves out, so a density estimate there would miss it.
+    ///
+    /// Frosted glass is glossy by the same measure (its reflection and its refraction).
     pub fn is_glossy(&self) -> bool {
         matches!(self.lobes, Lobes::Glossy { alpha, .. } | Lobes::Coated { alpha, .. } if alpha < 0.3)
             || matches!(self.lobes, Lobes::Conductor { alpha, .. } if alpha > 0.0 && alpha < 0.3)
+            || matches!(self.lobes, Lobes::Glass { alpha, .. }
+                if (rough_dielectric::MIN_ALPHA..0.3).contains(&alpha))
     }
 
-    /// BSDF value for light arriving from `wi` and leaving toward `wo`.
-    pub fn f(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
-        if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
-            return Vec3A::ZERO; // no non-specular transmission
+    /// Frosted glass: the one lobe with non-specular transmission.
+    fn rough_glass(&self) -> Option<(f32, Vec3A, f32)> {
+        match self.lobes {
+            Lobes::Glass { eta, tint, alpha } if alpha >= rough_dielectric::MIN_ALPHA => {
+                Some((eta, tint, alpha))
+            }
+            _ => None,
+        }
+    }
+
+    /// The local directions of a pair whose geometric side (reflection or transmission, by
+    /// `ng`) agrees with the shading frame's, for a BSDF that transmits or not.
+    #[inline]
+    fn local_pair(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<(Vec3A, Vec3A)> {
+        let reflect = wo.dot(self.ng) * wi.dot(self.ng);
+        if reflect == 0.0 || (!transmits && reflect < 0.0) {
+            return None;
         }
         let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
-        if o.z * i.z <= 0.0 {
-            return Vec3A::ZERO;
+        let local = o.z * i.z;
+        if local == 0.0 || (local > 0.0) != (reflect > 0.0) {
+            return None;
         }
+        Some((o, i))
+    }
+
+    /// BSDF value for light arriving from `wi` and leaving toward `wo` (radiance transport:
+    /// `wo` toward the camera).
+    pub fn f(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
+        self.f_mode(wo, wi, TransportMode::Radiance)
+    }
+
+    /// [`Bsdf::f`] for a path carrying `mode`: the two differ only across frosted glass, where
+    /// the importance value is the adjoint `f(wi, wo)` (no `1/eta^2`).
+    pub fn f_mode(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Vec3A {
+        if let Some((eta, tint, alpha)) = self.rough_glass() {
+            let Some((o, i)) = self.local_pair(wo, wi, true) else {
+                return Vec3A::ZERO;
+            };
+            return tint * rough_dielectric::eval(eta, alpha, o, i, mode).0;
+        }
+        let Some((o, i)) = self.local_pair(wo, wi, false) else {
+            return Vec3A::ZERO;
+        };
         match self.lobes {
             Lobes::Diffuse { albedo } => diffuse::f(albedo),
             Lobes::Glossy {
@@ -127,7 +177,7 @@ impl Bsdf {
             } => glossy::f(albedo, specular, alpha, o, i),
             Lobes::Conductor { eta, k, alpha } => conductor::f(eta, k, alpha, o, i),
             Lobes::Coated { albedo, eta, alpha } => coated::f(albedo, eta, alpha, o, i),
-            Lobes::Mirror { .. } | Lobes::Glass { .. } => Vec3A::ZERO,
+            Lobes::Mirror { .. } | Lobes::Glass { .. } | Lobes::ThinGlass { .. } => Vec3A::ZERO,
         }
     }
 
@@ -144,13 +194,15 @@ impl Bsdf {
 
     /// Solid-angle density of [`Bsdf::sample`] choosing `wi`.
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wo.dot(self.ng) * wi.dot(self.ng) <= 0.0 {
-            return 0.0;
+        if let Some((eta, _, alpha)) = self.rough_glass() {
+            let Some((o, i)) = self.local_pair(wo, wi, true) else {
+                return 0.0;
+            };
+            return rough_dielectric::eval(eta, alpha, o, i, TransportMode::Radiance).1;
         }
-        let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
-        if o.z * i.z <= 0.0 {
+        let Some((o, i)) = self.local_pair(wo, wi, false) else {
             return 0.0;
-        }
+        };
         match self.lobes {
             Lobes::Diffuse { .. } => diffuse::pdf(i),
             Lobes::Glossy {
@@ -160,7 +212,7 @@ impl Bsdf {
             } => glossy::pdf(albedo, specular, alpha, o, i),
             Lobes::Conductor { alpha, .. } => conductor::pdf(alpha, o, i),
             Lobes::Coated { albedo, eta, alpha } => coated::pdf(albedo, eta, alpha, o, i),
-            Lobes::Mirror { .. } | Lobes::Glass { .. } => 0.0,
+            Lobes::Mirror { .. } | Lobes::Glass { .. } | Lobes::ThinGlass { .. } => 0.0,
         }
     }
 
@@ -173,7 +225,13 @@ impl Bsdf {
         let s = match self.lobes {
             Lobes::Diffuse { albedo } => diffuse::sample(albedo, o, u),
             Lobes::Mirror { tint } => mirror::sample(tint, o),
-            Lobes::Glass { eta, tint } => dielectric::sample(eta, tint, o, uc, mode),
+            Lobes::Glass { eta, tint, alpha } if alpha < rough_dielectric::MIN_ALPHA => {
+                dielectric::sample(eta, tint, o, uc, mode)
+            }
+            Lobes::Glass { eta, tint, alpha } => {
+                rough_dielectric::sample(eta, tint, alpha, o, uc, u, mode)
+            }
+            Lobes::ThinGlass { eta, tint } => thin_dielectric::sample(eta, tint, o, uc),
             Lobes::Glossy {
                 albedo,
                 specular,

@@ -515,14 +515,19 @@ pub enum Material {
     Diffuse { albedo: ColorParam },
     /// Perfect specular reflection scaled by `tint`.
     Mirror { tint: ColorParam },
-    /// Smooth dielectric: Fresnel reflection and refraction, Beer–Lambert absorption inside.
+    /// Dielectric: Fresnel reflection and refraction, Beer–Lambert absorption inside; smooth
+    /// (`roughness` 0) or frosted (a GGX microfacet surface).
     Glass {
         ior: f64,
         /// Absorption coefficient per unit length inside the medium.
         absorb: ColorParam,
         /// Multiplies both reflection and transmission.
         tint: Color,
+        roughness: ScalarParam,
     },
+    /// A thin pane or film: reflection and straight transmission, the bounces between its two
+    /// faces summed; encloses no medium.
+    ThinGlass { ior: f64, tint: Color },
     /// A GGX microfacet lobe (metal-like, tinted by `specular`) over a Lambertian base.
     Glossy {
         albedo: ColorParam,

@@ -9,8 +9,8 @@ use sppm_lang::geometry::Ray;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::sampling::{Rng, uniform_sphere};
 use sppm_lang::scene::{
-    Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, Scene, Settings,
-    Shape,
+    Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, ScalarParam,
+    Scene, Settings, Shape,
 };
 use sppm_lang::span::Span;
 
@@ -66,6 +66,7 @@ pub fn glass_and_mirror(s: &mut Scene) -> (MaterialId, MaterialId) {
             ior: 1.5,
             absorb: ColorParam::Const(DVec3::ZERO),
             tint: DVec3::ONE,
+            roughness: ScalarParam::Const(0.0),
         },
     );
     let mirror = add_material(

@@ -31,6 +31,8 @@ pub(super) struct MaterialBuilder {
     roughness: Option<ColorDef>,
     /// A constant roughness as written, checked against the kind's range when it is known.
     roughness_num: Option<(f64, Span)>,
+    /// `thin` was written (a glass pane), with its span.
+    thin: Option<Span>,
     /// A conductor's named metal (`conductor "Au"`), with the name's span.
     metal: Option<(Color, Color, Span)>,
     eta: Option<(Color, Span)>,
@@ -55,7 +57,7 @@ pub(super) struct MaterialBuilder {
 fn uses(kind: &str) -> &'static [&'static str] {
     match kind {
         "mirror" => &["tint", "filter", "transmit"],
-        "glass" => &["ior", "absorb", "tint"],
+        "glass" => &["ior", "absorb", "tint", "roughness", "thin"],
         "glossy" => &["specular", "roughness", "filter", "transmit"],
         "conductor" => &["eta", "extinction", "reflectance", "edge_tint", "roughness"],
         "coated" => &["ior", "roughness", "filter", "transmit"],
@@ -64,10 +66,11 @@ fn uses(kind: &str) -> &'static [&'static str] {
     }
 }
 
-static MAT_PROPS: [PropSpec; 19] = [
+static MAT_PROPS: [PropSpec; 20] = [
     p("diffuse", 1, 1, "a color or texture", "rgb <0.8, 0.8, 0.8>"),
     p("mirror", 0, 1, "a color (optional)", "rgb <0.9, 0.9, 0.9>"),
     p("glass", 0, 0, "nothing", ""),
+    p("thin", 0, 0, "nothing", ""),
     p("glossy", 1, 1, "a color or texture", "rgb <0.5, 0.5, 0.5>"),
     p("coated", 1, 1, "a color or texture", "rgb <0.8, 0.1, 0.1>"),
     p("ior", 1, 1, "a number", "1.5"),
@@ -157,7 +160,8 @@ impl MaterialBuilder {
             misplaced(what, Some(s))?;
         }
         if let Some((r, s)) = self.roughness_num {
-            let lowest = if kind_name == "conductor" {
+            // A conductor and a glass may be perfectly smooth.
+            let lowest = if kind_name == "conductor" || kind_name == "glass" {
                 0.0
             } else {
                 MIN_ROUGHNESS
@@ -206,16 +210,21 @@ impl MaterialBuilder {
                             .at(at),
                     ]);
                 }
-                let (mut ior, mut absorb, mut tint) =
-                    (1.5, ColorDef::Const(Color::ZERO), Color::ONE);
+                let (mut ior, mut absorb, mut tint, mut roughness, mut thin) =
+                    (1.5, ColorDef::Const(Color::ZERO), Color::ONE, None, false);
                 if let Some(MatKind::Glass {
                     ior: i,
                     absorb: a,
                     tint: t,
+                    roughness: r,
+                    thin: th,
                 }) = base
                 {
-                    (ior, absorb, tint) = (i, a, t);
+                    (ior, absorb, tint, roughness, thin) = (i, a, t, r, th);
                 }
+                thin |= self.thin.is_some();
+                roughness = self.roughness.clone().or(roughness);
+                self.thin_glass_conflicts(thin)?;
                 if let Some((i, s)) = self.ior {
                     if i < IOR_RANGE.0 {
                         return Err(range_error(
@@ -238,6 +247,8 @@ impl MaterialBuilder {
                     ior,
                     absorb: self.absorb.unwrap_or(absorb),
                     tint: self.tint.unwrap_or(tint),
+                    roughness,
+                    thin,
                 }
             }
             "conductor" => self.conductor(base)?,
@@ -359,6 +370,40 @@ impl MaterialBuilder {
             weight,
             depth,
         })
+    }
+
+    /// A thin pane (`thin`, written here or in the declared glass it extends) takes neither an
+    /// absorption, since it encloses no medium, nor a roughness: it is two smooth faces.
+    fn thin_glass_conflicts(&self, thin: bool) -> SourceResult<()> {
+        if !thin {
+            return Ok(());
+        }
+        let at = |what: &str| self.written.iter().find(|w| w.0 == what).map(|w| w.1);
+        let why = [
+            (
+                "absorb",
+                "a thin glass encloses no medium to absorb in",
+                "drop `absorb` and colour the pane with `tint`, or drop `thin` for solid glass",
+            ),
+            (
+                "roughness",
+                "a thin glass is smooth",
+                "drop `roughness`, or drop `thin` for frosted solid glass",
+            ),
+        ];
+        for (what, message, help) in why {
+            if let Some(s) = at(what) {
+                let mut e = Error::new(format!("`{what}` does not apply to thin glass: {message}"))
+                    .label("not used by a thin glass")
+                    .help(help)
+                    .at(s);
+                if let Some(t) = self.thin {
+                    e = e.with_extra(t, "thin here");
+                }
+                return Err(vec![e]);
+            }
+        }
+        Ok(())
     }
 
     /// A conductor's kind: its index from exactly one of a named metal, `eta` with
@@ -604,6 +649,7 @@ impl Sink for MaterialBuilder {
             "filter",
             "transmit",
             "weight",
+            "thin",
         ]
         .iter()
         .find(|w| **w == kw.text)
@@ -624,6 +670,7 @@ impl Sink for MaterialBuilder {
                 }
             }
             "glass" => self.set_kind("glass", kw.span)?,
+            "thin" => self.thin = Some(kw.span),
             "glossy" => {
                 self.set_kind("glossy", kw.span)?;
                 let a = self.unfiltered(&args[0]);
@@ -701,8 +748,8 @@ impl Sink for MaterialBuilder {
                         return Err(range_error(
                             args[0].span,
                             format!(
-                                "roughness must be from 0.001 to 1 (0 to 1 for a conductor), \
-                                 found {}",
+                                "roughness must be from 0.001 to 1 (0 to 1 for a conductor or \
+                                 glass), found {}",
                                 crate::diag::short_number(r)
                             ),
                             "e.g. `roughness 0.2`",

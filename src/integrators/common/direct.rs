@@ -5,14 +5,15 @@
 
 use glam::Vec3A;
 
-use super::transmittance;
+use super::{medium_after, transmittance};
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::{PreparedScene, SurfaceHit};
 use crate::sampling::{Rng, power_heuristic};
 
-/// Reflected direct radiance toward `wo`, at a point inside a medium of absorption `medium`
-/// (zero: none; a light sample or a BSDF sample that reaches a light crosses no surface, so
-/// the whole way to the light is in it).
+/// Reflected (or, through frosted glass, transmitted) direct radiance toward `wo`, at a point
+/// inside a medium of absorption `medium` (zero: none). A light sample or a BSDF sample that
+/// reaches a light crosses no other surface, so the whole way to the light is in the medium on
+/// its side of this surface ([`medium_after`]: the same one but across frosted glass).
 pub fn direct_lighting(
     scene: &PreparedScene,
     sh: &SurfaceHit,
@@ -52,6 +53,7 @@ pub fn direct_lighting(
                 // (Toward the sky the distance is unknown; a path reaches it only out of
                 // the glass it was in, as an escaping path does, unabsorbed.)
                 let absorbed = if t_max.is_finite() {
+                    let medium = medium_after(scene, sh, wo, ls.wi, medium);
                     transmittance(medium, t_max * ray.d.length())
                 } else {
                     Vec3A::ONE
@@ -74,6 +76,7 @@ pub fn direct_lighting(
                     if le != Vec3A::ZERO {
                         let light_pdf = scene.light_distr.pdf(li)
                             * al.pdf_li_from(p, h2.hit.p, h2.hit.n, on_light(li));
+                        let medium = medium_after(scene, sh, wo, bs.wi, medium);
                         let absorbed = transmittance(medium, h2.hit.t * ray.d.length());
                         l += bs.weight * le * absorbed * power_heuristic(bs.pdf, light_pdf);
                     }

@@ -107,6 +107,20 @@ pub(super) fn validate(scene: &Scene) -> Result<(), Invalid> {
     Ok(())
 }
 
+/// A glass's (or a pane's) index of refraction is within [`IOR_RANGE`].
+fn glass_ior(ior: f64, index: usize) -> Result<(), Invalid> {
+    let (lo, hi) = IOR_RANGE;
+    if !(ior >= lo && ior <= hi) {
+        return Err(invalid(
+            Span::detached(),
+            format!("material {index}'s ior {} is out of range", fmt(ior)),
+            "out of range",
+            "glass has an index of refraction from 1 to 100 (1.5 for window glass)",
+        ));
+    }
+    Ok(())
+}
+
 fn material(m: &Material, index: usize) -> Result<(), Invalid> {
     let span = Span::detached();
     let param = |p: &ColorParam, what: &str| match p {
@@ -116,17 +130,27 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
     match m {
         Material::Diffuse { albedo } => param(albedo, "albedo"),
         Material::Mirror { tint } => param(tint, "tint"),
-        Material::Glass { ior, absorb, tint } => {
-            let (lo, hi) = IOR_RANGE;
-            if !(*ior >= lo && *ior <= hi) {
-                return Err(invalid(
-                    span,
-                    format!("material {index}'s ior {} is out of range", fmt(*ior)),
-                    "out of range",
-                    "glass has an index of refraction from 1 to 100 (1.5 for window glass)",
-                ));
-            }
+        Material::Glass {
+            ior,
+            absorb,
+            tint,
+            roughness,
+        } => {
+            glass_ior(*ior, index)?;
             param(absorb, "absorb")?;
+            color(*tint, &format!("material {index}'s tint"), span)?;
+            match roughness {
+                ScalarParam::Const(r) if !(0.0..=1.0).contains(r) => Err(invalid(
+                    span,
+                    format!("material {index}'s roughness {} is out of range", fmt(*r)),
+                    "out of range",
+                    "use 0 for smooth glass or a roughness up to 1 (frosted)",
+                )),
+                _ => Ok(()),
+            }
+        }
+        Material::ThinGlass { ior, tint } => {
+            glass_ior(*ior, index)?;
             color(*tint, &format!("material {index}'s tint"), span)
         }
         Material::Glossy {

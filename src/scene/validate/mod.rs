@@ -520,7 +520,17 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
     let ids = match m {
         Material::Diffuse { albedo } => [color(albedo), None, None],
         Material::Mirror { tint } => [color(tint), None, None],
-        Material::Glass { absorb, .. } => [color(absorb), None, None],
+        Material::Glass {
+            absorb, roughness, ..
+        } => [
+            color(absorb),
+            None,
+            match roughness {
+                ScalarParam::Texture(t) => Some(t.0),
+                ScalarParam::Const(_) => None,
+            },
+        ],
+        Material::ThinGlass { .. } => [None, None, None],
         Material::Conductor { .. } => [None, None, None],
         Material::Blend { weight, .. } => [
             None,
