@@ -432,6 +432,7 @@ fn povray_filter_and_transmit_become_glass() {
         ior: 1.0,
         absorb: ColorParam::Const(DVec3::ZERO),
         tint,
+        roughness: ScalarParam::Const(0.0),
     };
     for (mat, tint) in [
         (

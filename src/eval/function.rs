@@ -523,8 +523,8 @@ pub fn compile_function(text: &str, name: &str) -> Result<Arc<Function>, Vec<Dia
             "function.scn".into(),
             text.clone(),
         );
-        let items = crate::syntax::parse(file, &text)?;
-        ev.run_top(&items, &mut super::blocks::TopSink::default());
+        let mut items = crate::syntax::parse(file, &text)?;
+        ev.run_top(&mut items, &mut super::blocks::TopSink::default());
         if ev.errors.iter().any(Diagnostic::is_error) {
             return Err(ev.errors);
         }

@@ -136,7 +136,11 @@ pub fn non_specular_parts(scene: &Scene) -> Vec<bool> {
     let mut rough = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
         let r = match m {
-            Material::Mirror { .. } | Material::Glass { .. } => false,
+            Material::Mirror { .. } | Material::ThinGlass { .. } => false,
+            // Frosted glass (any roughness but a constant zero) scatters non-specularly.
+            Material::Glass { roughness, .. } => {
+                !matches!(roughness, ScalarParam::Const(r) if *r == 0.0)
+            }
             Material::Conductor { roughness, .. } => *roughness > 0.0,
             Material::Diffuse { .. } | Material::Glossy { .. } | Material::Coated { .. } => true,
             Material::Blend { a, b, .. } => [a, b]

@@ -103,5 +103,7 @@ pub(super) fn transparency(
         ior: 1.0,
         absorb: ColorDef::Const(Color::ZERO),
         tint,
+        roughness: None,
+        thin: false,
     })
 }
