@@ -133,12 +133,23 @@ impl Evaluator {
                                     v.type_name()
                                 ))
                                 .label("called here")
-                                .help(format!(
-                                    "only macros and functions are called with `(...)`; a \
-                                     function is declared with `#declare {} = function(x, y, \
-                                     z) {{ ... }};`",
-                                    name.text
-                                ))
+                                .help(
+                                    if crate::scene::animation_value(&name.text, None).is_some() {
+                                        format!(
+                                            "`{}` is one of the animation values, read as a number \
+                                         (`{} * 2`); only macros and functions are called with \
+                                         `(...)`",
+                                            name.text, name.text
+                                        )
+                                    } else {
+                                        format!(
+                                            "only macros and functions are called with `(...)`; a \
+                                         function is declared with `#declare {} = function(x, \
+                                         y, z) {{ ... }};`",
+                                            name.text
+                                        )
+                                    },
+                                )
                                 .at(name.span),
                             ]);
                         }
