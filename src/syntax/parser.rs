@@ -647,14 +647,15 @@ mod tests {
              /* a /* nested */ comment */ sphere { <1, 2, 3>, 0.5 material { M } }\n\
              #if (1 < 2) box { <0,0,0>, <1,1,1> } #else disk { } #end\n\
              #macro R(A, B) #debug concat(\"a\\tb\", str(A, 0, 2)) #end R(1, 2)\n\
-             , translate -<1, 2, 3>.x * 2 ? 1 : 0 #include \"x.inc\"\tx[1]",
+             , translate (-<1, 2, 3>.x * 2 ? 1 : 0) #include \"x.inc\"\tx[1]",
             "#debug \"bad \\q escape\" #debug \"\\w\"",
             "#macro M(A, A) #end sphere { }",
         ];
         for text in texts {
             let stray = check_nesting(FileId(3), text).unwrap();
             let whole = format!("{:?}", parse_whole(FileId(3), text, stray));
-            let by_item = parse_by_item(FileId(3), text).expect("no syntax error");
+            let by_item = parse_by_item(FileId(3), text)
+                .unwrap_or_else(|| panic!("a syntax error in {text:?}"));
             assert_eq!(format!("{by_item:?}"), whole, "{text}");
         }
         // A syntax error anywhere leaves the item-by-item parse to the whole-file one.
