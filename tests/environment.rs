@@ -614,20 +614,12 @@ fn an_eight_bit_environment_map_is_srgb_decoded() {
 
 /// Renders scene `text` with `iterations` iterations and seed `seed`.
 fn render_text(text: &str, iterations: u32, seed: u64) -> sppm_lang::render::RenderOutput {
-    let l = sppm_lang::load_source("scene.scn", text, &sppm_lang::EvalOptions::default());
-    let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
     let opts = sppm_lang::render::RenderOptions {
         iterations: Some(iterations),
         seed: Some(seed),
         ..Default::default()
     };
-    sppm_lang::render::render(
-        &scene,
-        &opts,
-        &std::sync::atomic::AtomicBool::new(false),
-        &mut |_| {},
-    )
-    .unwrap()
+    common::render_text(text, &opts)
 }
 
 /// An infinite ground plane shadows the sky however far it reaches: a vertical quad above a

@@ -2,28 +2,16 @@
 //! colour-map entries, and its string functions. The expected strings are what POV-Ray 3.7.0
 //! prints for the same expressions (checked with Debian's `povray`, `#debug` of each).
 
+mod common;
+
+use common::{debug, load, render_text};
 use glam::DVec3;
 use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, Loaded, load_source};
-
-fn load(text: &str) -> Loaded {
-    let l = load_source("test.scn", text, &EvalOptions::default());
-    assert!(
-        !l.has_errors(),
-        "{}",
-        sppm_lang::render_plain(&l.sources, &l.diagnostics, 100)
-    );
-    l
-}
+use sppm_lang::{EvalOptions, load_source};
 
 /// The `#debug` messages of `text`, in order.
 fn debug_lines(text: &str) -> Vec<String> {
-    load(text)
-        .diagnostics
-        .iter()
-        .filter(|d| d.severity == sppm_lang::Severity::Note)
-        .map(|d| d.message.clone())
-        .collect()
+    debug(&load(text))
 }
 
 /// Each `(expression, shown)`: `#debug expression` shows `shown`.
@@ -249,16 +237,7 @@ fn pattern_functions_give_the_pattern_value() {
 
 /// The image of `text` rendered with the scene's own settings (seed, iterations, integrator).
 fn render_image(text: &str) -> sppm_lang::film::Image {
-    let scene = load(text).scene.unwrap();
-    let opts = sppm_lang::render::RenderOptions::default();
-    sppm_lang::render::render(
-        &scene,
-        &opts,
-        &std::sync::atomic::AtomicBool::new(false),
-        &mut |_| {},
-    )
-    .unwrap()
-    .image
+    render_text(text, &sppm_lang::render::RenderOptions::default()).image
 }
 
 /// The largest difference of one channel of one pixel between two images of the same size.

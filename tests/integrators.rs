@@ -36,6 +36,22 @@ fn mean(img: &Image) -> f64 {
     img.mean().iter().sum::<f64>() / 3.0
 }
 
+/// The image means of seeds 1 to 4, their mean and its standard error (the spread of the four
+/// gives the method's noise).
+fn four_seeds(
+    scene: &Scene,
+    integrator: Integrator,
+    iterations: u32,
+    photons: u64,
+) -> (f64, f64, Vec<f64>) {
+    let means: Vec<f64> = (1..=4)
+        .map(|seed| mean(&run(scene, integrator, iterations, photons, seed)))
+        .collect();
+    let m = means.iter().sum::<f64>() / 4.0;
+    let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
+    (m, (var / 4.0).sqrt(), means)
+}
+
 fn window_mean(img: &Image, x0: u32, y0: u32, x1: u32, y1: u32) -> f64 {
     let mut s = 0.0;
     for y in y0..y1 {
@@ -189,16 +205,8 @@ fn path_and_sppm_agree_on_a_diffuse_only_box() {
         }
     }
     // Four seeds of each: the spread of the image means gives each method's noise.
-    let stats = |integrator, iterations, photons| {
-        let means: Vec<f64> = (1..=4)
-            .map(|seed| mean(&run(&scene, integrator, iterations, photons, seed)))
-            .collect();
-        let m = means.iter().sum::<f64>() / 4.0;
-        let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
-        (m, (var / 4.0).sqrt(), means)
-    };
-    let (pm, ps, pall) = stats(Integrator::Path, 256, 0);
-    let (sm, ss, sall) = stats(Integrator::Sppm, 64, 20_000);
+    let (pm, ps, pall) = four_seeds(&scene, Integrator::Path, 256, 0);
+    let (sm, ss, sall) = four_seeds(&scene, Integrator::Sppm, 64, 20_000);
     let sigma = (ps * ps + ss * ss).sqrt();
     let diff = (pm - sm).abs();
     println!(
@@ -234,16 +242,8 @@ fn coated_spheres_render_everywhere_and_path_agrees_with_sppm() {
     for integrator in Integrator::ALL {
         assert!(mean(&run(&scene, integrator, 2, 4_000, 1)) > 0.0);
     }
-    let stats = |integrator, iterations, photons| {
-        let means: Vec<f64> = (1..=4)
-            .map(|seed| mean(&run(&scene, integrator, iterations, photons, seed)))
-            .collect();
-        let m = means.iter().sum::<f64>() / 4.0;
-        let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
-        (m, (var / 4.0).sqrt())
-    };
-    let (pm, ps) = stats(Integrator::Path, 256, 0);
-    let (sm, ss) = stats(Integrator::Sppm, 64, 20_000);
+    let (pm, ps, _) = four_seeds(&scene, Integrator::Path, 256, 0);
+    let (sm, ss, _) = four_seeds(&scene, Integrator::Sppm, 64, 20_000);
     let sigma = (ps * ps + ss * ss).sqrt();
     let diff = (pm - sm).abs();
     println!("coated box 16x16: path {pm:.4} +- {ps:.4}, sppm {sm:.4} +- {ss:.4}");
@@ -438,16 +438,8 @@ fn rough_and_thin_glass_render_everywhere_and_path_agrees_with_sppm() {
         for integrator in Integrator::ALL {
             assert!(mean(&run(&scene, integrator, 2, 4_000, 1)) > 0.0, "{name}");
         }
-        let stats = |integrator, iterations, photons| {
-            let means: Vec<f64> = (1..=4)
-                .map(|seed| mean(&run(&scene, integrator, iterations, photons, seed)))
-                .collect();
-            let m = means.iter().sum::<f64>() / 4.0;
-            let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 3.0;
-            (m, (var / 4.0).sqrt())
-        };
-        let (pm, ps) = stats(Integrator::Path, 256, 0);
-        let (sm, ss) = stats(Integrator::Sppm, 64, 20_000);
+        let (pm, ps, _) = four_seeds(&scene, Integrator::Path, 256, 0);
+        let (sm, ss, _) = four_seeds(&scene, Integrator::Sppm, 64, 20_000);
         let sigma = (ps * ps + ss * ss).sqrt();
         let diff = (pm - sm).abs();
         println!(

@@ -371,6 +371,12 @@ pub fn load(text: &str) -> sppm_lang::Loaded {
     l
 }
 
+/// `text` loaded (with no errors) and rendered with `opts` over the scene's own settings.
+pub fn render_text(text: &str, opts: &RenderOptions) -> sppm_lang::render::RenderOutput {
+    let scene = load(text).scene.expect("a scene");
+    render(&scene, opts, &AtomicBool::new(false), &mut |_| {}).unwrap()
+}
+
 /// The `#debug` messages of a load, in order.
 pub fn debug(l: &sppm_lang::Loaded) -> Vec<String> {
     l.diagnostics
