@@ -1128,3 +1128,47 @@ fn a_failing_frame_stops_the_animation_and_is_named() {
         image::open(dir.path().join(name)).expect("a complete image");
     }
 }
+
+/// Names a range would overwrite that are not files it may replace are refused before the first
+/// frame renders, wherever they fall in the range (checked from what the folder and the scene
+/// hold, not frame by frame, so a range of ten million frames starts at once): a directory named
+/// as a frame deep in the range, and an image the scene reads named as one of its frames.
+#[test]
+fn a_frame_name_held_by_a_folder_or_an_input_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let anim = animation_scene(dir.path(), "frames 0, 9999999");
+    let a = anim.to_str().unwrap();
+    std::fs::create_dir(dir.path().join("f_7654321.png")).unwrap();
+    let pattern = dir.path().join("f_%07d.png");
+    let out = sppm(&["render", a, "-o", pattern.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("f_7654321.png") && err.contains("directory"),
+        "{err}"
+    );
+    assert_eq!(written(dir.path()), ["f_7654321.png"]);
+    // An input the scene reads, named as frame 2 of `tex_%d.png`.
+    let sub = tempfile::tempdir().unwrap();
+    image::RgbImage::new(2, 2)
+        .save(sub.path().join("tex_2.png"))
+        .unwrap();
+    let scene = sub.path().join("tex.scn");
+    std::fs::write(
+        &scene,
+        "sphere { <clock, 0, 0>, 1 material { diffuse texture { image \"tex_2.png\" } } }\n\
+         settings { resolution <8, 8> iterations 1 photons 100 frames 0, 5 }\n",
+    )
+    .unwrap();
+    let pattern = sub.path().join("tex_%d.png");
+    let out = sppm(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        pattern.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("tex_2.png") && err.contains("reads"), "{err}");
+    assert_eq!(written(sub.path()), ["tex_2.png"]);
+}

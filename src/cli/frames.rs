@@ -141,6 +141,17 @@ impl FramePattern {
         })
     }
 
+    /// The frame whose file name is `name` (the name [`FramePattern::path`] gives it), if any.
+    pub fn frame_of(&self, name: &str) -> Option<u32> {
+        let digits = name.strip_prefix(&self.before)?.strip_suffix(&self.after)?;
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let frame: u32 = digits.parse().ok()?;
+        let own = format!("{frame:0width$}", width = self.width);
+        (own == digits).then_some(frame)
+    }
+
     /// The file of frame `frame`.
     pub fn path(&self, frame: u32) -> PathBuf {
         let name = format!(
@@ -175,6 +186,30 @@ mod tests {
         assert_eq!(p.path(5), Path::new("100%_005.png"));
         assert_eq!(pattern("plain.png").unwrap(), None);
         assert_eq!(pattern("100%%.png").unwrap(), None);
+    }
+
+    #[test]
+    fn names_read_back_as_their_frames() {
+        let p = pattern("out/f_%04d.png").unwrap().unwrap();
+        for k in [0, 7, 9999, 12345, u32::MAX] {
+            let path = p.path(k);
+            let name = path.file_name().unwrap().to_str().unwrap();
+            assert_eq!(p.frame_of(name), Some(k), "{name}");
+        }
+        // Not a name this pattern gives: other digits, padding, prefix or suffix.
+        for name in [
+            "f_007.png",
+            "f_00007.png",
+            "f_.png",
+            "f_12a4.png",
+            "g_0001.png",
+            "f_0001.exr",
+        ] {
+            assert_eq!(p.frame_of(name), None, "{name}");
+        }
+        let plain = pattern("f%d.exr").unwrap().unwrap();
+        assert_eq!(plain.frame_of("f12.exr"), Some(12));
+        assert_eq!(plain.frame_of("f012.exr"), None);
     }
 
     #[test]

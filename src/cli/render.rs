@@ -197,12 +197,48 @@ fn animate(
         };
         super::output_path(Some(&path), &args.scene)
     };
-    // Every name is checked before the first frame renders.
-    for k in frames.clone() {
-        if let Err(e) =
-            output_of(k).and_then(|o| super::check_not_an_input(&[&o], &still.dependencies))
-        {
-            return usage(e);
+    // Every name is checked before the first frame renders, but not with a check on disk per
+    // frame (a range may hold millions): the first name fully (its folder is every frame's, the
+    // number being in the file name), then only the names that something already holds: the
+    // folder's entries and the scene's inputs that some frame of the range would replace.
+    let check =
+        |k: u32| output_of(k).and_then(|o| super::check_not_an_input(&[&o], &still.dependencies));
+    let first = match output_of(*frames.start()) {
+        Ok(o) => o,
+        Err(e) => return usage(e),
+    };
+    if let Err(e) = check(*frames.start()) {
+        return usage(e);
+    }
+    if count > 1 {
+        let named = pattern
+            .clone()
+            .or_else(|| FramePattern::for_scene(&args.scene));
+        let folder = first
+            .parent()
+            .filter(|f| !f.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        let held = std::fs::read_dir(folder)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.file_name())
+            .chain(
+                still
+                    .dependencies
+                    .iter()
+                    .filter_map(|d| d.file_name().map(Into::into)),
+            );
+        for name in held {
+            let frame = name
+                .to_str()
+                .and_then(|n| named.as_ref()?.frame_of(n))
+                .filter(|k| frames.contains(k));
+            if let Some(k) = frame
+                && let Err(e) = check(k)
+            {
+                return usage(e);
+            }
         }
     }
     if !still.animated {
