@@ -20,6 +20,8 @@ use crate::syntax::ast::Name;
 pub(super) struct MaterialBuilder {
     kind: Option<(&'static str, Span)>,
     base: Option<Rc<MaterialDef>>,
+    /// Where the declared material was named.
+    base_span: Option<Span>,
     albedo: Option<ColorDef>,
     ior: Option<(f64, Span)>,
     absorb: Option<ColorDef>,
@@ -114,17 +116,36 @@ impl MaterialBuilder {
         {
             return Ok(Value::Material(base));
         }
-        let kind_name = self.kind.map(|k| k.0).or_else(|| {
-            self.base.as_ref().map(|b| match b.kind {
-                MatKind::Diffuse(_) => "diffuse",
-                MatKind::Mirror(_) => "mirror",
-                MatKind::Glass { .. } => "glass",
-                MatKind::Glossy { .. } => "glossy",
-                MatKind::Conductor { .. } => "conductor",
-                MatKind::Coated { .. } => "coated",
-                MatKind::Blend { .. } => "blend",
-            })
+        let base_kind = self.base.as_ref().map(|b| match b.kind {
+            MatKind::Diffuse(_) => "diffuse",
+            MatKind::Mirror(_) => "mirror",
+            MatKind::Glass { .. } => "glass",
+            MatKind::Glossy { .. } => "glossy",
+            MatKind::Conductor { .. } => "conductor",
+            MatKind::Coated { .. } => "coated",
+            MatKind::Blend { .. } => "blend",
         });
+        // A kind written beside a declared material of another kind replaces it whole (its
+        // properties belong to its kind): said, since nothing of the declared one is kept.
+        if let (Some((kind, kind_span)), Some(declared), Some(at)) =
+            (self.kind, base_kind, self.base_span)
+            && kind != declared
+        {
+            let name = ev.sources.snippet(at);
+            ev.warn(
+                Diagnostic::warning(
+                    at,
+                    format!("`{name}` is a {declared} material: `{kind}` replaces it whole"),
+                )
+                .with_label("nothing of this material is kept")
+                .with_extra(kind_span, "the kind used")
+                .with_help(format!(
+                    "an override keeps the declared material's kind; drop `{name}` for a new \
+                     {kind} material, or `{kind}` to change `{name}`'s properties"
+                )),
+            );
+        }
+        let kind_name = self.kind.map(|k| k.0).or(base_kind);
         let Some(kind_name) = kind_name else {
             return Err(vec![
                 Error::new(
@@ -767,6 +788,7 @@ impl Sink for MaterialBuilder {
         match v {
             Value::Material(m) if self.base.is_none() => {
                 self.base = Some(m);
+                self.base_span = Some(span);
                 Ok(())
             }
             // A colour declared and then used as a material (POV-Ray's `pigment { Red }`), or
