@@ -15,6 +15,7 @@ pub mod atomic_file;
 pub mod bezier;
 pub mod camera;
 pub mod cancel;
+pub mod chains;
 pub mod chart;
 pub mod compare;
 pub mod diag;

@@ -1172,3 +1172,107 @@ fn a_frame_name_held_by_a_folder_or_an_input_is_refused_before_rendering() {
     assert!(err.contains("tex_2.png") && err.contains("reads"), "{err}");
     assert_eq!(written(sub.path()), ["tex_2.png"]);
 }
+
+/// `render --chain K/N` writes a chain whose pixels do not depend on the thread count and
+/// differ between chains (their own streams); `merge` combines two chains into their
+/// iteration-weighted mean, refuses a duplicate chain, another scene or another size with exit
+/// 1 and no output, and wants `.exr` names.
+#[test]
+fn chains_render_per_thread_count_alike_and_merge_or_refuse() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let small = ["--resolution", "24x24", "--photons", "3000"];
+    let chain = |k: &str, out: &str, its: &str, threads: &str, scene: &str| {
+        let out = render_with(
+            scene,
+            &p(out),
+            &[
+                &small[..],
+                &["--chain", k, "--iterations", its, "--threads", threads],
+            ]
+            .concat(),
+        );
+        succeeded(&out);
+    };
+    chain("1/2", "c1.exr", "2", "1", "examples/cornell.scn");
+    chain("1/2", "c1_t2.exr", "2", "2", "examples/cornell.scn");
+    chain("2/2", "c2.exr", "6", "2", "examples/cornell.scn");
+    let pixels = |name: &str| image::open(p(name)).unwrap().to_rgb32f().into_raw();
+    assert_eq!(pixels("c1.exr"), pixels("c1_t2.exr"), "1 and 2 threads");
+    assert_ne!(
+        pixels("c1.exr"),
+        pixels("c2.exr"),
+        "two chains, two streams"
+    );
+
+    let out = sppm(&["merge", &p("c1.exr"), &p("c2.exr"), "-o", &p("m.exr")]);
+    succeeded(&out);
+    let (a, b, m) = (pixels("c1.exr"), pixels("c2.exr"), pixels("m.exr"));
+    for i in 0..m.len() {
+        let want = (2.0 * f64::from(a[i]) + 6.0 * f64::from(b[i])) / 8.0;
+        assert!(
+            (f64::from(m[i]) - want).abs() <= 1e-5 * (1.0 + want),
+            "value {i}"
+        );
+    }
+
+    let refused = |inputs: &[String], what: &str| {
+        let out_path = p("bad.exr");
+        let args: Vec<&str> = ["merge"]
+            .into_iter()
+            .chain(inputs.iter().map(String::as_str))
+            .chain(["-o", &out_path])
+            .collect();
+        let out = sppm(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{what}: {err}");
+        assert!(err.contains(what), "{what}: {err}");
+        assert!(!dir.path().join("bad.exr").exists(), "{what}: no output");
+    };
+    refused(&[p("c1.exr"), p("c1_t2.exr")], "both chain 1");
+    chain("2/2", "other.exr", "1", "1", "examples/furnace.scn");
+    refused(&[p("c1.exr"), p("other.exr")], "scene hash");
+    let out = render_with(
+        "examples/cornell.scn",
+        &p("big.exr"),
+        &[
+            "--resolution",
+            "30x24",
+            "--photons",
+            "3000",
+            "--chain",
+            "2/2",
+            "--iterations",
+            "1",
+        ],
+    );
+    succeeded(&out);
+    refused(&[p("c1.exr"), p("big.exr")], "scene hash");
+    // A plain render is not a chain.
+    let out = render_with(
+        "examples/cornell.scn",
+        &p("plain.exr"),
+        &[&small[..], &["--iterations", "1"]].concat(),
+    );
+    succeeded(&out);
+    refused(&[p("c1.exr"), p("plain.exr")], "not a chain");
+
+    // A chain with a NaN pixel (as a broken file might hold) is refused, naming it.
+    let mut nan = sppm_lang::chains::read_chain(std::path::Path::new(&p("c2.exr"))).unwrap();
+    nan.image.pixels[5][1] = f64::NAN;
+    sppm_lang::chains::write_chain(std::path::Path::new(&p("nan.exr")), &nan.image, &nan.info)
+        .unwrap();
+    refused(&[p("c1.exr"), p("nan.exr")], "nan.exr`: pixel (5, 0)");
+
+    usage_error(&["merge", &p("c1.exr"), &p("c2.exr"), "-o", &p("m.png")]);
+    usage_error(&["render", "examples/cornell.scn", "--chain", "3/2"]);
+    usage_error(&["render", "examples/cornell.scn", "--chain", "0/2"]);
+    usage_error(&[
+        "render",
+        "examples/cornell.scn",
+        "--chain",
+        "1/2",
+        "-o",
+        &p("c.png"),
+    ]);
+}

@@ -101,6 +101,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Tools over finished images and renders.
     ("compare", &["film", "atomic_file"]),
     ("chart", &["atomic_file", "compare"]),
+    ("chains", &["film", "atomic_file"]),
     ("watch", &[]),
 ];
 

@@ -21,6 +21,7 @@ mod chart;
 mod check;
 mod frames;
 mod live;
+mod merge;
 mod output;
 mod reference;
 mod render;
@@ -151,6 +152,12 @@ pub fn cancel_on_ctrl_c() -> sppm_lang::Cancel {
 
 /// Refuses `outputs` that are among `inputs` (the files a load read): writing there would
 /// destroy a scene, an include or a texture (and `watch` would see its own output as a change).
+/// Whether `path` ends in `.exr` (any case).
+pub fn is_exr(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
 pub fn check_not_an_input(outputs: &[&std::path::Path], inputs: &[PathBuf]) -> Result<(), String> {
     for o in outputs {
         sppm_lang::atomic_file::check_output(o, inputs)?;
@@ -337,6 +344,9 @@ pub enum Command {
     /// Render a reference image for `chart` with the path tracer, in two independent halves
     /// whose difference estimates its noise (written beside it).
     Reference(reference::ReferenceArgs),
+    /// Merge the chains of a still (`render --chain K/N`) into one image, weighted by their
+    /// iterations.
+    Merge(merge::MergeArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -356,6 +366,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Watch(args) => watch::run(&args),
         Command::Chart(args) => chart::run(&args),
         Command::Reference(args) => reference::run(&args),
+        Command::Merge(args) => merge::run(&args),
     }
 }
 

@@ -6,12 +6,15 @@ use std::process::ExitCode;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use sppm_lang::chains::{ChainInfo, write_chain};
 use sppm_lang::render::{Progress, RenderOptions, RenderStats, prepare, render_prepared};
+use sppm_lang::sampling::chain_seed;
 use sppm_lang::scene::{Integrator, Scene};
 use sppm_lang::{Cancel, RangeOverride, SourceMap};
 
 use super::check::{print_diagnostics, print_render_error, print_render_warning};
 use super::frames::{self, FramePattern};
+use super::watch::identity::SceneId;
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -53,10 +56,27 @@ pub struct RenderArgs {
     /// 0..1).
     #[arg(long, value_name = "A..B", value_parser = frames::parse_clock, allow_hyphen_values = true)]
     pub clock: Option<(f64, f64)>,
+    /// Render chain K of N of a still: its own random streams under the seed, written as a
+    /// linear EXR whose header `sppm-lang merge` reads (default output: `<scene>.chainK.exr`).
+    #[arg(long, value_name = "K/N", value_parser = parse_chain)]
+    pub chain: Option<(u32, u32)>,
     #[command(flatten)]
     pub size: SizeArgs,
     #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+/// `K/N` with 1 <= K <= N.
+fn parse_chain(text: &str) -> Result<(u32, u32), String> {
+    let parsed = text
+        .split_once('/')
+        .and_then(|(k, n)| Some((k.trim().parse::<u32>().ok()?, n.trim().parse::<u32>().ok()?)));
+    match parsed {
+        Some((k, n)) if 1 <= k && k <= n => Ok((k, n)),
+        _ => Err(format!(
+            "`{text}` is not a chain: write K/N with 1 <= K <= N, e.g. 2/8"
+        )),
+    }
 }
 
 pub fn run(args: RenderArgs) -> ExitCode {
@@ -82,6 +102,21 @@ pub fn run(args: RenderArgs) -> ExitCode {
         None => None,
     };
     let first_output = pattern.as_ref().map(|p| p.path(0));
+    let chain_output = match (args.chain, &args.output) {
+        (Some((k, _)), None) => {
+            let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
+            Some(args.scene.with_file_name(format!("{stem}.chain{k}.exr")))
+        }
+        (Some(_), Some(o)) if !super::is_exr(o) => {
+            return usage(format!(
+                "a chain is written as EXR (its header carries what merging needs): name \
+                 `{}` with .exr",
+                o.display()
+            ));
+        }
+        _ => None,
+    };
+    let first_output = first_output.or(chain_output);
     let output = match super::output_path(
         first_output.as_deref().or(args.output.as_deref()),
         &args.scene,
@@ -118,6 +153,11 @@ pub fn run(args: RenderArgs) -> ExitCode {
             print_diagnostics(&still);
             usage(e)
         }
+        Ok(Some(_)) if args.chain.is_some() => usage(format!(
+            "`--chain` renders a still, and `{}` is an animation: render its frames with \
+             `--frame K`",
+            args.scene.display()
+        )),
         Ok(Some(range)) => animate(&args, &eval_options, still, pattern, &range, &cancel),
         Ok(None) => {
             let needs = if args.frame.is_some() {
@@ -338,17 +378,41 @@ fn render_scene(
         return Err(ExitCode::from(EXIT_USAGE));
     }
     let scene = scene.as_ref();
+    // A chain's header: its iterations are filled in as they finish.
+    let base_seed = args.seed.unwrap_or(scene.settings.seed);
+    let chain = args.chain.map(|(k, n)| ChainInfo {
+        iterations: 0,
+        photons: args.photons.or(scene.settings.photons).unwrap_or(0),
+        method: scene.settings.integrator.name().to_string(),
+        seed: base_seed,
+        chain: k,
+        chains: n,
+        scene: SceneId::of(scene).value(),
+    });
+    let write = |image: &sppm_lang::film::Image, iterations: u32| match &chain {
+        Some(info) => write_chain(
+            output,
+            image,
+            &ChainInfo {
+                iterations,
+                ..info.clone()
+            },
+        ),
+        None => image.write(output, scene.settings.exposure),
+    };
     let options = RenderOptions {
         iterations: args.iterations,
         photons: args.photons,
-        seed: args.seed,
+        seed: match args.chain {
+            Some((k, _)) => Some(chain_seed(base_seed, k)),
+            None => args.seed,
+        },
         time_limit: args.time_limit,
         threads: args.threads,
         memory_limit: args.limits.memory_limit,
         cancel: cancel.clone(),
         ..RenderOptions::default()
     };
-    let exposure = scene.settings.exposure;
     let total = options.iterations.unwrap_or(scene.settings.iterations);
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = ProgressBar::new(total as u64);
@@ -375,7 +439,7 @@ fn render_scene(
         if let Some(k) = args.snapshot_every
             && p.iteration.is_multiple_of(k)
             && p.iteration < p.iterations
-            && let Err(e) = p.image().write(output, exposure)
+            && let Err(e) = write(&p.image(), p.iteration)
         {
             snapshot_error = Some(e);
         }
@@ -445,7 +509,7 @@ fn render_scene(
         print_render_error(sources, &e);
         return Err(ExitCode::from(EXIT_SCENE_ERROR));
     }
-    if let Err(e) = out.image.write(output, exposure) {
+    if let Err(e) = write(&out.image, out.iterations_done) {
         say!("error: {e}");
         return Err(ExitCode::from(EXIT_SCENE_ERROR));
     }

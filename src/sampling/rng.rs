@@ -18,6 +18,13 @@ pub fn stream_seed(seed: u64, iteration: u32, kind: u32, index: u64) -> u64 {
     mix64(b ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03))
 }
 
+/// The render seed of chain `chain` of a still rendered as several chains under `seed`. For one
+/// `seed`, distinct chains get distinct seeds (two bijective mixes, the second of the chain
+/// number), so their streams ([`stream_seed`]) are as apart as two iterations of one render.
+pub fn chain_seed(seed: u64, chain: u32) -> u64 {
+    mix64(mix64(seed ^ 0x3c6e_f372_fe94_f82b) ^ u64::from(chain))
+}
+
 /// A PCG32 generator.
 #[derive(Debug, Clone)]
 pub struct Rng {

@@ -7,7 +7,8 @@
 //! only place diagnostics; a comment moves them), and the decoded pixels of images and the
 //! arrays of meshes are hashed as raw numbers rather than formatted, which is far faster. The
 //! scene holds every file it read by value (decoded images, parsed meshes), so their contents
-//! are part of the identity. The hash (SipHash with fixed keys) is only compared within one run.
+//! are part of the identity. The hash (SipHash with fixed keys) is compared within one run, and
+//! between the chain files of one build (`render --chain`, `merge`).
 
 use std::fmt::Write as _;
 use std::hash::{DefaultHasher, Hasher};
@@ -28,6 +29,11 @@ impl SceneId {
         let _ = write!(h, "{stripped:?}");
         h.flush();
         SceneId(h.hasher.finish())
+    }
+
+    /// The hash as a number (for a chain's header: the same scene and build give the same).
+    pub fn value(self) -> u64 {
+        self.0
     }
 }
 

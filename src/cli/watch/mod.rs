@@ -17,7 +17,7 @@
 //! Status lines go to stderr. When stderr is not a terminal they are plain lines starting with
 //! `[watch]`, one per event, which the integration tests read.
 
-mod identity;
+pub(super) mod identity;
 mod kept;
 mod load;
 mod round;
