@@ -280,6 +280,8 @@ impl Evaluator {
                 }
                 return self.inline(c, &f, pieces, span);
             }
+            // A declaration that failed (its error is reported): not again at each call.
+            None if self.poisoned.contains(text) => return Err(super::silent()),
             Some(Value::Macro(_)) | None => {}
             Some(v) => {
                 return Err(vec![
@@ -609,6 +611,10 @@ mod tests {
         }
         let err = compiled(&text, "F20").unwrap_err();
         assert!(err.contains("too large"), "{err}");
+        // One error: the functions after the one that failed call a poisoned name, silently.
+        let all = compile_function(&text, "F20").unwrap_err();
+        let errors: Vec<_> = all.iter().filter(|d| d.is_error()).collect();
+        assert_eq!(errors.len(), 1, "{errors:?}");
     }
 
     #[test]
