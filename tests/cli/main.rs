@@ -1,0 +1,15 @@
+//! The command line as a user runs it: exit codes, charts, watch, saves, interrupts and the live view.
+//!
+//! One test binary for the group (each binary links the whole library): run one file's tests
+//! with `cargo test --test cli <file>::`.
+
+#[path = "../common/running.rs"]
+mod running;
+
+mod chart_cli;
+mod cli_exit;
+mod interrupt;
+mod watch_cli;
+mod watch_saves;
+mod live_browser;
+mod live_security;
