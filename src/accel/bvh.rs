@@ -297,7 +297,7 @@ impl Bvh {
         }
         let boxes = BoxRay::new(ray);
         // Children still to visit, with their entry distances. An ArrayVec: a fixed array
-        // would be zeroed on every call (a tenth of a short ray's instructions).
+        // would be zeroed on every call, a cost a short ray notices.
         let mut stack = ArrayVec::<(u32, f32), STACK>::new();
         let mut c = Closest::NONE;
         let mut cur = 0u32;

@@ -480,7 +480,8 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// Not inlined: one copy of the traversal, called from every integrator's loop (inlined
-    /// into each caller it measured 4 % fewer photons/s, though it ran fewer instructions).
+    /// into each caller it ran fewer instructions but fewer photons/s: docs/measurements.md,
+    /// "Tried and not kept").
     #[inline(never)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
         if !finite(ray) {

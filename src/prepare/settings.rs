@@ -104,9 +104,9 @@ impl From<crate::scene::Invalid> for RenderError {
 
 /// Initial SPPM/PPM gather radii per pixel footprint: a pixel's radius starts at this many
 /// widths of its footprint at its first visible point. Chosen with `tools/every_example.py`
-/// on every example at equal CPU time (docs/integrators.md, "The initial radius"): among 1,
-/// 1.5 and 2, 1.5 gave the lowest RMSE against path tracing over all examples (geometric
-/// mean) and 0.72x the relative MSE of 1.
+/// on every example at equal CPU time (docs/integrators.md, "The factor on every example"):
+/// among 1, 1.5 and 2, 1.5 gave the lowest RMSE against path tracing over all examples
+/// (geometric mean) and a lower relative MSE than 1.
 pub const RADIUS_FOOTPRINTS: f64 = 1.5;
 
 /// With final gathering, a pixel's gather points start with this many times the initial radius

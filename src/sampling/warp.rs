@@ -5,8 +5,9 @@ use std::f32::consts::{FRAC_PI_4, PI};
 use glam::{Vec2, Vec3A};
 
 /// `(sin a, cos a)` for `|a| <= pi/4`, by their Taylor series to the a^9 and a^10 terms
-/// (the next terms are under 2e-9 and 1.2e-10 there, far below an f32 ulp). libm's `sincosf`,
-/// which reduces any angle first, was 30 M of the 868 M instructions of one SPPM iteration.
+/// (the next terms are under 2e-9 and 1.2e-10 there, far below an f32 ulp). libm's `sincosf`
+/// reduces any angle first, which showed in an SPPM iteration's instruction count
+/// (docs/measurements.md, "Instruction counts").
 #[inline]
 fn sin_cos_quarter(a: f32) -> (f32, f32) {
     let a2 = a * a;

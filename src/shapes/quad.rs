@@ -16,9 +16,8 @@ const MIN_SPHERICAL_RECT: f32 = 1e-3;
 
 /// Beyond this many diagonals from its center a rectangle is sampled by area: there the area
 /// sampler's density varies little over the rectangle, and the spherical rectangle's four
-/// `acos` and its inverse map cost more than the variance they save (on the Cornell box, light
-/// 2.8 diagonals above the floor, sampling it everywhere took path tracing 1.5x the CPU time
-/// for the same error).
+/// `acos` and its inverse map cost more than the variance they save (measured on the Cornell
+/// box: docs/measurements.md, "Light sampling").
 const NEAR_DIAGONALS: f32 = 1.5;
 
 /// The spherical rectangle a rectangle subtends from a receiver `o` (Ureña, Fajardo and King,

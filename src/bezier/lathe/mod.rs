@@ -368,8 +368,8 @@ impl Lathe {
     ) -> Option<(f64, Part, f64)> {
         let (o, dn) = (frame.o, frame.dn);
         let mut found: Option<(f64, Part, f64)> = None;
-        // The roots' buffer is the thread's, kept from search to search: a new one allocated
-        // at its first root took about 3 % of the goblet room's photon pass in the allocator.
+        // The roots' buffer is the thread's, kept from search to search: allocating one per
+        // search showed in the photon pass's profile (docs/measurements.md, "Cost per ray").
         let mut roots = ROOTS.take();
         roots.clear();
         // Segments whose shells the ray enters, nearest entry first: (entry, segment, pieces).

@@ -159,9 +159,8 @@ impl PhotonNoise {
 /// 0.4, the furnace 0.125) it leaves out what the iterations buy (the radius shrinks by
 /// iteration, and the visible points move) and the photon pass's costs beyond its rays. At
 /// equal CPU time on every example a forced 2 was as good as 1 within the runs' scatter and
-/// better on the teapot (1.04-1.05x path's RMSE against 1.19-1.27x), and going below 1
-/// (bounds 1/8 to 8) made `smallppm_far` 40 % worse (docs/integrators.md, "Camera samples and
-/// photons").
+/// better on the teapot, and going below 1 made `smallppm_far` worse (figures in
+/// docs/integrators.md, "Camera samples and photons").
 const SPLIT_RANGE: (f64, f64) = (2.0, 8.0);
 
 /// The ratio of the camera pass's ray casts to the photon pass's that minimises the image's

@@ -16,7 +16,7 @@
 //! Radii can span orders of magnitude (each pixel's radius follows the distance to its visible
 //! point: an infinite floor seen up to the horizon). Cells sized by the largest radius would
 //! then put every photon near the camera into a few cells, each scanned by every point there
-//! (15x the time of the same scene with a finite floor). So the points are split into levels
+//! (docs/measurements.md, "Photon grid levels"). So the points are split into levels
 //! by radius, a factor [`LEVEL_FACTOR`] apart, each level with its own cells over its own
 //! points; a photon is filed in every level whose points it may reach, and a point looks up its
 //! own level only. Radii above a quarter of the largest make one level: the grid of one level
