@@ -1,5 +1,5 @@
 //! The generated 100 000-object scene of the parse benchmark, shared with the test that checks
-//! it evaluates to exactly that many objects (`tests/good_scenes.rs`).
+//! it evaluates to exactly that many objects (`tests/language/good_scenes.rs`).
 
 use std::fmt::Write;
 

@@ -203,7 +203,7 @@ fn violations(module: &str, file: &str, text: &str) -> Vec<String> {
     let table = allowed();
     let Some(ok) = table.get(module) else {
         return vec![format!(
-            "{file}: module `{module}` is not placed in tests/layering.rs's ALLOWED table"
+            "{file}: module `{module}` is not placed in tests/language/layering.rs's ALLOWED table"
         )];
     };
     let mut found = Vec::new();
@@ -285,7 +285,7 @@ fn every_module_of_lib_rs_is_placed() {
             let name = name.trim_end_matches(';');
             assert!(
                 table.contains_key(name),
-                "src/lib.rs declares `{name}`, which tests/layering.rs does not place"
+                "src/lib.rs declares `{name}`, which tests/language/layering.rs does not place"
             );
         }
     }

@@ -6,7 +6,7 @@
 Prints, per image: the mean over the reference's, and the 99th, 99.9th and 99.99th percentiles,
 the largest value and the root mean square of the per-pixel error (mean absolute difference of
 the three channels), over the whole image and over the pixels away from directly seen lights
-(the reference at the pixel and its 8 neighbours below 2), as tests/glossy_reference.rs does.
+(the reference at the pixel and its 8 neighbours below 2), as tests/accuracy/glossy_reference.rs does.
 """
 import sys
 

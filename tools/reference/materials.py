@@ -10,7 +10,7 @@ It writes three files beside itself:
 - `materials.scn`: our scene, generated from ROWS (never edit it by hand);
 - `materials.mask.exr`: per pixel, 1 + the index of the sphere (row-major, as in
   `materials.labels`) whose inner disc (0.8 of the radius) the pixel centre's ray meets, else 0;
-  `tests/glossy_reference.rs` averages each sphere over these pixels;
+  `tests/accuracy/glossy_reference.rs` averages each sphere over these pixels;
 - `materials.labels`: one line per sphere, `<row> <roughness>`;
 - `materials.exr`: the Mitsuba render (linear RGB float, box filter).
 

@@ -599,7 +599,7 @@ fn from_inside_the_shells(l: &Lathe) -> impl Fn(&mut Rng) -> (DVec3, DVec3) + Sy
 }
 
 /// Rays #511630 and #958799 of the case above (at 10^6 rays) leave the surface and meet it
-/// again within 1e-4, nearly tangent (`tests/bezier_cases.rs` checks the robust method on
+/// again within 1e-4, nearly tangent (`tests/render/bezier_cases.rs` checks the robust method on
 /// them). The reference must give the true `t` (60-digit decimal Newton on
 /// `h(s) = o_y + t d_y`, `r(s)^2 = |o_xz + t d_xz|^2` from the exact f64 inputs) to well below
 /// the stress test's 1e-6. In plain f64 its answer on the second ray was 9.5e-7 off (the
