@@ -77,8 +77,10 @@ def coated_ours(r):
 
 
 def coated_mitsuba(r):
-    # Mitsuba's ext_ior defaults to air (1.000277), int_ior to polypropylene (1.49).
-    common = {'int_ior': 1.5, 'ext_ior': 1.0, 'nonlinear': False,
+    # Mitsuba's ext_ior defaults to air (1.000277), int_ior to polypropylene (1.49). Ours
+    # dims the light bouncing between base and coat by the base's colour at each round:
+    # Mitsuba's `nonlinear`.
+    common = {'int_ior': 1.5, 'ext_ior': 1.0, 'nonlinear': True,
               'diffuse_reflectance': rgb(PLASTIC_BASE)}
     if r == 0:
         return {'type': 'plastic', **common}
