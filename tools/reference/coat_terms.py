@@ -1,10 +1,11 @@
-"""Where our rough `coated` and Mitsuba 3's `roughplastic` (GGX, nonlinear false) part ways.
+"""The terms of our rough `coated` against Mitsuba 3's `roughplastic` (GGX, nonlinear true).
 
-Both give the base's light as `c t(mu_i) t(mu_o) / (eta^2 (1 - Ri) pi)` (ours divides by
-`max(eta^2 (1 - Ri), 1 - Re)`, the first term at these roughnesses). They differ in two terms:
-- `t`: ours is `1 - E(mu)`, one minus the coat's reflection albedo; Mitsuba's is the rough
-  interface's transmission albedo (`eval_transmittance`: `(1 - F) G1(refracted)` over the
-  visible normals), which also loses what masking hides from the refracted ray;
+Both give the base's light as `c t(mu_i) t(mu_o) / (eta^2 (1 - c Ri) pi)`, with `t` the rough
+interface's transmission albedo (Mitsuba's `eval_transmittance`: `(1 - F) G1(refracted)` over
+the visible normals; ours the same quadrature, tabulated). Until 2026-11-29 ours used
+`1 - E(mu)` for `t` (one minus the reflection albedo, counting what masking loses as let
+through) and `1 - Ri` for `1 - c Ri`; a random walk through the layer (`sppm-measure coat`)
+chose Mitsuba's terms. One difference remains:
 - `Ri`: ours is `2 int E_inside(mu) mu dmu` by a fine midpoint rule; Mitsuba's is the plain
   mean of `2 E_inside(mu) mu` over 64 evenly spaced nodes from 0 to 1, endpoints included with
   full weight (about 1.6 % low).
@@ -68,6 +69,21 @@ def coat_albedo(mu, alpha, eta):
     return v.mean()
 
 
+def coat_transmission(mu, alpha, eta):
+    """t(mu): mean of (1 - F(wo.h)) G1(refracted) over the visible normals (ours, and
+    Mitsuba's `eval_transmittance`)."""
+    wo = np.array([np.sqrt(1 - mu * mu), 0, mu])
+    h = visible_normals(wo, alpha, U1, U2)
+    d = h @ wo
+    st2 = (1 - d * d) / eta ** 2
+    ct = np.sqrt(np.maximum(1 - st2, 0))
+    wt = -wo / eta + (d / eta - ct)[:, None] * h
+    wt /= np.linalg.norm(wt, axis=-1, keepdims=True)
+    v = (1 - fresnel(d, eta)) * g1(-wt, alpha * alpha)
+    v[(st2 >= 1) | (wt[:, 2] >= 0)] = 0
+    return v.mean()
+
+
 def mitsuba_terms(alpha):
     def bsdf(c):
         return mi.load_dict({'type': 'roughplastic', 'distribution': 'ggx', 'alpha': alpha,
@@ -93,15 +109,16 @@ def main():
         ri_m, t_m = mitsuba_terms(a)
         e_in = np.array([coat_albedo(m, a, 1 / ETA) for m in mus])
         e_out = np.array([coat_albedo(m, a, ETA) for m in mus])
-        ri, re = 2 * np.mean(e_in * mus), 2 * np.mean(e_out * mus)
-        div = max(ETA ** 2 * (1 - ri), 1 - re)
+        t_out = np.array([coat_transmission(m, a, ETA) for m in mus])
+        ri, exit_share = 2 * np.mean(e_in * mus), 2 * np.mean(t_out * mus)
+        div = max(ETA ** 2 * (1 - ri), exit_share)
         print(f'roughness {r}: Ri ours {ri:.4f}, Mitsuba {ri_m:.4f}; divisor ours {div:.4f}, '
               f'Mitsuba {ETA ** 2 * (1 - ri_m):.4f}')
         for mu in [1.0, 0.7, 0.4, 0.15]:
-            t, tm = 1 - coat_albedo(mu, a, ETA), t_m(mu)
+            t, tm = coat_transmission(mu, a, ETA), t_m(mu)
             print(f'  cos {mu}: t ours {t:.4f}, Mitsuba {tm:.4f} (Mitsuba / ours {tm / t:.4f})')
         tt = np.array([t_m(m) for m in mus[::4]])
-        ours = (1 - coat_albedo(1.0, a, ETA)) * (1 - re) / div
+        ours = coat_transmission(1.0, a, ETA) * exit_share / div
         theirs = t_m(1.0) * 2 * np.mean(tt * mus[::4]) / (ETA ** 2 * (1 - ri_m))
         print(f'  white base seen head-on, base part of the albedo: ours {ours:.4f}, '
               f'Mitsuba {theirs:.4f}')

@@ -59,8 +59,9 @@ def vec(v):
 
 @dataclass
 class Row:
-    """One row of spheres: `ours(r)` is the body of our `material { }` at roughness r,
-    `mitsuba(r)` the Mitsuba BSDF dict."""
+    """One row of spheres: `ours(r)` is the body of our `material { }` at parameter r (the
+    roughness unless the row says otherwise: an index, a weight), `mitsuba(r)` the Mitsuba BSDF
+    dict. A sphere's label is `<name> <r>`."""
     name: str
     ours: Callable[[float], str]
     mitsuba: Callable[[float], dict]
@@ -76,8 +77,10 @@ def coated_ours(r):
 
 
 def coated_mitsuba(r):
-    # Mitsuba's ext_ior defaults to air (1.000277), int_ior to polypropylene (1.49).
-    common = {'int_ior': 1.5, 'ext_ior': 1.0, 'nonlinear': False,
+    # Mitsuba's ext_ior defaults to air (1.000277), int_ior to polypropylene (1.49). Ours
+    # dims the light bouncing between base and coat by the base's colour at each round:
+    # Mitsuba's `nonlinear`.
+    common = {'int_ior': 1.5, 'ext_ior': 1.0, 'nonlinear': True,
               'diffuse_reflectance': rgb(PLASTIC_BASE)}
     if r == 0:
         return {'type': 'plastic', **common}
@@ -105,22 +108,95 @@ ROWS = [
     Row('coated', coated_ours, coated_mitsuba),
     Row('Au', conductor_ours('Au'), conductor_mitsuba('Au')),
     Row('Cu', conductor_ours('Cu'), conductor_mitsuba('Cu')),
-    # Rows for materials being built elsewhere follow the same pattern, e.g.
-    # Row('roughglass', lambda r: f'glass ior 1.5 roughness {r:g}',
-    #     lambda r: {'type': 'roughdielectric', 'distribution': 'ggx', 'alpha': r * r,
-    #                'int_ior': 1.5, 'ext_ior': 1.0}, roughness=(0.1, 0.3, 0.6)),
-    # Row('thin', ..., lambda r: {'type': 'thindielectric', 'int_ior': 1.5, 'ext_ior': 1.0}),
-    # Row('blend', ..., lambda r: {'type': 'blendbsdf', 'weight': 0.3,
-    #                              'bsdf_0': {...}, 'bsdf_1': {...}}),
-    # Row('bump', ..., lambda r: {'type': 'bumpmap', 'arg': {texture}, 'bsdf': {...}}),
 ]
 
 
-def spheres():
-    """(label, centre, row) of every sphere: rows top to bottom, roughness left to right."""
+def frosted_ours(r):
+    rough = f' roughness {r:g}' if r > 0 else ''
+    return f'glass ior 1.5{rough}'
+
+
+def frosted_mitsuba(r):
+    if r == 0:
+        return {'type': 'dielectric', 'int_ior': 1.5, 'ext_ior': 1.0}
+    return {'type': 'roughdielectric', 'distribution': 'ggx', 'alpha': r * r,
+            'int_ior': 1.5, 'ext_ior': 1.0}
+
+
+THIN_IOR = (1.2, 1.5, 2.5, 4.0)
+
+
+def thin_ours(ior):
+    return f'glass thin ior {ior:g}'
+
+
+def thin_mitsuba(ior):
+    return {'type': 'thindielectric', 'int_ior': ior, 'ext_ior': 1.0}
+
+
+BLEND_WEIGHT = (0.1, 0.3, 0.6, 0.9)
+BLEND_METAL_ROUGHNESS = 0.2
+
+
+def blend_ours(w):
+    return (f'blend material {{ diffuse rgb {vec(PLASTIC_BASE)} }}, '
+            f'material {{ conductor "Au" roughness {BLEND_METAL_ROUGHNESS:g} }} weight {w:g}')
+
+
+def blend_mitsuba(w):
+    metal = conductor_mitsuba('Au')(BLEND_METAL_ROUGHNESS)
+    return {'type': 'blendbsdf', 'weight': w,
+            'bsdf_0': {'type': 'diffuse', 'reflectance': rgb(PLASTIC_BASE)},
+            'bsdf_1': metal}
+
+
+# The second sheet: materials that pass light, and a blend. A striped floor below gives the
+# glass something to refract (in a uniform sky a clear lossless sphere shows the sky's own
+# radiance whatever its model).
+GLASS_ROWS = [
+    Row('frosted', frosted_ours, frosted_mitsuba),
+    Row('thin', thin_ours, thin_mitsuba, roughness=THIN_IOR),
+    Row('blend', blend_ours, blend_mitsuba, roughness=BLEND_WEIGHT),
+    # A bump row would follow the same pattern:
+    # Row('bump', ..., lambda r: {'type': 'bumpmap', 'arg': {texture}, 'bsdf': {...}}),
+]
+
+# Floor: stripes of width 1 along z (alternating reflectance), at FLOOR_Y, facing up.
+FLOOR_Y = -1.6
+FLOOR_HALF = 6
+FLOOR_SHADES = (0.8, 0.2)
+
+
+@dataclass
+class Sheet:
+    """A scene of rows: its files are `<name>.scn`, `<name>.exr`, `<name>.mask.exr` and
+    `<name>.labels` beside this script."""
+    name: str
+    rows: list
+    floor: bool = False
+
+
+SHEETS = {
+    'materials': Sheet('materials', ROWS),
+    'glass_blend': Sheet('glass_blend', GLASS_ROWS, floor=True),
+}
+
+
+def floor_stripes():
+    """(corner, edge_u, edge_v, shade) of each floor stripe; edge_u x edge_v points up."""
     out = []
-    n_rows = len(ROWS)
-    for i, row in enumerate(ROWS):
+    for i, z in enumerate(range(-FLOOR_HALF, FLOOR_HALF)):
+        out.append(((-FLOOR_HALF, FLOOR_Y, z), (0, 0, 1), (2 * FLOOR_HALF, 0, 0),
+                    FLOOR_SHADES[i % 2]))
+    return out
+
+
+def spheres(sheet):
+    """(label, centre, row, parameter) of every sphere: rows top to bottom, parameter left to
+    right."""
+    out = []
+    n_rows = len(sheet.rows)
+    for i, row in enumerate(sheet.rows):
         y = PITCH * ((n_rows - 1) / 2 - i)
         n = len(row.roughness)
         for j, r in enumerate(row.roughness):
@@ -129,11 +205,16 @@ def spheres():
     return out
 
 
-def write_scene(path):
+def write_scene(sheet, path):
+    n = sheet.name
+    what = ('rows of spheres, one material per row at several roughnesses'
+            if not sheet.floor else
+            'rows of spheres, one material per row at several parameters, over a striped floor')
     lines = [
-        '// materials.scn: written by tools/reference/materials.py (do not edit; edit ROWS there).',
-        '// Rows of spheres, one material per row at several roughnesses, under a uniform sky',
-        '// and a rectangle light; tools/reference/materials.exr is the same scene in Mitsuba 3.',
+        f'// {n}.scn: written by tools/reference/materials.py (do not edit; edit its rows there).',
+        f'// {what[0].upper() + what[1:]},',
+        '// under a uniform sky and a rectangle light; tools/reference/'
+        f'{n}.exr is the same scene in Mitsuba 3.',
         '',
         f'settings {{ resolution <{WIDTH}, {HEIGHT}>  iterations 64  seed 1 }}',
         f'camera   {{ location {vec(EYE)}  look_at {vec(TARGET)}  up <0, 1, 0>  fov {FOV:g} }}',
@@ -142,7 +223,18 @@ def write_scene(path):
         f'{vec(LIGHT["edge_v"])} }}  radiance rgb {LIGHT_RADIANCE:g} }}',
         '',
     ]
-    for label, c, row, r in spheres():
+    if sheet.name == 'materials':
+        # The first sheet's scene text predates the other sheets: keep it byte for byte.
+        lines[0:3] = [
+            '// materials.scn: written by tools/reference/materials.py (do not edit; edit ROWS there).',
+            '// Rows of spheres, one material per row at several roughnesses, under a uniform sky',
+            '// and a rectangle light; tools/reference/materials.exr is the same scene in Mitsuba 3.',
+        ]
+    if sheet.floor:
+        for c, u, v, shade in floor_stripes():
+            lines.append(f'quad {{ {vec(c)}, {vec(u)}, {vec(v)}  material {{ diffuse rgb {shade:g} }} }}')
+        lines.append('')
+    for label, c, row, r in spheres(sheet):
         lines.append(f'sphere {{ {vec(c)}, {RADIUS:g}  material {{ {row.ours(r)} }} }}  // {label}')
     with open(path, 'w') as f:
         f.write('\n'.join(lines) + '\n')
@@ -163,11 +255,11 @@ def camera_rays():
     return d / np.linalg.norm(d, axis=2, keepdims=True)
 
 
-def mask():
+def mask(sheet):
     d = camera_rays()
     eye = np.array(EYE)
     out = np.zeros((HEIGHT, WIDTH), dtype=np.float32)
-    for k, (_, c, _, _) in enumerate(spheres()):
+    for k, (_, c, _, _) in enumerate(spheres(sheet)):
         oc = eye - np.array(c)
         b = d @ oc
         disc = b * b - (oc @ oc - (MASK_SHRINK * RADIUS) ** 2)
@@ -175,20 +267,24 @@ def mask():
     return out
 
 
-def mitsuba_scene(spp):
-    import mitsuba as mi
-    black = {'type': 'diffuse', 'reflectance': rgb([0.0, 0.0, 0.0])}
-    c, u, v = (np.array(LIGHT[k]) for k in ('corner', 'edge_u', 'edge_v'))
+def rectangle_to_world(mi, c, u, v):
+    """`rectangle` is [-1,1]^2 in local xy with normal +z: columns u/2, v/2, n, centre."""
+    c, u, v = (np.array(x, dtype=float) for x in (c, u, v))
     n = np.cross(u, v)
     n /= np.linalg.norm(n)
     centre = c + (u + v) / 2
-    # `rectangle` is [-1,1]^2 in local xy with normal +z: columns u/2, v/2, n, centre.
-    to_world = mi.ScalarTransform4f([
+    return mi.ScalarTransform4f([
         [u[0] / 2, v[0] / 2, n[0], centre[0]],
         [u[1] / 2, v[1] / 2, n[1], centre[1]],
         [u[2] / 2, v[2] / 2, n[2], centre[2]],
         [0, 0, 0, 1],
     ])
+
+
+def mitsuba_scene(sheet, spp):
+    import mitsuba as mi
+    black = {'type': 'diffuse', 'reflectance': rgb([0.0, 0.0, 0.0])}
+    to_world = rectangle_to_world(mi, *(LIGHT[k] for k in ('corner', 'edge_u', 'edge_v')))
     d = {
         'type': 'scene',
         'integrator': {'type': 'path', 'max_depth': -1},
@@ -204,18 +300,24 @@ def mitsuba_scene(spp):
         'light': {'type': 'rectangle', 'to_world': to_world, 'bsdf': black,
                   'emitter': {'type': 'area', 'radiance': rgb([LIGHT_RADIANCE] * 3)}},
     }
-    for k, (_, c, row, r) in enumerate(spheres()):
+    if sheet.floor:
+        for k, (c, u, v, shade) in enumerate(floor_stripes()):
+            d[f'floor{k}'] = {'type': 'rectangle', 'to_world': rectangle_to_world(mi, c, u, v),
+                              'bsdf': {'type': 'twosided', 'bsdf': {
+                                  'type': 'diffuse', 'reflectance': rgb([shade] * 3)}}}
+    for k, (_, c, row, r) in enumerate(spheres(sheet)):
         d[f'sphere{k}'] = {'type': 'sphere', 'center': list(c), 'radius': RADIUS,
                            'bsdf': row.mitsuba(r)}
     return d
 
 
-def write_mask_and_labels():
+def write_mask_and_labels(sheet):
     import mitsuba as mi
-    m = mask()
-    mi.Bitmap(np.repeat(m[:, :, None], 3, axis=2)).write(os.path.join(HERE, 'materials.mask.exr'))
-    with open(os.path.join(HERE, 'materials.labels'), 'w') as f:
-        for label, *_ in spheres():
+    m = mask(sheet)
+    mi.Bitmap(np.repeat(m[:, :, None], 3, axis=2)).write(
+        os.path.join(HERE, f'{sheet.name}.mask.exr'))
+    with open(os.path.join(HERE, f'{sheet.name}.labels'), 'w') as f:
+        for label, *_ in spheres(sheet):
             f.write(label + '\n')
 
 
@@ -224,29 +326,32 @@ def main():
     ap.add_argument('--spp', type=int, default=8192)
     ap.add_argument('--chunk', type=int, default=512, help='spp per run (runs are averaged)')
     ap.add_argument('--scene-only', action='store_true')
-    ap.add_argument('--out', default=os.path.join(HERE, 'materials.exr'))
+    ap.add_argument('--sheet', choices=sorted(SHEETS), default='materials')
+    ap.add_argument('--out', help='default: <sheet>.exr beside this script')
     a = ap.parse_args()
+    sheet = SHEETS[a.sheet]
+    out = a.out or os.path.join(HERE, f'{sheet.name}.exr')
     import mitsuba as mi
     mi.set_variant('scalar_rgb')
-    write_scene(os.path.join(HERE, 'materials.scn'))
-    write_mask_and_labels()
+    write_scene(sheet, os.path.join(HERE, f'{sheet.name}.scn'))
+    write_mask_and_labels(sheet)
     if a.scene_only:
         return
     runs = max(1, a.spp // a.chunk)
-    sc = mi.load_dict(mitsuba_scene(a.chunk))
+    sc = mi.load_dict(mitsuba_scene(sheet, a.chunk))
     acc = None
     for i in range(runs):
         img = np.array(mi.render(sc, spp=a.chunk, seed=1000 + i))
         acc = img if acc is None else acc + img
         print(f'run {i + 1}/{runs}', flush=True)
     img = (acc / runs).astype(np.float32)
-    mi.Bitmap(img).write(a.out)
-    m = mask()
-    for k, (label, *_) in enumerate(spheres()):
+    mi.Bitmap(img).write(out)
+    m = mask(sheet)
+    for k, (label, *_) in enumerate(spheres(sheet)):
         sel = m == k + 1
         mean = img[sel].mean(axis=0)
         print(f'{label:>12}: {sel.sum():4d} px, mean {mean[0]:.4f} {mean[1]:.4f} {mean[2]:.4f}')
-    print(f'wrote {a.out} ({runs * a.chunk} spp)')
+    print(f'wrote {out} ({runs * a.chunk} spp)')
 
 
 if __name__ == '__main__':

@@ -4,6 +4,8 @@
 //! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
 //!   tessellated meshes of the same surfaces.
 //! - [`cost`]: cost per ray of the Bezier surfaces as a ratio to a quad's.
+//! - [`layered`]: directional albedos of the rough coat against a random walk through the
+//!   layer, and of the rough metal lobe in a white furnace (`sppm-measure coat`, `furnace`).
 //! - [`lights`]: direct-light noise of area lights sampled by area and by solid angle, at
 //!   equal time (`cargo run --release -p sppm-measure -- lights`).
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
@@ -15,6 +17,7 @@
 
 pub mod bezier;
 pub mod cost;
+pub mod layered;
 pub mod lights;
 pub mod reference;
 pub mod setup;

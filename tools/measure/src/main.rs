@@ -1,7 +1,8 @@
 //! `sppm-measure bezier`: speed against accuracy of the Bezier intersectors and of meshes of
 //! the same surfaces (a thin front for [`sppm_measure::bezier`]); `sppm-measure lights`:
 //! direct-light noise of area lights sampled by area and by solid angle
-//! ([`sppm_measure::lights`]). Run from the repository root:
+//! ([`sppm_measure::lights`]); `sppm-measure coat` and `furnace`: directional albedos of the
+//! rough coat and the rough metal lobe ([`sppm_measure::layered`]). Run from the repository root:
 //! `cargo run --release -p sppm-measure -- bezier` (or `lights`). Exit status: 0 ok, 2 usage
 //! errors.
 
@@ -42,6 +43,18 @@ pub enum Bench {
     /// The set-up of a large OBJ mesh step by step (read, parse, triangles, BVH): wall and CPU
     /// time on each thread count, rounds alternating.
     Setup(SetupArgs),
+    /// Directional albedo of the rough coat against a random walk through the layer
+    /// (Markdown table).
+    Coat(SamplesArgs),
+    /// White-furnace albedo of the rough metal lobe over roughness and angle (Markdown table).
+    Furnace(SamplesArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct SamplesArgs {
+    /// Samples (random walks) per table cell.
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(100..=1_000_000_000))]
+    pub samples: u64,
 }
 
 #[derive(Debug, Args)]
@@ -129,6 +142,14 @@ fn run_bench(args: &BenchArgs) -> ExitCode {
         Bench::Twin(a) => finish(twin(a)),
         Bench::Lights(a) => finish(lights(a)),
         Bench::Setup(a) => finish(setup(a)),
+        Bench::Coat(a) => {
+            out(&sppm_measure::layered::coat_table(1.5, a.samples));
+            ExitCode::SUCCESS
+        }
+        Bench::Furnace(a) => {
+            out(&sppm_measure::layered::furnace_table(a.samples));
+            ExitCode::SUCCESS
+        }
     }
 }
 
