@@ -1477,3 +1477,70 @@ fn farm_slurm_renders_frames_and_chains_and_retries_a_failed_task() {
         "{merged} against one chain's {one_chain}"
     );
 }
+
+/// Without `--submit`, `farm slurm` needs no Slurm: it writes the array script (and the merge
+/// script for chains) and says how to submit them; bad requests are usage errors that write
+/// nothing.
+#[test]
+fn farm_slurm_writes_scripts_and_refuses_bad_requests() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let scene = format!("{}/examples/cornell.scn", env!("CARGO_MANIFEST_DIR"));
+    let out = sppm(&[
+        "farm",
+        "slurm",
+        &scene,
+        "--chains",
+        "3",
+        "-o",
+        &p("m.exr"),
+        "--partition",
+        "short",
+        "--",
+        "--iterations",
+        "8",
+    ]);
+    succeeded(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("0 of 3 chains finished; 3 to render (1-3)"),
+        "{err}"
+    );
+    assert!(err.contains("sbatch --dependency=afterok:"), "{err}");
+    let farm_dir = dir.path().join("sppm-cornell.slurm");
+    let tasks = std::fs::read_to_string(farm_dir.join("tasks.sbatch")).unwrap();
+    assert!(tasks.contains("#SBATCH --array=1-3\n"), "{tasks}");
+    assert!(tasks.contains("#SBATCH --partition=short\n"), "{tasks}");
+    assert!(tasks.contains("--chain \"$K/3\""), "{tasks}");
+    assert!(tasks.contains("--iterations 8"), "{tasks}");
+    let merge = std::fs::read_to_string(farm_dir.join("merge.sbatch")).unwrap();
+    assert!(
+        merge.contains(" merge ") && merge.contains("m.chain3.exr"),
+        "{merge}"
+    );
+
+    for bad in [
+        &["farm", "slurm", &scene][..],
+        &["farm", "slurm", &scene, "--frames", "0..3", "--chains", "2"],
+        &["farm", "slurm", &scene, "--chains", "2", "-o", &p("x.png")],
+        &[
+            "farm",
+            "slurm",
+            &scene,
+            "--frames",
+            "0..3",
+            "-o",
+            &p("plain.png"),
+        ],
+        &["farm", "slurm", &scene, "--chains", "0"],
+        &["farm", "slurm", &p("missing.scn"), "--chains", "2"],
+        &["farm", "slurm", &scene, "--frames", "0..200000"],
+    ] {
+        usage_error(bad);
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["sppm-cornell.slurm"], "only the first command wrote");
+}

@@ -57,9 +57,11 @@ fn write(output: &PathBuf, delay: u32, frames: &[String]) -> Result<(), String> 
         encoder
             .set_repeat(Repeat::Infinite)
             .and_then(|()| {
-                encoder.encode_frames(images.into_iter().map(|i| {
-                    Frame::from_parts(i, 0, 0, Delay::from_numer_denom_ms(delay, 1))
-                }))
+                encoder.encode_frames(
+                    images
+                        .into_iter()
+                        .map(|i| Frame::from_parts(i, 0, 0, Delay::from_numer_denom_ms(delay, 1))),
+                )
             })
             .map_err(|e| format!("cannot write `{}`: {e}", output.display()))
     })
