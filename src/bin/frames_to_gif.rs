@@ -7,7 +7,7 @@
 //! The frames are taken in the order given and must all have the size of the first.
 
 use std::io::BufWriter;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use image::codecs::gif::{GifEncoder, Repeat};
@@ -39,7 +39,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn write(output: &PathBuf, delay: u32, frames: &[String]) -> Result<(), String> {
+fn write(output: &Path, delay: u32, frames: &[String]) -> Result<(), String> {
     let mut images = Vec::with_capacity(frames.len());
     for f in frames {
         let image = image::open(f)

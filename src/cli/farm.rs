@@ -284,7 +284,7 @@ fn write_script(path: &Path, text: &str) -> Result<(), String> {
 }
 
 /// `sbatch --parsable [flags] script`: the job id.
-fn sbatch(flags: &[String], script: &PathBuf) -> Result<u64, String> {
+fn sbatch(flags: &[String], script: &Path) -> Result<u64, String> {
     let out = Command::new("sbatch")
         .arg("--parsable")
         .args(flags)
