@@ -20,6 +20,7 @@ pub mod chart;
 pub mod compare;
 pub mod diag;
 pub mod eval;
+pub mod farm;
 pub mod files;
 pub mod film;
 pub mod geometry;

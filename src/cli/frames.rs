@@ -152,6 +152,25 @@ impl FramePattern {
         (own == digits).then_some(frame)
     }
 
+    /// The pattern written out again (`%` as `%%`, the number as `%0Nd`): what
+    /// [`FramePattern::parse`] reads back as this pattern.
+    pub fn path_text(&self) -> PathBuf {
+        let number = if self.width == 0 {
+            "%d".to_string()
+        } else {
+            format!("%0{}d", self.width)
+        };
+        let name = format!(
+            "{}{number}{}",
+            self.before.replace('%', "%%"),
+            self.after.replace('%', "%%")
+        );
+        match &self.folder {
+            Some(f) => f.join(name),
+            None => PathBuf::from(name),
+        }
+    }
+
     /// The file of frame `frame`.
     pub fn path(&self, frame: u32) -> PathBuf {
         let name = format!(
@@ -173,6 +192,17 @@ mod tests {
 
     fn pattern(s: &str) -> Result<Option<FramePattern>, String> {
         FramePattern::parse(Path::new(s))
+    }
+
+    #[test]
+    fn a_pattern_written_out_reads_back_as_itself() {
+        for text in ["out/f_%04d.png", "a%%b_%d.exr", "%07d"] {
+            let p = pattern(text).unwrap().unwrap();
+            assert_eq!(p.path_text(), PathBuf::from(text));
+            assert_eq!(pattern(p.path_text().to_str().unwrap()).unwrap(), Some(p));
+        }
+        let p = FramePattern::for_scene(Path::new("dir/scene.scn")).unwrap();
+        assert_eq!(p.path_text(), PathBuf::from("dir/scene_%04d.png"));
     }
 
     #[test]

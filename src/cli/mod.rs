@@ -19,6 +19,7 @@ macro_rules! say_inline {
 
 mod chart;
 mod check;
+mod farm;
 mod frames;
 mod live;
 mod merge;
@@ -347,6 +348,8 @@ pub enum Command {
     /// Merge the chains of a still (`render --chain K/N`) into one image, weighted by their
     /// iterations.
     Merge(merge::MergeArgs),
+    /// Split the frames or chains of a scene over a cluster's batch scheduler (Slurm).
+    Farm(farm::FarmArgs),
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -367,6 +370,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Chart(args) => chart::run(&args),
         Command::Reference(args) => reference::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Farm(args) => farm::run(&args),
     }
 }
 

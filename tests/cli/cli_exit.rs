@@ -1276,3 +1276,271 @@ fn chains_render_per_thread_count_alike_and_merge_or_refuse() {
         &p("c.png"),
     ]);
 }
+
+#[path = "common/slurm.rs"]
+mod slurm;
+
+/// Root-mean-square difference of two images' linear values.
+fn rms_difference(a: &std::path::Path, b: &std::path::Path) -> f64 {
+    let (a, b) = (
+        image::open(a).unwrap().to_rgb32f().into_raw(),
+        image::open(b).unwrap().to_rgb32f().into_raw(),
+    );
+    assert_eq!(a.len(), b.len());
+    let sum: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2))
+        .sum();
+    (sum / a.len() as f64).sqrt()
+}
+
+/// `farm slurm --submit` on a real one-node Slurm (2 CPUs) that the test starts: a 4-frame
+/// animation whose frames are byte for byte those `render --frame K` writes, and a still as 4
+/// chains whose merge is as close to a long reference as one render of 4x the iterations (the
+/// measured ratio is printed). A chain that fails (its output is a folder) leaves the merge
+/// unsubmitted (`--kill-on-invalid-dep`); the rerun resubmits that chain alone and the merge.
+/// Skipped when Slurm is not installed or cannot start, except under `CI=true`.
+#[test]
+fn farm_slurm_renders_frames_and_chains_and_retries_a_failed_task() {
+    let cluster = match slurm::Cluster::start() {
+        Ok(c) => c,
+        Err(why) if std::env::var("CI").is_ok_and(|v| v == "true") => {
+            panic!("Slurm is needed under CI=true: {why}")
+        }
+        Err(why) => {
+            println!("SKIPPED: no Slurm cluster: {why}");
+            return;
+        }
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let farm = |args: &[&str]| -> Output {
+        cluster
+            .command(env!("CARGO_BIN_EXE_sppm-lang"))
+            .args([&["farm", "slurm"][..], args].concat())
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let limit = std::time::Duration::from_secs(600);
+
+    // Frames.
+    let anim = format!("{root}/examples/animation.scn");
+    let flags = [
+        "--resolution",
+        "24x24",
+        "--iterations",
+        "3",
+        "--photons",
+        "2000",
+    ];
+    let pattern = p("f_%04d.png");
+    let frame_args = [
+        &[
+            anim.as_str(),
+            "--frames",
+            "0..3",
+            "-o",
+            &pattern,
+            "--cpus-per-task",
+            "1",
+        ][..],
+        &["--submit", "--"],
+        &flags,
+    ]
+    .concat();
+    let out = farm(&frame_args);
+    succeeded(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("array "));
+    cluster.wait_until_idle(limit).unwrap();
+    for k in 0..4 {
+        let alone = p(&format!("alone_{k}.png"));
+        let k = k.to_string();
+        succeeded(&render_with(
+            &anim,
+            &alone,
+            &[
+                &["--frames", "0..3", "--frame", &k, "--threads", "2"][..],
+                &flags,
+            ]
+            .concat(),
+        ));
+        let farmed = std::fs::read(p(&format!("f_{k:0>4}.png")))
+            .unwrap_or_else(|e| panic!("frame {k}: {e}\n{}", cluster.logs()));
+        assert_eq!(farmed, std::fs::read(&alone).unwrap(), "frame {k}");
+    }
+    // A rerun finds every frame done and submits nothing.
+    let out = farm(&frame_args);
+    succeeded(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("4 of 4 frames finished") && err.contains("nothing to submit"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+
+    // Chains: chain 3's output is a folder, so its task fails.
+    let cornell = format!("{root}/examples/cornell.scn");
+    // Few photons per iteration and many iterations: noise, which merging reduces, outweighs
+    // the radius bias, which it does not (docs/farm.md gives the ratio in both regimes).
+    let (iterations, photons) = (64, 500);
+    let its = iterations.to_string();
+    let still = [
+        "--resolution",
+        "32x32",
+        "--photons",
+        "500",
+        "--iterations",
+        &its,
+    ];
+    let merged_path = p("m.exr");
+    let chain_args = [
+        &[
+            cornell.as_str(),
+            "--chains",
+            "4",
+            "-o",
+            &merged_path,
+            "--submit",
+            "--",
+        ][..],
+        &still,
+    ]
+    .concat();
+    std::fs::create_dir(p("m.chain3.exr")).unwrap();
+    succeeded(&farm(&chain_args));
+    cluster.wait_until_idle(limit).unwrap();
+    assert!(!dir.path().join("m.exr").exists(), "merged without chain 3");
+    let chain1 = std::fs::metadata(p("m.chain1.exr"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    std::fs::remove_dir(p("m.chain3.exr")).unwrap();
+    let out = farm(&chain_args);
+    succeeded(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("3 of 4 chains finished; 1 to render (3)"),
+        "{err}"
+    );
+    let ids = String::from_utf8_lossy(&out.stdout);
+    assert!(ids.contains("array ") && ids.contains("merge "), "{ids}");
+    cluster.wait_until_idle(limit).unwrap();
+    assert!(
+        dir.path().join("m.exr").exists(),
+        "no merge after the retry:\n{}",
+        cluster.logs()
+    );
+    let again = std::fs::metadata(p("m.chain1.exr"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    assert_eq!(chain1, again, "a finished chain was rendered again");
+
+    // The merge against a long reference, beside one render of 4x the iterations.
+    let photons = photons.to_string();
+    let long = |out: &str, iterations: u32| {
+        let n = iterations.to_string();
+        succeeded(&render_with(
+            &cornell,
+            &p(out),
+            &[
+                "--resolution",
+                "32x32",
+                "--photons",
+                &photons,
+                "--iterations",
+                &n,
+            ],
+        ));
+    };
+    long("ref.exr", 4096);
+    long("x4.exr", 4 * iterations);
+    long("x1.exr", iterations);
+    let reference = dir.path().join("ref.exr");
+    let merged = rms_difference(&dir.path().join("m.exr"), &reference);
+    let single = rms_difference(&dir.path().join("x4.exr"), &reference);
+    let one_chain = rms_difference(&dir.path().join("x1.exr"), &reference);
+    println!(
+        "4 chains of {iterations} iterations merged: rms error {merged:.5}; one render of {} \
+         iterations: {single:.5} (ratio {:.3}); one of {iterations}: {one_chain:.5}",
+        4 * iterations,
+        merged / single
+    );
+    // Measured 0.96 here (the bound leaves room for the noise of a 32x32 error estimate); and
+    // the merge must beat a single chain clearly (pure noise would halve its error).
+    assert!(merged / single < 1.25, "ratio {}", merged / single);
+    assert!(
+        merged < 0.75 * one_chain,
+        "{merged} against one chain's {one_chain}"
+    );
+}
+
+/// Without `--submit`, `farm slurm` needs no Slurm: it writes the array script (and the merge
+/// script for chains) and says how to submit them; bad requests are usage errors that write
+/// nothing.
+#[test]
+fn farm_slurm_writes_scripts_and_refuses_bad_requests() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let scene = format!("{}/examples/cornell.scn", env!("CARGO_MANIFEST_DIR"));
+    let out = sppm(&[
+        "farm",
+        "slurm",
+        &scene,
+        "--chains",
+        "3",
+        "-o",
+        &p("m.exr"),
+        "--partition",
+        "short",
+        "--",
+        "--iterations",
+        "8",
+    ]);
+    succeeded(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("0 of 3 chains finished; 3 to render (1-3)"),
+        "{err}"
+    );
+    assert!(err.contains("sbatch --dependency=afterok:"), "{err}");
+    let farm_dir = dir.path().join("sppm-cornell.slurm");
+    let tasks = std::fs::read_to_string(farm_dir.join("tasks.sbatch")).unwrap();
+    assert!(tasks.contains("#SBATCH --array=1-3\n"), "{tasks}");
+    assert!(tasks.contains("#SBATCH --partition=short\n"), "{tasks}");
+    assert!(tasks.contains("--chain \"$K/3\""), "{tasks}");
+    assert!(tasks.contains("--iterations 8"), "{tasks}");
+    let merge = std::fs::read_to_string(farm_dir.join("merge.sbatch")).unwrap();
+    assert!(
+        merge.contains(" merge ") && merge.contains("m.chain3.exr"),
+        "{merge}"
+    );
+
+    for bad in [
+        &["farm", "slurm", &scene][..],
+        &["farm", "slurm", &scene, "--frames", "0..3", "--chains", "2"],
+        &["farm", "slurm", &scene, "--chains", "2", "-o", &p("x.png")],
+        &[
+            "farm",
+            "slurm",
+            &scene,
+            "--frames",
+            "0..3",
+            "-o",
+            &p("plain.png"),
+        ],
+        &["farm", "slurm", &scene, "--chains", "0"],
+        &["farm", "slurm", &p("missing.scn"), "--chains", "2"],
+        &["farm", "slurm", &scene, "--frames", "0..200000"],
+    ] {
+        usage_error(bad);
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["sppm-cornell.slurm"], "only the first command wrote");
+}

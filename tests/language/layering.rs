@@ -102,6 +102,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("compare", &["film", "atomic_file"]),
     ("chart", &["atomic_file", "compare"]),
     ("chains", &["film", "atomic_file"]),
+    ("farm", &["chains"]),
     ("watch", &[]),
 ];
 

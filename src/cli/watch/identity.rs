@@ -7,15 +7,17 @@
 //! only place diagnostics; a comment moves them), and the decoded pixels of images and the
 //! arrays of meshes are hashed as raw numbers rather than formatted, which is far faster. The
 //! scene holds every file it read by value (decoded images, parsed meshes), so their contents
-//! are part of the identity. The hash (SipHash with fixed keys) is compared within one run, and
-//! between the chain files of one build (`render --chain`, `merge`).
+//! are part of the identity. The hash is XXH3-64, whose definition is fixed and published: the
+//! same scene gives the same identity in any build on any machine, so chains rendered on many
+//! machines can be compared (`render --chain`, `merge`). The `Debug` text is that of this
+//! version of the scene's types: a version that changes them changes the identity.
 
 use std::fmt::Write as _;
-use std::hash::{DefaultHasher, Hasher};
 use std::sync::Arc;
 
 use sppm_lang::scene::{Background, ImageData, Light, MeshData, Object, Pattern, Scene, Shape};
 use sppm_lang::span::Span;
+use xxhash_rust::xxh3::Xxh3;
 
 /// What a scene renders, as a hash (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,10 +30,10 @@ impl SceneId {
         // Writing into a hash cannot fail.
         let _ = write!(h, "{stripped:?}");
         h.flush();
-        SceneId(h.hasher.finish())
+        SceneId(h.hasher.digest())
     }
 
-    /// The hash as a number (for a chain's header: the same scene and build give the same).
+    /// The hash as a number (for a chain's header: the same scene gives the same on any machine).
     pub fn value(self) -> u64 {
         self.0
     }
@@ -40,7 +42,7 @@ impl SceneId {
 /// A hash fed through a buffer: `Debug` writes many short pieces, each call of the hash costs.
 #[derive(Default)]
 struct Hashing {
-    hasher: DefaultHasher,
+    hasher: Xxh3,
     buffer: Vec<u8>,
 }
 
@@ -55,7 +57,7 @@ impl Hashing {
     }
 
     fn flush(&mut self) {
-        self.hasher.write(&self.buffer);
+        self.hasher.update(&self.buffer);
         self.buffer.clear();
     }
 
@@ -172,6 +174,22 @@ mod tests {
         let loaded = sppm_lang::load_source("t.scn", text, &EvalOptions::default());
         assert!(!loaded.has_errors(), "{:?}", loaded.diagnostics);
         loaded.scene.expect("a scene")
+    }
+
+    /// The hash is XXH3-64 as published (its test vector for no input), fed the same bytes
+    /// however they arrive: nothing in it depends on the build or the machine.
+    #[test]
+    fn the_hash_is_xxh3_whatever_the_pieces() {
+        let mut h = Hashing::default();
+        h.flush();
+        assert_eq!(h.hasher.digest(), 0x2D06_8005_38D3_94C2);
+        let text: Vec<u8> = (0..200_000u32).map(|i| (i * 7 % 251) as u8).collect();
+        let mut h = Hashing::default();
+        for piece in text.chunks(13) {
+            h.bytes(piece);
+        }
+        h.flush();
+        assert_eq!(h.hasher.digest(), xxhash_rust::xxh3::xxh3_64(&text));
     }
 
     #[test]
