@@ -1277,8 +1277,7 @@ fn chains_render_per_thread_count_alike_and_merge_or_refuse() {
     ]);
 }
 
-#[path = "common/slurm.rs"]
-mod slurm;
+use crate::slurm;
 
 /// Root-mean-square difference of two images' linear values.
 fn rms_difference(a: &std::path::Path, b: &std::path::Path) -> f64 {

@@ -5,6 +5,8 @@
 
 #[path = "../common/running.rs"]
 mod running;
+#[path = "../common/slurm.rs"]
+mod slurm;
 
 mod chart_cli;
 mod cli_exit;
