@@ -16,6 +16,7 @@ pub mod bezier;
 pub mod camera;
 pub mod cancel;
 pub mod chains;
+#[cfg(feature = "chart")]
 pub mod chart;
 pub mod compare;
 pub mod diag;
@@ -34,7 +35,6 @@ pub mod shapes;
 pub mod span;
 pub mod syntax;
 pub mod textures;
-pub mod watch;
 
 pub use cancel::Cancel;
 pub use diag::SourceMap;

@@ -102,7 +102,6 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("compare", &["film", "atomic_file"]),
     ("chart", &["atomic_file", "compare"]),
     ("chains", &["film", "atomic_file"]),
-    ("watch", &[]),
 ];
 
 fn allowed() -> BTreeMap<&'static str, &'static [&'static str]> {

@@ -10,6 +10,7 @@ macro_rules! say {
     }};
 }
 /// `eprint!` that never panics (see [`say!`]).
+#[cfg_attr(not(feature = "watch"), allow(unused_macros))]
 macro_rules! say_inline {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -17,14 +18,18 @@ macro_rules! say_inline {
     }};
 }
 
+#[cfg(feature = "chart")]
 mod chart;
 mod check;
 mod frames;
+mod identity;
+#[cfg(feature = "watch")]
 mod live;
 mod merge;
 mod output;
 mod reference;
 mod render;
+#[cfg(feature = "watch")]
 mod watch;
 
 use std::path::PathBuf;
@@ -338,8 +343,10 @@ pub enum Command {
     /// Render a scene with stochastic progressive photon mapping.
     Render(render::RenderArgs),
     /// Re-render a scene every time it or a file it reads is saved.
+    #[cfg(feature = "watch")]
     Watch(watch::WatchArgs),
     /// Chart error against render time for every integrator against a reference image.
+    #[cfg(feature = "chart")]
     Chart(chart::ChartArgs),
     /// Render a reference image for `chart` with the path tracer, in two independent halves
     /// whose difference estimates its noise (written beside it).
@@ -363,7 +370,9 @@ pub fn run(cli: Cli) -> ExitCode {
             check::run(&scene, &limits.options(), &render_options, &size)
         }
         Command::Render(args) => render::run(args),
+        #[cfg(feature = "watch")]
         Command::Watch(args) => watch::run(&args),
+        #[cfg(feature = "chart")]
         Command::Chart(args) => chart::run(&args),
         Command::Reference(args) => reference::run(&args),
         Command::Merge(args) => merge::run(&args),

@@ -14,7 +14,7 @@ use sppm_lang::{Cancel, RangeOverride, SourceMap};
 
 use super::check::{print_diagnostics, print_render_error, print_render_warning};
 use super::frames::{self, FramePattern};
-use super::watch::identity::SceneId;
+use super::identity::SceneId;
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]

@@ -14,7 +14,7 @@ use sppm_lang::scene::Scene;
 
 use super::super::check::{print_render_error, print_render_warning};
 use super::super::live::{self, Hub};
-use super::identity::SceneId;
+use crate::cli::identity::SceneId;
 use super::kept::{OnDisk, Written};
 use super::{Job, Outcome, status};
 
