@@ -11,6 +11,7 @@
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
 
 pub mod accel;
+pub mod api;
 pub mod atomic_file;
 pub mod bezier;
 pub mod camera;
@@ -35,11 +36,15 @@ pub mod shapes;
 pub mod span;
 pub mod syntax;
 pub mod textures;
+pub mod world;
 
+pub use api::{Document, Failure, Prepared, Rendered, load, prepare, render};
 pub use cancel::Cancel;
 pub use diag::SourceMap;
 pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
 pub use eval::{
     EvalOptions, Loaded, RangeOverride, frame_range, load_file, load_frame, load_source,
 };
+pub use prepare::RenderOptions;
 pub use scene::{Frame, FrameRange};
+pub use world::{FileSystem, MemoryWorld, World};

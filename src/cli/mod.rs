@@ -274,8 +274,15 @@ impl SizeArgs {
     /// Sets `scene`'s resolution as the flags ask; a size beyond the render's limits is the
     /// flag's fault (a usage error naming it), not the scene's.
     pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) -> Result<(), String> {
+        scene.settings.resolution = self.resolution_for(scene.settings.resolution)?;
+        Ok(())
+    }
+
+    /// The resolution a scene of `scene_size` renders at, checked as [`SizeArgs::apply_to`]
+    /// checks it.
+    pub fn resolution_for(&self, scene_size: (u32, u32)) -> Result<(u32, u32), String> {
         use sppm_lang::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE};
-        let (w, h) = self.apply(scene.settings.resolution);
+        let (w, h) = self.apply(scene_size);
         let side = w.max(h);
         if self.is_set() && (side > MAX_RESOLUTION_SIDE || u64::from(w) * u64::from(h) > MAX_PIXELS)
         {
@@ -289,8 +296,7 @@ impl SizeArgs {
                  {MAX_PIXELS} pixels in all; ask for a smaller size"
             ));
         }
-        scene.settings.resolution = (w, h);
-        Ok(())
+        Ok((w, h))
     }
 }
 

@@ -367,23 +367,25 @@ fn render_scene(
     cancel: &Cancel,
     last: bool,
 ) -> Result<(), ExitCode> {
-    let mut scene = std::borrow::Cow::Borrowed(scene);
-    if let Some(integrator) = args.integrator {
-        scene.to_mut().settings.integrator = integrator;
-    }
-    if args.size.is_set()
-        && let Err(e) = args.size.apply_to(scene.to_mut())
-    {
-        say!("error: {e}");
-        return Err(ExitCode::from(EXIT_USAGE));
-    }
-    let scene = scene.as_ref();
+    // The flags override the scene's settings through the render options; the scene is
+    // rendered as loaded.
+    let resolution = match args.size.is_set() {
+        false => None,
+        true => match args.size.resolution_for(scene.settings.resolution) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                say!("error: {e}");
+                return Err(ExitCode::from(EXIT_USAGE));
+            }
+        },
+    };
+    let integrator = args.integrator.unwrap_or(scene.settings.integrator);
     // A chain's header: its iterations are filled in as they finish.
     let base_seed = args.seed.unwrap_or(scene.settings.seed);
     let chain = args.chain.map(|(k, n)| ChainInfo {
         iterations: 0,
         photons: args.photons.or(scene.settings.photons).unwrap_or(0),
-        method: scene.settings.integrator.name().to_string(),
+        method: integrator.name().to_string(),
         seed: base_seed,
         chain: k,
         chains: n,
@@ -401,6 +403,8 @@ fn render_scene(
         None => image.write(output, scene.settings.exposure),
     };
     let options = RenderOptions {
+        integrator: args.integrator,
+        resolution,
         iterations: args.iterations,
         photons: args.photons,
         seed: match args.chain {
@@ -530,7 +534,7 @@ fn render_scene(
         out.iterations_done,
         if out.cancelled { " (cancelled)" } else { "" },
         secs,
-        method_statistics(scene.settings.integrator, &out.stats, secs),
+        method_statistics(integrator, &out.stats, secs),
     );
     Ok(())
 }

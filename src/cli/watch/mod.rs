@@ -34,9 +34,9 @@ use clap::Args;
 use sppm_lang::files::FileError;
 use sppm_lang::{Diagnostic, EvalOptions};
 
+use super::identity::SceneId;
 use super::live::{self, Hub};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
-use super::identity::SceneId;
 use kept::OnDisk;
 use load::load;
 use round::{Round, start};
