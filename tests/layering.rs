@@ -33,7 +33,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sampling", &["geometry"]),
     // The language.
     ("syntax", &["span", "diag"]),
-    ("scene", &["span", "diag", "files", "world"]),
+    ("scene", &["span", "diag", "files", "world", "sampling"]),
     (
         "eval",
         &[

@@ -389,7 +389,16 @@ fn render_scene(
         seed: base_seed,
         chain: k,
         chains: n,
-        scene: SceneId::of(scene).value(),
+        // The identity of what is rendered: the scene with the flags' overrides.
+        scene: SceneId::of(&Scene {
+            settings: sppm_lang::scene::Settings {
+                integrator,
+                resolution: resolution.unwrap_or(scene.settings.resolution),
+                ..scene.settings.clone()
+            },
+            ..scene.clone()
+        })
+        .value(),
     });
     let write = |image: &sppm_lang::film::Image, iterations: u32| match &chain {
         Some(info) => write_chain(
