@@ -9,6 +9,12 @@
 //!
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
 //! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
+//!
+//! An embedding program needs three calls ([`api`]): [`load()`] a scene (its files come from a
+//! [`World`]: the disk, or a [`MemoryWorld`]), [`prepare()`] it with [`RenderOptions`] that
+//! override its settings, and [`render()`] it; each returns its warnings in its result and fails
+//! with a [`Failure`] holding the diagnostics. `examples/embed.rs` renders a scene built in
+//! memory; docs/library.md describes the API, the Cargo features and the build profiles.
 
 pub mod accel;
 pub mod api;
