@@ -1,15 +1,17 @@
 //! A cancel handle the caller owns: raised from anywhere (a Ctrl-C handler, another thread),
 //! read by the evaluation, the prepare stage and the render, which stop at their next check.
+//! The render also writes its progress into it ([`Cancel::progress`]), so one handle both
+//! stops the work and tells how far it got.
 //!
 //! A leaf: every stage may read it, and it knows nothing of them.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
-/// A shared flag that asks the work holding it to stop. Clones share the flag; the default
-/// is a fresh flag that nobody else holds (so it is never raised).
+/// A shared flag that asks the work holding it to stop, and the render's progress. Clones share
+/// both; the default is a fresh flag that nobody else holds (so it is never raised).
 #[derive(Clone, Default)]
-pub struct Cancel(Arc<AtomicBool>);
+pub struct Cancel(Arc<AtomicBool>, Arc<[AtomicU32; 2]>);
 
 impl Cancel {
     pub fn new() -> Self {
@@ -37,12 +39,27 @@ impl Cancel {
     pub fn same(&self, other: &AtomicBool) -> bool {
         std::ptr::eq(&*self.0, other)
     }
+
+    /// The iterations finished and the iterations asked for, as the render last reported them
+    /// (`(0, 0)` before it started; the total may be a bound when a time limit ends it first).
+    pub fn progress(&self) -> (u32, u32) {
+        (
+            self.1[0].load(Ordering::Relaxed),
+            self.1[1].load(Ordering::Relaxed),
+        )
+    }
+
+    /// Records the render's progress (see [`Cancel::progress`]).
+    pub fn set_progress(&self, done: u32, total: u32) {
+        self.1[1].store(total, Ordering::Relaxed);
+        self.1[0].store(done, Ordering::Relaxed);
+    }
 }
 
 impl From<Arc<AtomicBool>> for Cancel {
     /// A handle on a flag the caller already shares (as a Ctrl-C handler does).
     fn from(flag: Arc<AtomicBool>) -> Self {
-        Self(flag)
+        Self(flag, Arc::default())
     }
 }
 

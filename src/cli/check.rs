@@ -10,7 +10,7 @@ use sppm_lang::render::{
     EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
 };
 use sppm_lang::scene::{Background, ColorParam, Integrator, Light, Scene, Shape};
-use sppm_lang::{Diagnostic, EvalOptions, Loaded, SourceMap};
+use sppm_lang::{EvalOptions, Loaded, Severity, SourceMap};
 
 use super::output::{err, out};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, SizeArgs};
@@ -42,13 +42,11 @@ pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
 fn print_render_diagnostic(sources: &SourceMap, e: &RenderError, warning: bool) {
     match e.span {
         Some(span) if sources.get(span.file).is_some() => {
-            let mut d = if warning {
-                Diagnostic::warning(span, e.message.clone())
+            let d = e.to_diagnostic(if warning {
+                Severity::Warning
             } else {
-                Diagnostic::error(span, e.message.clone())
-            };
-            d.label = e.label.clone();
-            d.help = e.help.clone();
+                Severity::Error
+            });
             let loaded = Loaded {
                 diagnostics: vec![d],
                 sources: sources.clone(),

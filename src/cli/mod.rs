@@ -10,6 +10,7 @@ macro_rules! say {
     }};
 }
 /// `eprint!` that never panics (see [`say!`]).
+#[cfg_attr(not(feature = "watch"), allow(unused_macros))]
 macro_rules! say_inline {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -17,15 +18,19 @@ macro_rules! say_inline {
     }};
 }
 
+#[cfg(feature = "chart")]
 mod chart;
 mod check;
 mod farm;
 mod frames;
+mod identity;
+#[cfg(feature = "watch")]
 mod live;
 mod merge;
 mod output;
 mod reference;
 mod render;
+#[cfg(feature = "watch")]
 mod watch;
 
 use std::path::PathBuf;
@@ -270,8 +275,15 @@ impl SizeArgs {
     /// Sets `scene`'s resolution as the flags ask; a size beyond the render's limits is the
     /// flag's fault (a usage error naming it), not the scene's.
     pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) -> Result<(), String> {
+        scene.settings.resolution = self.resolution_for(scene.settings.resolution)?;
+        Ok(())
+    }
+
+    /// The resolution a scene of `scene_size` renders at, checked as [`SizeArgs::apply_to`]
+    /// checks it.
+    pub fn resolution_for(&self, scene_size: (u32, u32)) -> Result<(u32, u32), String> {
         use sppm_lang::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE};
-        let (w, h) = self.apply(scene.settings.resolution);
+        let (w, h) = self.apply(scene_size);
         let side = w.max(h);
         if self.is_set() && (side > MAX_RESOLUTION_SIDE || u64::from(w) * u64::from(h) > MAX_PIXELS)
         {
@@ -285,8 +297,7 @@ impl SizeArgs {
                  {MAX_PIXELS} pixels in all; ask for a smaller size"
             ));
         }
-        scene.settings.resolution = (w, h);
-        Ok(())
+        Ok((w, h))
     }
 }
 
@@ -339,8 +350,10 @@ pub enum Command {
     /// Render a scene with stochastic progressive photon mapping.
     Render(render::RenderArgs),
     /// Re-render a scene every time it or a file it reads is saved.
+    #[cfg(feature = "watch")]
     Watch(watch::WatchArgs),
     /// Chart error against render time for every integrator against a reference image.
+    #[cfg(feature = "chart")]
     Chart(chart::ChartArgs),
     /// Render a reference image for `chart` with the path tracer, in two independent halves
     /// whose difference estimates its noise (written beside it).
@@ -366,7 +379,9 @@ pub fn run(cli: Cli) -> ExitCode {
             check::run(&scene, &limits.options(), &render_options, &size)
         }
         Command::Render(args) => render::run(args),
+        #[cfg(feature = "watch")]
         Command::Watch(args) => watch::run(&args),
+        #[cfg(feature = "chart")]
         Command::Chart(args) => chart::run(&args),
         Command::Reference(args) => reference::run(&args),
         Command::Merge(args) => merge::run(&args),

@@ -14,7 +14,7 @@ use sppm_lang::{Cancel, RangeOverride, SourceMap};
 
 use super::check::{print_diagnostics, print_render_error, print_render_warning};
 use super::frames::{self, FramePattern};
-use super::watch::identity::SceneId;
+use super::identity::SceneId;
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -367,27 +367,38 @@ fn render_scene(
     cancel: &Cancel,
     last: bool,
 ) -> Result<(), ExitCode> {
-    let mut scene = std::borrow::Cow::Borrowed(scene);
-    if let Some(integrator) = args.integrator {
-        scene.to_mut().settings.integrator = integrator;
-    }
-    if args.size.is_set()
-        && let Err(e) = args.size.apply_to(scene.to_mut())
-    {
-        say!("error: {e}");
-        return Err(ExitCode::from(EXIT_USAGE));
-    }
-    let scene = scene.as_ref();
+    // The flags override the scene's settings through the render options; the scene is
+    // rendered as loaded.
+    let resolution = match args.size.is_set() {
+        false => None,
+        true => match args.size.resolution_for(scene.settings.resolution) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                say!("error: {e}");
+                return Err(ExitCode::from(EXIT_USAGE));
+            }
+        },
+    };
+    let integrator = args.integrator.unwrap_or(scene.settings.integrator);
     // A chain's header: its iterations are filled in as they finish.
     let base_seed = args.seed.unwrap_or(scene.settings.seed);
     let chain = args.chain.map(|(k, n)| ChainInfo {
         iterations: 0,
         photons: args.photons.or(scene.settings.photons).unwrap_or(0),
-        method: scene.settings.integrator.name().to_string(),
+        method: integrator.name().to_string(),
         seed: base_seed,
         chain: k,
         chains: n,
-        scene: SceneId::of(scene).value(),
+        // The identity of what is rendered: the scene with the flags' overrides.
+        scene: SceneId::of(&Scene {
+            settings: sppm_lang::scene::Settings {
+                integrator,
+                resolution: resolution.unwrap_or(scene.settings.resolution),
+                ..scene.settings.clone()
+            },
+            ..scene.clone()
+        })
+        .value(),
     });
     let write = |image: &sppm_lang::film::Image, iterations: u32| match &chain {
         Some(info) => write_chain(
@@ -401,6 +412,8 @@ fn render_scene(
         None => image.write(output, scene.settings.exposure),
     };
     let options = RenderOptions {
+        integrator: args.integrator,
+        resolution,
         iterations: args.iterations,
         photons: args.photons,
         seed: match args.chain {
@@ -530,7 +543,7 @@ fn render_scene(
         out.iterations_done,
         if out.cancelled { " (cancelled)" } else { "" },
         secs,
-        method_statistics(scene.settings.integrator, &out.stats, secs),
+        method_statistics(integrator, &out.stats, secs),
     );
     Ok(())
 }

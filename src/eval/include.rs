@@ -23,7 +23,7 @@ impl Evaluator {
             return self.include_std(path, span, sink);
         }
         let resolved = self.resolve_path(path, span);
-        let canon = canonical(&resolved);
+        let canon = self.options.world.canonical(&resolved);
         if let Some(pos) = self.include_stack.iter().position(|p| *p == canon) {
             let chain: Vec<String> = self.include_stack[pos..]
                 .iter()
@@ -58,7 +58,11 @@ impl Evaluator {
         // A file that would fit alone but not in what is left says so (its own size is not
         // the problem).
         let beyond_total = budget < crate::files::MAX_SOURCE_BYTES
-            && std::fs::metadata(&resolved).is_ok_and(|m| m.is_file() && m.len() > budget);
+            && self
+                .options
+                .world
+                .size(&resolved)
+                .is_some_and(|n| n > budget);
         if budget == 0 || beyond_total {
             return Err(vec![
                 Error::new(format!(
@@ -70,36 +74,41 @@ impl Evaluator {
                 .at(span),
             ]);
         }
-        let text = crate::files::read_text(&resolved, budget).map_err(|e| {
-            let label = match &e {
-                crate::files::FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
-                    "not found"
-                }
-                crate::files::FileError::Io(_) => "cannot be read",
-                crate::files::FileError::Refused(_) => "not a readable scene file",
-            };
-            // POV-Ray's files only where the file is missing (one that exists but cannot be
-            // read, a FIFO say, is the scene's own).
-            let povray = match &e {
-                crate::files::FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
-                    stdlib::povray_include(path)
-                }
-                _ => None,
-            };
-            let help = match povray {
-                Some(h) => format!("POV-Ray's `{path}`: {h}"),
-                None => format!(
-                    "the path is resolved relative to the including file: {}",
-                    resolved.display()
-                ),
-            };
-            vec![
-                Error::new(format!("cannot read included file `{path}`: {e}"))
-                    .label(label)
-                    .help(help)
-                    .at(span),
-            ]
-        })?;
+        let text =
+            crate::world::read_text(&*self.options.world, &resolved, budget).map_err(|e| {
+                let label = match &e {
+                    crate::files::FileError::Io(io)
+                        if io.kind() == std::io::ErrorKind::NotFound =>
+                    {
+                        "not found"
+                    }
+                    crate::files::FileError::Io(_) => "cannot be read",
+                    crate::files::FileError::Refused(_) => "not a readable scene file",
+                };
+                // POV-Ray's files only where the file is missing (one that exists but cannot be
+                // read, a FIFO say, is the scene's own).
+                let povray = match &e {
+                    crate::files::FileError::Io(io)
+                        if io.kind() == std::io::ErrorKind::NotFound =>
+                    {
+                        stdlib::povray_include(path)
+                    }
+                    _ => None,
+                };
+                let help = match povray {
+                    Some(h) => format!("POV-Ray's `{path}`: {h}"),
+                    None => format!(
+                        "the path is resolved relative to the including file: {}",
+                        resolved.display()
+                    ),
+                };
+                vec![
+                    Error::new(format!("cannot read included file `{path}`: {e}"))
+                        .label(label)
+                        .help(help)
+                        .at(span),
+                ]
+            })?;
         self.source_bytes += text.len() as u64;
         let file = self
             .sources
@@ -264,8 +273,12 @@ impl Evaluator {
             "the path is resolved relative to the folder of the file that names it, `{dir}`"
         );
         if Path::new(written).is_relative()
-            && Path::new(written).is_file()
-            && !self.resolve_path(written, span).exists()
+            && self.options.world.size(Path::new(written)).is_some()
+            && self
+                .options
+                .world
+                .size(&self.resolve_path(written, span))
+                .is_none()
         {
             help += &format!(
                 ", not the current folder (where `{written}` is): write the path from `{dir}`"
@@ -273,8 +286,4 @@ impl Evaluator {
         }
         help
     }
-}
-
-pub(super) fn canonical(p: &Path) -> PathBuf {
-    std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf())
 }

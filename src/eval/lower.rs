@@ -337,7 +337,7 @@ impl Evaluator {
             .sum();
         // Images count against the memory the whole load holds (`eval::memory`).
         let room = ImageRoom::after(loaded, self.held.total(), Some(self.memory_limit()));
-        let img = load_image_within(path, space, room).map_err(|e| {
+        let img = load_image_within(&*self.options.world, path, space, room).map_err(|e| {
             vec![
                 Error::new(e.message)
                     .label("cannot load this image")
@@ -366,7 +366,7 @@ impl Evaluator {
             return Ok(m.clone());
         }
         self.dependencies.push(path.clone());
-        let m = load_obj(path).map_err(|e| {
+        let m = load_obj_in(&*self.options.world, path).map_err(|e| {
             vec![
                 Error::new(e.message)
                     .label("cannot load this mesh")

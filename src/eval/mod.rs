@@ -50,7 +50,6 @@ use crate::syntax::SourceMap;
 use crate::syntax::ast::*;
 use args::Arg;
 use blocks::{Sink, TopSink};
-use include::canonical;
 use scope::{Binding, Frame};
 
 /// Limits that keep evaluation finite.
@@ -82,6 +81,9 @@ pub struct EvalOptions {
     /// animation names read ([`crate::scene::animation_value`]). `None`: a still, where they
     /// read 0.
     pub frame: Option<crate::scene::Frame>,
+    /// Where the scene file, its includes and its assets are read from: the disk unless set
+    /// (a [`crate::world::MemoryWorld`] supplies them from memory).
+    pub world: crate::world::SharedWorld,
 }
 
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
@@ -165,6 +167,7 @@ impl Default for EvalOptions {
             memory_limit: None,
             cancel: crate::cancel::Cancel::default(),
             frame: None,
+            world: crate::world::SharedWorld::default(),
         }
     }
 }
@@ -197,10 +200,11 @@ impl Loaded {
     }
 }
 
-/// Reads, parses and evaluates a scene file. `Err` only when the file itself cannot be read
-/// (missing, not a regular file, larger than [`crate::files::MAX_SOURCE_BYTES`], not UTF-8).
+/// Reads (from [`EvalOptions::world`]), parses and evaluates a scene file. `Err` only when the
+/// file itself cannot be read (missing, not a regular file, larger than
+/// [`crate::files::MAX_SOURCE_BYTES`], not UTF-8).
 pub fn load_file(path: &Path, options: &EvalOptions) -> Result<Loaded, crate::files::FileError> {
-    let text = crate::files::read_text(path, crate::files::MAX_SOURCE_BYTES)?;
+    let text = crate::world::read_text(&*options.world, path, crate::files::MAX_SOURCE_BYTES)?;
     Ok(load_source_at(
         path,
         &path.display().to_string(),
@@ -372,7 +376,8 @@ fn run(
     let file = ev.sources.add(path, name.to_string(), text.clone());
     ev.main_file = Some(file);
     ev.dependencies.push(path.to_path_buf());
-    ev.include_stack.push(canonical(path));
+    let canon = ev.options.world.canonical(path);
+    ev.include_stack.push(canon);
     // Parsing cannot stop midway: the cancel is checked before it and at the first step after.
     if !ev.interrupted() {
         match ev.parse_within_memory(file, &text, None) {

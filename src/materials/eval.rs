@@ -123,11 +123,9 @@ fn unit_hash(k: u64) -> f32 {
     (mix64(k) >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
-fn mix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
+/// One splitmix64 output from `z` (its increment, then its finaliser).
+fn mix64(z: u64) -> u64 {
+    crate::sampling::splitmix64(z).1
 }
 
 /// For each of the scene's materials, whether some point of it may scatter other than

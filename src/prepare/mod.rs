@@ -163,7 +163,7 @@ pub(crate) fn prepare_until<'a>(
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit, options.held_memory)
         .map_err(|e| e.at(scene.settings.span))?;
-    let prepared = PreparedScene::new_until(scene, stop)?;
+    let prepared = PreparedScene::new_sized(scene, (settings.width, settings.height), stop)?;
     Ok((settings, prepared))
 }
 
@@ -229,12 +229,21 @@ impl<'a> PreparedScene<'a> {
     /// [`PreparedScene::new`], stopping with [`RenderError::interrupted`] when `stop` says so
     /// (asked between phases, for every object, and inside the BVH build).
     pub fn new_until(scene: &'a Scene, stop: Stop) -> Result<Self, RenderError> {
+        Self::new_sized(scene, scene.settings.resolution, stop)
+    }
+
+    /// [`PreparedScene::new_until`] for an image of `(width, height)` pixels (the render's
+    /// resolution, which may override the scene's).
+    fn new_sized(
+        scene: &'a Scene,
+        (width, height): (u32, u32),
+        stop: Stop,
+    ) -> Result<Self, RenderError> {
         unless(stop)?;
         // From counts, before validation reads a CSG's meshes once per placement.
         csg::check_costs(scene)?;
         scene.validate()?;
         unless(stop)?;
-        let (width, height) = scene.settings.resolution;
         let camera = Camera::new(&scene.camera, scene.settings.handedness, width, height)?;
         let mut shapes = Vec::new();
         let mut meshes = Vec::new();

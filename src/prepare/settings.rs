@@ -1,6 +1,7 @@
 //! The settings a render uses: the scene's `settings` with the command line's overrides applied,
 //! checked once here.
 
+use crate::diag::{Diagnostic, Severity};
 use crate::scene::{Antialias, Integrator, Scene};
 use crate::span::Span;
 
@@ -11,6 +12,10 @@ pub const MAX_THREADS: usize = 1024;
 /// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RenderOptions {
+    /// The integrator; `None`: the scene's `integrator`.
+    pub integrator: Option<Integrator>,
+    /// Width and height in pixels; `None`: the scene's `resolution`.
+    pub resolution: Option<(u32, u32)>,
     pub iterations: Option<u32>,
     pub photons: Option<u64>,
     pub seed: Option<u64>,
@@ -89,6 +94,17 @@ impl RenderError {
     pub fn at(mut self, span: Span) -> Self {
         self.span = (!span.is_detached()).then_some(span);
         self
+    }
+
+    /// The error as a diagnostic of `severity` (a prepared scene's warnings are warnings).
+    pub fn to_diagnostic(&self, severity: Severity) -> Diagnostic {
+        let span = self.span.unwrap_or_else(Span::detached);
+        Diagnostic {
+            severity,
+            label: self.label.clone(),
+            help: self.help.clone(),
+            ..Diagnostic::error(span, self.message.clone())
+        }
     }
 }
 
@@ -170,7 +186,7 @@ pub fn effective_settings(
     o: &RenderOptions,
 ) -> Result<EffectiveSettings, RenderError> {
     let s = &scene.settings;
-    let (width, height) = s.resolution;
+    let (width, height) = o.resolution.unwrap_or(s.resolution);
     if width == 0
         || height == 0
         || width > MAX_SIDE
@@ -234,7 +250,7 @@ pub fn effective_settings(
         alpha: s.alpha,
         max_depth: s.max_depth.clamp(1, 1024),
         seed: o.seed.unwrap_or(s.seed),
-        integrator: s.integrator,
+        integrator: o.integrator.unwrap_or(s.integrator),
         time_limit,
         adaptive_threshold: (s.antialias == Antialias::Adaptive).then(|| {
             s.antialias_threshold

@@ -77,6 +77,7 @@ pub fn render_prepared(
     // A cancel raised from the progress callback stops the next iteration, as when the
     // integrator watches `cancel` itself (the watchdog would see it only later).
     let mut progress = |p: &Progress| {
+        options.cancel.set_progress(p.iteration, p.iterations);
         on_progress(p);
         if watched && cancelled() {
             stop.store(true, Ordering::Relaxed);

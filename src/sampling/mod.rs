@@ -8,7 +8,7 @@ mod warp;
 
 pub use distribution::{PiecewiseConstant1D, PiecewiseConstant2D};
 pub use rng::{Rng, chain_seed, stream_seed};
-pub use splitmix::SplitMix64;
+pub use splitmix::{SplitMix64, mix64, splitmix64};
 pub use warp::{
     concentric_disk, cosine_hemisphere, power_heuristic, uniform_cone, uniform_cone_pdf,
     uniform_sphere, uniform_triangle,

@@ -4,12 +4,7 @@ use glam::Vec2;
 
 const MULT: u64 = 0x5851_f42d_4c95_7f2d;
 
-/// SplitMix64 finaliser: a bijective 64-bit mix.
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
+use super::splitmix::mix64;
 
 /// Hashes (seed, iteration, stream kind, index) into a 64-bit stream seed.
 pub fn stream_seed(seed: u64, iteration: u32, kind: u32, index: u64) -> u64 {

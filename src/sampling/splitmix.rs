@@ -4,7 +4,26 @@
 
 use glam::DVec3;
 
-/// splitmix64 (Steele, Lea and Flood 2014), 53-bit uniform doubles.
+/// splitmix64's increment (the golden ratio in 64 bits).
+const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// splitmix64's finaliser: a bijective 64-bit mix in which every input bit reaches every
+/// output bit.
+pub const fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// One step of splitmix64 (Steele, Lea and Flood 2014) from `state`: the next state and the
+/// output. The one definition of the generator in the crate (`const`: tables are built with
+/// it at compile time).
+pub const fn splitmix64(state: u64) -> (u64, u64) {
+    let state = state.wrapping_add(GOLDEN);
+    (state, mix64(state))
+}
+
+/// splitmix64 as a stream of 53-bit uniform doubles.
 #[derive(Debug, Clone)]
 pub struct SplitMix64(u64);
 
@@ -24,11 +43,9 @@ impl SplitMix64 {
 
     /// Uniform in [0, 1).
     pub fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        let (state, z) = splitmix64(self.0);
+        self.0 = state;
+        (z >> 11) as f64 / (1u64 << 53) as f64
     }
 
     /// Uniform in [a, b).

@@ -6,6 +6,8 @@
 use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
+
+use crate::world::{FileSystem, World};
 use rayon::prelude::*;
 
 /// Largest image side accepted (pixels).
@@ -140,22 +142,24 @@ impl std::fmt::Display for AssetError {
     }
 }
 
-/// Reads an image file into linear RGB. 8-bit and 16-bit images are decoded with `space`;
-/// float formats (EXR, HDR) are always linear.
+/// Reads an image file from the disk into linear RGB. 8-bit and 16-bit images are decoded
+/// with `space`; float formats (EXR, HDR) are always linear.
 pub fn load_image(path: &std::path::Path, space: ColorSpace) -> Result<ImageData, AssetError> {
-    load_image_within(path, space, ImageRoom::after(0, 0, None))
+    load_image_within(&FileSystem, path, space, ImageRoom::after(0, 0, None))
 }
 
-/// [`load_image`] of an image that may have at most `room` pixels (what is left of
+/// [`load_image`] of an image of `world` that may have at most `room` pixels (what is left of
 /// [`MAX_TOTAL_IMAGE_PIXELS`], or of a memory limit, after the images loaded before), refused
 /// from its header before it is decoded.
 pub fn load_image_within(
+    world: &dyn World,
     path: &std::path::Path,
     space: ColorSpace,
     room: ImageRoom,
 ) -> Result<ImageData, AssetError> {
-    let bytes =
-        crate::files::read_bytes(path, crate::files::MAX_ASSET_BYTES).map_err(|e| match e {
+    let bytes = world
+        .read(path, crate::files::MAX_ASSET_BYTES)
+        .map_err(|e| match e {
             crate::files::FileError::Io(e) => {
                 AssetError::unread(format!("cannot open image `{}`: {e}", path.display()))
             }
@@ -308,18 +312,23 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-/// Reads a Wavefront OBJ file (all models merged, faces triangulated). Files of the common
-/// form are read on every core ([`super::obj::parse`]); the others, and every file with an
-/// error, by `tobj`.
+/// Reads a Wavefront OBJ file from the disk (all models merged, faces triangulated). Files of
+/// the common form are read on every core ([`super::obj::parse`]); the others, and every file
+/// with an error, by `tobj`.
 pub fn load_obj(path: &std::path::Path) -> Result<MeshData, AssetError> {
-    let bytes = crate::files::read_bytes_parallel(path, crate::files::MAX_ASSET_BYTES).map_err(
-        |e| match e {
+    load_obj_in(&FileSystem, path)
+}
+
+/// [`load_obj`] of a file of `world`.
+pub fn load_obj_in(world: &dyn World, path: &std::path::Path) -> Result<MeshData, AssetError> {
+    let bytes = world
+        .read(path, crate::files::MAX_ASSET_BYTES)
+        .map_err(|e| match e {
             crate::files::FileError::Io(e) => {
                 AssetError::unread(format!("cannot read OBJ mesh `{}`: {e}", path.display()))
             }
             refused => AssetError::unread(format!("cannot read OBJ mesh: {refused}")),
-        },
-    )?;
+        })?;
     parse_obj(&bytes, path).map_err(AssetError::content)
 }
 

@@ -21,7 +21,8 @@ mod validate;
 pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
 pub use assets::{
     AssetError, ColorSpace, IMAGE_BYTES_PER_PIXEL, ImageData, ImageRoom, MAX_TOTAL_IMAGE_PIXELS,
-    MeshData, brightest_pixel, load_image, load_image_within, load_obj, srgb_to_linear,
+    MeshData, brightest_pixel, load_image, load_image_within, load_obj, load_obj_in,
+    srgb_to_linear,
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use function::{Function, FunctionError, Op};

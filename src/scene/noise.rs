@@ -4,17 +4,10 @@
 //! gradients). Its permutation table is a compile-time constant shuffled by our own code from a
 //! fixed seed, so every evaluation everywhere gives the same value: no global state, no entropy.
 
+use crate::sampling::splitmix64;
+
 /// The seed the permutation table is shuffled from. Changing it changes every noisy texture.
 const SEED: u64 = 0x5eed_0f9e_7a11_a5e7;
-
-/// splitmix64: a small, well-mixed generator for building the table.
-const fn splitmix64(state: u64) -> (u64, u64) {
-    let state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    let mut z = state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (state, z ^ (z >> 31))
-}
 
 /// A Fisher–Yates shuffle of 0..=255 from `seed`, doubled to 512 entries so that lookups
 /// `perm[perm[x] + y]` never need a wrap.

@@ -23,6 +23,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("diag", &["span"]),
     ("atomic_file", &[]),
     ("files", &[]),
+    // Where a load's files come from (the disk, or memory).
+    ("world", &["files"]),
     // The caller's cancel handle, read by every stage that can take long.
     ("cancel", &[]),
     // Leaves of the renderer's building blocks, placed before the language because they know
@@ -31,11 +33,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sampling", &["geometry"]),
     // The language.
     ("syntax", &["span", "diag"]),
-    ("scene", &["span", "diag", "files"]),
+    ("scene", &["span", "diag", "files", "world", "sampling"]),
     (
         "eval",
         &[
-            "span", "diag", "files", "cancel", "syntax", "scene", "sampling",
+            "span", "diag", "files", "world", "cancel", "syntax", "scene", "sampling",
         ],
     ),
     // The renderer's building blocks.
@@ -103,7 +105,13 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("chart", &["atomic_file", "compare"]),
     ("chains", &["film", "atomic_file"]),
     ("farm", &["chains"]),
-    ("watch", &[]),
+    // The library's three calls (load, prepare, render) over the stages.
+    (
+        "api",
+        &[
+            "span", "diag", "cancel", "eval", "scene", "film", "prepare", "render",
+        ],
+    ),
 ];
 
 fn allowed() -> BTreeMap<&'static str, &'static [&'static str]> {

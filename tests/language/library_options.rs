@@ -565,3 +565,108 @@ fn a_bezier_patch_without_area_is_an_error() {
         assert!(err.contains("no area"), "{err}");
     }
 }
+
+/// A PNG of one colour, `w` by `h` pixels, made in memory.
+fn png_of(rgb: [u8; 3]) -> Vec<u8> {
+    let img = image::RgbImage::from_pixel(2, 2, image::Rgb(rgb));
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .unwrap();
+    bytes
+}
+
+/// A scene whose include and floor image exist only in memory: the include sets the resolution
+/// and the light, the image colours the floor that fills the view.
+fn memory_world(floor: [u8; 3]) -> sppm_lang::MemoryWorld {
+    let scene = r#"
+        #include "parts/setup.scn"
+        settings { resolution <W, H>  iterations 2  photons 5000  seed 3 }
+        camera { location <0, 3, 0.01>  look_at <0, 0, 0>  fov 40 }
+        quad { <-4, 0, -4>, <8, 0, 0>, <0, 0, 8>
+               material { diffuse texture { image "maps/floor.png" } } }
+    "#;
+    let setup = r#"
+        #declare W = 20;
+        #declare H = 14;
+        area_light { quad { <-1, 4, -1>, <2, 0, 0>, <0, 0, 2> }  radiance rgb <6, 6, 6> }
+    "#;
+    sppm_lang::MemoryWorld::new()
+        .with("memory-only/scene.scn", scene)
+        .with("memory-only/parts/setup.scn", setup)
+        .with("memory-only/maps/floor.png", png_of(floor))
+}
+
+fn mean(image: &sppm_lang::film::Image) -> [f64; 3] {
+    let n = image.pixels.len() as f64;
+    image
+        .pixels
+        .iter()
+        .fold([0.0; 3], |m, p| [m[0] + p[0], m[1] + p[1], m[2] + p[2]])
+        .map(|c| c / n)
+}
+
+#[test]
+fn a_scene_its_include_and_its_image_load_and_render_from_memory() {
+    let main = std::path::Path::new("memory-only/scene.scn");
+    assert!(!main.exists(), "the test needs files that are not on disk");
+    let render = |floor: [u8; 3], options: &sppm_lang::RenderOptions| {
+        let load_options = sppm_lang::EvalOptions {
+            world: sppm_lang::world::SharedWorld::new(memory_world(floor)),
+            ..Default::default()
+        };
+        let document = sppm_lang::load(main, &load_options).unwrap_or_else(|f| panic!("{f}"));
+        for dep in ["memory-only/parts/setup.scn", "memory-only/maps/floor.png"] {
+            assert!(
+                document
+                    .dependencies
+                    .iter()
+                    .any(|d| d.ends_with(dep) || d == std::path::Path::new(dep)),
+                "{dep} not read: {:?}",
+                document.dependencies
+            );
+            assert!(!std::path::Path::new(dep).exists());
+        }
+        let prepared = sppm_lang::prepare(&document, options).unwrap_or_else(|f| panic!("{f}"));
+        let rendered = sppm_lang::render(&prepared).unwrap_or_else(|f| panic!("{f}"));
+        assert_eq!(options.cancel.progress(), (2, 2));
+        rendered
+    };
+    // The include's resolution is used; the image's colour reaches the picture.
+    let red = render([230, 20, 20], &Default::default());
+    assert_eq!((red.image.width, red.image.height), (20, 14));
+    let [r, g, b] = mean(&red.image);
+    assert!(r > 4.0 * g && r > 4.0 * b, "red floor gave {r} {g} {b}");
+    let green = render([20, 230, 20], &Default::default());
+    let [r, g, b] = mean(&green.image);
+    assert!(g > 4.0 * r && g > 4.0 * b, "green floor gave {r} {g} {b}");
+    // The options override the scene's settings without editing it.
+    let options = sppm_lang::RenderOptions {
+        resolution: Some((8, 6)),
+        integrator: Some(sppm_lang::scene::Integrator::Path),
+        ..Default::default()
+    };
+    let small = render([230, 20, 20], &options);
+    assert_eq!((small.image.width, small.image.height), (8, 6));
+}
+
+#[test]
+fn a_file_missing_from_memory_is_a_diagnostic_at_its_include() {
+    let world = sppm_lang::MemoryWorld::new().with("main.scn", "#include \"gone.scn\"\n");
+    let load_options = sppm_lang::EvalOptions {
+        world: sppm_lang::world::SharedWorld::new(world),
+        ..Default::default()
+    };
+    let failure = sppm_lang::load(std::path::Path::new("main.scn"), &load_options).unwrap_err();
+    let e = &failure.diagnostics[0];
+    assert!(
+        e.message.contains("cannot read included file `gone.scn`"),
+        "{}",
+        e.message
+    );
+    assert_eq!(failure.sources.snippet(e.span), "\"gone.scn\"");
+    let missing = sppm_lang::load(std::path::Path::new("other.scn"), &load_options).unwrap_err();
+    assert!(missing.to_string().contains("other.scn"), "{missing}");
+}

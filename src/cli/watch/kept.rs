@@ -7,7 +7,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use super::identity::SceneId;
+use crate::cli::identity::SceneId;
 
 /// How converged an image is and of which scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

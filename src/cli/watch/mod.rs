@@ -8,7 +8,7 @@
 //! No save is lost and no work is thrown away for nothing: the files of the previous load stay
 //! watched while the next one runs (the scene itself from the start), and a save during a load
 //! starts another round. The render in flight goes on during the load; it is cancelled only
-//! when the new load gives another scene ([`identity::SceneId`]) or errors. A save that leaves
+//! when the new load gives another scene ([`SceneId`]) or errors. A save that leaves
 //! the scene as it was keeps the render going (or finished). A render never replaces a more
 //! converged image of the same scene ([`kept`]).
 //!
@@ -17,10 +17,10 @@
 //! Status lines go to stderr. When stderr is not a terminal they are plain lines starting with
 //! `[watch]`, one per event, which the integration tests read.
 
-pub(super) mod identity;
 mod kept;
 mod load;
 mod round;
+mod watcher;
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -32,15 +32,15 @@ use std::time::{Instant, SystemTime};
 
 use clap::Args;
 use sppm_lang::files::FileError;
-use sppm_lang::watch::DependencyWatcher;
 use sppm_lang::{Diagnostic, EvalOptions};
 
+use super::identity::SceneId;
 use super::live::{self, Hub};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
-use identity::SceneId;
 use kept::OnDisk;
 use load::load;
 use round::{Round, start};
+use watcher::DependencyWatcher;
 
 #[derive(Debug, Clone, Args)]
 pub struct WatchArgs {

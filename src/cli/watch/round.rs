@@ -14,9 +14,9 @@ use sppm_lang::scene::Scene;
 
 use super::super::check::{print_render_error, print_render_warning};
 use super::super::live::{self, Hub};
-use super::identity::SceneId;
 use super::kept::{OnDisk, Written};
 use super::{Job, Outcome, status};
+use crate::cli::identity::SceneId;
 
 /// What a round renders and where it reports.
 pub struct Round {
@@ -249,11 +249,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
 
 /// A render failure as a diagnostic (at its span when it has one).
 fn render_error_diagnostic(e: &render::RenderError) -> sppm_lang::Diagnostic {
-    let span = e.span.unwrap_or_else(sppm_lang::span::Span::detached);
-    let mut d = sppm_lang::Diagnostic::error(span, e.message.clone());
-    d.label = e.label.clone();
-    d.help = e.help.clone();
-    d
+    e.to_diagnostic(sppm_lang::Severity::Error)
 }
 
 /// `image` scaled to `size` by nearest neighbour (each preview pixel becomes a block).

@@ -194,16 +194,10 @@ impl DependencyWatcher {
         }
     }
 
-    /// The files being watched (normalised), sorted.
-    pub fn dependencies(&self) -> Vec<PathBuf> {
-        let mut v: Vec<_> = self.files.iter().cloned().collect();
-        v.sort();
-        v
-    }
-
     /// Blocks until a batch of changes to the dependencies arrives and returns the changed
     /// files, or returns `None` when `deadline` passes or `stop()` says so first (checked at
     /// least every [`POLL`]).
+    #[cfg(test)]
     pub fn wait(
         &mut self,
         deadline: Option<Instant>,
