@@ -484,3 +484,41 @@ fn a_thin_pane_in_a_furnace_transmits_and_reflects_all() {
         assert!((m - 1.0).abs() < 1e-3, "{integrator:?}: {m}");
     }
 }
+
+/// An orthographic camera renders in every integrator, and its picture is a parallel
+/// projection: a glowing unit sphere in a view 4 units high covers half of the middle row
+/// (16 of 32 pixels) whether it is 3 or 300 units away, and `fov 30` with `orthographic` shows
+/// what a perspective camera sees at `look_at` (a view 2·tan 15°·d high).
+#[test]
+fn an_orthographic_camera_projects_in_parallel_in_every_integrator() {
+    let covered = |camera: &str, integrator: Integrator| {
+        let text = format!(
+            "settings {{ resolution <32, 32> }}
+             camera {{ {camera} }}
+             area_light {{ sphere {{ <0, 0, 0>, 1 }} radiance rgb 1 }}"
+        );
+        let loaded = sppm_lang::load_source("ortho.scn", &text, &sppm_lang::EvalOptions::default());
+        let scene = loaded.scene.expect("orthographic scene evaluates");
+        let img = run(&scene, integrator, 2, 2_000, 5);
+        assert!(mean(&img) > 0.0, "{camera}, {integrator:?}: black");
+        (0..32).filter(|x| img.get(*x, 16)[0] > 0.5).count()
+    };
+    for integrator in Integrator::ALL {
+        for d in [3.0, 300.0] {
+            let n = covered(
+                &format!("orthographic location <0, 0, -{d}> look_at <0, 0, 0> up <0, 4, 0>"),
+                integrator,
+            );
+            assert!(
+                (15..=17).contains(&n),
+                "{integrator:?}, distance {d}: {n} pixels"
+            );
+        }
+    }
+    // 2·tan(15°)·d = 4 at d = 7.464.
+    let n = covered(
+        "orthographic location <0, 0, -7.4641> look_at <0, 0, 0> fov 30",
+        Integrator::Whitted,
+    );
+    assert!((15..=17).contains(&n), "fov 30: {n} pixels");
+}

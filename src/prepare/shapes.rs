@@ -17,6 +17,7 @@ use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
 use crate::shapes::plane::Plane;
 use crate::shapes::primitive::AnyShape;
+use crate::shapes::prism::Prism;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
@@ -222,6 +223,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             .into_iter()
             .map(|piece| placed(Arc::new(piece), obj))
             .collect::<Result<_, _>>()?,
+        scene::Shape::Prism(p) => vec![wrap(Arc::new(Prism::new(p)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

@@ -246,6 +246,7 @@ pub mod mesh;
 pub mod patch;
 pub mod plane;
 pub mod primitive;
+pub mod prism;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;

@@ -167,6 +167,20 @@ impl Camera {
                 span,
             )?;
         }
+        if self.orthographic {
+            size(
+                self.up.length(),
+                "the orthographic view's height (the length of `up`)",
+                span,
+            )?;
+            if let Some(r) = self.right {
+                size(
+                    r.length(),
+                    "the orthographic view's width (the length of `right`)",
+                    span,
+                )?;
+            }
+        }
         if let Some(r) = self.right
             && !(r.x.is_finite() && r.x != 0.0)
         {
@@ -427,6 +441,18 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             };
             if let Some(p) = mesh.positions.par_iter().find_first(|p| far(p)) {
                 at(*p)?;
+            }
+        }
+        Shape::Prism(p) => {
+            // The corners of its box: the profile's rectangle at both heights (scaled by the
+            // height for a conic sweep).
+            let (lo, hi) = p.heights;
+            len((hi - lo).abs(), "height")?;
+            for q in p.segments.iter().flatten() {
+                for h in [lo, hi] {
+                    let w = if p.conic { h } else { 1.0 };
+                    at(DVec3::new(q.x * w, h, q.y * w))?;
+                }
             }
         }
         Shape::Revolve {
