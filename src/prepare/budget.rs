@@ -102,6 +102,7 @@ fn held_bytes(shape: &Shape) -> u64 {
             | Shape::Revolve { .. }
             | Shape::BezierPatch { .. }
             | Shape::Prism(_)
+            | Shape::Superellipsoid { .. }
             | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

@@ -21,6 +21,7 @@ use crate::shapes::prism::Prism;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
+use crate::shapes::superellipsoid::Superellipsoid;
 use crate::shapes::torus::Torus;
 use crate::shapes::transformed::Transformed;
 use crate::shapes::triangle::Triangle;
@@ -224,6 +225,9 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             .map(|piece| placed(Arc::new(piece), obj))
             .collect::<Result<_, _>>()?,
         scene::Shape::Prism(p) => vec![wrap(Arc::new(Prism::new(p)?))?],
+        scene::Shape::Superellipsoid { e, n } => {
+            vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
+        }
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

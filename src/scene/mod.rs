@@ -443,9 +443,19 @@ pub enum Shape {
     },
     /// POV-Ray's `prism`: a closed profile swept along y (see [`Prism`]).
     Prism(Prism),
+    /// POV-Ray's `superellipsoid { <e, n> }` in the cube [-1, 1]^3, the exponents within
+    /// [`SUPERELLIPSOID_EXPONENTS`].
+    Superellipsoid {
+        e: f64,
+        n: f64,
+    },
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
+
+/// The range of a superellipsoid's exponents: below it the shape is a box, above it a set of
+/// needles, to within rounding.
+pub const SUPERELLIPSOID_EXPONENTS: (f64, f64) = (1e-3, 10.0);
 
 /// The most a torus's major radius may exceed its minor radius (see `shapes::torus`: beyond
 /// it the intersector's quartic loses the precision to place hits on the surface).
@@ -468,6 +478,7 @@ impl Shape {
             Shape::Revolve { .. } => "revolve",
             Shape::BezierPatch { .. } => "bezier_patch",
             Shape::Prism(_) => "prism",
+            Shape::Superellipsoid { .. } => "superellipsoid",
             Shape::Csg(c) => c.op.name(),
         }
     }

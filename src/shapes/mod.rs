@@ -250,6 +250,7 @@ pub mod prism;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
+pub mod superellipsoid;
 pub mod torus;
 pub mod transformed;
 pub mod triangle;

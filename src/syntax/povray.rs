@@ -261,16 +261,8 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `merge` spheres",
     ),
     pov(
-        "superellipsoid",
-        "POV-Ray's `superellipsoid` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
         "isosurface",
         "POV-Ray's `isosurface` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
-        "sphere_sweep",
-        "POV-Ray's `sphere_sweep` has no counterpart: chain `cylinder`s and `sphere`s in a `merge`",
     ),
     pov(
         "fog",

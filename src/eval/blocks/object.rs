@@ -4,6 +4,8 @@
 mod csg;
 mod primitive;
 mod prism;
+mod sphere_sweep;
+mod superellipsoid;
 
 use crate::diag::short_number;
 use std::rc::Rc;
@@ -67,6 +69,13 @@ static PRISM_PROPS: [PropSpec; 12] = with_transforms([
     p("linear_sweep", 0, 0, "nothing", ""),
     p("conic_sweep", 0, 0, "nothing", ""),
 ]);
+static SWEEP_PROPS: [PropSpec; 9] = with_transforms([
+    INVERSE,
+    p("linear_spline", 0, 0, "nothing", ""),
+    p("cubic_spline", 0, 0, "nothing", ""),
+    p("b_spline", 0, 0, "nothing", ""),
+    p("tolerance", 1, 1, "a number", "1e-6"),
+]);
 static REVOLVE_PROPS: [PropSpec; 12] = with_transforms([
     INVERSE,
     w("method", "`robust` or `newton`", "newton"),
@@ -98,6 +107,8 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "mesh",
     "revolve",
     "prism",
+    "superellipsoid",
+    "sphere_sweep",
     "bezier_patch",
     "bezier_mesh",
     "union",
@@ -255,6 +266,8 @@ impl ObjectBuilder {
                 })]
             }
             "prism" => vec![self.part(self.prism()?)],
+            "superellipsoid" => vec![self.part(self.superellipsoid()?)],
+            "sphere_sweep" => self.sphere_sweep()?,
             "bezier_patch" | "bezier_mesh" => {
                 let n = self.values.len();
                 if n == 0 || !n.is_multiple_of(16) || (self.kind == "bezier_patch" && n != 16) {
@@ -407,6 +420,7 @@ impl Sink for ObjectBuilder {
             "area_light" => &AREA_PROPS,
             "revolve" => &REVOLVE_PROPS,
             "prism" => &PRISM_PROPS,
+            "sphere_sweep" => &SWEEP_PROPS,
             "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,
             _ => &OBJ_PROPS,
         }
@@ -417,6 +431,23 @@ impl Sink for ObjectBuilder {
         }
         match kw.text.as_str() {
             "open" => self.open = true,
+            // A sphere sweep is exact along straight segments only.
+            "cubic_spline" | "b_spline" if self.kind == "sphere_sweep" => {
+                return Err(vec![
+                    Error::new(format!(
+                        "a sphere_sweep along a `{}` is not supported",
+                        kw.text
+                    ))
+                    .label("curved sweep")
+                    .help(
+                        "use `linear_spline` (straight segments between the spheres; add \
+                         points along the curve to follow it)",
+                    )
+                    .at(kw.span),
+                ]);
+            }
+            // A sphere sweep is exact: POV-Ray's root-finding tolerance has nothing to tune.
+            "tolerance" => {}
             "linear_spline" => self.spline = Some(PrismSpline::Linear),
             "quadratic_spline" => self.spline = Some(PrismSpline::Quadratic),
             "cubic_spline" => self.spline = Some(PrismSpline::Cubic),

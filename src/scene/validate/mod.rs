@@ -443,6 +443,27 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(*p)?;
             }
         }
+        Shape::Superellipsoid { e, n } => {
+            let (lo, hi) = super::SUPERELLIPSOID_EXPONENTS;
+            if !(*e >= lo && *e <= hi && *n >= lo && *n <= hi) {
+                return Err(invalid(
+                    span,
+                    format!(
+                        "the superellipsoid's exponents <{}, {}> lie outside [{}, {}]",
+                        fmt(*e),
+                        fmt(*n),
+                        fmt(lo),
+                        fmt(hi)
+                    ),
+                    "out of range",
+                    "near 0 a box, 1 a sphere, 2 an octahedron, beyond 2 a pinched star",
+                ));
+            }
+            len(1.0, "size")?;
+            for c in [DVec3::splat(-1.0), DVec3::splat(1.0)] {
+                at(c)?;
+            }
+        }
         Shape::Prism(p) => {
             // The corners of its box: the profile's rectangle at both heights (scaled by the
             // height for a conic sweep).
