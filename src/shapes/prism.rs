@@ -464,7 +464,8 @@ impl Shape for Prism {
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
-        let hit = self.nearest(o, d, f64::from(t_min), f64::from(t_max))?;
+        let (lo, hi) = super::f64_range(t_min, t_max);
+        let hit = self.nearest(o, d, lo, hi)?;
         let t = hit.t as f32;
         if !(t > t_min && t < t_max) {
             return None;
@@ -484,7 +485,8 @@ impl Shape for Prism {
     fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
         let mut any = false;
-        self.hits(o, d, f64::from(t_min), f64::from(t_max), |h| {
+        let (lo, hi) = super::f64_range(t_min, t_max);
+        self.hits(o, d, lo, hi, |h| {
             let t = h.t as f32;
             any = t > t_min && t < t_max;
             !any

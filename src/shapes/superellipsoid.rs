@@ -26,6 +26,11 @@ use crate::geometry::{Aabb, Hit, Ray};
 /// Leaf width of the subdivision, relative to the ray's chord through the cube.
 pub const LEAF: f64 = 1e-9;
 
+/// Most stretches one ray may visit: a bound on the work of one ray (tens of milliseconds).
+/// A ray that crosses the surface visits a few hundred; a ray that grazes a curved part within
+/// rounding visits up to about 10^5 (the stretches around the touch whose range still holds 1).
+const MAX_VISITS: u32 = 200_000;
+
 /// The exponents a superellipsoid accepts (the scene's own range): beyond them the shape is a
 /// box or a set of needles to within rounding.
 pub const EXPONENTS: (f64, f64) = crate::scene::SUPERELLIPSOID_EXPONENTS;
@@ -96,11 +101,18 @@ impl Superellipsoid {
         if !(a < b) {
             return None;
         }
-        let leaf = LEAF * (b - a).max(1e-300);
+        // A leaf is never narrower than the rounding of `t` itself (a chord that grazes the
+        // cube is shorter than that), so halving always ends.
+        let leaf = (LEAF * (b - a)).max(8.0 * f64::EPSILON * a.abs().max(b.abs()));
         let g = |t: f64| self.gauge(o + t * d) - 1.0;
         // Stretches still to look at, the nearest on top.
         let mut stack = vec![(a, b, g(a), g(b))];
+        let mut visits = 0;
         while let Some((lo, hi, glo, ghi)) = stack.pop() {
+            visits += 1;
+            if visits > MAX_VISITS {
+                return None;
+            }
             let (pa, pb) = (o + lo * d, o + hi * d);
             let range = |k: usize| {
                 let (u, v) = (pa[k], pb[k]);
@@ -115,13 +127,13 @@ impl Superellipsoid {
             if self.gauge_abs(x.0, y.0, z.0) > 1.0 || self.gauge_abs(x.1, y.1, z.1) < 1.0 {
                 continue;
             }
-            if hi - lo <= leaf {
+            let mid = 0.5 * (lo + hi);
+            if hi - lo <= leaf || mid <= lo || mid >= hi {
                 if (glo < 0.0) != (ghi < 0.0) {
                     return Some(self.bisect(&g, lo, hi, glo));
                 }
                 continue;
             }
-            let mid = 0.5 * (lo + hi);
             let gm = g(mid);
             stack.push((mid, hi, gm, ghi));
             stack.push((lo, mid, glo, gm));
@@ -194,7 +206,8 @@ impl Shape for Superellipsoid {
 
     fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
-        let t = self.nearest(o, d, f64::from(t_min), f64::from(t_max))?;
+        let (lo, hi) = super::f64_range(t_min, t_max);
+        let t = self.nearest(o, d, lo, hi)?;
         let tf = t as f32;
         if !(tf > t_min && tf < t_max) {
             return None;

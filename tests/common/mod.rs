@@ -316,6 +316,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         look_at: DVec3::new(0.3, 0.0, 0.0),
         up: DVec3::X,
         fov: 11.4,
+        orthographic: false,
         aperture: 0.0,
         focus_distance: None,
         right: None,
