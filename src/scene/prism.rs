@@ -232,7 +232,8 @@ pub fn prism_segments(
         .iter()
         .flatten()
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    if !(area > 1e-12 * extent * extent) {
+    let encloses = area > 1e-12 * extent * extent;
+    if !encloses {
         return Err(err(
             "the profile encloses no area (its points lie on a line or on top of each other)"
                 .into(),

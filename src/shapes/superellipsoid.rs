@@ -98,7 +98,7 @@ impl Superellipsoid {
             a = a.max(t0.min(t1));
             b = b.min(t0.max(t1));
         }
-        if !(a < b) {
+        if a.is_nan() || b.is_nan() || a >= b {
             return None;
         }
         // A leaf is never narrower than the rounding of `t` itself (a chord that grazes the

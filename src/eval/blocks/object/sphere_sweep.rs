@@ -27,7 +27,7 @@ impl ObjectBuilder {
         };
         let count = count.num().at(*count_span)?;
         let rest = &self.values[1..];
-        if count != (rest.len() / 2) as f64 || rest.len() % 2 != 0 {
+        if count != (rest.len() / 2) as f64 || !rest.len().is_multiple_of(2) {
             return Err(vec![
                 Error::new(format!(
                     "the sphere_sweep says it has {} spheres, but {} value{} follow (a centre \
