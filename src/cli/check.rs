@@ -147,6 +147,10 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
         Integrator::Sppm | Integrator::Ppm => {
             let text = match settings.initial_radius(&prepared.scene.camera) {
                 InitialRadius::Fixed(r) => format!("{} (from settings)", short_number(r)),
+                InitialRadius::Orthographic(r) => format!(
+                    "{} (default: {RADIUS_FOOTPRINTS} pixel footprints of the orthographic view)",
+                    short_number(r)
+                ),
                 InitialRadius::Footprint { per_distance } => format!(
                     "{} x the distance to each pixel's first visible point (default: \
                      {RADIUS_FOOTPRINTS} pixel footprints there)",
@@ -257,14 +261,23 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     ));
     let c = &s.camera;
     out.push_str(&format!(
-        "camera: location <{}, {}, {}> look_at <{}, {}, {}> fov {}{}{}\n",
+        "camera: location <{}, {}, {}> look_at <{}, {}, {}> {}{}{}\n",
         c.location.x,
         c.location.y,
         c.location.z,
         c.look_at.x,
         c.look_at.y,
         c.look_at.z,
-        c.fov,
+        if c.orthographic {
+            let (w, h) = c.view_size(s.settings.resolution.0, s.settings.resolution.1);
+            format!(
+                "orthographic, view {} x {}",
+                short_number(w),
+                short_number(h)
+            )
+        } else {
+            format!("fov {}", c.fov)
+        },
         if c.aperture > 0.0 {
             format!(" aperture {}", c.aperture)
         } else {

@@ -84,13 +84,26 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + Lathe::bytes_per_segment()) as u64
                 + WRAP_OVERHEAD
         }
+        // Its segments (with their boxes) in its own allocation, in an `Arc` and a boxed
+        // transform.
+        Shape::Prism(p) => {
+            (size_of::<crate::shapes::prism::Prism>()
+                + size_of::<crate::shapes::transformed::Transformed>()
+                + p.segments.len() * 112) as u64
+                + WRAP_OVERHEAD
+        }
         _ => 0,
     };
     // Spheres, disks and cones under a transform the renderer cannot bake are heavy too, and
     // not counted here.
     let heavy = matches!(
         shape,
-        Shape::Torus { .. } | Shape::Revolve { .. } | Shape::BezierPatch { .. } | Shape::Csg(_)
+        Shape::Torus { .. }
+            | Shape::Revolve { .. }
+            | Shape::BezierPatch { .. }
+            | Shape::Prism(_)
+            | Shape::Superellipsoid { .. }
+            | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }
 }

@@ -138,6 +138,9 @@ pub enum InitialRadius {
     /// pixel's first visible point (through mirrors and glass): [`RADIUS_FOOTPRINTS`] widths of
     /// the pixel's footprint there. Where the camera looks does not enter it.
     Footprint { per_distance: f64 },
+    /// An orthographic camera's pixels have one footprint at every distance: each pixel's
+    /// radius starts at this, [`RADIUS_FOOTPRINTS`] pixel heights of the view.
+    Orthographic(f64),
 }
 
 impl InitialRadius {
@@ -145,7 +148,7 @@ impl InitialRadius {
     /// `None` when there is no usable value (the pixel then waits for its next visible point).
     pub fn at(self, distance: f64) -> Option<f64> {
         let r = match self {
-            InitialRadius::Fixed(r) => r,
+            InitialRadius::Fixed(r) | InitialRadius::Orthographic(r) => r,
             InitialRadius::Footprint { per_distance } => per_distance * distance,
         };
         (r.is_finite() && r > 0.0).then_some(r)
@@ -156,6 +159,10 @@ impl std::fmt::Display for InitialRadius {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             InitialRadius::Fixed(r) => write!(f, "{r} (settings)"),
+            InitialRadius::Orthographic(r) => write!(
+                f,
+                "{r:.3e} ({RADIUS_FOOTPRINTS} pixel footprints of the orthographic view)"
+            ),
             InitialRadius::Footprint { per_distance } => write!(
                 f,
                 "{per_distance:.3e} x the distance to each pixel's first visible point ({RADIUS_FOOTPRINTS} pixel footprints)"
@@ -167,10 +174,15 @@ impl std::fmt::Display for InitialRadius {
 impl EffectiveSettings {
     /// The initial radius rule for a render of `camera` with these settings: the scene's
     /// `radius`, else [`RADIUS_FOOTPRINTS`] pixel footprints at each pixel's first visible
-    /// point (a pixel spans `2 tan(fov / 2) / height` radians), times `radius_scale`.
+    /// point (a pixel spans `2 tan(fov / 2) / height` radians), times `radius_scale`; for an
+    /// orthographic camera, as many pixel heights of its view.
     pub fn initial_radius(&self, camera: &crate::scene::Camera) -> InitialRadius {
         if let Some(r) = self.radius {
             return InitialRadius::Fixed(r * self.radius_scale);
+        }
+        if camera.orthographic {
+            let pixel = camera.up.length() / f64::from(self.height.max(1));
+            return InitialRadius::Orthographic(RADIUS_FOOTPRINTS * pixel * self.radius_scale);
         }
         let pixel = 2.0 * (0.5 * camera.fov.to_radians()).tan() / f64::from(self.height.max(1));
         InitialRadius::Footprint {

@@ -17,9 +17,11 @@ use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
 use crate::shapes::plane::Plane;
 use crate::shapes::primitive::AnyShape;
+use crate::shapes::prism::Prism;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
+use crate::shapes::superellipsoid::Superellipsoid;
 use crate::shapes::torus::Torus;
 use crate::shapes::transformed::Transformed;
 use crate::shapes::triangle::Triangle;
@@ -222,6 +224,10 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             .into_iter()
             .map(|piece| placed(Arc::new(piece), obj))
             .collect::<Result<_, _>>()?,
+        scene::Shape::Prism(p) => vec![wrap(Arc::new(Prism::new(p)?))?],
+        scene::Shape::Superellipsoid { e, n } => {
+            vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
+        }
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

@@ -17,9 +17,9 @@ pub const MAX_CSG_DEPTH: usize = 64;
 pub const MAX_CSG_LEAVES: usize = 4096;
 
 /// The help of every "not closed" diagnostic.
-pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, cylinder or cone without `open`, a revolve \
-     whose profile starts and ends on the axis, a watertight mesh, a plane), or `union`, which \
-     needs no inside";
+pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, superellipsoid, cylinder, \
+     cone or prism without `open`, a revolve whose profile starts and ends on the axis, a \
+     watertight mesh, a plane), or `union`, which needs no inside";
 
 /// The operations, with POV-Ray's meaning.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -116,6 +116,8 @@ pub fn why_open(shape: &Shape) -> Option<String> {
             Some(format!("a {} is a flat surface", shape.kind()))
         }
         Shape::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
+        Shape::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
+        Shape::Prism(_) | Shape::Superellipsoid { .. } => None,
         Shape::Revolve { profile, sweep, .. } => {
             if sweep.is_some() {
                 return Some("a partial sweep (`angle`) is open".into());

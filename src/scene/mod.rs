@@ -16,6 +16,7 @@ pub mod noise;
 mod obj;
 mod obj_errors;
 pub mod pattern_value;
+pub mod prism;
 mod validate;
 
 pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
@@ -27,6 +28,7 @@ pub use assets::{
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use function::{Function, FunctionError, Op};
 pub use pattern_value::{PatternFn, PatternKind};
+pub use prism::{Prism, PrismSpline, ProfileError, prism_segments};
 pub use validate::{
     COAT_IOR_RANGE, IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES,
     MAX_PHOTONS, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
@@ -262,21 +264,27 @@ impl Integrator {
     }
 }
 
-/// Pinhole or thin-lens camera.
+/// Pinhole or thin-lens camera, perspective or orthographic.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
     pub location: DVec3,
     pub look_at: DVec3,
+    /// Which way is up in the picture; for an orthographic camera its length is also the
+    /// height of the view in scene units (POV-Ray's rule).
     pub up: DVec3,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view in degrees (perspective cameras).
     pub fov: f64,
+    /// Parallel camera rays from a rectangle through `location` across the view direction,
+    /// `|up|` high and `|right|` wide (the resolution's aspect without `right`).
+    pub orthographic: bool,
     /// Lens radius; 0 is a pinhole.
     pub aperture: f64,
     /// Distance to the plane in focus; `None`: the distance to `look_at`.
     pub focus_distance: Option<f64>,
-    /// POV-Ray's `right` vector as written: only the sign of its x component is used, as
-    /// POV-Ray tests it against its default `up y` and `direction z` (positive: +x shows on
-    /// the right of the picture, as in a left-handed system; negative: a right-handed camera).
+    /// POV-Ray's `right` vector as written: the sign of its x component is used, as POV-Ray
+    /// tests it against its default `up y` and `direction z` (positive: +x shows on the right
+    /// of the picture, as in a left-handed system; negative: a right-handed camera), and an
+    /// orthographic camera takes its length as the view's width.
     /// `None`: the scene's [`Handedness`] decides.
     pub right: Option<DVec3>,
     /// The last `camera` block (detached when the file gave none).
@@ -290,6 +298,7 @@ impl Default for Camera {
             look_at: DVec3::ZERO,
             up: DVec3::Y,
             fov: 40.0,
+            orthographic: false,
             aperture: 0.0,
             focus_distance: None,
             right: None,
@@ -299,6 +308,18 @@ impl Default for Camera {
 }
 
 impl Camera {
+    /// The width and height of an orthographic camera's view in scene units for an image of
+    /// `width` x `height` pixels: `|right|` (else the image's aspect times the height) by
+    /// `|up|`.
+    pub fn view_size(&self, width: u32, height: u32) -> (f64, f64) {
+        let h = self.up.length();
+        let w = match self.right {
+            Some(r) => r.length(),
+            None => h * f64::from(width) / f64::from(height.max(1)),
+        };
+        (w, h)
+    }
+
     /// Whether the picture's x axis is mirrored from the right-handed camera: the camera's own
     /// `right` decides when it has one (so a POV-Ray camera made right-handed with
     /// `right <-1.33, 0, 0>` is never mirrored twice), else the scene's `handedness`.
@@ -421,9 +442,21 @@ pub enum Shape {
         points: Box<[DVec3; 16]>,
         method: IntersectMethod,
     },
+    /// POV-Ray's `prism`: a closed profile swept along y (see [`Prism`]).
+    Prism(Prism),
+    /// POV-Ray's `superellipsoid { <e, n> }` in the cube [-1, 1]^3, the exponents within
+    /// [`SUPERELLIPSOID_EXPONENTS`].
+    Superellipsoid {
+        e: f64,
+        n: f64,
+    },
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
+
+/// The range of a superellipsoid's exponents: below it the shape is a box, above it a set of
+/// needles, to within rounding.
+pub const SUPERELLIPSOID_EXPONENTS: (f64, f64) = (1e-3, 10.0);
 
 /// The most a torus's major radius may exceed its minor radius (see `shapes::torus`: beyond
 /// it the intersector's quartic loses the precision to place hits on the surface).
@@ -445,6 +478,8 @@ impl Shape {
             Shape::Mesh { .. } => "mesh",
             Shape::Revolve { .. } => "revolve",
             Shape::BezierPatch { .. } => "bezier_patch",
+            Shape::Prism(_) => "prism",
+            Shape::Superellipsoid { .. } => "superellipsoid",
             Shape::Csg(c) => c.op.name(),
         }
     }

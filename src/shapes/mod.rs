@@ -229,6 +229,15 @@ pub(crate) mod sampling_tests {
     }
 }
 
+/// The f64 range of ray parameters whose f32 rounding lies strictly inside `(t_min, t_max)`:
+/// an f64 search over it never returns a hit that rounds onto `t_min` (the hit a CSG or a
+/// bounce just left) and so hides the hits beyond it.
+pub(crate) fn f64_range(t_min: f32, t_max: f32) -> (f64, f64) {
+    let lo = 0.5 * (f64::from(t_min) + f64::from(t_min.next_up()));
+    let hi = 0.5 * (f64::from(t_max) + f64::from(t_max.next_down()));
+    (lo, if t_max.is_finite() { hi } else { f64::INFINITY })
+}
+
 /// The root finder of the curved shapes for the scene's choice of method.
 pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
     match method {
@@ -246,9 +255,11 @@ pub mod mesh;
 pub mod patch;
 pub mod plane;
 pub mod primitive;
+pub mod prism;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
+pub mod superellipsoid;
 pub mod torus;
 pub mod transformed;
 pub mod triangle;

@@ -246,10 +246,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `quad { <corner>, <edge_u>, <edge_v> }`",
     ),
     pov(
-        "prism",
-        "POV-Ray's `prism` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
         "height_field",
         "POV-Ray's `height_field` has no counterpart: model the terrain as a mesh, \
          `mesh { \"file.obj\" }`",
@@ -265,16 +261,8 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `merge` spheres",
     ),
     pov(
-        "superellipsoid",
-        "POV-Ray's `superellipsoid` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
         "isosurface",
         "POV-Ray's `isosurface` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
-        "sphere_sweep",
-        "POV-Ray's `sphere_sweep` has no counterpart: chain `cylinder`s and `sphere`s in a `merge`",
     ),
     pov(
         "fog",
@@ -289,13 +277,9 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
         "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
     ),
     pov(
-        "orthographic",
-        "the camera is always a perspective (pinhole or thin-lens) camera here: remove \
-         `orthographic` (a far camera with a small `fov` comes close)",
-    ),
-    pov(
         "fisheye",
-        "the camera is always a perspective (pinhole or thin-lens) camera here: remove `fisheye`",
+        "the camera is a perspective or `orthographic` (pinhole or thin-lens) camera here: \
+         remove `fisheye`",
     ),
     pov(
         "panoramic",

@@ -69,6 +69,33 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
             "revolve { profile bezier { <0, 0.6>, <0.9, 0.6>, <0.9, -0.6>, <0, -0.6> } }",
             true,
         ),
+        // A frame: a square with a square hole (even-odd), run clockwise and anticlockwise.
+        (
+            "prism { -0.6, 0.7, 10, <-0.9, -0.9>, <0.9, -0.9>, <0.9, 0.9>, <-0.9, 0.9>, \
+             <-0.9, -0.9>, <-0.4, -0.4>, <-0.4, 0.4>, <0.4, 0.4>, <0.4, -0.4>, <-0.4, -0.4> \
+             rotate <20, 0, 10> }",
+            false,
+        ),
+        (
+            "prism { cubic_spline conic_sweep 0.3, 1.2, 8, <0, 0>, <1, 0>, <0, 1>, \
+             <-1, 0>, <0, -1>, <1, 0>, <0, 1>, <0, 0> translate <0, -0.6, 0> }",
+            false,
+        ),
+        (
+            "prism { bezier_spline -0.5, 0.5, 8, <0, -0.8>, <1.2, -0.8>, <1.2, 0.8>, <0, 0.8>, \
+             <0, 0.8>, <-0.3, 0.8>, <-0.3, -0.8>, <0, -0.8> scale <1, 1.5, 1> }",
+            false,
+        ),
+        (
+            "superellipsoid { <0.01, 0.05> scale 0.8 rotate <10, 20, 0> }",
+            false,
+        ),
+        ("superellipsoid { <0.3, 2.5> scale 1.2 }", false),
+        (
+            "sphere_sweep { linear_spline 3, <-0.8, -0.5, 0>, 0.5, <0, 0.3, 0.2>, 0.7, \
+             <0.9, 0, -0.3>, 0.3 }",
+            false,
+        ),
     ];
     for (shape, inward) in shapes {
         let alone = load(dir.path(), shape);

@@ -193,7 +193,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
     // `sppm-lookat` method.
     let look_at_radius = match effective_settings(&scene, &options) {
         Ok(settings) => match settings.initial_radius(&scene.camera) {
-            InitialRadius::Fixed(r) => r,
+            InitialRadius::Fixed(r) | InitialRadius::Orthographic(r) => r,
             InitialRadius::Footprint { per_distance } => {
                 per_distance * (scene.camera.look_at - scene.camera.location).length()
             }

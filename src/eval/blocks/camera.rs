@@ -18,9 +18,13 @@ pub(super) struct CameraBuilder {
     /// Whether a property or a declared camera was given yet: a declared camera sets every
     /// property, so it must come first.
     given: bool,
+    /// Whether this block gave `fov`: an orthographic camera then shows what a perspective one
+    /// with that field of view shows at `look_at` (POV-Ray's rule for `angle`).
+    fov_given: bool,
 }
 
-static CAMERA_PROPS: [PropSpec; 7] = [
+static CAMERA_PROPS: [PropSpec; 8] = [
+    p("orthographic", 0, 0, "nothing", ""),
     p("location", 1, 1, "a point", "<0, 1, -5>"),
     p("look_at", 1, 1, "a point", "<0, 1, 0>"),
     p("up", 1, 1, "a vector", "<0, 1, 0>"),
@@ -35,10 +39,22 @@ impl CameraBuilder {
         Self {
             camera,
             given: false,
+            fov_given: false,
         }
     }
 
-    pub(super) fn finish(self, span: Span) -> SourceResult<Value> {
+    pub(super) fn finish(mut self, span: Span) -> SourceResult<Value> {
+        let c = &mut self.camera;
+        if c.orthographic && self.fov_given {
+            // The view's height becomes the perspective view's at `look_at`; a `right` keeps
+            // its ratio to `up`.
+            let h = 2.0 * (0.5 * c.fov.to_radians()).tan() * (c.look_at - c.location).length();
+            let k = h / c.up.length();
+            if k.is_finite() && k > 0.0 {
+                c.up *= k;
+                c.right = c.right.map(|r| r * k);
+            }
+        }
         // The scene's own check (the one `prepare` runs), reported here at the block.
         if let Err(e) = self.camera.validate() {
             return Err(vec![
@@ -60,6 +76,7 @@ impl Sink for CameraBuilder {
         self.given = true;
         let c = &mut self.camera;
         match kw.text.as_str() {
+            "orthographic" => c.orthographic = true,
             "location" => c.location = vec3(&args[0])?,
             "look_at" => c.look_at = vec3(&args[0])?,
             "up" => {
@@ -87,6 +104,7 @@ impl Sink for CameraBuilder {
                     ));
                 }
                 c.fov = f;
+                self.fov_given = true;
             }
             "aperture" => {
                 let a = num(&args[0])?;
@@ -100,8 +118,9 @@ impl Sink for CameraBuilder {
                 c.aperture = a;
             }
             "focus_distance" => c.focus_distance = Some(positive(&args[0], "focus distance")?),
-            // POV-Ray's `right`: its length (the aspect ratio) is the resolution's here; the
-            // sign of its x component says which way the picture faces.
+            // POV-Ray's `right`: the sign of its x component says which way the picture faces;
+            // its length is an orthographic view's width (a perspective view's aspect ratio is
+            // the resolution's).
             "right" => {
                 let r = vec3(&args[0])?;
                 if !(r.x.is_finite() && r.x != 0.0) {
@@ -144,7 +163,7 @@ impl Sink for CameraBuilder {
         }
     }
     fn positional_help(&self) -> &'static str {
-        "a camera takes a declared camera (first: it sets every property), `location`, \
-         `look_at`, `up`, `fov`, `aperture`, `focus_distance`, `right`"
+        "a camera takes a declared camera (first: it sets every property), `orthographic`, \
+         `location`, `look_at`, `up`, `fov`, `aperture`, `focus_distance`, `right`"
     }
 }

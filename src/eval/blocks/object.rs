@@ -1,8 +1,11 @@
-//! Object blocks: the primitives (in [`primitive`]), `revolve`, Bezier patches, the
+//! Object blocks: the primitives (in [`primitive`]), `prism` (in [`prism`]), `revolve`, Bezier patches, the
 //! containers `union`, `group`, `object` and `area_light`, and the CSG operations (in [`csg`]).
 
 mod csg;
 mod primitive;
+mod prism;
+mod sphere_sweep;
+mod superellipsoid;
 
 use crate::diag::short_number;
 use std::rc::Rc;
@@ -38,6 +41,9 @@ pub(super) struct ObjectBuilder {
     iterations: u32,
     starts: u32,
     inverse: bool,
+    /// A prism's spline and sweep keywords.
+    spline: Option<PrismSpline>,
+    conic: bool,
 }
 
 const INVERSE: PropSpec = p("inverse", 0, 0, "nothing", "");
@@ -52,6 +58,23 @@ static PATCH_PROPS: [PropSpec; 8] = with_transforms([
     w("method", "`robust` or `newton`", "newton"),
     p("iterations", 1, 1, "a number", "12"),
     p("starts", 1, 1, "a number", "8"),
+]);
+static PRISM_PROPS: [PropSpec; 12] = with_transforms([
+    INVERSE,
+    p("open", 0, 0, "nothing", ""),
+    p("linear_spline", 0, 0, "nothing", ""),
+    p("quadratic_spline", 0, 0, "nothing", ""),
+    p("cubic_spline", 0, 0, "nothing", ""),
+    p("bezier_spline", 0, 0, "nothing", ""),
+    p("linear_sweep", 0, 0, "nothing", ""),
+    p("conic_sweep", 0, 0, "nothing", ""),
+]);
+static SWEEP_PROPS: [PropSpec; 9] = with_transforms([
+    INVERSE,
+    p("linear_spline", 0, 0, "nothing", ""),
+    p("cubic_spline", 0, 0, "nothing", ""),
+    p("b_spline", 0, 0, "nothing", ""),
+    p("tolerance", 1, 1, "a number", "1e-6"),
 ]);
 static REVOLVE_PROPS: [PropSpec; 12] = with_transforms([
     INVERSE,
@@ -83,6 +106,9 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "triangle",
     "mesh",
     "revolve",
+    "prism",
+    "superellipsoid",
+    "sphere_sweep",
     "bezier_patch",
     "bezier_mesh",
     "union",
@@ -120,6 +146,8 @@ impl ObjectBuilder {
             iterations: 12,
             starts: 8,
             inverse: false,
+            spline: None,
+            conic: false,
         }
     }
 
@@ -237,6 +265,9 @@ impl ObjectBuilder {
                     method: self.method(),
                 })]
             }
+            "prism" => vec![self.part(self.prism()?)],
+            "superellipsoid" => vec![self.part(self.superellipsoid()?)],
+            "sphere_sweep" => self.sphere_sweep()?,
             "bezier_patch" | "bezier_mesh" => {
                 let n = self.values.len();
                 if n == 0 || !n.is_multiple_of(16) || (self.kind == "bezier_patch" && n != 16) {
@@ -388,6 +419,8 @@ impl Sink for ObjectBuilder {
             "cylinder" | "cone" => &CYL_PROPS,
             "area_light" => &AREA_PROPS,
             "revolve" => &REVOLVE_PROPS,
+            "prism" => &PRISM_PROPS,
+            "sphere_sweep" => &SWEEP_PROPS,
             "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,
             _ => &OBJ_PROPS,
         }
@@ -398,6 +431,29 @@ impl Sink for ObjectBuilder {
         }
         match kw.text.as_str() {
             "open" => self.open = true,
+            // A sphere sweep is exact along straight segments only.
+            "cubic_spline" | "b_spline" if self.kind == "sphere_sweep" => {
+                return Err(vec![
+                    Error::new(format!(
+                        "a sphere_sweep along a `{}` is not supported",
+                        kw.text
+                    ))
+                    .label("curved sweep")
+                    .help(
+                        "use `linear_spline` (straight segments between the spheres; add \
+                         points along the curve to follow it)",
+                    )
+                    .at(kw.span),
+                ]);
+            }
+            // A sphere sweep is exact: POV-Ray's root-finding tolerance has nothing to tune.
+            "tolerance" => {}
+            "linear_spline" => self.spline = Some(PrismSpline::Linear),
+            "quadratic_spline" => self.spline = Some(PrismSpline::Quadratic),
+            "cubic_spline" => self.spline = Some(PrismSpline::Cubic),
+            "bezier_spline" => self.spline = Some(PrismSpline::Bezier),
+            "linear_sweep" => self.conic = false,
+            "conic_sweep" => self.conic = true,
             "inverse" => self.inverse = true,
             "two_sided" => self.two_sided = true,
             "corner" => self.corner = true,

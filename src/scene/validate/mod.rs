@@ -167,6 +167,20 @@ impl Camera {
                 span,
             )?;
         }
+        if self.orthographic {
+            size(
+                self.up.length(),
+                "the orthographic view's height (the length of `up`)",
+                span,
+            )?;
+            if let Some(r) = self.right {
+                size(
+                    r.length(),
+                    "the orthographic view's width (the length of `right`)",
+                    span,
+                )?;
+            }
+        }
         if let Some(r) = self.right
             && !(r.x.is_finite() && r.x != 0.0)
         {
@@ -427,6 +441,39 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             };
             if let Some(p) = mesh.positions.par_iter().find_first(|p| far(p)) {
                 at(*p)?;
+            }
+        }
+        Shape::Superellipsoid { e, n } => {
+            let (lo, hi) = super::SUPERELLIPSOID_EXPONENTS;
+            if !(*e >= lo && *e <= hi && *n >= lo && *n <= hi) {
+                return Err(invalid(
+                    span,
+                    format!(
+                        "the superellipsoid's exponents <{}, {}> lie outside [{}, {}]",
+                        fmt(*e),
+                        fmt(*n),
+                        fmt(lo),
+                        fmt(hi)
+                    ),
+                    "out of range",
+                    "near 0 a box, 1 a sphere, 2 an octahedron, beyond 2 a pinched star",
+                ));
+            }
+            len(1.0, "size")?;
+            for c in [DVec3::splat(-1.0), DVec3::splat(1.0)] {
+                at(c)?;
+            }
+        }
+        Shape::Prism(p) => {
+            // The corners of its box: the profile's rectangle at both heights (scaled by the
+            // height for a conic sweep).
+            let (lo, hi) = p.heights;
+            len((hi - lo).abs(), "height")?;
+            for q in p.segments.iter().flatten() {
+                for h in [lo, hi] {
+                    let w = if p.conic { h } else { 1.0 };
+                    at(DVec3::new(q.x * w, h, q.y * w))?;
+                }
             }
         }
         Shape::Revolve {

@@ -8,8 +8,12 @@
 //!   layer, and of the rough metal lobe in a white furnace (`sppm-measure coat`, `furnace`).
 //! - [`lights`]: direct-light noise of area lights sampled by area and by solid angle, at
 //!   equal time (`cargo run --release -p sppm-measure -- lights`).
+//! - [`prism_reference`]: a slow reference intersector of `prism`, the oracle of its stress
+//!   test.
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
+//! - [`superellipsoid_reference`]: a slow reference intersector of `superellipsoid`, the
+//!   oracle of its stress test.
 //! - [`setup`]: the set-up of a large mesh (OBJ read, triangles, BVH) step by step, on 1
 //!   and more threads.
 //! - [`tessellate`]: triangle meshes of the Bezier surfaces, the study's meshes.
@@ -19,7 +23,9 @@ pub mod bezier;
 pub mod cost;
 pub mod layered;
 pub mod lights;
+pub mod prism_reference;
 pub mod reference;
 pub mod setup;
+pub mod superellipsoid_reference;
 pub mod tessellate;
 pub mod twin;

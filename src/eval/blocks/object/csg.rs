@@ -38,7 +38,7 @@ fn depth(part: &Part) -> usize {
 }
 
 /// One CSG node over `children`, checked against the tree limits.
-fn node(op: CsgOp, children: Vec<Part>, span: Span) -> SourceResult<Part> {
+pub(super) fn node(op: CsgOp, children: Vec<Part>, span: Span) -> SourceResult<Part> {
     let leaves = children.iter().map(leaves).sum();
     let depth = 1 + children.iter().map(depth).max().unwrap_or(0);
     if depth > MAX_CSG_DEPTH {

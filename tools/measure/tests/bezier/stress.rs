@@ -682,3 +682,499 @@ fn lathe_culling_rays_in_the_flat_planes() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// prism: the product's exact intersector against `sppm_measure::prism_reference`.
+
+mod prism_stress {
+    use glam::{DVec2, DVec3};
+    use rayon::prelude::*;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::scene::{Prism as ScenePrism, PrismSpline, prism_segments};
+    use sppm_lang::shapes::prism::{Prism, PrismPart};
+    use sppm_measure::prism_reference::RefPrism;
+
+    /// Rays per case: 10 000 by default (the ten cases take about 15 s together in the dev
+    /// profile on two shared cores); `PRISM_STRESS_RAYS=1000000` runs a million per case.
+    fn rays() -> usize {
+        std::env::var("PRISM_STRESS_RAYS")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(10_000)
+    }
+
+    fn pts(v: &[(f64, f64)]) -> Vec<DVec2> {
+        v.iter().map(|&(x, z)| DVec2::new(x, z)).collect()
+    }
+
+    /// The profiles: holes, a thin sliver with a needle tip, sharp spikes, curves of every
+    /// spline kind, and Bezier cusps (coincident control points).
+    fn profiles() -> Vec<(&'static str, PrismSpline, Vec<DVec2>)> {
+        let star: Vec<(f64, f64)> = (0..=14)
+            .map(|i| {
+                let a = std::f64::consts::TAU * f64::from(i % 14) / 14.0;
+                let r = if i % 2 == 0 { 2.0 } else { 0.15 };
+                (r * a.cos(), r * a.sin())
+            })
+            .collect();
+        vec![
+            (
+                "square, hole and sliver",
+                PrismSpline::Linear,
+                pts(&[
+                    (-2.0, -2.0),
+                    (2.0, -2.0),
+                    (2.0, 2.0),
+                    (-2.0, 2.0),
+                    (-2.0, -2.0),
+                    (-1.0, -1.0),
+                    (1.0, -1.0),
+                    (1.0, 1.0),
+                    (-1.0, 1.0),
+                    (-1.0, -1.0),
+                    (2.5, -2.0),
+                    (2.502, -2.0),
+                    (2.5, 2.0),
+                    (2.5, -2.0),
+                ]),
+            ),
+            ("star", PrismSpline::Linear, pts(&star)),
+            (
+                "quadratic",
+                PrismSpline::Quadratic,
+                pts(&[
+                    (0.0, -2.0),
+                    (2.0, 0.0),
+                    (0.0, 2.0),
+                    (-2.0, 0.0),
+                    (0.0, -2.0),
+                    (2.0, 0.0),
+                ]),
+            ),
+            (
+                "cubic with a hole",
+                PrismSpline::Cubic,
+                pts(&[
+                    (0.0, -2.0),
+                    (2.0, -0.5),
+                    (1.0, 2.0),
+                    (-1.5, 1.0),
+                    (-2.0, -1.5),
+                    (0.0, -2.0),
+                    (2.0, -0.5),
+                    (1.0, 2.0),
+                    (0.3, 0.0),
+                    (0.0, 0.5),
+                    (-0.5, 0.0),
+                    (0.0, -0.5),
+                    (0.3, 0.0),
+                    (0.0, 0.5),
+                    (-0.5, 0.0),
+                ]),
+            ),
+            (
+                "bezier cusps",
+                PrismSpline::Bezier,
+                pts(&[
+                    (0.0, -2.0),
+                    (0.0, -2.0),
+                    (2.0, -1.0),
+                    (2.0, 0.5),
+                    (2.0, 0.5),
+                    (2.0, 2.0),
+                    (0.5, 2.0),
+                    (0.0, 0.8),
+                    (0.0, 0.8),
+                    (-0.5, 2.0),
+                    (-2.0, 2.0),
+                    (-2.0, 0.5),
+                    (-2.0, 0.5),
+                    (-2.0, -1.0),
+                    (0.0, -2.0),
+                    (0.0, -2.0),
+                ]),
+            ),
+        ]
+    }
+
+    #[derive(Default)]
+    struct Counts {
+        rays: usize,
+        ambiguous: usize,
+        ref_hits: usize,
+        misses: usize,
+        false_hits: usize,
+        t_errors: usize,
+        max_t_err: f64,
+        normal_checked: usize,
+        normal_wrong: usize,
+        failing: Vec<String>,
+    }
+
+    impl Counts {
+        fn merge(mut self, o: Counts) -> Counts {
+            self.rays += o.rays;
+            self.ambiguous += o.ambiguous;
+            self.ref_hits += o.ref_hits;
+            self.misses += o.misses;
+            self.false_hits += o.false_hits;
+            self.t_errors += o.t_errors;
+            self.max_t_err = self.max_t_err.max(o.max_t_err);
+            self.normal_checked += o.normal_checked;
+            self.normal_wrong += o.normal_wrong;
+            self.failing.extend(o.failing);
+            self.failing.truncate(3);
+            self
+        }
+    }
+
+    /// A ray of kind `i % 4`: random through the box, grazing the side at 1e-5..1e-2 of the
+    /// size, aimed within 1e-9..1e-3 of a joint (a corner, a cusp, the sliver's needle), or
+    /// at a cap's edge.
+    fn ray(p: &ScenePrism, i: usize, rng: &mut SplitMix64) -> (DVec3, DVec3) {
+        let (lo, hi) = (p.heights.0.min(p.heights.1), p.heights.0.max(p.heights.1));
+        let seg = &p.segments[(rng.f() * p.segments.len() as f64) as usize % p.segments.len()];
+        let at = |s: f64| {
+            let u = 1.0 - s;
+            seg[0] * (u * u * u)
+                + seg[1] * (3.0 * u * u * s)
+                + seg[2] * (3.0 * u * s * s)
+                + seg[3] * (s * s * s)
+        };
+        let place = |q: DVec2, h: f64| {
+            let w = if p.conic { h } else { 1.0 };
+            DVec3::new(q.x * w, h, q.y * w)
+        };
+        match i % 4 {
+            0 => {
+                let o = rng.unit() * 9.0;
+                let target = DVec3::new(
+                    rng.range(-3.0, 3.0) * hi.abs().max(1.0),
+                    rng.range(lo, hi),
+                    rng.range(-3.0, 3.0) * hi.abs().max(1.0),
+                );
+                (o, (target - o).normalize())
+            }
+            1 => {
+                let s = rng.range(0.001, 0.999);
+                let h = rng.range(lo, hi);
+                let q = at(s);
+                let tq = (at(s + 1e-7) - at(s - 1e-7)).normalize();
+                let point = place(q, h);
+                let along = place(tq, h) - place(DVec2::ZERO, h);
+                let up = if p.conic {
+                    DVec3::new(q.x, 1.0, q.y)
+                } else {
+                    DVec3::Y
+                };
+                let n = along.cross(up).normalize();
+                let a = rng.range(0.0, std::f64::consts::TAU);
+                let dir = (along.normalize() * a.cos() + up.normalize() * a.sin()).normalize();
+                let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                let d = (dir + n * eps).normalize();
+                let o = point - d * 9.0 + n * (eps * rng.range(-2.0, 2.0));
+                (o, d)
+            }
+            2 => {
+                let h = rng.range(lo, hi);
+                let point = place(seg[0], h);
+                let off = rng.unit() * 10f64.powf(rng.range(-9.0, -3.0));
+                let d = rng.unit();
+                (point + off - d * 9.0, d)
+            }
+            _ => {
+                let h = if rng.f() < 0.5 { lo } else { hi };
+                let point = place(at(rng.f()), h);
+                let off = rng.unit() * 10f64.powf(rng.range(-9.0, -2.0));
+                let d = rng.unit();
+                (point + off - d * 9.0, d)
+            }
+        }
+    }
+
+    fn run_case(name: &str, p: &ScenePrism, seed: u64) {
+        let fast = Prism::new(p).unwrap();
+        let reference = RefPrism::new(p);
+        let n = rays();
+        let c = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = SplitMix64::for_item(seed, 0, i);
+                let (o, d) = ray(p, i, &mut rng);
+                let mut c = Counts {
+                    rays: 1,
+                    ..Default::default()
+                };
+                let want = reference.nearest(o, d, 0.0);
+                let got = fast.nearest(o, d, 0.0, f64::INFINITY);
+                if want.ambiguous {
+                    c.ambiguous = 1;
+                    return c;
+                }
+                c.ref_hits = usize::from(want.t.is_some());
+                match (want.t, got) {
+                    (Some(w), None) => {
+                        c.misses = 1;
+                        c.failing.push(format!("miss #{i}: o {o} d {d} want {w}"));
+                    }
+                    (None, Some(g)) => {
+                        c.false_hits = 1;
+                        c.failing
+                            .push(format!("false #{i}: o {o} d {d} got {:?}", g));
+                    }
+                    (Some(w), Some(g)) => {
+                        let err = (g.t - w).abs();
+                        c.max_t_err = err;
+                        if err > 1e-7 * w.max(1.0) {
+                            c.t_errors = 1;
+                            c.failing
+                                .push(format!("t #{i}: o {o} d {d} want {w} got {g:?}"));
+                        }
+                        // The normal points out of the solid: against the ray where the ray
+                        // enters (inside just after the hit), along it where it leaves.
+                        let (pt, nrm, _, _) = fast.surface(o, d, g);
+                        let step = 1e-6;
+                        if let (Some(before), Some(after)) = (
+                            reference.inside(pt - d * step),
+                            reference.inside(pt + d * step),
+                        ) && before != after
+                        {
+                            c.normal_checked = 1;
+                            if (nrm.dot(d) < 0.0) != after {
+                                c.normal_wrong = 1;
+                                c.failing
+                                    .push(format!("normal #{i}: o {o} d {d} hit {g:?} n {nrm}"));
+                            }
+                        }
+                        let _ = matches!(g.part, PrismPart::Cap { .. });
+                    }
+                    (None, None) => {}
+                }
+                c
+            })
+            .reduce(Counts::default, Counts::merge);
+        for f in &c.failing {
+            println!("  [{name}] {f}");
+        }
+        println!(
+            "[{name}] rays {} ambiguous {} reference hits {} | misses {} false hits {} t errors {} \
+             (max {:.2e}) | normals checked {} wrong {}",
+            c.rays,
+            c.ambiguous,
+            c.ref_hits,
+            c.misses,
+            c.false_hits,
+            c.t_errors,
+            c.max_t_err,
+            c.normal_checked,
+            c.normal_wrong
+        );
+        assert_eq!(
+            (c.misses, c.false_hits, c.t_errors, c.normal_wrong),
+            (0, 0, 0, 0),
+            "{name}"
+        );
+        // A quarter of the rays aim within 1e-9..1e-3 of a joint, where the reference cannot
+        // tell which segment a ray passing within its tolerance crosses.
+        assert!(
+            c.ambiguous * 100 <= 15 * c.rays,
+            "{name}: too many undecided rays"
+        );
+        assert!(c.ref_hits * 10 >= c.rays, "{name}: too few hits to test");
+    }
+
+    /// Every profile, swept straight and conic, against the reference: no miss, no false hit,
+    /// `t` within 1e-7 (relative), and every normal out of the solid.
+    #[test]
+    fn prism_rays_against_the_reference() {
+        for (k, (name, spline, points)) in profiles().into_iter().enumerate() {
+            let segments = prism_segments(spline, &points).unwrap();
+            for conic in [false, true] {
+                let p = ScenePrism {
+                    segments: segments.clone(),
+                    heights: if conic { (0.5, 1.5) } else { (-0.5, 1.0) },
+                    conic,
+                    open: false,
+                };
+                let label = format!("{name}, {}", if conic { "conic" } else { "linear" });
+                run_case(&label, &p, 0x9e1 + k as u64 * 2 + u64::from(conic));
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// superellipsoid: the product's interval subdivision against
+// `sppm_measure::superellipsoid_reference`.
+
+mod superellipsoid_stress {
+    use glam::DVec3;
+    use rayon::prelude::*;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::shapes::superellipsoid::Superellipsoid;
+    use sppm_measure::superellipsoid_reference::RefSuperellipsoid;
+
+    /// Rays per case: 3 000 by default (the reference samples every ray 4 000 times; the seven
+    /// cases take about 15 s together in the dev profile on two shared cores);
+    /// `SUPERELLIPSOID_STRESS_RAYS` sets another count.
+    fn rays() -> usize {
+        std::env::var("SUPERELLIPSOID_STRESS_RAYS")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(3_000)
+    }
+
+    /// The point of the surface in direction `u` (bisection of the reference function).
+    fn on_surface(r: &RefSuperellipsoid, u: DVec3) -> DVec3 {
+        let (mut lo, mut hi) = (0.0, 2.0);
+        for _ in 0..100 {
+            let m = 0.5 * (lo + hi);
+            if r.f(u * m) < 0.0 {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        u * lo
+    }
+
+    fn ray(r: &RefSuperellipsoid, i: usize, rng: &mut SplitMix64) -> (DVec3, DVec3) {
+        match i % 3 {
+            0 => {
+                let o = rng.unit() * 5.0;
+                let target = DVec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                );
+                (o, (target - o).normalize())
+            }
+            1 => {
+                // Grazing: nearly along the tangent plane (the reference's gradient by central
+                // differences), offset 1e-5..1e-2 across it.
+                let p = on_surface(r, rng.unit());
+                let h = 1e-6;
+                let g = DVec3::new(
+                    r.f(p + DVec3::X * h) - r.f(p - DVec3::X * h),
+                    r.f(p + DVec3::Y * h) - r.f(p - DVec3::Y * h),
+                    r.f(p + DVec3::Z * h) - r.f(p - DVec3::Z * h),
+                );
+                let n = g.normalize_or(p.normalize());
+                let tangent = n.cross(rng.unit()).normalize();
+                let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                let d = (tangent + n * eps).normalize();
+                (p - d * 4.0 + n * (eps * rng.range(-2.0, 2.0)), d)
+            }
+            _ => {
+                // At an edge or tip: an axis or a diagonal direction, moved by 1e-9..1e-3.
+                let dirs = [
+                    DVec3::X,
+                    DVec3::Z,
+                    DVec3::new(1.0, 1.0, 0.0),
+                    DVec3::new(1.0, 0.0, 1.0),
+                    DVec3::new(1.0, 1.0, 1.0),
+                ];
+                let k = (rng.f() * dirs.len() as f64) as usize % dirs.len();
+                let u = dirs[k].normalize() * DVec3::new(rng.sign(), rng.sign(), rng.sign())
+                    + rng.unit() * 10f64.powf(rng.range(-9.0, -3.0));
+                let p = on_surface(r, u.normalize());
+                let d = rng.unit();
+                (p - d * 4.0, d)
+            }
+        }
+    }
+
+    /// Near-box, sphere, octahedron, pinched and mixed exponents: no miss, no false hit (a hit
+    /// the reference's sampling stepped over counts when `F` changes sign across it), `t`
+    /// within 1e-6, and normals out of the solid.
+    #[test]
+    fn superellipsoid_rays_against_the_reference() {
+        let cases = [
+            (0.001, 0.001),
+            (0.02, 0.3),
+            (1.0, 1.0),
+            (2.0, 2.0),
+            (0.05, 2.5),
+            (3.0, 4.0),
+            (10.0, 10.0),
+        ];
+        for (c, &(e, n)) in cases.iter().enumerate() {
+            let fast = Superellipsoid::new(e, n).unwrap();
+            let r = RefSuperellipsoid::new(e, n);
+            let count = rays();
+            let (fails, confirmed, hits, normals, max_err) = (0..count)
+                .into_par_iter()
+                .map(|i| {
+                    let mut rng = SplitMix64::for_item(0x5e11 + c as u64, 0, i);
+                    let (o, d) = ray(&r, i, &mut rng);
+                    let want = r.nearest(o, d, 0.0);
+                    let got = fast.nearest(o, d, 0.0, f64::INFINITY);
+                    // The reference's function changes sign across `t` (on some scale from 1e-7
+                    // down to 1e-11: a ray that clips a sharp corner is inside only briefly).
+                    let changes = |t: f64| {
+                        [1e-7, 1e-9, 1e-11].iter().any(|dt| {
+                            (r.f(o + (t - dt) * d) < 0.0) != (r.f(o + (t + dt) * d) < 0.0)
+                        })
+                    };
+                    let mut out = (
+                        Vec::new(),
+                        0usize,
+                        usize::from(want.is_some()),
+                        0usize,
+                        0.0f64,
+                    );
+                    match (want, got) {
+                        (Some(w), None) => out.0.push(format!("miss: o {o} d {d} want {w}")),
+                        (None, Some(g)) if !changes(g) => {
+                            out.0.push(format!("false hit: o {o} d {d} got {g}"))
+                        }
+                        (None, Some(_)) => out.1 = 1,
+                        (Some(w), Some(g)) => {
+                            let err = (g - w).abs();
+                            if err > 1e-6 * w.max(1.0) {
+                                if g < w && changes(g) {
+                                    out.1 = 1;
+                                } else {
+                                    out.0.push(format!("t: o {o} d {d} want {w} got {g}"));
+                                }
+                            } else {
+                                out.4 = err;
+                            }
+                        }
+                        (None, None) => {}
+                    }
+                    if let Some(g) = got {
+                        let dt = 1e-7;
+                        let (before, after) =
+                            (r.f(o + (g - dt) * d) < 0.0, r.f(o + (g + dt) * d) < 0.0);
+                        if before != after {
+                            let (_, nrm, _, _) = fast.surface(o, d, g);
+                            if (nrm.dot(d) < 0.0) != after {
+                                out.0.push(format!("normal: o {o} d {d} t {g} n {nrm}"));
+                            }
+                            out.3 = 1;
+                        }
+                    }
+                    out
+                })
+                .reduce(
+                    || (Vec::new(), 0, 0, 0, 0.0),
+                    |mut a, b| {
+                        a.0.extend(b.0);
+                        (a.0, a.1 + b.1, a.2 + b.2, a.3 + b.3, a.4.max(b.4))
+                    },
+                );
+            for f in fails.iter().take(3) {
+                println!("  [<{e}, {n}>] {f}");
+            }
+            println!(
+                "[superellipsoid <{e}, {n}>] rays {count} reference hits {hits} failures {} \
+                 (hits the reference stepped over, confirmed: {confirmed}) normals checked \
+                 {normals} max t error {max_err:.2e}",
+                fails.len()
+            );
+            assert!(fails.is_empty(), "<{e}, {n}>: {} failures", fails.len());
+            assert!(hits * 10 >= count, "<{e}, {n}>: too few hits to test");
+        }
+    }
+}
