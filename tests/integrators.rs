@@ -523,7 +523,11 @@ fn bumped_surfaces_render_in_every_integrator() {
         .collect::<Vec<_>>()
         .join("\n");
     let flat = load(&flat_text).scene.expect("flat scene evaluates");
-    assert!(flat.materials.iter().all(|m| !matches!(m, Material::Bumped { .. })));
+    assert!(
+        flat.materials
+            .iter()
+            .all(|m| !matches!(m, Material::Bumped { .. }))
+    );
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 4_000, 1);
         let m = mean(&img);

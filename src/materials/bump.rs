@@ -120,7 +120,10 @@ impl Microsurface {
         };
         let x = v.clamp(0.0, 1.0) * EXIT_STEPS;
         let steps = x.floor().min(EXIT_STEPS - 1.0);
-        let (u_exit, u_lobe) = ((steps + 0.5) / EXIT_STEPS, (x - steps).min(1.0 - f32::EPSILON));
+        let (u_exit, u_lobe) = (
+            (steps + 0.5) / EXIT_STEPS,
+            (x - steps).min(1.0 - f32::EPSILON),
+        );
         let bs = lobes.sample_local(m.facet.to_local(ob), u_lobe, u, mode)?;
         let d = m.facet.to_world(bs.wi);
         let (g, wall) = m.exit(d);

@@ -303,7 +303,9 @@ fn adjoint(b: &Bsdf, rng: &mut Rng) -> Result<(), String> {
         let (a, c) = (uniform_sphere(rng.vec2()), uniform_sphere(rng.vec2()));
         let (x, y) = (b.f_mode(a, c, TransportMode::Importance), b.f(c, a));
         if x != y {
-            return Err(format!("importance f({a}, {c}) = {x} but f({c}, {a}) = {y}"));
+            return Err(format!(
+                "importance f({a}, {c}) = {x} but f({c}, {a}) = {y}"
+            ));
         }
         nonzero += usize::from(x != Vec3A::ZERO);
     }

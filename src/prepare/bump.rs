@@ -47,10 +47,7 @@ impl PreparedScene<'_> {
                 duv: duv * uv_rate / len,
             }
         };
-        let tangents = [
-            tangent(frame.s, Vec2::X),
-            tangent(frame.t, Vec2::Y),
-        ];
+        let tangents = [tangent(frame.s, Vec2::X), tangent(frame.t, Vec2::Y)];
         let [hs, ht] = bump::slopes(normal, textures, &tc, tangents);
         let a = normal.amount as f32;
         let np = (ns - a * (hs * frame.s + ht * frame.t)).normalize_or_zero();

@@ -4,8 +4,8 @@
 use glam::{Affine3A, DVec3, Vec3A};
 use rayon::prelude::*;
 
-mod bump;
 mod budget;
+mod bump;
 mod csg;
 mod instances;
 mod lights;

@@ -611,7 +611,11 @@ impl Scene {
                 }
                 Material::Bumped { base, .. } => {
                     let k = base.0 as usize;
-                    if k < i { depths[k].map(|d| d + 1) } else { None }
+                    if k < i {
+                        depths[k].map(|d| d + 1)
+                    } else {
+                        None
+                    }
                 }
                 _ => Some(0),
             };

@@ -33,13 +33,15 @@ pub fn height(normal: &Normal, textures: &[Texture], at: &TexCoord) -> f32 {
         NormalKind::Map(_) => return 0.0,
         NormalKind::Bumps => noise::noise_value(x, y, z, 1),
         NormalKind::Dents => -noise::noise_value(x, y, z, 1).powi(3),
-        NormalKind::Wrinkles => (0..6)
-            .map(|k| {
-                let s = f64::from(1u32 << k);
-                (2.0 * noise::noise_value(x * s, y * s, z * s, 1) - 1.0).abs() / s
-            })
-            .sum::<f64>()
-            * 0.5,
+        NormalKind::Wrinkles => {
+            (0..6)
+                .map(|k| {
+                    let s = f64::from(1u32 << k);
+                    (2.0 * noise::noise_value(x * s, y * s, z * s, 1) - 1.0).abs() / s
+                })
+                .sum::<f64>()
+                * 0.5
+        }
         NormalKind::Ripples | NormalKind::Waves => {
             let waves = normal.kind == NormalKind::Waves;
             WAVE_CENTERS
@@ -78,7 +80,10 @@ const WAVE_CENTERS: [[f64; 3]; 10] = [
 fn pattern_scale(normal: &Normal, textures: &[Texture]) -> f32 {
     let reach = |t: &DAffine3| {
         let m = t.matrix3;
-        m.x_axis.length().max(m.y_axis.length()).max(m.z_axis.length())
+        m.x_axis
+            .length()
+            .max(m.y_axis.length())
+            .max(m.z_axis.length())
     };
     let mut s = reach(&normal.transform);
     if let NormalKind::Height(t) = normal.kind
@@ -170,7 +175,10 @@ mod tests {
             let texture = Texture {
                 pattern: Pattern::Gradient {
                     direction: glam::DVec3::X,
-                    map: crate::scene::ColorMap(vec![(0.0, glam::DVec3::ZERO), (1.0, glam::DVec3::ONE)]),
+                    map: crate::scene::ColorMap(vec![
+                        (0.0, glam::DVec3::ZERO),
+                        (1.0, glam::DVec3::ONE),
+                    ]),
                 },
                 mapping: Mapping::Solid,
                 transform: DAffine3::from_scale(glam::DVec3::splat(1.0 / scale)),
@@ -211,9 +219,9 @@ mod tests {
             let hs: Vec<f32> = (0..200)
                 .map(|i| height(&n, &[], &at(Vec3A::new(i as f32 * 0.037, 0.4, -0.2))))
                 .collect();
-            let (lo, hi) = hs.iter().fold((f32::MAX, f32::MIN), |(a, b), &h| {
-                (a.min(h), b.max(h))
-            });
+            let (lo, hi) = hs
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
             assert!(hs.iter().all(|h| h.is_finite()), "{kind:?}");
             assert!(hi - lo > 0.05, "{kind:?}: {lo}..{hi}");
         }

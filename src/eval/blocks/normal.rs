@@ -139,9 +139,15 @@ impl NormalBuilder {
                 Some(b) => (b.source.clone(), b.transform * inverse),
                 None => {
                     let (what, example) = if self.bump_map {
-                        ("a bump map needs an image", "`bump_map { png \"height.png\" bump_size 2 }`")
+                        (
+                            "a bump map needs an image",
+                            "`bump_map { png \"height.png\" bump_size 2 }`",
+                        )
                     } else {
-                        ("a normal needs a pattern", "`normal { bumps 0.5 scale 0.1 }`")
+                        (
+                            "a normal needs a pattern",
+                            "`normal { bumps 0.5 scale 0.1 }`",
+                        )
                     };
                     return Err(vec![
                         Error::new(what)

@@ -16,9 +16,7 @@ fn bumped(lobes: Lobes, np: Vec3A) -> Bsdf {
 }
 
 fn white() -> Lobes {
-    Lobes::Diffuse {
-        albedo: Vec3A::ONE,
-    }
+    Lobes::Diffuse { albedo: Vec3A::ONE }
 }
 
 /// The lobes every test wraps: one of each kind that is not a delta.
@@ -143,10 +141,7 @@ fn white_furnace_bumped_diffuse_keeps_energy_the_shading_normal_method_loses() {
                 let s = (1.0f32 - c * c).sqrt();
                 let wo = Vec3A::new(s * phi.cos(), s * phi.sin(), c);
                 let a = albedo(&ours, wo, n, 11 + k as u64);
-                assert!(
-                    (a - 1.0).abs() <= 0.01,
-                    "tilt {tilt}, wo {wo}: albedo {a}"
-                );
+                assert!((a - 1.0).abs() <= 0.01, "tilt {tilt}, wo {wo}: albedo {a}");
                 // The shading-normal method as the plain BSDF does it.
                 worst_naive = worst_naive.min(albedo(&naive, wo, n, 5));
             }
