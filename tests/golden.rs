@@ -488,6 +488,7 @@ golden!(
     csg,
     goblet,
     materials,
+    bumps,
 );
 
 /// FNV-1a over the bits of every pixel.
