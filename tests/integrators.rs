@@ -536,7 +536,7 @@ fn bumped_surfaces_render_in_every_integrator() {
             .pixels
             .iter()
             .zip(&f.pixels)
-            .map(|(a, b)| (0..3).map(|c| f64::from((a[c] - b[c]).abs())).sum::<f64>())
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f64>())
             .sum();
         println!("{integrator:?}: bumped mean {m:.4}, flat {:.4}", mean(&f));
         assert!(m > 0.0, "{integrator:?} is black");
