@@ -8,7 +8,8 @@ use std::sync::Arc;
 
 use super::Evaluator;
 use super::value::{
-    ColorDef, MatKind, MaterialDef, ObjectDef, Part, PatternDef, ShapeDef, TextureDef,
+    ColorDef, MatKind, MaterialDef, NormalDef, NormalSource, ObjectDef, Part, PatternDef, ShapeDef,
+    TextureDef,
 };
 use crate::diag::{Error, SourceResult};
 use crate::scene::*;
@@ -270,9 +271,33 @@ impl Evaluator {
                 },
             },
         };
+        // A bumped material wraps its plain self, pushed first.
+        let material = match &m.normal {
+            None => material,
+            Some(n) => {
+                let normal = self.normal(n)?;
+                Material::Bumped {
+                    base: self.push_material(material),
+                    normal,
+                }
+            }
+        };
         let id = self.push_material(material);
         self.assets.materials.insert(key, (m.clone(), id));
         Ok(id)
+    }
+
+    fn normal(&mut self, n: &NormalDef) -> SourceResult<Normal> {
+        let kind = match &n.source {
+            NormalSource::Pattern(k) => *k,
+            NormalSource::Height(t) => NormalKind::Height(self.texture_id(t)?),
+            NormalSource::Map(t) => NormalKind::Map(self.texture_id(t)?),
+        };
+        Ok(Normal {
+            kind,
+            amount: n.amount,
+            transform: n.transform,
+        })
     }
 
     fn color_param(&mut self, c: &ColorDef) -> SourceResult<ColorParam> {

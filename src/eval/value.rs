@@ -11,8 +11,8 @@ use glam::{DAffine3, DVec2, DVec3};
 use crate::diag::Error;
 use crate::sampling::SplitMix64;
 use crate::scene::{
-    Camera, Color, ColorMap, CsgOp, Emission, Function, Light, Mapping, Pattern, Settings, Shape,
-    Wrap,
+    Camera, Color, ColorMap, CsgOp, Emission, Function, Light, Mapping, NormalKind, Pattern,
+    Settings, Shape, Wrap,
 };
 use crate::span::Span;
 use crate::syntax::ast::MacroDef;
@@ -34,6 +34,8 @@ pub enum Value {
     Object(Rc<ObjectDef>),
     Material(Rc<MaterialDef>),
     Texture(Rc<TextureDef>),
+    /// A bump or normal map (`normal { ... }`, `bump_map { ... }`).
+    Normal(Rc<NormalDef>),
     ColorMap(Rc<ColorMap>),
     Profile(Rc<ProfileDef>),
     Settings(Box<Settings>),
@@ -79,6 +81,7 @@ impl Value {
             Value::Object(_) => "an object",
             Value::Material(_) => "a material",
             Value::Texture(_) => "a texture",
+            Value::Normal(_) => "a normal",
             Value::ColorMap(_) => "a color map",
             Value::Profile(_) => "a profile",
             Value::Settings(_) => "a settings block",
@@ -210,6 +213,25 @@ pub enum ColorDef {
 pub struct MaterialDef {
     pub kind: MatKind,
     pub span: Span,
+    /// A bump or normal map on the material.
+    pub normal: Option<Rc<NormalDef>>,
+}
+
+/// A bump or normal map as written (lowered to `scene::Normal`).
+#[derive(Debug)]
+pub struct NormalDef {
+    pub source: NormalSource,
+    pub amount: f64,
+    /// Object space to the pattern's (or the height texture's object) space.
+    pub transform: DAffine3,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone)]
+pub enum NormalSource {
+    Pattern(NormalKind),
+    Height(Rc<TextureDef>),
+    Map(Rc<TextureDef>),
 }
 
 #[derive(Debug, Clone)]

@@ -8,7 +8,8 @@
 //! (b) `pdf` integrates to at most one;
 //! (c) `f(wo, wi) = f(wi, wo)`; for frosted glass, which transmits, the generalized form
 //!     `f(wo, wi) / n_o^2 = f(wi, wo) / n_i^2` over the whole sphere (`n` the index on each
-//!     direction's side, radiance mode), and the importance value equal to `f(wi, wo)`;
+//!     direction's side, radiance mode), and the importance value equal to `f(wi, wo)`; for a
+//!     bumped BSDF, which is not reciprocal, only the importance value's identity;
 //! (d) the directional albedo (mean sample weight) is at most one; in radiance mode a
 //!     refracted sample's weight is first turned into importance (times `(n_i / n_o)^2`),
 //!     since radiance entering a denser medium is concentrated, not created;
@@ -244,6 +245,9 @@ pub(super) fn check_mode(
             "chi-square {chi2:.1} over {dof} bins: p = {p:.3e} < {threshold:.1e}"
         ));
     }
+    if b.bump.is_some() {
+        return adjoint(b, &mut rng);
+    }
     if matches!(b.lobes, Lobes::Glass { .. }) {
         return generalized_reciprocity(b, &mut rng);
     }
@@ -287,6 +291,26 @@ fn generalized_reciprocity(b: &Bsdf, rng: &mut Rng) -> Result<(), String> {
     }
     if nonzero < 100 {
         return Err(format!("only {nonzero} refracting pairs had a value"));
+    }
+    Ok(())
+}
+
+/// (c) for a bumped BSDF, which is not reciprocal (bump.rs): the importance value is the
+/// adjoint `f*(a, c) = f(c, a)` on random pairs of the whole sphere, bit for bit.
+fn adjoint(b: &Bsdf, rng: &mut Rng) -> Result<(), String> {
+    let mut nonzero = 0;
+    for _ in 0..4000 {
+        let (a, c) = (uniform_sphere(rng.vec2()), uniform_sphere(rng.vec2()));
+        let (x, y) = (b.f_mode(a, c, TransportMode::Importance), b.f(c, a));
+        if x != y {
+            return Err(format!(
+                "importance f({a}, {c}) = {x} but f({c}, {a}) = {y}"
+            ));
+        }
+        nonzero += usize::from(x != Vec3A::ZERO);
+    }
+    if nonzero < 100 {
+        return Err(format!("only {nonzero} pairs had a value"));
     }
     Ok(())
 }

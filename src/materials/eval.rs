@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3A};
 
 use super::Lobes;
-use crate::scene::{ColorParam, Material, ScalarParam, Scene};
+use crate::scene::{ColorParam, Material, Normal, ScalarParam, Scene};
 use crate::textures::{self, TexCoord};
 
 /// Whether any parameter of a material is a texture: its lobes' (see [`is_constant`]) or a
@@ -36,8 +36,8 @@ pub fn is_constant(m: &Material) -> bool {
             roughness,
         } => c(albedo) && c(specular) && matches!(roughness, ScalarParam::Const(_)),
         Material::Conductor { .. } => true,
-        // The part a blend shows changes from point to point.
-        Material::Blend { .. } => false,
+        // The part a blend shows changes from point to point, and a bump's normal.
+        Material::Blend { .. } | Material::Bumped { .. } => false,
         Material::Coated {
             albedo, roughness, ..
         } => c(albedo) && matches!(roughness, ScalarParam::Const(_)),
@@ -87,11 +87,30 @@ pub fn scalar(p: &ScalarParam, scene: &Scene, tc: impl Fn() -> TexCoord) -> f32 
 /// Each step goes to an earlier material (the scene's validation checks it), so this ends;
 /// the bound is a second guard for a scene that was not validated.
 pub fn choose<'a>(m: &'a Material, scene: &'a Scene, tc: impl Fn() -> TexCoord) -> &'a Material {
+    choose_bumped(m, scene, tc).0
+}
+
+/// [`choose`], and the normal of the outermost bump met on the way (a bumped material's
+/// base is a step like a blend's part).
+pub fn choose_bumped<'a>(
+    m: &'a Material,
+    scene: &'a Scene,
+    tc: impl Fn() -> TexCoord,
+) -> (&'a Material, Option<&'a Normal>) {
     let mut m = m;
     let mut key = None;
+    let mut bump = None;
     for level in 0..=crate::scene::MAX_BLEND_DEPTH {
+        if let Material::Bumped { base, normal } = m {
+            bump = bump.or(Some(normal));
+            match scene.materials.get(base.0 as usize) {
+                Some(n) => m = n,
+                None => break,
+            }
+            continue;
+        }
         let Material::Blend { a, b, weight } = m else {
-            return m;
+            return (m, bump);
         };
         let tc_key = *key.get_or_insert_with(|| point_key(&tc()));
         let w = scalar(weight, scene, &tc);
@@ -104,7 +123,7 @@ pub fn choose<'a>(m: &'a Material, scene: &'a Scene, tc: impl Fn() -> TexCoord) 
         }
     }
     // Only an unvalidated scene gets here (a cycle, or an id past the end).
-    &BLACK
+    (&BLACK, None)
 }
 
 static BLACK: Material = Material::Diffuse {
@@ -144,6 +163,7 @@ pub fn non_specular_parts(scene: &Scene) -> Vec<bool> {
             Material::Blend { a, b, .. } => [a, b]
                 .iter()
                 .any(|id| (id.0 as usize) < i && rough[id.0 as usize]),
+            Material::Bumped { base, .. } => (base.0 as usize) < i && rough[base.0 as usize],
         };
         rough.push(r);
     }
@@ -160,6 +180,7 @@ pub fn glass_parts(scene: &Scene) -> Vec<bool> {
             Material::Blend { a, b, .. } => [a, b]
                 .iter()
                 .any(|id| (id.0 as usize) < i && glass[id.0 as usize]),
+            Material::Bumped { base, .. } => (base.0 as usize) < i && glass[base.0 as usize],
             _ => false,
         };
         glass.push(g);
@@ -170,10 +191,25 @@ pub fn glass_parts(scene: &Scene) -> Vec<bool> {
 /// The lobes of material `m` at a hit (texture lookups where the material has them; a blend's
 /// chosen part, see [`choose`]).
 pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
+    lobes_of(choose(m, scene, &tc), scene, tc)
+}
+
+/// [`lobes`], and the normal of the bump on the material (or the blend's part) shown at the
+/// hit, if any.
+pub fn bumped_lobes<'a>(
+    m: &'a Material,
+    scene: &'a Scene,
+    tc: impl Fn() -> TexCoord,
+) -> (Lobes, Option<&'a Normal>) {
+    let (m, normal) = choose_bumped(m, scene, &tc);
+    (lobes_of(m, scene, tc), normal)
+}
+
+/// The lobes of a material that is neither a blend nor bumped (what [`choose`] gives).
+fn lobes_of(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
     let clamp01 = |c: Vec3A| c.clamp(Vec3A::ZERO, Vec3A::ONE);
-    let m = choose(m, scene, &tc);
     match m {
-        Material::Blend { .. } => Lobes::Diffuse {
+        Material::Blend { .. } | Material::Bumped { .. } => Lobes::Diffuse {
             albedo: Vec3A::ZERO,
         },
         Material::Diffuse { albedo } => Lobes::Diffuse {

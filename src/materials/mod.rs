@@ -1,6 +1,7 @@
 //! BSDFs. A material evaluated at a hit becomes a [`Bsdf`] (plain `Copy` data, no heap) in a
 //! shading frame. Directions are world-space unit vectors pointing away from the surface.
 
+mod bump;
 #[cfg(test)]
 mod check;
 mod coated;
@@ -75,6 +76,9 @@ pub struct Bsdf {
     pub frame: Frame,
     /// Geometric normal; decides reflection vs transmission.
     pub ng: Vec3A,
+    /// A bump or normal map's perturbed normal, as a microsurface in the shading frame
+    /// (bump.rs); `None` for a surface without one, which pays only this check.
+    pub bump: Option<bump::Microsurface>,
 }
 
 /// A sampled direction.
@@ -94,7 +98,17 @@ impl Bsdf {
             lobes,
             frame: Frame::from_normal_tangent(ns, dpdu),
             ng,
+            bump: None,
         }
+    }
+
+    /// A BSDF whose lobes sit on facets of normal `np` (world space, a bump or normal map's
+    /// perturbed normal) of a microsurface around the shading normal `ns` (bump.rs). A normal
+    /// that does not lean from `ns` gives the plain BSDF.
+    pub fn bumped(lobes: Lobes, ns: Vec3A, dpdu: Vec3A, ng: Vec3A, np: Vec3A) -> Self {
+        let mut b = Self::new(lobes, ns, dpdu, ng);
+        b.bump = bump::Microsurface::new(b.frame.to_local(np));
+        b
     }
 
     /// Purely specular (delta) BSDFs: camera paths pass through them, photons never deposit.
@@ -126,12 +140,7 @@ impl Bsdf {
 
     /// Frosted glass: the one lobe with non-specular transmission.
     fn rough_glass(&self) -> Option<(f32, Vec3A, f32)> {
-        match self.lobes {
-            Lobes::Glass { eta, tint, alpha } if alpha >= rough_dielectric::MIN_ALPHA => {
-                Some((eta, tint, alpha))
-            }
-            _ => None,
-        }
+        self.lobes.rough_glass()
     }
 
     /// The local directions of a pair whose geometric side (reflection or transmission, by
@@ -159,6 +168,12 @@ impl Bsdf {
     /// [`Bsdf::f`] for a path carrying `mode`: the two differ only across frosted glass, where
     /// the importance value is the adjoint `f(wi, wo)` (no `1/eta^2`).
     pub fn f_mode(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Vec3A {
+        if let Some(m) = &self.bump {
+            let Some((o, i)) = self.local_pair(wo, wi, true) else {
+                return Vec3A::ZERO;
+            };
+            return m.f(&self.lobes, o, i, mode);
+        }
         if let Some((eta, tint, alpha)) = self.rough_glass() {
             let Some((o, i)) = self.local_pair(wo, wi, true) else {
                 return Vec3A::ZERO;
@@ -168,7 +183,83 @@ impl Bsdf {
         let Some((o, i)) = self.local_pair(wo, wi, false) else {
             return Vec3A::ZERO;
         };
+        self.lobes.f_reflect(o, i)
+    }
+
+    /// The value [`Bsdf::f`] gives for every pair of directions that passes its two side tests,
+    /// if it does not depend on the directions (Lambertian reflection): lets a caller that
+    /// evaluates one `wo` against many `wi` (SPPM's photon deposits) keep only the two normals
+    /// and this value.
+    pub fn constant_f(&self) -> Option<Vec3A> {
+        if self.bump.is_some() {
+            return None;
+        }
         match self.lobes {
+            Lobes::Diffuse { albedo } => Some(diffuse::f(albedo)),
+            _ => None,
+        }
+    }
+
+    /// Solid-angle density of [`Bsdf::sample`] choosing `wi`.
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if let Some(m) = &self.bump {
+            let Some((o, i)) = self.local_pair(wo, wi, true) else {
+                return 0.0;
+            };
+            return m.pdf(&self.lobes, o, i);
+        }
+        if let Some((eta, _, alpha)) = self.rough_glass() {
+            let Some((o, i)) = self.local_pair(wo, wi, true) else {
+                return 0.0;
+            };
+            return rough_dielectric::eval(eta, alpha, o, i, TransportMode::Radiance).1;
+        }
+        let Some((o, i)) = self.local_pair(wo, wi, false) else {
+            return 0.0;
+        };
+        self.lobes.pdf_reflect(o, i)
+    }
+
+    /// Samples an incident direction for outgoing `wo`.
+    pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let o = self.frame.to_local(wo);
+        if o.z == 0.0 {
+            return None;
+        }
+        let s = match &self.bump {
+            None => self.lobes.sample_local(o, uc, u, mode),
+            Some(m) => m.sample(&self.lobes, o, uc, u, mode),
+        }?;
+        let wi = self.frame.to_world(s.wi);
+        // Reject samples whose geometric side disagrees with the local decision (shading
+        // normals): reflection must stay on wo's side, refraction must cross.
+        let reflect = s.wi.z * o.z > 0.0;
+        if (wo.dot(self.ng) * wi.dot(self.ng) > 0.0) != reflect {
+            return None;
+        }
+        if !(s.weight.is_finite() && s.pdf.is_finite()) {
+            return None;
+        }
+        Some(BsdfSample { wi, ..s })
+    }
+}
+
+impl Lobes {
+    /// Frosted glass's parameters: the one lobe with non-specular transmission.
+    fn rough_glass(&self) -> Option<(f32, Vec3A, f32)> {
+        match *self {
+            Lobes::Glass { eta, tint, alpha } if alpha >= rough_dielectric::MIN_ALPHA => {
+                Some((eta, tint, alpha))
+            }
+            _ => None,
+        }
+    }
+
+    /// `f` in the local frame for a pair on one side (`o.z * i.z > 0`), for every lobe but
+    /// frosted glass's.
+    #[inline]
+    fn f_reflect(&self, o: Vec3A, i: Vec3A) -> Vec3A {
+        match *self {
             Lobes::Diffuse { albedo } => diffuse::f(albedo),
             Lobes::Glossy {
                 albedo,
@@ -181,29 +272,10 @@ impl Bsdf {
         }
     }
 
-    /// The value [`Bsdf::f`] gives for every pair of directions that passes its two side tests,
-    /// if it does not depend on the directions (Lambertian reflection): lets a caller that
-    /// evaluates one `wo` against many `wi` (SPPM's photon deposits) keep only the two normals
-    /// and this value.
-    pub fn constant_f(&self) -> Option<Vec3A> {
-        match self.lobes {
-            Lobes::Diffuse { albedo } => Some(diffuse::f(albedo)),
-            _ => None,
-        }
-    }
-
-    /// Solid-angle density of [`Bsdf::sample`] choosing `wi`.
-    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if let Some((eta, _, alpha)) = self.rough_glass() {
-            let Some((o, i)) = self.local_pair(wo, wi, true) else {
-                return 0.0;
-            };
-            return rough_dielectric::eval(eta, alpha, o, i, TransportMode::Radiance).1;
-        }
-        let Some((o, i)) = self.local_pair(wo, wi, false) else {
-            return 0.0;
-        };
-        match self.lobes {
+    /// [`Self::f_reflect`]'s density.
+    #[inline]
+    fn pdf_reflect(&self, o: Vec3A, i: Vec3A) -> f32 {
+        match *self {
             Lobes::Diffuse { .. } => diffuse::pdf(i),
             Lobes::Glossy {
                 albedo,
@@ -216,13 +288,27 @@ impl Bsdf {
         }
     }
 
-    /// Samples an incident direction for outgoing `wo`.
-    pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        let o = self.frame.to_local(wo);
-        if o.z == 0.0 {
-            return None;
+    /// `f` and `pdf` in the local frame, the normal being the only geometry (a facet of a
+    /// bumped microsurface): zero for a pair on two sides unless frosted glass.
+    fn eval_local(&self, o: Vec3A, i: Vec3A, mode: TransportMode) -> (Vec3A, f32) {
+        let local = o.z * i.z;
+        if local == 0.0 {
+            return (Vec3A::ZERO, 0.0);
         }
-        let s = match self.lobes {
+        if let Some((eta, tint, alpha)) = self.rough_glass() {
+            let (f, pdf) = rough_dielectric::eval(eta, alpha, o, i, mode);
+            return (tint * f, pdf);
+        }
+        if local < 0.0 {
+            return (Vec3A::ZERO, 0.0);
+        }
+        (self.f_reflect(o, i), self.pdf_reflect(o, i))
+    }
+
+    /// Samples an incident direction in the local frame.
+    #[inline]
+    fn sample_local(&self, o: Vec3A, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        match *self {
             Lobes::Diffuse { albedo } => diffuse::sample(albedo, o, u),
             Lobes::Mirror { tint } => mirror::sample(tint, o),
             Lobes::Glass { eta, tint, alpha } if alpha < rough_dielectric::MIN_ALPHA => {
@@ -239,17 +325,6 @@ impl Bsdf {
             } => glossy::sample(albedo, specular, alpha, o, uc, u),
             Lobes::Conductor { eta, k, alpha } => conductor::sample(eta, k, alpha, o, u),
             Lobes::Coated { albedo, eta, alpha } => coated::sample(albedo, eta, alpha, o, uc, u),
-        }?;
-        let wi = self.frame.to_world(s.wi);
-        // Reject samples whose geometric side disagrees with the local decision (shading
-        // normals): reflection must stay on wo's side, refraction must cross.
-        let reflect = s.wi.z * o.z > 0.0;
-        if (wo.dot(self.ng) * wi.dot(self.ng) > 0.0) != reflect {
-            return None;
         }
-        if !(s.weight.is_finite() && s.pdf.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample { wi, ..s })
     }
 }

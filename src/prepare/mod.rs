@@ -5,6 +5,7 @@ use glam::{Affine3A, DVec3, Vec3A};
 use rayon::prelude::*;
 
 mod budget;
+mod bump;
 mod csg;
 mod instances;
 mod lights;
@@ -110,7 +111,7 @@ enum GlassAbsorption {
 impl GlassAbsorption {
     fn of(m: &Material, has_glass: bool) -> Self {
         match m {
-            Material::Blend { .. } if has_glass => Self::Blended,
+            Material::Blend { .. } | Material::Bumped { .. } if has_glass => Self::Blended,
             Material::Glass {
                 absorb: ColorParam::Const(c),
                 ..
@@ -566,16 +567,25 @@ impl<'a> PreparedScene<'a> {
             .prim_material
             .get(sh.prim as usize)
             .map_or(usize::MAX, |&m| m as usize);
-        let lobes = match self.const_lobes.get(m) {
-            Some(Some(l)) => *l,
+        let (lobes, normal) = match self.const_lobes.get(m) {
+            Some(Some(l)) => (*l, None),
             _ => match self.scene.materials.get(m) {
-                Some(material) => self.lobes(material, sh),
-                None => Lobes::Diffuse {
-                    albedo: Vec3A::ZERO,
-                },
+                Some(material) => eval::bumped_lobes(material, self.scene, || self.tex_coord(sh)),
+                None => (
+                    Lobes::Diffuse {
+                        albedo: Vec3A::ZERO,
+                    },
+                    None,
+                ),
             },
         };
-        Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n)
+        match normal {
+            None => Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n),
+            Some(normal) => {
+                let np = self.perturbed_normal(normal, sh);
+                Bsdf::bumped(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n, np)
+            }
+        }
     }
 
     /// The lobes of material `m` at a hit (texture lookups where the material has them).

@@ -593,6 +593,37 @@ pub enum Material {
         b: MaterialId,
         weight: ScalarParam,
     },
+    /// Material `base` with its shading normal perturbed by a bump or normal map
+    /// (`materials::bump`); `base` comes earlier in [`Scene::materials`] and counts as a level
+    /// of [`MAX_BLEND_DEPTH`].
+    Bumped { base: MaterialId, normal: Normal },
+}
+
+/// A bump or normal map (`normal { ... }`): how a material's shading normal leans.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Normal {
+    pub kind: NormalKind,
+    /// How strongly the height's slope tilts the normal (POV-Ray's bump amount, `bump_size`),
+    /// or how far a normal map leans (1 as the map says).
+    pub amount: f64,
+    /// Object space to the built-in pattern's space (a texture carries its own transform).
+    pub transform: DAffine3,
+}
+
+/// Where a [`Normal`]'s perturbation comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NormalKind {
+    /// POV-Ray's normal patterns, heights from noise or from waves.
+    Bumps,
+    Dents,
+    Wrinkles,
+    Ripples,
+    Waves,
+    /// A texture's luminance is the height (any pattern, or an image: `bump_map`).
+    Height(TextureId),
+    /// A texture's colour is a tangent-space normal (`normal_map`): x along the shape's u,
+    /// y along its normal crossed with u, z along its normal, each from `2 c - 1`.
+    Map(TextureId),
 }
 
 /// The deepest blends nest (a blend of blends of ...): each level is one hash and one lookup
@@ -613,6 +644,14 @@ impl Scene {
                         if k < i { depths[k] } else { None }
                     };
                     part(*a).zip(part(*b)).map(|(x, y)| 1 + x.max(y))
+                }
+                Material::Bumped { base, .. } => {
+                    let k = base.0 as usize;
+                    if k < i {
+                        depths[k].map(|d| d + 1)
+                    } else {
+                        None
+                    }
                 }
                 _ => Some(0),
             };

@@ -116,9 +116,10 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
     ),
     pov(
         "normal",
-        "POV-Ray's `normal { ... }` (bump mapping) has no counterpart here: remove it; fine \
-         bumps (`bumps 0.5 scale 0.01`) blur reflections, which a larger `roughness` of a \
-         `coated`, `glossy` or `conductor` material does",
+        "POV-Ray's `normal { ... }` goes inside the material here: `material { diffuse \
+         rgb <...> normal { bumps 0.5 scale 0.1 } }` (also dents, wrinkles, ripples, waves, a \
+         `texture { ... }` as a height, `bump_map { png \"h.png\" bump_size 2 }`, \
+         `normal_map \"n.png\"`); docs/povray.md (Normals)",
     ),
     pov(
         "interior",

@@ -12,6 +12,7 @@
 //!
 //! See `docs/textures.md` for every pattern, mapping and wrap mode.
 
+pub mod bump;
 pub mod environment;
 pub mod image;
 pub mod mapping;

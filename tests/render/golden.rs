@@ -494,6 +494,7 @@ golden!(
     csg,
     goblet,
     materials,
+    bumps,
 );
 
 /// FNV-1a over the bits of every pixel.

@@ -5,6 +5,7 @@ mod camera;
 mod environment;
 mod light;
 mod material;
+mod normal;
 mod object;
 mod profile;
 mod scene;
@@ -25,6 +26,7 @@ use camera::CameraBuilder;
 use environment::EnvBuilder;
 use light::LightBuilder;
 use material::MaterialBuilder;
+use normal::NormalBuilder;
 use object::{OBJECT_BLOCKS, ObjectBuilder};
 use profile::ProfileBuilder;
 pub(super) use scene::TopSink;
@@ -82,6 +84,8 @@ pub(super) fn is_block_name(name: &str) -> bool {
 const VALUE_BLOCKS: &[&str] = &[
     "material",
     "texture",
+    "normal",
+    "bump_map",
     "color_map",
     "bezier",
     "spline",
@@ -129,6 +133,11 @@ impl Evaluator {
             }
             "texture" => {
                 let mut b = TextureBuilder::default();
+                self.run_items(items, &mut b)?;
+                b.finish(self, span)
+            }
+            "normal" | "bump_map" => {
+                let mut b = NormalBuilder::new(k == "bump_map");
                 self.run_items(items, &mut b)?;
                 b.finish(self, span)
             }

@@ -522,6 +522,12 @@ impl Sink for ObjectBuilder {
                 span,
                 "put the texture in a material: `material { diffuse texture { ... } }`",
             )),
+            Value::Normal(_) => Err(unexpected(
+                self,
+                &v,
+                span,
+                "a normal belongs to a material: `material { diffuse rgb <...> normal { ... } }`",
+            )),
             v if self.is_container() => Err(unexpected(
                 self,
                 &v,

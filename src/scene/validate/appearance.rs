@@ -187,6 +187,18 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
                 ))
             }
         }
+        Material::Bumped { normal, .. } => {
+            if normal.amount.is_finite() && normal.transform.is_finite() {
+                Ok(())
+            } else {
+                Err(invalid(
+                    span,
+                    format!("material {index}'s normal is not finite"),
+                    "not finite",
+                    "a bump amount and a normal's transform are finite numbers",
+                ))
+            }
+        }
         Material::Blend { weight, .. } => match weight {
             ScalarParam::Const(w) if !(0.0..=1.0).contains(w) => Err(invalid(
                 span,

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use super::{
     Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light,
     MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
-    Material, Object, ScalarParam, Scene, Settings, Shape, why_open,
+    Material, NormalKind, Object, ScalarParam, Scene, Settings, Shape, why_open,
 };
 use crate::span::Span;
 
@@ -579,6 +579,10 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
         ],
         Material::ThinGlass { .. } => [None, None, None],
         Material::Conductor { .. } => [None, None, None],
+        Material::Bumped { normal, .. } => match normal.kind {
+            NormalKind::Height(t) | NormalKind::Map(t) => [Some(t.0), None, None],
+            _ => [None, None, None],
+        },
         Material::Blend { weight, .. } => [
             None,
             None,

@@ -12,7 +12,7 @@ use crate::diag::{Diagnostic, Error, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color_def, num, range_error};
 use crate::eval::props::{PropSpec, p};
-use crate::eval::value::{ColorDef, MatKind, MaterialDef, Value};
+use crate::eval::value::{ColorDef, MatKind, MaterialDef, NormalDef, Value};
 use crate::scene::{COAT_IOR_RANGE, Color, IOR_RANGE, MIN_ROUGHNESS};
 use crate::span::Span;
 use crate::syntax::ast::Name;
@@ -51,6 +51,8 @@ pub(super) struct MaterialBuilder {
     blend: Option<(Rc<MaterialDef>, Rc<MaterialDef>)>,
     /// A blend's weight (the share of the second material) and where it was written.
     weight: Option<(ColorDef, Span)>,
+    /// A bump or normal map (`normal { ... }`, `bump_map { ... }`), with where it was written.
+    normal: Option<(Rc<NormalDef>, Span)>,
     /// The properties beyond the kind that were written (`ior`, `absorb`, `tint`, `specular`,
     /// `roughness`), with their keywords' spans: each must belong to the material's kind.
     written: Vec<(&'static str, Span)>,
@@ -329,7 +331,11 @@ impl MaterialBuilder {
             }
         };
         let kind = transparency(ev, filter, transmit, kind)?;
-        Ok(Value::Material(Rc::new(MaterialDef { kind, span })))
+        let normal = match self.normal {
+            Some((n, _)) => Some(n),
+            None => self.base.as_ref().and_then(|b| b.normal.clone()),
+        };
+        Ok(Value::Material(Rc::new(MaterialDef { kind, span, normal })))
     }
 }
 
@@ -492,6 +498,20 @@ impl Sink for MaterialBuilder {
     }
     fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
+            Value::Normal(n) => {
+                if let Some((_, first)) = &self.normal {
+                    return Err(vec![
+                        Error::new("a material has one normal")
+                            .label("second normal")
+                            .help("keep one `normal { ... }` (or `bump_map { ... }`) per material")
+                            .at(span)
+                            .with_extra(*first, "first normal here"),
+                    ]);
+                }
+                self.touched = true;
+                self.normal = Some((n, span));
+                Ok(())
+            }
             Value::Material(m) if self.base.is_none() => {
                 self.base = Some(m);
                 self.base_span = Some(span);
