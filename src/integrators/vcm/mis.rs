@@ -179,3 +179,6 @@ pub(super) fn merge(
     let w_camera = cam.vcm * f.vc_weight + cam.vm * mis(cam_rev);
     1.0 / (w_light + 1.0 + w_camera)
 }
+
+#[cfg(test)]
+mod tests;
