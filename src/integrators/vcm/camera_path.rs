@@ -39,7 +39,7 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
     let (jitter, lens) = (rng.vec2(), rng.vec2());
     let mut ray = ctx.camera.ray(x, y, jitter, lens);
     let pdf_camera = f64::from(ctx.camera.pdf_dir(ray.d));
-    if !(pdf_camera > 0.0) {
+    if pdf_camera.is_nan() || pdf_camera <= 0.0 {
         return Vec3A::ZERO;
     }
     let mut st = State {
@@ -242,7 +242,7 @@ fn direct(
         f64::from(cos_to_light),
         cos_at_light,
     );
-    if !(w > 0.0) || scene.occluded(&ray, t_max) {
+    if w.is_nan() || w <= 0.0 || scene.occluded(&ray, t_max) {
         return Vec3A::ZERO;
     }
     let absorbed = if t_max.is_finite() {
@@ -267,7 +267,7 @@ fn connect(
     let p = sh.hit.p;
     let d = v.p - p;
     let dist2 = d.length_squared();
-    if !(dist2 > 0.0) {
+    if dist2.is_nan() || dist2 <= 0.0 {
         return Vec3A::ZERO;
     }
     let dist = dist2.sqrt();

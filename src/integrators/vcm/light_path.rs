@@ -53,7 +53,7 @@ pub(super) fn trace(
         return;
     };
     let emission_pdf_w = f64::from(pe) * f64::from(pdf_pos) * f64::from(pdf_dir);
-    if !(emission_pdf_w > 0.0) {
+    if emission_pdf_w.is_nan() || emission_pdf_w <= 0.0 {
         return;
     }
     let pn = f64::from(scene.light_distr.pdf(li));
