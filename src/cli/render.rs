@@ -568,6 +568,9 @@ fn method_statistics(method: Integrator, stats: &RenderStats, secs: f64) -> Stri
         ),
         Integrator::Ppm => format!("{}, {} deposits", photons(), stats.deposits),
         Integrator::PhotonMap => photons(),
+        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => {
+            format!("{} light paths", stats.photons)
+        }
         Integrator::Path | Integrator::Whitted => String::new(),
     }
 }

@@ -1,5 +1,6 @@
 //! Light-transport algorithms. Each method is a type implementing [`Integrator`], in its own
-//! file or folder: `sppm/`, `ppm.rs`, `photon_map/`, `path.rs`, `whitted.rs`; [`for_method`]
+//! file or folder: `sppm/`, `ppm.rs`, `photon_map/`, `path.rs`, `whitted.rs`, `vcm/` (also
+//! `bpt` and `lt`); [`for_method`]
 //! picks the one the settings name. Code more than one of them uses is in `common/`: the eye
 //! path, direct lighting, photon tracing, the progressive loop and the random streams.
 //!
@@ -16,6 +17,7 @@ pub mod path;
 pub mod photon_map;
 pub mod ppm;
 pub mod sppm;
+pub mod vcm;
 pub mod whitted;
 
 pub use common::direct::direct_lighting;
@@ -95,5 +97,8 @@ pub fn for_method(method: Method) -> Box<dyn Integrator> {
         Method::Path => Box::new(path::PathTracer),
         Method::Whitted => Box::new(whitted::Whitted),
         Method::PhotonMap => Box::new(photon_map::PhotonMap),
+        Method::Vcm => Box::new(vcm::Vcm::new(vcm::Mode::VCM)),
+        Method::Bpt => Box::new(vcm::Vcm::new(vcm::Mode::BPT)),
+        Method::Lt => Box::new(vcm::Vcm::new(vcm::Mode::LT)),
     }
 }

@@ -85,6 +85,37 @@ impl Light {
         )
     }
 
+    /// The densities of [`Light::sample_photon`] choosing a photon that leaves the point with
+    /// normal `n` (zero for point and spot lights) in unit direction `dir`: per area of the
+    /// light (1 for the single point of a delta light) and per solid angle. `None` for the
+    /// environment, whose photons start on a disk the bidirectional methods do not use.
+    pub fn emission_pdf(&self, n: Vec3A, dir: Vec3A) -> Option<(f32, f32)> {
+        use std::f32::consts::{FRAC_1_PI, PI};
+        match self {
+            Light::Point(_) => Some((1.0, 0.25 * FRAC_1_PI)),
+            Light::Spot(l) => {
+                let inside = dir.dot(l.frame.n) >= l.cos_total;
+                let pdf = crate::sampling::uniform_cone_pdf(l.cos_total);
+                Some((1.0, if inside { pdf } else { 0.0 }))
+            }
+            Light::Area(l) => {
+                let cos = n.dot(dir);
+                let dir_pdf = if l.two_sided {
+                    cos.abs() / (2.0 * PI)
+                } else {
+                    cos.max(0.0) / PI
+                };
+                Some((1.0 / l.area, dir_pdf))
+            }
+            Light::Environment(_) => None,
+        }
+    }
+
+    /// Point and spot lights: a single point, which no ray can hit.
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Light::Point(_) | Light::Spot(_))
+    }
+
     pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
         match self {
             Light::Point(l) => l.sample_photon(u1),

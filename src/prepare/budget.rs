@@ -262,6 +262,9 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
             .photons
             .unwrap_or(DEFAULT_PHOTONS)
             .saturating_mul(3 * 48 * 2),
+        // One light path per pixel and iteration, its stored vertices (about 200 bytes with
+        // their BSDF) at most `max_depth` each, three on average; the grid's index beside them.
+        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => pixels.saturating_mul(3 * 208),
         Integrator::Path | Integrator::Whitted => 0,
     };
     items.push(MemoryItem {

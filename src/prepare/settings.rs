@@ -252,6 +252,26 @@ pub fn effective_settings(
             ))
         });
     }
+    let integrator = o.integrator.unwrap_or(s.integrator);
+    // Light tracing connects scene points to the lens; an orthographic camera's rays are
+    // parallel, so no point but those on a pixel's own ray can reach it (a delta direction).
+    if scene.camera.orthographic
+        && matches!(
+            integrator,
+            Integrator::Vcm | Integrator::Bpt | Integrator::Lt
+        )
+    {
+        return Err(RenderError {
+            help: Some(
+                "render an orthographic view with `sppm`, `path`, `ppm`, `photon_map` or `whitted`"
+                    .into(),
+            ),
+            ..RenderError::new(format!(
+                "`{}` connects light paths to the camera, which an orthographic camera cannot take",
+                integrator.name()
+            ))
+        });
+    }
     Ok(EffectiveSettings {
         width,
         height,
@@ -262,7 +282,7 @@ pub fn effective_settings(
         alpha: s.alpha,
         max_depth: s.max_depth.clamp(1, 1024),
         seed: o.seed.unwrap_or(s.seed),
-        integrator: o.integrator.unwrap_or(s.integrator),
+        integrator,
         time_limit,
         adaptive_threshold: (s.antialias == Antialias::Adaptive).then(|| {
             s.antialias_threshold

@@ -238,15 +238,24 @@ pub enum Integrator {
     #[default]
     Sppm,
     Path,
+    /// Vertex connection and merging.
+    Vcm,
+    /// Bidirectional path tracing (VCM's connections only).
+    Bpt,
+    /// Light tracing (light paths connected to the camera only).
+    Lt,
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 5] = [
+    pub const ALL: [Integrator; 8] = [
         Integrator::Whitted,
         Integrator::PhotonMap,
         Integrator::Ppm,
         Integrator::Sppm,
         Integrator::Path,
+        Integrator::Vcm,
+        Integrator::Bpt,
+        Integrator::Lt,
     ];
 
     pub fn name(self) -> &'static str {
@@ -256,6 +265,9 @@ impl Integrator {
             Integrator::Ppm => "ppm",
             Integrator::Sppm => "sppm",
             Integrator::Path => "path",
+            Integrator::Vcm => "vcm",
+            Integrator::Bpt => "bpt",
+            Integrator::Lt => "lt",
         }
     }
 

@@ -6,8 +6,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-mod render_accuracy;
 mod glossy_reference;
 mod reference_image;
+mod render_accuracy;
 mod smallppm_reference;
 mod sppm_theory;

@@ -3,11 +3,11 @@
 
 use std::sync::atomic::AtomicBool;
 
+use crate::common;
+use common::{debug, load};
 use glam::DVec3;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::*;
-use crate::common;
-use common::{debug, load};
 
 /// Each sphere's centre, in scene order.
 fn centres(s: &Scene) -> Vec<DVec3> {

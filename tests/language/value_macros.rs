@@ -3,10 +3,10 @@
 //! private, and it may recurse; a macro called as a statement still puts its objects where the
 //! call stands.
 
-use glam::DVec3;
-use sppm_lang::scene::*;
 use crate::common;
 use common::{debug, load};
+use glam::DVec3;
+use sppm_lang::scene::*;
 use sppm_lang::{EvalOptions, load_source};
 
 /// Each sphere's centre (in the world) and radius, in scene order.

@@ -8,17 +8,17 @@ mod common;
 #[path = "../common/measured.rs"]
 mod measured;
 
-mod integrators;
-mod determinism;
-mod instancing;
+mod backdrop_sky;
+mod bezier_cases;
 mod csg_cost;
 mod csg_glass;
 mod csg_oracle;
 mod csg_shapes;
-mod bezier_cases;
+mod determinism;
 mod environment;
-mod backdrop_sky;
-mod light_sampling;
 mod final_gather;
 mod golden;
+mod instancing;
+mod integrators;
+mod light_sampling;
 mod scale_invariance;

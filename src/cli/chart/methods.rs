@@ -34,7 +34,7 @@ pub fn methods() -> Vec<Method> {
         look_at_radius: false,
     };
     use Dash::{Dashed, Dotted, Solid};
-    use Integrator::{Path, PhotonMap, Ppm, Sppm, Whitted};
+    use Integrator::{Bpt, Lt, Path, PhotonMap, Ppm, Sppm, Vcm, Whitted};
     // Palette: 0 blue, 1 orange, 2 red, 3 green, 4 teal, 5 purple, 6 brown, 7 gold, 8 pink.
     vec![
         m("sppm", Sppm, None, 1.0, 1.0, 0, Solid),
@@ -46,6 +46,9 @@ pub fn methods() -> Vec<Method> {
         m("photon_map", PhotonMap, None, 1.0, 1.0, 2, Solid),
         m("path", Path, None, 1.0, 1.0, 3, Solid),
         m("whitted", Whitted, None, 1.0, 1.0, 6, Solid),
+        m("vcm", Vcm, None, 1.0, 1.0, 5, Solid),
+        m("bpt", Bpt, None, 1.0, 1.0, 8, Solid),
+        m("lt", Lt, None, 1.0, 1.0, 7, Solid),
         m("sppm-alpha0.5", Sppm, Some(0.5), 1.0, 1.0, 4, Dashed),
         m("sppm-alpha0.7", Sppm, Some(0.7), 1.0, 1.0, 5, Dashed),
         m("sppm-alpha0.9", Sppm, Some(0.9), 1.0, 1.0, 8, Dashed),

@@ -27,7 +27,7 @@ static SETTINGS_PROPS: [PropSpec; 17] = [
     p("seed", 1, 1, "a number", "7"),
     w(
         "integrator",
-        "`sppm`, `ppm`, `photon_map`, `path` or `whitted`",
+        "`sppm`, `ppm`, `photon_map`, `path`, `whitted`, `vcm`, `bpt` or `lt`",
         "sppm",
     ),
     p("exposure", 1, 1, "a number", "1"),

@@ -26,11 +26,15 @@ pub(crate) enum Stream {
     CameraExtra = 5,
     /// SPPM's final-gather paths, indexed by pixel.
     Gather = 6,
+    /// VCM's (and BPT's, light tracing's) light paths, indexed by path.
+    VcmLight = 7,
+    /// VCM's camera paths, indexed by pixel.
+    VcmCamera = 8,
 }
 
 impl Stream {
     #[cfg(test)]
-    const ALL: [Stream; 7] = [
+    const ALL: [Stream; 9] = [
         Stream::Camera,
         Stream::Photon,
         Stream::Pixel,
@@ -38,6 +42,8 @@ impl Stream {
         Stream::Supersample,
         Stream::CameraExtra,
         Stream::Gather,
+        Stream::VcmLight,
+        Stream::VcmCamera,
     ];
 
     /// The generator of item `index` of this stream in iteration `iteration`.
@@ -59,6 +65,6 @@ mod tests {
         for (i, a) in ids.iter().enumerate() {
             assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
         }
-        assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6]);
+        assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6, 7, 8]);
     }
 }

@@ -1,0 +1,332 @@
+//! Camera subpaths: from the pixel, by BSDF sampling (radiance transport). At each non-specular
+//! vertex they add next-event estimation, connections to the vertices of the light path with
+//! the pixel's index, and merges with the light vertices within the radius; emission they hit
+//! counts with its weight. With light tracing alone a camera path only follows delta bounces
+//! to the light or the sky it sees (what light tracing cannot reach).
+
+use glam::Vec3A;
+
+use super::Context;
+use super::light_path::LightVertex;
+use super::mis::{self, Quantities};
+use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
+use crate::lights::Light;
+use crate::materials::{Bsdf, TransportMode};
+use crate::prepare::SurfaceHit;
+use crate::sampling::Rng;
+
+/// Segments before Russian roulette may end a camera path.
+const RR_LEN: u32 = 4;
+
+/// The state of a camera path at its last vertex.
+struct State {
+    beta: Vec3A,
+    len: u32,
+    q: Quantities,
+    /// Every bounce so far specular.
+    specular: bool,
+    medium: Vec3A,
+    /// The previous vertex and the light whose surface it lies on, if any (for next-event
+    /// estimation's density of a light the path hits).
+    prev: Vec3A,
+    prev_light: Option<u32>,
+}
+
+/// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
+/// path with the pixel's index.
+pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: &mut Rng) -> Vec3A {
+    let scene = ctx.scene;
+    let (jitter, lens) = (rng.vec2(), rng.vec2());
+    let mut ray = ctx.camera.ray(x, y, jitter, lens);
+    let pdf_camera = f64::from(ctx.camera.pdf_dir(ray.d));
+    if pdf_camera.is_nan() || pdf_camera <= 0.0 {
+        return Vec3A::ZERO;
+    }
+    let mut st = State {
+        beta: Vec3A::ONE,
+        len: 1,
+        q: Quantities::camera(&ctx.factors, pdf_camera),
+        specular: true,
+        medium: Vec3A::ZERO,
+        prev: ray.o,
+        prev_light: None,
+    };
+    let mut l = Vec3A::ZERO;
+    loop {
+        let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
+            l += st.beta * escaped(ctx, &st, ray.d);
+            break;
+        };
+        attenuate_inside(scene, &sh, &ray, st.medium, &mut st.beta);
+        let wo = -ray.d;
+        let bsdf = scene.bsdf(&sh);
+        let dist = f64::from(sh.hit.t * ray.d.length());
+        st.q.arrive(Some(dist * dist), f64::from(wo.dot(bsdf.frame.n).abs()));
+        if let Some((li, al)) = scene.area_light(sh.prim) {
+            let le = al.le(sh.hit.n, wo);
+            if le != Vec3A::ZERO {
+                l += st.beta * le * hit_weight(ctx, &st, li, &sh, wo, dist);
+            }
+        }
+        if ctx.mode.light_trace_only && !bsdf.is_specular() {
+            break;
+        }
+        if st.len >= ctx.max_len {
+            break;
+        }
+        if !bsdf.is_specular() {
+            if ctx.mode.use_vc {
+                l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
+                for v in own {
+                    if v.len + 1 + st.len > ctx.max_len {
+                        continue;
+                    }
+                    l += st.beta * v.beta * connect(ctx, &st, &sh, &bsdf, wo, v);
+                }
+            }
+            if ctx.mode.use_vm {
+                l += st.beta * merge(ctx, &st, sh.hit.p, &bsdf, wo);
+            }
+        }
+        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
+            break;
+        };
+        let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
+        if s.specular {
+            st.q.scatter_specular(cos_out);
+        } else {
+            let rev = f64::from(bsdf.pdf(s.wi, wo));
+            st.q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
+        }
+        st.medium = medium_after(scene, &sh, wo, s.wi, st.medium);
+        st.specular &= s.specular;
+        st.beta *= s.weight;
+        if st.len >= RR_LEN {
+            let q = (1.0 - st.beta.max_element()).max(0.05);
+            if rng.f32() < q {
+                break;
+            }
+            st.beta /= 1.0 - q;
+        }
+        if !st.beta.is_finite() || st.beta.max_element() <= 0.0 {
+            break;
+        }
+        st.prev = sh.hit.p;
+        st.prev_light = scene.prim_light.get(sh.prim as usize).copied();
+        ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+        st.len += 1;
+    }
+    l
+}
+
+/// What a camera path that leaves the scene sees: the backdrop or sky straight on and after
+/// delta bounces (weight 1: nothing else samples it), the environment light after a
+/// non-specular bounce, weighed against next-event estimation (no light path starts on the
+/// sky, so only those two techniques reach it).
+fn escaped(ctx: &Context, st: &State, d: Vec3A) -> Vec3A {
+    let scene = ctx.scene;
+    if st.specular {
+        return scene.escaped_radiance(d, true);
+    }
+    if ctx.mode.light_trace_only {
+        return Vec3A::ZERO;
+    }
+    let Some((li, env)) = scene.environment_light() else {
+        return Vec3A::ZERO;
+    };
+    let le = env.le(d);
+    if le == Vec3A::ZERO {
+        return le;
+    }
+    let direct_pdf = f64::from(scene.light_distr.pdf(li) * env.pdf_li(d));
+    le * mis::hit_light(&st.q, direct_pdf, 0.0) as f32
+}
+
+/// The weight of emission from area light `li` hit at `sh`, `dist` from the previous vertex.
+fn hit_weight(ctx: &Context, st: &State, li: usize, sh: &SurfaceHit, wo: Vec3A, dist: f64) -> f32 {
+    if st.len == 1 {
+        // Light tracing never reaches the camera from the light point itself.
+        return 1.0;
+    }
+    if st.specular {
+        return 1.0;
+    }
+    if ctx.mode.light_trace_only {
+        return 0.0;
+    }
+    let scene = ctx.scene;
+    let Light::Area(al) = &scene.lights[li] else {
+        return 0.0;
+    };
+    let cos_light = f64::from(sh.hit.n.dot(wo).abs());
+    let on_light = st.prev_light == Some(li as u32);
+    let pn = f64::from(scene.light_distr.pdf(li));
+    let direct_pdf_a =
+        pn * f64::from(al.pdf_li_from(st.prev, sh.hit.p, sh.hit.n, on_light)) * cos_light
+            / (dist * dist);
+    let emission_pdf_w = match scene.lights[li].emission_pdf(sh.hit.n, wo) {
+        Some((pos, dir)) => ctx.emit_pdf(li) * f64::from(pos) * f64::from(dir),
+        None => 0.0,
+    };
+    mis::hit_light(&st.q, direct_pdf_a, emission_pdf_w) as f32
+}
+
+/// Next-event estimation at a camera vertex, weighted against the camera path hitting the
+/// light and every technique that starts on the light.
+fn direct(
+    ctx: &Context,
+    st: &State,
+    sh: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3A,
+    rng: &mut Rng,
+) -> Vec3A {
+    let scene = ctx.scene;
+    let (p, n) = (sh.hit.p, sh.hit.n);
+    let own = scene.prim_light.get(sh.prim as usize).copied();
+    let uc = rng.f32();
+    let ul = rng.vec2();
+    let Some((li, pl)) = scene.light_distr.sample(uc) else {
+        return Vec3A::ZERO;
+    };
+    let light = &scene.lights[li];
+    let Some(ls) = light.sample_li_from(p, ul, own == Some(li as u32)) else {
+        return Vec3A::ZERO;
+    };
+    let f = bsdf.f(wo, ls.wi);
+    let cos_to_light = ls.wi.dot(bsdf.frame.n).abs();
+    if f == Vec3A::ZERO || cos_to_light == 0.0 {
+        return Vec3A::ZERO;
+    }
+    let env = scene.environment == Some(li);
+    let (ray, t_max) = if env {
+        (scene.spawn_ray(p, n, ls.wi), f32::INFINITY)
+    } else {
+        scene.spawn_ray_to(p, n, ls.p, ls.n)
+    };
+    let t_max = if ls.delta { t_max * 0.9999 } else { t_max };
+    let pn = f64::from(pl);
+    let bsdf_rev = f64::from(bsdf.pdf(ls.wi, wo));
+    let dist2 = f64::from((ls.p - p).length_squared());
+    let (bsdf_pdf, direct_pdf_w, emission_pdf_w, cos_at_light) = if env {
+        (
+            f64::from(bsdf.pdf(wo, ls.wi)),
+            pn * f64::from(ls.pdf),
+            0.0,
+            1.0,
+        )
+    } else if ls.delta {
+        let e = light
+            .emission_pdf(ls.n, -ls.wi)
+            .map_or(0.0, |(pos, dir)| f64::from(pos) * f64::from(dir));
+        (0.0, pn * dist2, ctx.emit_pdf(li) * e, 1.0)
+    } else {
+        let e = light
+            .emission_pdf(ls.n, -ls.wi)
+            .map_or(0.0, |(pos, dir)| f64::from(pos) * f64::from(dir));
+        let cos_at_light = f64::from(ls.n.dot(ls.wi).abs());
+        (
+            f64::from(bsdf.pdf(wo, ls.wi)),
+            pn * f64::from(ls.pdf),
+            ctx.emit_pdf(li) * e,
+            cos_at_light,
+        )
+    };
+    let w = mis::direct(
+        &ctx.factors,
+        &st.q,
+        bsdf_pdf,
+        bsdf_rev,
+        direct_pdf_w,
+        emission_pdf_w,
+        f64::from(cos_to_light),
+        cos_at_light,
+    );
+    if w.is_nan() || w <= 0.0 || scene.occluded(&ray, t_max) {
+        return Vec3A::ZERO;
+    }
+    let absorbed = if t_max.is_finite() {
+        let medium = medium_after(scene, sh, wo, ls.wi, st.medium);
+        transmittance(medium, t_max * ray.d.length())
+    } else {
+        Vec3A::ONE
+    };
+    f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
+}
+
+/// Connects a camera vertex to light vertex `v` (without either path's throughput).
+fn connect(
+    ctx: &Context,
+    st: &State,
+    sh: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3A,
+    v: &LightVertex,
+) -> Vec3A {
+    let scene = ctx.scene;
+    let p = sh.hit.p;
+    let d = v.p - p;
+    let dist2 = d.length_squared();
+    if dist2.is_nan() || dist2 <= 0.0 {
+        return Vec3A::ZERO;
+    }
+    let dist = dist2.sqrt();
+    let dir = d / dist;
+    let f_cam = bsdf.f(wo, dir);
+    if f_cam == Vec3A::ZERO {
+        return Vec3A::ZERO;
+    }
+    let f_light = v.bsdf.f_mode(v.wo, -dir, TransportMode::Importance);
+    if f_light == Vec3A::ZERO {
+        return Vec3A::ZERO;
+    }
+    let cos_cam = dir.dot(bsdf.frame.n).abs();
+    let cos_light = dir.dot(v.bsdf.frame.n).abs();
+    let g = cos_cam * cos_light / dist2;
+    let d2 = f64::from(dist2);
+    let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
+    let light_pdf_a = f64::from(v.bsdf.pdf(v.wo, -dir)) * f64::from(cos_cam) / d2;
+    let w = mis::connect(
+        &ctx.factors,
+        &st.q,
+        &v.q,
+        cam_pdf_a,
+        light_pdf_a,
+        f64::from(bsdf.pdf(dir, wo)),
+        f64::from(v.bsdf.pdf(-dir, v.wo)),
+    );
+    if !(w > 0.0 && g > 0.0) {
+        return Vec3A::ZERO;
+    }
+    let (ray, t_max) = scene.spawn_ray_to(p, sh.hit.n, v.p, v.bsdf.ng);
+    if scene.occluded(&ray, t_max) {
+        return Vec3A::ZERO;
+    }
+    let absorbed = transmittance(medium_after(scene, sh, wo, dir, st.medium), dist);
+    f_cam * f_light * absorbed * (g * w as f32)
+}
+
+/// Merges the light vertices within the radius of camera vertex `p` (without the camera
+/// path's throughput): each counts its flux times the camera BSDF over the disk's area and
+/// the number of light paths.
+fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
+    let Some(grid) = ctx.grid else {
+        return Vec3A::ZERO;
+    };
+    let mut sum = Vec3A::ZERO;
+    grid.for_each_within(ctx.positions, p, ctx.radius, |i| {
+        let v = &ctx.vertices[i];
+        if v.len + st.len > ctx.max_len {
+            return;
+        }
+        let f = bsdf.f(wo, v.wo);
+        if f == Vec3A::ZERO {
+            return;
+        }
+        let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
+        let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
+        let w = mis::merge(&ctx.factors, &st.q, &v.q, cam_pdf, cam_rev);
+        sum += f * v.beta * w as f32;
+    });
+    sum * ctx.vm_normalization
+}

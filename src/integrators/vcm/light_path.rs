@@ -1,0 +1,184 @@
+//! Light subpaths: a light chosen by power emits a path that bounces by BSDF sampling
+//! (importance transport, the photon tracer's roulette). Every non-specular vertex is stored
+//! for connections and merging, and connected to the camera (light tracing); the splats go to
+//! a list the caller adds to the film in path order, so the image does not depend on threads.
+
+use glam::Vec3A;
+
+use super::Context;
+use super::mis::{self, Quantities};
+use crate::geometry::Ray;
+use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
+use crate::lights::Light;
+use crate::materials::{Bsdf, TransportMode};
+use crate::prepare::SurfaceHit;
+use crate::sampling::Rng;
+
+/// A stored non-specular vertex of a light path.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LightVertex {
+    pub(super) p: Vec3A,
+    pub(super) bsdf: Bsdf,
+    /// Unit direction toward the previous vertex (where the light came from).
+    pub(super) wo: Vec3A,
+    /// The flux arriving here, per light path (before this vertex's BSDF).
+    pub(super) beta: Vec3A,
+    /// Segments from the light to here.
+    pub(super) len: u32,
+    pub(super) q: Quantities,
+}
+
+/// Light tracing's contribution to one pixel.
+pub(super) type Splat = (u32, Vec3A);
+
+/// Traces one light path, appending its stored vertices to `vertices` and its camera
+/// connections to `splats`.
+pub(super) fn trace(
+    ctx: &Context,
+    rng: &mut Rng,
+    vertices: &mut Vec<LightVertex>,
+    splats: &mut Vec<Splat>,
+) {
+    let scene = ctx.scene;
+    let Some((k, pe)) = ctx.emitters.sample(rng.f32()) else {
+        return;
+    };
+    let li = ctx.emitter_lights[k];
+    let light = &scene.lights[li];
+    let (u1, u2) = (rng.vec2(), rng.vec2());
+    let Some(ps) = light.sample_photon(u1, u2) else {
+        return;
+    };
+    let Some((pdf_pos, pdf_dir)) = light.emission_pdf(ps.n, ps.dir) else {
+        return;
+    };
+    let emission_pdf_w = f64::from(pe) * f64::from(pdf_pos) * f64::from(pdf_dir);
+    if emission_pdf_w.is_nan() || emission_pdf_w <= 0.0 {
+        return;
+    }
+    let pn = f64::from(scene.light_distr.pdf(li));
+    let delta = light.is_delta();
+    let cos_light = if delta { 0.0 } else { ps.n.dot(ps.dir).abs() };
+    let mut ray = if ps.n == Vec3A::ZERO {
+        Ray::new(ps.p, ps.dir)
+    } else {
+        scene.spawn_ray(ps.p, ps.n, ps.dir)
+    };
+    let mut beta = ps.beta / pe;
+    let mut q = Quantities::default();
+    let mut medium = Vec3A::ZERO;
+    let mut len = 1u32;
+    loop {
+        let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
+            return;
+        };
+        attenuate_inside(scene, &sh, &ray, medium, &mut beta);
+        let wo = -ray.d;
+        let bsdf = scene.bsdf(&sh);
+        let cos_in = f64::from(wo.dot(bsdf.frame.n).abs());
+        let dist = f64::from(sh.hit.t * ray.d.length());
+        if len == 1 {
+            // Next-event estimation's density of the light point, seen from this surface.
+            let direct_pdf_a = if delta {
+                pn
+            } else {
+                let on_light = scene.prim_light.get(sh.prim as usize) == Some(&(li as u32));
+                match light {
+                    Light::Area(al) => {
+                        let w = f64::from(al.pdf_li_from(sh.hit.p, ps.p, ps.n, on_light));
+                        pn * w * f64::from(cos_light) / (dist * dist)
+                    }
+                    _ => return,
+                }
+            };
+            q = Quantities::light(&ctx.factors, direct_pdf_a, emission_pdf_w, cos_light.into());
+        }
+        q.arrive(Some(dist * dist), cos_in);
+        if !bsdf.is_specular() {
+            if ctx.mode.use_vc || ctx.mode.use_vm {
+                vertices.push(LightVertex {
+                    p: sh.hit.p,
+                    bsdf,
+                    wo,
+                    beta,
+                    len,
+                    q,
+                });
+            }
+            if ctx.mode.use_vc || ctx.mode.light_trace_only {
+                to_camera(ctx, &sh, &bsdf, wo, beta, &q, medium, rng, splats);
+            }
+        }
+        if len + 2 > ctx.max_len {
+            return;
+        }
+        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Importance) else {
+            return;
+        };
+        let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
+        if s.specular {
+            q.scatter_specular(cos_out);
+        } else {
+            let rev = f64::from(bsdf.pdf(s.wi, wo));
+            q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
+        }
+        medium = medium_after(scene, &sh, wo, s.wi, medium);
+        if !roulette(&mut beta, s.weight, rng) {
+            return;
+        }
+        ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
+        len += 1;
+    }
+}
+
+/// The photon tracer's roulette: keeps the power roughly constant.
+fn roulette(beta: &mut Vec3A, weight: Vec3A, rng: &mut Rng) -> bool {
+    let next = *beta * weight;
+    let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
+    if rng.f32() < q {
+        return false;
+    }
+    *beta = next / (1.0 - q);
+    beta.is_finite() && beta.max_element() > 0.0
+}
+
+/// Connects a light vertex to a point of the lens (light tracing).
+#[allow(clippy::too_many_arguments)]
+fn to_camera(
+    ctx: &Context,
+    sh: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3A,
+    beta: Vec3A,
+    q: &Quantities,
+    medium: Vec3A,
+    rng: &mut Rng,
+    splats: &mut Vec<Splat>,
+) {
+    let scene = ctx.scene;
+    let Some(cs) = ctx.camera.sample_toward(sh.hit.p, rng.vec2()) else {
+        return;
+    };
+    let f = bsdf.f_mode(wo, cs.to_camera, TransportMode::Importance);
+    if f == Vec3A::ZERO {
+        return;
+    }
+    let cos = cs.to_camera.dot(bsdf.frame.n).abs();
+    let dist2 = cs.dist * cs.dist;
+    let camera_pdf_a = f64::from(cs.pdf_dir) * f64::from(cos) / f64::from(dist2);
+    let w = if ctx.mode.light_trace_only {
+        1.0
+    } else {
+        let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
+        mis::to_camera(&ctx.factors, q, camera_pdf_a, rev)
+    };
+    let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
+    if scene.occluded(&ray, t_max) {
+        return;
+    }
+    let absorbed = transmittance(medium_after(scene, sh, wo, cs.to_camera, medium), cs.dist);
+    let c = beta * f * absorbed * (w * camera_pdf_a / ctx.factors.light_paths) as f32;
+    if c.is_finite() && c.max_element() > 0.0 {
+        splats.push((cs.pixel, c));
+    }
+}

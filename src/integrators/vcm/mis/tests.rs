@@ -1,0 +1,197 @@
+//! The recursive weights against brute force: for random paths of every length from 2 to 8
+//! segments (random distances, cosines and densities), every technique's density is computed
+//! from the whole path (Veach's products of per-vertex densities, merges counting `pi r^2 N`
+//! and light tracing `N`), and each weight the renderer's functions give from the subpaths'
+//! recursive quantities must equal that technique's power-heuristic weight, and all of them
+//! must sum to one, for VCM and for BPT.
+
+use super::*;
+use crate::sampling::Rng;
+
+/// A path x_0 (on the light) .. x_n (the eye), all of whose surface vertices scatter
+/// non-specularly.
+struct Path {
+    n: usize,
+    /// d[i]: distance from x_i to x_{i+1}.
+    d: Vec<f64>,
+    /// cos_next[i], cos_prev[i]: cosine at x_i toward x_{i+1} and toward x_{i-1}.
+    cos_next: Vec<f64>,
+    cos_prev: Vec<f64>,
+    /// a[i]: BSDF density at x_i of x_{i+1}'s direction given x_{i-1}'s; b[i] the reverse.
+    a: Vec<f64>,
+    b: Vec<f64>,
+    /// Emission: light choice and area density, direction density; next-event estimation's
+    /// solid-angle density (with the light choice) from x_1; the camera's direction density.
+    pos: f64,
+    dir: f64,
+    nee: f64,
+    cam: f64,
+}
+
+fn random_path(n: usize, rng: &mut Rng) -> Path {
+    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * f64::from(rng.f32());
+    Path {
+        n,
+        d: (0..n).map(|_| u(0.2, 3.0)).collect(),
+        cos_next: (0..=n).map(|_| u(0.05, 1.0)).collect(),
+        cos_prev: (0..=n).map(|_| u(0.05, 1.0)).collect(),
+        a: (0..=n).map(|_| u(0.05, 3.0)).collect(),
+        b: (0..=n).map(|_| u(0.05, 3.0)).collect(),
+        pos: u(0.1, 4.0),
+        dir: u(0.05, 1.0),
+        nee: u(0.05, 5.0),
+        cam: u(0.5, 50.0),
+    }
+}
+
+impl Path {
+    /// Density per area of x_i sampled from the light side (i < n).
+    fn fwd(&self, i: usize) -> f64 {
+        match i {
+            0 => self.pos,
+            1 => self.dir * self.cos_prev[1] / (self.d[0] * self.d[0]),
+            _ => self.a[i - 1] * self.cos_prev[i] / (self.d[i - 1] * self.d[i - 1]),
+        }
+    }
+
+    /// Density per area of x_i sampled from the camera side (i < n).
+    fn bwd(&self, i: usize) -> f64 {
+        let d2 = self.d[i] * self.d[i];
+        if i == self.n - 1 {
+            self.cam * self.cos_next[i] / d2
+        } else {
+            self.b[i + 1] * self.cos_next[i] / d2
+        }
+    }
+
+    fn nee_area(&self) -> f64 {
+        self.nee * self.cos_next[0] / (self.d[0] * self.d[0])
+    }
+
+    /// Every technique's density, by brute force: connections with s light vertices (0..n-1),
+    /// light tracing (s = n), then merges at x_1 .. x_{n-1}.
+    fn densities(&self, n_paths: f64, radius: f64, vm: bool) -> Vec<f64> {
+        let n = self.n;
+        let mut out = Vec::new();
+        for s in 0..=n {
+            let mut p = if s == n { n_paths } else { 1.0 };
+            for i in 0..s {
+                p *= if i == 0 && s == 1 {
+                    self.nee_area()
+                } else {
+                    self.fwd(i)
+                };
+            }
+            for i in s..n {
+                p *= self.bwd(i);
+            }
+            out.push(p);
+        }
+        if vm {
+            for i in 1..n {
+                let mut p = n_paths * std::f64::consts::PI * radius * radius;
+                for j in 0..=i {
+                    p *= self.fwd(j);
+                }
+                for j in i..n {
+                    p *= self.bwd(j);
+                }
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    /// The same techniques' weights from the recursive quantities.
+    fn recursive_weights(&self, f: &Factors) -> Vec<f64> {
+        let n = self.n;
+        let emission = self.pos * self.dir;
+        // Light subpath: quantities at x_1 .. x_{n-1}.
+        let mut light = vec![Quantities::default(); n];
+        let mut q = Quantities::light(f, self.nee_area(), emission, self.cos_next[0]);
+        q.arrive(Some(self.d[0] * self.d[0]), self.cos_prev[1]);
+        light[1] = q;
+        for i in 1..n - 1 {
+            q.scatter(f, self.cos_next[i], self.a[i], self.b[i]);
+            q.arrive(Some(self.d[i] * self.d[i]), self.cos_prev[i + 1]);
+            light[i + 1] = q;
+        }
+        // Camera subpath: quantities at x_{n-1} .. x_0.
+        let mut camera = vec![Quantities::default(); n];
+        let mut q = Quantities::camera(f, self.cam);
+        q.arrive(Some(self.d[n - 1] * self.d[n - 1]), self.cos_next[n - 1]);
+        camera[n - 1] = q;
+        for i in (0..n - 1).rev() {
+            q.scatter(f, self.cos_prev[i + 1], self.b[i + 1], self.a[i + 1]);
+            q.arrive(Some(self.d[i] * self.d[i]), self.cos_next[i]);
+            camera[i] = q;
+        }
+        let mut w = Vec::new();
+        // s = 0: the camera path hits the light.
+        w.push(hit_light(&camera[0], self.nee_area(), emission));
+        // s = 1: next-event estimation at x_1.
+        if n >= 2 {
+            w.push(direct(
+                f,
+                &camera[1],
+                self.b[1],
+                self.a[1],
+                self.nee,
+                emission,
+                self.cos_prev[1],
+                self.cos_next[0],
+            ));
+        }
+        // 2 <= s <= n-1: light vertex x_{s-1} to camera vertex x_s.
+        for s in 2..n {
+            let d2 = self.d[s - 1] * self.d[s - 1];
+            w.push(connect(
+                f,
+                &camera[s],
+                &light[s - 1],
+                self.b[s] * self.cos_next[s - 1] / d2,
+                self.a[s - 1] * self.cos_prev[s] / d2,
+                self.a[s],
+                self.b[s - 1],
+            ));
+        }
+        // s = n: light tracing from x_{n-1}.
+        let d2 = self.d[n - 1] * self.d[n - 1];
+        let camera_pdf_a = self.cam * self.cos_next[n - 1] / d2;
+        w.push(to_camera(f, &light[n - 1], camera_pdf_a, self.b[n - 1]));
+        if f.vm_weight > 0.0 {
+            for i in 1..n {
+                w.push(merge(f, &camera[i], &light[i], self.b[i], self.a[i]));
+            }
+        }
+        w
+    }
+}
+
+#[test]
+fn recursive_weights_equal_brute_force_and_sum_to_one() {
+    let mut rng = Rng::new(2024);
+    for (use_vm, name) in [(true, "vcm"), (false, "bpt")] {
+        for n in 2..=8 {
+            for _ in 0..200 {
+                let path = random_path(n, &mut rng);
+                let n_paths = 10.0 + 1000.0 * f64::from(rng.f32());
+                let radius = 0.01 + 0.5 * f64::from(rng.f32());
+                let f = Factors::new(radius, n_paths, true, use_vm);
+                let p = path.densities(n_paths, radius, use_vm);
+                let total: f64 = p.iter().map(|x| mis(*x)).sum();
+                let w = path.recursive_weights(&f);
+                assert_eq!(w.len(), p.len(), "{name}: technique count");
+                let sum: f64 = w.iter().sum();
+                assert!((sum - 1.0).abs() < 1e-9, "{name}, {n} segments: sum {sum}");
+                for (k, (wk, pk)) in w.iter().zip(&p).enumerate() {
+                    let expected = mis(*pk) / total;
+                    assert!(
+                        (wk - expected).abs() < 1e-9 * (1.0 + expected),
+                        "{name}, {n} segments, technique {k}: {wk} vs {expected}"
+                    );
+                }
+            }
+        }
+    }
+}
