@@ -307,7 +307,10 @@ fn rough_gold_renders_gold_in_every_integrator() {
         let loaded = sppm_lang::load_source("gold.scn", &text, &sppm_lang::EvalOptions::default());
         let scene = loaded.scene.expect("gold scene evaluates");
         for integrator in Integrator::ALL {
-            let img = run(&scene, integrator, 4, 20_000, 3);
+            // Light tracing reaches the unit sphere from the enclosing light by about one
+            // path in a hundred: it needs far more iterations than the others here.
+            let iterations = if integrator == Integrator::Lt { 256 } else { 4 };
+            let img = run(&scene, integrator, iterations, 20_000, 3);
             let mut c = [0.0f64; 3];
             for y in 5..11 {
                 for x in 5..11 {
@@ -561,6 +564,11 @@ fn prisms_render_in_every_integrator() {
     let scene = loaded.scene.expect("prism scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 9);
+        if integrator == Integrator::Lt {
+            // Light tracing starts no path on the sky, this scene's only light
+            // (docs/integrators.md): rendered (finite pixels, checked in `run`), not lit.
+            continue;
+        }
         // The frame's top: columns 6 to 9 of 32 see x from 1.9 down to 1.2 at height 1.
         let frame = window_mean(&img, 6, 14, 9, 18);
         let hole = window_mean(&img, 15, 15, 17, 17);
@@ -588,6 +596,11 @@ fn superellipsoids_render_in_every_integrator() {
     let scene = loaded.scene.expect("superellipsoid scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
+        if integrator == Integrator::Lt {
+            // Light tracing starts no path on the sky, this scene's only light
+            // (docs/integrators.md): rendered (finite pixels, checked in `run`), not lit.
+            continue;
+        }
         let centre = window_mean(&img, 10, 10, 14, 14);
         println!("{integrator:?}: centre {centre:.3}");
         assert!(centre > 0.05, "{integrator:?}: the superellipsoid is black");
@@ -608,6 +621,11 @@ fn a_sphere_sweep_renders_in_every_integrator() {
     let scene = loaded.scene.expect("sphere sweep scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
+        if integrator == Integrator::Lt {
+            // Light tracing starts no path on the sky, this scene's only light
+            // (docs/integrators.md): rendered (finite pixels, checked in `run`), not lit.
+            continue;
+        }
         let centre = window_mean(&img, 10, 10, 14, 14);
         let corner = window_mean(&img, 0, 0, 3, 3);
         println!("{integrator:?}: centre {centre:.3}, corner {corner:.3}");
