@@ -95,7 +95,7 @@ pub(crate) fn trace_classified_photon(
 /// Russian roulette after a bounce that multiplies the photon's power `beta` by `weight`:
 /// keeps the power roughly constant. Returns whether the photon goes on (`beta` then its new
 /// power).
-fn roulette(beta: &mut Vec3A, weight: Vec3A, rng: &mut Rng) -> bool {
+pub(crate) fn roulette(beta: &mut Vec3A, weight: Vec3A, rng: &mut Rng) -> bool {
     let next = *beta * weight;
     let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
     if rng.f32() < q {

@@ -8,6 +8,7 @@ use glam::Vec3A;
 use super::Context;
 use super::mis::{self, Quantities};
 use crate::geometry::Ray;
+use crate::integrators::common::photons::roulette;
 use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
 use crate::lights::Light;
 use crate::materials::{Bsdf, TransportMode};
@@ -129,17 +130,6 @@ pub(super) fn trace(
         ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
         len += 1;
     }
-}
-
-/// The photon tracer's roulette: keeps the power roughly constant.
-fn roulette(beta: &mut Vec3A, weight: Vec3A, rng: &mut Rng) -> bool {
-    let next = *beta * weight;
-    let q = (1.0 - next.max_element() / beta.max_element()).max(0.0);
-    if rng.f32() < q {
-        return false;
-    }
-    *beta = next / (1.0 - q);
-    beta.is_finite() && beta.max_element() > 0.0
 }
 
 /// Connects a light vertex to a point of the lens (light tracing).
