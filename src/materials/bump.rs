@@ -279,7 +279,7 @@ impl Facets {
             if let Some(i) = i.filter(|i| i.z * s > 0.0) {
                 return Some(i);
             }
-            key = mix64(key);
+            key = crate::sampling::splitmix64(key).1;
             u = Vec2::new(unit(key), unit(key >> 24));
             u_exit = unit(key >> 40);
         }
@@ -289,14 +289,6 @@ impl Facets {
 
 /// Returns a sampled diffuse walk follows before it gives up (a share `L^64`, below `1e-19`).
 const MAX_RETURNS: usize = 64;
-
-/// SplitMix64's finalizer.
-fn mix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
 
 /// A number in [0, 1) from the low 24 bits of `k`.
 fn unit(k: u64) -> f32 {

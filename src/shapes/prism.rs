@@ -222,11 +222,6 @@ impl Prism {
         Ok(prism)
     }
 
-    /// The bounds of the sweep's heights, lower first.
-    pub fn heights(&self) -> (f64, f64) {
-        (self.lo, self.hi)
-    }
-
     /// Crossings of the half-line from `q` along `dir` with the profile.
     fn crossings(&self, q: DVec2, dir: DVec2, buf: &mut Vec<Root>) -> u32 {
         let mut n = 0;

@@ -18,6 +18,7 @@
 
 use std::f64::consts::TAU;
 
+use arrayvec::ArrayVec;
 use glam::{DVec2, DVec3, Vec2, Vec3A};
 
 use super::{AreaSample, Shape};
@@ -107,8 +108,11 @@ impl Superellipsoid {
         // cube is shorter than that), so halving always ends.
         let leaf = (LEAF * (b - a)).max(8.0 * f64::EPSILON * a.abs().max(b.abs()));
         let g = |t: f64| self.gauge(o + t * d) - 1.0;
-        // Stretches still to look at, the nearest on top.
-        let mut stack = vec![(a, b, g(a), g(b))];
+        // Stretches still to look at, the nearest on top. Halving is depth first and a
+        // stretch at depth k is 2^-k of the chord, a leaf by depth 30 (LEAF = 1e-9): the
+        // stack holds at most one stretch per depth, so it lives on the stack of the thread.
+        let mut stack: ArrayVec<(f64, f64, f64, f64), 64> = ArrayVec::new();
+        stack.push((a, b, g(a), g(b)));
         let mut visits = 0;
         while let Some((lo, hi, glo, ghi)) = stack.pop() {
             visits += 1;
@@ -137,8 +141,11 @@ impl Superellipsoid {
                 continue;
             }
             let gm = g(mid);
-            stack.push((mid, hi, gm, ghi));
-            stack.push((lo, mid, glo, gm));
+            if stack.try_push((mid, hi, gm, ghi)).is_err()
+                || stack.try_push((lo, mid, glo, gm)).is_err()
+            {
+                return None;
+            }
         }
         None
     }

@@ -57,7 +57,15 @@ impl ObjectBuilder {
                 .map_err(|e| e.help("each sphere is a centre `<x, y, z>` and a radius"))
                 .at(pair[0].1)?;
             let r = pair[1].0.num().at(pair[1].1)?;
-            if !(r > 0.0 && r.is_finite() && c.is_finite()) {
+            if !c.is_finite() {
+                return Err(vec![
+                    Error::new("a sphere_sweep's centre must be finite")
+                        .label("not a finite point")
+                        .help(format!("e.g. `{EXAMPLE}`"))
+                        .at(pair[0].1),
+                ]);
+            }
+            if !(r > 0.0 && r.is_finite()) {
                 return Err(vec![
                     Error::new(format!(
                         "a sphere_sweep's radius must be positive, found {}",
