@@ -252,6 +252,8 @@ pub(crate) struct Evaluator {
     pub(crate) defining: Option<String>,
     /// Blocks being evaluated, innermost last (with `frames`, bounded by [`MAX_EVAL_NESTING`]).
     pub(crate) block_depth: usize,
+    /// The items being run are a blob's body (its `sphere`s and `cylinder`s are components).
+    pub(crate) in_blob: bool,
     /// The evaluation thread's stack (bytes): it bounds the nesting ([`nesting_limit`]).
     stack: usize,
     /// Object parts copied into containers so far (see [`Evaluator::count_parts`]).
@@ -338,6 +340,7 @@ impl Evaluator {
             messages: 0,
             main_file: None,
             block_depth: 0,
+            in_blob: false,
             warning_count: 0,
             camera_from_defaults: false,
             defining: None,

@@ -92,6 +92,13 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + p.segments.len() * 112) as u64
                 + WRAP_OVERHEAD
         }
+        // Its components and their hierarchy (about 200 bytes a component).
+        Shape::Blob(b) => {
+            (size_of::<crate::shapes::blob::Blob>()
+                + size_of::<crate::shapes::transformed::Transformed>()
+                + b.components.len() * 200) as u64
+                + WRAP_OVERHEAD
+        }
         _ => 0,
     };
     // Spheres, disks and cones under a transform the renderer cannot bake are heavy too, and
@@ -103,6 +110,8 @@ fn held_bytes(shape: &Shape) -> u64 {
             | Shape::BezierPatch { .. }
             | Shape::Prism(_)
             | Shape::Superellipsoid { .. }
+            | Shape::Blob(_)
+            | Shape::Isosurface(_)
             | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

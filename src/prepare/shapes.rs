@@ -9,10 +9,12 @@ use rayon::prelude::*;
 
 use crate::scene;
 use crate::shapes::Shape;
+use crate::shapes::blob::Blob;
 use crate::shapes::cone::Cone;
 use crate::shapes::cuboid::cuboid_faces;
 use crate::shapes::cylinder::Cylinder;
 use crate::shapes::disk::Disk;
+use crate::shapes::isosurface::Isosurface;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
 use crate::shapes::plane::Plane;
@@ -228,6 +230,8 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         scene::Shape::Superellipsoid { e, n } => {
             vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
         }
+        scene::Shape::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
+        scene::Shape::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

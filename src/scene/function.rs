@@ -220,6 +220,11 @@ impl Function {
         self.slots
     }
 
+    /// Stack entries a run needs.
+    pub fn stack_size(&self) -> usize {
+        self.stack
+    }
+
     pub fn code(&self) -> &[Op] {
         &self.code
     }

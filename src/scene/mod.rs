@@ -9,8 +9,10 @@
 
 pub mod animation;
 mod assets;
+pub mod blob;
 mod csg;
 pub mod function;
+pub mod interval;
 pub mod metals;
 pub mod noise;
 mod obj;
@@ -25,6 +27,7 @@ pub use assets::{
     MeshData, brightest_pixel, load_image, load_image_within, load_obj, load_obj_in,
     srgb_to_linear,
 };
+pub use blob::{Blob, BlobComponent, Container, Isosurface, MAX_BLOB_COMPONENTS};
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use function::{Function, FunctionError, Op};
 pub use pattern_value::{PatternFn, PatternKind};
@@ -462,6 +465,12 @@ pub enum Shape {
         e: f64,
         n: f64,
     },
+    /// POV-Ray's `blob`: spheres and capsules of density, the surface where their sum meets
+    /// a threshold (see [`Blob`]).
+    Blob(Blob),
+    /// POV-Ray's `isosurface`: where a user function meets a threshold in a container (see
+    /// [`Isosurface`]).
+    Isosurface(Isosurface),
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
@@ -492,6 +501,8 @@ impl Shape {
             Shape::BezierPatch { .. } => "bezier_patch",
             Shape::Prism(_) => "prism",
             Shape::Superellipsoid { .. } => "superellipsoid",
+            Shape::Blob(_) => "blob",
+            Shape::Isosurface(_) => "isosurface",
             Shape::Csg(c) => c.op.name(),
         }
     }

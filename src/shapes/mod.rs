@@ -246,11 +246,13 @@ pub(crate) fn solver_of(method: IntersectMethod) -> Solver {
     }
 }
 
+pub mod blob;
 pub mod cone;
 pub mod csg;
 pub mod cuboid;
 pub mod cylinder;
 pub mod disk;
+pub mod isosurface;
 pub mod mesh;
 pub mod patch;
 pub mod plane;

@@ -257,15 +257,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `mesh { \"file.obj\" }`",
     ),
     pov(
-        "blob",
-        "POV-Ray's `blob` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`, or \
-         `merge` spheres",
-    ),
-    pov(
-        "isosurface",
-        "POV-Ray's `isosurface` has no counterpart: model it as a mesh, `mesh { \"file.obj\" }`",
-    ),
-    pov(
         "fog",
         "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
     ),

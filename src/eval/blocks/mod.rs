@@ -28,6 +28,7 @@ use light::LightBuilder;
 use material::MaterialBuilder;
 use normal::NormalBuilder;
 use object::{OBJECT_BLOCKS, ObjectBuilder};
+
 use profile::ProfileBuilder;
 pub(super) use scene::TopSink;
 use settings::SettingsBuilder;
@@ -94,6 +95,7 @@ const VALUE_BLOCKS: &[&str] = &[
     "light",
     "spotlight",
     "environment",
+    "contained_by",
 ];
 
 impl Evaluator {
@@ -107,7 +109,12 @@ impl Evaluator {
         self.block_depth += 1;
         // A `#break` in the body cannot leave a `#switch` or loop around the block.
         let outer = std::mem::take(&mut self.break_targets);
-        let r = self.eval_block_body(kind, items, span);
+        // A `sphere` or `cylinder` directly in a blob's body is a component of it; the body of
+        // any other block is not a blob's.
+        let component = self.in_blob && matches!(kind.text.as_str(), "sphere" | "cylinder");
+        let outer_blob = std::mem::replace(&mut self.in_blob, kind.text == "blob");
+        let r = self.eval_block_body(kind, items, span, component);
+        self.in_blob = outer_blob;
         self.break_targets = outer;
         self.block_depth -= 1;
         r
@@ -118,11 +125,16 @@ impl Evaluator {
         kind: &Name,
         items: &Rc<Vec<Item>>,
         span: Span,
+        component: bool,
     ) -> SourceResult<Value> {
         let k = kind.text.as_str();
         match k {
             _ if OBJECT_BLOCKS.contains(&k) => {
-                let mut b = ObjectBuilder::new(k, span);
+                let mut b = if component {
+                    ObjectBuilder::new_component(k, span)
+                } else {
+                    ObjectBuilder::new(k, span)
+                };
                 self.run_items(items, &mut b)?;
                 b.finish(self).map(|o| Value::Object(Rc::new(o)))
             }
@@ -171,6 +183,11 @@ impl Evaluator {
                 let mut b = LightBuilder::new(k == "spotlight");
                 self.run_items(items, &mut b)?;
                 b.finish(self, span)
+            }
+            "contained_by" => {
+                let mut b = object::ContainedBy::default();
+                self.run_items(items, &mut b)?;
+                b.finish(span)
             }
             "environment" => {
                 let mut b = EnvBuilder::default();

@@ -1,7 +1,11 @@
 //! Object blocks: the primitives (in [`primitive`]), `prism` (in [`prism`]), `revolve`, Bezier patches, the
 //! containers `union`, `group`, `object` and `area_light`, and the CSG operations (in [`csg`]).
 
+mod blob;
 mod csg;
+mod isosurface;
+
+pub(super) use isosurface::ContainedBy;
 mod primitive;
 mod prism;
 mod sphere_sweep;
@@ -44,6 +48,18 @@ pub(super) struct ObjectBuilder {
     /// A prism's spline and sweep keywords.
     spline: Option<PrismSpline>,
     conic: bool,
+    /// A `sphere` or `cylinder` written in a blob's body: a component of it.
+    component: bool,
+    /// A component's strength; a blob's or isosurface's threshold.
+    strength: Option<(f64, Span)>,
+    threshold: Option<(f64, Span)>,
+    /// A blob's components so far.
+    components: Vec<BlobComponent>,
+    /// An isosurface's function, container, accuracy and `max_gradient`.
+    function: Option<(std::sync::Arc<Function>, Span)>,
+    container: Option<(Container, Span)>,
+    accuracy: Option<(f64, Span)>,
+    max_gradient: Option<Span>,
 }
 
 const INVERSE: PropSpec = p("inverse", 0, 0, "nothing", "");
@@ -75,6 +91,23 @@ static SWEEP_PROPS: [PropSpec; 9] = with_transforms([
     p("cubic_spline", 0, 0, "nothing", ""),
     p("b_spline", 0, 0, "nothing", ""),
     p("tolerance", 1, 1, "a number", "1e-6"),
+]);
+static COMPONENT_PROPS: [PropSpec; 5] =
+    with_transforms([p("strength", 1, 1, "a number", "strength 1")]);
+static BLOB_PROPS: [PropSpec; 8] = with_transforms([
+    p("threshold", 1, 1, "a positive number", "threshold 0.6"),
+    p("sturm", 0, 0, "nothing", ""),
+    w("hierarchy", "`on` or `off`", "hierarchy on"),
+    INVERSE,
+]);
+static ISO_PROPS: [PropSpec; 11] = with_transforms([
+    p("threshold", 1, 1, "a number", "threshold 0"),
+    p("open", 0, 0, "nothing", ""),
+    p("max_gradient", 1, 1, "a number", "max_gradient 4"),
+    p("accuracy", 1, 1, "a positive number", "accuracy 1e-6"),
+    p("max_trace", 1, 1, "a number", "max_trace 1"),
+    p("all_intersections", 0, 0, "nothing", ""),
+    INVERSE,
 ]);
 static REVOLVE_PROPS: [PropSpec; 12] = with_transforms([
     INVERSE,
@@ -109,6 +142,8 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "prism",
     "superellipsoid",
     "sphere_sweep",
+    "blob",
+    "isosurface",
     "bezier_patch",
     "bezier_mesh",
     "union",
@@ -148,6 +183,22 @@ impl ObjectBuilder {
             inverse: false,
             spline: None,
             conic: false,
+            component: false,
+            strength: None,
+            threshold: None,
+            components: Vec::new(),
+            function: None,
+            container: None,
+            accuracy: None,
+            max_gradient: None,
+        }
+    }
+
+    /// A `sphere` or `cylinder` block written directly in a blob's body.
+    pub(super) fn new_component(kind: &str, span: Span) -> Self {
+        Self {
+            component: true,
+            ..Self::new(kind, span)
         }
     }
 
@@ -267,6 +318,9 @@ impl ObjectBuilder {
             }
             "prism" => vec![self.part(self.prism()?)],
             "superellipsoid" => vec![self.part(self.superellipsoid()?)],
+            "blob" => vec![self.part(self.blob()?)],
+            "isosurface" => vec![self.part(self.isosurface(ev)?)],
+            "sphere" | "cylinder" if self.component => vec![self.blob_component()?],
             "sphere_sweep" => self.sphere_sweep()?,
             "bezier_patch" | "bezier_mesh" => {
                 let n = self.values.len();
@@ -416,16 +470,19 @@ impl Sink for ObjectBuilder {
     }
     fn props(&self) -> &'static [PropSpec] {
         match self.kind {
+            "sphere" | "cylinder" if self.component => &COMPONENT_PROPS,
             "cylinder" | "cone" => &CYL_PROPS,
             "area_light" => &AREA_PROPS,
             "revolve" => &REVOLVE_PROPS,
             "prism" => &PRISM_PROPS,
             "sphere_sweep" => &SWEEP_PROPS,
+            "blob" => &BLOB_PROPS,
+            "isosurface" => &ISO_PROPS,
             "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,
             _ => &OBJ_PROPS,
         }
     }
-    fn property(&mut self, _ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
+    fn property(&mut self, ev: &mut Evaluator, kw: &Name, args: Vec<Arg>) -> SourceResult<()> {
         if transform_prop(&kw.text, &args, &mut self.transform)? {
             return Ok(());
         }
@@ -448,6 +505,13 @@ impl Sink for ObjectBuilder {
             }
             // A sphere sweep is exact: POV-Ray's root-finding tolerance has nothing to tune.
             "tolerance" => {}
+            // A blob's roots are isolated exactly, over a hierarchy of its components always.
+            "sturm" | "hierarchy" => {}
+            "strength" => self.strength = Some((num(&args[0])?, args[0].span)),
+            "threshold" => self.threshold = Some((num(&args[0])?, args[0].span)),
+            "max_gradient" | "accuracy" | "max_trace" | "all_intersections" => {
+                self.iso_property(ev, kw, &args)?
+            }
             "linear_spline" => self.spline = Some(PrismSpline::Linear),
             "quadratic_spline" => self.spline = Some(PrismSpline::Quadratic),
             "cubic_spline" => self.spline = Some(PrismSpline::Cubic),
@@ -504,6 +568,12 @@ impl Sink for ObjectBuilder {
                 Ok(())
             }
             Value::Object(o) if let Some(op) = self.csg() => self.csg_child(ev, op, &o, span),
+            Value::Object(o) if self.kind == "blob" => self.blob_child(&o, span),
+            Value::Function(f) if self.kind == "isosurface" => self.iso_function(&f, span),
+            Value::Object(o) if self.kind == "isosurface" => {
+                self.container = Some((isosurface::container_of(&o, span)?, span));
+                Ok(())
+            }
             Value::Object(o) if self.is_container() => {
                 ev.count_parts(self.parts.len(), o.parts.len(), span)?;
                 self.parts.extend(o.parts.iter().cloned());

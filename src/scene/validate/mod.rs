@@ -464,6 +464,32 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(c)?;
             }
         }
+        Shape::Blob(b) => {
+            b.check().map_err(|m| {
+                invalid(span, m, "here", "see the blob section of docs/language.md")
+            })?;
+            for c in &b.components {
+                let place = *t * c.transform;
+                for q in [c.a, c.b] {
+                    point(place.transform_point3(q), &format!("this {kind}"), span)?;
+                }
+                len(c.radius * stretch(&c.transform), "component radius")?;
+            }
+        }
+        Shape::Isosurface(i) => {
+            i.check().map_err(|m| {
+                invalid(
+                    span,
+                    m,
+                    "here",
+                    "see the isosurface section of docs/language.md",
+                )
+            })?;
+            let (lo, hi) = i.container.bounds();
+            len((hi - lo).max_element(), "container")?;
+            at(lo)?;
+            at(hi)?;
+        }
         Shape::Prism(p) => {
             // The corners of its box: the profile's rectangle at both heights (scaled by the
             // height for a conic sweep).
