@@ -92,6 +92,24 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         ),
         ("superellipsoid { <0.3, 2.5> scale 1.2 }", false),
         (
+            "blob { threshold 0.5 sphere { <-0.4, 0, 0>, 1, strength 1 } \
+             sphere { <0.4, 0.1, 0>, 1, strength 1 } \
+             cylinder { <0, -0.6, 0>, <0, 0.6, 0.2>, 0.7, strength 1 } \
+             sphere { <0, 0.7, 0>, 0.5, strength -2 } rotate <10, 20, 0> }",
+            false,
+        ),
+        (
+            "isosurface { function { x*x + 2*y*y + z*z + 0.2*sin(4*x) } threshold 1 \
+             contained_by { box { <-1.4, -1.4, -1.4>, <1.4, 1.4, 1.4> } } }",
+            false,
+        ),
+        // Cut by its container: the walls close it.
+        (
+            "isosurface { function { x*x + y*y + z*z } threshold 1.2 \
+             contained_by { box { <-0.9, -0.9, -0.9>, <0.9, 0.9, 0.9> } } rotate <0, 30, 0> }",
+            false,
+        ),
+        (
             "sphere_sweep { linear_spline 3, <-0.8, -0.5, 0>, 0.5, <0, 0.3, 0.2>, 0.7, \
              <0.9, 0, -0.3>, 0.3 }",
             false,

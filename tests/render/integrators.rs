@@ -607,6 +607,40 @@ fn superellipsoids_render_in_every_integrator() {
     }
 }
 
+/// A blob (two spheres and a capsule merging, a negative sphere carving a dent) and an
+/// isosurface (a sphere shell by its distance function, cut open by its container's walls)
+/// render in every integrator: every pixel finite (checked in `run`), each shape lit at its
+/// centre, and the background seen between them.
+#[test]
+fn blobs_and_isosurfaces_render_in_every_integrator() {
+    let text = "settings { resolution <32, 16> max_depth 6 }
+         camera { location <0, 0, -8> look_at <0, 0, 0> fov 50 }
+         background rgb 0.5
+         blob { threshold 0.5
+                sphere { <-0.4, 0, 0>, 1, strength 1 }
+                sphere { <0.4, 0, 0>, 1, 1 }
+                cylinder { <0, -0.8, 0>, <0, 0.8, 0>, 0.5, strength 1 scale <1, 1.2, 1> }
+                sphere { <0, 0, -0.9>, 0.4, strength -1 }
+                translate <-2, 0, 0> material { diffuse rgb 0.8 } }
+         isosurface { function { sqrt(x*x + y*y + z*z) } threshold 1
+                      contained_by { box { <-0.8, -0.8, -0.8>, <0.8, 0.8, 0.8> } }
+                      translate <2, 0, 0> material { glass ior 1.5 } }";
+    let loaded = sppm_lang::load_source("blob.scn", text, &sppm_lang::EvalOptions::default());
+    let scene = loaded.scene.expect("blob scene evaluates");
+    for integrator in Integrator::ALL {
+        let img = run(&scene, integrator, 2, 5_000, 4);
+        if integrator == Integrator::Lt {
+            // Light tracing starts no path on the sky, this scene's only light.
+            continue;
+        }
+        let blob = window_mean(&img, 6, 6, 10, 10);
+        let iso = window_mean(&img, 22, 6, 26, 10);
+        println!("{integrator:?}: blob {blob:.3}, isosurface {iso:.3}");
+        assert!(blob > 0.05, "{integrator:?}: the blob is black");
+        assert!(iso > 0.05, "{integrator:?}: the isosurface is black");
+    }
+}
+
 /// A linear sphere sweep (a bent tube whose radius changes) renders in every integrator: every
 /// pixel finite (checked in `run`), the tube lit at its middle sphere, and the background seen
 /// beside it.

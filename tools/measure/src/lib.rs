@@ -3,6 +3,8 @@
 //!
 //! - [`bezier`]: speed against accuracy of the Bezier intersectors (robust, Newton) and of
 //!   tessellated meshes of the same surfaces.
+//! - [`blob_reference`]: slow reference intersectors of `blob` and `isosurface` (dense
+//!   sampling and bisection), the oracles of their stress tests.
 //! - [`cost`]: cost per ray of the Bezier surfaces as a ratio to a quad's.
 //! - [`layered`]: directional albedos of the rough coat against a random walk through the
 //!   layer, and of the rough metal lobe in a white furnace (`sppm-measure coat`, `furnace`).
@@ -20,6 +22,7 @@
 //! - [`twin`]: a scene's twin with its revolves replaced by meshes at a given accuracy.
 
 pub mod bezier;
+pub mod blob_reference;
 pub mod cost;
 pub mod layered;
 pub mod lights;

@@ -1178,3 +1178,532 @@ mod superellipsoid_stress {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// blob and isosurface: the product's exact piecewise-quartic isolation (blob) and interval
+// subdivision (isosurface) against `sppm_measure::blob_reference`.
+
+mod blob_stress {
+    use std::sync::Arc;
+    use std::time::Instant;
+
+    use glam::{DAffine3, DQuat, DVec3};
+    use rayon::prelude::*;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::scene::function::{Binary, Op, Unary};
+    use sppm_lang::scene::{
+        Blob as SceneBlob, BlobComponent, Container, Function, Isosurface as SceneIso,
+    };
+    use sppm_lang::shapes::blob::Blob;
+    use sppm_lang::shapes::isosurface::{DEFAULT_ACCURACY, Isosurface};
+    use sppm_measure::blob_reference::{RefBlob, RefComponent, first_sign_change};
+
+    /// Rays per case: 4 000 by default (the references sample every ray thousands of times);
+    /// `BLOB_STRESS_RAYS` sets another count.
+    fn rays() -> usize {
+        std::env::var("BLOB_STRESS_RAYS")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(4_000)
+    }
+
+    /// Counts of one case.
+    #[derive(Default)]
+    struct Tally {
+        fails: Vec<String>,
+        confirmed: usize,
+        hits: usize,
+        max_err: f64,
+    }
+
+    impl Tally {
+        fn merge(mut self, o: Tally) -> Tally {
+            self.fails.extend(o.fails);
+            self.confirmed += o.confirmed;
+            self.hits += o.hits;
+            self.max_err = self.max_err.max(o.max_err);
+            self
+        }
+
+        /// Judges one ray: `want` the reference's hit, `got` the product's, `changes(t)` whether
+        /// the reference's function changes sign across `t` (a hit the sampling stepped over).
+        fn judge(
+            want: Option<f64>,
+            got: Option<f64>,
+            changes: impl Fn(f64) -> bool,
+            what: String,
+        ) -> Tally {
+            let mut out = Tally {
+                hits: usize::from(want.is_some()),
+                ..Tally::default()
+            };
+            match (want, got) {
+                (Some(w), None) => out.fails.push(format!("miss: {what} want {w}")),
+                (None, Some(g)) if !changes(g) => {
+                    out.fails.push(format!("false hit: {what} got {g}"))
+                }
+                (None, Some(_)) => out.confirmed = 1,
+                (Some(w), Some(g)) => {
+                    let err = (g - w).abs();
+                    if err > 1e-6 * w.max(1.0) {
+                        if g < w && changes(g) {
+                            out.confirmed = 1;
+                        } else {
+                            out.fails.push(format!("t: {what} want {w} got {g}"));
+                        }
+                    } else {
+                        out.max_err = err;
+                    }
+                }
+                (None, None) => {}
+            }
+            out
+        }
+    }
+
+    struct Case {
+        name: &'static str,
+        threshold: f64,
+        /// (a, b, radius, strength, placement)
+        comps: Vec<(DVec3, DVec3, f64, f64, DAffine3)>,
+    }
+
+    fn cases() -> Vec<Case> {
+        let id = DAffine3::IDENTITY;
+        // Two spheres whose fields meet at the midpoint just above the threshold: a neck of
+        // radius about 3.5e-3 (2 (1 - c^2)^2 = 0.5 (1 + 1e-4)).
+        let c = (1.0 - 0.5 * (1.0f64 + 1e-4).sqrt()).sqrt();
+        let mut random = Vec::new();
+        let mut rng = SplitMix64::new(0xb10b);
+        for _ in 0..40 {
+            let a = DVec3::new(
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+            );
+            let b = if rng.f() < 0.4 {
+                a + rng.unit() * rng.range(0.2, 1.0)
+            } else {
+                a
+            };
+            let s = if rng.f() < 0.25 {
+                -rng.range(0.5, 2.0)
+            } else {
+                rng.range(0.5, 2.0)
+            };
+            let place = if rng.f() < 0.3 {
+                DAffine3::from_scale_rotation_translation(
+                    DVec3::new(
+                        rng.range(0.5, 1.5),
+                        rng.range(0.5, 1.5),
+                        rng.range(0.5, 1.5),
+                    ),
+                    DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 3.0)),
+                    DVec3::ZERO,
+                )
+            } else {
+                id
+            };
+            random.push((a, b, rng.range(0.3, 1.0), s, place));
+        }
+        vec![
+            Case {
+                name: "spheres, capsule and a negative sphere",
+                threshold: 0.5,
+                comps: vec![
+                    (
+                        DVec3::new(-0.4, 0.0, 0.0),
+                        DVec3::new(-0.4, 0.0, 0.0),
+                        1.0,
+                        1.0,
+                        id,
+                    ),
+                    (
+                        DVec3::new(0.4, 0.1, 0.0),
+                        DVec3::new(0.4, 0.1, 0.0),
+                        1.0,
+                        1.0,
+                        id,
+                    ),
+                    (
+                        DVec3::new(0.0, -0.8, 0.0),
+                        DVec3::new(0.0, 0.8, 0.3),
+                        0.6,
+                        1.5,
+                        id,
+                    ),
+                    (
+                        DVec3::new(0.0, 0.6, -0.5),
+                        DVec3::new(0.0, 0.6, -0.5),
+                        0.5,
+                        -2.0,
+                        id,
+                    ),
+                ],
+            },
+            Case {
+                name: "a neck where two spheres barely meet",
+                threshold: 0.5,
+                comps: vec![
+                    (
+                        DVec3::new(-c, 0.0, 0.0),
+                        DVec3::new(-c, 0.0, 0.0),
+                        1.0,
+                        1.0,
+                        id,
+                    ),
+                    (
+                        DVec3::new(c, 0.0, 0.0),
+                        DVec3::new(c, 0.0, 0.0),
+                        1.0,
+                        1.0,
+                        id,
+                    ),
+                ],
+            },
+            Case {
+                name: "40 random components, a quarter negative, some transformed",
+                threshold: 0.6,
+                comps: random,
+            },
+        ]
+    }
+
+    /// The first point where `f` (positive inside) turns negative going from `c` along `u`.
+    fn surface_from(f: &impl Fn(DVec3) -> f64, c: DVec3, u: DVec3) -> Option<DVec3> {
+        if f(c) <= 0.0 {
+            return None;
+        }
+        let mut t0 = 0.0;
+        for i in 1..=2000 {
+            let t1 = 4.0 * f64::from(i) / 2000.0;
+            if f(c + t1 * u) <= 0.0 {
+                let (mut l, mut h) = (t0, t1);
+                for _ in 0..100 {
+                    let m = 0.5 * (l + h);
+                    if f(c + m * u) > 0.0 {
+                        l = m;
+                    } else {
+                        h = m;
+                    }
+                }
+                return Some(c + l * u);
+            }
+            t0 = t1;
+        }
+        None
+    }
+
+    fn grad(f: &impl Fn(DVec3) -> f64, p: DVec3) -> DVec3 {
+        let h = 1e-7;
+        DVec3::new(
+            f(p + DVec3::X * h) - f(p - DVec3::X * h),
+            f(p + DVec3::Y * h) - f(p - DVec3::Y * h),
+            f(p + DVec3::Z * h) - f(p - DVec3::Z * h),
+        )
+    }
+
+    /// Random rays from afar (at points of the box), grazing rays (1e-5..1e-2 off a tangent
+    /// plane) and rays through the origin's neighbourhood across the x axis.
+    fn ray(
+        f: &impl Fn(DVec3) -> f64,
+        centres: &[DVec3],
+        lo: DVec3,
+        hi: DVec3,
+        i: usize,
+        rng: &mut SplitMix64,
+    ) -> (DVec3, DVec3) {
+        let random = |rng: &mut SplitMix64| {
+            let o = rng.unit() * 6.0;
+            let target = lo + (hi - lo) * DVec3::new(rng.f(), rng.f(), rng.f());
+            (o, (target - o).normalize())
+        };
+        match i % 3 {
+            0 => random(rng),
+            1 => {
+                let c = centres[(rng.f() * centres.len() as f64) as usize % centres.len()];
+                let Some(p) = surface_from(f, c, rng.unit()) else {
+                    return random(rng);
+                };
+                let n = (-grad(f, p)).normalize_or(DVec3::Y);
+                let tangent = n.cross(rng.unit()).normalize();
+                let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                let d = (tangent + n * eps).normalize();
+                (p - d * 4.0 + n * (eps * rng.range(-2.0, 2.0)), d)
+            }
+            _ => {
+                let target = DVec3::new(0.0, rng.range(-0.01, 0.01), rng.range(-0.01, 0.01));
+                let d = DVec3::new(
+                    rng.range(-0.05, 0.05),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+                .normalize();
+                (target - d * 4.0, d)
+            }
+        }
+    }
+
+    /// No miss, no false hit (a hit the reference's 4 000 samples stepped over counts when the
+    /// field changes sign across it), `t` within 1e-6, normals out of the solid.
+    #[test]
+    fn blob_rays_against_the_reference() {
+        for (k, case) in cases().iter().enumerate() {
+            let blob = Blob::new(&SceneBlob {
+                threshold: case.threshold,
+                components: case
+                    .comps
+                    .iter()
+                    .map(|&(a, b, radius, strength, transform)| BlobComponent {
+                        a,
+                        b,
+                        radius,
+                        strength,
+                        transform,
+                    })
+                    .collect(),
+            })
+            .unwrap();
+            let r = RefBlob {
+                threshold: case.threshold,
+                comps: case
+                    .comps
+                    .iter()
+                    .map(|&(a, b, r, s, t)| RefComponent {
+                        a,
+                        b,
+                        r,
+                        s,
+                        to_local: t.inverse(),
+                    })
+                    .collect(),
+            };
+            // The reference's box: every positive component's box, placed.
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            let mut centres = Vec::new();
+            for &(a, b, rad, s, t) in &case.comps {
+                if s <= 0.0 {
+                    continue;
+                }
+                centres.push(t.transform_point3(0.5 * (a + b)));
+                let (l, h) = (a.min(b) - DVec3::splat(rad), a.max(b) + DVec3::splat(rad));
+                for i in 0..8 {
+                    let pick = |bit: i32, u: f64, v: f64| if i & bit == 0 { u } else { v };
+                    let p = t.transform_point3(DVec3::new(
+                        pick(1, l.x, h.x),
+                        pick(2, l.y, h.y),
+                        pick(4, l.z, h.z),
+                    ));
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+            }
+            let f = |p: DVec3| r.f(p);
+            let count = rays();
+            let seed = 0xb10b0 + k as u64;
+            let rays: Vec<(DVec3, DVec3)> = (0..count)
+                .map(|i| {
+                    ray(
+                        &f,
+                        &centres,
+                        lo,
+                        hi,
+                        i,
+                        &mut SplitMix64::for_item(seed, 0, i),
+                    )
+                })
+                .collect();
+            let start = Instant::now();
+            let got: Vec<Option<f64>> = rays
+                .iter()
+                .map(|&(o, d)| blob.nearest(o, d, 0.0, f64::INFINITY))
+                .collect();
+            let per_ray = start.elapsed().as_secs_f64() / count as f64;
+            let tally = rays
+                .par_iter()
+                .zip(&got)
+                .map(|(&(o, d), &g)| {
+                    let want = first_sign_change(f, lo, hi, o, d, 0.0, 4_000);
+                    let changes = |t: f64| {
+                        [1e-7, 1e-9].iter().any(|dt| {
+                            (r.f(o + (t - dt) * d) > 0.0) != (r.f(o + (t + dt) * d) > 0.0)
+                        })
+                    };
+                    let mut out = Tally::judge(want, g, changes, format!("o {o} d {d}"));
+                    if let Some(t) = g {
+                        let dt = 1e-7;
+                        let after = r.f(o + (t + dt) * d) > 0.0;
+                        if after != (r.f(o + (t - dt) * d) > 0.0) {
+                            let n = blob.normal(o + t * d);
+                            if (n.dot(d) < 0.0) != after {
+                                out.fails.push(format!("normal: o {o} d {d} t {t} n {n}"));
+                            }
+                        }
+                    }
+                    out
+                })
+                .reduce(Tally::default, Tally::merge);
+            for f in tally.fails.iter().take(3) {
+                println!("  [{}] {f}", case.name);
+            }
+            println!(
+                "[blob: {}] rays {count} reference hits {} failures {} (stepped over by the \
+                 reference, confirmed: {}) max t error {:.2e}, {:.2} µs per ray",
+                case.name,
+                tally.hits,
+                tally.fails.len(),
+                tally.confirmed,
+                tally.max_err,
+                per_ray * 1e6
+            );
+            assert!(
+                tally.fails.is_empty(),
+                "{}: {} failures",
+                case.name,
+                tally.fails.len()
+            );
+            assert!(
+                tally.hits * 5 >= count,
+                "{}: too few hits to test",
+                case.name
+            );
+        }
+    }
+
+    /// sqrt(x^2 + y^2 + z^2) as a compiled program.
+    fn radius_ops() -> Vec<Op> {
+        let mut code = Vec::new();
+        for k in 0..3 {
+            code.extend([Op::Load(k), Op::Load(k), Op::Binary(Binary::Mul)]);
+        }
+        code.extend([
+            Op::Binary(Binary::Add),
+            Op::Binary(Binary::Add),
+            Op::Unary(Unary::Sqrt),
+        ]);
+        code
+    }
+
+    /// A shell 1e-3 thick (`|r - 1| < 5e-4`) and a needle (radius 2e-3 at y = 0 tapering to a
+    /// point at y = 1): features a fixed step of 0.01 (or a `max_gradient` guess) steps over.
+    /// The reference samples each ray 100 000 times (a step of about 3e-5).
+    #[test]
+    fn isosurface_thin_features_against_the_reference() {
+        type Reference = fn(DVec3) -> f64;
+        let shell_ops = {
+            let mut c = radius_ops();
+            c.extend([
+                Op::Const(1.0),
+                Op::Binary(Binary::Sub),
+                Op::Unary(Unary::Abs),
+            ]);
+            c
+        };
+        // sqrt(x^2 + z^2) + 0.002 y
+        let needle_ops = vec![
+            Op::Load(0),
+            Op::Load(0),
+            Op::Binary(Binary::Mul),
+            Op::Load(2),
+            Op::Load(2),
+            Op::Binary(Binary::Mul),
+            Op::Binary(Binary::Add),
+            Op::Unary(Unary::Sqrt),
+            Op::Const(0.002),
+            Op::Load(1),
+            Op::Binary(Binary::Mul),
+            Op::Binary(Binary::Add),
+        ];
+        let shell: Reference = |p| (p.length() - 1.0).abs() - 5e-4;
+        let needle: Reference = |p| (p.x * p.x + p.z * p.z).sqrt() + 0.002 * p.y - 0.002;
+        let cases: [(&str, Vec<Op>, f64, Reference); 2] = [
+            ("shell 1e-3 thick", shell_ops, 5e-4, shell),
+            ("needle 4e-3 wide", needle_ops, 0.002, needle),
+        ];
+        for (k, (name, ops, threshold, g)) in cases.into_iter().enumerate() {
+            let iso = Isosurface::new(&SceneIso {
+                function: Arc::new(Function::new(3, 3, ops).unwrap()),
+                threshold,
+                container: Container::Box {
+                    min: DVec3::splat(-1.5),
+                    max: DVec3::splat(1.5),
+                },
+                open: true,
+                // The default: 1e-6 of the container's diagonal (5.2e-6 here). At 1e-9 the
+                // rays that graze the shell's tangent cost about sqrt(2 / 1e-9) stretches
+                // each: no failure either, but 13 ms a ray on average.
+                accuracy: DEFAULT_ACCURACY * (2.0 * DVec3::splat(1.5)).length(),
+            })
+            .unwrap();
+            let (lo, hi) = (DVec3::splat(-1.5), DVec3::splat(1.5));
+            let count = rays() / 2;
+            let rays: Vec<(DVec3, DVec3)> = (0..count)
+                .map(|i| {
+                    let mut rng = SplitMix64::for_item(0x150 + k as u64, 0, i);
+                    let o = rng.unit() * 6.0;
+                    // At the feature: a point of the shell's sphere or of the needle's axis,
+                    // moved by up to 5e-3; a third of the rays graze (1e-5..1e-2 off the
+                    // tangent of the sphere).
+                    let target = if k == 0 {
+                        rng.unit() * (1.0 + rng.range(-5e-3, 5e-3))
+                    } else {
+                        DVec3::new(
+                            rng.range(-5e-3, 5e-3),
+                            rng.range(-1.0, 1.0),
+                            rng.range(-5e-3, 5e-3),
+                        )
+                    };
+                    if k == 0 && i % 3 == 1 {
+                        let p = target.normalize() * (1.0 + 5e-4);
+                        let n = p.normalize();
+                        let tangent = n.cross(rng.unit()).normalize();
+                        let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                        let d = (tangent + n * eps).normalize();
+                        return (p - d * 3.0, d);
+                    }
+                    (o, (target - o).normalize())
+                })
+                .collect();
+            let start = Instant::now();
+            let got: Vec<Option<f64>> = rays
+                .iter()
+                .map(|&(o, d)| iso.nearest(o, d, 0.0, f64::INFINITY).map(|m| m.t()))
+                .collect();
+            let per_ray = start.elapsed().as_secs_f64() / count as f64;
+            let inside = |p: DVec3| -g(p);
+            let tally = rays
+                .par_iter()
+                .zip(&got)
+                .map(|(&(o, d), &t)| {
+                    let want = first_sign_change(inside, lo, hi, o, d, 0.0, 100_000);
+                    let changes = |t: f64| {
+                        [1e-7, 1e-9]
+                            .iter()
+                            .any(|dt| (g(o + (t - dt) * d) < 0.0) != (g(o + (t + dt) * d) < 0.0))
+                    };
+                    Tally::judge(want, t, changes, format!("o {o} d {d}"))
+                })
+                .reduce(Tally::default, Tally::merge);
+            for f in tally.fails.iter().take(3) {
+                println!("  [{name}] {f}");
+            }
+            println!(
+                "[isosurface: {name}] rays {count} reference hits {} failures {} (confirmed: {}) \
+                 max t error {:.2e}, budget exhausted {}, {:.1} µs per ray",
+                tally.hits,
+                tally.fails.len(),
+                tally.confirmed,
+                tally.max_err,
+                iso.exhausted(),
+                per_ray * 1e6
+            );
+            assert!(
+                tally.fails.is_empty(),
+                "{name}: {} failures",
+                tally.fails.len()
+            );
+            assert_eq!(iso.exhausted(), 0, "{name}: rays gave up");
+            assert!(tally.hits * 5 >= count, "{name}: too few hits to test");
+        }
+    }
+}
