@@ -14,6 +14,9 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use super::Function;
 use super::function::{Binary, Op, SMALL, Unary};
 
+/// No slot: a stack entry computed, not loaded (see `Function::run_interval`).
+const NO_SLOT: u32 = u32::MAX;
+
 /// A closed interval `[lo, hi]` (`lo <= hi`); the whole line stands for "unknown".
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interval {
@@ -317,22 +320,28 @@ impl Function {
         if self.stack_size() <= SMALL && self.slots() <= SMALL {
             let mut stack = [Interval::point(0.0); SMALL];
             let mut slots = [Interval::point(0.0); SMALL];
-            self.run_interval(args, &mut stack, &mut slots)
+            let mut from = [NO_SLOT; SMALL];
+            self.run_interval(args, &mut stack, &mut slots, &mut from)
         } else {
             let zero = Interval::point(0.0);
             self.run_interval(
                 args,
                 &mut vec![zero; self.stack_size()],
                 &mut vec![zero; self.slots()],
+                &mut vec![NO_SLOT; self.stack_size()],
             )
         }
     }
 
+    /// `from[i]`: the slot stack entry `i` was loaded from unchanged (`NO_SLOT`: computed), so
+    /// that `x * x` is a square (never negative) rather than a product of two independent
+    /// ranges.
     fn run_interval(
         &self,
         args: &[Interval],
         stack: &mut [Interval],
         slots: &mut [Interval],
+        from: &mut [u32],
     ) -> Interval {
         for (s, a) in slots[..self.params()].iter_mut().zip(args) {
             *s = *a;
@@ -346,16 +355,24 @@ impl Function {
                 }
                 Op::Load(s) => {
                     stack[sp] = slots[*s as usize];
+                    from[sp] = *s;
                     sp += 1;
+                    continue;
                 }
                 Op::Store(s) => {
                     sp -= 1;
                     slots[*s as usize] = stack[sp];
+                    continue;
                 }
                 Op::Unary(u) => stack[sp - 1] = unary(*u, stack[sp - 1]),
                 Op::Binary(b) => {
                     sp -= 1;
-                    stack[sp - 1] = binary(*b, stack[sp - 1], stack[sp]);
+                    let same = from[sp - 1] != NO_SLOT && from[sp - 1] == from[sp];
+                    stack[sp - 1] = if *b == Binary::Mul && same {
+                        powi(stack[sp], 2.0)
+                    } else {
+                        binary(*b, stack[sp - 1], stack[sp])
+                    };
                 }
                 Op::Min(n) | Op::Max(n) => {
                     let start = sp - *n as usize;
@@ -408,6 +425,8 @@ impl Function {
                     stack[sp - 1] = Interval::UNIT;
                 }
             }
+            // Every other operation leaves a computed value on top.
+            from[sp - 1] = NO_SLOT;
         }
         stack[0]
     }
@@ -506,5 +525,29 @@ mod tests {
             r.lo <= 0.0 && r.lo > -1e-300 && (r.hi - 4.0).abs() < 1e-12,
             "{r:?}"
         );
+    }
+
+    #[test]
+    fn a_parameter_times_itself_is_a_square() {
+        // x * x + 1 over x in [-1, 2]: [1, 5], not [-1, 5]; x * y stays a product.
+        let sq = Function::new(
+            2,
+            2,
+            vec![
+                Op::Load(0),
+                Op::Load(0),
+                Op::Binary(Binary::Mul),
+                Op::Const(1.0),
+                Op::Binary(Binary::Add),
+            ],
+        )
+        .unwrap();
+        let x = Interval { lo: -1.0, hi: 2.0 };
+        let r = sq.eval_interval(&[x, x]);
+        assert!(r.lo > 0.99 && r.lo <= 1.0 && r.hi >= 5.0 && r.hi < 5.01, "{r:?}");
+        let xy = Function::new(2, 2, vec![Op::Load(0), Op::Load(1), Op::Binary(Binary::Mul)])
+            .unwrap();
+        let r = xy.eval_interval(&[x, x]);
+        assert!(r.lo <= -2.0, "{r:?}");
     }
 }
