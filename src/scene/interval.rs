@@ -544,9 +544,16 @@ mod tests {
         .unwrap();
         let x = Interval { lo: -1.0, hi: 2.0 };
         let r = sq.eval_interval(&[x, x]);
-        assert!(r.lo > 0.99 && r.lo <= 1.0 && r.hi >= 5.0 && r.hi < 5.01, "{r:?}");
-        let xy = Function::new(2, 2, vec![Op::Load(0), Op::Load(1), Op::Binary(Binary::Mul)])
-            .unwrap();
+        assert!(
+            r.lo > 0.99 && r.lo <= 1.0 && r.hi >= 5.0 && r.hi < 5.01,
+            "{r:?}"
+        );
+        let xy = Function::new(
+            2,
+            2,
+            vec![Op::Load(0), Op::Load(1), Op::Binary(Binary::Mul)],
+        )
+        .unwrap();
         let r = xy.eval_interval(&[x, x]);
         assert!(r.lo <= -2.0, "{r:?}");
     }

@@ -608,9 +608,9 @@ fn superellipsoids_render_in_every_integrator() {
 }
 
 /// A blob (two spheres and a capsule merging, a negative sphere carving a dent) and an
-/// isosurface (a sphere shell by its distance function, cut open by its container's walls)
-/// render in every integrator: every pixel finite (checked in `run`), each shape lit at its
-/// centre, and the background seen between them.
+/// isosurface (a ball by its distance function, cut by its container's walls) render in every
+/// integrator: every pixel finite (checked in `run`), the red blob red at its centre, the blue
+/// isosurface blue at its, and the grey background grey between them.
 #[test]
 fn blobs_and_isosurfaces_render_in_every_integrator() {
     let text = "settings { resolution <32, 16> max_depth 6 }
@@ -621,10 +621,10 @@ fn blobs_and_isosurfaces_render_in_every_integrator() {
                 sphere { <0.4, 0, 0>, 1, 1 }
                 cylinder { <0, -0.8, 0>, <0, 0.8, 0>, 0.5, strength 1 scale <1, 1.2, 1> }
                 sphere { <0, 0, -0.9>, 0.4, strength -1 }
-                translate <-2, 0, 0> material { diffuse rgb 0.8 } }
+                translate <-2, 0, 0> material { diffuse rgb <0.8, 0.05, 0.05> } }
          isosurface { function { sqrt(x*x + y*y + z*z) } threshold 1
                       contained_by { box { <-0.8, -0.8, -0.8>, <0.8, 0.8, 0.8> } }
-                      translate <2, 0, 0> material { glass ior 1.5 } }";
+                      translate <2, 0, 0> material { diffuse rgb <0.05, 0.05, 0.8> } }";
     let loaded = sppm_lang::load_source("blob.scn", text, &sppm_lang::EvalOptions::default());
     let scene = loaded.scene.expect("blob scene evaluates");
     for integrator in Integrator::ALL {
@@ -633,11 +633,29 @@ fn blobs_and_isosurfaces_render_in_every_integrator() {
             // Light tracing starts no path on the sky, this scene's only light.
             continue;
         }
-        let blob = window_mean(&img, 6, 6, 10, 10);
-        let iso = window_mean(&img, 22, 6, 26, 10);
-        println!("{integrator:?}: blob {blob:.3}, isosurface {iso:.3}");
-        assert!(blob > 0.05, "{integrator:?}: the blob is black");
-        assert!(iso > 0.05, "{integrator:?}: the isosurface is black");
+        // Red over blue at the blob, blue over red at the isosurface, grey between.
+        let tint = |x0: u32, x1: u32| {
+            let (mut r, mut b) = (0.0, 0.0);
+            for y in 7..9 {
+                for x in x0..x1 {
+                    r += img.get(x, y)[0];
+                    b += img.get(x, y)[2];
+                }
+            }
+            r / b.max(1e-9)
+        };
+        // The camera looks along +z with +x to the left of the image here (the blob at x = -2
+        // lands right of the centre): the blob's window is columns 19-21, the isosurface's 10-12.
+        let (blob, middle, iso) = (tint(19, 22), tint(15, 17), tint(10, 13));
+        println!(
+            "{integrator:?}: red / blue: blob {blob:.2}, between {middle:.2}, isosurface {iso:.2}"
+        );
+        assert!(blob > 3.0, "{integrator:?}: the blob is not red ({blob})");
+        assert!(
+            iso < 1.0 / 3.0,
+            "{integrator:?}: the isosurface is not blue ({iso})"
+        );
+        assert!((middle - 1.0).abs() < 0.05, "{integrator:?}: {middle}");
     }
 }
 
