@@ -55,7 +55,7 @@ impl Blob {
                 && c.b.is_finite()
                 && t.matrix3.is_finite()
                 && t.translation.is_finite();
-            if !finite || !(c.radius > 0.0 && c.radius.is_finite()) || !c.strength.is_finite() {
+            if !(finite && c.radius > 0.0 && c.radius.is_finite() && c.strength.is_finite()) {
                 return Err(format!(
                     "the blob's component {} is not finite or has no positive radius",
                     i + 1

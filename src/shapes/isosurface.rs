@@ -115,7 +115,7 @@ impl Isosurface {
                     q.length_squared() - radius * radius,
                 );
                 let disc = bh * bh - a * c;
-                if !(disc > 0.0) {
+                if disc.is_nan() || disc <= 0.0 {
                     return None;
                 }
                 let k = -(bh + bh.signum() * disc.sqrt());
@@ -136,7 +136,7 @@ impl Isosurface {
         }
         let (ta, tb) = self.chord(o, d)?;
         let (a, b) = (ta.max(lo), tb.min(hi));
-        if !(a < b) {
+        if a.is_nan() || b.is_nan() || a >= b {
             return None;
         }
         let walls = !self.open;

@@ -59,7 +59,7 @@ fn within(q: DVec3, e: DVec3, r2: f64) -> Option<(f64, f64)> {
     }
     let b = q.dot(e);
     let disc = b * b - a * c;
-    if !(disc > 0.0) {
+    if disc.is_nan() || disc <= 0.0 {
         return None;
     }
     // The stable pair of roots: no cancellation in either.

@@ -69,7 +69,7 @@ pub fn first_sign_change(
         a = a.max(t0.min(t1));
         b = b.min(t0.max(t1));
     }
-    if !(a < b) {
+    if a.is_nan() || b.is_nan() || a >= b {
         return None;
     }
     let side = |t: f64| g(o + t * d) > 0.0;
