@@ -10,6 +10,7 @@ mod slurm;
 
 mod chart_cli;
 mod cli_exit;
+mod editor_grammar;
 mod interrupt;
 mod live_browser;
 mod live_security;
