@@ -124,12 +124,12 @@ EOF
 # A free display number.
 display=90
 while [ -e "/tmp/.X11-unix/X$display" ] || [ -e "/tmp/.X$display-lock" ]; do display=$((display + 1)); done
-Xvfb ":$display" -screen 0 1400x900x24 -nolisten tcp >"$work/xvfb.log" 2>&1 &
+Xvfb ":$display" -screen 0 1800x900x24 -nolisten tcp >"$work/xvfb.log" 2>&1 &
 pids+=($!)
 export DISPLAY=":$display"
 for _ in $(seq 50); do xwininfo -root >/dev/null 2>&1 && break; sleep 0.1; done
 
-(cd "$work" && SHOT_DIR="$work" SPPM_LANG="$bin" exec xterm -geometry 92x20+0+0 \
+(cd "$work" && SHOT_DIR="$work" SPPM_LANG="$bin" exec xterm -geometry 132x20+0+0 \
   -fa 'DejaVu Sans Mono' -fs 14 -bg '#1e1e1e' -fg '#d4d4d4' -b 8 -bw 0 \
   -xrm 'XTerm*termName: xterm-256color' -e nvim -u init.lua scene.scn) &
 pids+=($!)
