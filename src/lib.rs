@@ -32,6 +32,7 @@ pub mod farm;
 pub mod files;
 pub mod film;
 pub mod geometry;
+pub mod ide;
 pub mod integrators;
 pub mod lights;
 pub mod materials;

@@ -80,6 +80,11 @@ impl MemoryWorld {
             .insert(normalize(path.as_ref()), bytes.into().into());
     }
 
+    /// [`MemoryWorld::insert`] without a copy of bytes already shared.
+    pub fn insert_shared(&mut self, path: impl AsRef<Path>, bytes: Arc<[u8]>) {
+        self.files.insert(normalize(path.as_ref()), bytes);
+    }
+
     /// [`MemoryWorld::insert`], by value (to build a world in one expression).
     pub fn with(mut self, path: impl AsRef<Path>, bytes: impl Into<Vec<u8>>) -> Self {
         self.insert(path, bytes);
@@ -111,6 +116,59 @@ impl World for MemoryWorld {
 
     fn canonical(&self, path: &Path) -> PathBuf {
         normalize(path)
+    }
+}
+
+/// Files held in memory over another world: an editor's unsaved buffers over the disk. A path
+/// the overlay holds is read from memory (compared after [`normalize`]); any other from `base`.
+#[derive(Debug, Clone, Default)]
+pub struct Overlay<W> {
+    files: MemoryWorld,
+    base: W,
+}
+
+impl<W: World> Overlay<W> {
+    pub fn new(base: W) -> Self {
+        Self {
+            files: MemoryWorld::new(),
+            base,
+        }
+    }
+
+    /// Adds (or replaces) the file `path` with `bytes`, over the base's file of that name.
+    pub fn insert(&mut self, path: impl AsRef<Path>, bytes: impl Into<Vec<u8>>) {
+        self.files.insert(path, bytes);
+    }
+
+    /// [`Overlay::insert`] without a copy of bytes already shared.
+    pub fn insert_shared(&mut self, path: impl AsRef<Path>, bytes: Arc<[u8]>) {
+        self.files.insert_shared(path, bytes);
+    }
+
+    fn holds(&self, path: &Path) -> bool {
+        self.files.size(path).is_some()
+    }
+}
+
+impl<W: World> World for Overlay<W> {
+    fn read(&self, path: &Path, max_bytes: u64) -> Result<Vec<u8>, FileError> {
+        if self.holds(path) {
+            self.files.read(path, max_bytes)
+        } else {
+            self.base.read(path, max_bytes)
+        }
+    }
+
+    fn size(&self, path: &Path) -> Option<u64> {
+        self.files.size(path).or_else(|| self.base.size(path))
+    }
+
+    fn canonical(&self, path: &Path) -> PathBuf {
+        if self.holds(path) {
+            normalize(path)
+        } else {
+            self.base.canonical(path)
+        }
     }
 }
 
@@ -200,6 +258,23 @@ mod tests {
         }
         assert_eq!(normalize(Path::new("../a/../../b")), Path::new("../../b"));
         assert_eq!(normalize(Path::new("/../a")), Path::new("/a"));
+    }
+
+    #[test]
+    fn an_overlay_reads_its_own_files_first() {
+        let base = MemoryWorld::new()
+            .with("d/a.scn", "disk a")
+            .with("d/b.scn", "disk b");
+        let mut w = Overlay::new(base);
+        w.insert("d/a.scn", "buffer a");
+        assert_eq!(
+            read_text(&w, Path::new("d/./a.scn"), 100).unwrap(),
+            "buffer a"
+        );
+        assert_eq!(read_text(&w, Path::new("d/b.scn"), 100).unwrap(), "disk b");
+        assert_eq!(w.size(Path::new("d/a.scn")), Some(8));
+        assert!(w.read(Path::new("d/a.scn"), 3).is_err());
+        assert!(w.read(Path::new("d/c.scn"), 100).is_err());
     }
 
     #[test]

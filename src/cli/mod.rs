@@ -26,6 +26,8 @@ mod frames;
 mod identity;
 #[cfg(feature = "watch")]
 mod live;
+#[cfg(feature = "lsp")]
+mod lsp;
 mod merge;
 mod output;
 mod reference;
@@ -363,6 +365,14 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// Split the frames or chains of a scene over a cluster's batch scheduler (Slurm).
     Farm(farm::FarmArgs),
+    /// Serve the Language Server Protocol on stdin and stdout, for editors: diagnostics,
+    /// completion, hover, go to definition, references and the outline of scene files.
+    #[cfg(feature = "lsp")]
+    Lsp {
+        /// Accepted for editors that pass it: stdio is the only transport.
+        #[arg(long)]
+        stdio: bool,
+    },
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -386,6 +396,8 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Reference(args) => reference::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Farm(args) => farm::run(&args),
+        #[cfg(feature = "lsp")]
+        Command::Lsp { .. } => lsp::run(),
     }
 }
 

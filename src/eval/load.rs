@@ -82,6 +82,7 @@ pub(super) fn on_eval_thread(
         environment,
         interrupted,
         animated: false,
+        globals: Vec::new(),
     };
     let mut last_error = None;
     for &stack in stacks {
@@ -191,6 +192,13 @@ fn run(
             Err(d) => ev.errors.extend(d),
         }
     }
+    // Before the unused-name warnings, which take the globals.
+    let mut globals: Vec<(String, String)> = ev
+        .globals
+        .iter()
+        .map(|(name, b)| (name.clone(), shown(&b.value)))
+        .collect();
+    globals.sort();
     ev.finish_warnings();
     let interrupted = ev.interrupted;
     if interrupted {
@@ -203,6 +211,7 @@ fn run(
     let mut seen = std::collections::HashSet::new();
     ev.dependencies.retain(|p| seen.insert(p.clone()));
     Loaded {
+        globals,
         dependencies: ev.dependencies,
         scene: (!has_errors).then_some(ev.scene),
         diagnostics,
@@ -210,5 +219,27 @@ fn run(
         environment: false,
         interrupted,
         animated: ev.animated,
+    }
+}
+
+/// A value as [`Loaded::globals`] holds it: as a message shows it, cut to 200 bytes, or its type.
+fn shown(v: &Value) -> String {
+    let text = match v {
+        Value::Str(s) => Some(format!("\"{s}\"")),
+        _ => v.show(),
+    };
+    match text {
+        Some(mut text) => {
+            if text.len() > 200 {
+                let mut cut = 200;
+                while !text.is_char_boundary(cut) {
+                    cut -= 1;
+                }
+                text.truncate(cut);
+                text.push('…');
+            }
+            text
+        }
+        None => v.type_name().to_string(),
     }
 }

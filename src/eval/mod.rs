@@ -40,9 +40,11 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 pub use animation::{RangeOverride, frame_range, load_frame};
+pub use blocks::{PropertyInfo, block_names, block_properties, top_level_properties};
 pub use builtins::{CONSTANTS, FUNCTIONS};
 pub use function::compile_function;
 pub use load::{load_file, load_source};
+pub use stdlib::FILES as STD_FILES;
 pub use value::Value;
 
 use crate::diag::{Diagnostic, Error, SourceResult, suggest};
@@ -194,6 +196,10 @@ pub struct Loaded {
     /// The evaluation read an animation name (`clock`, `frame_number`, ...): another frame
     /// may give another scene. When false every frame gives this one.
     pub animated: bool,
+    /// The global names as the load left them, sorted, each with its value as a message shows
+    /// it (numbers, vectors, colours and strings as written, cut to 200 bytes) or its type
+    /// ("an object"): what an editor shows on hover.
+    pub globals: Vec<(String, String)>,
 }
 
 impl Loaded {

@@ -2,7 +2,7 @@
 //! before any file of that name is looked for on disk.
 
 /// `(include path, text)` of every standard file.
-pub(crate) const FILES: &[(&str, &str)] = &[
+pub const FILES: &[(&str, &str)] = &[
     ("std/colors.scn", include_str!("stdlib/colors.scn")),
     ("std/materials.scn", include_str!("stdlib/materials.scn")),
 ];

@@ -112,6 +112,14 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "span", "diag", "cancel", "eval", "scene", "film", "prepare", "render",
         ],
     ),
+    // Editor support (diagnostics, completion, navigation) over the language and the stages.
+    (
+        "ide",
+        &[
+            "span", "diag", "files", "world", "cancel", "syntax", "eval", "scene", "prepare",
+            "render",
+        ],
+    ),
 ];
 
 fn allowed() -> BTreeMap<&'static str, &'static [&'static str]> {

@@ -98,6 +98,66 @@ const VALUE_BLOCKS: &[&str] = &[
     "contained_by",
 ];
 
+/// A property keyword as the evaluator checks it (its name, what it takes and an example): what
+/// an editor offers inside a block. Read from the builders' own tables, so the two cannot drift.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PropertyInfo {
+    pub name: &'static str,
+    /// What the arguments are ("a vector", "nothing").
+    pub hint: &'static str,
+    /// An argument as written (empty when it takes none).
+    pub example: &'static str,
+}
+
+impl From<&PropSpec> for PropertyInfo {
+    fn from(p: &PropSpec) -> Self {
+        Self {
+            name: p.name,
+            hint: p.hint,
+            example: p.example,
+        }
+    }
+}
+
+/// Every kind of block: the objects, then the others (`material`, `camera`, ...).
+pub fn block_names() -> impl Iterator<Item = &'static str> {
+    OBJECT_BLOCKS.iter().chain(VALUE_BLOCKS).copied()
+}
+
+/// The properties a block of kind `kind` takes (`None`: not a kind of block), from the builder
+/// that evaluates its body.
+pub fn block_properties(kind: &str) -> Option<Vec<PropertyInfo>> {
+    let sink: Box<dyn Sink> = match kind {
+        _ if OBJECT_BLOCKS.contains(&kind) => Box::new(ObjectBuilder::new(kind, Span::detached())),
+        "material" => Box::new(MaterialBuilder::default()),
+        // A texture's `size` is known to its `prop_spec` only (the pattern that uses it).
+        "texture" => {
+            let b = TextureBuilder::default();
+            let mut all: Vec<PropertyInfo> = b.props().iter().map(PropertyInfo::from).collect();
+            all.extend(texture::TEX_PROPS_SIZE.iter().map(PropertyInfo::from));
+            return Some(all);
+        }
+        "normal" | "bump_map" => Box::new(NormalBuilder::new(kind == "bump_map")),
+        "color_map" | "colour_map" => Box::new(ColorMapBuilder::default()),
+        "bezier" | "spline" => Box::new(ProfileBuilder::new(kind == "spline")),
+        "settings" => Box::new(SettingsBuilder(crate::scene::Settings::default())),
+        "camera" => Box::new(CameraBuilder::new(crate::scene::Camera::default())),
+        "light" | "spotlight" => Box::new(LightBuilder::new(kind == "spotlight")),
+        "environment" => Box::new(EnvBuilder::default()),
+        _ => return None,
+    };
+    Some(sink.props().iter().map(PropertyInfo::from).collect())
+}
+
+/// The properties of the scene's top level (`background`, `backdrop`).
+pub fn top_level_properties() -> Vec<PropertyInfo> {
+    TopSink::default()
+        .props()
+        .iter()
+        .map(PropertyInfo::from)
+        .collect()
+}
+
 impl Evaluator {
     pub(crate) fn eval_block(
         &mut self,

@@ -111,7 +111,8 @@ static TEX_PROPS: [PropSpec; 19] = with_transforms([
     p("turbulence", 1, 1, "a number", "1"),
     p("mortar", 1, 1, "a number", "0.01"),
 ]);
-static TEX_PROPS_SIZE: [PropSpec; 1] = [p("size", 1, 1, "a vector", "<0.2, 0.075, 0.1>")];
+pub(super) static TEX_PROPS_SIZE: [PropSpec; 1] =
+    [p("size", 1, 1, "a vector", "<0.2, 0.075, 0.1>")];
 
 impl TextureBuilder {
     fn set(&mut self, k: &'static str, span: Span) -> SourceResult<()> {
