@@ -236,7 +236,8 @@ struct Chunk {
 #[derive(Default)]
 struct LightPass {
     chunks: Vec<Chunk>,
-    /// The stored vertices of every light path in path order, and where each path's vertices end.
+    /// The stored vertices of every light path in path order, and where each path's
+    /// vertices end.
     vertices: Vec<LightVertex>,
     ends: Vec<u32>,
     positions: Vec<Vec3A>,
