@@ -11,15 +11,12 @@ use glam::Vec3A;
 
 use super::common::direct::direct_lighting;
 use super::common::progressive;
-use super::common::{attenuate_inside, medium_after};
+use super::common::{attenuate_inside, camera_roulette, medium_after};
 use super::{Integrator, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::TransportMode;
 use crate::prepare::PreparedScene;
 use crate::sampling::Rng;
-
-/// Vertices before Russian roulette may end a path.
-const RR_DEPTH: u32 = 3;
 
 /// Path tracing with next-event estimation.
 #[derive(Debug, Clone, Copy, Default)]
@@ -80,14 +77,7 @@ fn radiance(
         specular_bounce = s.specular;
         camera_chain &= s.specular;
         beta *= s.weight;
-        if depth >= RR_DEPTH {
-            let q = (1.0 - beta.max_element()).max(0.05);
-            if rng.f32() < q {
-                break;
-            }
-            beta /= 1.0 - q;
-        }
-        if !beta.is_finite() || beta.max_element() <= 0.0 {
+        if !camera_roulette(&mut beta, depth + 1, rng) {
             break;
         }
         ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);

@@ -118,6 +118,27 @@ impl EnvironmentLight {
         })
     }
 
+    /// The densities of [`EnvironmentLight::sample_photon`] choosing a photon that travels in
+    /// unit direction `dir` through the point `p`: per area of the disk it starts on and per
+    /// solid angle (as pbrt-v4's `PDF_Le`). The area density is zero where no photon along
+    /// `dir` passes `p` (beside the disk's cylinder, or before the disk): every point within
+    /// the bounding sphere is covered, the far part of an infinite plane is not.
+    pub fn emission_pdf(&self, p: Vec3A, dir: Vec3A) -> (f32, f32) {
+        let w = -dir;
+        let d = p - self.center;
+        let along = d.dot(w);
+        let across2 = (d - w * along).length_squared();
+        // The disk's own points lie on the boundary: a rounding's slack keeps them in.
+        let r = self.radius * (1.0 + 1e-4);
+        let covered = along <= r && across2 <= r * r;
+        let pdf_pos = if covered {
+            1.0 / (PI * self.radius * self.radius)
+        } else {
+            0.0
+        };
+        (pdf_pos, self.sky.pdf(w))
+    }
+
     pub fn sample_photon(&self, u1: Vec2, u2: Vec2) -> Option<PhotonSample> {
         let s = self.sky.sample(u1)?;
         if s.pdf.is_nan() || s.pdf <= 0.0 {

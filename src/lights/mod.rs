@@ -87,16 +87,17 @@ impl Light {
 
     /// The densities of [`Light::sample_photon`] choosing a photon that leaves the point with
     /// normal `n` (zero for point and spot lights) in unit direction `dir`: per area of the
-    /// light (1 for the single point of a delta light) and per solid angle. `None` for the
-    /// environment, whose photons start on a disk the bidirectional methods do not use.
-    pub fn emission_pdf(&self, n: Vec3A, dir: Vec3A) -> Option<(f32, f32)> {
+    /// light (1 for the single point of a delta light) and per solid angle. For the
+    /// environment, whose photons start on a disk outside the scene, `p` is a point the photon
+    /// passes ([`EnvironmentLight::emission_pdf`]); the other lights ignore it.
+    pub fn emission_pdf(&self, p: Vec3A, n: Vec3A, dir: Vec3A) -> (f32, f32) {
         use std::f32::consts::{FRAC_1_PI, PI};
         match self {
-            Light::Point(_) => Some((1.0, 0.25 * FRAC_1_PI)),
+            Light::Point(_) => (1.0, 0.25 * FRAC_1_PI),
             Light::Spot(l) => {
                 let inside = dir.dot(l.frame.n) >= l.cos_total;
                 let pdf = crate::sampling::uniform_cone_pdf(l.cos_total);
-                Some((1.0, if inside { pdf } else { 0.0 }))
+                (1.0, if inside { pdf } else { 0.0 })
             }
             Light::Area(l) => {
                 let cos = n.dot(dir);
@@ -105,9 +106,9 @@ impl Light {
                 } else {
                     cos.max(0.0) / PI
                 };
-                Some((1.0 / l.area, dir_pdf))
+                (1.0 / l.area, dir_pdf)
             }
-            Light::Environment(_) => None,
+            Light::Environment(l) => l.emission_pdf(p, dir),
         }
     }
 

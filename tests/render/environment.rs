@@ -112,6 +112,61 @@ fn environment_photons_carry_the_right_power() {
     assert!(flux[1] < 1e-9);
 }
 
+/// The same sphere under a constant environment map (the sky sampled through the map's
+/// importance distribution) rendered by light tracing, BPT and VCM, whose light paths start on
+/// the environment's disk: the centre 8x8 pixels' mean over four seeds within 1 % of `a L`,
+/// and the corner (the map seen directly) `L`.
+#[test]
+fn light_paths_from_an_environment_map_light_the_sphere() {
+    let (a, l) = (0.5, 2.0);
+    let mut scene = sphere_scene(16, ColorParam::Const(DVec3::splat(a)), l);
+    scene.settings.radius = Some(0.01);
+    for (integrator, iterations) in [
+        (Integrator::Bpt, 32),
+        (Integrator::Vcm, 32),
+        (Integrator::Lt, 2048),
+    ] {
+        scene.settings.integrator = integrator;
+        let means: Vec<f64> = (1..=4)
+            .map(|seed| {
+                let opts = RenderOptions {
+                    iterations: Some(iterations),
+                    seed: Some(seed),
+                    ..Default::default()
+                };
+                let img = render(&scene, &opts, &AtomicBool::new(false), &mut |_| {})
+                    .unwrap()
+                    .image;
+                for c in img.get(0, 0) {
+                    assert!(
+                        (c - l).abs() < 1e-4,
+                        "{}: background {c}",
+                        integrator.name()
+                    );
+                }
+                let mut sum = 0.0;
+                for y in 4..12 {
+                    for x in 4..12 {
+                        sum += img.get(x, y).iter().sum::<f64>() / 3.0;
+                    }
+                }
+                sum / 64.0
+            })
+            .collect();
+        let mean = means.iter().sum::<f64>() / 4.0;
+        println!(
+            "{}: sphere centre {mean:.4} {means:.4?} (expected {})",
+            integrator.name(),
+            a * l
+        );
+        assert!(
+            (mean - a * l).abs() < 0.01 * a * l,
+            "{}: {mean}",
+            integrator.name()
+        );
+    }
+}
+
 /// Textured furnace: a 4x2 albedo image (nearest texels) on the sphere's uv under a constant
 /// environment; every pixel whose footprint lies inside one texel equals that texel's albedo
 /// times L. The expected albedo comes from the texture at the pixel's corners and centre.

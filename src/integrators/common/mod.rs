@@ -12,6 +12,25 @@ use glam::Vec3A;
 
 use crate::geometry::Ray;
 use crate::prepare::{PreparedScene, SurfaceHit};
+use crate::sampling::Rng;
+
+/// Bounces before Russian roulette may end a camera path.
+const ROULETTE_BOUNCES: u32 = 4;
+
+/// Russian roulette for a camera path after its `bounces`-th bounce, whose throughput is now
+/// `beta`: from the fourth bounce on, it ends with probability `1 - max(beta)` (at most 0.95)
+/// and survivors carry the difference. Returns whether the path goes on with a usable `beta`.
+#[inline]
+pub(crate) fn camera_roulette(beta: &mut Vec3A, bounces: u32, rng: &mut Rng) -> bool {
+    if bounces >= ROULETTE_BOUNCES {
+        let q = (1.0 - beta.max_element()).max(0.05);
+        if rng.f32() < q {
+            return false;
+        }
+        *beta /= 1.0 - q;
+    }
+    beta.is_finite() && beta.max_element() > 0.0
+}
 
 /// Beer–Lambert absorption along the segment `ray` ran to `sh` inside an absorbing dielectric:
 /// where it hits a glass from its inner side, that glass's absorption (a textured one averaged

@@ -6,17 +6,15 @@
 
 use glam::Vec3A;
 
-use super::Context;
 use super::light_path::LightVertex;
 use super::mis::{self, Quantities};
-use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
-use crate::lights::Light;
+use super::{Context, bounce};
+use crate::integrators::common::direct::sample_light;
+use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
+use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::SurfaceHit;
 use crate::sampling::Rng;
-
-/// Segments before Russian roulette may end a camera path.
-const RR_LEN: u32 = 4;
 
 /// The state of a camera path at its last vertex.
 struct State {
@@ -65,7 +63,7 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
         if let Some((li, al)) = scene.area_light(sh.prim) {
             let le = al.le(sh.hit.n, wo);
             if le != Vec3A::ZERO {
-                l += st.beta * le * hit_weight(ctx, &st, li, &sh, wo, dist);
+                l += st.beta * le * hit_weight(ctx, &st, (li, al), &sh, wo, dist);
             }
         }
         if ctx.mode.light_trace_only && !bsdf.is_specular() {
@@ -88,27 +86,13 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
                 l += st.beta * merge(ctx, &st, sh.hit.p, &bsdf, wo);
             }
         }
-        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Radiance) else {
+        let mode = TransportMode::Radiance;
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut st.q, &mut st.medium, rng) else {
             break;
         };
-        let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
-        if s.specular {
-            st.q.scatter_specular(cos_out);
-        } else {
-            let rev = f64::from(bsdf.pdf(s.wi, wo));
-            st.q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
-        }
-        st.medium = medium_after(scene, &sh, wo, s.wi, st.medium);
         st.specular &= s.specular;
         st.beta *= s.weight;
-        if st.len >= RR_LEN {
-            let q = (1.0 - st.beta.max_element()).max(0.05);
-            if rng.f32() < q {
-                break;
-            }
-            st.beta /= 1.0 - q;
-        }
-        if !st.beta.is_finite() || st.beta.max_element() <= 0.0 {
+        if !camera_roulette(&mut st.beta, st.len, rng) {
             break;
         }
         st.prev = sh.hit.p;
@@ -121,8 +105,8 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
 
 /// What a camera path that leaves the scene sees: the backdrop or sky straight on and after
 /// delta bounces (weight 1: nothing else samples it), the environment light after a
-/// non-specular bounce, weighed against next-event estimation (no light path starts on the
-/// sky, so only those two techniques reach it).
+/// non-specular bounce, weighed against next-event estimation and the light paths that start
+/// on the sky.
 fn escaped(ctx: &Context, st: &State, d: Vec3A) -> Vec3A {
     let scene = ctx.scene;
     if st.specular {
@@ -139,15 +123,21 @@ fn escaped(ctx: &Context, st: &State, d: Vec3A) -> Vec3A {
         return le;
     }
     let direct_pdf = f64::from(scene.light_distr.pdf(li) * env.pdf_li(d));
-    le * mis::hit_light(&st.q, direct_pdf, 0.0) as f32
+    let emission_pdf_w = ctx.emission_pdf_w(li, st.prev, Vec3A::ZERO, -d);
+    le * mis::hit_light(&st.q, direct_pdf, emission_pdf_w) as f32
 }
 
 /// The weight of emission from area light `li` hit at `sh`, `dist` from the previous vertex.
-fn hit_weight(ctx: &Context, st: &State, li: usize, sh: &SurfaceHit, wo: Vec3A, dist: f64) -> f32 {
-    if st.len == 1 {
-        // Light tracing never reaches the camera from the light point itself.
-        return 1.0;
-    }
+fn hit_weight(
+    ctx: &Context,
+    st: &State,
+    (li, al): (usize, &AreaLight),
+    sh: &SurfaceHit,
+    wo: Vec3A,
+    dist: f64,
+) -> f32 {
+    // Seen straight on or after delta bounces: no other technique reaches the camera (a light
+    // path's point on the light is not stored, and no connection goes through a delta lobe).
     if st.specular {
         return 1.0;
     }
@@ -155,19 +145,13 @@ fn hit_weight(ctx: &Context, st: &State, li: usize, sh: &SurfaceHit, wo: Vec3A, 
         return 0.0;
     }
     let scene = ctx.scene;
-    let Light::Area(al) = &scene.lights[li] else {
-        return 0.0;
-    };
     let cos_light = f64::from(sh.hit.n.dot(wo).abs());
     let on_light = st.prev_light == Some(li as u32);
     let pn = f64::from(scene.light_distr.pdf(li));
     let direct_pdf_a =
         pn * f64::from(al.pdf_li_from(st.prev, sh.hit.p, sh.hit.n, on_light)) * cos_light
             / (dist * dist);
-    let emission_pdf_w = match scene.lights[li].emission_pdf(sh.hit.n, wo) {
-        Some((pos, dir)) => ctx.emit_pdf(li) * f64::from(pos) * f64::from(dir),
-        None => 0.0,
-    };
+    let emission_pdf_w = ctx.emission_pdf_w(li, sh.hit.p, sh.hit.n, wo);
     mis::hit_light(&st.q, direct_pdf_a, emission_pdf_w) as f32
 }
 
@@ -182,54 +166,35 @@ fn direct(
     rng: &mut Rng,
 ) -> Vec3A {
     let scene = ctx.scene;
-    let (p, n) = (sh.hit.p, sh.hit.n);
-    let own = scene.prim_light.get(sh.prim as usize).copied();
-    let uc = rng.f32();
-    let ul = rng.vec2();
-    let Some((li, pl)) = scene.light_distr.sample(uc) else {
+    let Some(sl) = sample_light(scene, sh, rng) else {
         return Vec3A::ZERO;
     };
-    let light = &scene.lights[li];
-    let Some(ls) = light.sample_li_from(p, ul, own == Some(li as u32)) else {
-        return Vec3A::ZERO;
-    };
+    let (li, ls) = (sl.light, &sl.sample);
     let f = bsdf.f(wo, ls.wi);
     let cos_to_light = ls.wi.dot(bsdf.frame.n).abs();
     if f == Vec3A::ZERO || cos_to_light == 0.0 {
         return Vec3A::ZERO;
     }
-    let env = scene.environment == Some(li);
-    let (ray, t_max) = if env {
-        (scene.spawn_ray(p, n, ls.wi), f32::INFINITY)
-    } else {
-        scene.spawn_ray_to(p, n, ls.p, ls.n)
-    };
-    let t_max = if ls.delta { t_max * 0.9999 } else { t_max };
-    let pn = f64::from(pl);
+    let pn = f64::from(sl.light_pdf);
     let bsdf_rev = f64::from(bsdf.pdf(ls.wi, wo));
-    let dist2 = f64::from((ls.p - p).length_squared());
-    let (bsdf_pdf, direct_pdf_w, emission_pdf_w, cos_at_light) = if env {
+    let (bsdf_pdf, direct_pdf_w, emission_pdf_w, cos_at_light) = if scene.environment == Some(li) {
+        // The sky's directions are measured without a cosine at the light.
         (
             f64::from(bsdf.pdf(wo, ls.wi)),
             pn * f64::from(ls.pdf),
-            0.0,
+            ctx.emission_pdf_w(li, sh.hit.p, Vec3A::ZERO, -ls.wi),
             1.0,
         )
     } else if ls.delta {
-        let e = light
-            .emission_pdf(ls.n, -ls.wi)
-            .map_or(0.0, |(pos, dir)| f64::from(pos) * f64::from(dir));
-        (0.0, pn * dist2, ctx.emit_pdf(li) * e, 1.0)
+        let dist2 = f64::from((ls.p - sh.hit.p).length_squared());
+        let e = ctx.emission_pdf_w(li, ls.p, ls.n, -ls.wi);
+        (0.0, pn * dist2, e, 1.0)
     } else {
-        let e = light
-            .emission_pdf(ls.n, -ls.wi)
-            .map_or(0.0, |(pos, dir)| f64::from(pos) * f64::from(dir));
-        let cos_at_light = f64::from(ls.n.dot(ls.wi).abs());
         (
             f64::from(bsdf.pdf(wo, ls.wi)),
             pn * f64::from(ls.pdf),
-            ctx.emit_pdf(li) * e,
-            cos_at_light,
+            ctx.emission_pdf_w(li, ls.p, ls.n, -ls.wi),
+            f64::from(ls.n.dot(ls.wi).abs()),
         )
     };
     let w = mis::direct(
@@ -242,15 +207,10 @@ fn direct(
         f64::from(cos_to_light),
         cos_at_light,
     );
-    if w.is_nan() || w <= 0.0 || scene.occluded(&ray, t_max) {
+    if w.is_nan() || w <= 0.0 || scene.occluded(&sl.shadow_ray, sl.t_max) {
         return Vec3A::ZERO;
     }
-    let absorbed = if t_max.is_finite() {
-        let medium = medium_after(scene, sh, wo, ls.wi, st.medium);
-        transmittance(medium, t_max * ray.d.length())
-    } else {
-        Vec3A::ONE
-    };
+    let absorbed = sl.transmittance(scene, sh, wo, st.medium);
     f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
 }
 

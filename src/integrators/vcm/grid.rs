@@ -1,51 +1,61 @@
 //! A hashed uniform grid over the light vertices of one iteration, for merging: cells one
 //! radius wide, so that the points within the radius of a query lie in the 27 cells around it;
-//! cells hash into a table as long as the vertex list. Built by counting sort, so it holds two
-//! arrays of indices and nothing grows between iterations.
+//! cells hash into a table as long as the vertex list. Built by counting sort into arrays that
+//! are kept and reused from one iteration to the next.
 
 use glam::Vec3A;
 
+#[derive(Default)]
 pub(super) struct Grid {
     min: Vec3A,
     inv_cell: f32,
     /// `starts[h]..starts[h + 1]` are the positions in `items` of the points in hash bucket h.
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// Each point's bucket (kept only to reuse its allocation).
+    buckets: Vec<u32>,
 }
 
 impl Grid {
-    /// The grid over `points` for queries of radius `r`; `None` with no points or no usable
-    /// radius.
-    pub(super) fn new(points: &[Vec3A], r: f32) -> Option<Self> {
+    /// Rebuilds the grid over `points` for queries of radius `r`, reusing its arrays; `false`
+    /// (and nothing to query) with no points or no usable radius.
+    pub(super) fn build(&mut self, points: &[Vec3A], r: f32) -> bool {
         if points.is_empty() || !(r > 0.0 && r.is_finite()) {
-            return None;
+            return false;
         }
         let (min, max) = points.iter().fold(
             (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
         if !(min.is_finite() && max.is_finite()) {
-            return None;
+            return false;
         }
-        let mut grid = Grid {
-            min,
-            inv_cell: 1.0 / r,
-            starts: vec![0; points.len() + 1],
-            items: vec![0; points.len()],
-        };
-        let buckets: Vec<u32> = points.iter().map(|p| grid.bucket_of(*p)).collect();
+        self.min = min;
+        self.inv_cell = 1.0 / r;
+        self.items.clear();
+        self.items.resize(points.len(), 0);
+        self.starts.clear();
+        self.starts.resize(points.len() + 1, 0);
+        let mut buckets = std::mem::take(&mut self.buckets);
+        buckets.clear();
+        buckets.extend(points.iter().map(|p| self.bucket_of(*p)));
         for &b in &buckets {
-            grid.starts[b as usize + 1] += 1;
+            self.starts[b as usize + 1] += 1;
         }
-        for i in 1..grid.starts.len() {
-            grid.starts[i] += grid.starts[i - 1];
+        for i in 1..self.starts.len() {
+            self.starts[i] += self.starts[i - 1];
         }
-        let mut next = grid.starts.clone();
+        // Fill the buckets in point order, each bucket's start serving as its cursor; the
+        // cursors end at the next bucket's start, so the starts shift back by one after.
         for (i, &b) in buckets.iter().enumerate() {
-            grid.items[next[b as usize] as usize] = i as u32;
-            next[b as usize] += 1;
+            let cursor = &mut self.starts[b as usize];
+            self.items[*cursor as usize] = i as u32;
+            *cursor += 1;
         }
-        Some(grid)
+        self.starts.copy_within(..points.len(), 1);
+        self.starts[0] = 0;
+        self.buckets = buckets;
+        true
     }
 
     fn cell(&self, p: Vec3A) -> [i64; 3] {
@@ -112,7 +122,8 @@ mod tests {
             .map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 4.0 - 1.0)
             .collect();
         let r = 0.2;
-        let grid = Grid::new(&points, r).unwrap();
+        let mut grid = Grid::default();
+        assert!(grid.build(&points, r));
         for _ in 0..300 {
             let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 5.0 - 1.5;
             let mut found = Vec::new();

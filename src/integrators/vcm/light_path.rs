@@ -1,12 +1,13 @@
-//! Light subpaths: a light chosen by power emits a path that bounces by BSDF sampling
-//! (importance transport, the photon tracer's roulette). Every non-specular vertex is stored
-//! for connections and merging, and connected to the camera (light tracing); the splats go to
-//! a list the caller adds to the film in path order, so the image does not depend on threads.
+//! Light subpaths: a light chosen by power (the environment included) emits a path that
+//! bounces by BSDF sampling (importance transport, the photon tracer's roulette). Every
+//! non-specular vertex is stored for connections and merging, and connected to the camera
+//! (light tracing); the splats go to a list the caller adds to the film in path order, so the
+//! image does not depend on threads.
 
 use glam::Vec3A;
 
-use super::Context;
 use super::mis::{self, Quantities};
+use super::{Context, bounce};
 use crate::geometry::Ray;
 use crate::integrators::common::photons::roulette;
 use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
@@ -41,25 +42,15 @@ pub(super) fn trace(
     splats: &mut Vec<Splat>,
 ) {
     let scene = ctx.scene;
-    let Some((k, pe)) = ctx.emitters.sample(rng.f32()) else {
+    let Some((li, pe)) = ctx.emitters.sample(rng.f32()) else {
         return;
     };
-    let li = ctx.emitter_lights[k];
     let light = &scene.lights[li];
     let (u1, u2) = (rng.vec2(), rng.vec2());
     let Some(ps) = light.sample_photon(u1, u2) else {
         return;
     };
-    let Some((pdf_pos, pdf_dir)) = light.emission_pdf(ps.n, ps.dir) else {
-        return;
-    };
-    let emission_pdf_w = f64::from(pe) * f64::from(pdf_pos) * f64::from(pdf_dir);
-    if emission_pdf_w.is_nan() || emission_pdf_w <= 0.0 {
-        return;
-    }
     let pn = f64::from(scene.light_distr.pdf(li));
-    let delta = light.is_delta();
-    let cos_light = if delta { 0.0 } else { ps.n.dot(ps.dir).abs() };
     let mut ray = if ps.n == Vec3A::ZERO {
         Ray::new(ps.p, ps.dir)
     } else {
@@ -78,23 +69,33 @@ pub(super) fn trace(
         let bsdf = scene.bsdf(&sh);
         let cos_in = f64::from(wo.dot(bsdf.frame.n).abs());
         let dist = f64::from(sh.hit.t * ray.d.length());
+        // The segment from the sky has no length: its density is per solid angle.
+        let mut dist2 = Some(dist * dist);
         if len == 1 {
-            // Next-event estimation's density of the light point, seen from this surface.
-            let direct_pdf_a = if delta {
-                pn
-            } else {
-                let on_light = scene.prim_light.get(sh.prim as usize) == Some(&(li as u32));
-                match light {
-                    Light::Area(al) => {
-                        let w = f64::from(al.pdf_li_from(sh.hit.p, ps.p, ps.n, on_light));
-                        pn * w * f64::from(cos_light) / (dist * dist)
-                    }
-                    _ => return,
+            let emission_pdf_w = ctx.emission_pdf_w(li, sh.hit.p, ps.n, ps.dir);
+            if emission_pdf_w.is_nan() || emission_pdf_w <= 0.0 {
+                return;
+            }
+            // Next-event estimation's density of the light point seen from this surface (per
+            // area; per solid angle for the sky; a delta light's choice alone), and the cosine
+            // at the light that a connection to it would use (none for a delta light; the
+            // sky's directions are measured without one).
+            let (direct_pdf_a, cos_light) = match light {
+                Light::Area(al) => {
+                    let on_light = scene.prim_light.get(sh.prim as usize) == Some(&(li as u32));
+                    let w = f64::from(al.pdf_li_from(sh.hit.p, ps.p, ps.n, on_light));
+                    let cos_light = f64::from(ps.n.dot(ps.dir).abs());
+                    (pn * w * cos_light / (dist * dist), cos_light)
                 }
+                Light::Environment(env) => {
+                    dist2 = None;
+                    (pn * f64::from(env.pdf_li(wo)), 1.0)
+                }
+                Light::Point(_) | Light::Spot(_) => (pn, 0.0),
             };
-            q = Quantities::light(&ctx.factors, direct_pdf_a, emission_pdf_w, cos_light.into());
+            q = Quantities::light(&ctx.factors, direct_pdf_a, emission_pdf_w, cos_light);
         }
-        q.arrive(Some(dist * dist), cos_in);
+        q.arrive(dist2, cos_in);
         if !bsdf.is_specular() {
             if ctx.mode.use_vc || ctx.mode.use_vm {
                 vertices.push(LightVertex {
@@ -113,17 +114,10 @@ pub(super) fn trace(
         if len + 2 > ctx.max_len {
             return;
         }
-        let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2(), TransportMode::Importance) else {
+        let mode = TransportMode::Importance;
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng) else {
             return;
         };
-        let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
-        if s.specular {
-            q.scatter_specular(cos_out);
-        } else {
-            let rev = f64::from(bsdf.pdf(s.wi, wo));
-            q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
-        }
-        medium = medium_after(scene, &sh, wo, s.wi, medium);
         if !roulette(&mut beta, s.weight, rng) {
             return;
         }

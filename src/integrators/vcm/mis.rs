@@ -60,7 +60,8 @@ impl Quantities {
     /// At a light path's first surface: `direct_pdf_a` is the density per area of the light
     /// point for next-event estimation from that surface (for a delta light the choice of the
     /// light alone), `emission_pdf_w` the emission's density (light choice, area, direction),
-    /// `cos_light` the cosine at the light (zero for a delta light: no connection reaches it).
+    /// `cos_light` the cosine at the light (zero for a delta light: no connection reaches it;
+    /// 1 for the environment, whose directions are measured without one).
     pub(super) fn light(
         f: &Factors,
         direct_pdf_a: f64,
@@ -111,7 +112,7 @@ impl Quantities {
 
 /// The weight of a camera path that hits an area light (or escapes to the environment):
 /// `direct_pdf_a` is next-event estimation's density of that light point per area (for the
-/// environment per solid angle, and `emission_pdf_w` zero: no light path starts there).
+/// environment per solid angle), `emission_pdf_w` the density of a light path starting there.
 pub(super) fn hit_light(cam: &Quantities, direct_pdf_a: f64, emission_pdf_w: f64) -> f64 {
     1.0 / (1.0 + mis(direct_pdf_a) * cam.vcm + mis(emission_pdf_w) * cam.vc)
 }
@@ -120,8 +121,8 @@ pub(super) fn hit_light(cam: &Quantities, direct_pdf_a: f64, emission_pdf_w: f64
 /// densities toward the light and back (`bsdf_pdf` zero for a delta light), `direct_pdf_w`
 /// the light sample's density per solid angle including the light choice (for a delta light
 /// the squared distance times the choice), `emission_pdf_w` the density of a light path
-/// leaving the light point toward the vertex (light choice, area, direction; zero for the
-/// environment), the cosines at the vertex and at the light (1 for a delta light).
+/// leaving the light point toward the vertex (light choice, area, direction), the cosines at
+/// the vertex and at the light (1 for a delta light and the environment).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn direct(
     f: &Factors,

@@ -13,11 +13,14 @@
 //! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
 //! SPPM's pixel footprint rule at the distance in focus.
 //!
-//! The environment light starts no light path (its photons leave a disk around the scene,
-//! whose densities the other techniques cannot share): camera paths reach it by next-event
-//! estimation and by escaping, weighed against each other. Light tracing alone therefore sees
-//! the sky only straight on and in mirrors, and nothing lit through a delta bounce next to
-//! the camera (a mirror's reflection of a wall): no light path can reach the lens through it.
+//! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
+//! direction by the sky's own sampling density, a point of a disk as wide as the bounding
+//! sphere of the finite shapes, outside the scene, facing it. Its position density counts in
+//! the weights only where such a path can pass (everywhere within that sphere, not on the far
+//! part of an infinite plane), so next-event estimation and escaping camera paths take over
+//! there. Light tracing alone sees nothing lit through a delta bounce next to the camera (a
+//! mirror's reflection of a wall): no light path can reach the lens through it, and it leaves
+//! the far part of an infinite plane under a sky dark.
 //!
 //! Determinism: light paths are seeded by their index, camera paths by their pixel, and the
 //! splats of each iteration are added in light-path order.
@@ -33,16 +36,16 @@ use std::time::Instant;
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
-use super::common::progressive;
 use super::common::streams::Stream;
+use super::common::{medium_after, progressive};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
-use crate::lights::Light;
-use crate::prepare::PreparedScene;
-use crate::sampling::PiecewiseConstant1D;
+use crate::materials::{Bsdf, BsdfSample, TransportMode};
+use crate::prepare::{PreparedScene, SurfaceHit};
+use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
-use light_path::LightVertex;
-use mis::Factors;
+use light_path::{LightVertex, Splat};
+use mis::{Factors, Quantities};
 
 /// Which techniques run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -101,11 +104,9 @@ struct Context<'c, 's, 'a> {
     factors: Factors,
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
-    /// Light choice for light paths (every light but the environment, by power) and the
-    /// light each entry is.
+    /// Light choice for light paths (every light, by power).
     emitters: &'c PiecewiseConstant1D,
-    emitter_lights: &'c [usize],
-    /// Each light's probability in `emitters` (0 for the environment).
+    /// Each light's probability in `emitters`.
     emit_probs: &'c [f64],
     radius: f32,
     vm_normalization: f32,
@@ -115,10 +116,41 @@ struct Context<'c, 's, 'a> {
 }
 
 impl Context<'_, '_, '_> {
-    /// The probability that a light path starts on light `li`.
-    fn emit_pdf(&self, li: usize) -> f64 {
-        self.emit_probs.get(li).copied().unwrap_or(0.0)
+    /// The density of a light path starting on light `li` at a point of normal `n` (zero for
+    /// a delta light) in unit direction `dir`: the light's choice times the densities of the
+    /// point (per area) and the direction (per solid angle). For the environment, `p` is a
+    /// point the path passes on its way in ([`crate::lights::Light::emission_pdf`]).
+    fn emission_pdf_w(&self, li: usize, p: Vec3A, n: Vec3A, dir: Vec3A) -> f64 {
+        let choice = self.emit_probs.get(li).copied().unwrap_or(0.0);
+        let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
+        choice * f64::from(pos) * f64::from(d)
     }
+}
+
+/// A bounce of a subpath at a surface (light paths in importance mode, camera paths in
+/// radiance mode): samples the BSDF, updates the MIS quantities `q` and the absorbing
+/// `medium` the path is in. The caller applies the sample's weight and Russian roulette.
+#[allow(clippy::too_many_arguments)]
+fn bounce(
+    ctx: &Context,
+    sh: &SurfaceHit,
+    bsdf: &Bsdf,
+    wo: Vec3A,
+    mode: TransportMode,
+    q: &mut Quantities,
+    medium: &mut Vec3A,
+    rng: &mut Rng,
+) -> Option<BsdfSample> {
+    let s = bsdf.sample(wo, rng.f32(), rng.vec2(), mode)?;
+    let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
+    if s.specular {
+        q.scatter_specular(cos_out);
+    } else {
+        let rev = f64::from(bsdf.pdf(s.wi, wo));
+        q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
+    }
+    *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
+    Some(s)
 }
 
 impl Integrator for Vcm {
@@ -126,24 +158,20 @@ impl Integrator for Vcm {
         let (scene, settings, cancel) = (job.scene, job.settings, job.cancel);
         let (w, h) = (settings.width, settings.height);
         let n_paths = (w * h) as usize;
-        let emitter_lights: Vec<usize> = (0..scene.lights.len())
-            .filter(|&i| !matches!(scene.lights[i], Light::Environment(_)))
-            .collect();
-        let powers: Vec<f64> = emitter_lights
-            .iter()
-            .map(|&i| scene.lights[i].power().max(0.0))
-            .collect();
+        // Every light starts light paths, chosen by power (the environment's counts the disk
+        // its paths leave from).
+        let powers: Vec<f64> = scene.lights.iter().map(|l| l.power().max(0.0)).collect();
         let emitters = PiecewiseConstant1D::new(&powers);
-        let mut emit_probs = vec![0.0; scene.lights.len()];
-        for (k, &li) in emitter_lights.iter().enumerate() {
-            emit_probs[li] = f64::from(emitters.pdf(k));
-        }
+        let emit_probs: Vec<f64> = (0..powers.len())
+            .map(|i| f64::from(emitters.pdf(i)))
+            .collect();
         let r0 = settings
             .initial_radius(&scene.scene.camera)
             .at(scene.camera.focus_distance())
             .unwrap_or(1e-3)
             * self.radius_scale;
         let mode = self.mode;
+        let mut pass = LightPass::default();
         progressive::render_means(job, |iter, stats| {
             let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
             let radius = radius.max(1e-7);
@@ -154,7 +182,6 @@ impl Integrator for Vcm {
                 factors: Factors::new(radius, n_paths as f64, mode.use_vc, mode.use_vm),
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
-                emitter_lights: &emitter_lights,
                 emit_probs: &emit_probs,
                 radius: radius as f32,
                 vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_paths as f64))
@@ -164,17 +191,15 @@ impl Integrator for Vcm {
                 grid: None,
             };
             let t_light = Instant::now();
-            let (vertices, ends, film) = light_pass(&ctx, n_paths, settings.seed, iter, cancel)?;
-            let positions: Vec<Vec3A> = vertices.iter().map(|v| v.p).collect();
-            let grid = if mode.use_vm {
-                Grid::new(&positions, ctx.radius)
-            } else {
-                None
-            };
+            if !pass.run(&ctx, n_paths, settings.seed, iter, cancel) {
+                return None;
+            }
+            let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
             stats.photon_time += t_light.elapsed();
-            ctx.vertices = &vertices;
-            ctx.positions = &positions;
-            ctx.grid = grid.as_ref();
+            ctx.vertices = &pass.vertices;
+            ctx.positions = &pass.positions;
+            ctx.grid = has_grid.then_some(&pass.grid);
+            let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
             let t_camera = Instant::now();
             let seed = settings.seed;
             let values: Vec<Vec3A> = (0..n_paths)
@@ -198,45 +223,74 @@ impl Integrator for Vcm {
     }
 }
 
-/// One light path per pixel: the stored vertices in path order, where each path's vertices
-/// end, and light tracing's film. `None` when cancelled.
-fn light_pass(
-    ctx: &Context,
-    n_paths: usize,
-    seed: u64,
-    iter: u32,
-    cancel: &AtomicBool,
-) -> Option<(Vec<LightVertex>, Vec<u32>, Vec<DVec3>)> {
-    let chunks: Vec<_> = (0..n_paths.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut vertices = Vec::new();
-            let mut ends = Vec::new();
-            let mut splats = Vec::new();
-            if cancel.load(Ordering::Relaxed) {
-                return (vertices, ends, splats);
-            }
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n_paths) {
-                let mut rng = Stream::VcmLight.rng(seed, iter, i as u64);
-                light_path::trace(ctx, &mut rng, &mut vertices, &mut splats);
-                ends.push(vertices.len() as u32);
-            }
-            (vertices, ends, splats)
-        })
-        .collect();
-    if cancel.load(Ordering::Relaxed) {
-        return None;
-    }
-    let mut vertices = Vec::new();
-    let mut ends = Vec::with_capacity(n_paths);
-    let mut film = vec![DVec3::ZERO; n_paths];
-    for (v, e, s) in chunks {
-        let base = vertices.len() as u32;
-        ends.extend(e.iter().map(|x| x + base));
-        vertices.extend(v);
-        for (pixel, c) in s {
-            film[pixel as usize] += c.as_dvec3();
+/// One chunk's share of a light pass.
+#[derive(Default)]
+struct Chunk {
+    vertices: Vec<LightVertex>,
+    ends: Vec<u32>,
+    splats: Vec<Splat>,
+}
+
+/// The light pass's buffers, kept across iterations: once grown to their size, an iteration
+/// allocates nothing.
+#[derive(Default)]
+struct LightPass {
+    chunks: Vec<Chunk>,
+    /// The stored vertices of every light path in path order, and where each path's
+    /// vertices end.
+    vertices: Vec<LightVertex>,
+    ends: Vec<u32>,
+    positions: Vec<Vec3A>,
+    /// Light tracing's film.
+    film: Vec<DVec3>,
+    grid: Grid,
+}
+
+impl LightPass {
+    /// Traces one light path per pixel into the buffers. `false` when cancelled.
+    fn run(
+        &mut self,
+        ctx: &Context,
+        n_paths: usize,
+        seed: u64,
+        iter: u32,
+        cancel: &AtomicBool,
+    ) -> bool {
+        self.chunks
+            .resize_with(n_paths.div_ceil(CHUNK), Chunk::default);
+        self.chunks
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                chunk.vertices.clear();
+                chunk.ends.clear();
+                chunk.splats.clear();
+                if cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                for i in c * CHUNK..((c + 1) * CHUNK).min(n_paths) {
+                    let mut rng = Stream::VcmLight.rng(seed, iter, i as u64);
+                    light_path::trace(ctx, &mut rng, &mut chunk.vertices, &mut chunk.splats);
+                    chunk.ends.push(chunk.vertices.len() as u32);
+                }
+            });
+        if cancel.load(Ordering::Relaxed) {
+            return false;
         }
+        self.vertices.clear();
+        self.ends.clear();
+        self.film.clear();
+        self.film.resize(n_paths, DVec3::ZERO);
+        for chunk in &self.chunks {
+            let base = self.vertices.len() as u32;
+            self.ends.extend(chunk.ends.iter().map(|x| x + base));
+            self.vertices.extend_from_slice(&chunk.vertices);
+            for &(pixel, c) in &chunk.splats {
+                self.film[pixel as usize] += c.as_dvec3();
+            }
+        }
+        self.positions.clear();
+        self.positions.extend(self.vertices.iter().map(|v| v.p));
+        true
     }
-    Some((vertices, ends, film))
 }

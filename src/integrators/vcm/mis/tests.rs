@@ -3,7 +3,8 @@
 //! from the whole path (Veach's products of per-vertex densities, merges counting `pi r^2 N`
 //! and light tracing `N`), and each weight the renderer's functions give from the subpaths'
 //! recursive quantities must equal that technique's power-heuristic weight, and all of them
-//! must sum to one, for VCM and for BPT.
+//! must sum to one, for VCM and for BPT, for paths from a light's surface and from the sky
+//! (whose first vertex is a direction).
 
 use super::*;
 use crate::sampling::Rng;
@@ -26,6 +27,10 @@ struct Path {
     dir: f64,
     nee: f64,
     cam: f64,
+    /// x_0 is a direction of the environment light (densities per solid angle, no distance
+    /// or cosine at it): emission picks the direction (`dir`) then a point of the disk
+    /// (`pos`, per area across the direction).
+    env: bool,
 }
 
 fn random_path(n: usize, rng: &mut Rng) -> Path {
@@ -41,6 +46,7 @@ fn random_path(n: usize, rng: &mut Rng) -> Path {
         dir: u(0.05, 1.0),
         nee: u(0.05, 5.0),
         cam: u(0.5, 50.0),
+        env: false,
     }
 }
 
@@ -48,6 +54,8 @@ impl Path {
     /// Density per area of x_i sampled from the light side (i < n).
     fn fwd(&self, i: usize) -> f64 {
         match i {
+            0 if self.env => self.dir,
+            1 if self.env => self.pos * self.cos_prev[1],
             0 => self.pos,
             1 => self.dir * self.cos_prev[1] / (self.d[0] * self.d[0]),
             _ => self.a[i - 1] * self.cos_prev[i] / (self.d[i - 1] * self.d[i - 1]),
@@ -57,7 +65,10 @@ impl Path {
     /// Density per area of x_i sampled from the camera side (i < n).
     fn bwd(&self, i: usize) -> f64 {
         let d2 = self.d[i] * self.d[i];
-        if i == self.n - 1 {
+        if i == 0 && self.env {
+            // The camera side reaches the sky by the direction alone.
+            self.b[1]
+        } else if i == self.n - 1 {
             self.cam * self.cos_next[i] / d2
         } else {
             self.b[i + 1] * self.cos_next[i] / d2
@@ -65,6 +76,9 @@ impl Path {
     }
 
     fn nee_area(&self) -> f64 {
+        if self.env {
+            return self.nee;
+        }
         self.nee * self.cos_next[0] / (self.d[0] * self.d[0])
     }
 
@@ -108,8 +122,13 @@ impl Path {
         let emission = self.pos * self.dir;
         // Light subpath: quantities at x_1 .. x_{n-1}.
         let mut light = vec![Quantities::default(); n];
-        let mut q = Quantities::light(f, self.nee_area(), emission, self.cos_next[0]);
-        q.arrive(Some(self.d[0] * self.d[0]), self.cos_prev[1]);
+        let (cos_light, d0) = if self.env {
+            (1.0, None)
+        } else {
+            (self.cos_next[0], Some(self.d[0] * self.d[0]))
+        };
+        let mut q = Quantities::light(f, self.nee_area(), emission, cos_light);
+        q.arrive(d0, self.cos_prev[1]);
         light[1] = q;
         for i in 1..n - 1 {
             q.scatter(f, self.cos_next[i], self.a[i], self.b[i]);
@@ -123,7 +142,10 @@ impl Path {
         camera[n - 1] = q;
         for i in (0..n - 1).rev() {
             q.scatter(f, self.cos_prev[i + 1], self.b[i + 1], self.a[i + 1]);
-            q.arrive(Some(self.d[i] * self.d[i]), self.cos_next[i]);
+            // A path escaping to the sky arrives nowhere.
+            if !(i == 0 && self.env) {
+                q.arrive(Some(self.d[i] * self.d[i]), self.cos_next[i]);
+            }
             camera[i] = q;
         }
         let mut w = Vec::new();
@@ -139,7 +161,7 @@ impl Path {
                 self.nee,
                 emission,
                 self.cos_prev[1],
-                self.cos_next[0],
+                cos_light,
             ));
         }
         // 2 <= s <= n-1: light vertex x_{s-1} to camera vertex x_s.
@@ -171,10 +193,16 @@ impl Path {
 #[test]
 fn recursive_weights_equal_brute_force_and_sum_to_one() {
     let mut rng = Rng::new(2024);
-    for (use_vm, name) in [(true, "vcm"), (false, "bpt")] {
+    for (use_vm, env, name) in [
+        (true, false, "vcm"),
+        (false, false, "bpt"),
+        (true, true, "vcm from the sky"),
+        (false, true, "bpt from the sky"),
+    ] {
         for n in 2..=8 {
             for _ in 0..200 {
-                let path = random_path(n, &mut rng);
+                let mut path = random_path(n, &mut rng);
+                path.env = env;
                 let n_paths = 10.0 + 1000.0 * f64::from(rng.f32());
                 let radius = 0.01 + 0.5 * f64::from(rng.f32());
                 let f = Factors::new(radius, n_paths, true, use_vm);
