@@ -323,6 +323,9 @@ pub struct Part {
 #[derive(Debug)]
 pub struct ObjectDef {
     pub parts: Vec<Part>,
+    /// The body of a `contained_by { ... }`: a region only an isosurface takes, never an object
+    /// placed in the scene or in a CSG.
+    pub container: bool,
 }
 
 #[derive(Debug)]

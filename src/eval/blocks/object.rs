@@ -3,7 +3,7 @@
 
 mod blob;
 mod csg;
-mod isosurface;
+pub(in crate::eval) mod isosurface;
 
 pub(super) use isosurface::ContainedBy;
 mod primitive;
@@ -404,7 +404,10 @@ impl ObjectBuilder {
                 part.material = self.material.clone();
             }
         }
-        Ok(ObjectDef { parts })
+        Ok(ObjectDef {
+            parts,
+            container: false,
+        })
     }
 
     fn check_profile(&self, ev: &mut Evaluator, profile: &ProfileDef) -> SourceResult<()> {
@@ -566,6 +569,9 @@ impl Sink for ObjectBuilder {
                 self.material = Some(m);
                 self.material_span = span;
                 Ok(())
+            }
+            Value::Object(o) if o.container && self.kind != "isosurface" => {
+                Err(vec![isosurface::container_misplaced(span)])
             }
             Value::Object(o) if let Some(op) = self.csg() => self.csg_child(ev, op, &o, span),
             Value::Object(o) if self.kind == "blob" => self.blob_child(&o, span),

@@ -88,6 +88,9 @@ impl Sink for TopSink {
     }
     fn positional(&mut self, ev: &mut Evaluator, v: Value, span: Span) -> SourceResult<()> {
         match v {
+            Value::Object(o) if o.container => Err(vec![
+                crate::eval::blocks::object::isosurface::container_misplaced(span),
+            ]),
             Value::Object(o) => ev.emit(&o, span),
             Value::Settings(s) => {
                 ev.scene.settings = *s;

@@ -222,8 +222,20 @@ impl ContainedBy {
                 emission: None,
                 span,
             }],
+            container: true,
         })))
     }
+}
+
+/// A `contained_by { ... }` anywhere but inside an isosurface (POV-Ray refuses it too).
+pub(in crate::eval) fn container_misplaced(span: Span) -> Diagnostic {
+    Error::new("`contained_by` belongs inside an `isosurface`")
+        .label("not inside an isosurface")
+        .help(
+            "write it in the isosurface it bounds: `isosurface { function { ... } contained_by \
+             { box { <-1, -1, -1>, <1, 1, 1> } } }`; to place a box, write `box { ... }`",
+        )
+        .at(span)
 }
 
 /// The container an object given to `contained_by` (or to an isosurface) stands for.
