@@ -2,8 +2,9 @@
 //! an outgoing direction it checks:
 //! (a) `sample` draws directions distributed as `pdf` says: a chi-square goodness-of-fit test
 //!     on the sphere binned in (cos theta, phi), the expected counts integrating `pdf` over
-//!     each bin (composite Simpson), bins expecting fewer than 5 samples pooled (after
-//!     Mitsuba 3's `ChiSquareTest`); the p-value must stay above a significance divided by
+//!     each bin (composite Simpson, adaptive; a bin that got samples where it found no
+//!     density is integrated again on a grid 64 times finer), bins expecting fewer than 5
+//!     samples pooled (after Mitsuba 3's `ChiSquareTest`); the p-value must stay above a significance divided by
 //!     the number of tests the caller runs (Bonferroni);
 //! (b) `pdf` integrates to at most one;
 //! (c) `f(wo, wi) = f(wi, wo)`; for frosted glass, which transmits, the generalized form
@@ -15,7 +16,8 @@
 //!     since radiance entering a denser medium is concentrated, not created;
 //! (e) each sample's weight is `f |cos| / pdf` (`f` in the sample's transport mode) and its
 //!     density is `pdf(wo, wi)`;
-//! and [`no_nan`] checks (f): finite, non-negative values on random inputs.
+//! [`delta_choice`] checks (a) for a delta lobe that reflects or passes light (the choice's
+//! frequency), and [`no_nan`] checks (f): finite, non-negative values on random inputs.
 
 use std::f64::consts::PI;
 
