@@ -36,17 +36,17 @@ const MIN_COS: f32 = 1e-3;
 /// steps for the exit, the rest of the bits for the lobes.
 const EXIT_STEPS: f32 = 4096.0;
 
-/// A perturbed normal in the shading frame (`z > 0`, leaning from `z`).
+/// A perturbed normal in the shading frame (`z > 0`, leaning from `z`), with the two facets'
+/// geometry every evaluation uses, derived once when it is built.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Microsurface {
+    /// The perturbed facet's normal.
     wp: Vec3A,
-}
-
-/// The microsurface's derived geometry.
-struct Facets {
-    wp: Vec3A,
+    /// The tangent facet's normal (horizontal, facing away from `wp`'s lean).
     wt: Vec3A,
+    /// The sine of `wp`'s lean.
     sin_p: f32,
+    /// The perturbed facet's frame, where the lobes are evaluated.
     facet: Frame,
 }
 
@@ -66,18 +66,14 @@ impl Microsurface {
         } else {
             wp
         };
-        Some(Self { wp })
+        Some(Self::from_normal(wp))
     }
 
-    /// The perturbed normal (local).
-    pub fn normal(&self) -> Vec3A {
-        self.wp
-    }
-
-    fn facets(&self) -> Facets {
-        let wp = self.wp;
+    /// The microsurface of a perturbed normal that [`Self::new`] gave (a [`Self::normal`]):
+    /// the same microsurface, bit for bit, from a compact copy of it.
+    pub fn from_normal(wp: Vec3A) -> Self {
         let sin_p = (wp.x * wp.x + wp.y * wp.y).sqrt();
-        Facets {
+        Self {
             wp,
             wt: Vec3A::new(-wp.x / sin_p, -wp.y / sin_p, 0.0),
             sin_p,
@@ -85,17 +81,21 @@ impl Microsurface {
         }
     }
 
+    /// The perturbed normal (local).
+    pub fn normal(&self) -> Vec3A {
+        self.wp
+    }
+
     /// `f` for a pair passing the side tests (`o.z`, `i.z` nonzero).
     pub fn f(&self, lobes: &Lobes, o: Vec3A, i: Vec3A, mode: TransportMode) -> Vec3A {
-        let m = self.facets();
         match mode {
-            TransportMode::Radiance => m.walk(lobes, o, i).0 / i.z.abs(),
-            TransportMode::Importance => m.walk(lobes, i, o).0 / o.z.abs(),
+            TransportMode::Radiance => self.walk(lobes, o, i).0 / i.z.abs(),
+            TransportMode::Importance => self.walk(lobes, i, o).0 / o.z.abs(),
         }
     }
 
     pub fn pdf(&self, lobes: &Lobes, o: Vec3A, i: Vec3A) -> f32 {
-        self.facets().walk(lobes, o, i).1
+        self.walk(lobes, o, i).1
     }
 
     /// Samples the walk from `o`: the first facet, the lobes, the exit.
@@ -107,16 +107,15 @@ impl Microsurface {
         u: Vec2,
         mode: TransportMode,
     ) -> Option<BsdfSample> {
-        let m = self.facets();
         if let Lobes::Diffuse { .. } = lobes {
-            let i = m.sample_diffuse(o, uc, u)?;
-            return m.weigh(lobes, o, i, mode);
+            let i = self.sample_diffuse(o, uc, u)?;
+            return self.weigh(lobes, o, i, mode);
         }
-        let lp = m.lambda_p(o);
+        let lp = self.lambda_p(o);
         let (ob, v) = if uc < lp {
             (o, uc / lp)
         } else {
-            (m.reflect(o), (uc - lp) / (1.0 - lp))
+            (self.reflect(o), (uc - lp) / (1.0 - lp))
         };
         let x = v.clamp(0.0, 1.0) * EXIT_STEPS;
         let steps = x.floor().min(EXIT_STEPS - 1.0);
@@ -124,13 +123,13 @@ impl Microsurface {
             (steps + 0.5) / EXIT_STEPS,
             (x - steps).min(1.0 - f32::EPSILON),
         );
-        let bs = lobes.sample_local(m.facet.to_local(ob), u_lobe, u, mode)?;
-        let d = m.facet.to_world(bs.wi);
-        let (g, wall) = m.exit(d);
+        let bs = lobes.sample_local(self.facet.to_local(ob), u_lobe, u, mode)?;
+        let d = self.facet.to_world(bs.wi);
+        let (g, wall) = self.exit(d);
         let i = if u_exit < g {
             d
         } else if wall {
-            m.reflect(d)
+            self.reflect(d)
         } else {
             return None;
         };
@@ -140,11 +139,11 @@ impl Microsurface {
         if bs.specular {
             return Some(BsdfSample { wi: i, ..bs });
         }
-        m.weigh(lobes, o, i, mode)
+        self.weigh(lobes, o, i, mode)
     }
 }
 
-impl Facets {
+impl Microsurface {
     /// A sample toward `i` weighted by the whole walk's `f |cos| / pdf` (the importance value
     /// for importance).
     fn weigh(&self, lobes: &Lobes, o: Vec3A, i: Vec3A, mode: TransportMode) -> Option<BsdfSample> {
@@ -231,7 +230,7 @@ impl Facets {
 /// surface meets the perturbed facet again and is scattered anew. Summed over every number of
 /// such returns the walk is closed: the share `L = (1 - cos theta_p) / 2` of the cosine lobe
 /// that heads below the shading horizon returns, so a white facet loses nothing.
-impl Facets {
+impl Microsurface {
     /// The share of a cosine lobe around `wp` that heads below the shading horizon.
     fn returning(&self) -> f32 {
         0.5 * (1.0 - self.wp.z)

@@ -2,8 +2,9 @@
 //! an outgoing direction it checks:
 //! (a) `sample` draws directions distributed as `pdf` says: a chi-square goodness-of-fit test
 //!     on the sphere binned in (cos theta, phi), the expected counts integrating `pdf` over
-//!     each bin (composite Simpson), bins expecting fewer than 5 samples pooled (after
-//!     Mitsuba 3's `ChiSquareTest`); the p-value must stay above a significance divided by
+//!     each bin (composite Simpson, adaptive; a bin that got samples where it found no
+//!     density is integrated again on a grid 64 times finer), bins expecting fewer than 5
+//!     samples pooled (after Mitsuba 3's `ChiSquareTest`); the p-value must stay above a significance divided by
 //!     the number of tests the caller runs (Bonferroni);
 //! (b) `pdf` integrates to at most one;
 //! (c) `f(wo, wi) = f(wi, wo)`; for frosted glass, which transmits, the generalized form
@@ -15,7 +16,8 @@
 //!     since radiance entering a denser medium is concentrated, not created;
 //! (e) each sample's weight is `f |cos| / pdf` (`f` in the sample's transport mode) and its
 //!     density is `pdf(wo, wi)`;
-//! and [`no_nan`] checks (f): finite, non-negative values on random inputs.
+//! [`delta_choice`] checks (a) for a delta lobe that reflects or passes light (the choice's
+//! frequency), and [`no_nan`] checks (f): finite, non-negative values on random inputs.
 
 use std::f64::consts::PI;
 
@@ -93,6 +95,22 @@ fn adaptive(b: &Bsdf, wo: Vec3A, cell: (f64, f64, f64, f64), whole: f64, depth: 
         .iter()
         .zip(parts)
         .map(|(&(c, p), part)| adaptive(b, wo, (c, p, hc, hp), part, depth + 1))
+        .sum()
+}
+
+/// How many times [`finely`] halves a cell's sides.
+const SLIVER_SPLITS: u32 = 6;
+
+/// `pdf` over a cell by Simpson on each of its `4^splits` sub-cells.
+fn finely(b: &Bsdf, wo: Vec3A, cell: (f64, f64, f64, f64), splits: u32) -> f64 {
+    let (c0, p0, dc, dp) = cell;
+    if splits == 0 {
+        return simpson(b, wo, c0, p0, dc, dp);
+    }
+    let (hc, hp) = (dc / 2.0, dp / 2.0);
+    [(c0, p0), (c0 + hc, p0), (c0, p0 + hp), (c0 + hc, p0 + hp)]
+        .iter()
+        .map(|&(c, p)| finely(b, wo, (c, p, hc, hp), splits - 1))
         .sum()
 }
 
@@ -202,7 +220,18 @@ pub(super) fn check_mode(
     if b.is_specular() {
         return Ok(());
     }
-    let mass = expected_mass(b, wo);
+    let mut mass = expected_mass(b, wo);
+    // A bin that got samples where the quadrature found no density holds a sliver of the
+    // lobe narrower than its evaluation points (light refracted out of glass at grazing
+    // incidence from inside): integrate it again on a grid [`SLIVER_SPLITS`] times finer.
+    for (i, m) in mass.iter_mut().enumerate() {
+        if *m == 0.0 && counts[i] > 0 {
+            let (ci, pi) = (i / PHI_BINS, i % PHI_BINS);
+            let (dc, dp) = (2.0 / COS_BINS as f64, 2.0 * PI / PHI_BINS as f64);
+            let cell = (-1.0 + dc * ci as f64, dp * pi as f64, dc, dp);
+            *m = finely(b, wo, cell, SLIVER_SPLITS);
+        }
+    }
     // (b) The density integrates to at most one.
     let total: f64 = mass.iter().sum();
     if total > 1.0 + 2e-3 {
@@ -211,9 +240,9 @@ pub(super) fn check_mode(
     // (a) Chi-square, low-expectation bins pooled.
     let (mut chi2, mut dof) = (0.0, 0usize);
     let (mut pool_exp, mut pool_obs) = (0.0, 0.0);
-    // Samples in bins where the quadrature found no density: (e) proved `pdf > 0` at each
-    // sample, so these are slivers of a lobe the quadrature did not resolve (light refracted
-    // out of glass at grazing incidence); a few join the pool, more fail.
+    // Samples in bins where even the finer quadrature found no density: (e) proved
+    // `pdf > 0` at each sample, so these are slivers narrower still; a few join the pool,
+    // more fail.
     let mut unresolved = 0.0;
     for (&m, &c) in mass.iter().zip(&counts) {
         let (e, o) = (m * n, c as f64);
@@ -351,6 +380,80 @@ pub(super) fn no_nan(n: usize, seed: u64, mut lobes: impl FnMut(&mut Rng) -> Lob
             );
         }
     }
+}
+
+/// (a) for a delta BSDF that reflects or passes light on (smooth glass, a thin pane): a
+/// chi-square test (one degree of freedom) of how often `sample` reflects against the share
+/// `reflected` computed independently by the caller, and each sample's direction (the mirror
+/// image of `wo`, or `transmitted`) and importance weight (one for a clear lobe: the choice's
+/// probability is its share). A choice of probability zero (total internal reflection) must
+/// never be made.
+pub(super) fn delta_choice(
+    b: &Bsdf,
+    wo: Vec3A,
+    reflected: f64,
+    transmitted: Option<Vec3A>,
+    tests: usize,
+    seed: u64,
+) -> Result<(), String> {
+    let mut rng = Rng::new(seed);
+    let mirror = Vec3A::new(-wo.x, -wo.y, wo.z);
+    let close = |a: Vec3A, c: Vec3A| (a - c).abs().max_element() <= 1e-5;
+    let mut refl = 0u64;
+    for _ in 0..SAMPLES {
+        let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), TransportMode::Importance) else {
+            return Err("no sample".into());
+        };
+        if !s.specular || (s.weight - Vec3A::ONE).abs().max_element() > 1e-5 {
+            return Err(format!("sample {s:?} is not a clear delta lobe's"));
+        }
+        if s.wi.z * wo.z > 0.0 {
+            if !close(s.wi, mirror) {
+                return Err(format!("reflected to {} instead of {mirror}", s.wi));
+            }
+            refl += 1;
+        } else {
+            match transmitted {
+                Some(t) if close(s.wi, t) => {}
+                _ => return Err(format!("passed to {} instead of {transmitted:?}", s.wi)),
+            }
+        }
+    }
+    let n = SAMPLES as f64;
+    let (o, e) = (refl as f64, reflected * n);
+    if e < 5.0 || n - e < 5.0 {
+        // One choice is all but certain: the other may be made only as often as expected.
+        let (rare_o, rare_e) = if e < 5.0 { (o, e) } else { (n - o, n - e) };
+        if rare_o > 5.0 + 10.0 * rare_e {
+            return Err(format!(
+                "{rare_o} samples of a choice expected {rare_e} times"
+            ));
+        }
+        return Ok(());
+    }
+    let chi2 = (o - e).powi(2) / e + (o - e).powi(2) / (n - e);
+    let p = erfc((chi2 / 2.0).sqrt());
+    let threshold = SIGNIFICANCE / tests as f64;
+    if p < threshold {
+        return Err(format!(
+            "reflected {o} of {n} samples, expected {e:.1}: p = {p:.3e} < {threshold:.1e}"
+        ));
+    }
+    Ok(())
+}
+
+/// Unpolarised Fresnel reflectance in `f64`, for checking the lobes' own: `cos_i` of the
+/// incident direction to the normal on its side, `eta` the index across over the index on
+/// its side.
+pub(super) fn fresnel64(cos_i: f64, eta: f64) -> f64 {
+    let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rp * rp + rs * rs)
 }
 
 /// Roughness to GGX alpha as the materials map it.

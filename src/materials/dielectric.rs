@@ -66,6 +66,49 @@ pub fn sample(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::materials::Lobes;
+    use crate::materials::check::{COS_O, bsdf, delta_choice, fresnel64, wo_at};
+
+    /// Smooth glass reflects as often as Fresnel says (chi-square of the choice against an
+    /// `f64` Fresnel) and refracts by Snell's law, from outside and from inside, at every
+    /// angle down to grazing (cos 1e-3: from inside that is total internal reflection, so no
+    /// sample may refract), for a dense and a barely denser glass.
+    #[test]
+    fn smooth_glass_chooses_by_fresnel_from_both_sides() {
+        let etas = [1.5f32, 1.05];
+        let cases = COS_O.len() * etas.len() * 2;
+        let mut seed = 900;
+        for &eta in &etas {
+            for &c in &COS_O {
+                for side in [1.0f32, -1.0] {
+                    let wo = wo_at(c) * Vec3A::new(1.0, 1.0, side);
+                    let b = bsdf(Lobes::Glass {
+                        eta,
+                        tint: Vec3A::ONE,
+                        alpha: 0.0,
+                    });
+                    // The index across over the index on wo's side.
+                    let etap = if side > 0.0 {
+                        f64::from(eta)
+                    } else {
+                        1.0 / f64::from(eta)
+                    };
+                    let cos_i = f64::from(c);
+                    let sin2_t = (1.0 - cos_i * cos_i) / (etap * etap);
+                    let transmitted = (sin2_t < 1.0).then(|| {
+                        let (wo, n) = (wo.as_dvec3(), glam::DVec3::Z * f64::from(side));
+                        let t = -wo / etap + n * (cos_i / etap - (1.0 - sin2_t).sqrt());
+                        t.normalize().as_vec3a()
+                    });
+                    seed += 1;
+                    let r = fresnel64(cos_i, etap);
+                    if let Err(e) = delta_choice(&b, wo, r, transmitted, cases, seed) {
+                        panic!("eta {eta}, cos {}: {e}", wo.z);
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn fresnel_limits() {

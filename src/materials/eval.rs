@@ -87,22 +87,26 @@ pub fn scalar(p: &ScalarParam, scene: &Scene, tc: impl Fn() -> TexCoord) -> f32 
 /// Each step goes to an earlier material (the scene's validation checks it), so this ends;
 /// the bound is a second guard for a scene that was not validated.
 pub fn choose<'a>(m: &'a Material, scene: &'a Scene, tc: impl Fn() -> TexCoord) -> &'a Material {
-    choose_bumped(m, scene, tc).0
+    choose_bumped(m, None, scene, tc).0
 }
 
 /// [`choose`], and the normal of the outermost bump met on the way (a bumped material's
-/// base is a step like a blend's part).
+/// base is a step like a blend's part), with the index of the bumped material that carries
+/// it (`None` if that is `m` and the caller gave no `id` for it).
 pub fn choose_bumped<'a>(
     m: &'a Material,
+    id: Option<usize>,
     scene: &'a Scene,
     tc: impl Fn() -> TexCoord,
-) -> (&'a Material, Option<&'a Normal>) {
+) -> (&'a Material, Option<(&'a Normal, Option<usize>)>) {
     let mut m = m;
+    let mut id = id;
     let mut key = None;
     let mut bump = None;
     for level in 0..=crate::scene::MAX_BLEND_DEPTH {
         if let Material::Bumped { base, normal } = m {
-            bump = bump.or(Some(normal));
+            bump = bump.or(Some((normal, id)));
+            id = Some(base.0 as usize);
             match scene.materials.get(base.0 as usize) {
                 Some(n) => m = n,
                 None => break,
@@ -117,6 +121,7 @@ pub fn choose_bumped<'a>(
         let u =
             unit_hash(tc_key ^ (u64::from(level) << 58) ^ (u64::from(a.0) << 32) ^ u64::from(b.0));
         let next = if u < w { b } else { a };
+        id = Some(next.0 as usize);
         match scene.materials.get(next.0 as usize) {
             Some(n) => m = n,
             None => break,
@@ -195,13 +200,14 @@ pub fn lobes(m: &Material, scene: &Scene, tc: impl Fn() -> TexCoord) -> Lobes {
 }
 
 /// [`lobes`], and the normal of the bump on the material (or the blend's part) shown at the
-/// hit, if any.
+/// hit, if any, with the index of the bumped material carrying it; `id` is `m`'s index.
 pub fn bumped_lobes<'a>(
     m: &'a Material,
+    id: usize,
     scene: &'a Scene,
     tc: impl Fn() -> TexCoord,
-) -> (Lobes, Option<&'a Normal>) {
-    let (m, normal) = choose_bumped(m, scene, &tc);
+) -> (Lobes, Option<(&'a Normal, Option<usize>)>) {
+    let (m, normal) = choose_bumped(m, Some(id), scene, &tc);
     (lobes_of(m, scene, tc), normal)
 }
 

@@ -103,12 +103,33 @@ impl Bsdf {
     }
 
     /// A BSDF whose lobes sit on facets of normal `np` (world space, a bump or normal map's
-    /// perturbed normal) of a microsurface around the shading normal `ns` (bump.rs). A normal
-    /// that does not lean from `ns` gives the plain BSDF.
-    pub fn bumped(lobes: Lobes, ns: Vec3A, dpdu: Vec3A, ng: Vec3A, np: Vec3A) -> Self {
-        let mut b = Self::new(lobes, ns, dpdu, ng);
-        b.bump = bump::Microsurface::new(b.frame.to_local(np));
-        b
+    /// perturbed normal) of a microsurface around the normal of the shading frame `frame`
+    /// (bump.rs). A normal that does not lean from the shading normal gives the plain BSDF.
+    pub fn bumped(lobes: Lobes, frame: Frame, ng: Vec3A, np: Vec3A) -> Self {
+        Self {
+            lobes,
+            frame,
+            ng,
+            bump: bump::Microsurface::new(frame.to_local(np)),
+        }
+    }
+
+    /// The bump's perturbed normal in the shading frame, if the BSDF has a bump: with the
+    /// lobes, the frame and `ng`, all [`Bsdf::from_parts`] needs to rebuild it (a compact
+    /// copy to keep, where the microsurface's derived geometry would take room).
+    pub fn bump_normal(&self) -> Option<Vec3A> {
+        self.bump.as_ref().map(bump::Microsurface::normal)
+    }
+
+    /// The BSDF of these parts, `bump` a [`Bsdf::bump_normal`]: the BSDF it came from, bit
+    /// for bit.
+    pub fn from_parts(lobes: Lobes, frame: Frame, ng: Vec3A, bump: Option<Vec3A>) -> Self {
+        Self {
+            lobes,
+            frame,
+            ng,
+            bump: bump.map(bump::Microsurface::from_normal),
+        }
     }
 
     /// Purely specular (delta) BSDFs: camera paths pass through them, photons never deposit.

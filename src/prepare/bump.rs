@@ -6,19 +6,25 @@ use glam::{Vec2, Vec3A};
 use super::{PreparedScene, SurfaceHit};
 use crate::geometry::Frame;
 use crate::scene::{Normal, NormalKind};
-use crate::textures::bump;
+use crate::textures::{TexCoord, bump};
 
 impl PreparedScene<'_> {
     /// The shading normal at a hit as a bump or normal map leans it (world space): a height's
     /// slopes along the shading frame's tangents tilt it, or a normal map's texel replaces it
-    /// in that frame (textures/bump.rs).
-    pub(super) fn perturbed_normal(&self, normal: &Normal, sh: &SurfaceHit) -> Vec3A {
+    /// in that frame (textures/bump.rs). `frame` is the shading frame, `tc` the hit's texture
+    /// coordinates and `scale` the height's pattern scale, all worked out once by the caller.
+    pub(super) fn perturbed_normal(
+        &self,
+        normal: &Normal,
+        scale: f32,
+        sh: &SurfaceHit,
+        frame: &Frame,
+        tc: &TexCoord,
+    ) -> Vec3A {
         let ns = sh.hit.ns;
-        let frame = Frame::from_normal_tangent(ns, sh.hit.dpdu);
-        let tc = self.tex_coord(sh);
         let textures = &self.scene.textures;
         if let NormalKind::Map(_) = normal.kind {
-            return match bump::mapped_normal(normal, textures, &tc) {
+            return match bump::mapped_normal(normal, textures, tc) {
                 Some(n) => frame.to_world(n),
                 None => ns,
             };
@@ -48,7 +54,7 @@ impl PreparedScene<'_> {
             }
         };
         let tangents = [tangent(frame.s, Vec2::X), tangent(frame.t, Vec2::Y)];
-        let [hs, ht] = bump::slopes(normal, textures, &tc, tangents);
+        let [hs, ht] = bump::slopes(normal, scale, textures, tc, tangents);
         let a = normal.amount as f32;
         let np = (ns - a * (hs * frame.s + ht * frame.t)).normalize_or_zero();
         if np == Vec3A::ZERO || !np.is_finite() {

@@ -16,13 +16,13 @@ mod sky;
 
 use crate::accel::{self, Bvh};
 use crate::camera::Camera;
-use crate::geometry::{Hit, Ray};
+use crate::geometry::{Frame, Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
-use crate::textures::TexCoord;
+use crate::textures::{self, TexCoord};
 pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use settings::{
@@ -86,6 +86,10 @@ pub struct PreparedScene<'a> {
     textured: Vec<bool>,
     /// Per material: whether it is glass, and its absorption where that is a constant.
     glass: Vec<GlassAbsorption>,
+    /// Per material: for a bumped one, how far one object unit reaches in its height's
+    /// pattern space ([`textures::bump::pattern_scale`], which sets the difference step);
+    /// 1 otherwise.
+    bump_scale: Vec<f32>,
     /// The floor of a spawned ray's offset, from the scene's extent ([`accel::offset_floor`]).
     offset_floor: f32,
 }
@@ -446,6 +450,16 @@ impl<'a> PreparedScene<'a> {
                 .zip(eval::glass_parts(scene))
                 .map(|(m, g)| GlassAbsorption::of(m, g))
                 .collect(),
+            bump_scale: scene
+                .materials
+                .iter()
+                .map(|m| match m {
+                    Material::Bumped { normal, .. } => {
+                        textures::bump::pattern_scale(normal, &scene.textures)
+                    }
+                    _ => 1.0,
+                })
+                .collect(),
             offset_floor: 0.0,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
@@ -567,23 +581,29 @@ impl<'a> PreparedScene<'a> {
             .prim_material
             .get(sh.prim as usize)
             .map_or(usize::MAX, |&m| m as usize);
-        let (lobes, normal) = match self.const_lobes.get(m) {
-            Some(Some(l)) => (*l, None),
-            _ => match self.scene.materials.get(m) {
-                Some(material) => eval::bumped_lobes(material, self.scene, || self.tex_coord(sh)),
-                None => (
-                    Lobes::Diffuse {
-                        albedo: Vec3A::ZERO,
-                    },
-                    None,
-                ),
-            },
+        if let Some(Some(l)) = self.const_lobes.get(m) {
+            return Bsdf::new(*l, sh.hit.ns, sh.hit.dpdu, sh.hit.n);
+        }
+        let Some(material) = self.scene.materials.get(m) else {
+            let black = Lobes::Diffuse {
+                albedo: Vec3A::ZERO,
+            };
+            return Bsdf::new(black, sh.hit.ns, sh.hit.dpdu, sh.hit.n);
         };
+        // The texture coordinates, looked up once for the lobes and the bump alike.
+        let cell = std::cell::OnceCell::new();
+        let tc = || *cell.get_or_init(|| self.tex_coord(sh));
+        let (lobes, normal) = eval::bumped_lobes(material, m, self.scene, tc);
         match normal {
             None => Bsdf::new(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n),
-            Some(normal) => {
-                let np = self.perturbed_normal(normal, sh);
-                Bsdf::bumped(lobes, sh.hit.ns, sh.hit.dpdu, sh.hit.n, np)
+            Some((normal, id)) => {
+                let frame = Frame::from_normal_tangent(sh.hit.ns, sh.hit.dpdu);
+                let scale = match id.and_then(|i| self.bump_scale.get(i)) {
+                    Some(&s) => s,
+                    None => textures::bump::pattern_scale(normal, &self.scene.textures),
+                };
+                let np = self.perturbed_normal(normal, scale, sh, &frame, &tc());
+                Bsdf::bumped(lobes, frame, sh.hit.n, np)
             }
         }
     }

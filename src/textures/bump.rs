@@ -76,8 +76,9 @@ const WAVE_CENTERS: [[f64; 3]; 10] = [
 ];
 
 /// How far one object unit reaches in the height's pattern space (the longest axis of its
-/// transform, and of a texture's own).
-fn pattern_scale(normal: &Normal, textures: &[Texture]) -> f32 {
+/// transform, and of a texture's own): a constant of the normal, worked out once per material
+/// when the scene is prepared.
+pub fn pattern_scale(normal: &Normal, textures: &[Texture]) -> f32 {
     let reach = |t: &DAffine3| {
         let m = t.matrix3;
         m.x_axis
@@ -107,14 +108,16 @@ pub struct Tangent {
     pub duv: Vec2,
 }
 
-/// The height's slope per world unit along each tangent (central differences).
+/// The height's slope per world unit along each tangent (central differences); `scale` is the
+/// normal's [`pattern_scale`].
 pub fn slopes(
     normal: &Normal,
+    scale: f32,
     textures: &[Texture],
     at: &TexCoord,
     tangents: [Tangent; 2],
 ) -> [f32; 2] {
-    let step = (STEP / pattern_scale(normal, textures))
+    let step = (STEP / scale)
         .max(at.p.abs().max_element() * 1e-5)
         .max(1e-12);
     tangents.map(|t| {
@@ -198,7 +201,8 @@ mod tests {
                 },
             ];
             let p = Vec3A::new(0.3 * scale as f32, 0.2, 0.0);
-            let [sx, sy] = slopes(&n, std::slice::from_ref(&texture), &at(p), tangents);
+            let textures = std::slice::from_ref(&texture);
+            let [sx, sy] = slopes(&n, pattern_scale(&n, textures), textures, &at(p), tangents);
             let want = 1.0 / scale as f32;
             assert!((sx - want).abs() < 1e-2 * want, "scale {scale}: {sx}");
             assert!(sy.abs() < 1e-3, "{sy}");

@@ -363,6 +363,9 @@ fn blend_renders_the_weighted_mean_of_its_parts_in_every_integrator() {
         (Integrator::Ppm, 64),
         (Integrator::Sppm, 64),
         (Integrator::PhotonMap, 16),
+        (Integrator::Vcm, 64),
+        (Integrator::Bpt, 64),
+        (Integrator::Lt, 256),
     ] {
         // Mean and standard error of the image mean over four seeds.
         let stats = |s: &Scene| {
@@ -735,7 +738,7 @@ fn bumped_surfaces_render_in_every_integrator() {
 
 /// A white Lambertian sphere under strong bumps inside a uniformly emitting shell (a white
 /// furnace) reflects all the light it gets: the image mean stays 1 within 1.5 % for path
-/// tracing, SPPM, PPM and photon mapping (whose k nearest photons on the sphere are the
+/// tracing, SPPM, PPM, VCM, BPT, light tracing and photon mapping (whose k nearest photons on the sphere are the
 /// shell's, ten units away: a leak that shrinks with the photon count, hence more photons).
 /// Whitted (no indirect light) renders finite.
 #[test]
@@ -751,6 +754,9 @@ fn a_bumped_white_sphere_in_a_white_furnace_keeps_mean_radiance_one() {
         (Integrator::Sppm, 32, 20_000),
         (Integrator::Ppm, 32, 20_000),
         (Integrator::PhotonMap, 8, 200_000),
+        (Integrator::Vcm, 32, 0),
+        (Integrator::Bpt, 32, 0),
+        (Integrator::Lt, 1024, 0),
     ] {
         let m = mean(&run(&bumped, integrator, iterations, photons, 3));
         println!("{integrator:?}: bumped white furnace {m:.5}");

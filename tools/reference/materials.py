@@ -157,8 +157,56 @@ GLASS_ROWS = [
     Row('frosted', frosted_ours, frosted_mitsuba),
     Row('thin', thin_ours, thin_mitsuba, roughness=THIN_IOR),
     Row('blend', blend_ours, blend_mitsuba, roughness=BLEND_WEIGHT),
-    # A bump row would follow the same pattern:
-    # Row('bump', ..., lambda r: {'type': 'bumpmap', 'arg': {texture}, 'bsdf': {...}}),
+]
+
+# The third sheet: bumps. An image height map on flat tiles (a quad's uv is affine, the same in
+# both renderers; a sphere's `v` rate is not: ours moves `v` at the rate of `u`). The height is
+# `bump_height.png`, written by this script: a 64 x 64 grey image of
+# 0.5 + 0.5 sin(2 pi 2 u) sin(2 pi 2 v), 8 bits, read linearly and bilinearly by both. Ours:
+# `normal { texture { image ... linear interpolate map uv } amount a }`; Mitsuba: `bumpmap`
+# with `scale` a over a `bitmap` (`raw`, bilinear, the v flip of README.md). Both lean the
+# normal to `n - a grad h` (the height's gradient per world unit): the same perturbed normal.
+# The parameter is the amount: the steepest lean on a tile (0.8 wide) is atan(a 2 pi / 0.8).
+BUMP_IMAGE = 'bump_height.png'
+BUMP_TEXELS = 64
+BUMP_PERIODS = 2
+BUMP_AMOUNT = (0.02, 0.06, 0.2, 0.6)
+BUMP_DIFFUSE = (0.8, 0.8, 0.8)
+
+
+def bump_heights():
+    """The height image's rows, top row first (8-bit values)."""
+    c = (np.arange(BUMP_TEXELS) + 0.5) / BUMP_TEXELS
+    u, v = np.meshgrid(c, c[::-1])
+    h = 0.5 + 0.5 * np.sin(2 * np.pi * BUMP_PERIODS * u) * np.sin(2 * np.pi * BUMP_PERIODS * v)
+    return np.round(h * 255).astype(np.uint8)
+
+
+def bumped_ours(body):
+    def ours(a):
+        return (f'{body} normal {{ texture {{ image "{BUMP_IMAGE}" linear interpolate map uv }} '
+                f'amount {a:g} }}')
+    return ours
+
+
+def bumped_mitsuba(bsdf):
+    def mitsuba(a):
+        import mitsuba as mi
+        flip = mi.ScalarTransform4f().translate([0, 1, 0]).scale([1, -1, 1])
+        return {'type': 'bumpmap', 'scale': a,
+                'arg': {'type': 'bitmap', 'filename': os.path.join(HERE, BUMP_IMAGE),
+                        'raw': True, 'filter_type': 'bilinear', 'wrap_mode': 'repeat',
+                        'to_uv': flip},
+                'bsdf': bsdf}
+    return mitsuba
+
+
+BUMP_ROWS = [
+    Row('bumped diffuse', bumped_ours(f'diffuse rgb {vec(BUMP_DIFFUSE)}'),
+        bumped_mitsuba({'type': 'diffuse', 'reflectance': rgb(BUMP_DIFFUSE)}),
+        roughness=BUMP_AMOUNT),
+    Row('bumped Au', bumped_ours(conductor_ours('Au')(0.2)),
+        bumped_mitsuba(conductor_mitsuba('Au')(0.2)), roughness=BUMP_AMOUNT),
 ]
 
 # Floor: stripes of width 1 along z (alternating reflectance), at FLOOR_Y, facing up.
@@ -174,12 +222,29 @@ class Sheet:
     name: str
     rows: list
     floor: bool = False
+    # Square tiles (TILE wide, leaning TILE_LEAN degrees back toward the light) instead of
+    # spheres.
+    tiles: bool = False
 
 
 SHEETS = {
     'materials': Sheet('materials', ROWS),
     'glass_blend': Sheet('glass_blend', GLASS_ROWS, floor=True),
+    'bumps': Sheet('bumps', BUMP_ROWS, tiles=True),
 }
+
+TILE = 0.8
+TILE_LEAN = 30.0
+
+
+def tile_edges(c):
+    """(corner, edge_u, edge_v) of the tile centred at `c`: u along x, v up the tile, the
+    normal u x v toward the camera and up."""
+    lean = math.radians(TILE_LEAN)
+    eu = np.array([TILE, 0.0, 0.0])
+    ev = TILE * np.array([0.0, math.cos(lean), -math.sin(lean)])
+    corner = np.array(c) - (eu + ev) / 2
+    return corner, eu, ev
 
 
 def floor_stripes():
@@ -210,6 +275,8 @@ def write_scene(sheet, path):
     what = ('rows of spheres, one material per row at several roughnesses'
             if not sheet.floor else
             'rows of spheres, one material per row at several parameters, over a striped floor')
+    if sheet.tiles:
+        what = 'rows of tiles, one material per row at several bump amounts'
     lines = [
         f'// {n}.scn: written by tools/reference/materials.py (do not edit; edit its rows there).',
         f'// {what[0].upper() + what[1:]},',
@@ -235,6 +302,11 @@ def write_scene(sheet, path):
             lines.append(f'quad {{ {vec(c)}, {vec(u)}, {vec(v)}  material {{ diffuse rgb {shade:g} }} }}')
         lines.append('')
     for label, c, row, r in spheres(sheet):
+        if sheet.tiles:
+            corner, eu, ev = tile_edges(c)
+            lines.append(f'quad {{ {vec(corner)}, {vec(eu)}, {vec(ev)}  '
+                         f'material {{ {row.ours(r)} }} }}  // {label}')
+            continue
         lines.append(f'sphere {{ {vec(c)}, {RADIUS:g}  material {{ {row.ours(r)} }} }}  // {label}')
     with open(path, 'w') as f:
         f.write('\n'.join(lines) + '\n')
@@ -260,6 +332,16 @@ def mask(sheet):
     eye = np.array(EYE)
     out = np.zeros((HEIGHT, WIDTH), dtype=np.float32)
     for k, (_, c, _, _) in enumerate(spheres(sheet)):
+        if sheet.tiles:
+            # The inner square (MASK_SHRINK of the side) of the tile.
+            corner, eu, ev = tile_edges(c)
+            n = np.cross(eu, ev)
+            t = ((corner - eye) @ n) / (d @ n)
+            p = eye + t[..., None] * d - corner
+            a, b = (p @ eu) / (eu @ eu), (p @ ev) / (ev @ ev)
+            lo, hi = (1 - MASK_SHRINK) / 2, (1 + MASK_SHRINK) / 2
+            out[(t > 0) & (a > lo) & (a < hi) & (b > lo) & (b < hi)] = k + 1
+            continue
         oc = eye - np.array(c)
         b = d @ oc
         disc = b * b - (oc @ oc - (MASK_SHRINK * RADIUS) ** 2)
@@ -306,6 +388,10 @@ def mitsuba_scene(sheet, spp):
                               'bsdf': {'type': 'twosided', 'bsdf': {
                                   'type': 'diffuse', 'reflectance': rgb([shade] * 3)}}}
     for k, (_, c, row, r) in enumerate(spheres(sheet)):
+        if sheet.tiles:
+            d[f'tile{k}'] = {'type': 'rectangle', 'to_world': rectangle_to_world(mi, *tile_edges(c)),
+                             'bsdf': row.mitsuba(r)}
+            continue
         d[f'sphere{k}'] = {'type': 'sphere', 'center': list(c), 'radius': RADIUS,
                            'bsdf': row.mitsuba(r)}
     return d
@@ -333,6 +419,8 @@ def main():
     out = a.out or os.path.join(HERE, f'{sheet.name}.exr')
     import mitsuba as mi
     mi.set_variant('scalar_rgb')
+    if sheet.tiles:
+        mi.Bitmap(bump_heights()).write(os.path.join(HERE, BUMP_IMAGE))
     write_scene(sheet, os.path.join(HERE, f'{sheet.name}.scn'))
     write_mask_and_labels(sheet)
     if a.scene_only:

@@ -52,7 +52,7 @@ use balance::{PhotonNoise, SampleStats};
 pub use pass::photon_flux;
 use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use photon_count::PhotonCount;
-use pixels::{Pixel, image_of, update};
+use pixels::{Pixel, StoredPoint, image_of, update};
 
 /// Stochastic progressive photon mapping.
 #[derive(Debug, Clone, Copy, Default)]
@@ -161,7 +161,7 @@ pub(crate) fn render_with(
                 {
                     px.radius = r;
                 }
-                px.vp = vp;
+                px.vp = vp.as_ref().map(StoredPoint::new);
                 let mut sum = finite(l);
                 if !balanced {
                     return sum;
@@ -186,14 +186,14 @@ pub(crate) fn render_with(
             .zip(st.pixels.par_iter())
             .enumerate()
             .map(|(i, (g, px))| {
-                let Some(vp) = px.vp.as_ref() else {
+                let Some(vp) = px.vp.as_ref().map(StoredPoint::point) else {
                     return Vec3A::ZERO;
                 };
                 if cancel.load(Ordering::Relaxed) {
                     return Vec3A::ZERO;
                 }
                 let mut rng = Stream::Gather.rng(seed, iter, i as u64);
-                let (l, gp) = gather_path(scene, settings, vp, &mut rng);
+                let (l, gp) = gather_path(scene, settings, &vp, &mut rng);
                 // The gather point's radius starts at a multiple of the visible point's own
                 // initial radius: its blur is averaged over the gather direction.
                 if g.radius == 0.0
@@ -202,7 +202,7 @@ pub(crate) fn render_with(
                 {
                     g.radius = r * GATHER_RADIUS_FACTOR;
                 }
-                g.vp = gp;
+                g.vp = gp.as_ref().map(StoredPoint::new);
                 finite(l)
             })
             .collect();

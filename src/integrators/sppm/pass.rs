@@ -291,7 +291,7 @@ fn gather(grid: &PhotonGrid, points: &[Pixel], sums: &mut Gathered) -> u64 {
             if !(r > 0.0 && r.is_finite()) {
                 return 0;
             }
-            let receiver = Receiver::new(vp);
+            let receiver = Receiver::new(vp.point());
             let weight = (vp.beta * Vec3A::new(0.2126, 0.7152, 0.0722)).as_dvec3();
             let mut found = 0;
             grid.for_each_within(vp.p, r, |wi, beta| {

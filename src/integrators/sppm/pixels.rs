@@ -8,7 +8,59 @@ use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 use crate::film::Image;
+use crate::geometry::Frame;
 use crate::integrators::common::camera_path::VisiblePoint;
+use crate::materials::{Bsdf, Lobes};
+
+/// A visible point as a pixel keeps it from the camera pass to the photon gather: a
+/// [`VisiblePoint`] whose BSDF's bump is kept as its perturbed normal alone, in the padding
+/// beside `distance`, and rebuilt where the point is used ([`Bsdf::from_parts`]). A bump's
+/// derived geometry would make every pixel larger, bumped or not (the size is checked by a
+/// test below).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StoredPoint {
+    pub(super) p: Vec3A,
+    pub(super) wo: Vec3A,
+    pub(super) beta: Vec3A,
+    pub(super) medium: Vec3A,
+    lobes: Lobes,
+    frame: Frame,
+    ng: Vec3A,
+    pub(super) distance: f32,
+    /// The bump's perturbed normal in the shading frame; all zero without a bump.
+    bump: [f32; 3],
+}
+
+impl StoredPoint {
+    pub(super) fn new(vp: &VisiblePoint) -> Self {
+        let b = &vp.bsdf;
+        StoredPoint {
+            p: vp.p,
+            wo: vp.wo,
+            beta: vp.beta,
+            medium: vp.medium,
+            lobes: b.lobes,
+            frame: b.frame,
+            ng: b.ng,
+            distance: vp.distance,
+            bump: b.bump_normal().map_or([0.0; 3], |n| n.to_array()),
+        }
+    }
+
+    /// The visible point it was made from, bit for bit.
+    pub(super) fn point(&self) -> VisiblePoint {
+        // A perturbed normal is a unit vector, never zero.
+        let bump = (self.bump != [0.0; 3]).then(|| Vec3A::from_array(self.bump));
+        VisiblePoint {
+            p: self.p,
+            wo: self.wo,
+            bsdf: Bsdf::from_parts(self.lobes, self.frame, self.ng, bump),
+            beta: self.beta,
+            distance: self.distance,
+            medium: self.medium,
+        }
+    }
+}
 
 /// A pixel's progressive estimate: the light its camera paths found, and the photons at their
 /// visible points. With final gathering a pixel has a second one, for its gather paths and
@@ -20,7 +72,7 @@ pub(super) struct Pixel {
     pub(super) tau: DVec3,
     pub(super) n: f64,
     pub(super) radius: f64,
-    pub(super) vp: Option<VisiblePoint>,
+    pub(super) vp: Option<StoredPoint>,
 }
 
 impl Pixel {
@@ -105,4 +157,61 @@ pub(super) fn image_of(
             *out = l.to_array();
         });
     img
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Rng, uniform_sphere};
+
+    /// A stored point is no larger than a visible point without a bump would be (its fields
+    /// with the BSDF's lobes, frame and `ng`), and gives back the visible point it was made
+    /// from: a bumped BSDF's values, densities and samples bit for bit.
+    #[test]
+    fn stored_points_are_as_small_as_unbumped_ones_and_give_the_bsdf_back() {
+        type Unbumped = (Vec3A, Vec3A, Vec3A, Vec3A, Lobes, Frame, Vec3A, f32);
+        assert!(
+            std::mem::size_of::<StoredPoint>() <= std::mem::size_of::<Unbumped>(),
+            "{} bytes",
+            std::mem::size_of::<StoredPoint>()
+        );
+        let mut rng = Rng::new(3);
+        let lobes = Lobes::Coated {
+            albedo: Vec3A::new(0.7, 0.2, 0.1),
+            eta: 1.5,
+            alpha: 0.1,
+        };
+        for k in 0..200 {
+            let ns = uniform_sphere(rng.vec2());
+            let frame = Frame::from_normal_tangent(ns, ns.any_orthonormal_vector());
+            let np = (ns + 0.8 * uniform_sphere(rng.vec2())).normalize();
+            let bsdf = if k % 4 == 0 {
+                Bsdf::new(lobes, ns, frame.s, ns)
+            } else {
+                Bsdf::bumped(lobes, frame, ns, np)
+            };
+            let vp = VisiblePoint {
+                p: Vec3A::ONE,
+                wo: uniform_sphere(rng.vec2()),
+                bsdf,
+                beta: Vec3A::splat(0.5),
+                distance: 2.0,
+                medium: Vec3A::ZERO,
+            };
+            let back = StoredPoint::new(&vp).point();
+            assert_eq!(back.bsdf, vp.bsdf);
+            assert_eq!((back.p, back.wo, back.beta), (vp.p, vp.wo, vp.beta));
+            for _ in 0..8 {
+                let wi = uniform_sphere(rng.vec2());
+                let (u, uc) = (rng.vec2(), rng.f32());
+                let mode = crate::materials::TransportMode::Radiance;
+                assert_eq!(back.bsdf.f(vp.wo, wi), vp.bsdf.f(vp.wo, wi));
+                assert_eq!(back.bsdf.pdf(vp.wo, wi), vp.bsdf.pdf(vp.wo, wi));
+                assert_eq!(
+                    back.bsdf.sample(vp.wo, uc, u, mode),
+                    vp.bsdf.sample(vp.wo, uc, u, mode)
+                );
+            }
+        }
+    }
 }

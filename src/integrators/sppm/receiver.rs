@@ -8,8 +8,8 @@ use crate::integrators::common::camera_path::VisiblePoint;
 /// [`crate::materials::Bsdf::f`] for a fixed `wo`. For a Lambertian point only the two side
 /// tests remain, kept in the same form (`(wo . n) * (wi . n) <= 0` rejects), so the result is
 /// bit-identical to calling the BSDF; other lobes call it.
-pub(super) struct Receiver<'a> {
-    vp: &'a VisiblePoint,
+pub(super) struct Receiver {
+    vp: VisiblePoint,
     /// Geometric normal, and `wo . ng` in `w`.
     ng: Vec4,
     /// Shading normal, and `wo . ns` in `w`.
@@ -18,8 +18,8 @@ pub(super) struct Receiver<'a> {
     constant: Option<Vec3A>,
 }
 
-impl<'a> Receiver<'a> {
-    pub(super) fn new(vp: &'a VisiblePoint) -> Self {
+impl Receiver {
+    pub(super) fn new(vp: VisiblePoint) -> Self {
         let (ng, ns) = (vp.bsdf.ng, vp.bsdf.frame.n);
         Receiver {
             vp,
@@ -81,7 +81,7 @@ mod tests {
                 distance: 1.0,
                 medium: Vec3A::ZERO,
             };
-            let r = Receiver::new(&vp);
+            let r = Receiver::new(vp);
             assert_eq!(r.constant.is_some(), i % 2 == 0);
             for _ in 0..8 {
                 let wi = uniform_sphere(rng.vec2());

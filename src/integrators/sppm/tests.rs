@@ -40,7 +40,7 @@ fn visible_points(prepared: &PreparedScene, settings: &EffectiveSettings, iter: 
             let (x, y) = (i % w, i / w);
             let vp = camera_path(prepared, &camera, settings, x, y, &mut rng).1;
             Pixel {
-                vp,
+                vp: vp.as_ref().map(StoredPoint::new),
                 ..Pixel::new(0.05)
             }
         })

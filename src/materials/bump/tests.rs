@@ -1,6 +1,7 @@
 use glam::{Vec2, Vec3A};
 
 use super::Microsurface;
+use crate::geometry::Frame;
 use crate::materials::check::{COS_O, alpha, check, wo_at};
 use crate::materials::{Bsdf, Lobes, TransportMode};
 use crate::sampling::{Rng, uniform_sphere};
@@ -12,7 +13,12 @@ fn leaning(tilt: f32, phi: f32) -> Vec3A {
 }
 
 fn bumped(lobes: Lobes, np: Vec3A) -> Bsdf {
-    Bsdf::bumped(lobes, Vec3A::Z, Vec3A::X, Vec3A::Z, np)
+    Bsdf::bumped(
+        lobes,
+        Frame::from_normal_tangent(Vec3A::Z, Vec3A::X),
+        Vec3A::Z,
+        np,
+    )
 }
 
 fn white() -> Lobes {
