@@ -100,8 +100,8 @@ fn parse_by_item(file: FileId, text: &str) -> Option<SourceResult<Vec<Item>>> {
 
 struct Cx {
     file: FileId,
-    /// Where the text the pairs index into starts in the file (a top-level item's offset when
-    /// the file is parsed item by item).
+    /// Where the text the pairs index into starts in the file (a chunk's offset when the file
+    /// is parsed a chunk of top-level items at a time).
     base: Cell<usize>,
     /// Terms (operands and operators) of the expressions being built, summed along the current
     /// path of nested expressions: a bound on the depth of the expression tree there.
