@@ -278,29 +278,31 @@ type Bins = ([Aabb; BINS], [usize; BINS]);
 
 /// The items' boxes and counts per bin.
 fn bins_of(items: &[Item], bin_of: impl Fn(&Item) -> usize + Sync, par: Parallelism) -> Bins {
-    let fold = |mut bins: Bins, it: &Item| {
-        let b = bin_of(it);
-        bins.0[b] = bins.0[b].union(it.bounds);
-        bins.1[b] += 1;
+    // Filled in place: a fold that passed the bins by value copied them (480 bytes) at every
+    // item, about 4 % of `check`'s time for a scene of 100 000 objects.
+    let fill = |chunk: &[Item]| {
+        let mut bins: Bins = ([Aabb::EMPTY; BINS], [0; BINS]);
+        for it in chunk {
+            let b = bin_of(it);
+            bins.0[b] = bins.0[b].union(it.bounds);
+            bins.1[b] += 1;
+        }
         bins
     };
     let empty = ([Aabb::EMPTY; BINS], [0; BINS]);
     if items.len() < par.binning {
-        return items.iter().fold(empty, fold);
+        return fill(items);
     }
-    items
-        .par_chunks(CHUNK)
-        .map(|chunk| chunk.iter().fold(empty, fold))
-        .reduce(
-            || empty,
-            |mut x, y| {
-                for i in 0..BINS {
-                    x.0[i] = x.0[i].union(y.0[i]);
-                    x.1[i] += y.1[i];
-                }
-                x
-            },
-        )
+    items.par_chunks(CHUNK).map(fill).reduce(
+        || empty,
+        |mut x, y| {
+            for i in 0..BINS {
+                x.0[i] = x.0[i].union(y.0[i]);
+                x.1[i] += y.1[i];
+            }
+            x
+        },
+    )
 }
 
 /// The node over `items`, and where they are split into its children (`None`: a leaf). The

@@ -69,40 +69,39 @@ fn parse_whole(file: FileId, text: &str, stray: Option<usize>) -> SourceResult<V
     cx.finish(items)
 }
 
-/// The file's items parsed one top-level item at a time, or `None` at a syntax error (the
-/// whole-file parse then finds and reports every error). pest's token list, 80 bytes a token
-/// and two tokens a rule matched, then holds one item instead of the whole file: that list
-/// was most of the peak memory of loading a large scene.
+/// The file's items parsed a few top-level items at a time (the `chunk` rule), or `None` at a
+/// syntax error (the whole-file parse then finds and reports every error). pest's token list,
+/// 80 bytes a token and two tokens a rule matched, then holds a chunk instead of the whole
+/// file: that list was most of the peak memory of loading a large scene.
 fn parse_by_item(file: FileId, text: &str) -> Option<SourceResult<Vec<Item>>> {
     let cx = Cx::new(file);
     let mut items = Vec::new();
     let mut at = 0;
     loop {
         let rest = &text[at..];
-        let item = SceneParser::parse(Rule::chunk, rest)
-            .ok()?
-            .next()?
-            .into_inner()
-            .next()?;
-        let end = item.as_span().end();
-        if item.as_rule() == Rule::EOI {
-            break;
+        let chunk = SceneParser::parse(Rule::chunk, rest).ok()?.next()?;
+        cx.base.set(at);
+        // The next chunk starts after the last item (with the blanks before its first item).
+        let mut end = 0;
+        for item in chunk.into_inner() {
+            if item.as_rule() == Rule::EOI {
+                items.shrink_to_fit();
+                return Some(cx.finish(items));
+            }
+            end = item.as_span().end();
+            items.push(cx.item(item));
         }
         if end == 0 {
             return None;
         }
-        cx.base.set(at);
-        items.push(cx.item(item));
         at += end;
     }
-    items.shrink_to_fit();
-    Some(cx.finish(items))
 }
 
 struct Cx {
     file: FileId,
-    /// Where the text the pairs index into starts in the file (a top-level item's offset when
-    /// the file is parsed item by item).
+    /// Where the text the pairs index into starts in the file (a chunk's offset when the file
+    /// is parsed a chunk of top-level items at a time).
     base: Cell<usize>,
     /// Terms (operands and operators) of the expressions being built, summed along the current
     /// path of nested expressions: a bound on the depth of the expression tree there.
@@ -334,7 +333,7 @@ impl Cx {
     fn expr(&self, pair: Pair<Rule>) -> Expr {
         // A chain of n terms makes a tree up to n deep, and evaluating (and dropping) it recurses
         // that deep: refuse it before building it, as the nesting check refuses deep brackets.
-        let n = pair.clone().into_inner().count();
+        let n = pair.clone().into_inner().len();
         let terms = self.terms.get() + n;
         if terms > MAX_EXPRESSION_TERMS {
             let first = pair.clone().into_inner().next();
@@ -658,8 +657,24 @@ mod tests {
                 .unwrap_or_else(|| panic!("a syntax error in {text:?}"));
             assert_eq!(format!("{by_item:?}"), whole, "{text}");
         }
-        // A syntax error anywhere leaves the item-by-item parse to the whole-file one.
-        for text in ["sphere { } }", "sphere { ", "#end", "x /* open"] {
+        // More items than a chunk holds (16): chunks follow one another without a gap.
+        let long: String = (0..53)
+            .map(|i| format!("sphere {{ <{i}, 0, 0>, 0.5 }} // {i}\n#declare A{i} = {i} , \t"))
+            .collect();
+        let stray = check_nesting(FileId(1), &long).unwrap();
+        let whole = format!("{:?}", parse_whole(FileId(1), &long, stray));
+        let by_item = parse_by_item(FileId(1), &long).expect("no syntax error");
+        assert_eq!(format!("{by_item:?}"), whole);
+        // A syntax error anywhere leaves the item-by-item parse to the whole-file one, also
+        // in a later chunk.
+        let late_error = format!("{long} sphere {{ }} }} x");
+        for text in [
+            "sphere { } }",
+            "sphere { ",
+            "#end",
+            "x /* open",
+            &late_error,
+        ] {
             assert!(parse_by_item(FileId(0), text).is_none(), "{text}");
         }
     }
