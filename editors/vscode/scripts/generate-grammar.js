@@ -95,7 +95,9 @@ function pestWords(body, allowedRules = []) {
     const t = tokens[i++];
     if (!t) fail("unexpected end of a rule");
     if (t.lit !== undefined) return [JSON.parse(`"${t.lit}"`)];
-    if (t.range) return [""];
+    // A range of one character (`'#'..'#'`, which pest matches faster than "#") is that
+    // character; any wider range stands for no fixed text (a lookahead's class).
+    if (t.range) return t.range[0] === t.range[1] ? [t.range[0]] : [""];
     if (t.rule && allowedRules.includes(t.rule)) return [""];
     if (t.op === "(") {
       const words = choice();
