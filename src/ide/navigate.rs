@@ -273,6 +273,9 @@ mod tests {
         let o = Outline::new(text);
         let r = references(&w, Path::new("d/s.scn"), text, &o, 11, true);
         let found: Vec<(&Path, u32)> = r.iter().map(|l| (l.path.as_path(), l.start.line)).collect();
-        assert_eq!(found, [(Path::new("d/s.scn"), 0), (Path::new("d/sub/part.inc"), 0)]);
+        assert_eq!(
+            found,
+            [(Path::new("d/s.scn"), 0), (Path::new("d/sub/part.inc"), 0)]
+        );
     }
 }
