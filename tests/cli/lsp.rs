@@ -10,7 +10,7 @@
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
@@ -134,10 +134,7 @@ impl Client {
 
     fn next(&mut self, deadline: Instant) -> Option<Value> {
         let left = deadline.saturating_duration_since(Instant::now());
-        match self.rx.recv_timeout(left) {
-            Ok(m) => Some(m),
-            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
-        }
+        self.rx.recv_timeout(left).ok()
     }
 
     /// The first published diagnostics for `uri` that `accept` takes, waiting up to `within`.
@@ -310,11 +307,7 @@ fn every_example_checks_clean_and_has_an_outline() {
             .iter()
             .map(|s| s["name"].as_str().unwrap())
             .collect();
-        assert!(
-            names.iter().any(|n| *n == "camera"),
-            "{}: {names:?}",
-            path.display()
-        );
+        assert!(names.contains(&"camera"), "{}: {names:?}", path.display());
         n += 1;
     }
     assert!(n >= 10, "only {n} examples");
