@@ -98,6 +98,9 @@ pub fn references(
         return Vec::new();
     };
     let t = &outline.tokens[i];
+    if matches!(t.kind, Kind::Str { .. }) {
+        return file_references(world, path, text, outline, t.inner(text));
+    }
     if t.kind != Kind::Word {
         return Vec::new();
     }
@@ -134,6 +137,37 @@ pub fn references(
             }
             if declarations || !is_decl(&f.outline, u) {
                 out.push(location(&f.path, &f.text, &ix, u.range()));
+            }
+        }
+    }
+    out
+}
+
+/// The `#include`s of the document and its included files that name the file `name` (as
+/// resolved from the document) names.
+fn file_references(
+    world: &dyn World,
+    path: &Path,
+    text: &str,
+    outline: &Outline,
+    name: &str,
+) -> Vec<Location> {
+    let (target, _) = resolve(path, name);
+    let mut out = Vec::new();
+    let index = LineIndex::new(text);
+    for i in &outline.includes {
+        if resolve(path, &i.path).0 == target {
+            out.push(location(path, text, &index, i.range.clone()));
+        }
+    }
+    for f in included(world, path, outline) {
+        if f.builtin {
+            continue;
+        }
+        let ix = LineIndex::new(&f.text);
+        for i in &f.outline.includes {
+            if resolve(&f.path, &i.path).0 == target {
+                out.push(location(&f.path, &f.text, &ix, i.range.clone()));
             }
         }
     }
@@ -228,5 +262,20 @@ mod tests {
             "the declaration in lib.inc is left out: {gold:?}"
         );
         assert_eq!(references(&w, p, SCENE, &o, at("Gold }", 1), true).len(), 2);
+    }
+
+    #[test]
+    fn references_of_an_included_file_are_its_includes() {
+        let w = MemoryWorld::new()
+            .with("d/lib.inc", LIB)
+            .with("d/sub/part.inc", "#include \"../lib.inc\"\n");
+        let text = "#include \"lib.inc\"\n#include \"sub/part.inc\"\n";
+        let o = Outline::new(text);
+        let r = references(&w, Path::new("d/s.scn"), text, &o, 11, true);
+        let found: Vec<(&Path, u32)> = r.iter().map(|l| (l.path.as_path(), l.start.line)).collect();
+        assert_eq!(
+            found,
+            [(Path::new("d/s.scn"), 0), (Path::new("d/sub/part.inc"), 0)]
+        );
     }
 }

@@ -7,10 +7,10 @@
 //! Timing bounds are generous and stated at each test (the machine is shared); each test
 //! prints what it measured.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
@@ -20,7 +20,8 @@ const ANSWER: Duration = Duration::from_secs(60);
 
 struct Client {
     child: Child,
-    stdin: ChildStdin,
+    /// `None` once closed.
+    stdin: Option<ChildStdin>,
     rx: Receiver<Value>,
     next_id: i64,
     /// Messages read while waiting for something else (notifications, mostly).
@@ -82,7 +83,7 @@ impl Client {
         });
         let mut c = Client {
             child,
-            stdin,
+            stdin: Some(stdin),
             rx,
             next_id: 1,
             stash: Vec::new(),
@@ -96,8 +97,9 @@ impl Client {
     }
 
     fn send_raw(&mut self, bytes: &[u8]) {
-        self.stdin.write_all(bytes).unwrap();
-        self.stdin.flush().unwrap();
+        let stdin = self.stdin.as_mut().expect("input open");
+        stdin.write_all(bytes).unwrap();
+        stdin.flush().unwrap();
     }
 
     fn send(&mut self, v: &Value) {
@@ -132,10 +134,7 @@ impl Client {
 
     fn next(&mut self, deadline: Instant) -> Option<Value> {
         let left = deadline.saturating_duration_since(Instant::now());
-        match self.rx.recv_timeout(left) {
-            Ok(m) => Some(m),
-            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
-        }
+        self.rx.recv_timeout(left).ok()
     }
 
     /// The first published diagnostics for `uri` that `accept` takes, waiting up to `within`.
@@ -180,15 +179,18 @@ impl Client {
     }
 
     fn at(&mut self, method: &str, uri: &str, (line, character): (usize, usize)) -> Value {
-        self.request(
-            method,
-            json!({
-                "textDocument": { "uri": uri },
-                "position": { "line": line, "character": character },
-                "context": { "includeDeclaration": true },
-            }),
-        )["result"]
-            .clone()
+        let mut params = json!({
+            "textDocument": { "uri": uri },
+            "position": { "line": line, "character": character },
+        });
+        params["context"] = match method {
+            "textDocument/references" => json!({ "includeDeclaration": true }),
+            "textDocument/completion" => json!({ "triggerKind": 1 }),
+            _ => Value::Null,
+        };
+        let r = self.request(method, params);
+        assert!(r.get("error").is_none(), "{method}: {r}");
+        r["result"].clone()
     }
 
     fn labels(&mut self, uri: &str, pos: (usize, usize)) -> Vec<String> {
@@ -305,11 +307,7 @@ fn every_example_checks_clean_and_has_an_outline() {
             .iter()
             .map(|s| s["name"].as_str().unwrap())
             .collect();
-        assert!(
-            names.iter().any(|n| *n == "camera"),
-            "{}: {names:?}",
-            path.display()
-        );
+        assert!(names.contains(&"camera"), "{}: {names:?}", path.display());
         n += 1;
     }
     assert!(n >= 10, "only {n} examples");
@@ -662,4 +660,22 @@ fn junk_from_the_client_is_survived() {
         "{h}"
     );
     c.finish();
+}
+
+#[test]
+fn an_oversized_message_is_read_past_and_the_end_of_input_ends_the_server() {
+    // A header that announces 100 GB: the server must not try to hold it. The input then
+    // ends (the editor quit without `shutdown`): exit status 1, within the bound.
+    let (mut c, _) = Client::start();
+    c.send_raw(b"Content-Length: 100000000000\r\n\r\n{\"jsonrpc\":\"2.0\"");
+    drop(c.stdin.take());
+    let deadline = Instant::now() + ANSWER;
+    loop {
+        if let Some(status) = c.child.try_wait().unwrap() {
+            assert_eq!(status.code(), Some(1), "{status}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "the server did not end");
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }

@@ -116,8 +116,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     (
         "ide",
         &[
-            "span", "diag", "files", "world", "cancel", "syntax", "eval", "scene", "prepare",
-            "render",
+            "span", "diag", "world", "cancel", "eval", "scene", "prepare", "render",
         ],
     ),
 ];

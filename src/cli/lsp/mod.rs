@@ -8,7 +8,7 @@ mod transport;
 mod worker;
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
@@ -19,12 +19,15 @@ use sppm_lang::world::{FileSystem, Overlay};
 
 use worker::{Open, Shared};
 
+/// A document's line index and outline, made from one version of its text.
+type Analysis = Arc<(LineIndex, Outline)>;
+
 /// An open document.
 struct Doc {
     uri: lsp::Uri,
     text: Arc<str>,
     /// Made when a request first needs it after a change.
-    analysis: Option<Arc<(LineIndex, Outline)>>,
+    analysis: Option<Analysis>,
 }
 
 struct Server {
@@ -235,7 +238,7 @@ impl Server {
     }
 
     /// The document, its line index and outline.
-    fn doc(&mut self, uri: &lsp::Uri) -> Option<(PathBuf, Arc<str>, Arc<(LineIndex, Outline)>)> {
+    fn doc(&mut self, uri: &lsp::Uri) -> Option<(PathBuf, Arc<str>, Analysis)> {
         let path = convert::path(uri);
         let doc = self.docs.get_mut(&path)?;
         let text = doc.text.clone();
@@ -255,7 +258,7 @@ impl Server {
         w
     }
 
-    fn globals(&self, path: &PathBuf) -> Arc<Vec<(String, String)>> {
+    fn globals(&self, path: &Path) -> worker::Globals {
         self.shared
             .globals
             .lock()

@@ -3,7 +3,7 @@
 //! only the diagnostics of a document's latest version are published.
 
 use std::collections::{BTreeSet, HashMap};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
@@ -27,13 +27,16 @@ pub struct Open {
     pub text: Arc<str>,
 }
 
+/// The global names and values a document's last evaluation left, sorted by name.
+pub type Globals = Arc<Vec<(String, String)>>;
+
 /// What the editor thread shares with the worker.
 #[derive(Default)]
 pub struct Shared {
     state: Mutex<State>,
     wake: Condvar,
     /// The last evaluation's global names and values, per document (for hover).
-    pub globals: Mutex<HashMap<PathBuf, Arc<Vec<(String, String)>>>>,
+    pub globals: Mutex<HashMap<PathBuf, Globals>>,
 }
 
 #[derive(Default)]
@@ -74,7 +77,7 @@ impl Shared {
         self.wake.notify_all();
     }
 
-    pub fn closed(&self, path: &PathBuf) {
+    pub fn closed(&self, path: &Path) {
         let mut s = lock(&self.state);
         s.open.remove(path);
         s.dirty.remove(path);
