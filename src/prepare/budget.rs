@@ -92,6 +92,13 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + p.segments.len() * 112) as u64
                 + WRAP_OVERHEAD
         }
+        // Its heights and their min/max hierarchy, in an `Arc` and a boxed transform.
+        Shape::HeightField(h) => {
+            (size_of::<crate::shapes::height_field::HeightField>()
+                + size_of::<crate::shapes::transformed::Transformed>()) as u64
+                + WRAP_OVERHEAD
+                + h.grid.render_bytes()
+        }
         _ => 0,
     };
     // Spheres, disks and cones under a transform the renderer cannot bake are heavy too, and
@@ -103,6 +110,7 @@ fn held_bytes(shape: &Shape) -> u64 {
             | Shape::BezierPatch { .. }
             | Shape::Prism(_)
             | Shape::Superellipsoid { .. }
+            | Shape::HeightField(_)
             | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

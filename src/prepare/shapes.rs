@@ -13,6 +13,7 @@ use crate::shapes::cone::Cone;
 use crate::shapes::cuboid::cuboid_faces;
 use crate::shapes::cylinder::Cylinder;
 use crate::shapes::disk::Disk;
+use crate::shapes::height_field::HeightField;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
 use crate::shapes::plane::Plane;
@@ -228,6 +229,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         scene::Shape::Superellipsoid { e, n } => {
             vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
         }
+        scene::Shape::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

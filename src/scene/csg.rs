@@ -17,7 +17,7 @@ pub const MAX_CSG_DEPTH: usize = 64;
 pub const MAX_CSG_LEAVES: usize = 4096;
 
 /// The help of every "not closed" diagnostic.
-pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, superellipsoid, cylinder, \
+pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, superellipsoid, height_field, cylinder, \
      cone or prism without `open`, a revolve whose profile starts and ends on the axis, a \
      watertight mesh, a plane), or `union`, which needs no inside";
 
@@ -117,7 +117,7 @@ pub fn why_open(shape: &Shape) -> Option<String> {
         }
         Shape::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
         Shape::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
-        Shape::Prism(_) | Shape::Superellipsoid { .. } => None,
+        Shape::Prism(_) | Shape::Superellipsoid { .. } | Shape::HeightField(_) => None,
         Shape::Revolve { profile, sweep, .. } => {
             if sweep.is_some() {
                 return Some("a partial sweep (`angle`) is open".into());

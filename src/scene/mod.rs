@@ -11,12 +11,14 @@ pub mod animation;
 mod assets;
 mod csg;
 pub mod function;
+pub mod height_field;
 pub mod metals;
 pub mod noise;
 mod obj;
 mod obj_errors;
 pub mod pattern_value;
 pub mod prism;
+pub mod text;
 mod validate;
 
 pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
@@ -27,6 +29,7 @@ pub use assets::{
 };
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use function::{Function, FunctionError, Op};
+pub use height_field::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE};
 pub use pattern_value::{PatternFn, PatternKind};
 pub use prism::{Prism, PrismSpline, ProfileError, prism_segments};
 pub use validate::{
@@ -462,6 +465,8 @@ pub enum Shape {
         e: f64,
         n: f64,
     },
+    /// POV-Ray's `height_field`: a grid of heights over the unit square (see [`HeightField`]).
+    HeightField(HeightField),
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
@@ -492,6 +497,7 @@ impl Shape {
             Shape::BezierPatch { .. } => "bezier_patch",
             Shape::Prism(_) => "prism",
             Shape::Superellipsoid { .. } => "superellipsoid",
+            Shape::HeightField(_) => "height_field",
             Shape::Csg(c) => c.op.name(),
         }
     }

@@ -251,6 +251,7 @@ pub mod csg;
 pub mod cuboid;
 pub mod cylinder;
 pub mod disk;
+pub mod height_field;
 pub mod mesh;
 pub mod patch;
 pub mod plane;

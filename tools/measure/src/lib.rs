@@ -21,6 +21,7 @@
 
 pub mod bezier;
 pub mod cost;
+pub mod height_field_reference;
 pub mod layered;
 pub mod lights;
 pub mod prism_reference;
