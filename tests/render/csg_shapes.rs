@@ -99,12 +99,12 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         // A terrain cut at its water level, and one whose heights reach 0 (holes there).
         (
             "height_field { function 23, 17 { 0.5 + 0.4 * sin(9 * x) * cos(7 * y) } \
-             water_level 0.2 translate <-0.5, -0.5, -0.5> scale <1.6, 1.2, 1.6> rotate <10, 20, 0> }",
+             water_level 0.2 translate <-0.5, -0.5, -0.5> scale <2.4, 2, 2.4> rotate <10, 20, 0> }",
             false,
         ),
         (
             "height_field { function 12, 9 { max(0, sin(5 * x + 3 * y)) } smooth \
-             translate <-0.5, -0.5, -0.5> scale 1.5 }",
+             translate <-0.5, -0.5, -0.5> scale <2.4, 2.2, 2.4> }",
             false,
         ),
         (

@@ -495,6 +495,7 @@ golden!(
     goblet,
     materials,
     bumps,
+    shapes,
 );
 
 /// FNV-1a over the bits of every pixel.

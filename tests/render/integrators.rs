@@ -657,7 +657,7 @@ fn height_fields_render_in_every_integrator() {
 #[test]
 fn text_renders_in_every_integrator() {
     let text = "settings { resolution <32, 16> max_depth 6 }
-         camera { location <0.75, 0.36, -3> look_at <0.75, 0.36, 0> fov 35 }
+         camera { location <0.376, 0.36, -3> look_at <0.376, 0.36, 0> fov 14 }
          background rgb 0.5
          text { ttf \"DejaVuSans.ttf\" \"HI\" 0.3, 0 material { diffuse rgb 0.9 } }";
     let loaded = sppm_lang::load_source("text.scn", text, &sppm_lang::EvalOptions::default());
@@ -669,10 +669,12 @@ fn text_renders_in_every_integrator() {
             // (docs/integrators.md): rendered (finite pixels, checked in `run`), not lit.
             continue;
         }
-        // Column 7 of 32 sees x = 0.16, the H's left stem; column 11 its gap (x = 0.4)
+        // Pixels are 0.046 units (fov is vertical), and a camera on -z sees +x on its left:
+        // column 20 of 32 sees x = 0.15..0.19, the H's left stem (0.10..0.20), rows 4 to 6 at
+        // its middle height; column 15 sees x = 0.38..0.42, between the stems, rows 2 and 3
         // above the bar.
-        let stem = window_mean(&img, 7, 4, 7, 6);
-        let gap = window_mean(&img, 11, 3, 11, 4);
+        let stem = window_mean(&img, 20, 4, 21, 7);
+        let gap = window_mean(&img, 15, 2, 16, 4);
         println!("{integrator:?}: stem {stem:.3}, gap {gap:.3}");
         assert!(stem > 0.05, "{integrator:?}: the H is black");
         assert!((gap - 0.5).abs() < 0.05, "{integrator:?}: gap {gap}");
