@@ -636,7 +636,7 @@ mod tests {
             // when it lies in the unit box).
             let inside = (0.0..=1.0).contains(&o.x) && (0.0..=1.0).contains(&o.z);
             if !inside {
-                assert!(signs.len() % 2 == 0, "{o} {d}: {signs:?}");
+                assert!(signs.len().is_multiple_of(2), "{o} {d}: {signs:?}");
                 assert!(signs.iter().step_by(2).all(|s| *s), "{o} {d}: {signs:?}");
             }
         }
