@@ -93,7 +93,7 @@ pub(super) fn word(a: &Arg, choices: &[&str]) -> SourceResult<String> {
 }
 
 /// A file name (a string) as written; `Evaluator::resolve_path` makes it a path.
-pub(super) fn file_name(a: &Arg) -> SourceResult<&str> {
+pub(crate) fn file_name(a: &Arg) -> SourceResult<&str> {
     match &a.value {
         Value::Str(s) => Ok(s),
         v => Err(vec![

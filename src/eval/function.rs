@@ -62,6 +62,21 @@ impl Evaluator {
             params,
             ops: 0,
         };
+        let grid = match &def.grid {
+            None => None,
+            Some(sides) => {
+                let (w, h) = (&sides.0, &sides.1);
+                let side = |ev: &mut Self, e: &Expr| -> SourceResult<f64> {
+                    ev.eval(e)?
+                        .num()
+                        .map_err(|e| {
+                            e.help("the grid's sides are numbers: `function 256, 256 { x * y }`")
+                        })
+                        .at(e.span)
+                };
+                Some((side(self, w)?, side(self, h)?, w.span.join(h.span)))
+            }
+        };
         let code = self.compile(&mut c, &def.body)?.into_code();
         let func = Function::new(c.params.len(), c.slots, code).map_err(|e| match e {
             FunctionError::TooLarge(n) => vec![too_large(n, def.body.span)],
@@ -75,6 +90,7 @@ impl Evaluator {
             code: Arc::new(func),
             params: c.params,
             span,
+            grid,
         })))
     }
 

@@ -223,23 +223,27 @@ fn run(
 }
 
 /// A value as [`Loaded::globals`] holds it: as a message shows it, cut to 200 bytes, or its type.
+/// A string is cut before it is copied: a scene's strings may be hundreds of MiB, and the copy
+/// would count against nothing.
 fn shown(v: &Value) -> String {
-    let text = match v {
-        Value::Str(s) => Some(format!("\"{s}\"")),
-        _ => v.show(),
-    };
-    match text {
-        Some(mut text) => {
-            if text.len() > 200 {
-                let mut cut = 200;
-                while !text.is_char_boundary(cut) {
-                    cut -= 1;
-                }
-                text.truncate(cut);
-                text.push('…');
-            }
-            text
+    fn cut(text: &str) -> (&str, bool) {
+        let mut end = 200.min(text.len());
+        while !text.is_char_boundary(end) {
+            end -= 1;
         }
-        None => v.type_name().to_string(),
+        (&text[..end], end < text.len())
+    }
+    match v {
+        Value::Str(s) => {
+            let (head, more) = cut(s);
+            format!("\"{head}{}\"", if more { "…" } else { "" })
+        }
+        _ => match v.show() {
+            Some(text) => {
+                let (head, more) = cut(&text);
+                format!("{head}{}", if more { "…" } else { "" })
+            }
+            None => v.type_name().to_string(),
+        },
     }
 }

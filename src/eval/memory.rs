@@ -22,6 +22,8 @@ pub(crate) struct Held {
     pub strings: u64,
     /// Decoded images ([`crate::scene::IMAGE_BYTES_PER_PIXEL`] a pixel).
     pub images: u64,
+    /// Height fields' heights (4 bytes a sample).
+    pub height_fields: u64,
 }
 
 impl Held {
@@ -29,6 +31,7 @@ impl Held {
         self.text
             .saturating_add(self.strings)
             .saturating_add(self.images)
+            .saturating_add(self.height_fields)
     }
 
     /// "parsed text 1.20 GiB, strings 640 MiB": the kinds held, for a message.
@@ -37,6 +40,7 @@ impl Held {
             ("parsed text", self.text),
             ("strings", self.strings),
             ("images", self.images),
+            ("height fields", self.height_fields),
         ]
         .into_iter()
         .filter(|(_, b)| *b > 0)

@@ -57,6 +57,9 @@ pub struct FunctionValue {
     pub code: Arc<Function>,
     pub params: Vec<String>,
     pub span: Span,
+    /// The grid of POV-Ray's height field form `function W, H { ... }`: its sides as written
+    /// and their span.
+    pub grid: Option<(f64, f64, Span)>,
 }
 
 impl FunctionValue {

@@ -99,6 +99,13 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + b.components.len() * 200) as u64
                 + WRAP_OVERHEAD
         }
+        // Its heights and their min/max hierarchy, in an `Arc` and a boxed transform.
+        Shape::HeightField(h) => {
+            (size_of::<crate::shapes::height_field::HeightField>()
+                + size_of::<crate::shapes::transformed::Transformed>()) as u64
+                + WRAP_OVERHEAD
+                + h.grid.render_bytes()
+        }
         _ => 0,
     };
     // Spheres, disks and cones under a transform the renderer cannot bake are heavy too, and
@@ -112,6 +119,7 @@ fn held_bytes(shape: &Shape) -> u64 {
             | Shape::Superellipsoid { .. }
             | Shape::Blob(_)
             | Shape::Isosurface(_)
+            | Shape::HeightField(_)
             | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

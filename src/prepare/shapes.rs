@@ -14,6 +14,7 @@ use crate::shapes::cone::Cone;
 use crate::shapes::cuboid::cuboid_faces;
 use crate::shapes::cylinder::Cylinder;
 use crate::shapes::disk::Disk;
+use crate::shapes::height_field::HeightField;
 use crate::shapes::isosurface::Isosurface;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::patch::BezierPatch;
@@ -232,6 +233,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         }
         scene::Shape::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
         scene::Shape::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
+        scene::Shape::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

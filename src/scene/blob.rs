@@ -106,6 +106,9 @@ impl Container {
     }
 }
 
+/// An isosurface's default accuracy, relative to its container's diagonal.
+pub const DEFAULT_ACCURACY: f64 = 1e-6;
+
 /// POV-Ray's `isosurface`: the points of `container` where `function(x, y, z) < threshold`
 /// (the surface where it equals the threshold), closed by the container's walls where the
 /// function is below the threshold there, unless `open`.

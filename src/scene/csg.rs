@@ -18,7 +18,8 @@ pub const MAX_CSG_LEAVES: usize = 4096;
 
 /// The help of every "not closed" diagnostic.
 pub const CLOSED_HELP: &str = "use closed shapes (sphere, box, torus, superellipsoid, blob, \
-     cylinder, cone, prism or isosurface without `open`, a revolve whose profile starts and ends on the axis, a \
+     height_field, text, cylinder, cone, prism or isosurface without `open`, a revolve whose \
+     profile starts and ends on the axis, a \
      watertight mesh, a plane), or `union`, which needs no inside";
 
 /// The operations, with POV-Ray's meaning.
@@ -117,7 +118,9 @@ pub fn why_open(shape: &Shape) -> Option<String> {
         }
         Shape::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
         Shape::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
-        Shape::Prism(_) | Shape::Superellipsoid { .. } | Shape::Blob(_) => None,
+        Shape::Prism(_) | Shape::Superellipsoid { .. } | Shape::Blob(_) | Shape::HeightField(_) => {
+            None
+        }
         Shape::Isosurface(i) if i.open => {
             Some("an `open` isosurface has no walls where its container cuts it".into())
         }

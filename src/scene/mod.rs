@@ -12,6 +12,7 @@ mod assets;
 pub mod blob;
 mod csg;
 pub mod function;
+pub mod height_field;
 pub mod interval;
 pub mod metals;
 pub mod noise;
@@ -19,6 +20,7 @@ mod obj;
 mod obj_errors;
 pub mod pattern_value;
 pub mod prism;
+pub mod text;
 mod validate;
 
 pub use animation::{ANIMATION_NAMES, Frame, FrameRange, MAX_FRAME, animation_value};
@@ -30,6 +32,7 @@ pub use assets::{
 pub use blob::{Blob, BlobComponent, Container, Isosurface, MAX_BLOB_COMPONENTS};
 pub use csg::{CLOSED_HELP, Csg, CsgOp, MAX_CSG_DEPTH, MAX_CSG_LEAVES, why_open};
 pub use function::{Function, FunctionError, Op};
+pub use height_field::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE};
 pub use pattern_value::{PatternFn, PatternKind};
 pub use prism::{Prism, PrismSpline, ProfileError, prism_segments};
 pub use validate::{
@@ -471,6 +474,8 @@ pub enum Shape {
     /// POV-Ray's `isosurface`: where a user function meets a threshold in a container (see
     /// [`Isosurface`]).
     Isosurface(Isosurface),
+    /// POV-Ray's `height_field`: a grid of heights over the unit square (see [`HeightField`]).
+    HeightField(HeightField),
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
@@ -503,6 +508,7 @@ impl Shape {
             Shape::Superellipsoid { .. } => "superellipsoid",
             Shape::Blob(_) => "blob",
             Shape::Isosurface(_) => "isosurface",
+            Shape::HeightField(_) => "height_field",
             Shape::Csg(c) => c.op.name(),
         }
     }

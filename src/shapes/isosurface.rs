@@ -30,8 +30,7 @@ use crate::scene::{self, Container, Function};
 /// Most stretches one ray may visit (each one interval evaluation of the function).
 pub const MAX_VISITS: u32 = 200_000;
 
-/// The default accuracy, relative to the container's diagonal.
-pub const DEFAULT_ACCURACY: f64 = 1e-6;
+pub use crate::scene::blob::DEFAULT_ACCURACY;
 
 pub struct Isosurface {
     f: Arc<Function>,

@@ -252,6 +252,7 @@ pub mod csg;
 pub mod cuboid;
 pub mod cylinder;
 pub mod disk;
+pub mod height_field;
 pub mod isosurface;
 pub mod mesh;
 pub mod patch;

@@ -202,6 +202,8 @@ pub enum ExprKind {
 #[derive(Debug)]
 pub struct FunctionDef {
     pub params: Option<Vec<Name>>,
+    /// POV-Ray's height field form `function W, H { ... }`: the grid it is sampled on.
+    pub grid: Option<Box<(Expr, Expr)>>,
     pub body: Expr,
     /// The `function` word.
     pub keyword: Span,

@@ -542,8 +542,17 @@ impl Cx {
         } else {
             None
         };
+        let grid = if next.as_rule() == Rule::fn_grid {
+            let mut sides = next.into_inner().map(|p| self.expr(p));
+            let (w, h) = (sides.next().expect("width"), sides.next().expect("height"));
+            next = rest.next().expect("function body");
+            Some(Box::new((w, h)))
+        } else {
+            None
+        };
         FunctionDef {
             params,
+            grid,
             body: self.expr(next),
             keyword,
         }

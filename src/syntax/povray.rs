@@ -247,16 +247,6 @@ pub const POVRAY_SPELLINGS: &[PovSpelling] = &[
          `quad { <corner>, <edge_u>, <edge_v> }`",
     ),
     pov(
-        "height_field",
-        "POV-Ray's `height_field` has no counterpart: model the terrain as a mesh, \
-         `mesh { \"file.obj\" }`",
-    ),
-    pov(
-        "text",
-        "POV-Ray's `text` objects have no counterpart: model the letters as a mesh, \
-         `mesh { \"file.obj\" }`",
-    ),
-    pov(
         "fog",
         "there are no participating media here (`fog`, `media`, `atmosphere`): remove it",
     ),

@@ -153,3 +153,49 @@ fn strings_and_images_count_in_one_total() {
     assert!(d.help.as_deref().unwrap().contains("--memory-limit"));
     assert!(errors(&load(61 * MIB)).is_empty());
 }
+
+/// A height field's heights count against the load's limit before they are allocated: a
+/// function grid of 16 384 x 16 384 samples (1 GiB of heights) is refused at its grid under a
+/// limit of 512 MiB, and a 16 384 x 16 384 PNG (a few hundred KB of zeros on disk, 4 GiB to
+/// decode) from its header, each with a help naming the flag; a 64 x 64 grid loads.
+#[test]
+fn a_height_field_past_the_memory_limit_is_refused_before_it_is_allocated() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = image::GrayImage::new(16_384, 16_384);
+    big.save(dir.path().join("big.png")).unwrap();
+    drop(big);
+    let options = EvalOptions {
+        memory_limit: Some(512 * MIB),
+        ..EvalOptions::default()
+    };
+    for (name, text, want) in [
+        (
+            "grid.scn",
+            "height_field { function 16384, 16384 { x * y } }\n",
+            "a grid of 16384 x 16384 heights needs 1.00 GiB",
+        ),
+        (
+            "image.scn",
+            "height_field { png \"big.png\" }\n",
+            "16384x16384 pixels; decoded and kept as heights it needs 5.00 GiB",
+        ),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let l = sppm_lang::load_file(&path, &options).unwrap();
+        let d = l.diagnostics.iter().find(|d| d.is_error()).expect(name);
+        assert!(d.message.contains(want), "{name}: {}", d.message);
+        assert!(
+            d.help.as_deref().unwrap().contains("--memory-limit"),
+            "{name}"
+        );
+        let at = &text[d.span.start as usize..d.span.end as usize];
+        assert!(at == "16384, 16384" || at == "\"big.png\"", "{name}: {at}");
+    }
+    let l = sppm_lang::load_source(
+        "small.scn",
+        "height_field { function 64, 64 { x * y } }",
+        &options,
+    );
+    assert!(!l.has_errors(), "{:?}", l.diagnostics);
+}

@@ -91,6 +91,22 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
             false,
         ),
         ("superellipsoid { <0.3, 2.5> scale 1.2 }", false),
+        // A glyph with a hole (its outer and inner contours), from the system's DejaVu Sans.
+        (
+            "text { ttf \"DejaVuSans.ttf\" \"O\" 0.6, 0 translate <-0.4, -0.36, -0.3> scale 2 }",
+            false,
+        ),
+        // A terrain cut at its water level, and one whose heights reach 0 (holes there).
+        (
+            "height_field { function 23, 17 { 0.5 + 0.4 * sin(9 * x) * cos(7 * y) } \
+             water_level 0.2 translate <-0.5, -0.5, -0.5> scale <2.4, 2, 2.4> rotate <10, 20, 0> }",
+            false,
+        ),
+        (
+            "height_field { function 12, 9 { max(0, sin(5 * x + 3 * y)) } smooth \
+             translate <-0.5, -0.5, -0.5> scale <2.4, 2.2, 2.4> }",
+            false,
+        ),
         (
             "blob { threshold 0.5 sphere { <-0.4, 0, 0>, 1, strength 1 } \
              sphere { <0.4, 0.1, 0>, 1, strength 1 } \

@@ -45,6 +45,7 @@
 //! | csg (a dim fill light: noisy at 64 px) | 4.7e-2 | 6.6% | 2.9% |
 //! | goblet | 2.4e-3 | 0.24% | 1.0% |
 //! | materials (re-blessed 2026-11-29, coated model; rough metals and plastics are grainy at 64 px) | 6.2e-2 | 5.7% | 1.3% |
+//! | shapes (blessed 2026-11-29 08:25, new) | 8.5e-3 | 0.52% | 0.77% |
 //!
 //! The 2026-11-29 re-bless of `materials` only: `coated` now dims a coloured base at every
 //! bounce between base and coat (`1 - c Ri`) and lets through the coat's transmission albedo,
@@ -495,6 +496,7 @@ golden!(
     goblet,
     materials,
     bumps,
+    shapes,
 );
 
 /// FNV-1a over the bits of every pixel.

@@ -622,10 +622,6 @@ fn blobs_and_isosurfaces_render_in_every_integrator() {
     let scene = loaded.scene.expect("blob scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
-        if integrator == Integrator::Lt {
-            // Light tracing starts no path on the sky, this scene's only light.
-            continue;
-        }
         // Red over blue at the blob, blue over red at the isosurface, grey between.
         let tint = |x0: u32, x1: u32| {
             let (mut r, mut b) = (0.0, 0.0);
@@ -649,6 +645,75 @@ fn blobs_and_isosurfaces_render_in_every_integrator() {
             "{integrator:?}: the isosurface is not blue ({iso})"
         );
         assert!((middle - 1.0).abs() < 0.05, "{integrator:?}: {middle}");
+    }
+}
+
+/// Height fields, one from a function (smooth) and one from a 16-bit grey PNG read through the
+/// load's world, render in every integrator: every pixel finite (checked in `run`), the terrain
+/// lit and darker than the sky where the camera looks down on it, and the sky seen above it.
+#[test]
+fn height_fields_render_in_every_integrator() {
+    let mut png = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::new(9, 7);
+    for (x, y, p) in png.enumerate_pixels_mut() {
+        *p = image::Luma([((x * 7 + y * 3) % 11 * 5000 + 10_000) as u16]);
+    }
+    let mut bytes = Vec::new();
+    png.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .unwrap();
+    let world = sppm_lang::world::MemoryWorld::new().with("t.png", bytes);
+    let options = sppm_lang::EvalOptions {
+        world: sppm_lang::world::SharedWorld::new(world),
+        ..sppm_lang::EvalOptions::default()
+    };
+    let text = "settings { resolution <24, 24> max_depth 6 }
+         camera { location <0, 3, -3> look_at <0, 0.2, 0> fov 50 }
+         background rgb 0.5
+         height_field { function 40, 30 { 0.3 + 0.2 * sin(8 * x) * cos(6 * y) } smooth
+                        translate <-0.5, 0, -0.5> scale <3, 1, 3> material { diffuse rgb 0.3 } }
+         height_field { png \"t.png\" water_level 0.2 translate <-0.5, 0, -0.5> scale 0.6
+                        translate <0, 0.6, 0> material { glass ior 1.5 } }";
+    let loaded = sppm_lang::load_source("hf.scn", text, &options);
+    let scene = loaded.scene.expect("height field scene evaluates");
+    for integrator in Integrator::ALL {
+        let img = run(&scene, integrator, 2, 5_000, 4);
+        let ground = window_mean(&img, 1, 12, 5, 15);
+        let sky = window_mean(&img, 10, 0, 14, 1);
+        println!("{integrator:?}: ground {ground:.3}, sky {sky:.3}");
+        // A dark terrain (albedo 0.3) under the grey sky: lit, and far darker than the sky.
+        assert!(
+            ground > 0.02 && ground < 0.3,
+            "{integrator:?}: ground {ground}"
+        );
+        assert!((sky - 0.5).abs() < 0.05, "{integrator:?}: sky {sky}");
+    }
+}
+
+/// A text (DejaVu Sans, installed by `.ci/run`, found in the system's font folder) renders in
+/// every integrator: every pixel finite (checked in `run`), the stem of the H lit and darker
+/// than the sky, and the background seen between the H's legs.
+#[test]
+fn text_renders_in_every_integrator() {
+    let text = "settings { resolution <32, 16> max_depth 6 }
+         camera { location <0.376, 0.36, -3> look_at <0.376, 0.36, 0> fov 14 }
+         background rgb 0.5
+         text { ttf \"DejaVuSans.ttf\" \"HI\" 0.3, 0 material { diffuse rgb 0.2 } }";
+    let loaded = sppm_lang::load_source("text.scn", text, &sppm_lang::EvalOptions::default());
+    let scene = loaded.scene.expect("text scene evaluates");
+    for integrator in Integrator::ALL {
+        let img = run(&scene, integrator, 2, 5_000, 4);
+        // Pixels are 0.046 units (fov is vertical), and a camera on -z sees +x on its left:
+        // column 20 of 32 sees x = 0.15..0.19, the H's left stem (0.10..0.20), rows 4 to 6 at
+        // its middle height; column 15 sees x = 0.38..0.42, between the stems, rows 2 and 3
+        // above the bar.
+        let stem = window_mean(&img, 20, 4, 21, 7);
+        let gap = window_mean(&img, 15, 2, 16, 4);
+        println!("{integrator:?}: stem {stem:.3}, gap {gap:.3}");
+        // A dark letter (albedo 0.2) under the grey sky: lit, and far darker than the sky.
+        assert!(stem > 0.02 && stem < 0.3, "{integrator:?}: stem {stem}");
+        assert!((gap - 0.5).abs() < 0.05, "{integrator:?}: gap {gap}");
     }
 }
 

@@ -6,10 +6,12 @@ mod csg;
 pub(in crate::eval) mod isosurface;
 
 pub(super) use isosurface::ContainedBy;
+mod height_field;
 mod primitive;
 mod prism;
 mod sphere_sweep;
 mod superellipsoid;
+mod text;
 
 use crate::diag::short_number;
 use std::rc::Rc;
@@ -60,6 +62,12 @@ pub(super) struct ObjectBuilder {
     container: Option<(Container, Span)>,
     accuracy: Option<(f64, Span)>,
     max_gradient: Option<Span>,
+    /// A height field's image, its `smooth` and `water_level`.
+    hf_file: Option<(std::path::PathBuf, Span)>,
+    smooth: bool,
+    water: Option<(f64, Span)>,
+    /// A text's font: the resolved path, the name as written and its span.
+    ttf: Option<(std::path::PathBuf, String, Span)>,
 }
 
 const INVERSE: PropSpec = p("inverse", 0, 0, "nothing", "");
@@ -84,6 +92,18 @@ static PRISM_PROPS: [PropSpec; 12] = with_transforms([
     p("bezier_spline", 0, 0, "nothing", ""),
     p("linear_sweep", 0, 0, "nothing", ""),
     p("conic_sweep", 0, 0, "nothing", ""),
+]);
+static HEIGHT_FIELD_PROPS: [PropSpec; 10] = with_transforms([
+    INVERSE,
+    p("png", 1, 1, "a file name", "\"terrain.png\""),
+    p("exr", 1, 1, "a file name", "\"terrain.exr\""),
+    p("jpeg", 1, 1, "a file name", "\"terrain.jpg\""),
+    p("smooth", 0, 0, "nothing", ""),
+    p("water_level", 1, 1, "a number in [0, 1)", "0.1"),
+]);
+static TEXT_PROPS: [PropSpec; 6] = with_transforms([
+    INVERSE,
+    p("ttf", 1, 1, "a font file name", "\"DejaVuSans.ttf\""),
 ]);
 static SWEEP_PROPS: [PropSpec; 9] = with_transforms([
     INVERSE,
@@ -144,6 +164,8 @@ pub(super) const OBJECT_BLOCKS: &[&str] = &[
     "sphere_sweep",
     "blob",
     "isosurface",
+    "height_field",
+    "text",
     "bezier_patch",
     "bezier_mesh",
     "union",
@@ -191,6 +213,10 @@ impl ObjectBuilder {
             container: None,
             accuracy: None,
             max_gradient: None,
+            hf_file: None,
+            smooth: false,
+            water: None,
+            ttf: None,
         }
     }
 
@@ -321,6 +347,8 @@ impl ObjectBuilder {
             "blob" => vec![self.part(self.blob()?)],
             "isosurface" => vec![self.part(self.isosurface(ev)?)],
             "sphere" | "cylinder" if self.component => vec![self.blob_component()?],
+            "height_field" => vec![self.part(self.height_field(ev)?)],
+            "text" => self.text(ev)?,
             "sphere_sweep" => self.sphere_sweep()?,
             "bezier_patch" | "bezier_mesh" => {
                 let n = self.values.len();
@@ -481,6 +509,8 @@ impl Sink for ObjectBuilder {
             "sphere_sweep" => &SWEEP_PROPS,
             "blob" => &BLOB_PROPS,
             "isosurface" => &ISO_PROPS,
+            "height_field" => &HEIGHT_FIELD_PROPS,
+            "text" => &TEXT_PROPS,
             "bezier_patch" | "bezier_mesh" => &PATCH_PROPS,
             _ => &OBJ_PROPS,
         }
@@ -522,6 +552,39 @@ impl Sink for ObjectBuilder {
             "linear_sweep" => self.conic = false,
             "conic_sweep" => self.conic = true,
             "inverse" => self.inverse = true,
+            "png" | "exr" | "jpeg" => {
+                if let Some((_, first)) = &self.hf_file {
+                    return Err(vec![
+                        Error::new("a height field takes one image")
+                            .label("a second image")
+                            .help("remove one of them")
+                            .at(kw.span.join(args[0].span))
+                            .with_extra(*first, "the first one"),
+                    ]);
+                }
+                let path = ev.resolve_path(crate::eval::args::file_name(&args[0])?, args[0].span);
+                self.hf_file = Some((path, args[0].span));
+            }
+            "smooth" => self.smooth = true,
+            "ttf" => {
+                let written = crate::eval::args::file_name(&args[0])?.to_string();
+                let path = ev.resolve_path(&written, args[0].span);
+                self.ttf = Some((path, written, args[0].span));
+            }
+            "water_level" => {
+                let w = num(&args[0])?;
+                if !(0.0..1.0).contains(&w) {
+                    return Err(range_error(
+                        args[0].span,
+                        format!(
+                            "the water level must lie in [0, 1), found {}",
+                            short_number(w)
+                        ),
+                        "heights run from 0 to 1: e.g. `water_level 0.2`",
+                    ));
+                }
+                self.water = Some((w, args[0].span));
+            }
             "two_sided" => self.two_sided = true,
             "corner" => self.corner = true,
             "radiance" => self.radiance = Some((color(&args[0])?, args[0].span)),

@@ -490,6 +490,12 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             at(lo)?;
             at(hi)?;
         }
+        Shape::HeightField(_) => {
+            len(1.0, "size")?;
+            for c in [DVec3::ZERO, DVec3::ONE] {
+                at(c)?;
+            }
+        }
         Shape::Prism(p) => {
             // The corners of its box: the profile's rectangle at both heights (scaled by the
             // height for a conic sweep).

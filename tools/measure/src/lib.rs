@@ -24,6 +24,7 @@
 pub mod bezier;
 pub mod blob_reference;
 pub mod cost;
+pub mod height_field_reference;
 pub mod layered;
 pub mod lights;
 pub mod prism_reference;

@@ -14,9 +14,9 @@ use crate::eval::args::{Arg, num};
 use crate::eval::blocks::{Sink, unexpected};
 use crate::eval::props::PropSpec;
 use crate::eval::value::{FunctionValue, ObjectDef, ShapeDef, Value};
+use crate::scene::blob::DEFAULT_ACCURACY;
 use crate::scene::interval::Interval;
 use crate::scene::{Container, Isosurface, Shape};
-use crate::shapes::isosurface::DEFAULT_ACCURACY;
 use crate::span::Span;
 use crate::syntax::ast::Name;
 

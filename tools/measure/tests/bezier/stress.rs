@@ -1707,3 +1707,285 @@ mod blob_stress {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// height_field: the product's min/max hierarchy against every triangle tested one by one
+// (`sppm_measure::height_field_reference`).
+
+mod height_field_stress {
+    use std::sync::Arc;
+    use std::time::Instant;
+
+    use glam::DVec3;
+    use rayon::prelude::*;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::scene::{self, HeightGrid};
+    use sppm_lang::shapes::height_field::HeightField;
+    use sppm_measure::height_field_reference::RefHeightField;
+
+    /// Rays per case: 20 000 by default (the reference tests every one of about 50 000
+    /// triangles per ray); `HEIGHT_FIELD_STRESS_RAYS` sets another count.
+    fn rays() -> usize {
+        std::env::var("HEIGHT_FIELD_STRESS_RAYS")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(20_000)
+    }
+
+    /// A rough terrain of `nx x nz` samples (a sum of waves, some of it under the water).
+    fn terrain(nx: u32, nz: u32, water: f64, smooth: bool) -> scene::HeightField {
+        let mut heights = Vec::new();
+        for j in 0..nz {
+            for i in 0..nx {
+                let (x, z) = (
+                    f64::from(i) / f64::from(nx - 1),
+                    f64::from(j) / f64::from(nz - 1),
+                );
+                let h = 0.45
+                    + 0.25 * (7.0 * x + 1.0).sin() * (5.0 * z).cos()
+                    + 0.12 * (31.0 * x * z + 2.0).sin()
+                    + 0.05 * (97.0 * x).sin() * (89.0 * z + 1.0).cos();
+                heights.push(h.clamp(0.0, 1.0) as f32);
+            }
+        }
+        scene::HeightField {
+            grid: Arc::new(HeightGrid { nx, nz, heights }),
+            water,
+            smooth,
+        }
+    }
+
+    /// Ray `i` of a case: random through the box; grazing a random sample's neighbourhood
+    /// (nearly along the terrain, 1e-5..1e-2 across it); through a grid vertex or along a grid
+    /// line or diagonal (shared edges and corners); nearly along the water plane.
+    fn ray(f: &scene::HeightField, i: usize, rng: &mut SplitMix64) -> (DVec3, DVec3) {
+        let g = &f.grid;
+        let sample = |rng: &mut SplitMix64| {
+            let (a, b) = (
+                (rng.f() * f64::from(g.nx)) as u32 % g.nx,
+                (rng.f() * f64::from(g.nz)) as u32 % g.nz,
+            );
+            DVec3::new(
+                f64::from(a) / f64::from(g.nx - 1),
+                f64::from(g.at(a, b)).max(f.water),
+                f64::from(b) / f64::from(g.nz - 1),
+            )
+        };
+        match i % 4 {
+            0 => {
+                let o = rng.unit() * 3.0 + DVec3::splat(0.5);
+                let target = DVec3::new(rng.f(), rng.range(f.water, 1.0), rng.f());
+                (o, (target - o).normalize())
+            }
+            1 => {
+                let p = sample(rng);
+                let mut tangent = DVec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
+                tangent = tangent.normalize_or(DVec3::X);
+                let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                let d = (tangent + DVec3::Y * eps).normalize();
+                (p - d * 2.0 + DVec3::Y * (eps * rng.range(-1.0, 1.0)), d)
+            }
+            2 => {
+                // Aimed exactly at a vertex, or run along a grid line or a cell diagonal.
+                let p = sample(rng);
+                let dirs = [
+                    DVec3::new(1.0, rng.range(-0.3, 0.3), 0.0),
+                    DVec3::new(0.0, rng.range(-0.3, 0.3), 1.0),
+                    DVec3::new(
+                        1.0 / f64::from(g.nx - 1),
+                        rng.range(-0.01, 0.01),
+                        -1.0 / f64::from(g.nz - 1),
+                    ),
+                ];
+                let k = (rng.f() * 4.0) as usize;
+                if k >= 3 {
+                    let d = rng.unit();
+                    return (p - d * 2.0, d);
+                }
+                let d = dirs[k].normalize() * rng.sign();
+                (p - d * 2.0 + DVec3::Y * 1e-9, d)
+            }
+            _ => {
+                let p = DVec3::new(rng.f(), f.water, rng.f());
+                let eps = 10f64.powf(rng.range(-6.0, -2.0)) * rng.sign();
+                let d = (DVec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
+                    .normalize_or(DVec3::Z)
+                    + DVec3::Y * eps)
+                    .normalize();
+                (p - d * 2.0, d)
+            }
+        }
+    }
+
+    /// Flat and smooth terrains, with and without a water level, of 129 x 97 samples (about
+    /// 50 000 triangles with the sides and the bottom): no miss, no false hit, `t` within 1e-12
+    /// of the reference's, and the speed of both per ray.
+    #[test]
+    fn height_field_rays_against_every_triangle() {
+        for (c, &(water, smooth)) in [(0.0, false), (0.3, true), (0.55, false)]
+            .iter()
+            .enumerate()
+        {
+            let field = terrain(129, 97, water, smooth);
+            let fast = HeightField::new(&field).unwrap();
+            let reference = RefHeightField::new(&fast);
+            let count = rays();
+            let make = |i: usize| {
+                let mut rng = SplitMix64::for_item(0x4f1e + c as u64, 0, i);
+                ray(&field, i, &mut rng)
+            };
+            let start = Instant::now();
+            let got: Vec<_> = (0..count)
+                .into_par_iter()
+                .map(|i| {
+                    let (o, d) = make(i);
+                    fast.hit_t(o, d, 0.0, f64::INFINITY)
+                })
+                .collect();
+            let fast_time = start.elapsed().as_secs_f64();
+            let start = Instant::now();
+            let want: Vec<_> = (0..count)
+                .into_par_iter()
+                .map(|i| {
+                    let (o, d) = make(i);
+                    reference.nearest(o, d, 0.0)
+                })
+                .collect();
+            let ref_time = start.elapsed().as_secs_f64();
+            let (mut misses, mut false_hits, mut t_errors, mut hits) = (0, 0, 0, 0);
+            let mut failing = Vec::new();
+            for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                match (w, g) {
+                    (Some(_), None) => misses += 1,
+                    (None, Some(_)) => false_hits += 1,
+                    (Some(w), Some(g)) => {
+                        hits += 1;
+                        if (g.0 - w.0).abs() > 1e-12 * w.0.max(1.0) {
+                            t_errors += 1;
+                        } else {
+                            continue;
+                        }
+                    }
+                    (None, None) => continue,
+                }
+                if failing.len() < 5 {
+                    failing.push(format!("ray {i} {:?}: want {w:?} got {g:?}", make(i)));
+                }
+            }
+            println!(
+                "height field 129x97 water {water} smooth {smooth}: {count} rays, {hits} hits, \
+                 {misses} misses, {false_hits} false hits, {t_errors} t errors; hierarchy \
+                 {:.2} µs/ray, every triangle ({} of them) {:.1} µs/ray ({:.0}x); hierarchy \
+                 {:.2} bytes per cell",
+                fast_time / count as f64 * 1e6,
+                reference.len(),
+                ref_time / count as f64 * 1e6,
+                ref_time / fast_time,
+                fast.hierarchy_bytes() as f64 / (128.0 * 96.0)
+            );
+            assert!(
+                misses + false_hits + t_errors == 0,
+                "water {water}: {failing:#?}"
+            );
+            assert!(hits > count / 4, "too few hits to test anything: {hits}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// text: each glyph's prism against its own outline, flattened finely and filled by even-odd.
+
+mod text_stress {
+    use glam::{DVec2, DVec3, Vec3A};
+    use rayon::prelude::*;
+    use sppm_lang::geometry::Ray;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::scene::text::text_glyphs;
+    use sppm_lang::shapes::Shape;
+    use sppm_lang::shapes::prism::Prism;
+
+    const DEJAVU: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+    /// The outline as a polygon: each cubic segment in 256 steps.
+    fn flatten(segments: &[[DVec2; 4]]) -> Vec<(DVec2, DVec2)> {
+        let mut edges = Vec::new();
+        for c in segments {
+            let at = |s: f64| {
+                let u = 1.0 - s;
+                c[0] * (u * u * u)
+                    + c[1] * (3.0 * u * u * s)
+                    + c[2] * (3.0 * u * s * s)
+                    + c[3] * (s * s * s)
+            };
+            for k in 0..256 {
+                edges.push((at(k as f64 / 256.0), at((k + 1) as f64 / 256.0)));
+            }
+        }
+        edges
+    }
+
+    /// Even-odd inside, and the distance to the nearest edge.
+    fn inside(edges: &[(DVec2, DVec2)], p: DVec2) -> (bool, f64) {
+        let mut odd = false;
+        let mut dist = f64::INFINITY;
+        for &(a, b) in edges {
+            if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+                odd = !odd;
+            }
+            let ab = b - a;
+            let s = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+            dist = dist.min((a + ab * s - p).length());
+        }
+        (odd, dist)
+    }
+
+    /// Rays straight down each glyph's sweep (DejaVu Sans, letters with holes, curves and
+    /// corners): a hit exactly where the outline holds the point (points within 1e-4 em of the
+    /// outline, closer than its flattening, are left out), at the cap.
+    #[test]
+    fn text_glyphs_against_their_outlines() {
+        let font = std::fs::read(DEJAVU)
+            .unwrap_or_else(|_| panic!("{DEJAVU} is missing: install fonts-dejavu-core"));
+        let glyphs = text_glyphs(&font, "Sppm-lang 0@&gB%", 0.25, DVec3::ZERO).unwrap();
+        let mut total = (0usize, 0usize, 0usize);
+        for (k, g) in glyphs.glyphs.iter().enumerate() {
+            let prism = Prism::new(&g.prism).unwrap();
+            let edges = flatten(&g.prism.segments);
+            let (lo, hi) = g
+                .prism
+                .segments
+                .iter()
+                .flatten()
+                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                });
+            let (wrong, hits, tested) = (0..20_000usize)
+                .into_par_iter()
+                .map(|i| {
+                    let mut rng = SplitMix64::for_item(0x7e47 + k as u64, 0, i);
+                    let p = DVec2::new(rng.range(lo.x, hi.x), rng.range(lo.y, hi.y));
+                    let (want, dist) = inside(&edges, p);
+                    if dist < 1e-4 {
+                        return (0, 0, 0);
+                    }
+                    let ray = Ray::new(Vec3A::new(p.x as f32, -1.0, p.y as f32), Vec3A::Y);
+                    let got = prism.intersect(&ray, 0.0, f32::INFINITY);
+                    let ok = match got {
+                        Some(h) => want && (h.t - 1.0).abs() < 1e-6,
+                        None => !want,
+                    };
+                    (usize::from(!ok), usize::from(want), 1)
+                })
+                .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+            assert_eq!(wrong, 0, "glyph {k}: {wrong} of {tested} rays disagree");
+            total = (total.0 + wrong, total.1 + hits, total.2 + tested);
+        }
+        println!(
+            "text: {} glyphs, {} rays, {} inside, {} disagreements",
+            glyphs.glyphs.len(),
+            total.2,
+            total.1,
+            total.0
+        );
+    }
+}
