@@ -156,9 +156,22 @@ fn write(path: &Path, size: (u32, u32), what: &impl Paint) -> Result<(), String>
     }
     crate::atomic_file::write_atomic(path, |tmp, _| {
         let result = if ext == "png" {
-            let root = BitMapBackend::new(tmp, size).into_drawing_area();
-            what.paint(&root)
-                .and_then(|_| root.present().map_err(|e| e.to_string()))
+            (|| {
+                // plotters draws into an RGB buffer; the `image` crate the renderer already uses
+                // encodes it (plotters' own encoder would build a second, older `image`).
+                let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+                {
+                    let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+                    what.paint(&root)
+                        .and_then(|_| root.present().map_err(|e| e.to_string()))?;
+                }
+                image::RgbImage::from_raw(size.0, size.1, rgb)
+                    .ok_or_else(|| "chart buffer has the wrong size".to_string())
+                    .and_then(|img| {
+                        img.save_with_format(tmp, image::ImageFormat::Png)
+                            .map_err(|e| e.to_string())
+                    })
+            })()
         } else {
             let root = SVGBackend::new(tmp, size).into_drawing_area();
             what.paint(&root)
