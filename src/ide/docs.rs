@@ -62,6 +62,31 @@ const BLOCKS: &[(&str, &str, &str)] = &[
         "sphere-sweep",
     ),
     (
+        "blob",
+        "`blob { threshold t sphere { <c>, r, strength s } ... }`: spheres and capsules of density",
+        "blob",
+    ),
+    (
+        "isosurface",
+        "`isosurface { function { f(x, y, z) } contained_by { box { ... } } }`: where f meets the threshold",
+        "isosurface",
+    ),
+    (
+        "contained_by",
+        "`contained_by { box { <a>, <b> } }`: an isosurface's container (a box or a sphere)",
+        "isosurface",
+    ),
+    (
+        "height_field",
+        "`height_field { png \"h.png\" smooth water_level w }`: a terrain over the unit square",
+        "height-field",
+    ),
+    (
+        "text",
+        "`text { ttf \"font.ttf\" \"string\" thickness, offset }`: letters extruded along z",
+        "text",
+    ),
+    (
         "bezier_patch",
         "`bezier_patch { 16 points }`: a bicubic patch",
         "objects",
