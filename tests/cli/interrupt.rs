@@ -153,15 +153,34 @@ fn ctrl_c_stops_render_while_it_prepares_a_large_scene() {
          #for (I, 0, 999998) sphere { <mod(I, 1000), floor(I / 1000), 0>, 0.4 } #end\n\
          #debug \"loaded\"\n";
     std::fs::write(dir.path().join("scene.scn"), scene).unwrap();
+    // How long this machine takes from the end of the load to the image: the prepare stage
+    // (the render after it is milliseconds). A fixed delay raced the BVH build once that got
+    // faster on an idle machine.
+    let mut whole = start(dir.path(), &["render", "scene.scn", "-o", "whole.png"]);
+    whole.expect("loaded", Duration::from_secs(120));
+    let t0 = Instant::now();
+    let done = loop {
+        if let Some(s) = whole.child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            t0.elapsed() < GIVE_UP,
+            "the uninterrupted render did not end"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let prepare = t0.elapsed();
+    assert!(done.success(), "the uninterrupted render failed");
     let mut run = start(dir.path(), &["render", "scene.scn", "-o", "out.png"]);
     run.expect("loaded", Duration::from_secs(120));
     let loaded = Instant::now();
-    // Past the validation, which cannot stop midway (0.85 s for these spheres measured on a
-    // busy machine), into the objects or the BVH build.
-    std::thread::sleep(Duration::from_millis(1200));
+    // Halfway into the prepare stage: late in the validation (which cannot stop midway: 0.85 s
+    // for these spheres on a busy machine) or into the objects and the BVH build.
+    std::thread::sleep(prepare / 2);
     let (status, took, log) = interrupt(&mut run, "INT");
     println!(
-        "render: SIGINT {:?} into the prepare stage, exit code {:?} after {took:?}",
+        "render: prepare took {prepare:?} uninterrupted; SIGINT {:?} into it, exit code {:?} \
+         after {took:?}",
         loaded.elapsed() - took,
         status.code()
     );
