@@ -134,7 +134,13 @@ pub fn measure(
             stop.cancel.store(true, Ordering::SeqCst);
         }
     };
-    let out = render(scene, options, &stop.cancel, &mut on_progress).map_err(Failure::Render)?;
+    let out = match render(scene, options, &stop.cancel, &mut on_progress) {
+        Ok(out) => out,
+        // Stopped before its first iteration ended (in the prepare stage): the render reports
+        // that as an error, but it is the interruption, not a failure of the method.
+        Err(_) if stop.interrupted.load(Ordering::SeqCst) => return Err(Failure::Interrupted),
+        Err(e) => return Err(Failure::Render(e)),
+    };
     if stop.interrupted.load(Ordering::SeqCst) {
         return Err(Failure::Interrupted);
     }
