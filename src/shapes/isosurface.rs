@@ -15,12 +15,11 @@
 //! threshold on them. The normal is the function's gradient by central differences (a wall's
 //! own normal on a wall); the uv is spherical about the container's centre, as the sphere's.
 
-use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use arrayvec::ArrayVec;
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec3, Vec2};
 
 use super::{AreaSample, Shape};
 use crate::geometry::{Aabb, Hit, Ray};
@@ -227,19 +226,6 @@ impl Isosurface {
             }
         }
     }
-
-    fn uv(&self, p: DVec3) -> (DVec2, DVec3) {
-        let (min, max) = self.container.bounds();
-        let q = p - 0.5 * (min + max);
-        let u = q.x.atan2(q.z).rem_euclid(TAU) / TAU;
-        let len = q.length();
-        let v = if len > 0.0 {
-            1.0 - (q.y / len).clamp(-1.0, 1.0).acos() / PI
-        } else {
-            0.5
-        };
-        (DVec2::new(u, v), DVec3::new(q.z, 0.0, -q.x) * TAU)
-    }
 }
 
 /// The crossing in `[lo, hi]` (inside at `lo` when `inside_lo`) to full precision.
@@ -279,20 +265,8 @@ impl Shape for Isosurface {
             Meet::Wall(_) => self.wall_normal(p),
         }
         .as_vec3a();
-        let (uv, around) = self.uv(p);
-        let dpdu = if around.length_squared() > 0.0 {
-            around.as_vec3a()
-        } else {
-            n.any_orthonormal_vector()
-        };
-        Some(Hit {
-            t: tf,
-            p: p.as_vec3a(),
-            n,
-            ns: n,
-            uv: uv.as_vec2(),
-            dpdu,
-        })
+        let (min, max) = self.container.bounds();
+        Some(super::blob::spherical_hit(tf, p, n, 0.5 * (min + max)))
     }
 
     /// An isosurface is not a light's shape: it is never sampled.

@@ -148,18 +148,33 @@ impl Blob {
     pub fn normal(&self, p: DVec3) -> DVec3 {
         (-self.gradient(p)).normalize_or((p - 0.5 * (self.min + self.max)).normalize_or(DVec3::Y))
     }
+}
 
-    fn uv(&self, p: DVec3) -> (DVec2, DVec3) {
-        let q = p - 0.5 * (self.min + self.max);
-        let u = q.x.atan2(q.z).rem_euclid(TAU) / TAU;
-        let len = q.length();
-        let v = if len > 0.0 {
-            1.0 - (q.y / len).clamp(-1.0, 1.0).acos() / PI
-        } else {
-            0.5
-        };
-        let around = DVec3::new(q.z, 0.0, -q.x) * TAU;
-        (DVec2::new(u, v), around)
+/// A hit at `p` with normal `n` and uv spherical about `centre`, as the sphere's (around the y
+/// axis, 0 toward +z, 1/4 toward +x; v from 0 below to 1 above): the blob's and the
+/// isosurface's.
+pub(super) fn spherical_hit(t: f32, p: DVec3, n: glam::Vec3A, centre: DVec3) -> Hit {
+    let q = p - centre;
+    let u = q.x.atan2(q.z).rem_euclid(TAU) / TAU;
+    let len = q.length();
+    let v = if len > 0.0 {
+        1.0 - (q.y / len).clamp(-1.0, 1.0).acos() / PI
+    } else {
+        0.5
+    };
+    let around = DVec3::new(q.z, 0.0, -q.x) * TAU;
+    let dpdu = if around.length_squared() > 0.0 {
+        around.as_vec3a()
+    } else {
+        n.any_orthonormal_vector()
+    };
+    Hit {
+        t,
+        p: p.as_vec3a(),
+        n,
+        ns: n,
+        uv: DVec2::new(u, v).as_vec2(),
+        dpdu,
     }
 }
 
@@ -240,20 +255,7 @@ impl Shape for Blob {
         }
         let p = o + t * d;
         let n = self.normal(p).as_vec3a();
-        let (uv, around) = self.uv(p);
-        let dpdu = if around.length_squared() > 0.0 {
-            around.as_vec3a()
-        } else {
-            n.any_orthonormal_vector()
-        };
-        Some(Hit {
-            t: tf,
-            p: p.as_vec3a(),
-            n,
-            ns: n,
-            uv: uv.as_vec2(),
-            dpdu,
-        })
+        Some(spherical_hit(tf, p, n, 0.5 * (self.min + self.max)))
     }
 
     /// A blob is not a light's shape: it is never sampled.
