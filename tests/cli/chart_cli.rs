@@ -3,32 +3,11 @@
 //! a method variant the render refuses, and an interruption after some methods finished.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 use crate::running;
-use running::Running;
-
-/// Runs `sppm-lang args`, killed after `seconds` (`None` then).
-fn sppm_within(args: &[&str], seconds: u64) -> Option<Output> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run sppm-lang");
-    let start = Instant::now();
-    while start.elapsed().as_secs() < seconds {
-        if child.try_wait().unwrap().is_some() {
-            return Some(child.wait_with_output().unwrap());
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    None
-}
+use running::{Running, sppm_within};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()

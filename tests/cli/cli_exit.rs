@@ -1,6 +1,7 @@
 //! The command line's exit status and output for good and bad input, through the real binary:
 //! 0 ok, 1 scene errors (with a spanned diagnostic, never a panic), 2 usage errors.
 
+use crate::running::sppm_within;
 use std::process::{Command, Output};
 
 fn sppm(args: &[&str]) -> Output {
@@ -790,27 +791,6 @@ fn an_unwritable_output_is_refused_before_rendering() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert!(names.len() <= 2, "{names:?}");
-}
-
-/// `sppm-lang args`, killed after `seconds`: `None` when it had not ended by then.
-fn sppm_within(args: &[&str], seconds: u64) -> Option<Output> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sppm-lang"))
-        .args(args)
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("run sppm-lang");
-    let start = std::time::Instant::now();
-    while start.elapsed().as_secs() < seconds {
-        if child.try_wait().unwrap().is_some() {
-            return Some(child.wait_with_output().unwrap());
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    None
 }
 
 /// `out` is a usage error (exit 2, no panic) whose message contains `why`; `what` names the

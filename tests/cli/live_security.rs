@@ -228,6 +228,21 @@ fn rss(pid: u32) -> u64 {
     kb * 1024
 }
 
+/// The process's resident memory now is at most `margin` above `before` (printed with `what`).
+fn assert_memory_held(pid: u32, what: &str, before: u64, margin: u64) {
+    let after = rss(pid);
+    println!(
+        "{what}resident memory {} MiB before, {} MiB after",
+        before >> 20,
+        after >> 20
+    );
+    assert!(
+        after <= before + margin,
+        "grew by {} MiB",
+        (after - before) >> 20
+    );
+}
+
 #[test]
 fn only_the_user_gets_in() {
     let mut live = Live::start(32, &[]);
@@ -454,17 +469,7 @@ fn a_huge_request_line_is_cut_off_with_bounded_memory() {
             answer.head
         );
     }
-    let after = rss(live.pid());
-    println!(
-        "resident memory {} MiB before, {} MiB after",
-        before >> 20,
-        after >> 20
-    );
-    assert!(
-        after <= before + MARGIN,
-        "grew by {} MiB",
-        (after - before) >> 20
-    );
+    assert_memory_held(live.pid(), "", before, MARGIN);
     assert_eq!(live.get("/").status, 303);
     live.assert_alive();
 }
@@ -652,17 +657,8 @@ fn event_streams_that_do_not_read_hold_little() {
     live.watch
         .expect("render #2 started", Duration::from_secs(60));
     std::thread::sleep(Duration::from_secs(3));
-    let after = rss(live.pid());
-    println!(
-        "31 stalled event streams, 1000 messages of 8 KB: resident {} MiB before, {} MiB after",
-        before >> 20,
-        after >> 20
-    );
-    assert!(
-        after <= before + MARGIN,
-        "grew by {} MiB",
-        (after - before) >> 20
-    );
+    let what = "31 stalled event streams, 1000 messages of 8 KB: ";
+    assert_memory_held(live.pid(), what, before, MARGIN);
     // A reading tab still gets the status, with the messages that fit and the count of the
     // rest.
     let head = format!(

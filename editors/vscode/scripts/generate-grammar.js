@@ -134,6 +134,20 @@ function stdlibNames(rel) {
 }
 
 /** `\b(?:a|b|...)\b` of a word list, longest first (so that a prefix never shadows a word). */
+// An expression between `open` and `close`. A `}` cannot stand inside parentheses or
+// brackets (only inside a block of its own): one there ends them, so a parenthesis left open
+// while typing does not run on.
+function enclosed(what, open, close) {
+  return {
+    name: `meta.${what}.scn`,
+    begin: open,
+    end: `${close}|(?=\\})`,
+    beginCaptures: { 0: { name: `punctuation.section.${what}.begin.scn` } },
+    endCaptures: { 0: { name: `punctuation.section.${what}.end.scn` } },
+    patterns: [{ include: "#expression" }],
+  };
+}
+
 function wordsPattern(words, { after = "", before = "" } = {}) {
   const sorted = [...new Set(words)].sort((a, b) => b.length - a.length || (a < b ? -1 : 1));
   return `${before}\\b(?:${sorted.join("|")})\\b${after}`;
@@ -317,24 +331,8 @@ function grammar(l) {
         // At the top level a `}` closes nothing: the parser stops there.
     patterns: [{ include: "#items" }, { match: "\\}", name: "invalid.illegal.stray-bracket.scn" }],
       },
-      // A `}` cannot stand inside parentheses or brackets (only inside a block of its own): one
-      // there ends them, so a parenthesis left open while typing does not run on.
-      parens: {
-        name: "meta.parens.scn",
-        begin: "\\(",
-        end: "\\)|(?=\\})",
-        beginCaptures: { 0: { name: "punctuation.section.parens.begin.scn" } },
-        endCaptures: { 0: { name: "punctuation.section.parens.end.scn" } },
-        patterns: [{ include: "#expression" }],
-      },
-      array: {
-        name: "meta.brackets.scn",
-        begin: "\\[",
-        end: "\\]|(?=\\})",
-        beginCaptures: { 0: { name: "punctuation.section.brackets.begin.scn" } },
-        endCaptures: { 0: { name: "punctuation.section.brackets.end.scn" } },
-        patterns: [{ include: "#expression" }],
-      },
+      parens: enclosed("parens", "\\(", "\\)"),
+      array: enclosed("brackets", "\\[", "\\]"),
       numbers: {
         name: "constant.numeric.scn",
         match: "(?<![A-Za-z0-9_.])(?:[0-9]+(?:\\.[0-9]*)?|\\.[0-9]+)(?:[eE][+-]?[0-9]+)?",

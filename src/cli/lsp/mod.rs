@@ -22,6 +22,14 @@ use worker::{Open, Shared};
 /// A document's line index and outline, made from one version of its text.
 type Analysis = Arc<(LineIndex, Outline)>;
 
+/// Where a request's cursor stands: the document, its analysis and the byte offset.
+struct Cursor {
+    path: PathBuf,
+    text: Arc<str>,
+    analysis: Analysis,
+    offset: usize,
+}
+
 /// An open document.
 struct Doc {
     uri: lsp::Uri,
@@ -267,22 +275,29 @@ impl Server {
             .unwrap_or_default()
     }
 
-    fn completion(&mut self, p: lsp::CompletionParams) -> Option<lsp::CompletionResponse> {
-        let at = p.text_document_position;
-        let (path, text, a) = self.doc(&at.text_document.uri)?;
-        let (index, outline) = &*a;
-        let offset = index.offset(&text, convert::from_position(at.position));
-        let c = ide::complete(
-            &self.world(),
-            &path,
-            &text,
-            outline,
+    /// The document and offset a request's cursor points at.
+    fn cursor(&mut self, at: &lsp::TextDocumentPositionParams) -> Option<Cursor> {
+        let (path, text, analysis) = self.doc(&at.text_document.uri)?;
+        let offset = analysis
+            .0
+            .offset(&text, convert::from_position(at.position));
+        Some(Cursor {
+            path,
+            text,
+            analysis,
             offset,
-            &self.globals(&path),
-        );
-        let replace = convert::range(&text, index, c.replace.clone());
+        })
+    }
+
+    fn completion(&mut self, p: lsp::CompletionParams) -> Option<lsp::CompletionResponse> {
+        let c = self.cursor(&p.text_document_position)?;
+        let (index, outline) = &*c.analysis;
+        let globals = self.globals(&c.path);
+        let found = ide::complete(&self.world(), &c.path, &c.text, outline, c.offset, &globals);
+        let replace = convert::range(&c.text, index, found.replace.clone());
         Some(lsp::CompletionResponse::Array(
-            c.items
+            found
+                .items
                 .iter()
                 .enumerate()
                 .map(|(k, i)| convert::completion(i, k, replace))
@@ -291,50 +306,37 @@ impl Server {
     }
 
     fn hover(&mut self, p: lsp::HoverParams) -> Option<lsp::Hover> {
-        let at = p.text_document_position_params;
-        let (path, text, a) = self.doc(&at.text_document.uri)?;
-        let (index, outline) = &*a;
-        let offset = index.offset(&text, convert::from_position(at.position));
-        let h = ide::hover(
-            &self.world(),
-            &path,
-            &text,
-            outline,
-            offset,
-            &self.globals(&path),
-        )?;
+        let c = self.cursor(&p.text_document_position_params)?;
+        let (index, outline) = &*c.analysis;
+        let globals = self.globals(&c.path);
+        let h = ide::hover(&self.world(), &c.path, &c.text, outline, c.offset, &globals)?;
         Some(lsp::Hover {
             contents: lsp::HoverContents::Markup(lsp::MarkupContent {
                 kind: lsp::MarkupKind::Markdown,
                 value: h.text,
             }),
-            range: Some(convert::range(&text, index, h.range)),
+            range: Some(convert::range(&c.text, index, h.range)),
         })
     }
 
     fn definition(&mut self, p: lsp::GotoDefinitionParams) -> Option<lsp::GotoDefinitionResponse> {
-        let at = p.text_document_position_params;
-        let (path, text, a) = self.doc(&at.text_document.uri)?;
-        let (index, outline) = &*a;
-        let offset = index.offset(&text, convert::from_position(at.position));
-        let found = ide::definition(&self.world(), &path, &text, outline, offset);
+        let c = self.cursor(&p.text_document_position_params)?;
+        let found = ide::definition(&self.world(), &c.path, &c.text, &c.analysis.1, c.offset);
         Some(lsp::GotoDefinitionResponse::Array(
             found.iter().filter_map(convert::location).collect(),
         ))
     }
 
     fn references(&mut self, p: lsp::ReferenceParams) -> Option<Vec<lsp::Location>> {
-        let at = p.text_document_position;
-        let (path, text, a) = self.doc(&at.text_document.uri)?;
-        let (index, outline) = &*a;
-        let offset = index.offset(&text, convert::from_position(at.position));
+        let c = self.cursor(&p.text_document_position)?;
+        let declaration = p.context.include_declaration;
         let found = ide::references(
             &self.world(),
-            &path,
-            &text,
-            outline,
-            offset,
-            p.context.include_declaration,
+            &c.path,
+            &c.text,
+            &c.analysis.1,
+            c.offset,
+            declaration,
         );
         Some(found.iter().filter_map(convert::location).collect())
     }
