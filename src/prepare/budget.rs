@@ -12,8 +12,9 @@ use std::collections::HashSet;
 use std::mem::size_of;
 
 use super::instances::{shared_key, shared_meshes};
-use super::{EffectiveSettings, ObjectInfo, RenderError};
+use super::{EffectiveSettings, ObjectInfo};
 use crate::bezier::lathe::Lathe;
+use crate::diag::Diagnostic;
 use crate::diag::size_text;
 use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, Shape};
 use crate::shapes::patch::{BezierPatch, PIECES as PATCH_PIECES};
@@ -178,7 +179,7 @@ pub(super) fn compact_mesh_bytes(mesh: &MeshData) -> u64 {
 
 /// The estimate, largest item first.
 pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> {
-    let pixels = settings.width as u64 * settings.height as u64;
+    let pixels = settings.width() as u64 * settings.height() as u64;
     let shape_bytes = size_of::<crate::shapes::primitive::AnyShape>() as u64;
     let per_primitive = shape_bytes + PER_PRIMITIVE;
     // A placement of a shared mesh: its primitive and the boxed transform it carries.
@@ -298,7 +299,7 @@ pub fn check_memory(
     settings: &EffectiveSettings,
     limit: u64,
     held: Option<MemoryItem>,
-) -> Result<(), RenderError> {
+) -> Result<(), Diagnostic> {
     let mut items = estimate(scene, settings);
     items.extend(held);
     let total = items
@@ -320,19 +321,15 @@ pub fn check_memory(
         .filter(|i| i.bytes > 0)
         .map(|i| format!("{} {}", i.what, size_text(i.bytes)))
         .collect();
-    Err(RenderError {
-        help: Some(
-            "lower the resolution, photons or object count, or raise the limit with \
-             --memory-limit"
-                .into(),
-        ),
-        ..RenderError::new(format!(
-            "this render needs about {} of memory, more than the limit of {} ({})",
-            size_text(total),
-            size_text(limit),
-            parts.join(", ")
-        ))
-    })
+    Err(Diagnostic::unplaced(format!(
+        "this render needs about {} of memory, more than the limit of {} ({})",
+        size_text(total),
+        size_text(limit),
+        parts.join(", ")
+    ))
+    .with_help(
+        "lower the resolution, photons or object count, or raise the limit with --memory-limit",
+    ))
 }
 
 /// What the estimate calls the photons one iteration stores.
@@ -342,21 +339,20 @@ const PHOTONS: &str = "photons of one iteration";
 /// touched) and given back. A limit raised past what the machine or the process may have
 /// (`--memory-limit 100G` on 16 GB, or under `ulimit -v`) lets an estimate pass that no
 /// allocation can meet, and a failed allocation aborts the process mid-render.
-fn allocatable(bytes: u64) -> Result<(), RenderError> {
+fn allocatable(bytes: u64) -> Result<(), Diagnostic> {
     let reserved = usize::try_from(bytes)
         .map_err(|_| ())
         .and_then(|n| Vec::<u8>::new().try_reserve_exact(n).map_err(|_| ()));
-    reserved.map_err(|()| RenderError {
-        help: Some(
-            "lower the resolution, photons or object count: `--memory-limit` bounds the \
-             estimate, it does not give the process more memory"
-                .into(),
-        ),
-        ..RenderError::new(format!(
+    reserved.map_err(|()| {
+        Diagnostic::unplaced(format!(
             "this render needs about {} of memory before its first photon, and this process \
              cannot allocate that much",
             size_text(bytes)
         ))
+        .with_help(
+            "lower the resolution, photons or object count: `--memory-limit` bounds the \
+             estimate, it does not give the process more memory",
+        )
     })
 }
 

@@ -10,10 +10,10 @@
 
 use glam::DAffine3;
 
-use super::RenderError;
 use super::budget::primitives;
 use super::orient::{profile_area, signed_volume};
 use super::shapes::build_shapes;
+use crate::diag::Diagnostic;
 use crate::scene::{self, MAX_CSG_DEPTH, MaterialId, Object, Scene};
 use crate::shapes::csg::{Csg, CsgLeaf, CsgNode};
 use crate::shapes::primitive::AnyShape;
@@ -42,7 +42,7 @@ pub fn ray_cost(csg: &scene::Csg) -> u64 {
 }
 
 /// Refuses a CSG object whose [`ray_cost`] passes [`MAX_CSG_RAY_COST`], at its span.
-pub(super) fn check_costs(scene: &Scene) -> Result<(), RenderError> {
+pub(super) fn check_costs(scene: &Scene) -> Result<(), Diagnostic> {
     for obj in &scene.objects {
         let scene::Shape::Csg(csg) = &obj.shape else {
             continue;
@@ -56,24 +56,22 @@ pub(super) fn check_costs(scene: &Scene) -> Result<(), RenderError> {
             .iter()
             .map(|o| primitives(&o.shape))
             .fold(0u64, u64::saturating_add);
-        return Err(RenderError {
-            label: "too costly to intersect".into(),
-            help: Some(
-                "a CSG tests the surfaces of its shapes one by one (every triangle of a mesh): \
-                 use `union` where inner surfaces may stay (its shapes go into the scene's \
-                 acceleration structure), split the object into smaller CSGs, or use meshes \
-                 with fewer triangles"
-                    .into(),
-            ),
-            ..RenderError::new(format!(
+        return Err(Diagnostic::error(
+            obj.span,
+            format!(
                 "this {} would cost up to {cost} surface tests for every ray that meets it \
                  ({} shapes with {surfaces} surfaces), more than the {MAX_CSG_RAY_COST} a CSG \
                  may cost",
                 csg.op.name(),
                 leaves.len(),
-            ))
-        }
-        .at(obj.span));
+            ),
+        )
+        .with_label("too costly to intersect")
+        .with_help(
+            "a CSG tests the surfaces of its shapes one by one (every triangle of a mesh): use \
+             `union` where inner surfaces may stay (its shapes go into the scene's acceleration \
+             structure), split the object into smaller CSGs, or use meshes with fewer triangles",
+        ));
     }
     Ok(())
 }

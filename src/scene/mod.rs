@@ -36,8 +36,8 @@ pub use height_field::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE};
 pub use pattern_value::{PatternFn, PatternKind};
 pub use prism::{Prism, PrismSpline, ProfileError, prism_segments};
 pub use validate::{
-    COAT_IOR_RANGE, IOR_RANGE, Invalid, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES,
-    MAX_PHOTONS, MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
+    COAT_IOR_RANGE, IOR_RANGE, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS,
+    MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
     environment_too_bright,
 };
 

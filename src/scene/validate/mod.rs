@@ -15,6 +15,7 @@ use super::{
     MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
     Material, NormalKind, Object, ScalarParam, Scene, Settings, Shape, why_open,
 };
+use crate::diag::Diagnostic;
 use crate::span::Span;
 
 mod appearance;
@@ -41,23 +42,12 @@ pub const MAX_PHOTONS: u64 = 100_000_000_000;
 /// Smallest radius, length or side in world space.
 pub const MIN_SIZE: f64 = 1e-9;
 
-/// Why a scene cannot be rendered, with where it comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Invalid {
-    pub message: String,
-    /// The declaration at fault (detached when the scene was built by hand).
-    pub span: Span,
-    pub label: String,
-    pub help: String,
-}
-
-fn invalid(span: Span, message: String, label: &str, help: &str) -> Invalid {
-    Invalid {
-        message,
-        span,
-        label: label.into(),
-        help: help.into(),
-    }
+/// Why a scene cannot be rendered, at the declaration at fault (detached when the scene was
+/// built by hand).
+fn invalid(span: Span, message: String, label: &str, help: &str) -> Diagnostic {
+    Diagnostic::error(span, message)
+        .with_label(label)
+        .with_help(help)
 }
 
 fn fmt(x: f64) -> String {
@@ -65,7 +55,7 @@ fn fmt(x: f64) -> String {
 }
 
 /// A point or vector that must be finite and within [`MAX_COORD`].
-fn point(p: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
+fn point(p: DVec3, what: &str, span: Span) -> Result<(), Diagnostic> {
     let m = p.abs().max_element();
     if m.is_nan() || m > MAX_COORD {
         return Err(invalid(
@@ -79,7 +69,7 @@ fn point(p: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
 }
 
 /// A world-space size that must lie in [`MIN_SIZE`, `MAX_COORD`].
-fn size(x: f64, what: &str, span: Span) -> Result<(), Invalid> {
+fn size(x: f64, what: &str, span: Span) -> Result<(), Diagnostic> {
     if x.is_nan() || x > MAX_COORD {
         return Err(invalid(
             span,
@@ -101,7 +91,7 @@ fn size(x: f64, what: &str, span: Span) -> Result<(), Invalid> {
 
 impl Camera {
     /// Whether the camera can be built: finite, in range, oriented.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         let span = self.span;
         point(self.location, "the camera's location", span)?;
         point(self.look_at, "the camera's look_at", span)?;
@@ -199,7 +189,7 @@ impl Camera {
 impl Settings {
     /// The numbers a render computes with; the resolution and counts are checked by `prepare`
     /// against the limits of the run.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         let span = self.span;
         if let Some(r) = self.radius {
             size(r, "the initial radius", span)?;
@@ -283,7 +273,7 @@ fn shrink(t: &DAffine3) -> f64 {
 
 impl Scene {
     /// Checks the whole scene; the first problem found.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         self.camera.validate()?;
         self.settings.validate()?;
         for (i, m) in self.materials.iter().enumerate() {
@@ -341,7 +331,7 @@ impl Scene {
 }
 
 /// One object under its parent's transform (identity at the top level).
-fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
+fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
     let span = obj.span;
     let t = &(*parent * obj.transform);
     let kind = obj.shape.kind();
@@ -550,7 +540,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
 }
 
 /// Newton's iterations and starts within the language's bounds (each ray pays their product).
-fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), Invalid> {
+fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), Diagnostic> {
     match method {
         IntersectMethod::Newton { iterations, starts }
             if iterations > MAX_NEWTON_ITERATIONS || starts > MAX_NEWTON_STARTS =>
@@ -571,7 +561,7 @@ fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), 
 
 /// Every blend's parts come before it in `Scene::materials` (so that following them ends) and
 /// blends nest at most `MAX_BLEND_DEPTH` deep.
-fn blends_bounded(scene: &Scene) -> Result<(), Invalid> {
+fn blends_bounded(scene: &Scene) -> Result<(), Diagnostic> {
     let depths = scene.blend_depths();
     match depths
         .iter()
@@ -591,7 +581,7 @@ fn blends_bounded(scene: &Scene) -> Result<(), Invalid> {
 }
 
 /// Every texture material `index` refers to is one of the scene's `count` textures.
-fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invalid> {
+fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Diagnostic> {
     let color = |p: &ColorParam| match p {
         ColorParam::Texture(t) => Some(t.0),
         ColorParam::Const(_) => None,
@@ -658,7 +648,7 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
 }
 
 /// The background's and the backdrop's textures are among the scene's.
-fn sky_textures_exist(scene: &Scene) -> Result<(), Invalid> {
+fn sky_textures_exist(scene: &Scene) -> Result<(), Diagnostic> {
     let count = scene.textures.len();
     let background = match scene.background {
         Background::Texture(t) => Some(("the background", t.0)),
@@ -684,7 +674,7 @@ fn sky_textures_exist(scene: &Scene) -> Result<(), Invalid> {
 }
 
 /// The size of a CSG tree; checked before anything walks it recursively.
-fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
+fn csg_limits(csg: &Csg, span: Span) -> Result<(), Diagnostic> {
     if csg.depth(MAX_CSG_DEPTH) > MAX_CSG_DEPTH {
         return Err(invalid(
             span,
@@ -710,7 +700,7 @@ fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
 }
 
 /// The children of a CSG node: closed, not emissive, each valid under `t`.
-fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
+fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Diagnostic> {
     if csg.op == CsgOp::Inverse && csg.children.len() != 1 {
         return Err(invalid(
             span,
