@@ -111,7 +111,7 @@ pub(super) fn on_eval_thread(
                 Err(RecvTimeoutError::Timeout) if cancel.is_cancelled() => {
                     if finished.recv_timeout(CANCEL_GRACE).is_err() && !handle.is_finished() {
                         return failed(
-                            Diagnostic::error(Span::detached(), "interrupted"),
+                            Diagnostic::interrupted(),
                             false,
                             true,
                         );
@@ -203,7 +203,7 @@ fn run(
     let interrupted = ev.interrupted;
     if interrupted {
         ev.errors
-            .push(Diagnostic::error(Span::detached(), "interrupted"));
+            .push(Diagnostic::interrupted());
     }
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;
