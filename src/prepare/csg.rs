@@ -204,7 +204,7 @@ mod tests {
         let cost = cost_of(&s);
         assert!(cost >= 3_000_000, "{cost}");
         let e = check_costs(&s).unwrap_err();
-        assert_eq!(e.span, Some(s.objects[0].span));
+        assert_eq!(e.span, s.objects[0].span);
         assert!(
             e.message
                 .contains(&format!("would cost up to {cost} surface tests"))

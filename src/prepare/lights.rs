@@ -268,7 +268,7 @@ mod tests {
         warnings
             .iter()
             .filter(|w| w.message.contains("faces away"))
-            .inspect(|w| assert!(w.span.is_some(), "{}", w.message))
+            .inspect(|w| assert!(w.is_placed(), "{}", w.message))
             .count()
     }
 

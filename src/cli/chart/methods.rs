@@ -235,7 +235,7 @@ mod tests {
             e.message
         );
         assert!(e.message.contains("at most 100000000000"), "{}", e.message);
-        assert!(e.span.is_some(), "the settings block is where it points");
+        assert!(e.is_placed(), "the settings block is where it points");
         let help = e.help.as_deref().unwrap();
         assert!(help.contains("--methods sppm`"), "{help}");
         // Every method is checked: photon mapping stores its photons, too many for memory.
