@@ -16,13 +16,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::cancel::Cancel;
-use crate::diag::{Diagnostic, Severity, SourceMap, render_plain};
+use crate::diag::{Diagnostic, SourceMap, render_plain};
 use crate::eval::EvalOptions;
 use crate::film::Image;
-use crate::prepare::{EffectiveSettings, PreparedScene, RenderError, RenderOptions};
+use crate::prepare::{EffectiveSettings, PreparedScene, RenderOptions};
 use crate::render::RenderStats;
 use crate::scene::Scene;
-use crate::span::Span;
 
 /// Why a call failed: its diagnostics (the errors, and the warnings found before them), with
 /// the sources they point into. `Display` renders them as plain text.
@@ -35,11 +34,11 @@ pub struct Failure {
 }
 
 impl Failure {
-    fn render(e: &RenderError, sources: &SourceMap) -> Self {
+    fn render(e: Diagnostic, sources: &SourceMap) -> Self {
         Self {
-            diagnostics: vec![e.to_diagnostic(Severity::Error)],
-            sources: sources.clone(),
             interrupted: e.interrupted,
+            diagnostics: vec![e],
+            sources: sources.clone(),
         }
     }
 }
@@ -66,7 +65,7 @@ pub struct Document {
 /// Reads the scene file `path` from `options.world`, parses and evaluates it.
 pub fn load(path: &Path, options: &EvalOptions) -> Result<Document, Failure> {
     let loaded = crate::eval::load_file(path, options).map_err(|e| Failure {
-        diagnostics: vec![Diagnostic::error(Span::detached(), e.with_path(path))],
+        diagnostics: vec![e.to_diagnostic(path)],
         ..Failure::default()
     })?;
     let failed = loaded.has_errors();
@@ -109,12 +108,8 @@ pub fn prepare<'a>(
     options: &RenderOptions,
 ) -> Result<Prepared<'a>, Failure> {
     let (settings, scene) = crate::render::prepare(&document.scene, options)
-        .map_err(|e| Failure::render(&e, &document.sources))?;
-    let warnings = scene
-        .warnings()
-        .iter()
-        .map(|w| w.to_diagnostic(Severity::Warning))
-        .collect();
+        .map_err(|e| Failure::render(e, &document.sources))?;
+    let warnings = scene.warnings();
     Ok(Prepared {
         scene,
         settings,
@@ -146,7 +141,7 @@ pub fn render(prepared: &Prepared) -> Result<Rendered, Failure> {
         cancel.flag(),
         &mut |_| {},
     )
-    .map_err(|e| Failure::render(&e, prepared.sources))?;
+    .map_err(|e| Failure::render(e, prepared.sources))?;
     Ok(Rendered {
         image: out.image,
         iterations: out.iterations_done,

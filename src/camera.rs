@@ -42,7 +42,7 @@ impl Camera {
         handedness: scene::Handedness,
         width: u32,
         height: u32,
-    ) -> Result<Self, scene::Invalid> {
+    ) -> Result<Self, crate::diag::Diagnostic> {
         c.validate()?;
         let fwd = (c.look_at - c.location).normalize();
         let right = fwd.cross(c.up).normalize();

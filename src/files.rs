@@ -4,11 +4,15 @@
 //! given number of bytes, checked both against the size the file system reports and while
 //! reading (a file that grows meanwhile is cut off and refused).
 //!
-//! Errors are messages fit for a diagnostic; the caller adds the span.
+//! A [`FileError`] keeps the operating system's error (a caller acts on its kind: a missing
+//! file is watched for until it appears); it becomes a diagnostic at the place that named the
+//! file, or with [`FileError::to_diagnostic`] when no source names it.
 
 use std::fs::File;
 use std::io::Read;
 use std::path::Path;
+
+use crate::diag::Diagnostic;
 
 /// Largest scene or include file read: 256 MiB (a generated scene of 100 000 objects is 7 MB).
 pub const MAX_SOURCE_BYTES: u64 = 256 << 20;
@@ -42,6 +46,12 @@ impl FileError {
             FileError::Io(e) => format!("cannot read `{}`: {e}", path.display()),
             FileError::Refused(m) => m.clone(),
         }
+    }
+
+    /// The error about `path` as a diagnostic at no place in the sources (the scene file a
+    /// command line or a library call names).
+    pub fn to_diagnostic(&self, path: &Path) -> Diagnostic {
+        Diagnostic::unplaced(self.with_path(path))
     }
 }
 

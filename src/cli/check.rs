@@ -7,66 +7,48 @@ use std::process::ExitCode;
 
 use sppm_lang::diag::short_number;
 use sppm_lang::render::{
-    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
+    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderOptions,
 };
-use sppm_lang::scene::{Background, ColorParam, Integrator, Light, Scene, Shape};
-use sppm_lang::{EvalOptions, Loaded, Severity, SourceMap};
+use sppm_lang::scene::{Background, ColorParam, Integrator, LightDecl, Scene, ShapeDecl};
+use sppm_lang::{Diagnostic, EvalOptions, Severity, SourceMap};
 
 use super::output::{err, out};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, SizeArgs};
 
-/// Prints the diagnostics of a load to stderr: miette's fancy output on a terminal, plain text
-/// otherwise.
-pub fn print_diagnostics(loaded: &Loaded) {
-    if loaded.diagnostics.is_empty() {
-        return;
-    }
-    if std::io::stderr().is_terminal() {
-        let report = sppm_lang::to_report(&loaded.sources, &loaded.diagnostics);
-        err(&format!("{report:?}\n"));
-    } else {
-        err(&sppm_lang::render_plain(
-            &loaded.sources,
-            &loaded.diagnostics,
-            100,
-        ));
-    }
-}
-
-/// Prints a render failure: as a diagnostic at its span when it has one.
-pub fn print_render_error(sources: &SourceMap, e: &RenderError) {
-    print_render_diagnostic(sources, e, false);
-}
-
-/// A render error or warning, at its span when it has one, else about the whole scene.
-fn print_render_diagnostic(sources: &SourceMap, e: &RenderError, warning: bool) {
-    match e.span {
-        Some(span) if sources.get(span.file).is_some() => {
-            let d = e.to_diagnostic(if warning {
-                Severity::Warning
-            } else {
-                Severity::Error
-            });
-            let loaded = Loaded {
-                diagnostics: vec![d],
-                sources: sources.clone(),
-                ..Loaded::default()
-            };
-            print_diagnostics(&loaded);
+/// Prints diagnostics to stderr: the one place the command line renders them. Those at a place
+/// in the sources show it (miette's fancy output on a terminal, plain text otherwise); those
+/// about no place (a default the file never wrote, an option, the machine) read
+/// `error: <scene file>: message` and their help.
+pub fn print_diagnostics(sources: &SourceMap, diagnostics: &[Diagnostic]) {
+    let (placed, unplaced): (Vec<&Diagnostic>, Vec<&Diagnostic>) = diagnostics
+        .iter()
+        .partition(|d| d.is_placed() && sources.get(d.span.file).is_some());
+    if !placed.is_empty() {
+        let placed: Vec<Diagnostic> = placed.into_iter().cloned().collect();
+        if std::io::stderr().is_terminal() {
+            let report = sppm_lang::to_report(sources, &placed);
+            err(&format!("{report:?}\n"));
+        } else {
+            err(&sppm_lang::render_plain(sources, &placed, 100));
         }
-        // No declaration to point at (e.g. a default the file never wrote): name the file.
-        _ => print_unplaced(sources, if warning { "warning" } else { "error" }, e),
+    }
+    for d in unplaced {
+        print_unplaced(sources, d);
     }
 }
 
 /// A message about the whole scene: `kind: file: message`, then its help.
-fn print_unplaced(sources: &SourceMap, kind: &str, e: &RenderError) {
-    let file = sources.files().first().map(|f| f.name.as_str());
-    match file {
-        Some(f) => err(&format!("{kind}: {f}: {}\n", e.message)),
-        None => err(&format!("{kind}: {}\n", e.message)),
+fn print_unplaced(sources: &SourceMap, d: &Diagnostic) {
+    let kind = match d.severity {
+        Severity::Error => "error",
+        Severity::Warning => "warning",
+        Severity::Note => "note",
+    };
+    match sources.files().first() {
+        Some(f) => err(&format!("{kind}: {}: {}\n", f.name, d.message)),
+        None => err(&format!("{kind}: {}\n", d.message)),
     }
-    if let Some(h) = &e.help {
+    if let Some(h) = &d.help {
         err(&format!("  help: {h}\n"));
     }
 }
@@ -83,13 +65,13 @@ pub struct LoadedScene {
 /// error: it has errors).
 pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, ExitCode> {
     let loaded = sppm_lang::load_file(path, options).map_err(|e| {
-        err(&format!("error: {}\n", e.with_path(path)));
+        print_diagnostics(&SourceMap::new(), &[e.to_diagnostic(path)]);
         ExitCode::from(EXIT_USAGE)
     })?;
     if loaded.interrupted {
         return Err(interrupted());
     }
-    print_diagnostics(&loaded);
+    print_diagnostics(&loaded.sources, &loaded.diagnostics);
     let has_errors = loaded.has_errors();
     match loaded.scene {
         Some(scene) if !has_errors => Ok(LoadedScene {
@@ -109,11 +91,6 @@ fn interrupted() -> ExitCode {
     ExitCode::from(EXIT_SCENE_ERROR)
 }
 
-/// Prints a warning the prepare stage found: at its span, or about the whole scene.
-pub fn print_render_warning(sources: &SourceMap, w: &RenderError) {
-    print_render_diagnostic(sources, w, true);
-}
-
 /// What the prepare stage decided: mesh sizes, the focus distance, the initial radius.
 fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> String {
     let mut out = String::new();
@@ -122,7 +99,7 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
         .objects
         .iter()
         .filter_map(|o| match &o.shape {
-            Shape::Mesh { mesh } => Some(format!(
+            ShapeDecl::Mesh { mesh } => Some(format!(
                 "{} ({} triangle{})",
                 mesh.path.display(),
                 mesh.indices.len(),
@@ -183,14 +160,14 @@ pub fn run(
     let mut loaded = match sppm_lang::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
-            err(&format!("error: {}\n", e.with_path(scene)));
+            print_diagnostics(&SourceMap::new(), &[e.to_diagnostic(scene)]);
             return ExitCode::from(EXIT_USAGE);
         }
     };
     if loaded.interrupted {
         return interrupted();
     }
-    print_diagnostics(&loaded);
+    print_diagnostics(&loaded.sources, &loaded.diagnostics);
     let has_errors = loaded.has_errors();
     // Taken, not copied: a large scene's objects are tens of megabytes.
     match loaded.scene.take() {
@@ -204,13 +181,11 @@ pub fn run(
                 Ok(p) => p,
                 Err(e) if e.interrupted => return interrupted(),
                 Err(e) => {
-                    print_render_error(&loaded.sources, &e);
+                    print_diagnostics(&loaded.sources, &[e]);
                     return ExitCode::from(EXIT_SCENE_ERROR);
                 }
             };
-            for w in prepared.warnings() {
-                print_render_warning(&loaded.sources, &w);
-            }
+            print_diagnostics(&loaded.sources, &prepared.warnings());
             let mut text = summary(&s, loaded.dependencies.len());
             text.push_str(&render_summary(&prepared, &settings));
             out(&text);
@@ -248,7 +223,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     let points = s
         .lights
         .iter()
-        .filter(|l| matches!(l, Light::Point { .. }))
+        .filter(|l| matches!(l, LightDecl::Point { .. }))
         .count();
     let spots = s.lights.len() - points;
     out.push_str(&format!(

@@ -25,7 +25,7 @@ use sppm_lang::film::Image;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::Integrator;
 
-use super::check::{load_scene, print_render_error};
+use super::check::{load_scene, print_diagnostics};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 
 #[derive(Debug, Args)]
@@ -119,7 +119,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
         Err(e) => {
-            print_render_error(&sources, &e);
+            print_diagnostics(&sources, &[e]);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
@@ -133,7 +133,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
         Err(e) => {
-            print_render_error(&sources, &e);
+            print_diagnostics(&sources, &[e]);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };

@@ -12,7 +12,7 @@ use sppm_lang::sampling::chain_seed;
 use sppm_lang::scene::{Integrator, Scene};
 use sppm_lang::{Cancel, RangeOverride, SourceMap};
 
-use super::check::{print_diagnostics, print_render_error, print_render_warning};
+use super::check::print_diagnostics;
 use super::frames::{self, FramePattern};
 use super::identity::SceneId;
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
@@ -144,13 +144,13 @@ pub fn run(args: RenderArgs) -> ExitCode {
     let range = match still.scene.as_ref().filter(|_| !still.has_errors()) {
         Some(s) => sppm_lang::frame_range(&s.settings, &over),
         None => {
-            print_diagnostics(&still);
+            print_diagnostics(&still.sources, &still.diagnostics);
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
     };
     match range {
         Err(e) => {
-            print_diagnostics(&still);
+            print_diagnostics(&still.sources, &still.diagnostics);
             usage(e)
         }
         Ok(Some(_)) if args.chain.is_some() => usage(format!(
@@ -176,7 +176,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
                     args.scene.display()
                 ));
             }
-            print_diagnostics(&still);
+            print_diagnostics(&still.sources, &still.diagnostics);
             let Some(scene) = still.scene.as_ref() else {
                 return ExitCode::from(EXIT_SCENE_ERROR);
             };
@@ -283,7 +283,7 @@ fn animate(
     }
     if !still.animated {
         // Every frame is the still: its warnings are said once.
-        print_diagnostics(&still);
+        print_diagnostics(&still.sources, &still.diagnostics);
         if count > 1 {
             say!(
                 "warning: `{}` reads no animation value (`clock`, `frame_number`, ...): its {count} \
@@ -323,7 +323,7 @@ fn animate(
             return ExitCode::from(EXIT_SCENE_ERROR);
         }
         if still.animated {
-            print_diagnostics(&loaded);
+            print_diagnostics(&loaded.sources, &loaded.diagnostics);
         }
         let Some(scene) = loaded.scene.as_ref().filter(|_| !loaded.has_errors()) else {
             return stopped(k, written);
@@ -457,17 +457,15 @@ fn render_scene(
             snapshot_error = Some(e);
         }
     };
-    let on_warning = |w: &sppm_lang::render::RenderError| {
+    let on_warnings = |w: &[sppm_lang::Diagnostic]| {
         if let Some(b) = &bar {
-            b.suspend(|| print_render_warning(sources, w));
+            b.suspend(|| print_diagnostics(sources, w));
         } else {
-            print_render_warning(sources, w);
+            print_diagnostics(sources, w);
         }
     };
     let result = prepare(scene, &options).and_then(|(settings, prepared)| {
-        for w in prepared.warnings() {
-            on_warning(&w);
-        }
+        on_warnings(&prepared.warnings());
         let out = render_prepared(
             &prepared,
             &settings,
@@ -496,7 +494,7 @@ fn render_scene(
         Ok(o) => o,
         Err(e) if e.interrupted => return Err(interrupted()),
         Err(e) => {
-            print_render_error(sources, &e);
+            print_diagnostics(sources, &[e]);
             return Err(ExitCode::from(EXIT_SCENE_ERROR));
         }
     };
@@ -509,17 +507,15 @@ fn render_scene(
             "no iteration finished within the time limit; `{}` is left as it was",
             output.display()
         );
-        let mut e = sppm_lang::render::RenderError::new(message);
-        e.help = Some(
+        let mut e = sppm_lang::Diagnostic::unplaced(message).with_help(
             "give more time (`time_limit` in the settings or `--time-limit`), or lower the \
-             resolution or photons so that one iteration fits"
-                .into(),
+             resolution or photons so that one iteration fits",
         );
         if args.time_limit.is_none() {
             // The limit came from the scene's settings: point at them.
             e = e.at(scene.settings.span);
         }
-        print_render_error(sources, &e);
+        print_diagnostics(sources, &[e]);
         return Err(ExitCode::from(EXIT_SCENE_ERROR));
     }
     if let Err(e) = write(&out.image, out.iterations_done) {

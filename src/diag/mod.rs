@@ -83,6 +83,8 @@ pub struct Diagnostic {
     pub help: Option<String>,
     /// Innermost first: where the failing code was reached from ("in macro Branch called here").
     pub trace: Vec<(Span, String)>,
+    /// The caller cancelled the work ([`Diagnostic::interrupted`]): not the scene's fault.
+    pub interrupted: bool,
 }
 
 /// The most bytes a diagnostic keeps of its message, a label or its help: a scene can put a
@@ -126,6 +128,21 @@ impl Diagnostic {
             labels: Vec::new(),
             help: None,
             trace: Vec::new(),
+            interrupted: false,
+        }
+    }
+
+    /// An error about no place in the source: a setting the file never wrote, an option of
+    /// the caller, the machine's limits.
+    pub fn unplaced(message: impl Into<String>) -> Self {
+        Self::error(Span::detached(), message)
+    }
+
+    /// The error of work the caller cancelled: the one word "interrupted".
+    pub fn interrupted() -> Self {
+        Self {
+            interrupted: true,
+            ..Self::unplaced("interrupted")
         }
     }
 
@@ -160,6 +177,32 @@ impl Diagnostic {
 
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
+    }
+
+    /// The same diagnostic at `span` (a check that knows the value, its caller the place).
+    pub fn at(self, span: Span) -> Self {
+        Self { span, ..self }
+    }
+
+    /// Whether the span points into a source (not [`Span::detached`]).
+    pub fn is_placed(&self) -> bool {
+        !self.span.is_detached()
+    }
+}
+
+/// The message alone (a log line, a test's assertion); [`render_plain`] draws the span and help.
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Diagnostic {}
+
+/// A stage that fails with one diagnostic passes it on where a list is expected (`?`).
+impl From<Diagnostic> for Vec<Diagnostic> {
+    fn from(d: Diagnostic) -> Self {
+        vec![d]
     }
 }
 

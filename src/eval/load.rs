@@ -110,11 +110,7 @@ pub(super) fn on_eval_thread(
                 Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
                 Err(RecvTimeoutError::Timeout) if cancel.is_cancelled() => {
                     if finished.recv_timeout(CANCEL_GRACE).is_err() && !handle.is_finished() {
-                        return failed(
-                            Diagnostic::error(Span::detached(), "interrupted"),
-                            false,
-                            true,
-                        );
+                        return failed(Diagnostic::interrupted(), false, true);
                     }
                     break;
                 }
@@ -202,8 +198,7 @@ fn run(
     ev.finish_warnings();
     let interrupted = ev.interrupted;
     if interrupted {
-        ev.errors
-            .push(Diagnostic::error(Span::detached(), "interrupted"));
+        ev.errors.push(Diagnostic::interrupted());
     }
     let has_errors = ev.errors.iter().any(Diagnostic::is_error);
     let mut diagnostics = ev.errors;

@@ -87,14 +87,9 @@ pub fn check(path: &Path, world: SharedWorld, cancel: Cancel, limits: &CheckLimi
             ..Default::default()
         };
         match crate::render::prepare(&scene, &options) {
-            Ok((_, prepared)) => found.extend(
-                prepared
-                    .warnings()
-                    .iter()
-                    .map(|w| w.to_diagnostic(Severity::Warning)),
-            ),
+            Ok((_, prepared)) => found.extend(prepared.warnings()),
             Err(e) if e.interrupted => {}
-            Err(e) => found.push(e.to_diagnostic(Severity::Error)),
+            Err(e) => found.push(e),
         }
     }
     let interrupted = loaded.interrupted || cancel.is_cancelled();

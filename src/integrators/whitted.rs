@@ -43,7 +43,7 @@ pub struct Whitted;
 
 impl Integrator for Whitted {
     fn render(&self, job: Job<'_, '_>) -> RenderOutput {
-        if let Some(threshold) = job.settings.adaptive_threshold {
+        if let Some(threshold) = job.settings.adaptive_threshold() {
             return render_adaptive(job, threshold as f32);
         }
         let (scene, settings) = (job.scene, job.settings);
@@ -88,7 +88,7 @@ fn differ(a: (Vec3A, u64), b: (Vec3A, u64), threshold: f32) -> bool {
 /// Whitted ray tracing with adaptive supersampling (see the module doc).
 fn render_adaptive(job: Job<'_, '_>, threshold: f32) -> RenderOutput {
     let (scene, settings, cancel) = (job.scene, job.settings, job.cancel);
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = settings.resolution;
     let camera = scene.camera;
     let seed = settings.seed;
     let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };

@@ -10,10 +10,10 @@
 
 use glam::DAffine3;
 
-use super::RenderError;
 use super::budget::primitives;
 use super::orient::{profile_area, signed_volume};
 use super::shapes::build_shapes;
+use crate::diag::Diagnostic;
 use crate::scene::{self, MAX_CSG_DEPTH, MaterialId, Object, Scene};
 use crate::shapes::csg::{Csg, CsgLeaf, CsgNode};
 use crate::shapes::primitive::AnyShape;
@@ -42,9 +42,9 @@ pub fn ray_cost(csg: &scene::Csg) -> u64 {
 }
 
 /// Refuses a CSG object whose [`ray_cost`] passes [`MAX_CSG_RAY_COST`], at its span.
-pub(super) fn check_costs(scene: &Scene) -> Result<(), RenderError> {
+pub(super) fn check_costs(scene: &Scene) -> Result<(), Diagnostic> {
     for obj in &scene.objects {
-        let scene::Shape::Csg(csg) = &obj.shape else {
+        let scene::ShapeDecl::Csg(csg) = &obj.shape else {
             continue;
         };
         let cost = ray_cost(csg);
@@ -56,24 +56,22 @@ pub(super) fn check_costs(scene: &Scene) -> Result<(), RenderError> {
             .iter()
             .map(|o| primitives(&o.shape))
             .fold(0u64, u64::saturating_add);
-        return Err(RenderError {
-            label: "too costly to intersect".into(),
-            help: Some(
-                "a CSG tests the surfaces of its shapes one by one (every triangle of a mesh): \
-                 use `union` where inner surfaces may stay (its shapes go into the scene's \
-                 acceleration structure), split the object into smaller CSGs, or use meshes \
-                 with fewer triangles"
-                    .into(),
-            ),
-            ..RenderError::new(format!(
+        return Err(Diagnostic::error(
+            obj.span,
+            format!(
                 "this {} would cost up to {cost} surface tests for every ray that meets it \
                  ({} shapes with {surfaces} surfaces), more than the {MAX_CSG_RAY_COST} a CSG \
                  may cost",
                 csg.op.name(),
                 leaves.len(),
-            ))
-        }
-        .at(obj.span));
+            ),
+        )
+        .with_label("too costly to intersect")
+        .with_help(
+            "a CSG tests the surfaces of its shapes one by one (every triangle of a mesh): use \
+             `union` where inner surfaces may stay (its shapes go into the scene's acceleration \
+             structure), split the object into smaller CSGs, or use meshes with fewer triangles",
+        ));
     }
     Ok(())
 }
@@ -99,7 +97,7 @@ fn node(
     parts: &mut Vec<LeafPart>,
 ) -> Result<CsgNode, String> {
     let transform = *parent * obj.transform;
-    if let scene::Shape::Csg(csg) = &obj.shape {
+    if let scene::ShapeDecl::Csg(csg) = &obj.shape {
         let kids = csg
             .children
             .iter()
@@ -122,8 +120,8 @@ fn node(
     };
     let shapes = build_shapes(&leaf)?;
     let flip = match &obj.shape {
-        scene::Shape::Mesh { mesh } => signed_volume(mesh) < 0.0,
-        scene::Shape::Revolve { profile, .. } => profile_area(profile) < 0.0,
+        scene::ShapeDecl::Mesh { mesh } => signed_volume(mesh) < 0.0,
+        scene::ShapeDecl::Revolve { profile, .. } => profile_area(profile) < 0.0,
         _ => false,
     };
     let id = first_id + parts.len() as u32;
@@ -137,7 +135,7 @@ fn node(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{MeshData, Shape};
+    use crate::scene::{MeshData, ShapeDecl};
     use std::sync::Arc;
 
     fn scene(text: &str) -> Scene {
@@ -147,7 +145,7 @@ mod tests {
 
     fn cost_of(s: &Scene) -> u64 {
         match &s.objects[0].shape {
-            Shape::Csg(c) => ray_cost(c),
+            ShapeDecl::Csg(c) => ray_cost(c),
             _ => panic!("not a CSG"),
         }
     }
@@ -185,28 +183,28 @@ mod tests {
             indices: vec![[0, 1, 2]; 10_000],
             ..Default::default()
         });
-        let Shape::Csg(csg) = &mut s.objects[0].shape else {
+        let ShapeDecl::Csg(csg) = &mut s.objects[0].shape else {
             unreachable!()
         };
         let template = csg.children[0].clone();
         let placements = |n: usize| {
             (0..n)
                 .map(|_| Object {
-                    shape: Shape::Mesh { mesh: mesh.clone() },
+                    shape: ShapeDecl::Mesh { mesh: mesh.clone() },
                     ..template.clone()
                 })
                 .collect::<Vec<_>>()
         };
         csg.children = placements(30);
         assert!(check_costs(&s).is_ok(), "{}", cost_of(&s));
-        let Shape::Csg(csg) = &mut s.objects[0].shape else {
+        let ShapeDecl::Csg(csg) = &mut s.objects[0].shape else {
             unreachable!()
         };
         csg.children = placements(100);
         let cost = cost_of(&s);
         assert!(cost >= 3_000_000, "{cost}");
         let e = check_costs(&s).unwrap_err();
-        assert_eq!(e.span, Some(s.objects[0].span));
+        assert_eq!(e.span, s.objects[0].span);
         assert!(
             e.message
                 .contains(&format!("would cost up to {cost} surface tests"))

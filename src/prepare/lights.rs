@@ -3,20 +3,21 @@
 
 use glam::Vec3A;
 
+use super::PreparedScene;
 use super::shapes::v;
-use super::{PreparedScene, RenderError};
 use crate::accel::Bvh;
+use crate::diag::Diagnostic;
 use crate::lights::{EnvironmentLight, GroundPhotons, Light, PointLight, Sky, SpotLight};
 use crate::scene::{self, Scene};
 use crate::shapes::Shape;
 use crate::textures;
 
 /// Appends the scene's point and spot lights to `lights`.
-pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Result<(), RenderError> {
+pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Result<(), Diagnostic> {
     let color3 = |c: glam::DVec3| c.as_vec3a();
     for l in &scene.lights {
         match l {
-            scene::Light::Point {
+            scene::LightDecl::Point {
                 position,
                 intensity,
                 span,
@@ -25,20 +26,20 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                     && intensity.is_finite()
                     && intensity.min_element() >= 0.0)
                 {
-                    return Err(RenderError {
-                        message: "point light: position and intensity must be finite, intensity non-negative".into(),
-                        span: Some(*span),
-                        label: String::new(),
-                        help: Some("give a finite position and an intensity of finite numbers of at least 0".into()),
-                        interrupted: false,
-                    });
+                    return Err(Diagnostic::error(
+                        *span,
+                        "point light: position and intensity must be finite, intensity non-negative",
+                    )
+                    .with_help(
+                        "give a finite position and an intensity of finite numbers of at least 0",
+                    ));
                 }
                 lights.push(Light::Point(PointLight {
                     position: v(*position),
                     intensity: color3(*intensity),
                 }))
             }
-            scene::Light::Spot {
+            scene::LightDecl::Spot {
                 position,
                 direction,
                 intensity,
@@ -58,19 +59,15 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                     && *cone_angle <= 90.0
                     && (0.0..=*cone_angle).contains(falloff_angle))
                 {
-                    return Err(RenderError {
-                        message: "spot light: invalid position, direction, intensity or angle"
-                            .into(),
-                        span: Some(*span),
-                        label: String::new(),
-                        help: Some(
-                            "give a finite position, a non-zero direction, an intensity of at \
-                             least 0, a cone angle in (0, 90] degrees and a falloff from 0 to it \
-                             (as the language does)"
-                                .into(),
-                        ),
-                        interrupted: false,
-                    });
+                    return Err(Diagnostic::error(
+                        *span,
+                        "spot light: invalid position, direction, intensity or angle",
+                    )
+                    .with_help(
+                        "give a finite position, a non-zero direction, an intensity of at least \
+                         0, a cone angle in (0, 90] degrees and a falloff from 0 to it (as the \
+                         language does)",
+                    ));
                 }
                 lights.push(Light::Spot(SpotLight::new(
                     v(*position),
@@ -144,7 +141,7 @@ pub(super) fn ground_photons(
         .enumerate()
         .filter_map(|(prim, &oi)| {
             let o = scene.objects.get(oi as usize)?;
-            let scene::Shape::Plane { normal, offset } = o.shape else {
+            let scene::ShapeDecl::Plane { normal, offset } = o.shape else {
                 return None;
             };
             let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
@@ -168,14 +165,14 @@ pub(super) fn ground_photons(
 /// of its pieces faces anything. The test uses the scene's bounding box, so it never warns
 /// about a light that lights something; a tilted light beside a scene of scattered objects
 /// may go unnamed.
-pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
+pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<Diagnostic> {
     let scene = prepared.scene;
     let b = prepared.bvh.bounds();
     // Infinite planes, as (unit normal, a point), in world space; an unbounded shape that is
     // not a plane object (a CSG part) could be anywhere: then no warning at all.
     let mut planes = Vec::new();
     for o in &scene.objects {
-        if let scene::Shape::Plane { normal, offset } = o.shape {
+        if let scene::ShapeDecl::Plane { normal, offset } = o.shape {
             let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
             planes.push((n, o.transform.transform_point3(normal * offset)));
         }
@@ -242,18 +239,17 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<RenderError> {
         .iter()
         .enumerate()
         .filter(|(_, v)| **v == Some(false))
-        .map(|(oi, _)| RenderError {
-            message: "this area light faces away from everything: it emits only on the side \
-                      its normal points to, and nothing is there"
-                .into(),
-            span: Some(scene.objects[oi].span),
-            label: "lights nothing".into(),
-            help: Some(
-                "turn it around (swap a quad's two edges or a triangle's last two points; \
-                 negate a disk's normal) or add `two_sided`"
-                    .into(),
-            ),
-            interrupted: false,
+        .map(|(oi, _)| {
+            Diagnostic::warning(
+                scene.objects[oi].span,
+                "this area light faces away from everything: it emits only on the side its \
+                 normal points to, and nothing is there",
+            )
+            .with_label("lights nothing")
+            .with_help(
+                "turn it around (swap a quad's two edges or a triangle's last two points; negate \
+                 a disk's normal) or add `two_sided`",
+            )
         })
         .collect()
 }
@@ -272,7 +268,7 @@ mod tests {
         warnings
             .iter()
             .filter(|w| w.message.contains("faces away"))
-            .inspect(|w| assert!(w.span.is_some(), "{}", w.message))
+            .inspect(|w| assert!(w.is_placed(), "{}", w.message))
             .count()
     }
 

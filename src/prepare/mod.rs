@@ -16,6 +16,7 @@ mod sky;
 
 use crate::accel::{self, Bvh};
 use crate::camera::Camera;
+use crate::diag::Diagnostic;
 use crate::geometry::{Frame, Hit, Ray};
 use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light};
 use crate::materials::{Bsdf, Lobes, eval};
@@ -27,7 +28,7 @@ pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as est
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
-    MAX_THREADS, RADIUS_FOOTPRINTS, RenderError, RenderOptions, effective_settings,
+    MAX_THREADS, RADIUS_FOOTPRINTS, RenderOptions, effective_settings,
 };
 use shapes::{build_mesh, build_shapes};
 
@@ -144,12 +145,12 @@ fn color3(c: DVec3) -> Vec3A {
 /// against `options.memory_limit` (default: [`default_memory_limit`]), then the validated,
 /// prepared scene. `check` and `render` both go through here, so they accept the same scenes.
 ///
-/// Fails with [`RenderError::interrupted`] when `options.cancel` is raised: it is checked
+/// Fails with [`Diagnostic::interrupted`] when `options.cancel` is raised: it is checked
 /// between the phases, for every object and inside the BVH build.
 pub fn prepare<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
-) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
+) -> Result<(EffectiveSettings, PreparedScene<'a>), Diagnostic> {
     prepare_until(scene, options, &|| options.cancel.is_cancelled())
 }
 
@@ -158,7 +159,7 @@ pub(crate) fn prepare_until<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
     stop: Stop,
-) -> Result<(EffectiveSettings, PreparedScene<'a>), RenderError> {
+) -> Result<(EffectiveSettings, PreparedScene<'a>), Diagnostic> {
     unless(stop)?;
     // `PreparedScene::new` validates the scene (once); the estimate before it only counts.
     let settings = effective_settings(scene, options).map_err(|e| e.at(scene.settings.span))?;
@@ -168,7 +169,7 @@ pub(crate) fn prepare_until<'a>(
     let limit = options.memory_limit.unwrap_or_else(default_memory_limit);
     check_memory(scene, &settings, limit, options.held_memory)
         .map_err(|e| e.at(scene.settings.span))?;
-    let prepared = PreparedScene::new_sized(scene, (settings.width, settings.height), stop)?;
+    let prepared = PreparedScene::new_sized(scene, settings.resolution, stop)?;
     Ok((settings, prepared))
 }
 
@@ -178,18 +179,18 @@ const PARALLEL_SHAPES: usize = 4096;
 /// What the prepare stage asks to learn whether the caller cancelled.
 pub type Stop<'s> = &'s (dyn Fn() -> bool + Sync);
 
-/// [`RenderError::interrupted`] once `stop` says so.
-fn unless(stop: Stop) -> Result<(), RenderError> {
+/// [`Diagnostic::interrupted`] once `stop` says so.
+fn unless(stop: Stop) -> Result<(), Diagnostic> {
     if stop() {
-        Err(RenderError::interrupted())
+        Err(Diagnostic::interrupted())
     } else {
         Ok(())
     }
 }
 
 /// How to mend a shape that cannot be built (the evaluator catches most of these first).
-fn shape_help(shape: &scene::Shape) -> &'static str {
-    use scene::Shape as S;
+fn shape_help(shape: &scene::ShapeDecl) -> &'static str {
+    use scene::ShapeDecl as S;
     match shape {
         S::Triangle { .. } => "give three points that do not lie on one line",
         S::Box { .. } => {
@@ -205,35 +206,34 @@ fn shape_help(shape: &scene::Shape) -> &'static str {
 }
 
 impl<'a> PreparedScene<'a> {
-    /// What is legal but probably not what the author meant, as render errors used as
-    /// warnings (message and help): a scene with nothing that emits light, and a one-sided
-    /// flat light that faces away from everything.
-    pub fn warnings(&self) -> Vec<RenderError> {
+    /// What is legal but probably not what the author meant, as warnings: a scene with
+    /// nothing that emits light, and a one-sided flat light that faces away from everything.
+    pub fn warnings(&self) -> Vec<Diagnostic> {
         let mut out = lights::facing_away(self);
         if self.lights.is_empty() {
-            out.push(RenderError {
-                help: Some(
-                    "add a `light { <position> intensity <color> }`, an `area_light { ... }`, \
-                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }` (a \
-                     `backdrop` is only seen, it lights nothing)"
-                        .into(),
-                ),
-                ..RenderError::new(
+            out.push(
+                Diagnostic::warning(
+                    crate::span::Span::detached(),
                     "the scene has no light: no light source, no emitting object and a black \
                      background, so its objects render black",
                 )
-            });
+                .with_help(
+                    "add a `light { <position> intensity <color> }`, an `area_light { ... }`, \
+                     a `background rgb <...>` or an `environment { image \"sky.hdr\" }` (a \
+                     `backdrop` is only seen, it lights nothing)",
+                ),
+            );
         }
         out
     }
 
-    pub fn new(scene: &'a Scene) -> Result<Self, RenderError> {
+    pub fn new(scene: &'a Scene) -> Result<Self, Diagnostic> {
         Self::new_until(scene, &|| false)
     }
 
-    /// [`PreparedScene::new`], stopping with [`RenderError::interrupted`] when `stop` says so
+    /// [`PreparedScene::new`], stopping with [`Diagnostic::interrupted`] when `stop` says so
     /// (asked between phases, for every object, and inside the BVH build).
-    pub fn new_until(scene: &'a Scene, stop: Stop) -> Result<Self, RenderError> {
+    pub fn new_until(scene: &'a Scene, stop: Stop) -> Result<Self, Diagnostic> {
         Self::new_sized(scene, scene.settings.resolution, stop)
     }
 
@@ -243,7 +243,7 @@ impl<'a> PreparedScene<'a> {
         scene: &'a Scene,
         (width, height): (u32, u32),
         stop: Stop,
-    ) -> Result<Self, RenderError> {
+    ) -> Result<Self, Diagnostic> {
         unless(stop)?;
         // From counts, before validation reads a CSG's meshes once per placement.
         csg::check_costs(scene)?;
@@ -263,21 +263,16 @@ impl<'a> PreparedScene<'a> {
         for (oi, obj) in scene.objects.iter().enumerate() {
             // Each object can be a CSG tree's set-up or a mesh of millions of triangles.
             unless(stop)?;
-            let err = |message: String| RenderError {
-                message: format!("{}: {message}", obj.shape.kind()),
-                span: Some(obj.span),
-                label: String::new(),
-                help: Some(shape_help(&obj.shape).into()),
-                interrupted: false,
+            let err = |message: String| {
+                Diagnostic::error(obj.span, format!("{}: {message}", obj.shape.kind()))
+                    .with_help(shape_help(&obj.shape))
             };
             if obj.material.0 as usize >= scene.materials.len() {
-                return Err(RenderError {
-                    help: Some("refer to an entry of `Scene::materials`".into()),
-                    ..err("unknown material".into())
-                });
+                return Err(err("unknown material".into())
+                    .with_help("refer to an entry of `Scene::materials`"));
             }
             objects.push(ObjectInfo::new(obj.material, &obj.transform));
-            if let scene::Shape::Csg(_) = &obj.shape {
+            if let scene::ShapeDecl::Csg(_) = &obj.shape {
                 // One primitive; its leaves have ids (and objects) of their own.
                 let id = prim_object.len() as u32;
                 let (shape, parts) = csg::build_csg(obj, id + 1).map_err(err)?;
@@ -286,10 +281,8 @@ impl<'a> PreparedScene<'a> {
                 prim_light.push(NO_LIGHT);
                 for part in parts {
                     if part.material.0 as usize >= scene.materials.len() {
-                        return Err(RenderError {
-                            help: Some("refer to an entry of `Scene::materials`".into()),
-                            ..err("unknown material".into())
-                        });
+                        return Err(err("unknown material".into())
+                            .with_help("refer to an entry of `Scene::materials`"));
                     }
                     prim_object.push((scene.objects.len() + csg_parts.len()) as u32);
                     prim_light.push(NO_LIGHT);
@@ -314,14 +307,12 @@ impl<'a> PreparedScene<'a> {
             if let Some(e) = obj.emission
                 && !(e.radiance.is_finite() && e.radiance.min_element() >= 0.0)
             {
-                return Err(RenderError {
-                    help: Some("give a radiance of finite numbers of at least 0".into()),
-                    ..err("emission must be finite and non-negative".into())
-                });
+                return Err(err("emission must be finite and non-negative".into())
+                    .with_help("give a radiance of finite numbers of at least 0"));
             }
             // A mesh that is neither instanced nor a light: one primitive, its triangles kept
             // in the BVH's compact form.
-            if let (None, None, scene::Shape::Mesh { mesh }) = (&placed, emission, &obj.shape) {
+            if let (None, None, scene::ShapeDecl::Mesh { mesh }) = (&placed, emission, &obj.shape) {
                 meshes.push((
                     build_mesh(obj, mesh, faces_in).map_err(err)?,
                     prim_object.len() as u32,
@@ -365,18 +356,15 @@ impl<'a> PreparedScene<'a> {
                     let ls = ls.next().expect("same shapes twice");
                     let area = ls.area();
                     if !(area.is_finite() && area > 0.0) || ls.sample(glam::Vec2::ZERO).is_none() {
-                        return Err(RenderError {
-                            help: Some(
-                                "make the light a finite shape (a quad, disk, sphere, ...) under \
-                                 translate, rotate and uniform scale only"
-                                    .into(),
-                            ),
-                            ..err(
-                                "this emissive shape cannot be sampled as a light (infinite, or \
-                                 a transform other than translate/rotate/uniform scale)"
-                                    .into(),
-                            )
-                        });
+                        return Err(err(
+                            "this emissive shape cannot be sampled as a light (infinite, or a \
+                             transform other than translate/rotate/uniform scale)"
+                                .into(),
+                        )
+                        .with_help(
+                            "make the light a finite shape (a quad, disk, sphere, ...) under \
+                             translate, rotate and uniform scale only",
+                        ));
                     }
                     light = lights.len() as u32;
                     lights.push(Light::Area(AreaLight {
@@ -396,7 +384,7 @@ impl<'a> PreparedScene<'a> {
         lights::push_scene_lights(scene, &mut lights)?;
         unless(stop)?;
         let bvh =
-            Bvh::with_meshes_until(shapes, meshes, stop).ok_or_else(RenderError::interrupted)?;
+            Bvh::with_meshes_until(shapes, meshes, stop).ok_or_else(Diagnostic::interrupted)?;
         unless(stop)?;
         let environment = lights::push_environment(scene, &bvh, &mut lights);
         unless(stop)?;
@@ -793,7 +781,7 @@ mod tests {
         assert!(absorbing_kept > 300, "{absorbing_kept}");
     }
 
-    /// The caller's cancel stops the prepare stage with [`RenderError::interrupted`]: raised
+    /// The caller's cancel stops the prepare stage with [`Diagnostic::interrupted`]: raised
     /// before it, and asked midway through the objects and inside the BVH build (a stop that
     /// says yes from its n-th question on).
     #[test]

@@ -1,9 +1,8 @@
 //! The settings a render uses: the scene's `settings` with the command line's overrides applied,
 //! checked once here.
 
-use crate::diag::{Diagnostic, Severity};
-use crate::scene::{Antialias, Integrator, Scene};
-use crate::span::Span;
+use crate::diag::Diagnostic;
+use crate::scene::{Antialias, Integrator, Scene, Settings};
 
 pub use crate::scene::{MAX_ITERATIONS, MAX_PHOTONS};
 /// Most worker threads ([`RenderOptions::threads`]).
@@ -29,92 +28,49 @@ pub struct RenderOptions {
     /// counted in the estimate against `memory_limit`.
     pub held_memory: Option<super::MemoryItem>,
     /// Raised by the caller to stop: [`super::prepare`] checks it between its phases, per
-    /// object and inside the BVH build, and fails with [`RenderError::interrupted`]; the
+    /// object and inside the BVH build, and fails with [`Diagnostic::interrupted`]; the
     /// render's passes stop as for their own cancel flag.
     pub cancel: crate::cancel::Cancel,
 }
 
-/// The settings a render actually uses (scene settings with the options applied).
+/// The settings a render actually uses: the scene's [`Settings`] with the options applied
+/// (resolution, integrator, iterations, photons, seed, time limit) and `max_depth` clamped to
+/// 1..=1024. It reads as those settings (`settings.iterations`, through `Deref`); what is
+/// derived from them is a method ([`EffectiveSettings::width`], ...).
 #[derive(Debug, Clone, PartialEq)]
-pub struct EffectiveSettings {
-    pub width: u32,
-    pub height: u32,
-    pub iterations: u32,
-    /// Photons per iteration; `None`: chosen by the integrator.
-    pub photons: Option<u64>,
-    pub radius: Option<f64>,
-    /// Scale of the default initial radius (the rule of [`InitialRadius::Footprint`]): 1 in a
-    /// render; `sppm-lang chart` varies it to compare radii.
-    pub radius_scale: f64,
-    pub alpha: f64,
-    pub max_depth: u32,
-    pub seed: u64,
-    pub integrator: Integrator,
-    pub time_limit: Option<f64>,
+pub struct EffectiveSettings(Settings);
+
+impl std::ops::Deref for EffectiveSettings {
+    type Target = Settings;
+    fn deref(&self) -> &Settings {
+        &self.0
+    }
+}
+
+/// Tests and tools vary one setting of a checked set (`settings.seed = 2`).
+impl std::ops::DerefMut for EffectiveSettings {
+    fn deref_mut(&mut self) -> &mut Settings {
+        &mut self.0
+    }
+}
+
+impl EffectiveSettings {
+    /// Image width in pixels.
+    pub fn width(&self) -> u32 {
+        self.resolution.0
+    }
+
+    /// Image height in pixels.
+    pub fn height(&self) -> u32 {
+        self.resolution.1
+    }
+
     /// `whitted`'s adaptive anti-aliasing threshold (`antialias adaptive`); `None`: jitter only.
-    pub adaptive_threshold: Option<f64>,
-    /// SPPM's final gathering (`final_gather on`).
-    pub final_gather: bool,
-}
-
-/// A render failure; `span` points at the declaration that caused it when there is one.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{message}")]
-pub struct RenderError {
-    pub message: String,
-    pub span: Option<Span>,
-    /// What the span's label says (empty: none).
-    pub label: String,
-    /// A suggested fix.
-    pub help: Option<String>,
-    /// The caller cancelled the work ([`RenderOptions::cancel`]): not the scene's fault.
-    pub interrupted: bool,
-}
-
-impl RenderError {
-    pub fn new(message: impl Into<String>) -> Self {
-        Self {
-            message: message.into(),
-            span: None,
-            label: String::new(),
-            help: None,
-            interrupted: false,
-        }
-    }
-
-    /// The error of work the caller cancelled.
-    pub fn interrupted() -> Self {
-        Self {
-            interrupted: true,
-            ..Self::new("interrupted")
-        }
-    }
-
-    /// The error at `span` (none when it is detached).
-    pub fn at(mut self, span: Span) -> Self {
-        self.span = (!span.is_detached()).then_some(span);
-        self
-    }
-
-    /// The error as a diagnostic of `severity` (a prepared scene's warnings are warnings).
-    pub fn to_diagnostic(&self, severity: Severity) -> Diagnostic {
-        let span = self.span.unwrap_or_else(Span::detached);
-        Diagnostic {
-            severity,
-            label: self.label.clone(),
-            help: self.help.clone(),
-            ..Diagnostic::error(span, self.message.clone())
-        }
-    }
-}
-
-impl From<crate::scene::Invalid> for RenderError {
-    fn from(e: crate::scene::Invalid) -> Self {
-        Self {
-            label: e.label,
-            help: Some(e.help),
-            ..RenderError::new(e.message).at(e.span)
-        }
+    pub fn adaptive_threshold(&self) -> Option<f64> {
+        (self.antialias == Antialias::Adaptive).then(|| {
+            self.antialias_threshold
+                .unwrap_or(Antialias::DEFAULT_THRESHOLD)
+        })
     }
 }
 
@@ -181,10 +137,10 @@ impl EffectiveSettings {
             return InitialRadius::Fixed(r * self.radius_scale);
         }
         if camera.orthographic {
-            let pixel = camera.up.length() / f64::from(self.height.max(1));
+            let pixel = camera.up.length() / f64::from(self.height().max(1));
             return InitialRadius::Orthographic(RADIUS_FOOTPRINTS * pixel * self.radius_scale);
         }
-        let pixel = 2.0 * (0.5 * camera.fov.to_radians()).tan() / f64::from(self.height.max(1));
+        let pixel = 2.0 * (0.5 * camera.fov.to_radians()).tan() / f64::from(self.height().max(1));
         InitialRadius::Footprint {
             per_distance: RADIUS_FOOTPRINTS * pixel * self.radius_scale,
         }
@@ -196,7 +152,7 @@ use crate::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE as MAX_SIDE};
 pub fn effective_settings(
     scene: &Scene,
     o: &RenderOptions,
-) -> Result<EffectiveSettings, RenderError> {
+) -> Result<EffectiveSettings, Diagnostic> {
     let s = &scene.settings;
     let (width, height) = o.resolution.unwrap_or(s.resolution);
     if width == 0
@@ -205,7 +161,7 @@ pub fn effective_settings(
         || height > MAX_SIDE
         || width as u64 * height as u64 > MAX_PIXELS
     {
-        return Err(RenderError::new(format!(
+        return Err(Diagnostic::unplaced(format!(
             "resolution {width}x{height} is out of range (1..={MAX_SIDE} per side, at most {MAX_PIXELS} pixels)"
         )));
     }
@@ -215,42 +171,38 @@ pub fn effective_settings(
     if let Some(t) = o.time_limit
         && !(t > 0.0 && t.is_finite())
     {
-        return Err(RenderError::new(format!(
+        return Err(Diagnostic::unplaced(format!(
             "time limit must be a positive number of seconds, got {t}"
         )));
     }
     if let Some(n) = o.threads
         && !(1..=MAX_THREADS).contains(&n)
     {
-        return Err(RenderError::new(format!(
+        return Err(Diagnostic::unplaced(format!(
             "threads must be from 1 to {MAX_THREADS}, got {n}"
         )));
     }
     // More iterations only under a time limit, which then ends the render (`reference`).
     let iterations = o.iterations.unwrap_or(s.iterations);
     if iterations == 0 || (iterations > MAX_ITERATIONS && time_limit.is_none()) {
-        return Err(RenderError {
-            help: Some(format!(
-                "ask for 1 to {MAX_ITERATIONS} iterations, or set a time limit to end the render"
-            )),
-            ..RenderError::new(format!(
-                "iterations must be from 1 to {MAX_ITERATIONS}, got {iterations}"
-            ))
-        });
+        return Err(Diagnostic::unplaced(format!(
+            "iterations must be from 1 to {MAX_ITERATIONS}, got {iterations}"
+        ))
+        .with_help(format!(
+            "ask for 1 to {MAX_ITERATIONS} iterations, or set a time limit to end the render"
+        )));
     }
     // 0 is allowed: methods without photons are run with it.
     let photons = o.photons.or(s.photons);
     if let Some(n) = photons
         && n > MAX_PHOTONS
     {
-        return Err(RenderError {
-            help: Some(format!(
-                "ask for at most {MAX_PHOTONS} photons per iteration (more iterations add more)"
-            )),
-            ..RenderError::new(format!(
-                "photons per iteration must be at most {MAX_PHOTONS}, got {n}"
-            ))
-        });
+        return Err(Diagnostic::unplaced(format!(
+            "photons per iteration must be at most {MAX_PHOTONS}, got {n}"
+        ))
+        .with_help(format!(
+            "ask for at most {MAX_PHOTONS} photons per iteration (more iterations add more)"
+        )));
     }
     let integrator = o.integrator.unwrap_or(s.integrator);
     // Light tracing connects scene points to the lens; an orthographic camera's rays are
@@ -261,33 +213,22 @@ pub fn effective_settings(
             Integrator::Vcm | Integrator::Bpt | Integrator::Lt
         )
     {
-        return Err(RenderError {
-            help: Some(
-                "render an orthographic view with `sppm`, `path`, `ppm`, `photon_map` or `whitted`"
-                    .into(),
-            ),
-            ..RenderError::new(format!(
-                "`{}` connects light paths to the camera, which an orthographic camera cannot take",
-                integrator.name()
-            ))
-        });
+        return Err(Diagnostic::unplaced(format!(
+            "`{}` connects light paths to the camera, which an orthographic camera cannot take",
+            integrator.name()
+        ))
+        .with_help(
+            "render an orthographic view with `sppm`, `path`, `ppm`, `photon_map` or `whitted`",
+        ));
     }
-    Ok(EffectiveSettings {
-        width,
-        height,
+    Ok(EffectiveSettings(Settings {
+        resolution: (width, height),
         iterations,
         photons,
-        radius: s.radius,
-        radius_scale: s.radius_scale,
-        alpha: s.alpha,
         max_depth: s.max_depth.clamp(1, 1024),
         seed: o.seed.unwrap_or(s.seed),
         integrator,
         time_limit,
-        adaptive_threshold: (s.antialias == Antialias::Adaptive).then(|| {
-            s.antialias_threshold
-                .unwrap_or(Antialias::DEFAULT_THRESHOLD)
-        }),
-        final_gather: s.final_gather,
-    })
+        ..s.clone()
+    }))
 }

@@ -2,7 +2,7 @@
 //! overridable settings, report progress per iteration, stop promptly on cancel.
 //!
 //! The caller's [`RenderOptions::cancel`] and the `cancel` flag of these functions stop the
-//! work alike: the prepare stage with [`RenderError::interrupted`], the passes as described
+//! work alike: the prepare stage with [`Diagnostic::interrupted`], the passes as described
 //! below.
 //!
 //! A time limit is a deadline: when it passes, the iteration in flight is abandoned like a
@@ -11,13 +11,14 @@
 
 pub use crate::integrators::{Progress, RenderOutput, RenderStats};
 pub use crate::prepare::{
-    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderError, RenderOptions,
-    SurfaceHit, effective_settings, prepare,
+    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderOptions, SurfaceHit,
+    effective_settings, prepare,
 };
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use crate::diag::Diagnostic;
 use crate::integrators;
 use crate::scene::Scene;
 
@@ -29,7 +30,7 @@ pub fn render(
     options: &RenderOptions,
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> Result<RenderOutput, RenderError> {
+) -> Result<RenderOutput, Diagnostic> {
     render_with_warnings(scene, options, cancel, &mut |_| {}, on_progress)
 }
 
@@ -39,9 +40,9 @@ pub fn render_with_warnings(
     scene: &Scene,
     options: &RenderOptions,
     cancel: &AtomicBool,
-    on_warning: &mut dyn FnMut(&RenderError),
+    on_warning: &mut dyn FnMut(&Diagnostic),
     on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> Result<RenderOutput, RenderError> {
+) -> Result<RenderOutput, Diagnostic> {
     let stop = || options.cancel.is_cancelled() || cancel.load(Ordering::Relaxed);
     let (settings, prepared) = crate::prepare::prepare_until(scene, options, &stop)?;
     for w in prepared.warnings() {
@@ -59,7 +60,7 @@ pub fn render_prepared(
     options: &RenderOptions,
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
-) -> Result<RenderOutput, RenderError> {
+) -> Result<RenderOutput, Diagnostic> {
     let integrator = integrators::for_method(settings.integrator);
     let deadline = settings
         .time_limit
@@ -122,7 +123,7 @@ pub fn render_prepared(
                 .num_threads(n)
                 .build()
                 .map(|pool| pool.install(&mut run))
-                .map_err(|e| RenderError::new(format!("cannot start {n} threads: {e}"))),
+                .map_err(|e| Diagnostic::unplaced(format!("cannot start {n} threads: {e}"))),
             None => Ok(run()),
         }
     });

@@ -22,7 +22,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("span", &[]),
     ("diag", &["span"]),
     ("atomic_file", &[]),
-    ("files", &[]),
+    ("files", &["diag"]),
     // Where a load's files come from (the disk, or memory).
     ("world", &["files"]),
     // The caller's cancel handle, read by every stage that can take long.
@@ -50,7 +50,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         &["geometry", "sampling", "shapes", "textures", "scene"],
     ),
     ("lights", &["geometry", "sampling", "shapes", "textures"]),
-    ("camera", &["geometry", "sampling", "scene"]),
+    ("camera", &["diag", "geometry", "sampling", "scene"]),
     ("film", &["atomic_file"]),
     // The stages.
     (

@@ -2,8 +2,9 @@
 //! scene with a few settings changed; how each is drawn; and their validation, which runs
 //! before any of them renders.
 
+use sppm_lang::Diagnostic;
 use sppm_lang::chart::Dash;
-use sppm_lang::render::{RenderError, RenderOptions, prepare};
+use sppm_lang::render::{RenderOptions, prepare};
 use sppm_lang::scene::{DEFAULT_PHOTONS, Integrator, Scene};
 
 /// A method on the chart: an integrator and its parameter changes, and how it is drawn.
@@ -109,8 +110,8 @@ impl Method {
 /// that a method the render would refuse stops the chart before it spends the budgets of the
 /// others. One error per refused method, naming it, with the span kept (the scene's
 /// `settings`); the help names the methods that pass.
-pub fn validate(chosen: &[(Method, Scene)], options: &RenderOptions) -> Vec<RenderError> {
-    let results: Vec<Result<(), RenderError>> = chosen
+pub fn validate(chosen: &[(Method, Scene)], options: &RenderOptions) -> Vec<Diagnostic> {
+    let results: Vec<Result<(), Diagnostic>> = chosen
         .iter()
         .map(|(_, scene)| prepare(scene, options).map(|_| ()))
         .collect();
@@ -139,7 +140,7 @@ pub fn validate(chosen: &[(Method, Scene)], options: &RenderOptions) -> Vec<Rend
                 (None, false) => Some(leave_out.clone()),
                 (None, true) => None,
             };
-            RenderError {
+            Diagnostic {
                 message: format!(
                     "the chart's method `{}` ({}) cannot render this scene: {}",
                     m.label,
@@ -234,7 +235,7 @@ mod tests {
             e.message
         );
         assert!(e.message.contains("at most 100000000000"), "{}", e.message);
-        assert!(e.span.is_some(), "the settings block is where it points");
+        assert!(e.is_placed(), "the settings block is where it points");
         let help = e.help.as_deref().unwrap();
         assert!(help.contains("--methods sppm`"), "{help}");
         // Every method is checked: photon mapping stores its photons, too many for memory.

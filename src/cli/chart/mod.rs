@@ -23,10 +23,10 @@ use std::process::ExitCode;
 use clap::Args;
 use sppm_lang::SourceMap;
 use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
-use sppm_lang::render::{InitialRadius, RenderError, RenderOptions, effective_settings};
+use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings};
 use sppm_lang::scene::{ColorSpace, Scene, load_image};
 
-use super::check::{print_diagnostics, print_render_error};
+use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
 use methods::{Method, methods, parse_methods, rank_of, style_of};
@@ -163,7 +163,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
     let reference = load_image(reference_path, ColorSpace::Linear)?;
     let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
         .map_err(|e| e.with_path(scene_path))?;
-    print_diagnostics(&loaded);
+    print_diagnostics(&loaded.sources, &loaded.diagnostics);
     let mut scene = match &loaded.scene {
         Some(s) if !loaded.has_errors() => s.clone(),
         _ => return Ok(ExitCode::from(super::check::failure_code(&loaded))),
@@ -199,7 +199,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
             }
         },
         Err(e) => {
-            print_render_error(&loaded.sources, &e.at(scene.settings.span));
+            print_diagnostics(&loaded.sources, &[e.at(scene.settings.span)]);
             return Ok(ExitCode::from(EXIT_SCENE_ERROR));
         }
     };
@@ -213,9 +213,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         .collect();
     let refused = methods::validate(&chosen, &options);
     if !refused.is_empty() {
-        for e in &refused {
-            print_render_error(&loaded.sources, e);
-        }
+        print_diagnostics(&loaded.sources, &refused);
         return Ok(ExitCode::from(EXIT_SCENE_ERROR));
     }
     let stop = Stop::on_interrupt();
@@ -282,11 +280,11 @@ fn finish(
             })
         }
         Failure::Render(e) => {
-            let e = RenderError {
+            let e = sppm_lang::Diagnostic {
                 message: format!("the chart's method `{label}` failed: {}", e.message),
                 ..e
             };
-            print_render_error(sources, &e);
+            print_diagnostics(sources, &[e]);
             say!("chart: {kept}");
             Ok(ExitCode::from(EXIT_SCENE_ERROR))
         }

@@ -5,9 +5,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use sppm_lang::Diagnostic;
 use sppm_lang::compare::{ImageView, Window, error};
 use sppm_lang::film::Image;
-use sppm_lang::render::{RenderError, RenderOptions, render};
+use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::Scene;
 
 use super::methods::Method;
@@ -19,7 +20,7 @@ pub enum Failure {
     /// Ctrl-C or SIGTERM during its render.
     Interrupted,
     /// Its render failed (after the validation every method passed).
-    Render(RenderError),
+    Render(Diagnostic),
     /// Its measurement failed.
     Other(String),
 }

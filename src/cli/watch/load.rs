@@ -46,7 +46,7 @@ pub fn load(path: &Path, options: &EvalOptions, frame: Option<(&RangeOverride, u
     match loaded {
         Ok(loaded) => {
             if !loaded.interrupted {
-                print_diagnostics(&loaded);
+                print_diagnostics(&loaded.sources, &loaded.diagnostics);
             }
             let scene = if loaded.has_errors() {
                 None

@@ -12,7 +12,7 @@ use sppm_lang::film::Image;
 use sppm_lang::render::{self, RenderOptions};
 use sppm_lang::scene::Scene;
 
-use super::super::check::{print_render_error, print_render_warning};
+use super::super::check::print_diagnostics;
 use super::super::live::{self, Hub};
 use super::kept::{OnDisk, Written};
 use super::{Job, Outcome, status};
@@ -159,16 +159,14 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
         };
         // Warnings of the prepared scene: once per round (the preview's), to the terminal and
         // the page.
-        let mut on_warning = |w: &render::RenderError| {
+        let mut on_warning = |w: &sppm_lang::Diagnostic| {
             if stage == "full" && r.preview {
                 return;
             }
-            print_render_warning(&r.sources, w);
+            let w = std::slice::from_ref(w);
+            print_diagnostics(&r.sources, w);
             if let Some(hub) = &r.hub {
-                let mut view = live::diagnostics_view(&r.sources, &[render_error_diagnostic(w)]);
-                for v in &mut view {
-                    v.error = false;
-                }
+                let view = live::diagnostics_view(&r.sources, w);
                 hub.update(|s| s.diagnostics.extend(view));
             }
         };
@@ -227,11 +225,11 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
             // Cancelled while preparing (a change, Ctrl-C): no image, as before any iteration.
             Err(e) if e.interrupted => return Outcome::Cancelled,
             Err(e) => {
-                print_render_error(&r.sources, &e);
+                let e = [e];
+                print_diagnostics(&r.sources, &e);
                 status(&format!("render #{number} failed"));
                 if let Some(hub) = &r.hub {
-                    let d = render_error_diagnostic(&e);
-                    let view = live::diagnostics_view(&r.sources, &[d]);
+                    let view = live::diagnostics_view(&r.sources, &e);
                     hub.update(|s| {
                         s.state = "failed";
                         s.message = format!("render #{number} failed");
@@ -245,11 +243,6 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
     }
     status("waiting for changes");
     Outcome::Finished
-}
-
-/// A render failure as a diagnostic (at its span when it has one).
-fn render_error_diagnostic(e: &render::RenderError) -> sppm_lang::Diagnostic {
-    e.to_diagnostic(sppm_lang::Severity::Error)
 }
 
 /// `image` scaled to `size` by nearest neighbour (each preview pixel becomes a block).

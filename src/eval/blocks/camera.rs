@@ -57,9 +57,7 @@ impl CameraBuilder {
         }
         // The scene's own check (the one `prepare` runs), reported here at the block.
         if let Err(e) = self.camera.validate() {
-            return Err(vec![
-                Error::new(e.message).label(e.label).help(e.help).at(span),
-            ]);
+            return Err(vec![e.at(span)]);
         }
         Ok(Value::Camera(Box::new(self.camera)))
     }

@@ -2,7 +2,7 @@
 
 use super::Sink;
 use crate::diag::short_number;
-use crate::diag::{At, Error, SourceResult};
+use crate::diag::{At, SourceResult};
 use crate::eval::Evaluator;
 use crate::eval::args::{Arg, count, num, positive, range_error, word};
 use crate::eval::props::{PropSpec, p, w};
@@ -55,9 +55,7 @@ impl SettingsBuilder {
         if self.0.antialias_threshold.is_some()
             && let Err(e) = self.0.validate()
         {
-            return Err(vec![
-                Error::new(e.message).label(e.label).help(e.help).at(span),
-            ]);
+            return Err(vec![e.at(span)]);
         }
         Ok(Value::Settings(Box::new(self.0)))
     }

@@ -58,7 +58,7 @@ pub(crate) fn iterate<S>(
             break;
         };
         done = iter + 1;
-        stats.camera_paths += u64::from(settings.width * settings.height);
+        stats.camera_paths += u64::from(settings.width() * settings.height());
         stats.photons += finished.photons;
         stats.deposits += finished.deposits;
         let state_ref = &state;
@@ -107,7 +107,7 @@ pub(crate) fn render_means(
         on_progress,
         ..
     } = job;
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = settings.resolution;
     let sums = vec![DVec3::ZERO; (w * h) as usize];
     let pass = |sums: &mut Vec<DVec3>, iter: u32, stats: &mut RenderStats| {
         let (values, photons) = values(iter, stats)?;
@@ -132,7 +132,7 @@ pub(crate) fn render<T: Sync>(
     pixel: impl Fn(&T, &Camera, u32, u32, &mut Rng) -> Vec3A + Sync,
 ) -> RenderOutput {
     let (settings, cancel) = (job.settings, job.cancel);
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = settings.resolution;
     let camera = job.scene.camera;
     render_means(job, |iter, stats| {
         let t_setup = Instant::now();

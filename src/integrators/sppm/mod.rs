@@ -113,7 +113,7 @@ pub(crate) fn render_with(
         cancel,
         on_progress,
     } = job;
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = settings.resolution;
     let camera = scene.camera;
     let initial_radius = settings.initial_radius(&scene.scene.camera);
     // A pixel's radius is chosen at its first visible point (0 until then).

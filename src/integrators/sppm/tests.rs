@@ -26,7 +26,7 @@ fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
 
 /// The camera pass of iteration `iter` (seed 4), every radius 0.05.
 fn visible_points(prepared: &PreparedScene, settings: &EffectiveSettings, iter: u32) -> Vec<Pixel> {
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = settings.resolution;
     let camera = Camera::new(
         &prepared.scene.camera,
         prepared.scene.settings.handedness,
@@ -381,17 +381,12 @@ fn moving_look_at_along_the_line_of_sight_leaves_the_image_as_it_is() {
 /// only, whose noise the extra samples leave as it is, and the first iteration has none).
 #[test]
 fn extra_camera_samples_calm_the_light_edge() {
-    let (scene, settings) = cornell(64, 20_000);
-    let settings = EffectiveSettings {
-        iterations: 8,
-        ..settings
-    };
+    let (scene, mut settings) = cornell(64, 20_000);
+    settings.iterations = 8;
     let prepared = PreparedScene::new(&scene).unwrap();
     let render = |seed: u64, balanced: bool| {
-        let settings = EffectiveSettings {
-            seed,
-            ..settings.clone()
-        };
+        let mut settings = settings.clone();
+        settings.seed = seed;
         image_of(&prepared, &settings, balanced)
     };
     // The light spans about columns 26-38 and rows 8-11 at 64 px: the window is it and its edge.
@@ -486,7 +481,7 @@ mod census {
         radius: impl Fn(&EffectiveSettings, f64) -> Option<f64>,
     ) -> Census {
         let (mut scene, settings) = example(name);
-        let (w, h) = (settings.width / shrink, settings.height / shrink);
+        let (w, h) = (settings.width() / shrink, settings.height() / shrink);
         scene.settings.resolution = (w, h);
         let options = RenderOptions {
             photons: Some(settings.photons.unwrap_or(CENSUS_PHOTONS) / u64::from(shrink * shrink)),
@@ -635,7 +630,7 @@ mod census {
         let look_at = (far_camera.look_at - far_camera.location).length();
         let old = mean(
             &census("smallppm_far", 4, |s, _| {
-                let pixel = 2.0 * (0.5 * far_camera.fov.to_radians()).tan() / f64::from(s.height);
+                let pixel = 2.0 * (0.5 * far_camera.fov.to_radians()).tan() / f64::from(s.height());
                 Some(pixel * look_at)
             })
             .per_point,

@@ -156,7 +156,7 @@ fn bounce(
 impl Integrator for Vcm {
     fn render(&self, job: Job<'_, '_>) -> RenderOutput {
         let (scene, settings, cancel) = (job.scene, job.settings, job.cancel);
-        let (w, h) = (settings.width, settings.height);
+        let (w, h) = settings.resolution;
         let n_paths = (w * h) as usize;
         // Every light starts light paths, chosen by power (the environment's counts the disk
         // its paths leave from).

@@ -6,9 +6,10 @@
 
 use glam::DVec3;
 
-use super::{Invalid, fmt, invalid};
+use super::{fmt, invalid};
+use crate::diag::Diagnostic;
 use crate::scene::{
-    Background, ColorMap, ColorParam, Light, Material, Pattern, ScalarParam, Scene, Texture,
+    Background, ColorMap, ColorParam, LightDecl, Material, Pattern, ScalarParam, Scene, Texture,
 };
 use crate::span::Span;
 
@@ -62,7 +63,7 @@ pub fn environment_too_bright(
 
 const COLOR_HELP: &str = "use finite components from 0 to 1e9";
 
-fn color(c: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
+fn color(c: DVec3, what: &str, span: Span) -> Result<(), Diagnostic> {
     match color_problem(c) {
         Some(why) => Err(invalid(
             span,
@@ -75,7 +76,7 @@ fn color(c: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
 }
 
 /// The appearance of the whole scene (see the module docs); the first problem found.
-pub(super) fn validate(scene: &Scene) -> Result<(), Invalid> {
+pub(super) fn validate(scene: &Scene) -> Result<(), Diagnostic> {
     for (i, m) in scene.materials.iter().enumerate() {
         material(m, i)?;
     }
@@ -86,10 +87,10 @@ pub(super) fn validate(scene: &Scene) -> Result<(), Invalid> {
     }
     for light in &scene.lights {
         let (intensity, span, what) = match light {
-            Light::Point {
+            LightDecl::Point {
                 intensity, span, ..
             } => (*intensity, *span, "the point light's intensity"),
-            Light::Spot {
+            LightDecl::Spot {
                 intensity, span, ..
             } => (*intensity, *span, "the spot light's intensity"),
         };
@@ -108,7 +109,7 @@ pub(super) fn validate(scene: &Scene) -> Result<(), Invalid> {
 }
 
 /// A glass's (or a pane's) index of refraction is within [`IOR_RANGE`].
-fn glass_ior(ior: f64, index: usize) -> Result<(), Invalid> {
+fn glass_ior(ior: f64, index: usize) -> Result<(), Diagnostic> {
     let (lo, hi) = IOR_RANGE;
     if !(ior >= lo && ior <= hi) {
         return Err(invalid(
@@ -121,7 +122,7 @@ fn glass_ior(ior: f64, index: usize) -> Result<(), Invalid> {
     Ok(())
 }
 
-fn material(m: &Material, index: usize) -> Result<(), Invalid> {
+fn material(m: &Material, index: usize) -> Result<(), Diagnostic> {
     let span = Span::detached();
     let param = |p: &ColorParam, what: &str| match p {
         ColorParam::Const(c) => color(*c, &format!("material {index}'s {what}"), span),
@@ -241,7 +242,7 @@ fn material(m: &Material, index: usize) -> Result<(), Invalid> {
     }
 }
 
-fn texture(t: &Texture, index: usize) -> Result<(), Invalid> {
+fn texture(t: &Texture, index: usize) -> Result<(), Diagnostic> {
     let span = t.span;
     let name = |what: &str| format!("texture {index}'s {what}");
     if !(t.transform.matrix3.is_finite() && t.transform.translation.is_finite()) {
@@ -349,7 +350,7 @@ fn texture(t: &Texture, index: usize) -> Result<(), Invalid> {
 
 /// At least two entries, positions in [0, 1] in ascending order, colours in range (as the
 /// language's `color_map` builds them).
-fn color_map(m: &ColorMap, what: &str, span: Span) -> Result<(), Invalid> {
+fn color_map(m: &ColorMap, what: &str, span: Span) -> Result<(), Diagnostic> {
     let bad = |message: String| {
         Err(invalid(
             span,

@@ -11,10 +11,11 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use super::{
-    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light,
+    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, LightDecl,
     MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
-    Material, NormalKind, Object, ScalarParam, Scene, Settings, Shape, why_open,
+    Material, NormalKind, Object, ScalarParam, Scene, Settings, ShapeDecl, why_open,
 };
+use crate::diag::Diagnostic;
 use crate::span::Span;
 
 mod appearance;
@@ -41,23 +42,12 @@ pub const MAX_PHOTONS: u64 = 100_000_000_000;
 /// Smallest radius, length or side in world space.
 pub const MIN_SIZE: f64 = 1e-9;
 
-/// Why a scene cannot be rendered, with where it comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Invalid {
-    pub message: String,
-    /// The declaration at fault (detached when the scene was built by hand).
-    pub span: Span,
-    pub label: String,
-    pub help: String,
-}
-
-fn invalid(span: Span, message: String, label: &str, help: &str) -> Invalid {
-    Invalid {
-        message,
-        span,
-        label: label.into(),
-        help: help.into(),
-    }
+/// Why a scene cannot be rendered, at the declaration at fault (detached when the scene was
+/// built by hand).
+fn invalid(span: Span, message: String, label: &str, help: &str) -> Diagnostic {
+    Diagnostic::error(span, message)
+        .with_label(label)
+        .with_help(help)
 }
 
 fn fmt(x: f64) -> String {
@@ -65,7 +55,7 @@ fn fmt(x: f64) -> String {
 }
 
 /// A point or vector that must be finite and within [`MAX_COORD`].
-fn point(p: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
+fn point(p: DVec3, what: &str, span: Span) -> Result<(), Diagnostic> {
     let m = p.abs().max_element();
     if m.is_nan() || m > MAX_COORD {
         return Err(invalid(
@@ -79,7 +69,7 @@ fn point(p: DVec3, what: &str, span: Span) -> Result<(), Invalid> {
 }
 
 /// A world-space size that must lie in [`MIN_SIZE`, `MAX_COORD`].
-fn size(x: f64, what: &str, span: Span) -> Result<(), Invalid> {
+fn size(x: f64, what: &str, span: Span) -> Result<(), Diagnostic> {
     if x.is_nan() || x > MAX_COORD {
         return Err(invalid(
             span,
@@ -101,7 +91,7 @@ fn size(x: f64, what: &str, span: Span) -> Result<(), Invalid> {
 
 impl Camera {
     /// Whether the camera can be built: finite, in range, oriented.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         let span = self.span;
         point(self.location, "the camera's location", span)?;
         point(self.look_at, "the camera's look_at", span)?;
@@ -199,7 +189,7 @@ impl Camera {
 impl Settings {
     /// The numbers a render computes with; the resolution and counts are checked by `prepare`
     /// against the limits of the run.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         let span = self.span;
         if let Some(r) = self.radius {
             size(r, "the initial radius", span)?;
@@ -283,7 +273,7 @@ fn shrink(t: &DAffine3) -> f64 {
 
 impl Scene {
     /// Checks the whole scene; the first problem found.
-    pub fn validate(&self) -> Result<(), Invalid> {
+    pub fn validate(&self) -> Result<(), Diagnostic> {
         self.camera.validate()?;
         self.settings.validate()?;
         for (i, m) in self.materials.iter().enumerate() {
@@ -293,7 +283,7 @@ impl Scene {
         sky_textures_exist(self)?;
         appearance::validate(self)?;
         for obj in &self.objects {
-            if let Shape::Csg(csg) = &obj.shape {
+            if let ShapeDecl::Csg(csg) = &obj.shape {
                 csg_limits(csg, obj.span)?;
                 if obj.emission.is_some() {
                     return Err(invalid(
@@ -308,9 +298,8 @@ impl Scene {
         }
         for light in &self.lights {
             let (position, span) = match light {
-                Light::Point { position, span, .. } | Light::Spot { position, span, .. } => {
-                    (*position, *span)
-                }
+                LightDecl::Point { position, span, .. }
+                | LightDecl::Spot { position, span, .. } => (*position, *span),
             };
             point(position, "the light's position", span)?;
         }
@@ -341,7 +330,7 @@ impl Scene {
 }
 
 /// One object under its parent's transform (identity at the top level).
-fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
+fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
     let span = obj.span;
     let t = &(*parent * obj.transform);
     let kind = obj.shape.kind();
@@ -360,11 +349,11 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
         size(x * lo, &format!("the {kind}'s {what}"), span)
     };
     match &obj.shape {
-        Shape::Sphere { center, radius } => {
+        ShapeDecl::Sphere { center, radius } => {
             at(*center)?;
             len(*radius, "radius")?;
         }
-        Shape::Plane { normal, offset } => {
+        ShapeDecl::Plane { normal, offset } => {
             // Only the distance from the origin matters: a plane moved along itself is
             // the same plane.
             let n = t.matrix3.inverse().transpose() * *normal;
@@ -376,7 +365,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             };
             point(DVec3::splat(d), &format!("this {kind}"), span)?;
         }
-        Shape::Quad {
+        ShapeDecl::Quad {
             origin,
             edge_u,
             edge_v,
@@ -386,7 +375,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             }
             at(*origin + *edge_u + *edge_v)?;
         }
-        Shape::Box { min, max } => {
+        ShapeDecl::Box { min, max } => {
             for i in 0..8 {
                 let pick = |bit: i32, a: f64, b: f64| if i & bit == 0 { a } else { b };
                 at(DVec3::new(
@@ -396,7 +385,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 ))?;
             }
         }
-        Shape::Cylinder {
+        ShapeDecl::Cylinder {
             base, cap, radius, ..
         } => {
             at(*base)?;
@@ -404,7 +393,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             len(*radius, "radius")?;
             len((*cap - *base).length(), "length")?;
         }
-        Shape::Cone {
+        ShapeDecl::Cone {
             base,
             base_radius,
             cap,
@@ -417,22 +406,22 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             len(base_radius.max(*cap_radius), "radius")?;
             len((*cap - *base).length(), "length")?;
         }
-        Shape::Torus { major, minor } => {
+        ShapeDecl::Torus { major, minor } => {
             at(DVec3::ZERO)?;
             len(*major + *minor, "size")?;
             len(*minor, "minor radius")?;
         }
-        Shape::Disk { center, radius, .. } => {
+        ShapeDecl::Disk { center, radius, .. } => {
             // A disk may be squashed along its own normal: only its largest stretch.
             at(*center)?;
             size(*radius * hi, &format!("the {kind}'s radius"), span)?;
         }
-        Shape::Triangle { vertices } => {
+        ShapeDecl::Triangle { vertices } => {
             for v in vertices {
                 at(*v)?;
             }
         }
-        Shape::Mesh { mesh } => {
+        ShapeDecl::Mesh { mesh } => {
             // A mesh may have millions of vertices: looked at in parallel, the first one out of
             // range reported.
             let far = |p: &DVec3| {
@@ -443,7 +432,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(*p)?;
             }
         }
-        Shape::Superellipsoid { e, n } => {
+        ShapeDecl::Superellipsoid { e, n } => {
             let (lo, hi) = super::SUPERELLIPSOID_EXPONENTS;
             if !(*e >= lo && *e <= hi && *n >= lo && *n <= hi) {
                 return Err(invalid(
@@ -464,7 +453,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(c)?;
             }
         }
-        Shape::Blob(b) => {
+        ShapeDecl::Blob(b) => {
             b.check().map_err(|m| {
                 invalid(span, m, "here", "see the blob section of docs/language.md")
             })?;
@@ -476,7 +465,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 len(c.radius * stretch(&c.transform), "component radius")?;
             }
         }
-        Shape::Isosurface(i) => {
+        ShapeDecl::Isosurface(i) => {
             i.check().map_err(|m| {
                 invalid(
                     span,
@@ -490,13 +479,13 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
             at(lo)?;
             at(hi)?;
         }
-        Shape::HeightField(_) => {
+        ShapeDecl::HeightField(_) => {
             len(1.0, "size")?;
             for c in [DVec3::ZERO, DVec3::ONE] {
                 at(c)?;
             }
         }
-        Shape::Prism(p) => {
+        ShapeDecl::Prism(p) => {
             // The corners of its box: the profile's rectangle at both heights (scaled by the
             // height for a conic sweep).
             let (lo, hi) = p.heights;
@@ -508,7 +497,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 }
             }
         }
-        Shape::Revolve {
+        ShapeDecl::Revolve {
             profile, method, ..
         } => {
             newton_bounds(*method, kind, span)?;
@@ -516,7 +505,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 at(DVec3::new(p.x, p.y, p.x))?;
             }
         }
-        Shape::BezierPatch { points, method } => {
+        ShapeDecl::BezierPatch { points, method } => {
             newton_bounds(*method, kind, span)?;
             for p in points.iter() {
                 at(*p)?;
@@ -544,13 +533,13 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Invalid> {
                 ));
             }
         }
-        Shape::Csg(csg) => validate_csg(csg, t, span)?,
+        ShapeDecl::Csg(csg) => validate_csg(csg, t, span)?,
     }
     Ok(())
 }
 
 /// Newton's iterations and starts within the language's bounds (each ray pays their product).
-fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), Invalid> {
+fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), Diagnostic> {
     match method {
         IntersectMethod::Newton { iterations, starts }
             if iterations > MAX_NEWTON_ITERATIONS || starts > MAX_NEWTON_STARTS =>
@@ -571,7 +560,7 @@ fn newton_bounds(method: IntersectMethod, kind: &str, span: Span) -> Result<(), 
 
 /// Every blend's parts come before it in `Scene::materials` (so that following them ends) and
 /// blends nest at most `MAX_BLEND_DEPTH` deep.
-fn blends_bounded(scene: &Scene) -> Result<(), Invalid> {
+fn blends_bounded(scene: &Scene) -> Result<(), Diagnostic> {
     let depths = scene.blend_depths();
     match depths
         .iter()
@@ -591,7 +580,7 @@ fn blends_bounded(scene: &Scene) -> Result<(), Invalid> {
 }
 
 /// Every texture material `index` refers to is one of the scene's `count` textures.
-fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invalid> {
+fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Diagnostic> {
     let color = |p: &ColorParam| match p {
         ColorParam::Texture(t) => Some(t.0),
         ColorParam::Const(_) => None,
@@ -658,7 +647,7 @@ fn textures_exist(m: &Material, index: usize, count: usize) -> Result<(), Invali
 }
 
 /// The background's and the backdrop's textures are among the scene's.
-fn sky_textures_exist(scene: &Scene) -> Result<(), Invalid> {
+fn sky_textures_exist(scene: &Scene) -> Result<(), Diagnostic> {
     let count = scene.textures.len();
     let background = match scene.background {
         Background::Texture(t) => Some(("the background", t.0)),
@@ -684,7 +673,7 @@ fn sky_textures_exist(scene: &Scene) -> Result<(), Invalid> {
 }
 
 /// The size of a CSG tree; checked before anything walks it recursively.
-fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
+fn csg_limits(csg: &Csg, span: Span) -> Result<(), Diagnostic> {
     if csg.depth(MAX_CSG_DEPTH) > MAX_CSG_DEPTH {
         return Err(invalid(
             span,
@@ -710,7 +699,7 @@ fn csg_limits(csg: &Csg, span: Span) -> Result<(), Invalid> {
 }
 
 /// The children of a CSG node: closed, not emissive, each valid under `t`.
-fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Invalid> {
+fn validate_csg(csg: &Csg, t: &DAffine3, span: Span) -> Result<(), Diagnostic> {
     if csg.op == CsgOp::Inverse && csg.children.len() != 1 {
         return Err(invalid(
             span,
