@@ -9,7 +9,7 @@ use sppm_lang::diag::short_number;
 use sppm_lang::render::{
     EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderOptions,
 };
-use sppm_lang::scene::{Background, ColorParam, Integrator, Light, Scene, Shape};
+use sppm_lang::scene::{Background, ColorParam, Integrator, LightDecl, Scene, ShapeDecl};
 use sppm_lang::{Diagnostic, EvalOptions, Severity, SourceMap};
 
 use super::output::{err, out};
@@ -99,7 +99,7 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
         .objects
         .iter()
         .filter_map(|o| match &o.shape {
-            Shape::Mesh { mesh } => Some(format!(
+            ShapeDecl::Mesh { mesh } => Some(format!(
                 "{} ({} triangle{})",
                 mesh.path.display(),
                 mesh.indices.len(),
@@ -223,7 +223,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     let points = s
         .lights
         .iter()
-        .filter(|l| matches!(l, Light::Point { .. }))
+        .filter(|l| matches!(l, LightDecl::Point { .. }))
         .count();
     let spots = s.lights.len() - points;
     out.push_str(&format!(

@@ -15,7 +15,9 @@
 use std::fmt::Write as _;
 use std::sync::Arc;
 
-use sppm_lang::scene::{Background, ImageData, Light, MeshData, Object, Pattern, Scene, Shape};
+use sppm_lang::scene::{
+    Background, ImageData, LightDecl, MeshData, Object, Pattern, Scene, ShapeDecl,
+};
 use sppm_lang::span::Span;
 use xxhash_rust::xxh3::Xxh3;
 
@@ -91,7 +93,9 @@ fn stripped(scene: &Scene, h: &mut Hashing) -> Scene {
     }
     for light in &mut s.lights {
         match light {
-            Light::Point { span, .. } | Light::Spot { span, .. } => *span = Span::detached(),
+            LightDecl::Point { span, .. } | LightDecl::Spot { span, .. } => {
+                *span = Span::detached()
+            }
         }
     }
     for t in &mut s.textures {
@@ -109,9 +113,9 @@ fn stripped(scene: &Scene, h: &mut Hashing) -> Scene {
 fn strip_object(o: &mut Object, h: &mut Hashing) {
     o.span = Span::detached();
     match &mut o.shape {
-        Shape::Mesh { mesh } => *mesh = strip_mesh(mesh, h),
+        ShapeDecl::Mesh { mesh } => *mesh = strip_mesh(mesh, h),
         // Depth at most `MAX_CSG_DEPTH`, checked by the evaluator.
-        Shape::Csg(csg) => {
+        ShapeDecl::Csg(csg) => {
             for child in &mut csg.children {
                 strip_object(child, h);
             }
@@ -257,7 +261,7 @@ mod tests {
             ..MeshData::default()
         };
         s.objects.push(Object {
-            shape: Shape::Mesh {
+            shape: ShapeDecl::Mesh {
                 mesh: Arc::new(mesh),
             },
             transform: DAffine3::IDENTITY,

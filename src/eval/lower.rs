@@ -120,7 +120,7 @@ impl Evaluator {
         };
         let shape = match &part.shape {
             ShapeDef::Ready(s) => s.clone(),
-            ShapeDef::Mesh { path, span } => Shape::Mesh {
+            ShapeDef::Mesh { path, span } => ShapeDecl::Mesh {
                 mesh: self.mesh(path, *span)?,
             },
             ShapeDef::Csg(c) => {
@@ -129,11 +129,11 @@ impl Evaluator {
                     let object = self.lower_part(child, own)?;
                     // Meshes are known only now: is this one closed?
                     let why = match (&child.shape, &object.shape) {
-                        (ShapeDef::Mesh { path, .. }, Shape::Mesh { mesh }) => self
+                        (ShapeDef::Mesh { path, .. }, ShapeDecl::Mesh { mesh }) => self
                             .assets
                             .open_meshes
                             .entry(path.clone())
-                            .or_insert_with(|| why_open(&Shape::Mesh { mesh: mesh.clone() }))
+                            .or_insert_with(|| why_open(&ShapeDecl::Mesh { mesh: mesh.clone() }))
                             .clone(),
                         (_, shape) => why_open(shape),
                     };
@@ -154,7 +154,7 @@ impl Evaluator {
                     }
                     children.push(object);
                 }
-                Shape::Csg(Csg { op: c.op, children })
+                ShapeDecl::Csg(Csg { op: c.op, children })
             }
         };
         Ok(Object {

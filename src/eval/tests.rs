@@ -77,7 +77,7 @@ fn value_macro_recursion_fits_the_stack_it_is_limited_to() {
     let l = load(&sum(limit / 2 - 2), 100_000, &[stack]);
     assert!(!l.has_errors(), "{:?}", l.diagnostics);
     let radius = match l.scene.unwrap().objects[0].shape {
-        crate::scene::Shape::Sphere { radius, .. } => radius,
+        crate::scene::ShapeDecl::Sphere { radius, .. } => radius,
         ref s => panic!("{s:?}"),
     };
     assert_eq!(radius, (limit / 2 - 2) as f64);

@@ -11,8 +11,8 @@ use glam::{DAffine3, DVec2, DVec3};
 use crate::diag::Error;
 use crate::sampling::SplitMix64;
 use crate::scene::{
-    Camera, Color, ColorMap, CsgOp, Emission, Function, Light, Mapping, NormalKind, Pattern,
-    Settings, Shape, Wrap,
+    Camera, Color, ColorMap, CsgOp, Emission, Function, LightDecl, Mapping, NormalKind, Pattern,
+    Settings, ShapeDecl, Wrap,
 };
 use crate::span::Span;
 use crate::syntax::ast::MacroDef;
@@ -40,7 +40,7 @@ pub enum Value {
     Profile(Rc<ProfileDef>),
     Settings(Box<Settings>),
     Camera(Box<Camera>),
-    Light(Box<Light>),
+    Light(Box<LightDecl>),
     Environment(Rc<EnvDef>),
     Macro(Rc<MacroDef>),
     /// A random stream (`seed(n)`): every copy of the value draws from the same stream, as
@@ -297,7 +297,7 @@ pub enum PatternDef {
 
 #[derive(Debug, Clone)]
 pub enum ShapeDef {
-    Ready(Shape),
+    Ready(ShapeDecl),
     Mesh { path: PathBuf, span: Span },
     Csg(Rc<CsgDef>),
 }

@@ -16,7 +16,7 @@ use super::{EffectiveSettings, ObjectInfo};
 use crate::bezier::lathe::Lathe;
 use crate::diag::Diagnostic;
 use crate::diag::size_text;
-use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, Shape};
+use crate::scene::{Background, DEFAULT_PHOTONS, Integrator, MeshData, Pattern, Scene, ShapeDecl};
 use crate::shapes::patch::{BezierPatch, PIECES as PATCH_PIECES};
 use crate::shapes::revolve::Revolve;
 
@@ -43,20 +43,20 @@ pub struct MemoryItem {
 
 /// Primitives each scene shape becomes in the prepared scene (in a CSG: the surfaces of its
 /// leaf).
-pub(super) fn primitives(shape: &Shape) -> u64 {
+pub(super) fn primitives(shape: &ShapeDecl) -> u64 {
     match shape {
-        Shape::Mesh { mesh } => mesh.indices.len() as u64,
-        Shape::Box { .. } => 6,
+        ShapeDecl::Mesh { mesh } => mesh.indices.len() as u64,
+        ShapeDecl::Box { .. } => 6,
         // Body and two caps.
-        Shape::Cylinder { .. } | Shape::Cone { .. } => 3,
+        ShapeDecl::Cylinder { .. } | ShapeDecl::Cone { .. } => 3,
         // Cut into pieces, each a primitive of its own.
-        Shape::BezierPatch { .. } => u64::from(PATCH_PIECES * PATCH_PIECES),
+        ShapeDecl::BezierPatch { .. } => u64::from(PATCH_PIECES * PATCH_PIECES),
         // One primitive per profile segment, and one for the caps of a partial sweep.
-        Shape::Revolve { profile, sweep, .. } => {
+        ShapeDecl::Revolve { profile, sweep, .. } => {
             (profile.segments.len() as u64).max(1) + u64::from(sweep.is_some())
         }
         // Its shapes live in the one CSG primitive (an overestimate by one).
-        Shape::Csg(csg) => csg
+        ShapeDecl::Csg(csg) => csg
             .leaves()
             .iter()
             .map(|o| primitives(&o.shape))
@@ -68,18 +68,18 @@ pub(super) fn primitives(shape: &Shape) -> u64 {
 /// Bytes a primitive of `shape` holds beyond its record: a patch piece's control net, a
 /// revolve segment's share of its lathe (in their own allocations), and a heavy primitive's
 /// own leaf ([`HEAVY_BVH`]).
-fn held_bytes(shape: &Shape) -> u64 {
+fn held_bytes(shape: &ShapeDecl) -> u64 {
     let own = match shape {
         // The piece in its `Arc` and the boxed transform around it, each a heap allocation
         // (with its header and the `Arc`'s counts): measured 1.33 KB per piece in all against
         // 0.92 KB counted without them.
-        Shape::BezierPatch { .. } => {
+        ShapeDecl::BezierPatch { .. } => {
             (size_of::<BezierPatch>() + size_of::<crate::shapes::transformed::Transformed>()) as u64
                 + WRAP_OVERHEAD
         }
         // A segment's part in its `Arc` and boxed transform, and its share of the lathe the
         // parts share (the segment, its tables and shells).
-        Shape::Revolve { .. } => {
+        ShapeDecl::Revolve { .. } => {
             (size_of::<Revolve>()
                 + size_of::<crate::shapes::transformed::Transformed<Revolve>>()
                 + Lathe::bytes_per_segment()) as u64
@@ -87,21 +87,21 @@ fn held_bytes(shape: &Shape) -> u64 {
         }
         // Its segments (with their boxes) in its own allocation, in an `Arc` and a boxed
         // transform.
-        Shape::Prism(p) => {
+        ShapeDecl::Prism(p) => {
             (size_of::<crate::shapes::prism::Prism>()
                 + size_of::<crate::shapes::transformed::Transformed>()
                 + p.segments.len() * 112) as u64
                 + WRAP_OVERHEAD
         }
         // Its components and their hierarchy (about 200 bytes a component).
-        Shape::Blob(b) => {
+        ShapeDecl::Blob(b) => {
             (size_of::<crate::shapes::blob::Blob>()
                 + size_of::<crate::shapes::transformed::Transformed>()
                 + b.components.len() * 200) as u64
                 + WRAP_OVERHEAD
         }
         // Its heights and their min/max hierarchy, in an `Arc` and a boxed transform.
-        Shape::HeightField(h) => {
+        ShapeDecl::HeightField(h) => {
             (size_of::<crate::shapes::height_field::HeightField>()
                 + size_of::<crate::shapes::transformed::Transformed>()) as u64
                 + WRAP_OVERHEAD
@@ -113,15 +113,15 @@ fn held_bytes(shape: &Shape) -> u64 {
     // not counted here.
     let heavy = matches!(
         shape,
-        Shape::Torus { .. }
-            | Shape::Revolve { .. }
-            | Shape::BezierPatch { .. }
-            | Shape::Prism(_)
-            | Shape::Superellipsoid { .. }
-            | Shape::Blob(_)
-            | Shape::Isosurface(_)
-            | Shape::HeightField(_)
-            | Shape::Csg(_)
+        ShapeDecl::Torus { .. }
+            | ShapeDecl::Revolve { .. }
+            | ShapeDecl::BezierPatch { .. }
+            | ShapeDecl::Prism(_)
+            | ShapeDecl::Superellipsoid { .. }
+            | ShapeDecl::Blob(_)
+            | ShapeDecl::Isosurface(_)
+            | ShapeDecl::HeightField(_)
+            | ShapeDecl::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }
 }
@@ -192,7 +192,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         .iter()
         .map(|o| match (shared_key(o, &shared), &o.shape) {
             // A mesh placed several times: one primitive per placement, its triangles once.
-            (Some(id), Shape::Mesh { mesh }) => {
+            (Some(id), ShapeDecl::Mesh { mesh }) => {
                 per_placement.saturating_add(if stored.insert(id) {
                     compact_mesh_bytes(mesh)
                 } else {
@@ -200,7 +200,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
                 })
             }
             // A mesh that is not a light: one primitive, its triangles in compact form.
-            (_, Shape::Mesh { mesh }) if o.emission.is_none() => {
+            (_, ShapeDecl::Mesh { mesh }) if o.emission.is_none() => {
                 per_primitive.saturating_add(compact_mesh_bytes(mesh))
             }
             // An emissive object is built twice, as geometry and as lights (one per
@@ -517,7 +517,7 @@ mod tests {
     fn meshes_are_counted_as_they_are_built() {
         let m = std::sync::Arc::new(mesh(40, false, false));
         let mut once = scene("sphere { <0,0,0> 1 }");
-        once.objects[0].shape = Shape::Mesh { mesh: m.clone() };
+        once.objects[0].shape = ShapeDecl::Mesh { mesh: m.clone() };
         let primitives_of = |s: &Scene| {
             estimate(s, &settings_of(s))
                 .into_iter()

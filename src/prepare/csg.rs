@@ -44,7 +44,7 @@ pub fn ray_cost(csg: &scene::Csg) -> u64 {
 /// Refuses a CSG object whose [`ray_cost`] passes [`MAX_CSG_RAY_COST`], at its span.
 pub(super) fn check_costs(scene: &Scene) -> Result<(), Diagnostic> {
     for obj in &scene.objects {
-        let scene::Shape::Csg(csg) = &obj.shape else {
+        let scene::ShapeDecl::Csg(csg) = &obj.shape else {
             continue;
         };
         let cost = ray_cost(csg);
@@ -97,7 +97,7 @@ fn node(
     parts: &mut Vec<LeafPart>,
 ) -> Result<CsgNode, String> {
     let transform = *parent * obj.transform;
-    if let scene::Shape::Csg(csg) = &obj.shape {
+    if let scene::ShapeDecl::Csg(csg) = &obj.shape {
         let kids = csg
             .children
             .iter()
@@ -120,8 +120,8 @@ fn node(
     };
     let shapes = build_shapes(&leaf)?;
     let flip = match &obj.shape {
-        scene::Shape::Mesh { mesh } => signed_volume(mesh) < 0.0,
-        scene::Shape::Revolve { profile, .. } => profile_area(profile) < 0.0,
+        scene::ShapeDecl::Mesh { mesh } => signed_volume(mesh) < 0.0,
+        scene::ShapeDecl::Revolve { profile, .. } => profile_area(profile) < 0.0,
         _ => false,
     };
     let id = first_id + parts.len() as u32;
@@ -135,7 +135,7 @@ fn node(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{MeshData, Shape};
+    use crate::scene::{MeshData, ShapeDecl};
     use std::sync::Arc;
 
     fn scene(text: &str) -> Scene {
@@ -145,7 +145,7 @@ mod tests {
 
     fn cost_of(s: &Scene) -> u64 {
         match &s.objects[0].shape {
-            Shape::Csg(c) => ray_cost(c),
+            ShapeDecl::Csg(c) => ray_cost(c),
             _ => panic!("not a CSG"),
         }
     }
@@ -183,21 +183,21 @@ mod tests {
             indices: vec![[0, 1, 2]; 10_000],
             ..Default::default()
         });
-        let Shape::Csg(csg) = &mut s.objects[0].shape else {
+        let ShapeDecl::Csg(csg) = &mut s.objects[0].shape else {
             unreachable!()
         };
         let template = csg.children[0].clone();
         let placements = |n: usize| {
             (0..n)
                 .map(|_| Object {
-                    shape: Shape::Mesh { mesh: mesh.clone() },
+                    shape: ShapeDecl::Mesh { mesh: mesh.clone() },
                     ..template.clone()
                 })
                 .collect::<Vec<_>>()
         };
         csg.children = placements(30);
         assert!(check_costs(&s).is_ok(), "{}", cost_of(&s));
-        let Shape::Csg(csg) = &mut s.objects[0].shape else {
+        let ShapeDecl::Csg(csg) = &mut s.objects[0].shape else {
             unreachable!()
         };
         csg.children = placements(100);

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::DAffine3;
 
 use crate::accel::Bvh;
-use crate::scene::{MeshData, Object, Scene, Shape};
+use crate::scene::{MeshData, Object, Scene, ShapeDecl};
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::AnyShape;
 use crate::shapes::transformed::Transformed;
@@ -23,7 +23,7 @@ fn key(mesh: &Arc<MeshData>) -> usize {
 /// The mesh an object places, when it may be instanced (not emissive).
 fn placed_mesh(obj: &Object) -> Option<&Arc<MeshData>> {
     match &obj.shape {
-        Shape::Mesh { mesh } if obj.emission.is_none() => Some(mesh),
+        ShapeDecl::Mesh { mesh } if obj.emission.is_none() => Some(mesh),
         _ => None,
     }
 }

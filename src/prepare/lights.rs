@@ -17,7 +17,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
     let color3 = |c: glam::DVec3| c.as_vec3a();
     for l in &scene.lights {
         match l {
-            scene::Light::Point {
+            scene::LightDecl::Point {
                 position,
                 intensity,
                 span,
@@ -39,7 +39,7 @@ pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Resul
                     intensity: color3(*intensity),
                 }))
             }
-            scene::Light::Spot {
+            scene::LightDecl::Spot {
                 position,
                 direction,
                 intensity,
@@ -141,7 +141,7 @@ pub(super) fn ground_photons(
         .enumerate()
         .filter_map(|(prim, &oi)| {
             let o = scene.objects.get(oi as usize)?;
-            let scene::Shape::Plane { normal, offset } = o.shape else {
+            let scene::ShapeDecl::Plane { normal, offset } = o.shape else {
                 return None;
             };
             let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
@@ -172,7 +172,7 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<Diagnostic> {
     // not a plane object (a CSG part) could be anywhere: then no warning at all.
     let mut planes = Vec::new();
     for o in &scene.objects {
-        if let scene::Shape::Plane { normal, offset } = o.shape {
+        if let scene::ShapeDecl::Plane { normal, offset } = o.shape {
             let n = (o.transform.matrix3.inverse().transpose() * normal).normalize();
             planes.push((n, o.transform.transform_point3(normal * offset)));
         }

@@ -189,8 +189,8 @@ fn unless(stop: Stop) -> Result<(), Diagnostic> {
 }
 
 /// How to mend a shape that cannot be built (the evaluator catches most of these first).
-fn shape_help(shape: &scene::Shape) -> &'static str {
-    use scene::Shape as S;
+fn shape_help(shape: &scene::ShapeDecl) -> &'static str {
+    use scene::ShapeDecl as S;
     match shape {
         S::Triangle { .. } => "give three points that do not lie on one line",
         S::Box { .. } => {
@@ -272,7 +272,7 @@ impl<'a> PreparedScene<'a> {
                     .with_help("refer to an entry of `Scene::materials`"));
             }
             objects.push(ObjectInfo::new(obj.material, &obj.transform));
-            if let scene::Shape::Csg(_) = &obj.shape {
+            if let scene::ShapeDecl::Csg(_) = &obj.shape {
                 // One primitive; its leaves have ids (and objects) of their own.
                 let id = prim_object.len() as u32;
                 let (shape, parts) = csg::build_csg(obj, id + 1).map_err(err)?;
@@ -312,7 +312,7 @@ impl<'a> PreparedScene<'a> {
             }
             // A mesh that is neither instanced nor a light: one primitive, its triangles kept
             // in the BVH's compact form.
-            if let (None, None, scene::Shape::Mesh { mesh }) = (&placed, emission, &obj.shape) {
+            if let (None, None, scene::ShapeDecl::Mesh { mesh }) = (&placed, emission, &obj.shape) {
                 meshes.push((
                     build_mesh(obj, mesh, faces_in).map_err(err)?,
                     prim_object.len() as u32,

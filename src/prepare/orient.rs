@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use glam::DVec2;
 
-use crate::scene::{self, MeshData, Object, Profile, Scene, Shape};
+use crate::scene::{self, MeshData, Object, Profile, Scene, ShapeDecl};
 
 /// Six times the volume a closed mesh encloses, positive when its triangles wind
 /// counter-clockwise seen from outside (normals outward).
@@ -75,11 +75,11 @@ impl Orientation {
             return false;
         }
         match &obj.shape {
-            Shape::Mesh { mesh } => *self
+            ShapeDecl::Mesh { mesh } => *self
                 .inward_meshes
                 .entry(Arc::as_ptr(mesh) as usize)
                 .or_insert_with(|| inward_mesh(mesh)),
-            Shape::Revolve { profile, .. } => {
+            ShapeDecl::Revolve { profile, .. } => {
                 scene::why_open(&obj.shape).is_none() && profile_area(profile) < 0.0
             }
             _ => false,
@@ -96,14 +96,14 @@ fn inward_mesh(mesh: &Arc<MeshData>) -> bool {
     if mesh.indices.len() > MAX_CHECKED_TRIANGLES {
         return false;
     }
-    let shape = Shape::Mesh { mesh: mesh.clone() };
+    let shape = ShapeDecl::Mesh { mesh: mesh.clone() };
     scene::why_open(&shape).is_none() && signed_volume(mesh) < 0.0
 }
 
 /// The revolve `obj` with its profile run backwards (the same surface, normals reversed;
 /// its texture `v` runs the other way).
 pub(super) fn outward_revolve(obj: &Object) -> Option<Object> {
-    let Shape::Revolve {
+    let ShapeDecl::Revolve {
         profile,
         sweep,
         method,
@@ -118,7 +118,7 @@ pub(super) fn outward_revolve(obj: &Object) -> Option<Object> {
         .map(|s| s.iter().rev().copied().collect())
         .collect();
     Some(Object {
-        shape: Shape::Revolve {
+        shape: ShapeDecl::Revolve {
             profile: Profile { segments },
             sweep: *sweep,
             method: *method,

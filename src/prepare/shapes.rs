@@ -144,7 +144,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         Ok(out)
     };
     Ok(match &obj.shape {
-        scene::Shape::Sphere { center, radius } => match sim {
+        scene::ShapeDecl::Sphere { center, radius } => match sim {
             Some(s) => vec![AnyShape::Sphere(Sphere::with_frame(
                 v(xf.transform_point3(*center)),
                 (radius * s) as f32,
@@ -152,24 +152,24 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             )?)],
             None => vec![wrap(Arc::new(Sphere::new(v(*center), *radius as f32)?))?],
         },
-        scene::Shape::Plane { normal, offset } => {
+        scene::ShapeDecl::Plane { normal, offset } => {
             let p0 = xf.transform_point3(*normal * *offset / normal.length_squared().max(1e-300));
             let n = (nmat * *normal).normalize_or_zero();
             vec![AnyShape::Plane(Plane::new(v(n), n.dot(p0) as f32)?)]
         }
-        scene::Shape::Quad {
+        scene::ShapeDecl::Quad {
             origin,
             edge_u,
             edge_v,
         } => vec![quad(*origin, *edge_u, *edge_v)?],
-        scene::Shape::Box { min, max } => {
+        scene::ShapeDecl::Box { min, max } => {
             let to_world = |p: Vec3A| v(xf.transform_point3(p.as_dvec3()));
             cuboid_faces(v(*min), v(*max), to_world, mirrored)?
                 .into_iter()
                 .map(AnyShape::Quad)
                 .collect()
         }
-        scene::Shape::Disk {
+        scene::ShapeDecl::Disk {
             center,
             normal,
             radius,
@@ -185,35 +185,35 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
                 *radius as f32,
             )?))?],
         },
-        scene::Shape::Cylinder {
+        scene::ShapeDecl::Cylinder {
             base,
             cap,
             radius,
             open,
         } => axial(*base, *cap, (*radius, *radius), *open, false)?,
-        scene::Shape::Cone {
+        scene::ShapeDecl::Cone {
             base,
             base_radius,
             cap,
             cap_radius,
             open,
         } => axial(*base, *cap, (*base_radius, *cap_radius), *open, true)?,
-        scene::Shape::Torus { major, minor } => {
+        scene::ShapeDecl::Torus { major, minor } => {
             vec![wrap(Arc::new(Torus::new(*major, *minor)?))?]
         }
-        scene::Shape::Triangle { vertices } => {
+        scene::ShapeDecl::Triangle { vertices } => {
             let mut p = vertices.map(|q| v(xf.transform_point3(q)));
             if mirrored {
                 p.swap(1, 2);
             }
             vec![AnyShape::Triangle(Triangle::new(p, None, None)?)]
         }
-        scene::Shape::Mesh { mesh } => build_mesh(obj, mesh, false)?
+        scene::ShapeDecl::Mesh { mesh } => build_mesh(obj, mesh, false)?
             .triangles()
             .into_par_iter()
             .map(AnyShape::Triangle)
             .collect(),
-        scene::Shape::Revolve {
+        scene::ShapeDecl::Revolve {
             profile,
             sweep,
             method,
@@ -222,19 +222,19 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             .into_iter()
             .map(|part| placed(Arc::new(part), obj))
             .collect::<Result<_, _>>()?,
-        scene::Shape::BezierPatch { points, method } => BezierPatch::new(points, *method)?
+        scene::ShapeDecl::BezierPatch { points, method } => BezierPatch::new(points, *method)?
             .split()
             .into_iter()
             .map(|piece| placed(Arc::new(piece), obj))
             .collect::<Result<_, _>>()?,
-        scene::Shape::Prism(p) => vec![wrap(Arc::new(Prism::new(p)?))?],
-        scene::Shape::Superellipsoid { e, n } => {
+        scene::ShapeDecl::Prism(p) => vec![wrap(Arc::new(Prism::new(p)?))?],
+        scene::ShapeDecl::Superellipsoid { e, n } => {
             vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
         }
-        scene::Shape::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
-        scene::Shape::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
-        scene::Shape::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
+        scene::ShapeDecl::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
+        scene::ShapeDecl::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
+        scene::ShapeDecl::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
-        scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
+        scene::ShapeDecl::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })
 }

@@ -1,13 +1,13 @@
 //! Constructive solid geometry as plain data: an operation over child objects, and which
 //! shapes enclose a volume (and so can take part in one).
 //!
-//! A CSG node is an [`Object`] whose shape is [`Shape::Csg`]: its transform applies to every
+//! A CSG node is an [`Object`] whose shape is [`ShapeDecl::Csg`]: its transform applies to every
 //! child (each child's own transform comes first), and each child keeps its own material. The
 //! renderer intersects the whole tree as one primitive (`shapes::csg`).
 
 use std::collections::HashMap;
 
-use super::{MeshData, Object, Shape};
+use super::{MeshData, Object, ShapeDecl};
 use crate::diag::short_number as short;
 
 /// Deepest nesting of CSG operations: the renderer classifies a hit by walking the tree.
@@ -78,7 +78,7 @@ impl Csg {
             .children
             .iter()
             .map(|c| match &c.shape {
-                Shape::Csg(inner) => inner.depth(limit - 1),
+                ShapeDecl::Csg(inner) => inner.depth(limit - 1),
                 _ => 0,
             })
             .max()
@@ -92,7 +92,7 @@ impl Csg {
         while let Some(n) = stack.pop() {
             for c in &n.children {
                 match &c.shape {
-                    Shape::Csg(inner) => stack.push(inner),
+                    ShapeDecl::Csg(inner) => stack.push(inner),
                     _ => out.push(c),
                 }
             }
@@ -102,30 +102,31 @@ impl Csg {
 }
 
 /// Why a shape does not enclose a volume, or `None` when it does.
-pub fn why_open(shape: &Shape) -> Option<String> {
+pub fn why_open(shape: &ShapeDecl) -> Option<String> {
     match shape {
-        Shape::Sphere { .. }
-        | Shape::Box { .. }
-        | Shape::Plane { .. }
-        | Shape::Torus { .. }
-        | Shape::Csg(_) => None,
-        Shape::Cylinder { open: true, .. } => Some("an `open` cylinder has no caps".into()),
-        Shape::Cylinder { .. } => None,
-        Shape::Cone { open: true, .. } => Some("an `open` cone has no caps".into()),
-        Shape::Cone { .. } => None,
-        Shape::Quad { .. } | Shape::Disk { .. } | Shape::Triangle { .. } => {
+        ShapeDecl::Sphere { .. }
+        | ShapeDecl::Box { .. }
+        | ShapeDecl::Plane { .. }
+        | ShapeDecl::Torus { .. }
+        | ShapeDecl::Csg(_) => None,
+        ShapeDecl::Cylinder { open: true, .. } => Some("an `open` cylinder has no caps".into()),
+        ShapeDecl::Cylinder { .. } => None,
+        ShapeDecl::Cone { open: true, .. } => Some("an `open` cone has no caps".into()),
+        ShapeDecl::Cone { .. } => None,
+        ShapeDecl::Quad { .. } | ShapeDecl::Disk { .. } | ShapeDecl::Triangle { .. } => {
             Some(format!("a {} is a flat surface", shape.kind()))
         }
-        Shape::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
-        Shape::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
-        Shape::Prism(_) | Shape::Superellipsoid { .. } | Shape::Blob(_) | Shape::HeightField(_) => {
-            None
-        }
-        Shape::Isosurface(i) if i.open => {
+        ShapeDecl::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
+        ShapeDecl::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
+        ShapeDecl::Prism(_)
+        | ShapeDecl::Superellipsoid { .. }
+        | ShapeDecl::Blob(_)
+        | ShapeDecl::HeightField(_) => None,
+        ShapeDecl::Isosurface(i) if i.open => {
             Some("an `open` isosurface has no walls where its container cuts it".into())
         }
-        Shape::Isosurface(_) => None,
-        Shape::Revolve { profile, sweep, .. } => {
+        ShapeDecl::Isosurface(_) => None,
+        ShapeDecl::Revolve { profile, sweep, .. } => {
             if sweep.is_some() {
                 return Some("a partial sweep (`angle`) is open".into());
             }
@@ -140,7 +141,7 @@ pub fn why_open(shape: &Shape) -> Option<String> {
                 ),
             }
         }
-        Shape::Mesh { mesh } => mesh_why_open(mesh),
+        ShapeDecl::Mesh { mesh } => mesh_why_open(mesh),
     }
 }
 

@@ -90,7 +90,7 @@ pub struct Scene {
     /// operation is one object holding its children.
     pub objects: Vec<Object>,
     /// Lights that are not shapes (point, spot). Emissive objects are lights too.
-    pub lights: Vec<Light>,
+    pub lights: Vec<LightDecl>,
     pub materials: Vec<Material>,
     /// Only textures some material, the background or the backdrop actually uses.
     pub textures: Vec<Texture>,
@@ -374,7 +374,7 @@ impl Default for Background {
 /// One object: a shape in object space, its object-to-world transform, and its appearance.
 #[derive(Debug, Clone)]
 pub struct Object {
-    pub shape: Shape,
+    pub shape: ShapeDecl,
     /// Object-to-world transform (identity when the file gave none).
     pub transform: DAffine3,
     pub material: MaterialId,
@@ -394,7 +394,7 @@ pub struct Emission {
 
 /// Shapes in object space.
 #[derive(Debug, Clone)]
-pub enum Shape {
+pub enum ShapeDecl {
     Sphere {
         center: DVec3,
         radius: f64,
@@ -488,28 +488,28 @@ pub const SUPERELLIPSOID_EXPONENTS: (f64, f64) = (1e-3, 10.0);
 /// it the intersector's quartic loses the precision to place hits on the surface).
 pub const TORUS_MAX_ASPECT: f64 = 1000.0;
 
-impl Shape {
+impl ShapeDecl {
     /// The keyword that declares this shape, for messages and summaries.
     pub fn kind(&self) -> &'static str {
         match self {
-            Shape::Sphere { .. } => "sphere",
-            Shape::Plane { .. } => "plane",
-            Shape::Quad { .. } => "quad",
-            Shape::Box { .. } => "box",
-            Shape::Cylinder { .. } => "cylinder",
-            Shape::Cone { .. } => "cone",
-            Shape::Torus { .. } => "torus",
-            Shape::Disk { .. } => "disk",
-            Shape::Triangle { .. } => "triangle",
-            Shape::Mesh { .. } => "mesh",
-            Shape::Revolve { .. } => "revolve",
-            Shape::BezierPatch { .. } => "bezier_patch",
-            Shape::Prism(_) => "prism",
-            Shape::Superellipsoid { .. } => "superellipsoid",
-            Shape::Blob(_) => "blob",
-            Shape::Isosurface(_) => "isosurface",
-            Shape::HeightField(_) => "height_field",
-            Shape::Csg(c) => c.op.name(),
+            ShapeDecl::Sphere { .. } => "sphere",
+            ShapeDecl::Plane { .. } => "plane",
+            ShapeDecl::Quad { .. } => "quad",
+            ShapeDecl::Box { .. } => "box",
+            ShapeDecl::Cylinder { .. } => "cylinder",
+            ShapeDecl::Cone { .. } => "cone",
+            ShapeDecl::Torus { .. } => "torus",
+            ShapeDecl::Disk { .. } => "disk",
+            ShapeDecl::Triangle { .. } => "triangle",
+            ShapeDecl::Mesh { .. } => "mesh",
+            ShapeDecl::Revolve { .. } => "revolve",
+            ShapeDecl::BezierPatch { .. } => "bezier_patch",
+            ShapeDecl::Prism(_) => "prism",
+            ShapeDecl::Superellipsoid { .. } => "superellipsoid",
+            ShapeDecl::Blob(_) => "blob",
+            ShapeDecl::Isosurface(_) => "isosurface",
+            ShapeDecl::HeightField(_) => "height_field",
+            ShapeDecl::Csg(c) => c.op.name(),
         }
     }
 }
@@ -540,7 +540,7 @@ pub enum IntersectMethod {
 
 /// Lights that are not shapes.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Light {
+pub enum LightDecl {
     Point {
         position: DVec3,
         /// Radiant intensity (W/sr per channel).

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use glam::DVec3;
 use sppm_lang::integrators::sppm::{photon_flux, render_with_state};
 use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings};
-use sppm_lang::scene::{Light, Shape};
+use sppm_lang::scene::{LightDecl, ShapeDecl};
 use sppm_lang::span::Span;
 
 /// A closed box with diffuse walls of albedo a and a point light inside: the flux reaching the
@@ -21,14 +21,14 @@ fn photon_pass_conserves_energy_in_a_closed_box() {
     let m = common::diffuse(&mut s, a);
     common::add_object(
         &mut s,
-        Shape::Box {
+        ShapeDecl::Box {
             min: DVec3::splat(-1.0),
             max: DVec3::splat(1.0),
         },
         m,
         None,
     );
-    s.lights.push(Light::Point {
+    s.lights.push(LightDecl::Point {
         position: DVec3::new(0.2, -0.1, 0.3),
         intensity: DVec3::ONE,
         span: Span::detached(),

@@ -9,8 +9,8 @@ use sppm_lang::geometry::Ray;
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::sampling::{Rng, uniform_sphere};
 use sppm_lang::scene::{
-    Background, Camera, ColorParam, Emission, Light, Material, MaterialId, Object, ScalarParam,
-    Scene, Settings, Shape,
+    Background, Camera, ColorParam, Emission, LightDecl, Material, MaterialId, Object, ScalarParam,
+    Scene, Settings, ShapeDecl,
 };
 use sppm_lang::span::Span;
 
@@ -44,7 +44,12 @@ pub fn diffuse(s: &mut Scene, albedo: f64) -> MaterialId {
     )
 }
 
-pub fn add_object(s: &mut Scene, shape: Shape, material: MaterialId, emission: Option<Emission>) {
+pub fn add_object(
+    s: &mut Scene,
+    shape: ShapeDecl,
+    material: MaterialId,
+    emission: Option<Emission>,
+) {
     s.objects.push(Object {
         shape,
         transform: DAffine3::IDENTITY,
@@ -54,8 +59,8 @@ pub fn add_object(s: &mut Scene, shape: Shape, material: MaterialId, emission: O
     });
 }
 
-pub fn sphere(center: DVec3, radius: f64) -> Shape {
-    Shape::Sphere { center, radius }
+pub fn sphere(center: DVec3, radius: f64) -> ShapeDecl {
+    ShapeDecl::Sphere { center, radius }
 }
 
 /// A clear glass of index 1.5 and a white mirror, both lossless.
@@ -115,7 +120,7 @@ pub fn furnace_point(res: u32) -> Scene {
     let mut s = empty_scene((res, res));
     let m = diffuse(&mut s, 0.5);
     add_object(&mut s, sphere(DVec3::ZERO, 1.0), m, None);
-    s.lights.push(Light::Point {
+    s.lights.push(LightDecl::Point {
         position: DVec3::ZERO,
         intensity: DVec3::splat(std::f64::consts::PI),
         span: Span::detached(),
@@ -153,8 +158,8 @@ pub fn furnace_enclosure(res: u32, a: f64) -> Scene {
     s
 }
 
-fn quad(origin: DVec3, edge_u: DVec3, edge_v: DVec3) -> Shape {
-    Shape::Quad {
+fn quad(origin: DVec3, edge_u: DVec3, edge_v: DVec3) -> ShapeDecl {
+    ShapeDecl::Quad {
         origin,
         edge_u,
         edge_v,
@@ -287,7 +292,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
     );
     add_object(
         &mut s,
-        Shape::Quad {
+        ShapeDecl::Quad {
             origin: DVec3::new(0.0, 0.0, -1.0),
             edge_u: DVec3::Z * 2.0,
             edge_v: DVec3::X * 2.0,
@@ -297,7 +302,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
     );
     add_object(
         &mut s,
-        Shape::Quad {
+        ShapeDecl::Quad {
             origin: DVec3::new(0.0, 0.0, -1.0),
             edge_u: DVec3::Y * 2.0,
             edge_v: DVec3::Z * 2.0,
@@ -306,7 +311,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         None,
     );
     let intensity = 4.0;
-    s.lights.push(Light::Point {
+    s.lights.push(LightDecl::Point {
         position: DVec3::new(1.0, 1.0, 0.0),
         intensity: DVec3::splat(intensity),
         span: Span::detached(),

@@ -55,7 +55,7 @@ fn the_readme_scene_evaluates_and_its_light_faces_the_floor() {
         .find(|o| o.emission.is_some())
         .expect("the README scene has an area light");
     match &light.shape {
-        sppm_lang::scene::Shape::Quad { edge_u, edge_v, .. } => {
+        sppm_lang::scene::ShapeDecl::Quad { edge_u, edge_v, .. } => {
             assert!(edge_u.cross(*edge_v).y < 0.0, "the light must shine down");
         }
         other => panic!("expected a quad light, found {}", other.kind()),

@@ -18,7 +18,7 @@ fn scene(text: &str) -> Scene {
 
 fn csg(o: &Object) -> &Csg {
     match &o.shape {
-        Shape::Csg(c) => c,
+        ShapeDecl::Csg(c) => c,
         s => panic!("expected a CSG, found a {}", s.kind()),
     }
 }
@@ -54,7 +54,7 @@ fn merge_keeps_own_materials_and_gives_its_own_to_the_rest() {
         DAffine3::from_translation(DVec3::new(0.0, 2.0, 0.0))
     );
     assert!(c.children.iter().all(|k| k.transform == DAffine3::IDENTITY));
-    assert!(matches!(c.children[1].shape, Shape::Sphere { center, .. } if center == DVec3::X));
+    assert!(matches!(c.children[1].shape, ShapeDecl::Sphere { center, .. } if center == DVec3::X));
 }
 
 #[test]

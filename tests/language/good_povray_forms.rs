@@ -45,7 +45,7 @@ fn vectors_without_commas() {
     ]);
     let l = load("sphere { <0 1 2> 0.5 } #declare C = <1 2 3 4 5>; #debug str(C[4])");
     let s = l.scene.as_ref().unwrap();
-    let Shape::Sphere { center, radius } = s.objects[0].shape else {
+    let ShapeDecl::Sphere { center, radius } = s.objects[0].shape else {
         panic!("not a sphere")
     };
     assert_eq!((center, radius), (DVec3::new(0.0, 1.0, 2.0), 0.5));
@@ -200,7 +200,7 @@ fn functions_in_macros_and_objects() {
          #debug str(Scaled(5), 0, 1)",
     );
     let o = &l.scene.as_ref().unwrap().objects[0];
-    let Shape::Sphere { center, radius } = o.shape else {
+    let ShapeDecl::Sphere { center, radius } = o.shape else {
         panic!("{:?}", o.shape)
     };
     let c = o.transform.transform_point3(center);

@@ -49,7 +49,7 @@ fn cornell_matches_reference_description() {
     let e = light[0].emission.unwrap();
     assert_eq!(e.radiance, DVec3::new(17.0, 12.0, 4.0));
     assert!(!e.two_sided);
-    let Shape::Quad {
+    let ShapeDecl::Quad {
         origin,
         edge_u,
         edge_v,
@@ -230,7 +230,7 @@ fn macros_recurse_and_count() {
          Branch(<0, 0, 0>, <0, 1, 0>, 0.5, 6)",
     );
     assert_eq!(s.objects.len(), 127);
-    let Shape::Cylinder { cap, radius, .. } = s.objects[0].shape else {
+    let ShapeDecl::Cylinder { cap, radius, .. } = s.objects[0].shape else {
         panic!()
     };
     assert!(close(cap, DVec3::new(0.0, 0.5, 0.0)));
@@ -244,7 +244,7 @@ fn cones_as_in_pov_ray() {
         "cone { <0, 0, 0>, 1, <0, 2, 0>, 0 }
          cone { <1, 0, 0>, 0.25, <1, 1, 0>, 0.5 open }",
     );
-    let Shape::Cone {
+    let ShapeDecl::Cone {
         base,
         base_radius,
         cap,
@@ -259,7 +259,7 @@ fn cones_as_in_pov_ray() {
         (DVec3::ZERO, 1.0, DVec3::new(0.0, 2.0, 0.0), 0.0, false)
     );
     assert!(
-        matches!(s.objects[1].shape, Shape::Cone { open: true, cap_radius, .. } if cap_radius == 0.5)
+        matches!(s.objects[1].shape, ShapeDecl::Cone { open: true, cap_radius, .. } if cap_radius == 0.5)
     );
     assert_eq!(s.objects[1].shape.kind(), "cone");
 }
@@ -269,7 +269,7 @@ fn cones_as_in_pov_ray() {
 fn a_torus_as_in_pov_ray() {
     let s = scene("torus { 1, 0.25 translate <0, 0.25, 0> }");
     assert!(
-        matches!(s.objects[0].shape, Shape::Torus { major, minor } if major == 1.0 && minor == 0.25)
+        matches!(s.objects[0].shape, ShapeDecl::Torus { major, minor } if major == 1.0 && minor == 0.25)
     );
 }
 
@@ -285,7 +285,7 @@ fn expressions_and_builtins() {
          #if (A == 5 && !(C < 12) || false) #declare F = 1; #elif (1) #declare F = 2; #end
          sphere { <A, C, D>, E/1000 + F }",
     );
-    let Shape::Sphere { center, radius } = s.objects[0].shape else {
+    let ShapeDecl::Sphere { center, radius } = s.objects[0].shape else {
         panic!()
     };
     assert_eq!(center, DVec3::new(5.0, 12.0, 12.0));
@@ -300,7 +300,7 @@ fn loops_and_locals() {
          #for (J, 10, 0, -5) sphere { <J, 1, 0>, 0.1 } #end",
     );
     assert_eq!(s.objects.len(), 7);
-    let Shape::Sphere { center, .. } = s.objects[6].shape else {
+    let ShapeDecl::Sphere { center, .. } = s.objects[6].shape else {
         panic!()
     };
     assert_eq!(center, DVec3::new(0.0, 1.0, 0.0));
@@ -330,7 +330,7 @@ fn settings_camera_lights_background() {
     assert_eq!(s.camera.aperture, 0.1);
     assert_eq!(s.camera.focus_distance, Some(3.0));
     assert_eq!(s.lights.len(), 2);
-    let Light::Spot {
+    let LightDecl::Spot {
         direction,
         cone_angle,
         falloff_angle,
@@ -379,7 +379,7 @@ fn revolve_and_patches() {
          bezier_mesh { #for (K, 1, 32) <K, 0, 0> #end }",
     );
     assert_eq!(s.objects.len(), 5);
-    let Shape::Revolve {
+    let ShapeDecl::Revolve {
         profile,
         sweep,
         method,
@@ -409,11 +409,11 @@ fn revolve_and_patches() {
         s.objects[0].transform.transform_vector3(DVec3::Y),
         DVec3::X
     ));
-    let Shape::Revolve { profile, .. } = &s.objects[1].shape else {
+    let ShapeDecl::Revolve { profile, .. } = &s.objects[1].shape else {
         panic!()
     };
     assert_eq!(profile.segments.len(), 2);
-    let Shape::BezierPatch { points, .. } = &s.objects[2].shape else {
+    let ShapeDecl::BezierPatch { points, .. } = &s.objects[2].shape else {
         panic!()
     };
     assert_eq!(points[4 + 2], DVec3::new(1.0, 0.0, 2.0));
@@ -425,7 +425,7 @@ fn includes_resolve_relative_to_the_including_file() {
     assert!(!l.has_errors(), "{:?}", l.diagnostics);
     assert_eq!(l.dependencies.len(), 2);
     let s = l.scene.unwrap();
-    let Shape::Sphere { radius, .. } = s.objects[0].shape else {
+    let ShapeDecl::Sphere { radius, .. } = s.objects[0].shape else {
         panic!()
     };
     assert_eq!(radius, 0.25);
@@ -448,7 +448,7 @@ fn an_included_file_keeps_its_locals_and_its_spare_declarations_quietly() {
         .objects
         .iter()
         .map(|o| match o.shape {
-            Shape::Sphere { radius, .. } => radius,
+            ShapeDecl::Sphere { radius, .. } => radius,
             _ => panic!("a sphere"),
         })
         .collect();
@@ -493,7 +493,7 @@ fn sphere_xs(s: &Scene) -> Vec<f64> {
     s.objects
         .iter()
         .map(|o| match o.shape {
-            Shape::Sphere { center, .. } => o.transform.transform_point3(center).x,
+            ShapeDecl::Sphere { center, .. } => o.transform.transform_point3(center).x,
             _ => panic!("not a sphere: {:?}", o.shape),
         })
         .collect()
@@ -716,13 +716,13 @@ fn directions_of_huge_and_tiny_vectors_are_unit() {
     let mut found = 0;
     for o in &s.objects {
         match o.shape {
-            Shape::Sphere { center, .. } => {
+            ShapeDecl::Sphere { center, .. } => {
                 let want = [DVec3::splat(third), DVec3::new(0.6, 0.8, 0.0)][found];
                 assert!(close(center, want), "{center} != {want}");
                 found += 1;
             }
-            Shape::Plane { normal, .. } => assert!(close(normal, DVec3::X), "{normal}"),
-            Shape::Disk { normal, .. } => {
+            ShapeDecl::Plane { normal, .. } => assert!(close(normal, DVec3::X), "{normal}"),
+            ShapeDecl::Disk { normal, .. } => {
                 let h = 0.5f64.sqrt();
                 assert!(close(normal, DVec3::new(h, h, 0.0)), "{normal}");
             }
@@ -745,7 +745,7 @@ fn tiny_lengths_form_feeds_and_debug_lines() {
     );
     let s = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
     match s.objects[0].shape {
-        Shape::Sphere { radius, .. } => assert!((radius - 5.0).abs() < 1e-12, "{radius}"),
+        ShapeDecl::Sphere { radius, .. } => assert!((radius - 5.0).abs() < 1e-12, "{radius}"),
         ref other => panic!("{other:?}"),
     }
     assert_eq!(l.diagnostics[0].message, "L = 5");
@@ -787,7 +787,7 @@ fn povray_logic_operators_and_the_conditional() {
     );
     let s = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
     match s.objects[0].shape {
-        Shape::Sphere { center, radius } => {
+        ShapeDecl::Sphere { center, radius } => {
             assert_eq!(center, DVec3::new(2.0, 30.0, 1.0));
             assert_eq!(radius, 1.0);
         }
@@ -849,7 +849,7 @@ fn a_spotlight_aimed_at_a_very_close_point_has_that_direction() {
          plane { <0, 1, 0>, -2 }\n",
     );
     match &s.lights[0] {
-        sppm_lang::scene::Light::Spot { direction, .. } => {
+        sppm_lang::scene::LightDecl::Spot { direction, .. } => {
             assert_eq!(*direction, DVec3::NEG_Y)
         }
         other => panic!("{other:?}"),
@@ -941,7 +941,7 @@ fn animation_names_read_the_frame_being_evaluated() {
         assert!(!l.has_errors(), "{:?}", l.diagnostics);
         assert!(l.animated, "the scene reads `clock`");
         let s = l.scene.unwrap();
-        let Shape::Sphere { center, .. } = s.objects[0].shape else {
+        let ShapeDecl::Sphere { center, .. } = s.objects[0].shape else {
             panic!("{:?}", s.objects[0].shape)
         };
         (center.x / 4.0, s)
@@ -973,7 +973,7 @@ fn animation_names_read_the_frame_being_evaluated() {
         s.objects[1..]
             .iter()
             .map(|o| match o.shape {
-                Shape::Sphere { center, .. } => center.x,
+                ShapeDecl::Sphere { center, .. } => center.x,
                 _ => f64::NAN,
             })
             .collect()

@@ -10,7 +10,8 @@ use common::{add_material, add_object, furnace_emitting};
 use glam::{DVec2, DVec3};
 use sppm_lang::render::{RenderOptions, render};
 use sppm_lang::scene::{
-    ColorParam, IntersectMethod, Light, Material, Profile, ScalarParam, Scene, Shape, TextureId,
+    ColorParam, IntersectMethod, LightDecl, Material, Profile, ScalarParam, Scene, ShapeDecl,
+    TextureId,
 };
 use sppm_lang::span::Span;
 
@@ -167,14 +168,14 @@ fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
         starts: u32::MAX,
     };
     let shapes = [
-        Shape::Revolve {
+        ShapeDecl::Revolve {
             profile: Profile {
                 segments: vec![vec![DVec2::new(0.5, -0.5), DVec2::new(0.5, 0.5)]],
             },
             sweep: None,
             method: newton,
         },
-        Shape::BezierPatch {
+        ShapeDecl::BezierPatch {
             points: Box::new(std::array::from_fn(|i| {
                 DVec3::new((i / 4) as f64 * 0.2, (i % 4) as f64 * 0.2, 0.5)
             })),
@@ -201,7 +202,7 @@ fn a_missing_texture_or_an_endless_newton_method_is_an_error() {
 #[test]
 fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
     let aimed =
-        |direction: DVec3, cone_angle: f64, falloff_angle: f64, intensity: f64| Light::Spot {
+        |direction: DVec3, cone_angle: f64, falloff_angle: f64, intensity: f64| LightDecl::Spot {
             position: DVec3::new(0.0, 0.5, 0.0),
             direction,
             intensity: DVec3::splat(intensity),
@@ -383,7 +384,7 @@ fn appearance_values_outside_the_language_s_ranges_are_errors() {
         assert!(err.contains("radiance"), "{radiance}: {err}");
     }
     let mut scene = furnace_emitting(4);
-    scene.lights.push(Light::Point {
+    scene.lights.push(LightDecl::Point {
         position: DVec3::ZERO,
         intensity: DVec3::splat(1e308),
         span: Span::detached(),
@@ -556,7 +557,7 @@ fn a_bezier_patch_without_area_is_an_error() {
                 albedo: ColorParam::Const(DVec3::splat(0.5)),
             },
         );
-        let shape = Shape::BezierPatch {
+        let shape = ShapeDecl::BezierPatch {
             points: Box::new(points),
             method: IntersectMethod::Robust,
         };

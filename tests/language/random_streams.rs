@@ -14,7 +14,7 @@ fn centres(s: &Scene) -> Vec<DVec3> {
     s.objects
         .iter()
         .map(|o| match o.shape {
-            Shape::Sphere { center, .. } => o.transform.transform_point3(center),
+            ShapeDecl::Sphere { center, .. } => o.transform.transform_point3(center),
             _ => panic!("not a sphere: {:?}", o.shape),
         })
         .collect()

@@ -14,7 +14,7 @@ fn spheres(objects: &[Object]) -> Vec<(DVec3, f64)> {
     objects
         .iter()
         .map(|o| match o.shape {
-            Shape::Sphere { center, radius } => (o.transform.transform_point3(center), radius),
+            ShapeDecl::Sphere { center, radius } => (o.transform.transform_point3(center), radius),
             _ => panic!("not a sphere: {:?}", o.shape),
         })
         .collect()
@@ -66,7 +66,7 @@ fn a_macro_yielding_an_object_stands_in_object_union_and_declarations() {
     assert!((s[2].1 - 0.4).abs() < 1e-12 && s[2].0 == DVec3::new(0.0, 3.0, 0.0));
     assert_eq!(s[3], (DVec3::new(0.0, 0.0, -1.0), 0.5));
     assert!(
-        matches!(scene.objects[4].shape, Shape::Csg(_)),
+        matches!(scene.objects[4].shape, ShapeDecl::Csg(_)),
         "{:?}",
         scene.objects[4].shape
     );

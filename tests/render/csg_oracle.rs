@@ -18,7 +18,7 @@ use common::empty_scene;
 use glam::{DAffine3, DQuat, DVec3};
 use sppm_lang::geometry::Ray;
 use sppm_lang::prepare::PreparedScene;
-use sppm_lang::scene::{ColorParam, Csg, CsgOp, Material, MaterialId, Object, Scene, Shape};
+use sppm_lang::scene::{ColorParam, Csg, CsgOp, Material, MaterialId, Object, Scene, ShapeDecl};
 use sppm_lang::span::Span;
 
 /// Oracle sampling step along a unit-direction ray; the geometry spans about 4 units.
@@ -150,7 +150,7 @@ fn random_tree(rng: &mut Rand, depth: u32, next_id: &mut usize) -> (Tree, Object
             (
                 Tree::Sphere { c, r, id },
                 object(
-                    Shape::Sphere {
+                    ShapeDecl::Sphere {
                         center: c,
                         radius: r,
                     },
@@ -163,7 +163,7 @@ fn random_tree(rng: &mut Rand, depth: u32, next_id: &mut usize) -> (Tree, Object
             let (lo, hi) = (c - h, c + h);
             (
                 Tree::Box { lo, hi, id },
-                object(Shape::Box { min: lo, max: hi }, DAffine3::IDENTITY, id),
+                object(ShapeDecl::Box { min: lo, max: hi }, DAffine3::IDENTITY, id),
             )
         };
     }
@@ -189,7 +189,7 @@ fn random_tree(rng: &mut Rand, depth: u32, next_id: &mut usize) -> (Tree, Object
         DAffine3::IDENTITY
     };
     let node = object(
-        Shape::Csg(Csg {
+        ShapeDecl::Csg(Csg {
             op,
             children: objects,
         }),
@@ -227,7 +227,7 @@ fn random_trees_match_a_point_membership_oracle() {
     for tree_no in 0..300 {
         let mut next_id = 0;
         let (tree, object) = random_tree(&mut rng, 3, &mut next_id);
-        if !matches!(object.shape, Shape::Csg(_)) {
+        if !matches!(object.shape, ShapeDecl::Csg(_)) {
             continue;
         }
         let mut scene: Scene = empty_scene((8, 8));

@@ -378,7 +378,7 @@ fn environment_render_does_not_depend_on_thread_count() {
     // A floor under the sphere so photons deposit (second surface).
     common::add_object(
         &mut scene,
-        sppm_lang::scene::Shape::Quad {
+        sppm_lang::scene::ShapeDecl::Quad {
             origin: DVec3::new(-3.0, -1.0, -3.0),
             edge_u: DVec3::new(0.0, 0.0, 6.0),
             edge_v: DVec3::new(6.0, 0.0, 0.0),
@@ -448,7 +448,7 @@ fn background_colour_lights_sppm_and_path_alike() {
         m,
         None,
     );
-    let floor = sppm_lang::scene::Shape::Quad {
+    let floor = sppm_lang::scene::ShapeDecl::Quad {
         origin: DVec3::new(-3.0, 0.0, -3.0),
         edge_u: DVec3::new(0.0, 0.0, 6.0),
         edge_v: DVec3::new(6.0, 0.0, 0.0),

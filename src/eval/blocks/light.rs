@@ -9,7 +9,7 @@ use crate::eval::Evaluator;
 use crate::eval::args::{Arg, color, num, range_error, vec3};
 use crate::eval::props::{PropSpec, p};
 use crate::eval::value::Value;
-use crate::scene::{Color, Light};
+use crate::scene::{Color, LightDecl};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -77,7 +77,7 @@ impl LightBuilder {
             );
         }
         if !self.spot {
-            return Ok(Value::Light(Box::new(Light::Point {
+            return Ok(Value::Light(Box::new(LightDecl::Point {
                 position,
                 intensity,
                 span,
@@ -123,7 +123,7 @@ impl LightBuilder {
                 "e.g. `falloff 25` with `angle 30`",
             ));
         }
-        Ok(Value::Light(Box::new(Light::Spot {
+        Ok(Value::Light(Box::new(LightDecl::Spot {
             position,
             direction,
             intensity,

@@ -236,7 +236,7 @@ impl ObjectBuilder {
         csg::csg_op(self.kind)
     }
 
-    fn part(&self, shape: Shape) -> Part {
+    fn part(&self, shape: ShapeDecl) -> Part {
         Part {
             shape: ShapeDef::Ready(shape),
             transform: DAffine3::IDENTITY,
@@ -308,10 +308,10 @@ impl ObjectBuilder {
                     if let ShapeDef::Ready(s) = &p.shape
                         && !matches!(
                             s,
-                            Shape::Quad { .. }
-                                | Shape::Disk { .. }
-                                | Shape::Sphere { .. }
-                                | Shape::Triangle { .. }
+                            ShapeDecl::Quad { .. }
+                                | ShapeDecl::Disk { .. }
+                                | ShapeDecl::Sphere { .. }
+                                | ShapeDecl::Triangle { .. }
                         )
                     {
                         return Err(vec![
@@ -334,7 +334,7 @@ impl ObjectBuilder {
                     return Err(vec![Error::new("a revolve needs a `profile`").label("no profile").help("add e.g. `profile bezier { <0, 0>, <0.35, 0>, <0.4, 0.3>, <0.15, 0.6> }`").at(self.span)]);
                 };
                 self.check_profile(ev, &profile)?;
-                vec![self.part(Shape::Revolve {
+                vec![self.part(ShapeDecl::Revolve {
                     profile: Profile {
                         segments: profile.segments.clone(),
                     },
@@ -374,7 +374,7 @@ impl ObjectBuilder {
                     for (i, (v, s)) in chunk.iter().enumerate() {
                         pts[i] = v.vec3().at(*s)?;
                     }
-                    parts.push(self.part(Shape::BezierPatch {
+                    parts.push(self.part(ShapeDecl::BezierPatch {
                         points: Box::new(pts),
                         method: self.method(),
                     }));

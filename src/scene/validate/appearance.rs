@@ -9,7 +9,7 @@ use glam::DVec3;
 use super::{fmt, invalid};
 use crate::diag::Diagnostic;
 use crate::scene::{
-    Background, ColorMap, ColorParam, Light, Material, Pattern, ScalarParam, Scene, Texture,
+    Background, ColorMap, ColorParam, LightDecl, Material, Pattern, ScalarParam, Scene, Texture,
 };
 use crate::span::Span;
 
@@ -87,10 +87,10 @@ pub(super) fn validate(scene: &Scene) -> Result<(), Diagnostic> {
     }
     for light in &scene.lights {
         let (intensity, span, what) = match light {
-            Light::Point {
+            LightDecl::Point {
                 intensity, span, ..
             } => (*intensity, *span, "the point light's intensity"),
-            Light::Spot {
+            LightDecl::Spot {
                 intensity, span, ..
             } => (*intensity, *span, "the spot light's intensity"),
         };

@@ -11,9 +11,9 @@ use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
 
 use super::{
-    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, Light,
+    Background, CLOSED_HELP, Camera, ColorParam, Csg, CsgOp, IntersectMethod, LightDecl,
     MAX_BLEND_DEPTH, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_NEWTON_ITERATIONS, MAX_NEWTON_STARTS,
-    Material, NormalKind, Object, ScalarParam, Scene, Settings, Shape, why_open,
+    Material, NormalKind, Object, ScalarParam, Scene, Settings, ShapeDecl, why_open,
 };
 use crate::diag::Diagnostic;
 use crate::span::Span;
@@ -283,7 +283,7 @@ impl Scene {
         sky_textures_exist(self)?;
         appearance::validate(self)?;
         for obj in &self.objects {
-            if let Shape::Csg(csg) = &obj.shape {
+            if let ShapeDecl::Csg(csg) = &obj.shape {
                 csg_limits(csg, obj.span)?;
                 if obj.emission.is_some() {
                     return Err(invalid(
@@ -298,9 +298,8 @@ impl Scene {
         }
         for light in &self.lights {
             let (position, span) = match light {
-                Light::Point { position, span, .. } | Light::Spot { position, span, .. } => {
-                    (*position, *span)
-                }
+                LightDecl::Point { position, span, .. }
+                | LightDecl::Spot { position, span, .. } => (*position, *span),
             };
             point(position, "the light's position", span)?;
         }
@@ -350,11 +349,11 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
         size(x * lo, &format!("the {kind}'s {what}"), span)
     };
     match &obj.shape {
-        Shape::Sphere { center, radius } => {
+        ShapeDecl::Sphere { center, radius } => {
             at(*center)?;
             len(*radius, "radius")?;
         }
-        Shape::Plane { normal, offset } => {
+        ShapeDecl::Plane { normal, offset } => {
             // Only the distance from the origin matters: a plane moved along itself is
             // the same plane.
             let n = t.matrix3.inverse().transpose() * *normal;
@@ -366,7 +365,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             };
             point(DVec3::splat(d), &format!("this {kind}"), span)?;
         }
-        Shape::Quad {
+        ShapeDecl::Quad {
             origin,
             edge_u,
             edge_v,
@@ -376,7 +375,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             }
             at(*origin + *edge_u + *edge_v)?;
         }
-        Shape::Box { min, max } => {
+        ShapeDecl::Box { min, max } => {
             for i in 0..8 {
                 let pick = |bit: i32, a: f64, b: f64| if i & bit == 0 { a } else { b };
                 at(DVec3::new(
@@ -386,7 +385,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 ))?;
             }
         }
-        Shape::Cylinder {
+        ShapeDecl::Cylinder {
             base, cap, radius, ..
         } => {
             at(*base)?;
@@ -394,7 +393,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             len(*radius, "radius")?;
             len((*cap - *base).length(), "length")?;
         }
-        Shape::Cone {
+        ShapeDecl::Cone {
             base,
             base_radius,
             cap,
@@ -407,22 +406,22 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             len(base_radius.max(*cap_radius), "radius")?;
             len((*cap - *base).length(), "length")?;
         }
-        Shape::Torus { major, minor } => {
+        ShapeDecl::Torus { major, minor } => {
             at(DVec3::ZERO)?;
             len(*major + *minor, "size")?;
             len(*minor, "minor radius")?;
         }
-        Shape::Disk { center, radius, .. } => {
+        ShapeDecl::Disk { center, radius, .. } => {
             // A disk may be squashed along its own normal: only its largest stretch.
             at(*center)?;
             size(*radius * hi, &format!("the {kind}'s radius"), span)?;
         }
-        Shape::Triangle { vertices } => {
+        ShapeDecl::Triangle { vertices } => {
             for v in vertices {
                 at(*v)?;
             }
         }
-        Shape::Mesh { mesh } => {
+        ShapeDecl::Mesh { mesh } => {
             // A mesh may have millions of vertices: looked at in parallel, the first one out of
             // range reported.
             let far = |p: &DVec3| {
@@ -433,7 +432,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 at(*p)?;
             }
         }
-        Shape::Superellipsoid { e, n } => {
+        ShapeDecl::Superellipsoid { e, n } => {
             let (lo, hi) = super::SUPERELLIPSOID_EXPONENTS;
             if !(*e >= lo && *e <= hi && *n >= lo && *n <= hi) {
                 return Err(invalid(
@@ -454,7 +453,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 at(c)?;
             }
         }
-        Shape::Blob(b) => {
+        ShapeDecl::Blob(b) => {
             b.check().map_err(|m| {
                 invalid(span, m, "here", "see the blob section of docs/language.md")
             })?;
@@ -466,7 +465,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 len(c.radius * stretch(&c.transform), "component radius")?;
             }
         }
-        Shape::Isosurface(i) => {
+        ShapeDecl::Isosurface(i) => {
             i.check().map_err(|m| {
                 invalid(
                     span,
@@ -480,13 +479,13 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             at(lo)?;
             at(hi)?;
         }
-        Shape::HeightField(_) => {
+        ShapeDecl::HeightField(_) => {
             len(1.0, "size")?;
             for c in [DVec3::ZERO, DVec3::ONE] {
                 at(c)?;
             }
         }
-        Shape::Prism(p) => {
+        ShapeDecl::Prism(p) => {
             // The corners of its box: the profile's rectangle at both heights (scaled by the
             // height for a conic sweep).
             let (lo, hi) = p.heights;
@@ -498,7 +497,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 }
             }
         }
-        Shape::Revolve {
+        ShapeDecl::Revolve {
             profile, method, ..
         } => {
             newton_bounds(*method, kind, span)?;
@@ -506,7 +505,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 at(DVec3::new(p.x, p.y, p.x))?;
             }
         }
-        Shape::BezierPatch { points, method } => {
+        ShapeDecl::BezierPatch { points, method } => {
             newton_bounds(*method, kind, span)?;
             for p in points.iter() {
                 at(*p)?;
@@ -534,7 +533,7 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
                 ));
             }
         }
-        Shape::Csg(csg) => validate_csg(csg, t, span)?,
+        ShapeDecl::Csg(csg) => validate_csg(csg, t, span)?,
     }
     Ok(())
 }

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use sppm_lang::accel::Bvh;
 use sppm_lang::render::PreparedScene;
-use sppm_lang::scene::Shape;
+use sppm_lang::scene::ShapeDecl;
 use sppm_lang::shapes::mesh::TriangleMesh;
 
 /// One step: its name, wall seconds and CPU seconds (summed over the process's threads).
@@ -92,7 +92,7 @@ pub fn run(obj: &Path, threads: usize) -> Result<Vec<Step>, String> {
         timed("validate the scene", &mut steps, || scene.validate())
             .map_err(|e| format!("{e:?}"))?;
         let object = &scene.objects[0];
-        let Shape::Mesh { mesh } = &object.shape else {
+        let ShapeDecl::Mesh { mesh } = &object.shape else {
             return Err("the scene holds no mesh".into());
         };
         let compact = timed("TriangleMesh::new", &mut steps, || {

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use sppm_lang::bezier::lathe::Lathe;
 use sppm_lang::eval::{EvalOptions, load_file};
-use sppm_lang::scene::{MeshData, Shape};
+use sppm_lang::scene::{MeshData, ShapeDecl};
 
 use crate::tessellate::lathe_mesh;
 
@@ -112,10 +112,10 @@ pub fn write_twin(scene: &Path, out: &Path, tol: f64) -> Result<(Vec<String>, St
     for (k, obj) in sc
         .objects
         .iter()
-        .filter(|o| matches!(o.shape, Shape::Revolve { .. }))
+        .filter(|o| matches!(o.shape, ShapeDecl::Revolve { .. }))
         .enumerate()
     {
-        let Shape::Revolve { profile, sweep, .. } = &obj.shape else {
+        let ShapeDecl::Revolve { profile, sweep, .. } = &obj.shape else {
             continue;
         };
         let lathe = Lathe::new(&profile.segments, *sweep)?;

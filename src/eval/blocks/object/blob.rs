@@ -9,7 +9,7 @@ use glam::DVec3;
 use super::ObjectBuilder;
 use crate::diag::{At, Error, SourceResult, short_number};
 use crate::eval::value::{ObjectDef, Part, ShapeDef};
-use crate::scene::{Blob, BlobComponent, MAX_BLOB_COMPONENTS, Shape};
+use crate::scene::{Blob, BlobComponent, MAX_BLOB_COMPONENTS, ShapeDecl};
 use crate::span::Span;
 
 const EXAMPLE: &str = "blob { threshold 0.6 sphere { <0, 0, 0>, 1, strength 1 } \
@@ -103,7 +103,7 @@ impl ObjectBuilder {
                 .at(sspan),
             ]);
         }
-        Ok(self.part(Shape::Blob(Blob {
+        Ok(self.part(ShapeDecl::Blob(Blob {
             threshold: 1.0,
             components: vec![BlobComponent {
                 a,
@@ -119,7 +119,7 @@ impl ObjectBuilder {
     /// their transforms.
     pub(super) fn blob_child(&mut self, o: &ObjectDef, span: Span) -> SourceResult<()> {
         for part in &o.parts {
-            let ShapeDef::Ready(Shape::Blob(b)) = &part.shape else {
+            let ShapeDef::Ready(ShapeDecl::Blob(b)) = &part.shape else {
                 return Err(vec![
                     Error::new(
                         "a blob takes `sphere` and `cylinder` components, not other objects",
@@ -148,7 +148,7 @@ impl ObjectBuilder {
         Ok(())
     }
 
-    pub(super) fn blob(&self) -> SourceResult<Shape> {
+    pub(super) fn blob(&self) -> SourceResult<ShapeDecl> {
         if let Some((v, s)) = self.values.first() {
             return Err(vec![
                 Error::new(format!("a blob does not take {} here", v.type_name()))
@@ -200,6 +200,6 @@ impl ObjectBuilder {
         };
         blob.check()
             .map_err(|m| vec![Error::new(m).label("here").at(self.span)])?;
-        Ok(Shape::Blob(blob))
+        Ok(ShapeDecl::Blob(blob))
     }
 }

@@ -11,12 +11,12 @@ use crate::diag::{Error, SourceResult, short_number, size_text};
 use crate::eval::Evaluator;
 use crate::eval::value::Value;
 use crate::scene::height_field::{grid_bytes, height_grid_from_image};
-use crate::scene::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE, Shape};
+use crate::scene::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE, ShapeDecl};
 
 const EXAMPLE: &str = "height_field { png \"terrain.png\" smooth }";
 
 impl ObjectBuilder {
-    pub(super) fn height_field(&self, ev: &mut Evaluator) -> SourceResult<Shape> {
+    pub(super) fn height_field(&self, ev: &mut Evaluator) -> SourceResult<ShapeDecl> {
         let grid = match (&self.hf_file, self.values.as_slice()) {
             (Some((path, span)), []) => {
                 ev.dependencies.push(path.clone());
@@ -176,7 +176,7 @@ impl ObjectBuilder {
                 .at(at),
             ]);
         }
-        Ok(Shape::HeightField(HeightField {
+        Ok(ShapeDecl::HeightField(HeightField {
             grid: Arc::new(grid),
             water,
             smooth: self.smooth,

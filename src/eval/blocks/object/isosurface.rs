@@ -16,7 +16,7 @@ use crate::eval::props::PropSpec;
 use crate::eval::value::{FunctionValue, ObjectDef, ShapeDef, Value};
 use crate::scene::blob::DEFAULT_ACCURACY;
 use crate::scene::interval::Interval;
-use crate::scene::{Container, Isosurface, Shape};
+use crate::scene::{Container, Isosurface, ShapeDecl};
 use crate::span::Span;
 use crate::syntax::ast::Name;
 
@@ -93,7 +93,7 @@ impl ObjectBuilder {
         Ok(())
     }
 
-    pub(super) fn isosurface(&self, ev: &mut Evaluator) -> SourceResult<Shape> {
+    pub(super) fn isosurface(&self, ev: &mut Evaluator) -> SourceResult<ShapeDecl> {
         if let Some((v, s)) = self.values.first() {
             return Err(unexpected(
                 self,
@@ -182,7 +182,7 @@ impl ObjectBuilder {
                     ),
             );
         }
-        Ok(Shape::Isosurface(Isosurface {
+        Ok(ShapeDecl::Isosurface(Isosurface {
             function,
             threshold,
             container,
@@ -211,8 +211,8 @@ impl ContainedBy {
             ]);
         };
         let shape = match c {
-            Container::Box { min, max } => Shape::Box { min, max },
-            Container::Sphere { center, radius } => Shape::Sphere { center, radius },
+            Container::Box { min, max } => ShapeDecl::Box { min, max },
+            Container::Sphere { center, radius } => ShapeDecl::Sphere { center, radius },
         };
         Ok(Value::Object(std::rc::Rc::new(ObjectDef {
             parts: vec![crate::eval::value::Part {
@@ -255,11 +255,11 @@ pub(super) fn container_of(o: &ObjectDef, span: Span) -> SourceResult<Container>
         return Err(refuse());
     }
     match &part.shape {
-        ShapeDef::Ready(Shape::Box { min, max }) => Ok(Container::Box {
+        ShapeDef::Ready(ShapeDecl::Box { min, max }) => Ok(Container::Box {
             min: *min,
             max: *max,
         }),
-        ShapeDef::Ready(Shape::Sphere { center, radius }) => Ok(Container::Sphere {
+        ShapeDef::Ready(ShapeDecl::Sphere { center, radius }) => Ok(Container::Sphere {
             center: *center,
             radius: *radius,
         }),

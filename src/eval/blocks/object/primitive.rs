@@ -10,7 +10,7 @@ use crate::eval::Evaluator;
 use crate::eval::args::range_error;
 use crate::eval::builtins::unit;
 use crate::eval::value::{Part, ShapeDef, Value};
-use crate::scene::{Shape, TORUS_MAX_ASPECT};
+use crate::scene::{ShapeDecl, TORUS_MAX_ASPECT};
 use crate::span::Span;
 
 /// What each primitive's positional values are: (name, kind) with kind `v` vector, `n` number,
@@ -187,11 +187,11 @@ impl ObjectBuilder {
             Ok(v)
         };
         let shape = match self.kind {
-            "sphere" => Shape::Sphere {
+            "sphere" => ShapeDecl::Sphere {
                 center: vs[0].0,
                 radius: radius(ns[0])?,
             },
-            "plane" => Shape::Plane {
+            "plane" => ShapeDecl::Plane {
                 normal: unit(nonzero(vs[0], "normal")?).unwrap_or(DVec3::Y),
                 offset: ns[0].0,
             },
@@ -208,13 +208,13 @@ impl ObjectBuilder {
                             .at(vs[2].1),
                     ]);
                 }
-                Shape::Quad {
+                ShapeDecl::Quad {
                     origin: vs[0].0,
                     edge_u: u,
                     edge_v: v,
                 }
             }
-            "box" => Shape::Box {
+            "box" => ShapeDecl::Box {
                 min: vs[0].0.min(vs[1].0),
                 max: vs[0].0.max(vs[1].0),
             },
@@ -227,7 +227,7 @@ impl ObjectBuilder {
                             .at(vs[1].1),
                     ]);
                 }
-                Shape::Cylinder {
+                ShapeDecl::Cylinder {
                     base: vs[0].0,
                     cap: vs[1].0,
                     radius: radius(ns[0])?,
@@ -262,7 +262,7 @@ impl ObjectBuilder {
                         "give the base or the cap a positive radius",
                     ));
                 }
-                Shape::Cone {
+                ShapeDecl::Cone {
                     base: vs[0].0,
                     base_radius: ns[0].0,
                     cap: vs[1].0,
@@ -296,9 +296,9 @@ impl ObjectBuilder {
                         "make the minor radius at least the major radius / 1000",
                     ));
                 }
-                Shape::Torus { major, minor }
+                ShapeDecl::Torus { major, minor }
             }
-            "disk" => Shape::Disk {
+            "disk" => ShapeDecl::Disk {
                 center: vs[0].0,
                 normal: unit(nonzero(vs[1], "normal")?).unwrap_or(DVec3::Y),
                 radius: radius(ns[0])?,
@@ -311,7 +311,7 @@ impl ObjectBuilder {
                             .with_label("degenerate triangle"),
                     );
                 }
-                Shape::Triangle {
+                ShapeDecl::Triangle {
                     vertices: [a, b, c],
                 }
             }

@@ -5,12 +5,12 @@ use glam::DVec2;
 
 use super::ObjectBuilder;
 use crate::diag::{At, Error, SourceResult, short_number};
-use crate::scene::{Prism, PrismSpline, Shape, prism_segments};
+use crate::scene::{Prism, PrismSpline, ShapeDecl, prism_segments};
 
 const EXAMPLE: &str = "prism { linear_sweep 0, 1, 4, <0, 0>, <1, 0>, <0, 1>, <0, 0> }";
 
 impl ObjectBuilder {
-    pub(super) fn prism(&self) -> SourceResult<Shape> {
+    pub(super) fn prism(&self) -> SourceResult<ShapeDecl> {
         let spline = self.spline.unwrap_or(PrismSpline::Linear);
         if self.values.len() < 3 {
             return Err(vec![
@@ -102,7 +102,7 @@ impl ObjectBuilder {
                     .at(self.values[0].1.join(self.values[1].1)),
             ]);
         }
-        Ok(Shape::Prism(Prism {
+        Ok(ShapeDecl::Prism(Prism {
             segments,
             heights: (h1, h2),
             conic: self.conic,

@@ -10,7 +10,7 @@ use super::ObjectBuilder;
 use super::csg::node;
 use crate::diag::{At, Error, SourceResult, short_number};
 use crate::eval::value::Part;
-use crate::scene::{CsgOp, Shape};
+use crate::scene::{CsgOp, ShapeDecl};
 
 const EXAMPLE: &str =
     "sphere_sweep { linear_spline 3, <0, 0, 0>, 0.1, <1, 1, 0>, 0.2, <2, 0, 0>, 0.1 }";
@@ -80,7 +80,7 @@ impl ObjectBuilder {
         }
         let mut parts: Vec<Part> = spheres
             .iter()
-            .map(|&(center, radius)| self.part(Shape::Sphere { center, radius }))
+            .map(|&(center, radius)| self.part(ShapeDecl::Sphere { center, radius }))
             .collect();
         for w in spheres.windows(2) {
             let ((c1, r1), (c2, r2)) = (w[0], w[1]);
@@ -98,7 +98,7 @@ impl ObjectBuilder {
             if cos < 1e-6 {
                 continue;
             }
-            parts.push(self.part(Shape::Cone {
+            parts.push(self.part(ShapeDecl::Cone {
                 base: c1 + u * (r1 * sin),
                 base_radius: r1 * cos,
                 cap: c2 + u * (r2 * sin),

@@ -3,10 +3,10 @@
 
 use super::ObjectBuilder;
 use crate::diag::{At, Error, SourceResult, short_number};
-use crate::scene::{SUPERELLIPSOID_EXPONENTS, Shape};
+use crate::scene::{SUPERELLIPSOID_EXPONENTS, ShapeDecl};
 
 impl ObjectBuilder {
-    pub(super) fn superellipsoid(&self) -> SourceResult<Shape> {
+    pub(super) fn superellipsoid(&self) -> SourceResult<ShapeDecl> {
         let (lo, hi) = SUPERELLIPSOID_EXPONENTS;
         let [(v, span)] = self.values.as_slice() else {
             return Err(vec![
@@ -45,6 +45,6 @@ impl ObjectBuilder {
                 ]);
             }
         }
-        Ok(Shape::Superellipsoid { e: en.x, n: en.y })
+        Ok(ShapeDecl::Superellipsoid { e: en.x, n: en.y })
     }
 }

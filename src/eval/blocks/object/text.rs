@@ -10,7 +10,7 @@ use super::ObjectBuilder;
 use crate::diag::{At, Diagnostic, Error, SourceResult, short_number};
 use crate::eval::Evaluator;
 use crate::eval::value::{Part, ShapeDef, Value};
-use crate::scene::Shape;
+use crate::scene::ShapeDecl;
 use crate::scene::text::{MAX_TEXT_SEGMENTS, TextError, text_glyphs};
 
 const EXAMPLE: &str = "text { ttf \"DejaVuSans.ttf\" \"Hello\" 0.2, 0 }";
@@ -153,7 +153,7 @@ impl ObjectBuilder {
             .glyphs
             .into_iter()
             .map(|g| Part {
-                shape: ShapeDef::Ready(Shape::Prism(g.prism)),
+                shape: ShapeDef::Ready(ShapeDecl::Prism(g.prism)),
                 transform: g.transform,
                 material: None,
                 emission: None,

@@ -30,7 +30,7 @@ use sppm_lang::camera::Camera;
 use sppm_lang::eval::Loaded;
 use sppm_lang::geometry::Ray;
 use sppm_lang::render::PreparedScene;
-use sppm_lang::scene::{Scene, Shape};
+use sppm_lang::scene::{Scene, ShapeDecl};
 use sppm_lang::{EvalOptions, load_file, load_source};
 use sppm_measure::reference::{self, RefHit};
 
@@ -69,10 +69,10 @@ fn curved_objects(scene: &Scene) -> Vec<Curved> {
         .enumerate()
         .filter_map(|(i, obj)| {
             let core = match &obj.shape {
-                Shape::Revolve { profile, sweep, .. } => {
+                ShapeDecl::Revolve { profile, sweep, .. } => {
                     Core::Lathe(Lathe::new(&profile.segments, *sweep).unwrap())
                 }
-                Shape::BezierPatch { points, .. } => {
+                ShapeDecl::BezierPatch { points, .. } => {
                     Core::Patch(Box::new(Patch::new(points).ok()?))
                 }
                 _ => return None,
