@@ -671,3 +671,70 @@ fn a_file_missing_from_memory_is_a_diagnostic_at_its_include() {
     let missing = sppm_lang::load(std::path::Path::new("other.scn"), &load_options).unwrap_err();
     assert!(missing.to_string().contains("other.scn"), "{missing}");
 }
+
+/// The three calls report in one type, `Diagnostic`: a warning of the prepared scene comes back
+/// in `Prepared::warnings` as a warning (not an error), a refused override as an error at the
+/// `settings` block that the option overrides, a missing scene file as an error at no place, and
+/// the caller's cancel as the one diagnostic `interrupted` with its flag set.
+#[test]
+fn the_three_calls_report_in_one_type() {
+    use sppm_lang::world::SharedWorld;
+    use sppm_lang::{Cancel, EvalOptions, MemoryWorld, Severity};
+    use std::path::Path;
+    // No light: legal, but it renders black (a warning at no place).
+    let text = "settings { resolution 8, 8 }\ncamera { location <0, 0, 3> look_at <0, 0, 0> }\n\
+                sphere { <0, 0, 0>, 1 material { diffuse rgb <0.5, 0.5, 0.5> } }\n";
+    let options = EvalOptions {
+        world: SharedWorld::new(MemoryWorld::new().with("dark.scn", text)),
+        ..EvalOptions::default()
+    };
+    let document = sppm_lang::load(Path::new("dark.scn"), &options).expect("loads");
+    let prepared = sppm_lang::prepare(&document, &RenderOptions::default()).expect("prepares");
+    let no_light: Vec<_> = prepared
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("no light"))
+        .collect();
+    assert_eq!(no_light.len(), 1, "{:?}", prepared.warnings);
+    assert_eq!(no_light[0].severity, Severity::Warning);
+    assert!(!no_light[0].is_placed());
+
+    let too_many = RenderOptions {
+        iterations: Some(0),
+        ..Default::default()
+    };
+    let failure = sppm_lang::prepare(&document, &too_many)
+        .err()
+        .expect("0 iterations are refused");
+    assert!(!failure.interrupted);
+    let [e] = failure.diagnostics.as_slice() else {
+        panic!("{:?}", failure.diagnostics)
+    };
+    assert_eq!(e.severity, Severity::Error);
+    assert!(e.message.contains("iterations"), "{}", e.message);
+    assert_eq!(e.span, document.scene.settings.span);
+    assert!(e.is_placed());
+
+    let missing = sppm_lang::load(Path::new("missing.scn"), &options)
+        .err()
+        .expect("a missing file is an error");
+    let [e] = missing.diagnostics.as_slice() else {
+        panic!("{:?}", missing.diagnostics)
+    };
+    assert!(e.is_error() && !e.is_placed(), "{e:?}");
+    assert!(e.message.contains("missing.scn"), "{}", e.message);
+
+    let cancel = Cancel::new();
+    cancel.cancel();
+    let stopped = RenderOptions {
+        cancel,
+        ..Default::default()
+    };
+    let failure = sppm_lang::prepare(&document, &stopped)
+        .err()
+        .expect("a cancelled prepare stops");
+    assert!(failure.interrupted);
+    assert_eq!(failure.diagnostics.len(), 1);
+    assert!(failure.diagnostics[0].interrupted);
+    assert_eq!(failure.diagnostics[0].message, "interrupted");
+}
