@@ -475,6 +475,9 @@ fn render_scene(
             cancel.flag(),
             &mut on_progress,
         )?;
+        for w in prepared.render_warnings() {
+            on_warning(&w);
+        }
         Ok((out, prepared))
     });
     if let Some(b) = &bar {
