@@ -128,6 +128,9 @@ pub struct Rendered {
     /// Stopped by the options' cancel handle (the image holds the finished iterations).
     pub cancelled: bool,
     pub stats: RenderStats,
+    /// What went wrong in the render without stopping it (rays that gave up on an
+    /// isosurface: [`PreparedScene::render_warnings`]).
+    pub warnings: Vec<Diagnostic>,
 }
 
 /// Renders `prepared`. Its options' `cancel` handle stops the render at its next check and
@@ -147,5 +150,6 @@ pub fn render(prepared: &Prepared) -> Result<Rendered, Failure> {
         iterations: out.iterations_done,
         cancelled: out.cancelled,
         stats: out.stats,
+        warnings: prepared.scene.render_warnings(),
     })
 }

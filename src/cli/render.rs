@@ -473,6 +473,7 @@ fn render_scene(
             cancel.flag(),
             &mut on_progress,
         )?;
+        on_warnings(&prepared.render_warnings());
         Ok((out, prepared))
     });
     if let Some(b) = &bar {

@@ -555,7 +555,7 @@ mod tests {
                        <0.2, 3.8>, <0.1, 3.9>, <0.05, 3.95>, <0, 4> }";
         for (sweep, parts) in [("", 3), ("angle 0, 90", 4)] {
             let s = scene(&format!("revolve {{ {profile} {sweep} }}"));
-            let built = super::super::shapes::build_shapes(&s.objects[0]).unwrap();
+            let built = super::super::shapes::build_shapes(&s.objects[0], &mut Vec::new()).unwrap();
             assert_eq!(built.len(), parts, "{sweep}");
             assert_eq!(primitives(&s.objects[0].shape), parts as u64, "{sweep}");
             assert!(built.iter().all(|p| p.is_heavy()));

@@ -12,7 +12,7 @@ use glam::DAffine3;
 
 use super::budget::primitives;
 use super::orient::{profile_area, signed_volume};
-use super::shapes::build_shapes;
+use super::shapes::{Isosurfaces, build_shapes};
 use crate::diag::Diagnostic;
 use crate::scene::{self, MAX_CSG_DEPTH, MaterialId, Object, Scene};
 use crate::shapes::csg::{Csg, CsgLeaf, CsgNode};
@@ -84,9 +84,14 @@ pub(super) struct LeafPart {
 
 /// The primitive of CSG object `obj`; its leaves get ids `first_id`, `first_id + 1`, ... in the
 /// order of the returned parts.
-pub(super) fn build_csg(obj: &Object, first_id: u32) -> Result<(AnyShape, Vec<LeafPart>), String> {
+/// Its isosurfaces go into `isos`.
+pub(super) fn build_csg(
+    obj: &Object,
+    first_id: u32,
+    isos: &mut Isosurfaces,
+) -> Result<(AnyShape, Vec<LeafPart>), String> {
     let mut parts = Vec::new();
-    let root = node(obj, &DAffine3::IDENTITY, first_id, &mut parts)?;
+    let root = node(obj, &DAffine3::IDENTITY, first_id, &mut parts, isos)?;
     Ok((AnyShape::Csg(Box::new(Csg::new(root)?)), parts))
 }
 
@@ -95,13 +100,14 @@ fn node(
     parent: &DAffine3,
     first_id: u32,
     parts: &mut Vec<LeafPart>,
+    isos: &mut Isosurfaces,
 ) -> Result<CsgNode, String> {
     let transform = *parent * obj.transform;
     if let scene::ShapeDecl::Csg(csg) = &obj.shape {
         let kids = csg
             .children
             .iter()
-            .map(|c| node(c, &transform, first_id, parts))
+            .map(|c| node(c, &transform, first_id, parts, isos))
             .collect::<Result<Vec<_>, _>>()?;
         return Ok(CsgNode::Op(csg.op, kids));
     }
@@ -118,7 +124,7 @@ fn node(
         emission: None,
         span: obj.span,
     };
-    let shapes = build_shapes(&leaf)?;
+    let shapes = build_shapes(&leaf, isos)?;
     let flip = match &obj.shape {
         scene::ShapeDecl::Mesh { mesh } => signed_volume(mesh) < 0.0,
         scene::ShapeDecl::Revolve { profile, .. } => profile_area(profile) < 0.0,

@@ -93,6 +93,9 @@ pub struct PreparedScene<'a> {
     bump_scale: Vec<f32>,
     /// The floor of a spawned ray's offset, from the scene's extent ([`accel::offset_floor`]).
     offset_floor: f32,
+    /// The isosurfaces, whose rays given up are reported after a render
+    /// ([`PreparedScene::render_warnings`]).
+    isosurfaces: shapes::Isosurfaces,
 }
 
 /// A surface hit with the primitive it belongs to.
@@ -227,6 +230,36 @@ impl<'a> PreparedScene<'a> {
         out
     }
 
+    /// What went wrong in a render that still finished, since the last call: rays that gave
+    /// up on an isosurface, their stretches exhausted, and were taken as misses (the image may
+    /// show holes or specks there), one warning per isosurface at its object.
+    pub fn render_warnings(&self) -> Vec<Diagnostic> {
+        self.isosurfaces
+            .iter()
+            .filter_map(|(iso, span)| {
+                let n = iso.take_exhausted();
+                (n > 0).then(|| {
+                    Diagnostic::warning(
+                        *span,
+                        format!(
+                            "{n} ray{} gave up on this isosurface after {} stretches each and \
+                             were taken as misses: the image may show holes or specks on it",
+                            if n == 1 { "" } else { "s" },
+                            crate::shapes::isosurface::MAX_VISITS
+                        ),
+                    )
+                    .with_label("rays gave up here")
+                    .with_help(
+                        "give the isosurface a larger `accuracy` (each ray halves its stretches \
+                         down to it), or simplify the function (its bounds over a stretch are \
+                         tightest where each of x, y, z appears once): fewer stretches stay \
+                         undecided",
+                    )
+                })
+            })
+            .collect()
+    }
+
     pub fn new(scene: &'a Scene) -> Result<Self, Diagnostic> {
         Self::new_until(scene, &|| false)
     }
@@ -251,6 +284,7 @@ impl<'a> PreparedScene<'a> {
         unless(stop)?;
         let camera = Camera::new(&scene.camera, scene.settings.handedness, width, height)?;
         let mut shapes = Vec::new();
+        let mut isosurfaces = Vec::new();
         let mut meshes = Vec::new();
         let mut prim_object = Vec::new();
         let mut prim_light = Vec::new();
@@ -275,7 +309,7 @@ impl<'a> PreparedScene<'a> {
             if let scene::ShapeDecl::Csg(_) = &obj.shape {
                 // One primitive; its leaves have ids (and objects) of their own.
                 let id = prim_object.len() as u32;
-                let (shape, parts) = csg::build_csg(obj, id + 1).map_err(err)?;
+                let (shape, parts) = csg::build_csg(obj, id + 1, &mut isosurfaces).map_err(err)?;
                 shapes.push((shape, id));
                 prim_object.push(oi as u32);
                 prim_light.push(NO_LIGHT);
@@ -323,10 +357,11 @@ impl<'a> PreparedScene<'a> {
             }
             let list = match placed {
                 Some(placed) => vec![placed],
-                None => build_shapes(obj).map_err(err)?,
+                None => build_shapes(obj, &mut isosurfaces).map_err(err)?,
             };
             let light_shapes = if emission.is_some() {
-                Some(build_shapes(obj).map_err(err)?)
+                // The same shapes again, as lights: their isosurfaces are counted once.
+                Some(build_shapes(obj, &mut Vec::new()).map_err(err)?)
             } else {
                 None
             };
@@ -449,6 +484,7 @@ impl<'a> PreparedScene<'a> {
                 })
                 .collect(),
             offset_floor: 0.0,
+            isosurfaces,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
         let b = prepared.bvh.bounds();

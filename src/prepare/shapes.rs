@@ -78,8 +78,15 @@ fn placed<S: Shape + ?Sized + 'static>(s: Arc<S>, obj: &scene::Object) -> Result
     )?)))
 }
 
-/// World-space shapes of one object.
-pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String> {
+/// The isosurfaces a prepared scene holds, with their objects' spans: their counts of rays
+/// given up ([`Isosurface::exhausted`]) are reported when a render ends.
+pub(super) type Isosurfaces = Vec<(Arc<Isosurface>, crate::span::Span)>;
+
+/// World-space shapes of one object; its isosurface, if it is one, also goes into `isos`.
+pub(super) fn build_shapes(
+    obj: &scene::Object,
+    isos: &mut Isosurfaces,
+) -> Result<Vec<AnyShape>, String> {
     let xf = &obj.transform;
     let m = xf.matrix3;
     let det = determinant(obj)?;
@@ -232,7 +239,11 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
             vec![wrap(Arc::new(Superellipsoid::new(*e, *n)?))?]
         }
         scene::ShapeDecl::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
-        scene::ShapeDecl::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
+        scene::ShapeDecl::Isosurface(i) => {
+            let iso = Arc::new(Isosurface::new(i)?);
+            isos.push((iso.clone(), obj.span));
+            vec![wrap(iso)?]
+        }
         scene::ShapeDecl::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::ShapeDecl::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),

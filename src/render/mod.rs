@@ -35,7 +35,8 @@ pub fn render(
 }
 
 /// [`render`], telling `on_warning` the prepared scene's [warnings](PreparedScene::warnings)
-/// before the first iteration.
+/// before the first iteration, and those of the render itself
+/// ([`PreparedScene::render_warnings`]) after the last.
 pub fn render_with_warnings(
     scene: &Scene,
     options: &RenderOptions,
@@ -48,7 +49,11 @@ pub fn render_with_warnings(
     for w in prepared.warnings() {
         on_warning(&w);
     }
-    render_prepared(&prepared, &settings, options, cancel, on_progress)
+    let out = render_prepared(&prepared, &settings, options, cancel, on_progress)?;
+    for w in prepared.render_warnings() {
+        on_warning(&w);
+    }
+    Ok(out)
 }
 
 /// The part of [`render_with_warnings`] after [`prepare`]: runs the integrator on `prepared`

@@ -15,7 +15,7 @@ use super::Function;
 use super::function::{Binary, Op, SMALL, Unary};
 
 /// No slot: a stack entry computed, not loaded (see `Function::run_interval`).
-const NO_SLOT: u32 = u32::MAX;
+pub(super) const NO_SLOT: u32 = u32::MAX;
 
 /// A closed interval `[lo, hi]` (`lo <= hi`); the whole line stands for "unknown".
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,21 +47,21 @@ impl Interval {
         self.lo <= x && x <= self.hi
     }
 
-    fn hull(self, o: Interval) -> Interval {
+    pub(super) fn hull(self, o: Interval) -> Interval {
         Interval {
             lo: self.lo.min(o.lo),
             hi: self.hi.max(o.hi),
         }
     }
 
-    fn is_point(&self) -> bool {
+    pub(super) fn is_point(&self) -> bool {
         self.lo == self.hi
     }
 }
 
 /// `[lo, hi]` widened outward by a few ulps; the whole line if either end is NaN.
 #[inline]
-fn out(lo: f64, hi: f64) -> Interval {
+pub(super) fn out(lo: f64, hi: f64) -> Interval {
     if lo.is_nan() || hi.is_nan() {
         return Interval::ENTIRE;
     }
@@ -109,7 +109,7 @@ fn holds_phase(x: Interval, c: f64, period: f64) -> bool {
         || c + (k - 1.0) * period >= x.lo - 1e-12 * (1.0 + x.lo.abs())
 }
 
-fn sin(x: Interval) -> Interval {
+pub(super) fn sin(x: Interval) -> Interval {
     if !(x.lo.is_finite() && x.hi.is_finite()) || x.hi - x.lo >= TAU {
         return Interval { lo: -1.0, hi: 1.0 };
     }
@@ -131,11 +131,11 @@ fn sin(x: Interval) -> Interval {
     }
 }
 
-fn mul(x: Interval, y: Interval) -> Interval {
+pub(super) fn mul(x: Interval, y: Interval) -> Interval {
     span(&[x.lo * y.lo, x.lo * y.hi, x.hi * y.lo, x.hi * y.hi])
 }
 
-fn div(x: Interval, y: Interval) -> Interval {
+pub(super) fn div(x: Interval, y: Interval) -> Interval {
     if y.is_point() && y.lo == 0.0 && !x.contains(0.0) {
         // A division by exactly 0: an infinity of the numerator's sign.
         return Interval::point(if x.lo > 0.0 {
@@ -150,7 +150,7 @@ fn div(x: Interval, y: Interval) -> Interval {
     span(&[x.lo / y.lo, x.lo / y.hi, x.hi / y.lo, x.hi / y.hi])
 }
 
-fn abs(x: Interval) -> Interval {
+pub(super) fn abs(x: Interval) -> Interval {
     if x.lo >= 0.0 {
         x
     } else if x.hi <= 0.0 {
@@ -167,7 +167,7 @@ fn abs(x: Interval) -> Interval {
 }
 
 /// `x^n` for a whole `n`.
-fn powi(x: Interval, n: f64) -> Interval {
+pub(super) fn powi(x: Interval, n: f64) -> Interval {
     if n == 0.0 {
         return Interval::point(1.0);
     }
@@ -185,7 +185,7 @@ fn powi(x: Interval, n: f64) -> Interval {
     }
 }
 
-fn pow(x: Interval, y: Interval) -> Interval {
+pub(super) fn pow(x: Interval, y: Interval) -> Interval {
     if y.is_point() && y.lo == y.lo.trunc() && y.lo.abs() <= 1e6 {
         return powi(x, y.lo);
     }
@@ -241,7 +241,7 @@ fn atan2(y: Interval, x: Interval) -> Interval {
     }
 }
 
-fn unary(u: Unary, x: Interval) -> Interval {
+pub(super) fn unary(u: Unary, x: Interval) -> Interval {
     use Unary::*;
     match u {
         Neg => Interval {
@@ -287,7 +287,7 @@ fn unary(u: Unary, x: Interval) -> Interval {
     }
 }
 
-fn binary(b: Binary, x: Interval, y: Interval) -> Interval {
+pub(super) fn binary(b: Binary, x: Interval, y: Interval) -> Interval {
     use Binary::*;
     // `==` as the language compares: within 1e-10.
     let apart = x.lo - y.hi >= 1e-10 || y.lo - x.hi >= 1e-10;

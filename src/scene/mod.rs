@@ -20,6 +20,7 @@ mod obj;
 mod obj_errors;
 pub mod pattern_value;
 pub mod prism;
+pub mod slope;
 pub mod text;
 mod validate;
 

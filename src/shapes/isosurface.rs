@@ -4,9 +4,13 @@
 //!
 //! Along a ray, the chord through the container is cut in halves, nearest first; a stretch
 //! whose interval of function values ([`crate::scene::interval`]) excludes the threshold holds
-//! no crossing and is dropped. A stretch narrower than the accuracy whose ends lie on opposite
-//! sides holds a crossing, refined by bisection to full precision; one whose ends lie on one
-//! side is a graze (or a feature thinner than the accuracy). No crossing between features
+//! no crossing and is dropped. The same evaluation bounds the function's derivative along the
+//! ray ([`crate::scene::slope`]): where that excludes 0 the function is monotone on the
+//! stretch, which then holds one crossing if its ends lie on opposite sides and none
+//! otherwise, decided without halving further. A stretch narrower than the accuracy whose ends
+//! lie on opposite sides holds a crossing; one whose ends lie on one side is a graze (or a
+//! feature thinner than the accuracy). A crossing is refined by a bracketed regula falsi to
+//! full precision. No crossing between features
 //! thicker than the accuracy is skipped, whatever the function's gradient: nothing is assumed
 //! of it. A ray may visit at most [`MAX_VISITS`] stretches; one that needs more is counted
 //! ([`Isosurface::exhausted`]) and treated as a miss.
@@ -75,6 +79,11 @@ impl Isosurface {
     /// Rays given up as misses since the shape was made, their stretches exhausted.
     pub fn exhausted(&self) -> u64 {
         self.exhausted.load(Ordering::Relaxed)
+    }
+
+    /// [`Isosurface::exhausted`], counted again from 0 (what a render's end reports).
+    pub fn take_exhausted(&self) -> u64 {
+        self.exhausted.swap(0, Ordering::Relaxed)
     }
 
     /// The function minus the threshold at `p` (below 0 inside).
@@ -152,6 +161,7 @@ impl Isosurface {
         let g = |t: f64| self.value(o + t * d);
         let side = |v: f64| v < 0.0;
         let leaf = (self.accuracy / d.length()).max(8.0 * f64::EPSILON * a.abs().max(b.abs()));
+        let rates = d.to_array();
         // Halving is depth first, nearest half on top: at most one stretch waits per depth,
         // and a stretch of width below the leaf is never split (64 levels halve any f64 range).
         let mut stack: ArrayVec<(f64, f64, f64, f64), 128> = ArrayVec::new();
@@ -165,14 +175,22 @@ impl Isosurface {
             }
             let (p, q) = (o + lo * d, o + hi * d);
             let args = [0, 1, 2].map(|k| Interval::new(p[k], q[k]));
-            let range = self.f.eval_interval(&args);
+            let (range, slope) = self.f.eval_slope(&args, &rates);
             if !range.contains(self.threshold) {
+                continue;
+            }
+            if slope.lo > 0.0 || slope.hi < 0.0 {
+                // Strictly monotone along the stretch: one crossing at most, where the ends
+                // lie on opposite sides.
+                if side(glo) != side(ghi) {
+                    return Some(Some(refine(&g, (lo, glo), (hi, ghi))));
+                }
                 continue;
             }
             let mid = 0.5 * (lo + hi);
             if hi - lo <= leaf || mid <= lo || mid >= hi {
                 if side(glo) != side(ghi) {
-                    return Some(Some(bisect(&g, lo, hi, side(glo))));
+                    return Some(Some(refine(&g, (lo, glo), (hi, ghi))));
                 }
                 continue;
             }
@@ -228,17 +246,42 @@ impl Isosurface {
     }
 }
 
-/// The crossing in `[lo, hi]` (inside at `lo` when `inside_lo`) to full precision.
-fn bisect(g: &impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, inside_lo: bool) -> f64 {
-    for _ in 0..80 {
+/// A crossing in `[lo, hi]`, whose ends (with `g`'s values there) lie on opposite sides, to
+/// full precision: regula falsi with the Illinois rule (an end kept twice has its value
+/// halved), every third step a halving, so that the bracket at least halves every three
+/// steps whatever the function; both ends close in on a simple root after a handful.
+fn refine(
+    g: &impl Fn(f64) -> f64,
+    (mut lo, mut glo): (f64, f64),
+    (mut hi, mut ghi): (f64, f64),
+) -> f64 {
+    let inside_lo = glo < 0.0;
+    // Which end moved last: -1 the low one, 1 the high one.
+    let mut moved = 0;
+    for k in 0..200 {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {
             break;
         }
-        if (g(mid) < 0.0) == inside_lo {
-            lo = mid;
+        let secant = (lo * ghi - hi * glo) / (ghi - glo);
+        let s = if k % 3 == 2 || !(secant > lo && secant < hi) {
+            mid
         } else {
-            hi = mid;
+            secant
+        };
+        let gs = g(s);
+        if (gs < 0.0) == inside_lo {
+            (lo, glo) = (s, gs);
+            if moved == -1 {
+                ghi *= 0.5;
+            }
+            moved = -1;
+        } else {
+            (hi, ghi) = (s, gs);
+            if moved == 1 {
+                glo *= 0.5;
+            }
+            moved = 1;
         }
     }
     0.5 * (lo + hi)

@@ -1523,3 +1523,51 @@ fn farm_slurm_writes_scripts_and_refuses_bad_requests() {
         .collect();
     assert_eq!(left, ["sppm-cornell.slurm"], "only the first command wrote");
 }
+
+/// Rays that exhaust an isosurface's budget (a function whose interval never decides: it
+/// holds the threshold on every stretch, down to the accuracy) are taken as misses, and the
+/// render says so at its end, at the isosurface, with what to change; a decided isosurface
+/// renders without the warning.
+#[test]
+fn rays_that_give_up_on_an_isosurface_are_reported_after_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |function: &str| {
+        format!(
+            "settings {{ resolution <4, 4>  iterations 1  integrator whitted }}\n\
+             camera {{ location <0, 0, -5>  look_at <0, 0, 0>  fov 20 }}\n\
+             light {{ <0, 5, -5>  intensity rgb <10, 10, 10> }}\n\
+             isosurface {{\n  function {{ {function} }}\n  \
+             contained_by {{ box {{ <-1, -1, -1>, <1, 1, 1> }} }}  accuracy 1e-7\n  \
+             material {{ diffuse rgb <0.5, 0.5, 0.5> }}\n}}\n"
+        )
+    };
+    let (undecided, png) = (dir.path().join("undecided.scn"), dir.path().join("u.png"));
+    // x - x: 0 at every point (never below the threshold), [-w, w] over a stretch of width w.
+    std::fs::write(&undecided, scene("x - x")).unwrap();
+    let out = render_to(&undecided, &png);
+    succeeded(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("gave up on this isosurface"))
+        .unwrap_or_else(|| panic!("no warning of the rays given up:\n{stderr}"));
+    let n: u64 = line
+        .split_whitespace()
+        .find_map(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {line}"));
+    // Every camera ray meets the box (16 pixels at least once each).
+    assert!(n >= 16, "{line}");
+    assert!(
+        stderr.contains("undecided.scn:4"),
+        "not at the isosurface:\n{stderr}"
+    );
+    assert!(stderr.contains("larger `accuracy`"), "{stderr}");
+    assert!(png.exists());
+
+    let decided = dir.path().join("decided.scn");
+    std::fs::write(&decided, scene("sqrt(x * x + y * y + z * z) - 0.8")).unwrap();
+    let out = render_to(&decided, &dir.path().join("d.png"));
+    succeeded(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("gave up"), "{stderr}");
+}
