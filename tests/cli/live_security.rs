@@ -295,7 +295,11 @@ fn only_the_user_gets_in() {
     }
 
     // Another local user: the right Host, no token or a wrong one, or another port's cookie.
-    let wrong = format!("{}0", &token[..31]);
+    // The token with its last character changed (a fixed `0` would be the token itself one
+    // time in sixteen).
+    let last = if token.ends_with('0') { '1' } else { '0' };
+    let wrong = format!("{}{last}", &token[..31]);
+    assert_ne!(wrong, token);
     for (query, cookie) in [
         (String::new(), String::new()),
         (format!("?token={wrong}"), String::new()),
