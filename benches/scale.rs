@@ -2,9 +2,10 @@
 //! on exactly the same triangles and rays.
 //!
 //! Run: `cargo bench --bench scale` (sizes: `SCALE_SIZES=1e4,1e5,1e6,1e7`, the default;
-//! rounds: `SCALE_ROUNDS=2`). For each size it makes a displaced sphere (a UV sphere with
-//! bumps, so the BVH sees neither a flat nor a regular surface), writes the triangles and two
-//! fixed ray sets to `target/scale/` (coherent: a 1024x1024 pinhole camera that the mesh fills;
+//! rounds: `SCALE_ROUNDS=2`; `SCALE_RENDER=0` leaves out the SPPM render, for quicker runs of
+//! the BVH alone). For each size it makes a displaced sphere (a UV sphere with bumps, so the
+//! BVH sees neither a flat nor a regular surface), writes the triangles and two fixed ray sets
+//! to `target/scale/` (coherent: a 1024x1024 pinhole camera that the mesh fills;
 //! incoherent: cosine-distributed diffuse bounces from the camera rays' hits), and measures:
 //!
 //! - BVH build time (wall, and CPU time of all the process's threads: the build runs on rayon's
@@ -426,6 +427,8 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(2)
         .clamp(1, 10);
+    // `SCALE_RENDER=0` leaves out the SPPM render (quicker A/B runs of the BVH alone).
+    let skip_render = std::env::var("SCALE_RENDER").is_ok_and(|v| v == "0");
     let py = python();
     if py.is_none() {
         println!(
@@ -457,7 +460,11 @@ fn main() {
                 theirs.get_or_insert_with(Figures::default).best(&f);
             }
         }
-        let render = render_figures(&dir, &mesh);
+        let render = if skip_render {
+            (f64::NAN, f64::NAN)
+        } else {
+            render_figures(&dir, &mesh)
+        };
         let _ = writeln!(table, "\n{n} triangles");
         let ratio = |a: f64, b: Option<f64>| b.map_or("-".into(), |b| format!("{:.2}x", a / b));
         let _ = writeln!(

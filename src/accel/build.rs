@@ -509,6 +509,55 @@ mod tests {
         }
     }
 
+    /// The binned SAH copes with every extent a node's centroids can have: none on
+    /// two axes (a row of boxes), a subnormal one, one that overflows to infinity
+    /// (coordinates near `f32::MAX`) and none at all (identical boxes). Each tree's leaves
+    /// cover the items once, hold at most 8 items, and each node's box holds its items.
+    #[test]
+    fn binning_copes_with_degenerate_and_extreme_extents() {
+        let boxes = |f: &dyn Fn(usize) -> Vec3A| -> Vec<Item> {
+            (0..300)
+                .map(|i| {
+                    let p = f(i);
+                    Item::triangle(Aabb::new(p, p), i)
+                })
+                .collect()
+        };
+        let cases: [(&str, Vec<Item>); 4] = [
+            ("a row", boxes(&|i| Vec3A::new(i as f32, 0.0, 0.0))),
+            (
+                "subnormal",
+                boxes(&|i| Vec3A::new(1e-42 * (i % 7) as f32, 0.0, 1e-40)),
+            ),
+            (
+                "overflowing",
+                boxes(&|i| {
+                    let s = if i % 2 == 0 { 1.0 } else { -1.0 };
+                    Vec3A::new(s * 3e38, (i % 5) as f32, -s * 3e38 * (i % 3) as f32)
+                }),
+            ),
+            ("identical", boxes(&|_| Vec3A::splat(2.5))),
+        ];
+        for (what, mut items) in cases {
+            let nodes = build(&mut items, usize::MAX, Parallelism::DEFAULT);
+            let mut seen = vec![false; items.len()];
+            let mut next = 0;
+            for (k, n) in nodes.iter().enumerate() {
+                if n.count > 0 {
+                    assert_eq!(n.offset as usize, next, "{what}: leaf {k}");
+                    assert!(n.count <= 8, "{what}: leaf {k} holds {}", n.count);
+                    for it in &items[next..next + n.count as usize] {
+                        assert!(!seen[it.index], "{what}: item {} twice", it.index);
+                        seen[it.index] = true;
+                        assert_eq!(n.bounds.union(it.bounds), n.bounds, "{what}");
+                    }
+                    next += n.count as usize;
+                }
+            }
+            assert!(seen.iter().all(|&s| s), "{what}: an item is in no leaf");
+        }
+    }
+
     /// Leaf sizes of a tree built over `items`.
     fn leaf_sizes(mut items: Vec<Item>) -> Vec<u32> {
         let nodes = build(&mut items, usize::MAX, Parallelism::DEFAULT);

@@ -237,7 +237,8 @@ impl Bvh {
     }
 
     /// Closest hit with `t_min < t < t_max`, and the hit shape's id. Candidates are tested
-    /// for `t` only; the surface data is computed once, for the closest hit.
+    /// for `t` only; the surface data is computed once, for the closest hit. A ray with a NaN
+    /// in its origin or a non-finite direction hits none of the bounded shapes.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
         let (lazy, surface, id) = self.intersect_lazy(ray, t_min, t_max)?;
         Some((
@@ -292,7 +293,7 @@ impl Bvh {
                 best = Some((h, Surface::Shape(s), *id));
             }
         }
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !BoxRay::usable(ray) {
             return best;
         }
         let boxes = BoxRay::new(ray);
@@ -396,7 +397,7 @@ impl Bvh {
         {
             return true;
         }
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !BoxRay::usable(ray) {
             return false;
         }
         let boxes = BoxRay::new(ray);

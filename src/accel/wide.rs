@@ -43,6 +43,16 @@ pub(super) struct BoxRay {
 }
 
 impl BoxRay {
+    /// Whether the box test can take `ray`: its origin has no NaN and its direction is finite.
+    /// On an axis where the origin is NaN or the direction infinite (inverse 0) or NaN, every
+    /// slab distance is NaN and ignored; a ray ignored on all three axes would enter every
+    /// box, the unused slots' inverted ones too, and reach a child reference that names
+    /// nothing. Such a ray has no meaningful hit: the BVH reports none.
+    #[inline(always)]
+    pub(super) fn usable(ray: &Ray) -> bool {
+        !ray.o.is_nan() && ray.d.is_finite()
+    }
+
     #[inline(always)]
     pub(super) fn new(ray: &Ray) -> Self {
         let inv_d: Vec3A = ray.d.recip();

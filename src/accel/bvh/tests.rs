@@ -359,3 +359,76 @@ fn heavy_primitives_match_brute_force() {
         assert!(hits > 100, "layout {layout}: {hits} hits of 2400 rays");
     }
 }
+
+/// Rays a caller may pass by mistake or by rounding (a NaN or infinite direction or origin, a
+/// zero direction) over a mesh and a sphere: no panic (a ray whose slab distances are NaN on
+/// every axis entered the unused child slots and indexed past the packets), occlusion agrees
+/// with the closest hit, and a hit lies in the range asked; a ray along an axis lying exactly
+/// in the plane of a face of the mesh's bounds still finds what it crosses.
+#[test]
+fn degenerate_rays_are_answered_consistently() {
+    use crate::scene::MeshData;
+    use crate::shapes::mesh::TriangleMesh;
+    use glam::DVec3;
+    // A flat square of two triangles in z = 0 over [0, 1]^2, and one standing in x = 0.5.
+    let mesh = MeshData {
+        path: "flat.obj".into(),
+        positions: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.5, 0.0, -1.0),
+            DVec3::new(0.5, 1.0, -1.0),
+            DVec3::new(0.5, 0.5, 1.0),
+        ],
+        indices: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]],
+        normals: Vec::new(),
+        uvs: Vec::new(),
+    };
+    let m = TriangleMesh::new(&mesh, &glam::DAffine3::IDENTITY).unwrap();
+    let spheres = vec![(
+        AnyShape::Sphere(Sphere::new(Vec3A::new(3.0, 0.0, 0.0), 0.5).unwrap()),
+        9,
+    )];
+    let bvh = Bvh::with_meshes(spheres, vec![(m, 1)]);
+    let nan = f32::NAN;
+    let inf = f32::INFINITY;
+    let odd = [
+        (Vec3A::new(0.2, 0.2, 1.0), Vec3A::new(nan, 0.0, -1.0)),
+        (Vec3A::new(0.2, 0.2, 1.0), Vec3A::new(0.0, 0.0, -inf)),
+        (Vec3A::new(0.2, 0.2, 1.0), Vec3A::new(inf, -inf, inf)),
+        (Vec3A::new(0.2, 0.2, 1.0), Vec3A::ZERO),
+        (Vec3A::new(nan, 0.2, 1.0), Vec3A::new(0.0, 0.0, -1.0)),
+        (Vec3A::new(-inf, 0.2, 0.0), Vec3A::new(1.0, 0.0, 0.0)),
+        (Vec3A::splat(nan), Vec3A::splat(nan)),
+    ];
+    for (o, d) in odd {
+        let ray = Ray::new(o, d);
+        for t_max in [1.0, f32::INFINITY, nan] {
+            let hit = bvh.intersect(&ray, 0.0, t_max);
+            assert_eq!(
+                bvh.occluded(&ray, 0.0, t_max),
+                hit.is_some(),
+                "o {o}, d {d}, t_max {t_max}"
+            );
+            if let Some((h, _)) = hit {
+                assert!(h.t > 0.0 && h.t < t_max, "o {o}, d {d}: t {}", h.t);
+            }
+        }
+    }
+    // In the plane z = 0 of the square (and of its box's face), along x: it crosses the
+    // standing triangle at x = 0.5 and must find it.
+    let ray = Ray::new(Vec3A::new(-1.0, 0.5, 0.0), Vec3A::X);
+    let (h, id) = bvh
+        .intersect(&ray, 0.0, f32::INFINITY)
+        .expect("the standing triangle");
+    assert_eq!(id, 1);
+    assert!((h.t - 1.5).abs() < 1e-5, "t {}", h.t);
+    assert!(bvh.occluded(&ray, 0.0, f32::INFINITY));
+    // Along the bounds' face y = 1 from above the square: it crosses the square's edge.
+    let ray = Ray::new(Vec3A::new(0.3, 1.0, 2.0), -Vec3A::Z);
+    assert!(
+        bvh.occluded(&ray, 0.0, f32::INFINITY) == bvh.intersect(&ray, 0.0, f32::INFINITY).is_some()
+    );
+}
