@@ -15,117 +15,23 @@ use super::parser::MAX_EXPRESSION_TERMS;
 use crate::span::{FileId, Span};
 
 /// The property keywords of the grammar's `kw_word` rule (a test checks the two agree).
+#[rustfmt::skip]
 pub(super) const KEYWORDS: &[&str] = &[
-    "aperture",
-    "absorb",
-    "alpha",
-    "angle",
-    "antialias",
-    "axis",
-    "amount",
-    "accuracy",
-    "all_intersections",
-    "background",
-    "backdrop",
-    "brick",
-    "blend",
-    "bezier_spline",
-    "b_spline",
-    "bumps",
-    "bump_size",
-    "checker",
-    "corner",
-    "conductor",
-    "coated",
-    "clock_range",
-    "cyclic",
-    "cubic_spline",
-    "conic_sweep",
-    "diffuse",
-    "degree",
-    "dents",
-    "exposure",
-    "exr",
-    "eta",
-    "extinction",
-    "edge_tint",
-    "focus_distance",
-    "falloff",
-    "fov",
-    "final_gather",
-    "filter",
-    "frames",
-    "gradient",
-    "glass",
-    "glossy",
-    "handedness",
-    "hierarchy",
-    "interpolate",
-    "iterations",
-    "integrator",
-    "intensity",
-    "inverse",
-    "image",
-    "ior",
-    "jpeg",
-    "location",
-    "look_at",
-    "linear_spline",
-    "linear_sweep",
-    "linear",
-    "max_depth",
-    "max_gradient",
-    "max_trace",
-    "matrix",
-    "mirror",
-    "method",
-    "marble",
-    "mortar",
-    "map",
-    "noise",
-    "normal_map",
-    "octaves",
-    "open",
-    "orthographic",
-    "point_at",
-    "photons",
-    "profile",
-    "png",
-    "quadratic_spline",
-    "resolution",
-    "reflectance",
-    "roughness",
-    "radiance",
-    "rotate",
-    "radius",
-    "right",
-    "ripples",
-    "specular",
-    "stripes",
-    "strength",
-    "sturm",
-    "starts",
-    "scale",
-    "seed",
-    "size",
-    "smooth",
-    "tolerance",
-    "time_limit",
-    "turbulence",
-    "two_sided",
-    "translate",
-    "tint",
-    "threshold",
-    "transmit",
-    "thin",
-    "ttf",
-    "up",
-    "wood",
-    "wrap",
-    "weight",
-    "waves",
-    "wrinkles",
-    "water_level",
+    "aperture", "absorb", "alpha", "angle", "antialias", "axis", "amount", "accuracy",
+    "all_intersections", "background", "backdrop", "brick", "blend", "bezier_spline",
+    "b_spline", "bumps", "bump_size", "checker", "corner", "conductor", "coated", "clock_range",
+    "cyclic", "cubic_spline", "conic_sweep", "diffuse", "degree", "dents", "exposure", "exr",
+    "eta", "extinction", "edge_tint", "focus_distance", "falloff", "fov", "final_gather",
+    "filter", "frames", "gradient", "glass", "glossy", "handedness", "hierarchy", "interpolate",
+    "iterations", "integrator", "intensity", "inverse", "image", "ior", "jpeg", "location",
+    "look_at", "linear_spline", "linear_sweep", "linear", "max_depth", "max_gradient",
+    "max_trace", "matrix", "mirror", "method", "marble", "mortar", "map", "noise", "normal_map",
+    "octaves", "open", "orthographic", "point_at", "photons", "profile", "png",
+    "quadratic_spline", "resolution", "reflectance", "roughness", "radiance", "rotate",
+    "radius", "right", "ripples", "specular", "stripes", "strength", "sturm", "starts", "scale",
+    "seed", "size", "smooth", "tolerance", "time_limit", "turbulence", "two_sided", "translate",
+    "tint", "threshold", "transmit", "thin", "ttf", "up", "wood", "wrap", "weight", "waves",
+    "wrinkles", "water_level",
 ];
 
 /// Words that are neither keywords nor names but start an operand.
@@ -886,33 +792,98 @@ mod tests {
         out.push_str(c.pick(BLANKS));
     }
 
-    /// Generated texts, valid and not: where the direct reader takes part, the item-by-item
-    /// parse gives the whole-file parse's tree and errors (spans included), and no tree where
-    /// the whole file has a syntax error.
+    /// Whether the direct reader reads every item of `text` by itself.
+    fn read_alone(text: &str) -> bool {
+        let mut r = Reader::new(FileId(2), text, 0);
+        while r.blanks().is_some() {
+            if r.pos == text.len() {
+                return true;
+            }
+            if r.item().is_none() {
+                return false;
+            }
+        }
+        false
+    }
+
+    /// The item-by-item parse (the direct reader, pest for the rest) gives the whole-file
+    /// parse's tree (spans included) or errors, and no tree where the whole file has a syntax
+    /// error. Returns whether it gave a tree.
+    fn same_as_pest(text: &str) -> bool {
+        let Ok(stray) = check_nesting(FileId(2), text) else {
+            return false;
+        };
+        let whole = format!("{:?}", parse_whole(FileId(2), text, stray));
+        match parse_by_item(FileId(2), text) {
+            Some(by_item) => {
+                assert_eq!(format!("{by_item:?}"), whole, "{text:?}");
+                true
+            }
+            None => {
+                assert!(whole.starts_with("Err("), "{text:?}: {whole}");
+                false
+            }
+        }
+    }
+
+    /// Generated texts, valid and not.
     #[test]
     fn the_reader_builds_the_grammars_tree() {
         let mut c = Choices(0x2545_f491_4f6c_dd1d);
-        let (mut parsed, mut cases) = (0, 0);
-        for _ in 0..6000 {
+        let (mut parsed, mut alone, cases) = (0, 0, 6000);
+        for _ in 0..cases {
             let mut text = String::new();
             items(&mut c, 3, &mut text);
-            let Ok(stray) = check_nesting(FileId(2), &text) else {
-                continue;
-            };
-            cases += 1;
-            let whole = format!("{:?}", parse_whole(FileId(2), &text, stray));
-            match parse_by_item(FileId(2), &text) {
-                Some(by_item) => {
-                    assert_eq!(format!("{by_item:?}"), whole, "{text:?}");
-                    parsed += 1;
-                }
-                None => assert!(whole.starts_with("Err("), "{text:?}: {whole}"),
-            }
+            parsed += usize::from(same_as_pest(&text));
+            alone += usize::from(read_alone(&text));
         }
-        // Both kinds occur often enough to mean something.
+        // Trees and errors both occur often enough to mean something, and the reader reads
+        // whole files by itself in many of the cases that parse.
         assert!(
             parsed > cases / 10 && parsed < cases * 9 / 10,
             "{parsed} of {cases}"
         );
+        assert!(alone > parsed / 4, "{alone} of {parsed}");
+    }
+
+    /// The repository's scenes, and the same with a character deleted or a token inserted at
+    /// deterministic places.
+    #[test]
+    fn the_reader_reads_the_repositorys_scenes_as_pest_does() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut texts = Vec::new();
+        for dir in ["examples", "tests/good", "tests/good/parts", "tests/bad"] {
+            let Ok(entries) = std::fs::read_dir(root.join(dir)) else {
+                continue;
+            };
+            let mut paths: Vec<_> = entries.map(|e| e.expect("entry").path()).collect();
+            paths.sort();
+            for p in paths {
+                if p.extension().is_some_and(|e| e == "scn") {
+                    texts.push(std::fs::read_to_string(&p).expect("scene text"));
+                }
+            }
+        }
+        assert!(texts.len() > 100, "{} scenes", texts.len());
+        let tokens = [
+            "<", ">", ",", "{", "}", "(", ")", "-", ".", "/*", "#", "x", "1",
+        ];
+        let mut c = Choices(0x9e37_79b9_7f4a_7c15);
+        let (mut parsed, mut alone) = (0, 0);
+        for text in &texts {
+            parsed += usize::from(same_as_pest(text));
+            alone += usize::from(read_alone(text));
+            for _ in 0..6 {
+                let mut t = text.clone();
+                let at = c.next(t.len() + 1);
+                let at = (0..=at).rev().find(|&i| t.is_char_boundary(i)).unwrap_or(0);
+                match t[at..].chars().next() {
+                    Some(ch) if c.next(2) == 0 => t.replace_range(at..at + ch.len_utf8(), ""),
+                    _ => t.insert_str(at, c.pick(&tokens)),
+                }
+                same_as_pest(&t);
+            }
+        }
+        assert!(alone > 0 && parsed > texts.len() / 2, "{alone}, {parsed}");
     }
 }
