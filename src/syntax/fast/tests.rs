@@ -173,9 +173,14 @@ fn operand(c: &mut Choices, depth: usize, out: &mut String) {
 
 fn expr(c: &mut Choices, depth: usize, out: &mut String) {
     operand(c, depth, out);
-    for _ in 0..c.next(3) {
+    for _ in 0..c.next(4) {
         out.push_str(c.pick(BLANKS));
-        out.push_str(c.pick(OPS));
+        // Mostly operators that join (so that precedence is tested), sometimes any.
+        if c.next(4) == 0 {
+            out.push_str(c.pick(OPS));
+        } else {
+            out.push_str(c.pick(&OPS[..14]));
+        }
         out.push_str(c.pick(BLANKS));
         operand(c, depth, out);
     }
