@@ -372,9 +372,12 @@ fn word_before(text: &str, pos: usize) -> &str {
     {
         head = head[..open].trim_end();
     }
+    // After the last character that is not part of a name (it may take several bytes).
     let start = head
-        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-        .map_or(0, |i| i + 1);
+        .char_indices()
+        .rev()
+        .find(|&(_, c)| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |(i, c)| i + c.len_utf8());
     &head[start..]
 }
 

@@ -2,6 +2,7 @@
 
 pub mod ast;
 mod errors;
+mod fast;
 mod parser;
 pub mod povray;
 mod recover;

@@ -10,6 +10,7 @@ use pest::pratt_parser::{Assoc, Op, PrattParser};
 
 use super::ast::*;
 use super::errors::check_nesting;
+use super::fast::Reader;
 use super::recover::all_errors;
 use crate::diag::{Diagnostic, SourceResult};
 use crate::span::{FileId, Span};
@@ -59,7 +60,11 @@ pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
 }
 
 /// The file parsed in one piece with the `file` rule; its errors are every syntax error.
-fn parse_whole(file: FileId, text: &str, stray: Option<usize>) -> SourceResult<Vec<Item>> {
+pub(super) fn parse_whole(
+    file: FileId,
+    text: &str,
+    stray: Option<usize>,
+) -> SourceResult<Vec<Item>> {
     let mut pairs =
         SceneParser::parse(Rule::file, text).map_err(|e| all_errors(file, text, e, stray))?;
     let file_pair = pairs.next().expect("file rule");
@@ -73,11 +78,29 @@ fn parse_whole(file: FileId, text: &str, stray: Option<usize>) -> SourceResult<V
 /// syntax error (the whole-file parse then finds and reports every error). pest's token list,
 /// 80 bytes a token and two tokens a rule matched, then holds a chunk instead of the whole
 /// file: that list was most of the peak memory of loading a large scene.
-fn parse_by_item(file: FileId, text: &str) -> Option<SourceResult<Vec<Item>>> {
+///
+/// The common items are read directly ([`super::fast`]); pest parses from the first item that
+/// reader leaves to it, a chunk at a time, and the reader takes over again after the chunk.
+pub(super) fn parse_by_item(file: FileId, text: &str) -> Option<SourceResult<Vec<Item>>> {
     let cx = Cx::new(file);
     let mut items = Vec::new();
     let mut at = 0;
     loop {
+        let mut reader = Reader::new(file, text, at);
+        while reader.blanks().is_some() {
+            if reader.pos == text.len() {
+                items.shrink_to_fit();
+                return Some(cx.finish(items));
+            }
+            at = reader.pos;
+            match reader.item() {
+                Some(item) => {
+                    items.push(item);
+                    at = reader.pos;
+                }
+                None => break,
+            }
+        }
         let rest = &text[at..];
         let chunk = SceneParser::parse(Rule::chunk, rest).ok()?.next()?;
         cx.base.set(at);
