@@ -99,6 +99,13 @@ fn held_bytes(shape: &Shape) -> u64 {
                 + b.components.len() * 200) as u64
                 + WRAP_OVERHEAD
         }
+        // Its segments with their boxes, order and hierarchy (about 300 bytes a segment).
+        Shape::SphereSweep(s) => {
+            (size_of::<crate::shapes::sphere_sweep::SphereSweep>()
+                + size_of::<crate::shapes::transformed::Transformed>()
+                + s.centres.len() * 300) as u64
+                + WRAP_OVERHEAD
+        }
         // Its heights and their min/max hierarchy, in an `Arc` and a boxed transform.
         Shape::HeightField(h) => {
             (size_of::<crate::shapes::height_field::HeightField>()
@@ -120,6 +127,7 @@ fn held_bytes(shape: &Shape) -> u64 {
             | Shape::Blob(_)
             | Shape::Isosurface(_)
             | Shape::HeightField(_)
+            | Shape::SphereSweep(_)
             | Shape::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

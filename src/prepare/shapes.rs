@@ -24,6 +24,7 @@ use crate::shapes::prism::Prism;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
+use crate::shapes::sphere_sweep::SphereSweep;
 use crate::shapes::superellipsoid::Superellipsoid;
 use crate::shapes::torus::Torus;
 use crate::shapes::transformed::Transformed;
@@ -234,6 +235,7 @@ pub(super) fn build_shapes(obj: &scene::Object) -> Result<Vec<AnyShape>, String>
         scene::Shape::Blob(b) => vec![wrap(Arc::new(Blob::new(b)?))?],
         scene::Shape::Isosurface(i) => vec![wrap(Arc::new(Isosurface::new(i)?))?],
         scene::Shape::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
+        scene::Shape::SphereSweep(s) => vec![wrap(Arc::new(SphereSweep::new(s)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::Shape::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

@@ -118,9 +118,11 @@ pub fn why_open(shape: &Shape) -> Option<String> {
         }
         Shape::BezierPatch { .. } => Some("a single Bezier patch is an open surface".into()),
         Shape::Prism(p) if p.open => Some("an `open` prism has no caps".into()),
-        Shape::Prism(_) | Shape::Superellipsoid { .. } | Shape::Blob(_) | Shape::HeightField(_) => {
-            None
-        }
+        Shape::Prism(_)
+        | Shape::Superellipsoid { .. }
+        | Shape::Blob(_)
+        | Shape::HeightField(_)
+        | Shape::SphereSweep(_) => None,
         Shape::Isosurface(i) if i.open => {
             Some("an `open` isosurface has no walls where its container cuts it".into())
         }
