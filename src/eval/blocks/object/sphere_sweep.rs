@@ -43,7 +43,14 @@ impl ObjectBuilder {
                     if rest.len() == 1 { "" } else { "s" }
                 ))
                 .label("the count")
-                .help(format!("e.g. `{EXAMPLE}`"))
+                .help(format!(
+                    "e.g. `{}`",
+                    if self.sweep_spline.is_some() {
+                        CURVED_EXAMPLE
+                    } else {
+                        EXAMPLE
+                    }
+                ))
                 .at(*count_span),
             ]);
         }

@@ -2218,6 +2218,12 @@ mod sweep_stress {
                                 }
                             } else {
                                 max_err = err;
+                                if std::env::var("SWEEP_STRESS_WORST").is_ok() && err > 1e-7 {
+                                    println!(
+                                        "  worst? {what} want {}..{} got {gin}..{gout}",
+                                        w.entry, w.exit
+                                    );
+                                }
                             }
                         }
                         (Some(w), None, _) => {
