@@ -135,10 +135,10 @@ impl Sweep {
         };
         let pow = [1.0, s, s * s, s * s * s];
         let (mut c, mut r) = (DVec3::ZERO, 0.0);
-        for j in 0..4 {
-            let w: f64 = (0..4).map(|k| pow[k] * m[k][j]).sum();
-            c += w * self.pts[i + j].0;
-            r += w * self.pts[i + j].1;
+        let w: [f64; 4] = std::array::from_fn(|j| (0..4).map(|k| pow[k] * m[k][j]).sum());
+        for (w, p) in w.iter().zip(&self.pts[i..i + 4]) {
+            c += *w * p.0;
+            r += *w * p.1;
         }
         (c, r)
     }

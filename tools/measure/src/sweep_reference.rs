@@ -49,10 +49,14 @@ impl RefSweep {
         };
         let pow = [1.0, s, s * s, s * s * s];
         let (mut c, mut r) = (DVec3::ZERO, 0.0);
-        for j in 0..4 {
-            let w: f64 = (0..4).map(|k| pow[k] * m[k][j]).sum();
-            c += w * self.centres[i + j];
-            r += w * self.radii[i + j];
+        let w: [f64; 4] = std::array::from_fn(|j| (0..4).map(|k| pow[k] * m[k][j]).sum());
+        for ((w, p), q) in w
+            .iter()
+            .zip(&self.centres[i..i + 4])
+            .zip(&self.radii[i..i + 4])
+        {
+            c += *w * *p;
+            r += *w * *q;
         }
         (c, r)
     }
