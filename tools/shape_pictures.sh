@@ -15,6 +15,9 @@ declare -A shapes=(
       material { conductor "Cu" roughness 0.15 } }'
   [sphere_sweep]='sphere_sweep { linear_spline 4, <-0.8, 0.15, 0>, 0.12, <-0.3, 0.9, 0.2>, 0.2,
       <0.3, 0.5, -0.1>, 0.1, <0.8, 1.1, 0>, 0.15 material { coated rgb <0.7, 0.1, 0.1> roughness 0.1 } }'
+  [sphere_sweep_b_spline]='sphere_sweep { b_spline 7, <-1.1, 0.2, 0>, 0.05, <-0.7, 1.0, 0.1>, 0.18,
+      <-0.2, 0.15, -0.2>, 0.12, <0.2, 1.0, 0.2>, 0.2, <0.6, 0.2, 0>, 0.1, <1.0, 0.9, -0.1>, 0.12,
+      <1.2, 0.4, 0>, 0 material { conductor "Au" roughness 0.1 } }'
   [blob]='blob { threshold 0.6
       sphere { <-0.3, 0, 0>, 0.7, strength 1 } sphere { <0.3, 0.05, 0>, 0.65, strength 1 }
       sphere { <0, 0.4, 0.05>, 0.6, strength 1 } sphere { <0, 0.1, -0.35>, 0.4, strength -1 }

@@ -58,7 +58,7 @@ const BLOCKS: &[(&str, &str, &str)] = &[
     ),
     (
         "sphere_sweep",
-        "`sphere_sweep { linear_spline N, <c1>, r1, ... }`",
+        "`sphere_sweep { linear_spline | cubic_spline | b_spline N, <c1>, r1, ... }`",
         "sphere-sweep",
     ),
     (

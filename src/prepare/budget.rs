@@ -100,6 +100,13 @@ fn held_bytes(shape: &ShapeDecl) -> u64 {
                 + b.components.len() * 200) as u64
                 + WRAP_OVERHEAD
         }
+        // Its segments with their boxes, order and hierarchy (about 300 bytes a segment).
+        ShapeDecl::SphereSweep(s) => {
+            (size_of::<crate::shapes::sphere_sweep::SphereSweep>()
+                + size_of::<crate::shapes::transformed::Transformed>()
+                + s.centres.len() * 300) as u64
+                + WRAP_OVERHEAD
+        }
         // Its heights and their min/max hierarchy, in an `Arc` and a boxed transform.
         ShapeDecl::HeightField(h) => {
             (size_of::<crate::shapes::height_field::HeightField>()
@@ -121,6 +128,7 @@ fn held_bytes(shape: &ShapeDecl) -> u64 {
             | ShapeDecl::Blob(_)
             | ShapeDecl::Isosurface(_)
             | ShapeDecl::HeightField(_)
+            | ShapeDecl::SphereSweep(_)
             | ShapeDecl::Csg(_)
     );
     own + if heavy { HEAVY_BVH } else { 0 }

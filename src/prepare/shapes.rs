@@ -24,6 +24,7 @@ use crate::shapes::prism::Prism;
 use crate::shapes::quad::Quad;
 use crate::shapes::revolve::Revolve;
 use crate::shapes::sphere::Sphere;
+use crate::shapes::sphere_sweep::SphereSweep;
 use crate::shapes::superellipsoid::Superellipsoid;
 use crate::shapes::torus::Torus;
 use crate::shapes::transformed::Transformed;
@@ -245,6 +246,7 @@ pub(super) fn build_shapes(
             vec![wrap(iso)?]
         }
         scene::ShapeDecl::HeightField(h) => vec![wrap(Arc::new(HeightField::new(h)?))?],
+        scene::ShapeDecl::SphereSweep(s) => vec![wrap(Arc::new(SphereSweep::new(s)?))?],
         // Built whole by `csg::build_csg`, which gives its parts their own ids.
         scene::ShapeDecl::Csg(_) => return Err("a CSG object is not one of a CSG's shapes".into()),
     })

@@ -121,7 +121,8 @@ pub fn why_open(shape: &ShapeDecl) -> Option<String> {
         ShapeDecl::Prism(_)
         | ShapeDecl::Superellipsoid { .. }
         | ShapeDecl::Blob(_)
-        | ShapeDecl::HeightField(_) => None,
+        | ShapeDecl::HeightField(_)
+        | ShapeDecl::SphereSweep(_) => None,
         ShapeDecl::Isosurface(i) if i.open => {
             Some("an `open` isosurface has no walls where its container cuts it".into())
         }

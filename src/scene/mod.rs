@@ -21,6 +21,7 @@ mod obj_errors;
 pub mod pattern_value;
 pub mod prism;
 pub mod slope;
+pub mod sphere_sweep;
 pub mod text;
 mod validate;
 
@@ -36,6 +37,7 @@ pub use function::{Function, FunctionError, Op};
 pub use height_field::{HeightField, HeightGrid, MAX_HEIGHT_FIELD_SIDE};
 pub use pattern_value::{PatternFn, PatternKind};
 pub use prism::{Prism, PrismSpline, ProfileError, prism_segments};
+pub use sphere_sweep::{MAX_SWEEP_SPHERES, SphereSweep, SweepSegment, SweepSpline};
 pub use validate::{
     COAT_IOR_RANGE, IOR_RANGE, MAX_COLOR, MAX_COORD, MAX_ITERATIONS, MAX_OCTAVES, MAX_PHOTONS,
     MAX_PIXELS, MAX_RESOLUTION_SIDE, MIN_ROUGHNESS, MIN_SIZE, color_problem,
@@ -477,6 +479,9 @@ pub enum ShapeDecl {
     Isosurface(Isosurface),
     /// POV-Ray's `height_field`: a grid of heights over the unit square (see [`HeightField`]).
     HeightField(HeightField),
+    /// POV-Ray's `sphere_sweep` along a `cubic_spline` or `b_spline` (see [`SphereSweep`]; a
+    /// `linear_spline` sweep is a merge of spheres and cones).
+    SphereSweep(SphereSweep),
     /// Constructive solid geometry over closed child objects (see [`Csg`]).
     Csg(Csg),
 }
@@ -510,6 +515,7 @@ impl ShapeDecl {
             ShapeDecl::Blob(_) => "blob",
             ShapeDecl::Isosurface(_) => "isosurface",
             ShapeDecl::HeightField(_) => "height_field",
+            ShapeDecl::SphereSweep(_) => "sphere_sweep",
             ShapeDecl::Csg(c) => c.op.name(),
         }
     }

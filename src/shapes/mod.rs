@@ -262,6 +262,7 @@ pub mod prism;
 pub mod quad;
 pub mod revolve;
 pub mod sphere;
+pub mod sphere_sweep;
 pub mod superellipsoid;
 pub mod torus;
 pub mod transformed;

@@ -742,6 +742,55 @@ fn a_sphere_sweep_renders_in_every_integrator() {
     }
 }
 
+/// Curved sphere sweeps (a Catmull-Rom arch in glass, a b-spline coil) render in every
+/// integrator: every pixel finite (checked in `run`), the arch's top lit by the sky, the
+/// background beside it; and the picture is the same on 1 and 3 threads.
+#[test]
+fn curved_sphere_sweeps_render_in_every_integrator() {
+    let text = "settings { resolution <24, 24> max_depth 8 }
+         camera { location <0, 0, -6> look_at <0, 0, 0> fov 40 }
+         background rgb 0.5
+         sphere_sweep { cubic_spline 5, <-2, -2, 0>, 0.2, <-1, -1, 0>, 0.3, <0, 0.5, 0>, 0.5,
+                        <1, -1, 0>, 0.3, <2, -2, 0>, 0.2 material { diffuse rgb 0.8 } }
+         sphere_sweep { b_spline 6, <-1.2, 1.2, 0>, 0.1, <-0.6, 1.6, 0.4>, 0.15, <0, 1.2, 0>, 0.2,
+                        <0.6, 1.6, -0.4>, 0.15, <1.2, 1.2, 0>, 0.1, <1.6, 1.5, 0>, 0.05
+                        material { glass ior 1.5 } }";
+    let loaded = sppm_lang::load_source("curved.scn", text, &sppm_lang::EvalOptions::default());
+    let scene = loaded.scene.expect("curved sweep scene evaluates");
+    for integrator in Integrator::ALL {
+        let img = run(&scene, integrator, 2, 5_000, 4);
+        // The arch's top sphere (centre <0, 0.5>, radius 0.5) fills rows 9 to 11 of column 12.
+        let arch = window_mean(&img, 11, 10, 13, 12);
+        let corner = window_mean(&img, 0, 21, 3, 24);
+        println!("{integrator:?}: arch {arch:.3}, corner {corner:.3}");
+        assert!(arch > 0.05, "{integrator:?}: the arch is black");
+        assert!(
+            (corner - 0.5).abs() < 0.05,
+            "{integrator:?}: corner {corner}"
+        );
+    }
+    let threads = |n: usize| {
+        let opts = RenderOptions {
+            iterations: Some(2),
+            photons: Some(5_000),
+            seed: Some(3),
+            threads: Some(n),
+            ..Default::default()
+        };
+        let out = render(&scene, &opts, &AtomicBool::new(false), &mut |_| {}).unwrap();
+        out.image
+            .pixels
+            .iter()
+            .map(|p| p.map(f64::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        threads(1),
+        threads(3),
+        "the sweep's picture depends on the thread count"
+    );
+}
+
 /// A scene with a bump on every kind of surface: rippled glass over a checker floor, a
 /// bumped diffuse sphere, a dented metal, a wrinkled coat.
 const BUMPED_SCENE: &str = "settings { resolution <24, 18> max_depth 8 }

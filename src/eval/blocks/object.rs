@@ -50,6 +50,8 @@ pub(super) struct ObjectBuilder {
     /// A prism's spline and sweep keywords.
     spline: Option<PrismSpline>,
     conic: bool,
+    /// A curved sphere sweep's spline; `None`: straight segments.
+    sweep_spline: Option<SweepSpline>,
     /// A `sphere` or `cylinder` written in a blob's body: a component of it.
     component: bool,
     /// A component's strength; a blob's or isosurface's threshold.
@@ -205,6 +207,7 @@ impl ObjectBuilder {
             inverse: false,
             spline: None,
             conic: false,
+            sweep_spline: None,
             component: false,
             strength: None,
             threshold: None,
@@ -521,21 +524,11 @@ impl Sink for ObjectBuilder {
         }
         match kw.text.as_str() {
             "open" => self.open = true,
-            // A sphere sweep is exact along straight segments only.
-            "cubic_spline" | "b_spline" if self.kind == "sphere_sweep" => {
-                return Err(vec![
-                    Error::new(format!(
-                        "a sphere_sweep along a `{}` is not supported",
-                        kw.text
-                    ))
-                    .label("curved sweep")
-                    .help(
-                        "use `linear_spline` (straight segments between the spheres; add \
-                         points along the curve to follow it)",
-                    )
-                    .at(kw.span),
-                ]);
+            // The last spline keyword of a sphere sweep counts, as in POV-Ray.
+            "cubic_spline" if self.kind == "sphere_sweep" => {
+                self.sweep_spline = Some(SweepSpline::CatmullRom)
             }
+            "b_spline" => self.sweep_spline = Some(SweepSpline::BSpline),
             // A sphere sweep is exact: POV-Ray's root-finding tolerance has nothing to tune.
             "tolerance" => {}
             // A blob's roots are isolated exactly, over a hierarchy of its components always.
@@ -545,7 +538,10 @@ impl Sink for ObjectBuilder {
             "max_gradient" | "accuracy" | "max_trace" | "all_intersections" => {
                 self.iso_property(ev, kw, &args)?
             }
-            "linear_spline" => self.spline = Some(PrismSpline::Linear),
+            "linear_spline" => {
+                self.spline = Some(PrismSpline::Linear);
+                self.sweep_spline = None;
+            }
             "quadratic_spline" => self.spline = Some(PrismSpline::Quadratic),
             "cubic_spline" => self.spline = Some(PrismSpline::Cubic),
             "bezier_spline" => self.spline = Some(PrismSpline::Bezier),

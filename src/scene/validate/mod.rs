@@ -479,6 +479,22 @@ fn validate_object(obj: &Object, parent: &DAffine3) -> Result<(), Diagnostic> {
             at(lo)?;
             at(hi)?;
         }
+        ShapeDecl::SphereSweep(s) => {
+            s.check().map_err(|m| {
+                invalid(
+                    span,
+                    m,
+                    "here",
+                    "see the sphere sweep section of docs/language.md",
+                )
+            })?;
+            for (c, r) in s.centres.iter().zip(&s.radii) {
+                at(*c)?;
+                if *r > 0.0 {
+                    len(*r, "radius")?;
+                }
+            }
+        }
         ShapeDecl::HeightField(_) => {
             len(1.0, "size")?;
             for c in [DVec3::ZERO, DVec3::ONE] {

@@ -20,17 +20,17 @@ use crate::scene;
 use field::{Component, Scratch, first_crossing};
 
 /// Components per leaf of the hierarchy.
-const LEAF_SIZE: usize = 4;
+pub(super) const LEAF_SIZE: usize = 4;
 
 /// A node of the components' hierarchy: a box, and either two children (`count == 0`, the
 /// first at the next index, the second at `next`) or `count` components from `first`.
 #[derive(Debug, Clone, Copy)]
-struct Node {
-    min: DVec3,
-    max: DVec3,
-    next: u32,
-    first: u32,
-    count: u32,
+pub(super) struct Node {
+    pub(super) min: DVec3,
+    pub(super) max: DVec3,
+    pub(super) next: u32,
+    pub(super) first: u32,
+    pub(super) count: u32,
 }
 
 pub struct Blob {
@@ -179,7 +179,14 @@ pub(super) fn spherical_hit(t: f32, p: DVec3, n: glam::Vec3A, centre: DVec3) -> 
 }
 
 /// The part of `[lo, hi]` where `o + t d` lies in the box, if any.
-fn clip(min: DVec3, max: DVec3, o: DVec3, d: DVec3, lo: f64, hi: f64) -> Option<(f64, f64)> {
+pub(super) fn clip(
+    min: DVec3,
+    max: DVec3,
+    o: DVec3,
+    d: DVec3,
+    lo: f64,
+    hi: f64,
+) -> Option<(f64, f64)> {
     let (mut a, mut b) = (lo, hi);
     for k in 0..3 {
         if d[k] == 0.0 {
@@ -198,7 +205,12 @@ fn clip(min: DVec3, max: DVec3, o: DVec3, d: DVec3, lo: f64, hi: f64) -> Option<
 
 /// Builds the hierarchy over `order[..]` (indices into `boxes`) depth first, median split on
 /// the longest axis of the boxes' centres; returns the node's index.
-fn build(boxes: &[(DVec3, DVec3)], order: &mut [u32], offset: u32, nodes: &mut Vec<Node>) -> u32 {
+pub(super) fn build(
+    boxes: &[(DVec3, DVec3)],
+    order: &mut [u32],
+    offset: u32,
+    nodes: &mut Vec<Node>,
+) -> u32 {
     let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let (mut cmin, mut cmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for &i in order.iter() {

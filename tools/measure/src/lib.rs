@@ -14,6 +14,8 @@
 //!   test.
 //! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
+//! - [`sweep_reference`]: a slow reference intersector of the curved `sphere_sweep` (dense
+//!   sampling along the curve and golden-section refinement), the oracle of its stress test.
 //! - [`superellipsoid_reference`]: a slow reference intersector of `superellipsoid`, the
 //!   oracle of its stress test.
 //! - [`setup`]: the set-up of a large mesh (OBJ read, triangles, BVH) step by step, on 1
@@ -31,5 +33,6 @@ pub mod prism_reference;
 pub mod reference;
 pub mod setup;
 pub mod superellipsoid_reference;
+pub mod sweep_reference;
 pub mod tessellate;
 pub mod twin;

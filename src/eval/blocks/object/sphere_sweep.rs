@@ -3,6 +3,10 @@
 //! is exactly the `merge` of the spheres at the points and, per segment, the cone frustum
 //! tangent to its two spheres (the rest of their convex hull), so it is built as that merge:
 //! exact, closed, and a CSG child like any other.
+//!
+//! With `cubic_spline` or `b_spline` the sweep is the renderer's own primitive
+//! ([`crate::scene::SphereSweep`]): at least 4 spheres, radii of any sign (a stretch where the
+//! interpolated radius is not positive is absent), positive somewhere.
 
 use glam::DVec3;
 
@@ -10,10 +14,12 @@ use super::ObjectBuilder;
 use super::csg::node;
 use crate::diag::{At, Error, SourceResult, short_number};
 use crate::eval::value::Part;
-use crate::scene::{CsgOp, ShapeDecl};
+use crate::scene::{CsgOp, MAX_SWEEP_SPHERES, ShapeDecl, SphereSweep, SweepSpline};
 
 const EXAMPLE: &str =
     "sphere_sweep { linear_spline 3, <0, 0, 0>, 0.1, <1, 1, 0>, 0.2, <2, 0, 0>, 0.1 }";
+const CURVED_EXAMPLE: &str = "sphere_sweep { b_spline 4, <0, 0, 0>, 0.1, <1, 1, 0>, 0.2, \
+                              <2, 0, 0>, 0.2, <3, 1, 0>, 0.1 }";
 
 impl ObjectBuilder {
     pub(super) fn sphere_sweep(&self) -> SourceResult<Vec<Part>> {
@@ -37,9 +43,19 @@ impl ObjectBuilder {
                     if rest.len() == 1 { "" } else { "s" }
                 ))
                 .label("the count")
-                .help(format!("e.g. `{EXAMPLE}`"))
+                .help(format!(
+                    "e.g. `{}`",
+                    if self.sweep_spline.is_some() {
+                        CURVED_EXAMPLE
+                    } else {
+                        EXAMPLE
+                    }
+                ))
                 .at(*count_span),
             ]);
+        }
+        if let Some(spline) = self.sweep_spline {
+            return self.curved_sweep(spline, rest, *count_span);
         }
         if rest.len() < 4 {
             return Err(vec![
@@ -107,5 +123,87 @@ impl ObjectBuilder {
             }));
         }
         Ok(vec![node(CsgOp::Merge, parts, self.span)?])
+    }
+
+    /// A sweep along a `cubic_spline` or `b_spline` of the spheres in `rest` (pairs of a
+    /// centre and a radius, as many as the count says).
+    fn curved_sweep(
+        &self,
+        spline: SweepSpline,
+        rest: &[(crate::eval::value::Value, crate::span::Span)],
+        count_span: crate::span::Span,
+    ) -> SourceResult<Vec<Part>> {
+        let name = match spline {
+            SweepSpline::CatmullRom => "cubic_spline",
+            SweepSpline::BSpline => "b_spline",
+        };
+        let n = rest.len() / 2;
+        if n < 4 {
+            return Err(vec![
+                Error::new(format!(
+                    "a `{name}` sphere_sweep needs at least 4 spheres, found {n}"
+                ))
+                .label("the count")
+                .help(format!(
+                    "the first and the last sphere only steer the curve's ends; e.g. \
+                     `{CURVED_EXAMPLE}`"
+                ))
+                .at(count_span),
+            ]);
+        }
+        if n > MAX_SWEEP_SPHERES {
+            return Err(vec![
+                Error::new(format!(
+                    "a sphere_sweep may have at most {MAX_SWEEP_SPHERES} spheres, found {n}"
+                ))
+                .label("the count")
+                .help("split the sweep into several")
+                .at(count_span),
+            ]);
+        }
+        let (mut centres, mut radii) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for pair in rest.chunks(2) {
+            let c = pair[0]
+                .0
+                .vec3()
+                .map_err(|e| e.help("each sphere is a centre `<x, y, z>` and a radius"))
+                .at(pair[0].1)?;
+            let r = pair[1].0.num().at(pair[1].1)?;
+            if !c.is_finite() {
+                return Err(vec![
+                    Error::new("a sphere_sweep's centre must be finite")
+                        .label("not a finite point")
+                        .help(format!("e.g. `{CURVED_EXAMPLE}`"))
+                        .at(pair[0].1),
+                ]);
+            }
+            if !r.is_finite() {
+                return Err(vec![
+                    Error::new(format!(
+                        "a sphere_sweep's radius must be finite, found {}",
+                        short_number(r)
+                    ))
+                    .label("not a finite radius")
+                    .help(format!("e.g. `{CURVED_EXAMPLE}`"))
+                    .at(pair[1].1),
+                ]);
+            }
+            centres.push(c);
+            radii.push(r);
+        }
+        let sweep = SphereSweep {
+            spline,
+            centres,
+            radii,
+        };
+        if let Err(m) = sweep.check() {
+            return Err(vec![
+                Error::new(m)
+                    .label("this sweep")
+                    .help("give the spheres positive radii")
+                    .at(self.span),
+            ]);
+        }
+        Ok(vec![self.part(ShapeDecl::SphereSweep(sweep))])
     }
 }

@@ -1989,3 +1989,282 @@ mod text_stress {
         );
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// sphere_sweep (cubic_spline, b_spline): the product's Bernstein branch and bound against
+// `sppm_measure::sweep_reference`.
+
+mod sweep_stress {
+    use std::time::Instant;
+
+    use glam::DVec3;
+    use rayon::prelude::*;
+    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::scene::{SphereSweep as SceneSweep, SweepSpline};
+    use sppm_lang::shapes::sphere_sweep::SphereSweep;
+    use sppm_measure::sweep_reference::RefSweep;
+
+    /// Rays per case: 4 000 by default (the reference samples each ray's spheres 2 000 times
+    /// per segment, four times over); `SWEEP_STRESS_RAYS` sets another count.
+    fn rays() -> usize {
+        std::env::var("SWEEP_STRESS_RAYS")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(4_000)
+    }
+
+    const SAMPLES: usize = 2_000;
+
+    struct Case {
+        name: &'static str,
+        spline: SweepSpline,
+        pts: Vec<(DVec3, f64)>,
+    }
+
+    fn cases() -> Vec<Case> {
+        let mut rng = SplitMix64::new(0x5eef);
+        let wiggly: Vec<(DVec3, f64)> = (0..9)
+            .map(|i| {
+                (
+                    DVec3::new(
+                        f64::from(i) * 0.5 - 2.0,
+                        rng.range(-1.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                    ),
+                    rng.range(0.1, 0.5),
+                )
+            })
+            .collect();
+        let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        vec![
+            Case {
+                name: "cubic_spline, random",
+                spline: SweepSpline::CatmullRom,
+                pts: wiggly.clone(),
+            },
+            Case {
+                name: "b_spline, random",
+                spline: SweepSpline::BSpline,
+                pts: wiggly,
+            },
+            Case {
+                // A tripled control point: the curve stops there (a cusp, c' = 0), and the
+                // radius grows faster than the centre moves on either side of it.
+                name: "b_spline, cusp and fast radius",
+                spline: SweepSpline::BSpline,
+                pts: vec![
+                    (v(-2.0, 0.0, 0.0), 0.1),
+                    (v(-1.0, 1.0, 0.0), 0.2),
+                    (v(0.0, 0.0, 0.0), 0.05),
+                    (v(0.0, 0.0, 0.0), 0.9),
+                    (v(0.0, 0.0, 0.0), 0.05),
+                    (v(1.0, 1.0, 0.5), 0.2),
+                    (v(2.0, -0.5, 0.0), 0.1),
+                ],
+            },
+            Case {
+                // Coincident points (a segment of zero length), a thin stretch of radius 2e-3
+                // and a stretch where the interpolated radius goes below zero (absent).
+                name: "cubic_spline, coincident points, thin and vanishing",
+                spline: SweepSpline::CatmullRom,
+                pts: vec![
+                    (v(-2.0, 0.0, 0.0), 0.3),
+                    (v(-1.5, 0.0, 0.0), 0.3),
+                    (v(-1.5, 0.0, 0.0), 0.3),
+                    (v(-0.5, 0.5, 0.0), 0.002),
+                    (v(0.5, -0.5, 0.0), 0.002),
+                    (v(1.0, 0.0, 0.5), -0.4),
+                    (v(1.5, 0.0, 0.0), 0.5),
+                    (v(2.0, 0.5, 0.0), 0.3),
+                    (v(2.5, 0.0, 0.0), 0.3),
+                ],
+            },
+        ]
+    }
+
+    /// A point on the surface: from a centre on the curve outward along `dir` until the
+    /// reference's distance changes sign, bisected.
+    fn surface_from(r: &RefSweep, c: DVec3, dir: DVec3) -> Option<DVec3> {
+        let f = |t: f64| r.distance(c + t * dir, 200);
+        if f(0.0) >= 0.0 {
+            return None;
+        }
+        let (mut l, mut h) = (0.0, 3.0);
+        if f(h) <= 0.0 {
+            return None;
+        }
+        for _ in 0..60 {
+            let m = 0.5 * (l + h);
+            if f(m) < 0.0 {
+                l = m;
+            } else {
+                h = m;
+            }
+        }
+        Some(c + h * dir)
+    }
+
+    /// Random rays from afar, grazing rays (1e-5..1e-2 off a tangent plane of the surface)
+    /// and rays at the curve's points across it (the cusp, the thin stretch).
+    fn ray(r: &RefSweep, i: usize, rng: &mut SplitMix64) -> (DVec3, DVec3) {
+        let random = |rng: &mut SplitMix64| {
+            let o = rng.unit() * 8.0;
+            let target = DVec3::new(
+                rng.range(-2.5, 2.5),
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+            );
+            (o, (target - o).normalize())
+        };
+        let seg = (rng.f() * r.segments() as f64) as usize % r.segments();
+        let (c, _) = r.at(seg, rng.f());
+        let (o, d) = match i % 3 {
+            0 => random(rng),
+            1 => {
+                let Some(p) = surface_from(r, c, rng.unit()) else {
+                    return random(rng);
+                };
+                let h = 1e-6;
+                let g = |q: DVec3| r.distance(q, 400);
+                let n = DVec3::new(
+                    g(p + DVec3::X * h) - g(p - DVec3::X * h),
+                    g(p + DVec3::Y * h) - g(p - DVec3::Y * h),
+                    g(p + DVec3::Z * h) - g(p - DVec3::Z * h),
+                )
+                .normalize_or(DVec3::Y);
+                let tangent = n.cross(rng.unit()).normalize();
+                let eps = 10f64.powf(rng.range(-5.0, -2.0)) * rng.sign();
+                let d = (tangent + n * eps).normalize();
+                (p - d * 6.0 + n * (eps * rng.range(-2.0, 2.0)), d)
+            }
+            _ => {
+                let d = rng.unit();
+                let target = c + rng.unit() * rng.range(0.0, 0.01);
+                (target - d * 6.0, d)
+            }
+        };
+        // From outside only: the first crossing is then an entry.
+        if r.distance(o, 200) < 0.01 {
+            return random(rng);
+        }
+        (o, d)
+    }
+
+    /// No miss, no false hit, entry and last exit within 1e-6 (relative to the distance, at
+    /// least 1). A ray that reaches less than 1e-8 into or past the spheres (the product's
+    /// stated touch resolution) may count either way.
+    #[test]
+    fn sweep_rays_against_the_reference() {
+        for (k, case) in cases().iter().enumerate() {
+            let scene = SceneSweep {
+                spline: case.spline,
+                centres: case.pts.iter().map(|p| p.0).collect(),
+                radii: case.pts.iter().map(|p| p.1).collect(),
+            };
+            let sweep = SphereSweep::new(&scene).unwrap();
+            let r = RefSweep {
+                b_spline: case.spline == SweepSpline::BSpline,
+                centres: scene.centres.clone(),
+                radii: scene.radii.clone(),
+            };
+            let count = rays();
+            let rays: Vec<(DVec3, DVec3)> = (0..count)
+                .map(|i| ray(&r, i, &mut SplitMix64::for_item(0x5eef0 + k as u64, 0, i)))
+                .collect();
+            let start = Instant::now();
+            // The product's crossings along each ray, all of them.
+            let got: Vec<Vec<(f64, bool)>> = rays
+                .iter()
+                .map(|&(o, d)| {
+                    let mut out = Vec::new();
+                    let mut lo = 0.0;
+                    while let Some(c) = sweep.nearest(o, d, lo, f64::INFINITY, |a, b| b <= a) {
+                        out.push((c.t, c.entering));
+                        lo = c.t;
+                        if out.len() > 64 {
+                            break;
+                        }
+                    }
+                    out
+                })
+                .collect();
+            let per_ray = start.elapsed().as_secs_f64() / count as f64;
+            let (fails, hits, confirmed, max_err) = rays
+                .par_iter()
+                .zip(&got)
+                .map(|(&(o, d), got)| {
+                    let mut fails = Vec::new();
+                    let (mut hits, mut confirmed, mut max_err) = (0, 0, 0.0f64);
+                    let what = format!("o {o} d {d}");
+                    if got.len() % 2 == 1
+                        || got.iter().enumerate().any(|(i, c)| c.1 != (i % 2 == 0))
+                    {
+                        fails.push(format!("crossings not in/out pairs: {what} {got:?}"));
+                    }
+                    let want = r.span(o, d, SAMPLES);
+                    let near_touch = || r.reach(o, d, SAMPLES).abs() < 1e-8;
+                    match (want, got.first(), got.last()) {
+                        (Some(w), Some(&(gin, _)), Some(&(gout, _))) => {
+                            hits = 1;
+                            let err = (gin - w.entry).abs().max((gout - w.exit).abs());
+                            if err > 1e-6 * w.exit.max(1.0) {
+                                if near_touch() {
+                                    confirmed = 1;
+                                } else {
+                                    fails.push(format!(
+                                        "t: {what} want {}..{} got {gin}..{gout}",
+                                        w.entry, w.exit
+                                    ));
+                                }
+                            } else {
+                                max_err = err;
+                                if std::env::var("SWEEP_STRESS_WORST").is_ok() && err > 1e-7 {
+                                    println!(
+                                        "  worst? {what} want {}..{} got {gin}..{gout}",
+                                        w.entry, w.exit
+                                    );
+                                }
+                            }
+                        }
+                        (Some(w), None, _) => {
+                            hits = 1;
+                            if near_touch() {
+                                confirmed = 1;
+                            } else {
+                                fails.push(format!("miss: {what} want {}", w.entry));
+                            }
+                        }
+                        (None, Some(&(g, _)), _) => {
+                            if near_touch() {
+                                confirmed = 1;
+                            } else {
+                                fails.push(format!("false hit: {what} got {g}"));
+                            }
+                        }
+                        _ => {}
+                    }
+                    (fails, hits, confirmed, max_err)
+                })
+                .reduce(
+                    || (Vec::new(), 0, 0, 0.0),
+                    |a, b| {
+                        let mut f = a.0;
+                        f.extend(b.0);
+                        (f, a.1 + b.1, a.2 + b.2, a.3.max(b.3))
+                    },
+                );
+            for f in fails.iter().take(3) {
+                println!("  [{}] {f}", case.name);
+            }
+            println!(
+                "[sphere_sweep: {}] rays {count} reference hits {hits} failures {} (touches \
+                 within 1e-8: {confirmed}) max t error {max_err:.2e}, {:.2} µs per ray",
+                case.name,
+                fails.len(),
+                per_ray * 1e6
+            );
+            assert!(fails.is_empty(), "{}: {} failures", case.name, fails.len());
+            assert!(hits * 5 >= count, "{}: too few hits to test", case.name);
+        }
+    }
+}
