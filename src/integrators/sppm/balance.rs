@@ -16,6 +16,9 @@
 //! bound measured): a scene lit mostly directly (an environment map's sun) moves more of its
 //! casts to the camera pass.
 //!
+//! VCM shares its extra camera paths among the pixels with the same [`SampleStats`] and
+//! [`allocate`] (`integrators/vcm/mod.rs`), for a fixed budget.
+//!
 //! Every count comes from deterministic quantities: the photon pass's traced segments (a count
 //! of ray casts, the same on any thread count and machine load), each pixel's own samples and
 //! the photons it gathered, summed in pixel order; never from the clock.
