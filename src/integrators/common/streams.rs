@@ -30,11 +30,13 @@ pub(crate) enum Stream {
     VcmLight = 7,
     /// VCM's camera paths, indexed by pixel.
     VcmCamera = 8,
+    /// VCM's extra camera paths (where a pixel's camera paths vary most), indexed by pixel.
+    VcmCameraExtra = 9,
 }
 
 impl Stream {
     #[cfg(test)]
-    const ALL: [Stream; 9] = [
+    const ALL: [Stream; 10] = [
         Stream::Camera,
         Stream::Photon,
         Stream::Pixel,
@@ -44,6 +46,7 @@ impl Stream {
         Stream::Gather,
         Stream::VcmLight,
         Stream::VcmCamera,
+        Stream::VcmCameraExtra,
     ];
 
     /// The generator of item `index` of this stream in iteration `iteration`.
@@ -65,6 +68,6 @@ mod tests {
         for (i, a) in ids.iter().enumerate() {
             assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
         }
-        assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6, 7, 8]);
+        assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
     }
 }

@@ -16,6 +16,9 @@
 //! bound measured): a scene lit mostly directly (an environment map's sun) moves more of its
 //! casts to the camera pass.
 //!
+//! VCM shares its extra camera paths among the pixels with the same [`SampleStats`] and
+//! [`allocate`] (`integrators/vcm/mod.rs`), for a fixed budget.
+//!
 //! Every count comes from deterministic quantities: the photon pass's traced segments (a count
 //! of ray casts, the same on any thread count and machine load), each pixel's own samples and
 //! the photons it gathered, summed in pixel order; never from the clock.
@@ -29,7 +32,7 @@ use super::pixels::Pixel;
 /// Rays per camera sample: the eye ray, the shadow ray of the light sample and the BSDF
 /// sample's ray (specular bounces add a few; the photon side's gathers are not counted either,
 /// so the two omissions roughly cancel).
-pub(super) const RAYS_PER_CAMERA_SAMPLE: f64 = 3.0;
+pub(crate) const RAYS_PER_CAMERA_SAMPLE: f64 = 3.0;
 
 /// The most extra camera samples one pixel takes in one iteration.
 pub(super) const MAX_EXTRA: u32 = 63;
@@ -37,14 +40,14 @@ pub(super) const MAX_EXTRA: u32 = 63;
 /// One pixel's camera samples so far: their number and the sums of their luminance and of its
 /// square, for the variance.
 #[derive(Clone, Copy, Default)]
-pub(super) struct SampleStats {
+pub(crate) struct SampleStats {
     n: u32,
     sum: f64,
     sum2: f64,
 }
 
 impl SampleStats {
-    pub(super) fn add(&mut self, l: Vec3A) {
+    pub(crate) fn add(&mut self, l: Vec3A) {
         let y = luminance(l.as_dvec3());
         self.n = self.n.saturating_add(1);
         self.sum += y;
@@ -87,7 +90,7 @@ fn deviations(stats: &[SampleStats]) -> (impl Fn(&SampleStats) -> f64, f64) {
 /// so far and the camera pass's ray casts: a budget of
 /// `camera_rays / RAYS_PER_CAMERA_SAMPLE - pixels` samples shared in proportion to the
 /// pixels' standard deviations.
-pub(super) fn allocate(stats: &[SampleStats], camera_rays: u64, extra: &mut [u32]) {
+pub(crate) fn allocate(stats: &[SampleStats], camera_rays: u64, extra: &mut [u32]) {
     let pixels = stats.len() as f64;
     let budget = (camera_rays as f64 / RAYS_PER_CAMERA_SAMPLE - pixels).max(0.0);
     let (sd, sd_sum) = deviations(stats);

@@ -39,7 +39,7 @@ use crate::camera::Camera;
 use crate::prepare::{EffectiveSettings, GATHER_RADIUS_FACTOR, PreparedScene};
 use crate::sampling::Rng;
 
-mod balance;
+pub(crate) mod balance;
 mod grid;
 mod pass;
 mod photon_count;

@@ -1,6 +1,7 @@
 //! Light subpaths: a light chosen by power (the environment included) emits a path that
 //! bounces by BSDF sampling (importance transport, the photon tracer's roulette). Every
-//! non-specular vertex is stored for connections and merging, and connected to the camera
+//! non-specular vertex (and, for merging, a blend's specular one) is stored for connections
+//! and merging, and every non-specular one connected to the camera
 //! (light tracing); the splats go to a list the caller adds to the film in path order, so the
 //! image does not depend on threads.
 
@@ -96,20 +97,25 @@ pub(super) fn trace(
             q = Quantities::light(&ctx.factors, direct_pdf_a, emission_pdf_w, cos_light);
         }
         q.arrive(dist2, cos_in);
-        if !bsdf.is_specular() {
-            if ctx.mode.use_vc || ctx.mode.use_vm {
-                vertices.push(LightVertex {
-                    p: sh.hit.p,
-                    bsdf,
-                    wo,
-                    beta,
-                    len,
-                    q,
-                });
-            }
-            if ctx.mode.use_vc || ctx.mode.light_trace_only {
-                to_camera(ctx, &sh, &bsdf, wo, beta, &q, medium, rng, splats);
-            }
+        let specular = bsdf.is_specular();
+        // A blend's specular point stores its vertex for merging all the same (as photon
+        // mapping stores its photons there): a camera vertex on a rough point nearby merges with
+        // the light arriving at the surface, whichever part the light's own point shows, or the
+        // density it estimates lacks the share of the specular part. Connections to such a
+        // vertex find no BSDF and add nothing.
+        let store = !specular || (ctx.mode.use_vm && scene.blend_stores_photons(&sh));
+        if store && (ctx.mode.use_vc || ctx.mode.use_vm) {
+            vertices.push(LightVertex {
+                p: sh.hit.p,
+                bsdf,
+                wo,
+                beta,
+                len,
+                q,
+            });
+        }
+        if !specular && (ctx.mode.use_vc || ctx.mode.light_trace_only) {
+            to_camera(ctx, &sh, &bsdf, wo, beta, &q, medium, rng, splats);
         }
         if len + 2 > ctx.max_len {
             return;

@@ -38,6 +38,7 @@ use rayon::prelude::*;
 
 use super::common::streams::Stream;
 use super::common::{medium_after, progressive};
+use super::sppm::balance::{RAYS_PER_CAMERA_SAMPLE, SampleStats, allocate};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
@@ -92,6 +93,12 @@ impl Vcm {
         }
     }
 }
+
+/// Extra camera paths per iteration, as a share of the pixels, given to the pixels whose
+/// camera paths vary most (Neyman allocation, as SPPM's camera samples: a directly visible
+/// light's edge, a small light's soft shadow). Each pixel's estimate is the mean of its camera
+/// paths, every one weighted as the only one (unbiased; the light paths are shared).
+const EXTRA_CAMERA_PATHS: f64 = 1.0;
 
 /// Light paths traced per parallel task: the unit of work whose results are joined in order.
 const CHUNK: usize = 1024;
@@ -172,6 +179,10 @@ impl Integrator for Vcm {
             * self.radius_scale;
         let mode = self.mode;
         let mut pass = LightPass::default();
+        // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
+        let mut samples = vec![SampleStats::default(); n_paths];
+        let mut extra = vec![0u32; n_paths];
+        let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         progressive::render_means(job, |iter, stats| {
             let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
             let radius = radius.max(1e-7);
@@ -202,9 +213,12 @@ impl Integrator for Vcm {
             let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
             let t_camera = Instant::now();
             let seed = settings.seed;
-            let values: Vec<Vec3A> = (0..n_paths)
-                .into_par_iter()
-                .map(|i| {
+            let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
+            let values: Vec<Vec3A> = samples
+                .par_iter_mut()
+                .zip(extra.par_iter())
+                .enumerate()
+                .map(|(i, (px, &extra))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
                         return Vec3A::ZERO;
@@ -213,10 +227,24 @@ impl Integrator for Vcm {
                     let start = if i == 0 { 0 } else { ends[i - 1] as usize };
                     let own = &vertices[start..ends[i] as usize];
                     let (x, y) = (i as u32 % w, i as u32 / w);
-                    let l = camera_path::radiance(&ctx, x, y, own, &mut rng) + splat;
-                    if l.is_finite() { l } else { Vec3A::ZERO }
+                    let mut sum = finite(camera_path::radiance(&ctx, x, y, own, &mut rng));
+                    px.add(sum);
+                    if extra > 0 {
+                        let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
+                        for _ in 0..extra {
+                            let l = finite(camera_path::radiance(&ctx, x, y, own, &mut rng));
+                            px.add(l);
+                            sum += l;
+                        }
+                    }
+                    finite(sum / (1 + extra) as f32 + splat)
                 })
                 .collect();
+            stats.camera_paths += extra.iter().map(|&e| u64::from(e)).sum::<u64>();
+            if extra_budget > 0 {
+                let rays = (n_paths as u64 + extra_budget) as f64 * RAYS_PER_CAMERA_SAMPLE;
+                allocate(&samples, rays as u64, &mut extra);
+            }
             stats.camera_time += t_camera.elapsed();
             (!cancel.load(Ordering::Relaxed)).then_some((values, n_paths as u64))
         })
