@@ -8,8 +8,8 @@
 //! each photon looking them up made every photon hit a random read of the point arrays, and
 //! that lookup waited on memory for a third of the photon pass.)
 //!
-//! The cells are a little over `2 r_max` wide, so the photons within `r <= r_max` of a point
-//! lie in the 2x2x2 cells nearest to it. A photon is stored once per level (below), in the cell
+//! The cells are a little over `r_max` wide, so the photons within `r <= r_max` of a point lie
+//! in the (at most) 3x3x3 cells that meet the cube of half-width `r` around it. A photon is stored once per level (below), in the cell
 //! that holds it; the entries of a bucket are contiguous, positions (all the distance test
 //! reads) in one array and the photon's direction and flux in a parallel one.
 //!
@@ -73,7 +73,7 @@ struct Level {
 /// primes, then a Fibonacci multiply whose top `bits` bits index a power-of-two range). Cell
 /// `(x, y, z)` has bucket `row(y, z) + x` (the table has `2^bits + res_x` buckets, so this never
 /// wraps): cells next to each other along `x` have consecutive buckets and their entries are one
-/// contiguous run, so a lookup of 2x2x2 cells reads at most 4 runs.
+/// contiguous run, so a lookup of at most 3x3x3 cells reads at most 9 runs.
 #[inline]
 fn row(y: i32, z: i32, bits: u32) -> u32 {
     let h = (y as u32).wrapping_mul(19_349_663) ^ (z as u32).wrapping_mul(83_492_791);
@@ -174,9 +174,13 @@ impl Level {
             bounds.min - Vec3A::splat(max_r),
             bounds.max + Vec3A::splat(max_r),
         );
-        // A little over 2 r_max, so that rounding never puts a photon within r_max of a point
-        // outside the point's 2x2x2 cells.
-        let cell = 2.0 * max_r * 1.001;
+        // A little over r_max: a point's lookup (`bucket_runs`) then meets at most 3 cells per
+        // axis, and its candidates cover about (2 r + r_max)^2 of a surface around it. 2x2x2
+        // cells of 2 r_max made that 16 r_max^2 (the gather's distance tests were a quarter of
+        // the photon pass's instructions at the default radius); cells of 1.5 r_max ran fewer
+        // instructions at the smallest radii but fewer photons per CPU second
+        // (docs/measurements.md, "Photon pass").
+        let cell = max_r * 1.01;
         let diag = bounds.diagonal();
         // Cap the resolution so that huge scenes with a tiny radius stay in range (cells only
         // grow: a lookup still finds every photon within r_max).
@@ -223,45 +227,44 @@ impl Level {
         row(y, z, self.bits) + x as u32
     }
 
-    /// The bucket runs `lo..hi` of the 2x2x2 cells nearest to `p` (fewer at the grid's border).
-    /// Each row of (at most) two cells along `x` is a run of consecutive buckets; runs that share
-    /// a bucket (two rows hashed close together) are merged, so that no entry is listed twice
-    /// (the point would take that photon twice).
+    /// The bucket runs `lo..hi` of the cells that meet the cube of half-width `r` around `p`
+    /// (`r` at most the level's largest radius): at most 3 per axis, since a cell is wider than
+    /// that largest radius. Each row of cells along `x` is a run of consecutive buckets; runs
+    /// that share a bucket (two rows hashed close together) are merged, so that no entry is
+    /// listed twice (the point would take that photon twice).
     #[inline]
-    fn bucket_runs(&self, p: Vec3A) -> ArrayVec<(u32, u32), 4> {
+    fn bucket_runs(&self, p: Vec3A, r: f32) -> ArrayVec<(u32, u32), 9> {
         let mut out = ArrayVec::new();
         if !self.contains(p) {
             return out;
         }
-        // The cube of half-width r_max around `p` is under half a cell wide, so it meets the
-        // cell holding `c - 0.5` and the next one on each axis.
-        let c = (p - self.bounds.min) * self.inv_cell - Vec3A::splat(0.5);
-        let lo = [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)];
-        let (x0, x1) = (lo[0].max(0), (lo[0] + 1).min(self.res[0] - 1));
-        if x0 > x1 {
+        // The cube is padded by 0.1 % so that the rounding of the distance test cannot take a
+        // photon from a cell outside it; `2 r (1.001) < 2 cells` keeps it within 3 cells per
+        // axis (`min` only guards that bound).
+        let pad = Vec3A::splat(r * 1.001);
+        let lo_c = (p - pad - self.bounds.min) * self.inv_cell;
+        let hi_c = (p + pad - self.bounds.min) * self.inv_cell;
+        let range = |a: usize| {
+            let lo = floor_i32(lo_c[a]).max(0);
+            let hi = floor_i32(hi_c[a]).min(self.res[a] - 1).min(lo + 2);
+            (lo, hi)
+        };
+        let ((x0, x1), (y0, y1), (z0, z1)) = (range(0), range(1), range(2));
+        if x0 > x1 || y0 > y1 || z0 > z1 {
             return out;
         }
         let len = (x1 - x0 + 1) as u32;
-        // The rows' first buckets, sorted (a 4-element sorting network; unused slots stay at
-        // u32::MAX and sort last).
-        let mut first = [u32::MAX; 4];
-        let mut n = 0;
-        for z in lo[2].max(0)..=(lo[2] + 1).min(self.res[2] - 1) {
-            for y in lo[1].max(0)..=(lo[1] + 1).min(self.res[1] - 1) {
-                first[n] = row(y, z, self.bits) + x0 as u32;
-                n += 1;
-            }
-        }
-        if n == 0 {
-            return out;
-        }
-        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
-            if first[i] > first[j] {
-                first.swap(i, j);
+        // The rows' first buckets, sorted (insertion sort of at most 9).
+        let mut first = ArrayVec::<u32, 9>::new();
+        for z in z0..=z1 {
+            for y in y0..=y1 {
+                let b = row(y, z, self.bits) + x0 as u32;
+                let at = first.iter().position(|&f| f > b).unwrap_or(first.len());
+                first.insert(at, b);
             }
         }
         let (mut lo_b, mut hi_b) = (first[0], first[0] + len);
-        for &b in &first[1..n] {
+        for &b in &first[1..] {
             if b <= hi_b {
                 hi_b = hi_b.max(b + len);
             } else {
@@ -383,7 +386,7 @@ impl PhotonGrid {
             return;
         };
         if let Some(grid) = self.levels.get(cells.level_of(r)) {
-            grid.for_each_within(p, r * r, f);
+            grid.for_each_within(p, r, f);
         }
     }
 }
@@ -440,14 +443,15 @@ impl LevelGrid {
             });
     }
 
-    /// Calls `f(wi, flux)` for every photon within `radius^2 = r2` of `p` (`r` at most the
-    /// level's largest radius), each once, in entry order.
+    /// Calls `f(wi, flux)` for every photon within `r` of `p` (`r` at most the level's
+    /// largest radius), each once, in entry order.
     #[inline]
-    fn for_each_within(&self, p: Vec3A, r2: f32, mut f: impl FnMut(Vec3A, Vec3A)) {
+    fn for_each_within(&self, p: Vec3A, r: f32, mut f: impl FnMut(Vec3A, Vec3A)) {
         let Some(cells) = &self.cells else {
             return;
         };
-        for (lo, hi) in cells.bucket_runs(p) {
+        let r2 = r * r;
+        for (lo, hi) in cells.bucket_runs(p, r) {
             let (start, end) = (self.starts[lo as usize], self.starts[hi as usize]);
             for k in start as usize..end as usize {
                 if (self.points[k] - p).length_squared() <= r2 {

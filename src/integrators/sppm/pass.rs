@@ -94,8 +94,10 @@ impl PhotonPass {
     /// visible point gather the photons within its radius (adding to `sums`), in rounds that
     /// bound the memory. With `gather_sums` (final gathering) the visible points gather only
     /// caustic photons and every gather point gathers all photons, adding to `gather_sums`.
-    /// Returns the number of deposits; stops without a gather when `cancel` is set.
+    /// Returns the number of deposits; stops without a gather when `cancel` is set. Never
+    /// inlined: `benches/instructions.rs` counts the instructions inside it.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     pub(super) fn run(
         &mut self,
         scene: &PreparedScene,
