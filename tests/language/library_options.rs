@@ -716,8 +716,7 @@ fn the_three_calls_report_in_one_type() {
     assert!(e.is_placed());
 
     let missing = sppm_lang::load(Path::new("missing.scn"), &options)
-        .err()
-        .expect("a missing file is an error");
+        .expect_err("a missing file is an error");
     let [e] = missing.diagnostics.as_slice() else {
         panic!("{:?}", missing.diagnostics)
     };
