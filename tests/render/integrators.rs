@@ -764,19 +764,27 @@ fn a_sphere_sweep_renders_in_every_integrator() {
          background rgb 0.5
          sphere_sweep { linear_spline 4, <-1.5, -1, 0>, 0.2, <0, 0, 0>, 0.5, <1, 1, 0>, 0.3,
                         <1.5, -1, 0>, 0.1 tolerance 1e-6 material { diffuse rgb 0.8 } }";
-    let loaded = sppm_lang::load_source("sweep.scn", text, &sppm_lang::EvalOptions::default());
-    let scene = loaded.scene.expect("sphere sweep scene evaluates");
+    lit_on_grey_in_every_integrator(text, [10, 10, 14, 14], [0, 0, 3, 3]);
+}
+
+/// `text` (24 x 24 pixels on a grey background of 0.5) evaluates and renders in every
+/// integrator with every pixel finite (checked in `run`), the window `lit` (x0, y0, x1, y1) lit
+/// and the window `grey` showing the background; returns the scene.
+fn lit_on_grey_in_every_integrator(text: &str, lit: [u32; 4], grey: [u32; 4]) -> Scene {
+    let loaded = sppm_lang::load_source("s.scn", text, &sppm_lang::EvalOptions::default());
+    let scene = loaded.scene.expect("the scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
-        let centre = window_mean(&img, 10, 10, 14, 14);
-        let corner = window_mean(&img, 0, 0, 3, 3);
-        println!("{integrator:?}: centre {centre:.3}, corner {corner:.3}");
-        assert!(centre > 0.05, "{integrator:?}: the sweep is black");
+        let shape = window_mean(&img, lit[0], lit[1], lit[2], lit[3]);
+        let corner = window_mean(&img, grey[0], grey[1], grey[2], grey[3]);
+        println!("{integrator:?}: shape {shape:.3}, background {corner:.3}");
+        assert!(shape > 0.05, "{integrator:?}: the shape is black");
         assert!(
             (corner - 0.5).abs() < 0.05,
-            "{integrator:?}: corner {corner}"
+            "{integrator:?}: background {corner}"
         );
     }
+    scene
 }
 
 /// Curved sphere sweeps (a Catmull-Rom arch in glass, a b-spline coil) render in every
@@ -792,20 +800,8 @@ fn curved_sphere_sweeps_render_in_every_integrator() {
          sphere_sweep { b_spline 6, <-1.2, 1.2, 0>, 0.1, <-0.6, 1.6, 0.4>, 0.15, <0, 1.2, 0>, 0.2,
                         <0.6, 1.6, -0.4>, 0.15, <1.2, 1.2, 0>, 0.1, <1.6, 1.5, 0>, 0.05
                         material { glass ior 1.5 } }";
-    let loaded = sppm_lang::load_source("curved.scn", text, &sppm_lang::EvalOptions::default());
-    let scene = loaded.scene.expect("curved sweep scene evaluates");
-    for integrator in Integrator::ALL {
-        let img = run(&scene, integrator, 2, 5_000, 4);
-        // The arch's top sphere (centre <0, 0.5>, radius 0.5) fills rows 9 to 11 of column 12.
-        let arch = window_mean(&img, 11, 10, 13, 12);
-        let corner = window_mean(&img, 0, 21, 3, 24);
-        println!("{integrator:?}: arch {arch:.3}, corner {corner:.3}");
-        assert!(arch > 0.05, "{integrator:?}: the arch is black");
-        assert!(
-            (corner - 0.5).abs() < 0.05,
-            "{integrator:?}: corner {corner}"
-        );
-    }
+    // The arch's top sphere (centre <0, 0.5>, radius 0.5) fills rows 9 to 11 of column 12.
+    let scene = lit_on_grey_in_every_integrator(text, [11, 10, 13, 12], [0, 21, 3, 24]);
     let threads = |n: usize| {
         let opts = RenderOptions {
             iterations: Some(2),

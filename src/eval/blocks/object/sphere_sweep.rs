@@ -13,8 +13,9 @@ use glam::DVec3;
 use super::ObjectBuilder;
 use super::csg::node;
 use crate::diag::{At, Error, SourceResult, short_number};
-use crate::eval::value::Part;
+use crate::eval::value::{Part, Value};
 use crate::scene::{CsgOp, MAX_SWEEP_SPHERES, ShapeDecl, SphereSweep, SweepSpline};
+use crate::span::Span;
 
 const EXAMPLE: &str =
     "sphere_sweep { linear_spline 3, <0, 0, 0>, 0.1, <1, 1, 0>, 0.2, <2, 0, 0>, 0.1 }";
@@ -67,20 +68,7 @@ impl ObjectBuilder {
         }
         let mut spheres: Vec<(DVec3, f64)> = Vec::new();
         for pair in rest.chunks(2) {
-            let c = pair[0]
-                .0
-                .vec3()
-                .map_err(|e| e.help("each sphere is a centre `<x, y, z>` and a radius"))
-                .at(pair[0].1)?;
-            let r = pair[1].0.num().at(pair[1].1)?;
-            if !c.is_finite() {
-                return Err(vec![
-                    Error::new("a sphere_sweep's centre must be finite")
-                        .label("not a finite point")
-                        .help(format!("e.g. `{EXAMPLE}`"))
-                        .at(pair[0].1),
-                ]);
-            }
+            let (c, r) = sweep_sphere(pair, EXAMPLE)?;
             if !(r > 0.0 && r.is_finite()) {
                 return Err(vec![
                     Error::new(format!(
@@ -163,20 +151,7 @@ impl ObjectBuilder {
         }
         let (mut centres, mut radii) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for pair in rest.chunks(2) {
-            let c = pair[0]
-                .0
-                .vec3()
-                .map_err(|e| e.help("each sphere is a centre `<x, y, z>` and a radius"))
-                .at(pair[0].1)?;
-            let r = pair[1].0.num().at(pair[1].1)?;
-            if !c.is_finite() {
-                return Err(vec![
-                    Error::new("a sphere_sweep's centre must be finite")
-                        .label("not a finite point")
-                        .help(format!("e.g. `{CURVED_EXAMPLE}`"))
-                        .at(pair[0].1),
-                ]);
-            }
+            let (c, r) = sweep_sphere(pair, CURVED_EXAMPLE)?;
             if !r.is_finite() {
                 return Err(vec![
                     Error::new(format!(
@@ -206,4 +181,24 @@ impl ObjectBuilder {
         }
         Ok(vec![self.part(ShapeDecl::SphereSweep(sweep))])
     }
+}
+
+/// One sphere of a sweep: its centre (finite, or an error naming `example`) and its radius
+/// (a number; each spline checks its range).
+fn sweep_sphere(pair: &[(Value, Span)], example: &str) -> SourceResult<(DVec3, f64)> {
+    let c = pair[0]
+        .0
+        .vec3()
+        .map_err(|e| e.help("each sphere is a centre `<x, y, z>` and a radius"))
+        .at(pair[0].1)?;
+    let r = pair[1].0.num().at(pair[1].1)?;
+    if !c.is_finite() {
+        return Err(vec![
+            Error::new("a sphere_sweep's centre must be finite")
+                .label("not a finite point")
+                .help(format!("e.g. `{example}`"))
+                .at(pair[0].1),
+        ]);
+    }
+    Ok((c, r))
 }
