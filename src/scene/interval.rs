@@ -317,15 +317,27 @@ impl Function {
     /// An interval holding every value of the function over the box `args` (missing arguments
     /// read as 0, as [`Function::eval`]).
     pub fn eval_interval(&self, args: &[Interval]) -> Interval {
+        self.with_scratch(Interval::point(0.0), |stack, slots, from| {
+            self.run_interval(args, stack, slots, from)
+        })
+    }
+
+    /// Runs `run` on a value stack, the slots and the stack's `from` marks (see
+    /// `run_interval`), all filled with `zero` (`from` with `NO_SLOT`): on the call stack for a
+    /// small function, allocated for a large one.
+    pub(super) fn with_scratch<T: Copy, R>(
+        &self,
+        zero: T,
+        run: impl FnOnce(&mut [T], &mut [T], &mut [u32]) -> R,
+    ) -> R {
         if self.stack_size() <= SMALL && self.slots() <= SMALL {
-            let mut stack = [Interval::point(0.0); SMALL];
-            let mut slots = [Interval::point(0.0); SMALL];
-            let mut from = [NO_SLOT; SMALL];
-            self.run_interval(args, &mut stack, &mut slots, &mut from)
+            run(
+                &mut [zero; SMALL],
+                &mut [zero; SMALL],
+                &mut [NO_SLOT; SMALL],
+            )
         } else {
-            let zero = Interval::point(0.0);
-            self.run_interval(
-                args,
+            run(
                 &mut vec![zero; self.stack_size()],
                 &mut vec![zero; self.slots()],
                 &mut vec![NO_SLOT; self.stack_size()],

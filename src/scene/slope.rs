@@ -13,7 +13,7 @@
 use std::f64::consts::LN_10;
 
 use super::Function;
-use super::function::{Binary, Op, SMALL, Unary};
+use super::function::{Binary, Op, Unary};
 use super::interval::{Interval, NO_SLOT, binary, div, mul, powi, unary};
 
 const ZERO: Interval = Interval { lo: 0.0, hi: 0.0 };
@@ -153,21 +153,9 @@ impl Function {
     /// the rates `rates` (a ray's direction); the whole line where it has none (see the
     /// module's notes).
     pub fn eval_slope(&self, args: &[Interval], rates: &[f64]) -> (Interval, Interval) {
-        let zero = (Interval::point(0.0), ZERO);
-        if self.stack_size() <= SMALL && self.slots() <= SMALL {
-            let mut stack = [zero; SMALL];
-            let mut slots = [zero; SMALL];
-            let mut from = [NO_SLOT; SMALL];
-            self.run_slope(args, rates, &mut stack, &mut slots, &mut from)
-        } else {
-            self.run_slope(
-                args,
-                rates,
-                &mut vec![zero; self.stack_size()],
-                &mut vec![zero; self.slots()],
-                &mut vec![NO_SLOT; self.stack_size()],
-            )
-        }
+        self.with_scratch((Interval::point(0.0), ZERO), |stack, slots, from| {
+            self.run_slope(args, rates, stack, slots, from)
+        })
     }
 
     /// [`Function::eval_slope`] on pairs (value, derivative); `from` as in `run_interval`.
