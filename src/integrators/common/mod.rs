@@ -3,6 +3,7 @@
 //! iteration loop and the random streams.
 
 pub(crate) mod camera_path;
+pub(crate) mod camera_samples;
 pub(crate) mod direct;
 pub(crate) mod photons;
 pub(crate) mod progressive;

@@ -4,9 +4,7 @@
 //! directly visible light's edge, a small light's soft shadow) one sample per iteration starves
 //! it: at equal time a path tracer gives such a pixel many more samples. So every iteration
 //! also traces extra camera samples, for the emitted and direct part only (their visible points
-//! are not kept), shared among the pixels in proportion to the standard deviation of their
-//! camera samples so far (Neyman allocation: it minimises the summed variance for a given
-//! number of samples).
+//! are not kept), shared among the pixels by `common/camera_samples.rs`.
 //!
 //! How many: the camera pass casts `ratio` times the photon pass's rays, and the automatic
 //! photon count (`photon_count.rs`) gives the photons their share of the same total. The ratio
@@ -16,95 +14,14 @@
 //! bound measured): a scene lit mostly directly (an environment map's sun) moves more of its
 //! casts to the camera pass.
 //!
-//! VCM shares its extra camera paths among the pixels with the same [`SampleStats`] and
-//! [`allocate`] (`integrators/vcm/mod.rs`), for a fixed budget.
-//!
 //! Every count comes from deterministic quantities: the photon pass's traced segments (a count
 //! of ray casts, the same on any thread count and machine load), each pixel's own samples and
 //! the photons it gathered, summed in pixel order; never from the clock.
 
 use std::f64::consts::PI;
 
-use glam::{DVec3, Vec3A};
-
 use super::pixels::Pixel;
-
-/// Rays per camera sample: the eye ray, the shadow ray of the light sample and the BSDF
-/// sample's ray (specular bounces add a few; the photon side's gathers are not counted either,
-/// so the two omissions roughly cancel).
-pub(crate) const RAYS_PER_CAMERA_SAMPLE: f64 = 3.0;
-
-/// The most extra camera samples one pixel takes in one iteration.
-pub(super) const MAX_EXTRA: u32 = 63;
-
-/// One pixel's camera samples so far: their number and the sums of their luminance and of its
-/// square, for the variance.
-#[derive(Clone, Copy, Default)]
-pub(crate) struct SampleStats {
-    n: u32,
-    sum: f64,
-    sum2: f64,
-}
-
-impl SampleStats {
-    pub(crate) fn add(&mut self, l: Vec3A) {
-        let y = luminance(l.as_dvec3());
-        self.n = self.n.saturating_add(1);
-        self.sum += y;
-        self.sum2 += y * y;
-    }
-
-    /// The sample variance; `None` with fewer than two samples.
-    fn variance(&self) -> Option<f64> {
-        (self.n >= 2).then(|| {
-            let n = f64::from(self.n);
-            ((self.sum2 - self.sum * self.sum / n) / (n - 1.0)).max(0.0)
-        })
-    }
-}
-
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
-/// Each pixel's standard deviation of one camera sample (a pixel with a single sample counts
-/// with the mean variance), and their sum; summed in pixel order (the same on every thread
-/// count).
-fn deviations(stats: &[SampleStats]) -> (impl Fn(&SampleStats) -> f64, f64) {
-    let (mut known, mut var_sum) = (0usize, 0.0f64);
-    for v in stats.iter().filter_map(SampleStats::variance) {
-        known += 1;
-        var_sum += v;
-    }
-    let mean_var = if known > 0 {
-        var_sum / known as f64
-    } else {
-        0.0
-    };
-    let sd = move |s: &SampleStats| s.variance().unwrap_or(mean_var).sqrt();
-    let sd_sum: f64 = stats.iter().map(&sd).sum();
-    (sd, sd_sum)
-}
-
-/// The extra camera samples of every pixel for the next iteration, given each pixel's samples
-/// so far and the camera pass's ray casts: a budget of
-/// `camera_rays / RAYS_PER_CAMERA_SAMPLE - pixels` samples shared in proportion to the
-/// pixels' standard deviations.
-pub(crate) fn allocate(stats: &[SampleStats], camera_rays: u64, extra: &mut [u32]) {
-    let pixels = stats.len() as f64;
-    let budget = (camera_rays as f64 / RAYS_PER_CAMERA_SAMPLE - pixels).max(0.0);
-    let (sd, sd_sum) = deviations(stats);
-    for (e, s) in extra.iter_mut().zip(stats) {
-        *e = if sd_sum > 0.0 && budget > 0.0 {
-            let share = budget * sd(s) / sd_sum;
-            // Whole samples, the fraction kept as the probability of one more would need a
-            // random number: rounding is as good and stays deterministic.
-            (share.round() as u32).min(MAX_EXTRA)
-        } else {
-            0
-        };
-    }
-}
+use crate::integrators::common::camera_samples::{RAYS_PER_CAMERA_SAMPLE, SampleStats, deviations};
 
 /// The noise of the photon part: `V`, the sum over the pixels of `v_i`, where pixel `i`'s
 /// photon estimate from one iteration of `M` photons (the luminance of its gathered flux times
@@ -191,28 +108,7 @@ pub(super) fn camera_share(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Pixels share the budget in proportion to their standard deviations; constant pixels
-    /// get none; without a photon ray there is no budget.
-    #[test]
-    fn the_budget_follows_the_standard_deviations() {
-        let mut stats = vec![SampleStats::default(); 4];
-        for (i, s) in stats.iter_mut().enumerate() {
-            for k in 0..4 {
-                // Pixel i alternates between 0 and i: standard deviation proportional to i.
-                s.add(Vec3A::splat(if k % 2 == 0 { 0.0 } else { i as f32 }));
-            }
-        }
-        let mut extra = vec![0; 4];
-        // 4 pixels, 3 rays per sample: 36 rays are 12 samples, 8 extra.
-        allocate(&stats, 36, &mut extra);
-        assert_eq!(extra[0], 0);
-        assert!(extra[1] < extra[2] && extra[2] < extra[3], "{extra:?}");
-        let total: u32 = extra.iter().sum();
-        assert!((7..=9).contains(&total), "{extra:?}");
-        allocate(&stats, 0, &mut extra);
-        assert_eq!(extra, [0; 4]);
-    }
+    use glam::Vec3A;
 
     /// The photon noise of one gather: photons of contribution `c` found at random, `k` on
     /// average per point, give an estimate whose variance over many draws is what

@@ -21,8 +21,8 @@
 //!
 //! PPM runs the same loop with its own eye paths (`render_with`). Files: `pixels.rs` the
 //! per-pixel state and its update, `pass.rs` the photon pass, `grid.rs` the photon grid,
-//! `receiver.rs` the BSDF at a visible point, `balance.rs` the extra camera samples,
-//! `photon_count.rs` the photons per iteration.
+//! `receiver.rs` the BSDF at a visible point, `balance.rs` how many extra camera samples
+//! (`common/camera_samples.rs` shares them), `photon_count.rs` the photons per iteration.
 
 use crate::integrators::Job;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -39,7 +39,7 @@ use crate::camera::Camera;
 use crate::prepare::{EffectiveSettings, GATHER_RADIUS_FACTOR, PreparedScene};
 use crate::sampling::Rng;
 
-pub(crate) mod balance;
+mod balance;
 mod grid;
 mod pass;
 mod photon_count;
@@ -48,7 +48,8 @@ mod receiver;
 #[cfg(test)]
 mod tests;
 
-use balance::{PhotonNoise, SampleStats};
+use super::common::camera_samples::{SampleStats, allocate};
+use balance::PhotonNoise;
 pub use pass::photon_flux;
 use pass::{Gathered, PhotonPass, ROUND_CHUNKS, ROUND_HITS};
 use photon_count::PhotonCount;
@@ -262,7 +263,7 @@ pub(crate) fn render_with(
                 let per_photon = photon_rays as f64 / photons.max(1) as f64;
                 camera_rays = (ratio * next * per_photon).min(u64::MAX as f64) as u64;
             }
-            balance::allocate(&st.samples, camera_rays, &mut st.extra);
+            allocate(&st.samples, camera_rays, &mut st.extra);
         }
         st.emitted += photons;
         stats.camera_paths += extra_paths;

@@ -23,7 +23,7 @@
 //! at a quarter of the resolution it is a quarter of that, and a scene whose photons bounce
 //! longer gets fewer. Only counts enter: the same on any thread count and machine load.
 
-use super::balance::RAYS_PER_CAMERA_SAMPLE;
+use crate::integrators::common::camera_samples::RAYS_PER_CAMERA_SAMPLE;
 
 /// Photons per iteration are whole multiples of this (the photon pass's task size).
 const CHUNK: u64 = 4096;

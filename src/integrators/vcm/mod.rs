@@ -36,9 +36,9 @@ use std::time::Instant;
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
+use super::common::camera_samples::{RAYS_PER_CAMERA_SAMPLE, SampleStats, allocate};
 use super::common::streams::Stream;
 use super::common::{medium_after, progressive};
-use super::sppm::balance::{RAYS_PER_CAMERA_SAMPLE, SampleStats, allocate};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
