@@ -7,7 +7,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
-use sppm_lang::eval::compile_function;
+use sppm_lang::internals::eval::compile_function;
 
 /// A sphere of radius 1 with a ripple, through a helper function and a declared constant: what
 /// an isosurface would evaluate.

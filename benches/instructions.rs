@@ -32,7 +32,7 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, render};
 
 fn rays() {
     let scene = common::cornell_glass(256);

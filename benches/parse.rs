@@ -15,8 +15,10 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group};
-use sppm_lang::span::FileId;
-use sppm_lang::{EvalOptions, load_source, syntax};
+use sppm_lang::EvalOptions;
+use sppm_lang::FileId;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::syntax;
 
 #[path = "support/big_scene.rs"]
 mod big_scene;

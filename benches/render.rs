@@ -11,10 +11,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use glam::Vec3A;
-use sppm_lang::render::{PreparedScene, RenderOptions, render};
-use sppm_lang::shapes::Shape;
-use sppm_lang::shapes::quad::Quad;
-use sppm_lang::shapes::sphere::Sphere;
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::internals::shapes::Shape;
+use sppm_lang::internals::shapes::quad::Quad;
+use sppm_lang::internals::shapes::sphere::Sphere;
 
 const RUNS: usize = 3;
 

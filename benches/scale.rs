@@ -36,12 +36,13 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use glam::Vec3A;
-use sppm_lang::accel::Bvh;
-use sppm_lang::chart::{ChartSpec, Dash, Series, draw_panels};
-use sppm_lang::geometry::Ray;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::shapes::mesh::TriangleMesh;
-use sppm_lang::{EvalOptions, load_file};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::accel::Bvh;
+use sppm_lang::internals::chart::{ChartSpec, Dash, Series, draw_panels};
+use sppm_lang::internals::eval::load_file;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::shapes::mesh::TriangleMesh;
 
 const CAMERA_SIDE: u32 = 1024;
 const BOUNCE_RAYS: usize = 1 << 20;

@@ -9,9 +9,11 @@ use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DAffine3, DVec3, Vec2, Vec3A};
-use sppm_lang::scene::{ColorMap, ColorParam, ImageData, Mapping, Pattern, Texture, Wrap};
-use sppm_lang::span::Span;
-use sppm_lang::textures::{self, EnvironmentMap, TexCoord};
+use sppm_lang::Span;
+use sppm_lang::internals::scene::{
+    ColorMap, ColorParam, ImageData, Mapping, Pattern, Texture, Wrap,
+};
+use sppm_lang::internals::textures::{self, EnvironmentMap, TexCoord};
 
 fn points() -> Vec<TexCoord> {
     (0..1024)

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use sppm_lang::world::SharedWorld;
+use sppm_lang::SharedWorld;
 use sppm_lang::{EvalOptions, MemoryWorld, RenderOptions};
 
 const SCENE: &str = r#"

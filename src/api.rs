@@ -8,7 +8,7 @@
 //!
 //! Each returns its warnings in its result and fails with a [`Failure`]: the diagnostics and
 //! the sources they point into. The files come from [`EvalOptions::world`] (the disk unless
-//! set; a [`crate::world::MemoryWorld`] supplies them from memory). [`RenderOptions`] overrides
+//! set; a [`crate::MemoryWorld`] supplies them from memory). [`RenderOptions`] overrides
 //! the scene's settings (integrator, resolution, seed, threads, iterations, time, budgets)
 //! without editing the scene, and its `cancel` handle both stops every stage and tells the
 //! render's progress ([`crate::Cancel::progress`]).
@@ -21,7 +21,7 @@ use crate::eval::EvalOptions;
 use crate::film::Image;
 use crate::prepare::{EffectiveSettings, PreparedScene, RenderOptions};
 use crate::render::RenderStats;
-use crate::scene::Scene;
+use crate::scene::{Scene, Settings};
 
 /// Why a call failed: its diagnostics (the errors, and the warnings found before them), with
 /// the sources they point into. `Display` renders them as plain text.
@@ -54,12 +54,22 @@ impl std::error::Error for Failure {}
 /// A scene loaded without errors.
 #[derive(Debug, Clone)]
 pub struct Document {
-    pub scene: Scene,
+    /// The scene model is the crate's own (it changes with the language); a caller reads the
+    /// settings ([`Document::settings`]).
+    pub(crate) scene: Scene,
     /// Warnings and the notes the scene asked for (`#debug`).
     pub warnings: Vec<Diagnostic>,
     pub sources: SourceMap,
     /// Every file the load read (the scene, includes, images, meshes).
     pub dependencies: Vec<PathBuf>,
+}
+
+impl Document {
+    /// The scene's `settings` as written (resolution, exposure, ...), before the render's
+    /// options apply ([`Prepared::settings`] has them applied).
+    pub fn settings(&self) -> &Settings {
+        &self.scene.settings
+    }
 }
 
 /// Reads the scene file `path` from `options.world`, parses and evaluates it.

@@ -274,7 +274,7 @@ pub fn merge_files(inputs: &[&Path], output: &Path) -> Result<u32, String> {
         .map(|p| Ok((p.display().to_string(), read_chain(p)?)))
         .collect::<Result<Vec<_>, String>>()?;
     let (image, total) = merge(&chains)?;
-    image.write(output, 1.0)?;
+    image.write(output, 1.0).map_err(|d| d.message)?;
     Ok(total)
 }
 

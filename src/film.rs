@@ -7,6 +7,8 @@ use std::path::Path;
 
 use image::{ImageFormat, Rgb, Rgb32FImage, RgbImage};
 
+use crate::diag::Diagnostic;
+
 /// A finished (or snapshot) image: linear RGB, row 0 at the top.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
@@ -40,13 +42,21 @@ impl Image {
 
     /// Writes the image; the format follows the extension (`.png`, `.exr`). `exposure`
     /// multiplies PNG values before the sRGB curve; EXR is written linear and unscaled.
-    pub fn write(&self, path: &Path, exposure: f64) -> Result<(), String> {
-        crate::atomic_file::write_atomic(path, |_, file| self.encode(path, exposure, file))
+    /// Fails with a diagnostic at no place (the file is the caller's, not the scene's).
+    pub fn write(&self, path: &Path, exposure: f64) -> Result<(), Diagnostic> {
+        crate::atomic_file::write_atomic(path, |_, file| self.encode_file(path, exposure, file))
+            .map_err(Diagnostic::unplaced)
     }
 
     /// The image encoded into `file` in the format of `path`'s extension (see
     /// [`Image::write`]; `path` names the file in messages).
-    pub fn encode(&self, path: &Path, exposure: f64, file: &mut File) -> Result<(), String> {
+    pub fn encode(&self, path: &Path, exposure: f64, file: &mut File) -> Result<(), Diagnostic> {
+        self.encode_file(path, exposure, file)
+            .map_err(Diagnostic::unplaced)
+    }
+
+    /// [`Image::encode`] with the message alone, as [`crate::atomic_file`] takes it.
+    fn encode_file(&self, path: &Path, exposure: f64, file: &mut File) -> Result<(), String> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -174,7 +184,7 @@ mod tests {
             for name in ["b.png", "b.exr"] {
                 let p = dir.path().join(name);
                 let e = bad.write(&p, 1.0).unwrap_err();
-                assert!(e.contains("cannot write"), "{e}");
+                assert!(e.message.contains("cannot write"), "{e}");
                 assert!(!p.exists());
             }
         }

@@ -1,58 +1,40 @@
 //! sppm-lang: a POV-Ray-like scene language and a stochastic progressive photon mapping renderer.
 //!
-//! The pipeline, one module boundary per arrow:
+//! An embedding program needs three calls: [`load()`] a scene (its files come from a
+//! [`World`]: the disk, or a [`MemoryWorld`]), [`prepare()`] it with [`RenderOptions`] that
+//! override its settings, and [`render()`] it to an [`Image`]. Each returns its warnings in its
+//! result and fails with a [`Failure`] holding the [`Diagnostic`]s; a [`Cancel`] handle stops
+//! any of them and tells the render's progress. Everything else this crate declares (the
+//! parser, the interpreter, the renderer's parts) is private to it: the crate root holds the
+//! whole supported interface. `examples/embed.rs` renders a scene built in memory;
+//! docs/library.md describes the API, the Cargo features and the build profiles.
+//!
+//! The pipeline behind the three calls, one module boundary per arrow:
 //!
 //! ```text
-//! source text → syntax (pest parse, AST with spans) → eval (interpreter) → scene::Scene (plain data)
+//! source text → syntax (pest parse, AST with spans) → eval (interpreter) → scene (plain data)
 //!             → prepare (validated: BVH, lights, camera, budgets) → integrators → film → image files
 //! ```
 //!
 //! The language side (`syntax`, `eval`, `diag`) never reaches into rendering internals; the
-//! renderer knows nothing of source text except the [`span::Span`]s the scene carries.
-//!
-//! An embedding program needs three calls ([`api`]): [`load()`] a scene (its files come from a
-//! [`World`]: the disk, or a [`MemoryWorld`]), [`prepare()`] it with [`RenderOptions`] that
-//! override its settings, and [`render()`] it; each returns its warnings in its result and fails
-//! with a [`Failure`] holding the diagnostics. `examples/embed.rs` renders a scene built in
-//! memory; docs/library.md describes the API, the Cargo features and the build profiles.
+//! renderer knows nothing of source text except the [`Span`]s the scene carries.
 
-pub mod accel;
-pub mod api;
-pub mod atomic_file;
-pub mod bezier;
-pub mod camera;
-pub mod cancel;
-pub mod chains;
-#[cfg(feature = "chart")]
-pub mod chart;
-pub mod compare;
-pub mod diag;
-pub mod eval;
-pub mod farm;
-pub mod files;
-pub mod film;
-pub mod geometry;
-pub mod ide;
-pub mod integrators;
-pub mod lights;
-pub mod materials;
-pub mod prepare;
-pub mod render;
-pub mod sampling;
-pub mod scene;
-pub mod shapes;
-pub mod span;
-pub mod syntax;
-pub mod textures;
-pub mod world;
+#[doc(hidden)]
+pub mod internals;
 
-pub use api::{Document, Failure, Prepared, Rendered, load, prepare, render};
-pub use cancel::Cancel;
-pub use diag::SourceMap;
-pub use diag::{Diagnostic, Severity, SourceResult, render_plain, to_report};
-pub use eval::{
-    EvalOptions, Loaded, RangeOverride, frame_range, load_file, load_frame, load_source,
+// Inside the crate every module keeps its short path (`crate::scene::Scene`).
+pub(crate) use internals::*;
+
+pub use internals::api::{Document, Failure, Prepared, Rendered, load, prepare, render};
+pub use internals::cancel::Cancel;
+pub use internals::diag::{
+    Diagnostic, Location, Severity, SourceFile, SourceMap, render_plain, to_report,
 };
-pub use prepare::RenderOptions;
-pub use scene::{Frame, FrameRange};
-pub use world::{FileSystem, MemoryWorld, World};
+pub use internals::eval::EvalOptions;
+pub use internals::files::FileError;
+pub use internals::film::Image;
+pub use internals::prepare::{EffectiveSettings, MemoryItem, RenderOptions};
+pub use internals::render::RenderStats;
+pub use internals::scene::{Antialias, Frame, FrameRange, Handedness, Integrator, Settings};
+pub use internals::span::{FileId, Span};
+pub use internals::world::{FileSystem, MemoryWorld, SharedWorld, World};

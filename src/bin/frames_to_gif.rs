@@ -52,7 +52,7 @@ fn write(output: &Path, delay: u32, frames: &[String]) -> Result<(), String> {
         }
         images.push(image);
     }
-    sppm_lang::atomic_file::write_atomic(output, |_, file| {
+    sppm_lang::internals::atomic_file::write_atomic(output, |_, file| {
         let mut encoder = GifEncoder::new_with_speed(BufWriter::new(file), 1);
         encoder
             .set_repeat(Repeat::Infinite)

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use image::{Rgb, Rgb32FImage, RgbImage};
-use sppm_lang::textures::noise::{fbm, turbulence};
+use sppm_lang::internals::textures::noise::{fbm, turbulence};
 
 fn main() -> ExitCode {
     let dir = std::env::args_os()

@@ -5,11 +5,13 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use sppm_lang::diag::short_number;
-use sppm_lang::render::{
+use sppm_lang::internals::diag::short_number;
+use sppm_lang::internals::render::{
     EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderOptions,
 };
-use sppm_lang::scene::{Background, ColorParam, Integrator, LightDecl, Scene, ShapeDecl};
+use sppm_lang::internals::scene::{
+    Background, ColorParam, Integrator, LightDecl, Scene, ShapeDecl,
+};
 use sppm_lang::{Diagnostic, EvalOptions, Severity, SourceMap};
 
 use super::output::{err, out};
@@ -64,7 +66,7 @@ pub struct LoadedScene {
 /// errors) and its sources, or the exit status (usage error: the file cannot be read; scene
 /// error: it has errors).
 pub fn load_scene(path: &Path, options: &EvalOptions) -> Result<LoadedScene, ExitCode> {
-    let loaded = sppm_lang::load_file(path, options).map_err(|e| {
+    let loaded = sppm_lang::internals::eval::load_file(path, options).map_err(|e| {
         print_diagnostics(&SourceMap::new(), &[e.to_diagnostic(path)]);
         ExitCode::from(EXIT_USAGE)
     })?;
@@ -157,7 +159,7 @@ pub fn run(
         cancel,
         ..render_options.clone()
     };
-    let mut loaded = match sppm_lang::load_file(scene, options) {
+    let mut loaded = match sppm_lang::internals::eval::load_file(scene, options) {
         Ok(l) => l,
         Err(e) => {
             print_diagnostics(&SourceMap::new(), &[e.to_diagnostic(scene)]);
@@ -177,14 +179,15 @@ pub fn run(
                 return ExitCode::from(EXIT_USAGE);
             }
             // The prepare stage a render runs: `check` accepts exactly what `render` accepts.
-            let (settings, prepared) = match sppm_lang::render::prepare(&s, render_options) {
-                Ok(p) => p,
-                Err(e) if e.interrupted => return interrupted(),
-                Err(e) => {
-                    print_diagnostics(&loaded.sources, &[e]);
-                    return ExitCode::from(EXIT_SCENE_ERROR);
-                }
-            };
+            let (settings, prepared) =
+                match sppm_lang::internals::render::prepare(&s, render_options) {
+                    Ok(p) => p,
+                    Err(e) if e.interrupted => return interrupted(),
+                    Err(e) => {
+                        print_diagnostics(&loaded.sources, &[e]);
+                        return ExitCode::from(EXIT_SCENE_ERROR);
+                    }
+                };
             print_diagnostics(&loaded.sources, &prepared.warnings());
             let mut text = summary(&s, loaded.dependencies.len());
             text.push_str(&render_summary(&prepared, &settings));
@@ -197,7 +200,7 @@ pub fn run(
 
 /// The exit code of a load that failed: a usage error when the evaluation could not start in
 /// this environment (as for a scene file that cannot be read), else a scene error.
-pub fn failure_code(loaded: &sppm_lang::Loaded) -> u8 {
+pub fn failure_code(loaded: &sppm_lang::internals::eval::Loaded) -> u8 {
     if loaded.environment {
         EXIT_USAGE
     } else {

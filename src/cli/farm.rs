@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
 use clap::{ArgGroup, Args, Subcommand};
-use sppm_lang::farm::{Farm, Task, Work, chain_tasks, parse_job_id};
+use sppm_lang::internals::farm::{Farm, Task, Work, chain_tasks, parse_job_id};
 
 use super::frames::{self, FramePattern};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
@@ -89,7 +89,10 @@ fn slurm(args: &SlurmArgs) -> ExitCode {
         if remaining.is_empty() {
             String::new()
         } else {
-            format!(" ({})", sppm_lang::farm::array_spec(&indices(&remaining)))
+            format!(
+                " ({})",
+                sppm_lang::internals::farm::array_spec(&indices(&remaining))
+            )
         }
     );
     let merge =
@@ -276,7 +279,7 @@ fn plan(args: &SlurmArgs) -> Result<Farm, String> {
 }
 
 fn write_script(path: &Path, text: &str) -> Result<(), String> {
-    sppm_lang::atomic_file::write_atomic(path, |_, file| {
+    sppm_lang::internals::atomic_file::write_atomic(path, |_, file| {
         use std::io::Write as _;
         file.write_all(text.as_bytes())
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use sppm_lang::scene::MAX_FRAME;
+use sppm_lang::internals::scene::MAX_FRAME;
 
 /// `A..B`: the first and last frames, both rendered.
 pub fn parse_frames(text: &str) -> Result<(u32, u32), String> {
@@ -34,7 +34,7 @@ pub fn parse_clock(text: &str) -> Result<(f64, f64), String> {
     let (a, b) = text.trim().split_once("..").ok_or_else(usage)?;
     let number = |s: &str| -> Result<f64, String> {
         match s.trim().parse::<f64>() {
-            Ok(v) if v.abs() <= sppm_lang::scene::animation::MAX_CLOCK => Ok(v),
+            Ok(v) if v.abs() <= sppm_lang::internals::scene::animation::MAX_CLOCK => Ok(v),
             _ => Err(usage()),
         }
     };

@@ -15,10 +15,10 @@
 use std::fmt::Write as _;
 use std::sync::Arc;
 
-use sppm_lang::scene::{
+use sppm_lang::Span;
+use sppm_lang::internals::scene::{
     Background, ImageData, LightDecl, MeshData, Object, Pattern, Scene, ShapeDecl,
 };
-use sppm_lang::span::Span;
 use xxhash_rust::xxh3::Xxh3;
 
 /// What a scene renders, as a hash (see the module docs).
@@ -167,7 +167,7 @@ mod tests {
     use super::*;
     use glam::{DAffine3, DVec3};
     use sppm_lang::EvalOptions;
-    use sppm_lang::scene::MaterialId;
+    use sppm_lang::internals::scene::MaterialId;
 
     const TEXT: &str = "settings { resolution <16, 16>  iterations 3 }\n\
                         camera { location <0, 0, -5>  look_at <0, 0, 0> }\n\
@@ -175,7 +175,8 @@ mod tests {
                         sphere { <0, 0, 0>, 1  material { diffuse rgb <0.8, 0.2, 0.2> } }\n";
 
     fn scene(text: &str) -> Scene {
-        let loaded = sppm_lang::load_source("t.scn", text, &EvalOptions::default());
+        let loaded =
+            sppm_lang::internals::eval::load_source("t.scn", text, &EvalOptions::default());
         assert!(!loaded.has_errors(), "{:?}", loaded.diagnostics);
         loaded.scene.expect("a scene")
     }

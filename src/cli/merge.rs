@@ -30,7 +30,7 @@ pub fn run(args: &MergeArgs) -> ExitCode {
         return ExitCode::from(EXIT_USAGE);
     }
     let inputs: Vec<&std::path::Path> = args.chains.iter().map(PathBuf::as_path).collect();
-    match sppm_lang::chains::merge_files(&inputs, &args.output) {
+    match sppm_lang::internals::chains::merge_files(&inputs, &args.output) {
         Ok(total) => {
             say!(
                 "wrote {}: {} chains, {total} iterations in all",

@@ -59,7 +59,7 @@ pub struct Cli {
 
 /// The limits of the render options, checked again by the render (the library's callers have
 /// no command line).
-pub use sppm_lang::prepare::{MAX_ITERATIONS, MAX_PHOTONS, MAX_THREADS};
+pub use sppm_lang::internals::prepare::{MAX_ITERATIONS, MAX_PHOTONS, MAX_THREADS};
 /// Longest time limit or snapshot interval in seconds (a year).
 pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 
@@ -143,7 +143,7 @@ pub fn output_path(
             });
         }
     }
-    sppm_lang::atomic_file::check_output(&output, &[scene])?;
+    sppm_lang::internals::atomic_file::check_output(&output, &[scene])?;
     Ok(output)
 }
 
@@ -168,7 +168,7 @@ pub fn is_exr(path: &std::path::Path) -> bool {
 
 pub fn check_not_an_input(outputs: &[&std::path::Path], inputs: &[PathBuf]) -> Result<(), String> {
     for o in outputs {
-        sppm_lang::atomic_file::check_output(o, inputs)?;
+        sppm_lang::internals::atomic_file::check_output(o, inputs)?;
     }
     Ok(())
 }
@@ -196,21 +196,25 @@ pub fn parse_resolution(text: &str) -> Result<Resolution, String> {
             return Ok(None);
         }
         match s.parse::<u32>() {
-            Ok(n) if (1..=sppm_lang::scene::MAX_RESOLUTION_SIDE).contains(&n) => Ok(Some(n)),
+            Ok(n) if (1..=sppm_lang::internals::scene::MAX_RESOLUTION_SIDE).contains(&n) => {
+                Ok(Some(n))
+            }
             Ok(n) => Err(format!(
                 "each side must be from 1 to {}, got {n}",
-                sppm_lang::scene::MAX_RESOLUTION_SIDE
+                sppm_lang::internals::scene::MAX_RESOLUTION_SIDE
             )),
             Err(_) => Err(usage()),
         }
     };
     match (side(w)?, side(h)?) {
         (None, None) => Err(usage()),
-        (Some(w), Some(h)) if u64::from(w) * u64::from(h) > sppm_lang::scene::MAX_PIXELS => {
+        (Some(w), Some(h))
+            if u64::from(w) * u64::from(h) > sppm_lang::internals::scene::MAX_PIXELS =>
+        {
             Err(format!(
                 "{w}x{h} is {} pixels, more than the limit of {}",
                 u64::from(w) * u64::from(h),
-                sppm_lang::scene::MAX_PIXELS
+                sppm_lang::internals::scene::MAX_PIXELS
             ))
         }
         (w, h) => Ok(Resolution {
@@ -276,7 +280,7 @@ impl SizeArgs {
 
     /// Sets `scene`'s resolution as the flags ask; a size beyond the render's limits is the
     /// flag's fault (a usage error naming it), not the scene's.
-    pub fn apply_to(&self, scene: &mut sppm_lang::scene::Scene) -> Result<(), String> {
+    pub fn apply_to(&self, scene: &mut sppm_lang::internals::scene::Scene) -> Result<(), String> {
         scene.settings.resolution = self.resolution_for(scene.settings.resolution)?;
         Ok(())
     }
@@ -284,7 +288,7 @@ impl SizeArgs {
     /// The resolution a scene of `scene_size` renders at, checked as [`SizeArgs::apply_to`]
     /// checks it.
     pub fn resolution_for(&self, scene_size: (u32, u32)) -> Result<(u32, u32), String> {
-        use sppm_lang::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE};
+        use sppm_lang::internals::scene::{MAX_PIXELS, MAX_RESOLUTION_SIDE};
         let (w, h) = self.apply(scene_size);
         let side = w.max(h);
         if self.is_set() && (side > MAX_RESOLUTION_SIDE || u64::from(w) * u64::from(h) > MAX_PIXELS)
@@ -331,7 +335,7 @@ impl LimitArgs {
             // have (the machine's default included) as they are loaded.
             memory_limit: Some(
                 self.memory_limit
-                    .unwrap_or_else(sppm_lang::prepare::default_memory_limit),
+                    .unwrap_or_else(sppm_lang::internals::prepare::default_memory_limit),
             ),
             ..EvalOptions::default()
         }
@@ -382,7 +386,7 @@ pub fn run(cli: Cli) -> ExitCode {
             size,
             limits,
         } => {
-            let render_options = sppm_lang::render::RenderOptions {
+            let render_options = sppm_lang::internals::render::RenderOptions {
                 memory_limit: limits.memory_limit,
                 ..Default::default()
             };

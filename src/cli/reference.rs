@@ -20,10 +20,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use clap::Args;
-use sppm_lang::compare::{ErrorStats, ImageView, error};
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::Integrator;
+use sppm_lang::Image;
+use sppm_lang::Integrator;
+use sppm_lang::internals::compare::{ErrorStats, ImageView, error};
+use sppm_lang::internals::render::{RenderOptions, render};
 
 use super::check::{load_scene, print_diagnostics};
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
@@ -157,14 +157,14 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         estimate.rel_mse
     );
     // The three files together or none of them (a full disk leaves the old ones whole).
-    let written = sppm_lang::atomic_file::write_atomic_group(vec![
+    let written = sppm_lang::internals::atomic_file::write_atomic_group(vec![
         (
             args.output.as_path(),
-            Box::new(|_, f| mean.encode(&args.output, 1.0, f)),
+            Box::new(|_, f| mean.encode(&args.output, 1.0, f).map_err(|d| d.message)),
         ),
         (
             noise_exr.as_path(),
-            Box::new(|_, f| noise.encode(&noise_exr, 1.0, f)),
+            Box::new(|_, f| noise.encode(&noise_exr, 1.0, f).map_err(|d| d.message)),
         ),
         (
             noise_json.as_path(),
@@ -212,7 +212,7 @@ pub fn average_and_noise(a: &Image, na: u32, b: &Image, nb: u32) -> (Image, Imag
 pub fn floor_in(
     reference: ImageView<'_>,
     noise: ImageView<'_>,
-    window: Option<sppm_lang::compare::Window>,
+    window: Option<sppm_lang::internals::compare::Window>,
 ) -> Result<ErrorStats, String> {
     if (reference.width, reference.height) != (noise.width, noise.height) {
         return Err(format!(

@@ -6,11 +6,14 @@ use std::process::ExitCode;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use sppm_lang::chains::{ChainInfo, write_chain};
-use sppm_lang::render::{Progress, RenderOptions, RenderStats, prepare, render_prepared};
-use sppm_lang::sampling::chain_seed;
-use sppm_lang::scene::{Integrator, Scene};
-use sppm_lang::{Cancel, RangeOverride, SourceMap};
+use sppm_lang::internals::chains::{ChainInfo, write_chain};
+use sppm_lang::internals::eval::RangeOverride;
+use sppm_lang::internals::render::{
+    Progress, RenderOptions, RenderStats, prepare, render_prepared,
+};
+use sppm_lang::internals::sampling::chain_seed;
+use sppm_lang::internals::scene::{Integrator, Scene};
+use sppm_lang::{Cancel, SourceMap};
 
 use super::check::print_diagnostics;
 use super::frames::{self, FramePattern};
@@ -128,8 +131,8 @@ pub fn run(args: RenderArgs) -> ExitCode {
         cancel: cancel.clone(),
         ..args.limits.options()
     };
-    // Read as a still first: that gives the scene's frame range (see `sppm_lang::load_frame`).
-    let still = match sppm_lang::load_file(&args.scene, &eval_options) {
+    // Read as a still first: that gives the scene's frame range (see `sppm_lang::internals::eval::load_frame`).
+    let still = match sppm_lang::internals::eval::load_file(&args.scene, &eval_options) {
         Ok(l) => l,
         Err(e) => return usage(e.with_path(&args.scene)),
     };
@@ -142,7 +145,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
         clock: args.clock,
     };
     let range = match still.scene.as_ref().filter(|_| !still.has_errors()) {
-        Some(s) => sppm_lang::frame_range(&s.settings, &over),
+        Some(s) => sppm_lang::internals::eval::frame_range(&s.settings, &over),
         None => {
             print_diagnostics(&still.sources, &still.diagnostics);
             return ExitCode::from(EXIT_SCENE_ERROR);
@@ -199,7 +202,7 @@ pub fn run(args: RenderArgs) -> ExitCode {
 fn animate(
     args: &RenderArgs,
     options: &sppm_lang::EvalOptions,
-    still: sppm_lang::Loaded,
+    still: sppm_lang::internals::eval::Loaded,
     pattern: Option<FramePattern>,
     range: &sppm_lang::FrameRange,
     cancel: &Cancel,
@@ -311,7 +314,14 @@ fn animate(
     for k in frames.clone() {
         // The frames before this one, all written.
         let written = k - frames.start();
-        let loaded = match sppm_lang::load_frame(&args.scene, options, &still, &over, range, k) {
+        let loaded = match sppm_lang::internals::eval::load_frame(
+            &args.scene,
+            options,
+            &still,
+            &over,
+            range,
+            k,
+        ) {
             Ok(l) => l,
             Err(e) => {
                 say!("error: {}", e.with_path(&args.scene));
@@ -341,7 +351,7 @@ fn animate(
             "frame {k} of {}..{} (clock {})",
             range.first,
             range.last,
-            sppm_lang::diag::short_number(range.clock_at(k))
+            sppm_lang::internals::diag::short_number(range.clock_at(k))
         );
         let last = k == *frames.end();
         if let Err(code) = render_scene(scene, args, &loaded.sources, &output, cancel, last) {
@@ -391,7 +401,7 @@ fn render_scene(
         chains: n,
         // The identity of what is rendered: the scene with the flags' overrides.
         scene: SceneId::of(&Scene {
-            settings: sppm_lang::scene::Settings {
+            settings: sppm_lang::Settings {
                 integrator,
                 resolution: resolution.unwrap_or(scene.settings.resolution),
                 ..scene.settings.clone()
@@ -400,7 +410,7 @@ fn render_scene(
         })
         .value(),
     });
-    let write = |image: &sppm_lang::film::Image, iterations: u32| match &chain {
+    let write = |image: &sppm_lang::Image, iterations: u32| match &chain {
         Some(info) => write_chain(
             output,
             image,
@@ -409,7 +419,9 @@ fn render_scene(
                 ..info.clone()
             },
         ),
-        None => image.write(output, scene.settings.exposure),
+        None => image
+            .write(output, scene.settings.exposure)
+            .map_err(|d| d.message),
     };
     let options = RenderOptions {
         integrator: args.integrator,

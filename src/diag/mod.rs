@@ -10,7 +10,7 @@ mod render;
 mod source;
 
 pub use render::{render_plain, to_report};
-pub use source::{SourceFile, SourceMap};
+pub use source::{Location, SourceFile, SourceMap};
 
 use crate::span::Span;
 

@@ -39,7 +39,7 @@ pub fn frame_range(
         final_clock,
         cyclic: settings.cyclic,
     };
-    range.check()?;
+    range.check().map_err(|d| d.message)?;
     Ok(Some(range))
 }
 

@@ -169,9 +169,9 @@ mod tests {
 mod adaptive_tests {
     use std::sync::atomic::AtomicBool;
 
+    use crate::eval::{EvalOptions, load_file};
     use crate::render::{RenderOptions, render};
     use crate::scene::{Antialias, Integrator, Scene};
-    use crate::{EvalOptions, load_file};
 
     fn cornell(antialias: Antialias, iterations: u32, seed: u64) -> Vec<[f64; 3]> {
         cornell_on(antialias, iterations, seed, None)

@@ -257,7 +257,7 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<Diagnostic> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{EvalOptions, load_source};
+    use crate::eval::{EvalOptions, load_source};
 
     /// How many "faces away" warnings a scene gets.
     fn facing_away_count(text: &str) -> usize {

@@ -712,9 +712,9 @@ impl<'a> PreparedScene<'a> {
 mod tests {
     use super::*;
     use crate::camera::Camera;
+    use crate::eval::{EvalOptions, load_file, load_source};
     use crate::sampling::{Rng, uniform_sphere};
     use crate::shapes::primitive::{AnyShape, LazyHit};
-    use crate::{EvalOptions, load_file, load_source};
 
     /// A hit from [`PreparedScene::intersect`] is the full hit of the same shape, field for
     /// field and bit for bit, except that `uv` is NaN on spheres, disks, cylinders and revolves

@@ -6,6 +6,8 @@
 //! last frame leads back into its first) stops one step short of the final clock, so that the
 //! frame after the last would be the first again.
 
+use crate::diag::Diagnostic;
+
 /// Highest frame number (frame numbers go into file names; seven digits at most).
 pub const MAX_FRAME: u32 = 9_999_999;
 
@@ -40,24 +42,25 @@ impl FrameRange {
 
     /// Why the range cannot be rendered, if it cannot: frames out of order or beyond
     /// [`MAX_FRAME`], a clock that is not a finite number within [`MAX_CLOCK`].
-    pub fn check(&self) -> Result<(), String> {
+    /// The diagnostic is at no place: the caller knows where the range came from.
+    pub fn check(&self) -> Result<(), Diagnostic> {
         if self.last < self.first {
-            return Err(format!(
+            return Err(Diagnostic::unplaced(format!(
                 "the frame range {}..{} ends before it starts",
                 self.first, self.last
-            ));
+            )));
         }
         if self.last > MAX_FRAME {
-            return Err(format!(
+            return Err(Diagnostic::unplaced(format!(
                 "frame {} is beyond the highest frame number, {MAX_FRAME}",
                 self.last
-            ));
+            )));
         }
         for c in [self.initial_clock, self.final_clock] {
             if !(c.is_finite() && c.abs() <= MAX_CLOCK) {
-                return Err(format!(
+                return Err(Diagnostic::unplaced(format!(
                     "the clock must run between finite numbers within ±{MAX_CLOCK:e}, found {c}"
-                ));
+                )));
             }
         }
         Ok(())

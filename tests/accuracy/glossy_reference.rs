@@ -27,9 +27,9 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use sppm_lang::EvalOptions;
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{ColorSpace, Integrator, load_image};
+use sppm_lang::Image;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::{ColorSpace, Integrator, load_image};
 
 struct Checkpoint {
     iterations: u32,
@@ -48,7 +48,7 @@ fn p9999(errors: &mut [f64]) -> f64 {
 fn checkpoints(integrator: Integrator, n: u32, photons: u64) -> Vec<Checkpoint> {
     let reference = load_image(Path::new("tools/reference/glossy.exr"), ColorSpace::Linear)
         .expect("tools/reference/glossy.exr loads");
-    let loaded = sppm_lang::load_file(
+    let loaded = sppm_lang::internals::eval::load_file(
         Path::new("tools/reference/glossy.scn"),
         &EvalOptions::default(),
     )
@@ -232,7 +232,7 @@ fn sheet_ratios(
     photons: u64,
 ) -> Vec<(String, [f64; 3])> {
     let (reference, index, labels, size) = material_reference(sheet);
-    let loaded = sppm_lang::load_file(
+    let loaded = sppm_lang::internals::eval::load_file(
         Path::new(&format!("tools/reference/{sheet}.scn")),
         &EvalOptions::default(),
     )

@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use sppm_lang::scene::{ColorSpace, load_image};
+use sppm_lang::internals::scene::{ColorSpace, load_image};
 
 #[test]
 fn cornell_glass_reference_loads_with_documented_mean() {

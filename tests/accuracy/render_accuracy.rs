@@ -4,11 +4,11 @@ use crate::common;
 
 use common::*;
 use glam::{DVec3, Vec2};
-use sppm_lang::camera::Camera;
-use sppm_lang::film::Image;
-use sppm_lang::scene::Emission;
-use sppm_lang::shapes::Shape as _;
-use sppm_lang::shapes::sphere::Sphere;
+use sppm_lang::Image;
+use sppm_lang::internals::camera::Camera;
+use sppm_lang::internals::scene::Emission;
+use sppm_lang::internals::shapes::Shape as _;
+use sppm_lang::internals::shapes::sphere::Sphere;
 
 fn assert_finite(img: &Image) {
     for (i, p) in img.pixels.iter().enumerate() {
@@ -123,7 +123,7 @@ fn furnace_d_an_inner_ball_hides_the_light_behind_it() {
         m,
         Some(emission),
     );
-    s.settings.integrator = sppm_lang::scene::Integrator::Path;
+    s.settings.integrator = sppm_lang::Integrator::Path;
     s.settings.max_depth = 1;
     let img = run(&s, 512, 0);
     assert_finite(&img);
@@ -205,7 +205,11 @@ fn a_textured_absorption_is_the_same_both_ways_through_the_glass() {
              quad {{ <-50, 0, -50>, <100, 0, 0>, <0, 0, 100> material {{ diffuse rgb 0.8 }} }}\n\
              box {{ <-50, 0.1, -50>, <50, 0.9, 50> material {{ glass ior 1 absorb {absorb} }} }}\n"
         );
-        let l = sppm_lang::load_source("slab.scn", &text, &sppm_lang::EvalOptions::default());
+        let l = sppm_lang::internals::eval::load_source(
+            "slab.scn",
+            &text,
+            &sppm_lang::EvalOptions::default(),
+        );
         let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
         let m = run(&scene, 64, 20_000).mean();
         (m[0] + m[1] + m[2]) / 3.0
@@ -256,7 +260,11 @@ fn coloured_glass_absorbs_on_the_way_to_an_object_inside_it() {
              sphere {{ <0, 0, 0>, {small} material {{ diffuse rgb {albedo} }} }}\n",
             sigma[0], sigma[1], sigma[2]
         );
-        let l = sppm_lang::load_source("glass.scn", &text, &sppm_lang::EvalOptions::default());
+        let l = sppm_lang::internals::eval::load_source(
+            "glass.scn",
+            &text,
+            &sppm_lang::EvalOptions::default(),
+        );
         let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
         let img = run(&scene, 256, 20_000);
         let got = img.mean();

@@ -13,9 +13,9 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use sppm_lang::EvalOptions;
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{ColorSpace, ImageData, Integrator, load_image};
+use sppm_lang::Image;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::{ColorSpace, ImageData, Integrator, load_image};
 
 /// The floor around the glass ball's focused caustic (just behind the ball), in half-size
 /// pixels (x0, y0, x1, y1, half-open): wide enough that the blur of a gather radius stays
@@ -81,8 +81,11 @@ fn mean_ratio(img: &Image, r: &Reference, window: Option<(usize, usize, usize, u
 }
 
 fn render_half(integrator: Integrator, iterations: u32) -> Image {
-    let loaded = sppm_lang::load_file(Path::new("examples/smallppm.scn"), &EvalOptions::default())
-        .expect("smallppm.scn reads");
+    let loaded = sppm_lang::internals::eval::load_file(
+        Path::new("examples/smallppm.scn"),
+        &EvalOptions::default(),
+    )
+    .expect("smallppm.scn reads");
     let mut scene = loaded.scene.expect("smallppm.scn evaluates");
     scene.settings.integrator = integrator;
     let (w, h) = scene.settings.resolution;

@@ -6,10 +6,10 @@ use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
 
 use glam::DVec3;
-use sppm_lang::integrators::sppm::{photon_flux, render_with_state};
-use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings};
-use sppm_lang::scene::{LightDecl, ShapeDecl};
-use sppm_lang::span::Span;
+use sppm_lang::Span;
+use sppm_lang::internals::integrators::sppm::{photon_flux, render_with_state};
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, effective_settings};
+use sppm_lang::internals::scene::{LightDecl, ShapeDecl};
 
 /// A closed box with diffuse walls of albedo a and a point light inside: the flux reaching the
 /// walls over all bounces is Phi / (1 - a), Phi a / (1 - a) from the second hit on, and all of

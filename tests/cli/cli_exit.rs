@@ -1238,10 +1238,15 @@ fn chains_render_per_thread_count_alike_and_merge_or_refuse() {
     refused(&[p("c1.exr"), p("plain.exr")], "not a chain");
 
     // A chain with a NaN pixel (as a broken file might hold) is refused, naming it.
-    let mut nan = sppm_lang::chains::read_chain(std::path::Path::new(&p("c2.exr"))).unwrap();
+    let mut nan =
+        sppm_lang::internals::chains::read_chain(std::path::Path::new(&p("c2.exr"))).unwrap();
     nan.image.pixels[5][1] = f64::NAN;
-    sppm_lang::chains::write_chain(std::path::Path::new(&p("nan.exr")), &nan.image, &nan.info)
-        .unwrap();
+    sppm_lang::internals::chains::write_chain(
+        std::path::Path::new(&p("nan.exr")),
+        &nan.image,
+        &nan.info,
+    )
+    .unwrap();
     refused(&[p("c1.exr"), p("nan.exr")], "nan.exr`: pixel (5, 0)");
 
     usage_error(&["merge", &p("c1.exr"), &p("c2.exr"), "-o", &p("m.png")]);

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
-use sppm_lang::span::FileId;
-use sppm_lang::syntax::parse;
+use sppm_lang::FileId;
+use sppm_lang::internals::syntax::parse;
 
 const GRAMMAR: &str = "editors/vscode/syntaxes/scn.tmLanguage.json";
 
@@ -98,16 +98,17 @@ fn the_grammars_keywords_are_the_parsers_reserved_words() {
 fn the_grammar_knows_the_built_in_names() {
     let functions = grammar_words("support.function.builtin.scn");
     let constants = grammar_words("support.constant.builtin.scn");
-    for f in sppm_lang::eval::FUNCTIONS {
+    for f in sppm_lang::internals::eval::FUNCTIONS {
         assert!(
             functions.contains(*f),
             "built-in function `{f}` is not highlighted"
         );
     }
-    for c in sppm_lang::eval::CONSTANTS
-        .iter()
-        .chain(sppm_lang::scene::ANIMATION_NAMES.iter().map(|(n, _)| n))
-    {
+    for c in sppm_lang::internals::eval::CONSTANTS.iter().chain(
+        sppm_lang::internals::scene::ANIMATION_NAMES
+            .iter()
+            .map(|(n, _)| n),
+    ) {
         assert!(
             constants.contains(*c),
             "built-in constant `{c}` is not highlighted"

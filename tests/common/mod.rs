@@ -4,15 +4,15 @@
 use glam::{DAffine3, DVec3, Vec3A};
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::film::Image;
-use sppm_lang::geometry::Ray;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::sampling::{Rng, uniform_sphere};
-use sppm_lang::scene::{
+use sppm_lang::Image;
+use sppm_lang::Span;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::sampling::{Rng, uniform_sphere};
+use sppm_lang::internals::scene::{
     Background, Camera, ColorParam, Emission, LightDecl, Material, MaterialId, Object, ScalarParam,
     Scene, Settings, ShapeDecl,
 };
-use sppm_lang::span::Span;
 
 pub fn empty_scene(res: (u32, u32)) -> Scene {
     Scene {
@@ -94,7 +94,7 @@ pub fn inside_camera() -> Camera {
         aperture: 0.0,
         focus_distance: None,
         right: None,
-        span: sppm_lang::span::Span::detached(),
+        span: sppm_lang::Span::detached(),
     }
 }
 
@@ -153,7 +153,7 @@ pub fn furnace_enclosure(res: u32, a: f64) -> Scene {
         aperture: 0.0,
         focus_distance: None,
         right: None,
-        span: sppm_lang::span::Span::detached(),
+        span: sppm_lang::Span::detached(),
     };
     s
 }
@@ -270,7 +270,7 @@ pub fn cornell_glass(res: u32) -> Scene {
         aperture: 0.0,
         focus_distance: None,
         right: None,
-        span: sppm_lang::span::Span::detached(),
+        span: sppm_lang::Span::detached(),
     };
     s.settings.max_depth = 16;
     s
@@ -316,7 +316,7 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         intensity: DVec3::splat(intensity),
         span: Span::detached(),
     });
-    s.camera = sppm_lang::scene::Camera {
+    s.camera = sppm_lang::internals::scene::Camera {
         location: DVec3::new(0.3, 3.0, 0.0),
         look_at: DVec3::new(0.3, 0.0, 0.0),
         up: DVec3::X,
@@ -325,10 +325,11 @@ pub fn corner_scene(res: u32) -> (Scene, impl Fn(u32, u32) -> (f64, f64)) {
         aperture: 0.0,
         focus_distance: None,
         right: None,
-        span: sppm_lang::span::Span::detached(),
+        span: sppm_lang::Span::detached(),
     };
     s.settings.max_depth = 2;
-    let cam = sppm_lang::camera::Camera::new(&s.camera, s.settings.handedness, res, res).unwrap();
+    let cam = sppm_lang::internals::camera::Camera::new(&s.camera, s.settings.handedness, res, res)
+        .unwrap();
     let analytic = move |p: glam::Vec3A| -> f64 {
         let p = p.as_dvec3();
         let term = |l: DVec3| {
@@ -370,8 +371,12 @@ pub fn run(scene: &Scene, iterations: u32, photons: u64) -> Image {
 }
 
 /// `text` loaded as a scene file, with no errors (they are printed otherwise).
-pub fn load(text: &str) -> sppm_lang::Loaded {
-    let l = sppm_lang::load_source("test.scn", text, &sppm_lang::EvalOptions::default());
+pub fn load(text: &str) -> sppm_lang::internals::eval::Loaded {
+    let l = sppm_lang::internals::eval::load_source(
+        "test.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     assert!(
         !l.has_errors(),
         "{}",
@@ -381,13 +386,13 @@ pub fn load(text: &str) -> sppm_lang::Loaded {
 }
 
 /// `text` loaded (with no errors) and rendered with `opts` over the scene's own settings.
-pub fn render_text(text: &str, opts: &RenderOptions) -> sppm_lang::render::RenderOutput {
+pub fn render_text(text: &str, opts: &RenderOptions) -> sppm_lang::internals::render::RenderOutput {
     let scene = load(text).scene.expect("a scene");
     render(&scene, opts, &AtomicBool::new(false), &mut |_| {}).unwrap()
 }
 
 /// The `#debug` messages of a load, in order.
-pub fn debug(l: &sppm_lang::Loaded) -> Vec<String> {
+pub fn debug(l: &sppm_lang::internals::eval::Loaded) -> Vec<String> {
     l.diagnostics
         .iter()
         .filter(|d| d.severity == sppm_lang::Severity::Note)

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use sppm_lang::{EvalOptions, load_file, render_plain};
+use sppm_lang::internals::eval::load_file;
+use sppm_lang::{EvalOptions, render_plain};
 
 #[test]
 fn bad_scenes_give_spanned_diagnostics() {
@@ -45,7 +46,7 @@ fn bad_scenes_give_spanned_diagnostics() {
 
 /// The first error of `text` (message, help).
 fn first_error(text: &str) -> (String, String) {
-    let l = sppm_lang::load_source("habit.scn", text, &EvalOptions::default());
+    let l = sppm_lang::internals::eval::load_source("habit.scn", text, &EvalOptions::default());
     let d = l
         .diagnostics
         .iter()
@@ -125,7 +126,7 @@ fn pov_habits_get_their_spelling_here() {
         assert!(!help.contains("declare it first"), "{text:?}: {help}");
     }
     // A well-formed `#else` and `#end` still parse, with and without space after them.
-    let ok = sppm_lang::load_source(
+    let ok = sppm_lang::internals::eval::load_source(
         "ok.scn",
         "#if (0) sphere { <0,0,0>, 1 } #else sphere { <0,0,0>, 2 } #end\n\
          #if(1)#if(1)sphere { <0,0,0>, 3 }#end#end\n",
@@ -138,7 +139,7 @@ fn pov_habits_get_their_spelling_here() {
 /// deeper than the parser's bound is an error, not a stack overflow.
 #[test]
 fn block_comments_nest() {
-    let l = sppm_lang::load_source(
+    let l = sppm_lang::internals::eval::load_source(
         "c.scn",
         "/* outer /* inner */ still a comment */ sphere { <0, 0, 0>, 1 }\n",
         &EvalOptions::default(),
@@ -190,7 +191,7 @@ fn a_material_property_belongs_to_its_kind() {
     let declared = "#declare P = material { glass thin }\n\
                     sphere { <0, 0, 0>, 1 material { P absorb rgb 0.1 } }\n";
     assert!(first_error(declared).0.contains("thin glass"));
-    let ok = sppm_lang::load_source(
+    let ok = sppm_lang::internals::eval::load_source(
         "ok.scn",
         "#declare G = material { glass ior 1.5 }\n\
          #declare F = material { glass ior 1.5 roughness 0.3 }\n\
@@ -231,7 +232,11 @@ fn a_parallel_up_gets_an_up_that_works() {
             Some(i) => format!("{} {want}", &bad[..i]),
             None => format!("{bad} {want}"),
         };
-        let l = sppm_lang::load_source("up.scn", &text(&fixed), &EvalOptions::default());
+        let l = sppm_lang::internals::eval::load_source(
+            "up.scn",
+            &text(&fixed),
+            &EvalOptions::default(),
+        );
         assert!(!l.has_errors(), "{fixed}: {:?}", l.diagnostics);
     }
 }
@@ -242,7 +247,7 @@ fn a_parallel_up_gets_an_up_that_works() {
 #[test]
 fn a_name_used_only_where_evaluation_did_not_go_is_not_unused() {
     let unused = |text: &str| -> Vec<String> {
-        let l = sppm_lang::load_source("u.scn", text, &EvalOptions::default());
+        let l = sppm_lang::internals::eval::load_source("u.scn", text, &EvalOptions::default());
         assert!(!l.has_errors(), "{:?}", l.diagnostics);
         l.diagnostics
             .iter()

@@ -1,7 +1,8 @@
 //! Evaluation budgets: work that each loop or recursion limit allows on its own but that would
 //! run for hours or exhaust memory in all ends with one spanned error, quickly.
 
-use sppm_lang::{EvalOptions, Loaded, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::{Loaded, load_source};
 
 fn errors(l: &Loaded) -> Vec<String> {
     l.diagnostics
@@ -238,7 +239,7 @@ fn images_beyond_the_memory_limit_are_refused_before_they_are_decoded() {
             memory_limit: limit,
             ..EvalOptions::default()
         };
-        sppm_lang::load_file(&scene, &options).unwrap()
+        sppm_lang::internals::eval::load_file(&scene, &options).unwrap()
     };
     // Without a limit, and with room for both (24 MiB): loaded.
     for limit in [None, Some(25 << 20)] {
@@ -288,14 +289,14 @@ fn an_error_repeated_by_many_calls_is_shown_once_and_the_count_is_bounded() {
         .collect();
     let last = format!(
         "more than {} errors: the evaluation stopped",
-        sppm_lang::eval::MAX_ERRORS
+        sppm_lang::internals::eval::MAX_ERRORS
     );
     assert_eq!(notes, [last.as_str()]);
     let note = l.diagnostics.iter().find(|d| !d.is_error()).unwrap();
     // At the call after the 100th.
     assert_eq!(
         l.sources.line_col(note.span).0,
-        sppm_lang::eval::MAX_ERRORS + 2
+        sppm_lang::internals::eval::MAX_ERRORS + 2
     );
 }
 
@@ -314,7 +315,7 @@ fn many_unknown_names_among_many_declarations_are_reported_quickly() {
     let l = load(&text, &EvalOptions::default());
     assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
     let e = errors(&l);
-    assert_eq!(e.len(), sppm_lang::eval::MAX_ERRORS);
+    assert_eq!(e.len(), sppm_lang::internals::eval::MAX_ERRORS);
     assert_eq!(e[0], "unknown identifier `Nmae0`");
     // The first unknown names get their nearest declared name, the later ones the plain help.
     let helps: Vec<&str> = l
@@ -337,20 +338,23 @@ fn text_too_large_to_parse_within_the_memory_limit_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     // 64 KiB of text, 65 544 lexemes: 20.0 MiB to parse at 320 bytes each.
     let big = format!("#declare A = [{}1];\n", "1,".repeat(32 * 1024));
-    let need = sppm_lang::syntax::parse_memory(&big);
-    assert_eq!(need, 65_544 * sppm_lang::syntax::PARSE_BYTES_PER_LEXEME);
+    let need = sppm_lang::internals::syntax::parse_memory(&big);
+    assert_eq!(
+        need,
+        65_544 * sppm_lang::internals::syntax::PARSE_BYTES_PER_LEXEME
+    );
     std::fs::write(dir.path().join("big.scn"), &big).unwrap();
     let main = dir.path().join("main.scn");
     let main_text = "#include \"big.scn\"\n";
     std::fs::write(&main, main_text).unwrap();
     // The load holds the scene file's parse too: one total for every file it reads.
-    let both = need + sppm_lang::syntax::parse_memory(main_text);
+    let both = need + sppm_lang::internals::syntax::parse_memory(main_text);
     let with = |path: &std::path::Path, limit: Option<u64>| {
         let options = EvalOptions {
             memory_limit: limit,
             ..EvalOptions::default()
         };
-        sppm_lang::load_file(path, &options).unwrap()
+        sppm_lang::internals::eval::load_file(path, &options).unwrap()
     };
     // Room to parse both (and no limit given: the default of 2 GiB): loaded.
     for limit in [None, Some(both)] {
@@ -397,7 +401,7 @@ fn error_naming_the_memory_limit(l: &Loaded) -> &sppm_lang::Diagnostic {
 /// (the load was killed at 2 GB), and an image named by such a string put it into its error.
 #[test]
 fn diagnostics_keep_a_bounded_part_of_long_strings() {
-    let max = sppm_lang::diag::MAX_DIAGNOSTIC_TEXT;
+    let max = sppm_lang::internals::diag::MAX_DIAGNOSTIC_TEXT;
     let l = load(
         "#declare S = \"ab\";\n#for (I, 1, 20) #declare S = S + S; #end\n\
          #for (I, 1, 50) #debug S #end\n\
@@ -407,7 +411,7 @@ fn diagnostics_keep_a_bounded_part_of_long_strings() {
     let notes: Vec<_> = l
         .diagnostics
         .iter()
-        .filter(|d| d.severity == sppm_lang::diag::Severity::Note)
+        .filter(|d| d.severity == sppm_lang::Severity::Note)
         .collect();
     assert_eq!(notes.len(), 50);
     for d in &notes {
@@ -438,11 +442,14 @@ fn diagnostics_keep_a_bounded_part_of_long_strings() {
 fn warnings_are_bounded() {
     let text = format!(
         "{}sphere {{ <0, 0, 0>, 1 }}\n",
-        "union { }\n".repeat(sppm_lang::eval::MAX_WARNINGS + 500)
+        "union { }\n".repeat(sppm_lang::internals::eval::MAX_WARNINGS + 500)
     );
     let l = load(&text, &EvalOptions::default());
     assert!(errors(&l).is_empty(), "{:?}", errors(&l));
-    assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_WARNINGS + 1);
+    assert_eq!(
+        l.diagnostics.len(),
+        sppm_lang::internals::eval::MAX_WARNINGS + 1
+    );
     let last = l.diagnostics.last().unwrap();
     assert!(
         last.message.contains("warnings: the rest are not shown"),

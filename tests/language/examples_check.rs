@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use sppm_lang::{EvalOptions, load_file, load_source, render_plain};
+use sppm_lang::internals::eval::{load_file, load_source};
+use sppm_lang::{EvalOptions, render_plain};
 
 #[test]
 fn every_example_evaluates_without_diagnostics() {
@@ -55,7 +56,7 @@ fn the_readme_scene_evaluates_and_its_light_faces_the_floor() {
         .find(|o| o.emission.is_some())
         .expect("the README scene has an area light");
     match &light.shape {
-        sppm_lang::scene::ShapeDecl::Quad { edge_u, edge_v, .. } => {
+        sppm_lang::internals::scene::ShapeDecl::Quad { edge_u, edge_v, .. } => {
             assert!(edge_u.cross(*edge_v).y < 0.0, "the light must shine down");
         }
         other => panic!("expected a quad light, found {}", other.kind()),

@@ -3,8 +3,9 @@
 use proptest::prelude::*;
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::render::{RenderOptions, render};
 
 const SEED_SCENE: &str = include_str!("../../examples/cornell.scn");
 

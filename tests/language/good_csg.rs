@@ -3,8 +3,9 @@
 //! shapes below it that have none, the nearest operation's first).
 
 use glam::{DAffine3, DVec3};
-use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::scene::*;
 
 fn scene(text: &str) -> Scene {
     let l = load_source("csg.scn", text, &EvalOptions::default());
@@ -167,5 +168,5 @@ fn closed_shapes_are_accepted() {
         }",
     );
     assert_eq!(csg(&s.objects[0]).children.len(), 4);
-    sppm_lang::prepare::PreparedScene::new(&s).expect("prepares");
+    sppm_lang::internals::prepare::PreparedScene::new(&s).expect("prepares");
 }

@@ -6,8 +6,9 @@ use crate::common;
 
 use common::{debug, load, render_text};
 use glam::DVec3;
-use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::scene::*;
 
 /// The `#debug` messages of `text`, in order.
 fn debug_lines(text: &str) -> Vec<String> {
@@ -236,12 +237,16 @@ fn pattern_functions_give_the_pattern_value() {
 }
 
 /// The image of `text` rendered with the scene's own settings (seed, iterations, integrator).
-fn render_image(text: &str) -> sppm_lang::film::Image {
-    render_text(text, &sppm_lang::render::RenderOptions::default()).image
+fn render_image(text: &str) -> sppm_lang::Image {
+    render_text(
+        text,
+        &sppm_lang::internals::render::RenderOptions::default(),
+    )
+    .image
 }
 
 /// The largest difference of one channel of one pixel between two images of the same size.
-fn max_difference(a: &sppm_lang::film::Image, b: &sppm_lang::film::Image) -> f64 {
+fn max_difference(a: &sppm_lang::Image, b: &sppm_lang::Image) -> f64 {
     assert_eq!((a.width, a.height), (b.width, b.height));
     a.pixels
         .iter()

@@ -1,8 +1,9 @@
 //! Good scenes: the evaluated `Scene` holds what the text says.
 
 use glam::{DAffine3, DVec2, DVec3};
-use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, Loaded, Severity, load_file, load_source};
+use sppm_lang::internals::eval::{Loaded, load_file, load_source};
+use sppm_lang::internals::scene::*;
+use sppm_lang::{EvalOptions, Severity};
 
 fn load(text: &str) -> Loaded {
     let l = load_source("test.scn", text, &EvalOptions::default());
@@ -628,7 +629,10 @@ fn debug_messages_are_bounded() {
         let l = load(&format!(
             "#for (I, 1, 5000) {kind} str(I) #end sphere {{ <0,0,0>, 1 }}"
         ));
-        assert_eq!(l.diagnostics.len(), sppm_lang::eval::MAX_MESSAGES + 1);
+        assert_eq!(
+            l.diagnostics.len(),
+            sppm_lang::internals::eval::MAX_MESSAGES + 1
+        );
         assert!(l.diagnostics.last().unwrap().message.contains("not shown"));
     }
 }
@@ -757,13 +761,13 @@ fn tiny_lengths_form_feeds_and_debug_lines() {
 fn string_literals_beyond_the_string_limit_are_errors() {
     let text = format!(
         "#declare S = \"{}\";\nsphere {{ <0, 0, 0>, 1 }}\n",
-        "a".repeat(sppm_lang::eval::MAX_STRING_BYTES + 1)
+        "a".repeat(sppm_lang::internals::eval::MAX_STRING_BYTES + 1)
     );
     let options = sppm_lang::EvalOptions {
         memory_limit: Some(4 << 30),
         ..Default::default()
     };
-    let l = sppm_lang::load_source("test.scn", &text, &options);
+    let l = sppm_lang::internals::eval::load_source("test.scn", &text, &options);
     let e = l
         .diagnostics
         .iter()
@@ -849,7 +853,7 @@ fn a_spotlight_aimed_at_a_very_close_point_has_that_direction() {
          plane { <0, 1, 0>, -2 }\n",
     );
     match &s.lights[0] {
-        sppm_lang::scene::LightDecl::Spot { direction, .. } => {
+        sppm_lang::internals::scene::LightDecl::Spot { direction, .. } => {
             assert_eq!(*direction, DVec3::NEG_Y)
         }
         other => panic!("{other:?}"),
@@ -948,7 +952,7 @@ fn animation_names_read_the_frame_being_evaluated() {
     };
     let (still_clock, still) = at(None);
     assert_eq!(still_clock, 0.0);
-    let range = sppm_lang::frame_range(&still.settings, &Default::default())
+    let range = sppm_lang::internals::eval::frame_range(&still.settings, &Default::default())
         .unwrap()
         .expect("the scene declares frames");
     assert_eq!((range.first, range.last), (10, 14));
@@ -995,7 +999,7 @@ fn a_frame_reloads_only_what_the_clock_changes() {
         std::fs::write(&p, text).unwrap();
         p
     };
-    let over = sppm_lang::RangeOverride::default();
+    let over = sppm_lang::internals::eval::RangeOverride::default();
     let options = EvalOptions::default();
     let fixed = write(
         "fixed.scn",
@@ -1003,10 +1007,12 @@ fn a_frame_reloads_only_what_the_clock_changes() {
     );
     let still = load_file(&fixed, &options).unwrap();
     assert!(!still.animated);
-    let range = sppm_lang::frame_range(&still.scene.as_ref().unwrap().settings, &over)
-        .unwrap()
-        .unwrap();
-    let frame = sppm_lang::load_frame(&fixed, &options, &still, &over, &range, 2).unwrap();
+    let range =
+        sppm_lang::internals::eval::frame_range(&still.scene.as_ref().unwrap().settings, &over)
+            .unwrap()
+            .unwrap();
+    let frame =
+        sppm_lang::internals::eval::load_frame(&fixed, &options, &still, &over, &range, 2).unwrap();
     assert_eq!(format!("{:?}", frame.scene), format!("{:?}", still.scene));
     let moving = write(
         "moving.scn",
@@ -1014,14 +1020,17 @@ fn a_frame_reloads_only_what_the_clock_changes() {
     );
     let still = load_file(&moving, &options).unwrap();
     assert!(still.animated);
-    let range = sppm_lang::frame_range(&still.scene.as_ref().unwrap().settings, &over)
-        .unwrap()
-        .unwrap();
+    let range =
+        sppm_lang::internals::eval::frame_range(&still.scene.as_ref().unwrap().settings, &over)
+            .unwrap()
+            .unwrap();
     assert_eq!(range.last, 3);
     // Frame 0 has clock 0, as the still: the same range, accepted.
-    let first = sppm_lang::load_frame(&moving, &options, &still, &over, &range, 0).unwrap();
+    let first = sppm_lang::internals::eval::load_frame(&moving, &options, &still, &over, &range, 0)
+        .unwrap();
     assert!(!first.has_errors(), "{:?}", first.diagnostics);
-    let later = sppm_lang::load_frame(&moving, &options, &still, &over, &range, 2).unwrap();
+    let later = sppm_lang::internals::eval::load_frame(&moving, &options, &still, &over, &range, 2)
+        .unwrap();
     assert!(later.scene.is_none());
     let text = sppm_lang::render_plain(&later.sources, &later.diagnostics, 100);
     assert!(

@@ -51,7 +51,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     ("lights", &["geometry", "sampling", "shapes", "textures"]),
     ("camera", &["diag", "geometry", "sampling", "scene"]),
-    ("film", &["atomic_file"]),
+    ("film", &["diag", "atomic_file"]),
     // The stages.
     (
         "prepare",
@@ -126,7 +126,7 @@ fn allowed() -> BTreeMap<&'static str, &'static [&'static str]> {
 }
 
 /// The first path segments after `crate::` in `code` (a `use crate::{a, b::c}` group gives
-/// `a` and `b`).
+/// `a` and `b`). The modules are declared in `internals`, so `crate::internals::a` is `a`.
 fn crate_imports(code: &str) -> Vec<String> {
     let mut out = Vec::new();
     let mut rest = code;
@@ -137,6 +137,7 @@ fn crate_imports(code: &str) -> Vec<String> {
         if matches!(before, Some(c) if c == '$' || c.is_alphanumeric() || c == '_') {
             continue;
         }
+        rest = rest.strip_prefix("internals::").unwrap_or(rest);
         if let Some(group) = rest.strip_prefix('{') {
             let end = matching_brace(group);
             for item in split_top_level(&group[..end]) {
@@ -257,7 +258,8 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The library's modules: `src/` minus the crate root, the binaries and the command line.
+/// The library's modules: `src/` minus the crate root and the file that declares the modules
+/// (`internals.rs`), the binaries and the command line.
 fn library_files() -> Vec<(String, PathBuf)> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
@@ -267,7 +269,10 @@ fn library_files() -> Vec<(String, PathBuf)> {
         let rel = f.strip_prefix(&src).expect("under src");
         let first = rel.components().next().expect("a path").as_os_str();
         let first = first.to_string_lossy();
-        if matches!(first.as_ref(), "lib.rs" | "main.rs" | "cli" | "bin") {
+        if matches!(
+            first.as_ref(),
+            "lib.rs" | "internals.rs" | "main.rs" | "cli" | "bin"
+        ) {
             continue;
         }
         if f.file_name().is_some_and(|n| n == "tests.rs") {
@@ -291,20 +296,45 @@ fn no_module_imports_from_a_stage_above_it() {
     assert!(all.is_empty(), "backward imports:\n{}", all.join("\n"));
 }
 
+/// The modules `src/internals.rs` declares (every module of the library is declared there).
+fn declared_modules(internals: &str) -> Vec<&str> {
+    internals
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod "))
+        .map(|name| name.trim_end_matches(';'))
+        .collect()
+}
+
 #[test]
-fn every_module_of_lib_rs_is_placed() {
-    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"))
-        .expect("src/lib.rs");
+fn every_declared_module_is_placed() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let internals = std::fs::read_to_string(root.join("internals.rs")).expect("src/internals.rs");
+    let declared = declared_modules(&internals);
+    // The library's top-level files and folders, each a module that must be declared there.
+    assert!(declared.len() > 20, "found only {declared:?}");
     let table = allowed();
-    for line in lib.lines() {
-        if let Some(name) = line.trim().strip_prefix("pub mod ") {
-            let name = name.trim_end_matches(';');
-            assert!(
-                table.contains_key(name),
-                "src/lib.rs declares `{name}`, which tests/language/layering.rs does not place"
-            );
-        }
+    for name in &declared {
+        assert!(
+            table.contains_key(name),
+            "src/internals.rs declares `{name}`, which tests/language/layering.rs does not place"
+        );
     }
+    // The root declares no module of its own beside `internals` (a module declared there
+    // would escape this table and be public).
+    let lib = std::fs::read_to_string(root.join("lib.rs")).expect("src/lib.rs");
+    let own: Vec<&str> = lib
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.contains("mod ") && !l.starts_with("//"))
+        .collect();
+    assert_eq!(own, ["pub mod internals;"], "src/lib.rs declares {own:?}");
+    // ... and a module missing from the table is found.
+    let planted = "#[path = \"newcomer.rs\"]\npub mod newcomer;\n";
+    assert!(
+        declared_modules(planted)
+            .iter()
+            .any(|m| !table.contains_key(m))
+    );
 }
 
 #[test]
@@ -333,6 +363,9 @@ fn a_planted_backward_import_is_found() {
         ("geometry", "use crate::{\n    sampling::Rng,\n};\n"),
         ("integrators", "use crate::render::render;\n"),
         ("newcomer", "use crate::span::Span;\n"),
+        // Through the modules' declaring module, or the root's re-exports.
+        ("prepare", "use crate::internals::render::render;\n"),
+        ("span", "use crate::Diagnostic;\n"),
     ];
     for (module, code) in planted {
         assert!(
@@ -362,6 +395,7 @@ fn a_planted_backward_import_is_found() {
             "sampling",
             "macro_rules! m { () => { $crate::sampling::Rng } }\n",
         ),
+        ("eval", "pub(in crate::internals::eval) fn f() {}\n"),
     ];
     for (module, code) in fine {
         let v = violations(module, "fine.rs", code);

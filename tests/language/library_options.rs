@@ -8,12 +8,12 @@ use std::sync::atomic::AtomicBool;
 
 use common::{add_material, add_object, furnace_emitting};
 use glam::{DVec2, DVec3};
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{
+use sppm_lang::Span;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::{
     ColorParam, IntersectMethod, LightDecl, Material, Profile, ScalarParam, Scene, ShapeDecl,
     TextureId,
 };
-use sppm_lang::span::Span;
 
 #[test]
 fn absurd_overrides_are_errors() {
@@ -253,9 +253,9 @@ fn a_spot_light_out_of_the_language_s_bounds_is_an_error() {
 #[test]
 fn queries_with_non_finite_rays_or_unknown_primitives_do_not_panic() {
     use glam::Vec3A;
-    use sppm_lang::geometry::Ray;
-    use sppm_lang::prepare::PreparedScene;
-    let l = sppm_lang::load_source(
+    use sppm_lang::internals::geometry::Ray;
+    use sppm_lang::internals::prepare::PreparedScene;
+    let l = sppm_lang::internals::eval::load_source(
         "q.scn",
         "triangle { <0,0,0>, <1,0,0>, <0,1,0> }\nsphere { <3, 0, 0>, 1 }\n",
         &sppm_lang::EvalOptions::default(),
@@ -288,7 +288,7 @@ fn queries_with_non_finite_rays_or_unknown_primitives_do_not_panic() {
     }
     // A primitive number no primitive has.
     assert!(prepared.material(u32::MAX).is_none());
-    let made_up = sppm_lang::prepare::SurfaceHit {
+    let made_up = sppm_lang::internals::prepare::SurfaceHit {
         prim: u32::MAX,
         ..hit
     };
@@ -302,7 +302,7 @@ fn queries_with_non_finite_rays_or_unknown_primitives_do_not_panic() {
 /// 2^32 octaves (it never finished a texture lookup) are refused, each naming what is wrong.
 #[test]
 fn appearance_values_outside_the_language_s_ranges_are_errors() {
-    use sppm_lang::scene::{Background, ColorMap, Mapping, Pattern, Texture};
+    use sppm_lang::internals::scene::{Background, ColorMap, Mapping, Pattern, Texture};
     let c = |x: f64| ColorParam::Const(DVec3::splat(x));
     let glass = |ior: f64, absorb: f64, tint: f64| Material::Glass {
         ior,
@@ -600,7 +600,7 @@ fn memory_world(floor: [u8; 3]) -> sppm_lang::MemoryWorld {
         .with("memory-only/maps/floor.png", png_of(floor))
 }
 
-fn mean(image: &sppm_lang::film::Image) -> [f64; 3] {
+fn mean(image: &sppm_lang::Image) -> [f64; 3] {
     let n = image.pixels.len() as f64;
     image
         .pixels
@@ -615,7 +615,7 @@ fn a_scene_its_include_and_its_image_load_and_render_from_memory() {
     assert!(!main.exists(), "the test needs files that are not on disk");
     let render = |floor: [u8; 3], options: &sppm_lang::RenderOptions| {
         let load_options = sppm_lang::EvalOptions {
-            world: sppm_lang::world::SharedWorld::new(memory_world(floor)),
+            world: sppm_lang::SharedWorld::new(memory_world(floor)),
             ..Default::default()
         };
         let document = sppm_lang::load(main, &load_options).unwrap_or_else(|f| panic!("{f}"));
@@ -646,7 +646,7 @@ fn a_scene_its_include_and_its_image_load_and_render_from_memory() {
     // The options override the scene's settings without editing it.
     let options = sppm_lang::RenderOptions {
         resolution: Some((8, 6)),
-        integrator: Some(sppm_lang::scene::Integrator::Path),
+        integrator: Some(sppm_lang::Integrator::Path),
         ..Default::default()
     };
     let small = render([230, 20, 20], &options);
@@ -657,7 +657,7 @@ fn a_scene_its_include_and_its_image_load_and_render_from_memory() {
 fn a_file_missing_from_memory_is_a_diagnostic_at_its_include() {
     let world = sppm_lang::MemoryWorld::new().with("main.scn", "#include \"gone.scn\"\n");
     let load_options = sppm_lang::EvalOptions {
-        world: sppm_lang::world::SharedWorld::new(world),
+        world: sppm_lang::SharedWorld::new(world),
         ..Default::default()
     };
     let failure = sppm_lang::load(std::path::Path::new("main.scn"), &load_options).unwrap_err();
@@ -678,7 +678,7 @@ fn a_file_missing_from_memory_is_a_diagnostic_at_its_include() {
 /// the caller's cancel as the one diagnostic `interrupted` with its flag set.
 #[test]
 fn the_three_calls_report_in_one_type() {
-    use sppm_lang::world::SharedWorld;
+    use sppm_lang::SharedWorld;
     use sppm_lang::{Cancel, EvalOptions, MemoryWorld, Severity};
     use std::path::Path;
     // No light: legal, but it renders black (a warning at no place).
@@ -712,7 +712,7 @@ fn the_three_calls_report_in_one_type() {
     };
     assert_eq!(e.severity, Severity::Error);
     assert!(e.message.contains("iterations"), "{}", e.message);
-    assert_eq!(e.span, document.scene.settings.span);
+    assert_eq!(e.span, document.settings().span);
     assert!(e.is_placed());
 
     let missing = sppm_lang::load(Path::new("missing.scn"), &options)

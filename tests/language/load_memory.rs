@@ -9,7 +9,7 @@ use measured::{flat, peak_text, run_measured};
 use std::time::Duration;
 
 use sppm_lang::EvalOptions;
-use sppm_lang::syntax::{PARSE_BYTES_PER_LEXEME, parse_memory};
+use sppm_lang::internals::syntax::{PARSE_BYTES_PER_LEXEME, parse_memory};
 
 const MIB: u64 = 1 << 20;
 
@@ -127,9 +127,9 @@ fn strings_and_images_count_in_one_total() {
             memory_limit: Some(limit),
             ..EvalOptions::default()
         };
-        sppm_lang::load_file(&scene, &options).unwrap()
+        sppm_lang::internals::eval::load_file(&scene, &options).unwrap()
     };
-    let errors = |l: &sppm_lang::Loaded| -> Vec<String> {
+    let errors = |l: &sppm_lang::internals::eval::Loaded| -> Vec<String> {
         l.diagnostics
             .iter()
             .filter(|d| d.is_error())
@@ -182,7 +182,7 @@ fn a_height_field_past_the_memory_limit_is_refused_before_it_is_allocated() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        let l = sppm_lang::load_file(&path, &options).unwrap();
+        let l = sppm_lang::internals::eval::load_file(&path, &options).unwrap();
         let d = l.diagnostics.iter().find(|d| d.is_error()).expect(name);
         assert!(d.message.contains(want), "{name}: {}", d.message);
         assert!(
@@ -192,7 +192,7 @@ fn a_height_field_past_the_memory_limit_is_refused_before_it_is_allocated() {
         let at = &text[d.span.start as usize..d.span.end as usize];
         assert!(at == "16384, 16384" || at == "\"big.png\"", "{name}: {at}");
     }
-    let l = sppm_lang::load_source(
+    let l = sppm_lang::internals::eval::load_source(
         "small.scn",
         "height_field { function 64, 64 { x * y } }",
         &options,

@@ -6,8 +6,9 @@
 
 use std::fmt::Write;
 
-use sppm_lang::span::FileId;
-use sppm_lang::{SourceMap, render_plain, syntax};
+use sppm_lang::FileId;
+use sppm_lang::internals::syntax;
+use sppm_lang::{SourceMap, render_plain};
 
 /// Tokens a mutation inserts, separated by `|`.
 const TOKENS: &str = "{|}|<|>|,|(|)|[|]|#declare X = |#end|#if (1)|#switch (1)|#case (1)|#break|#debug \"a\"|=|1|-2.5|.5|1e3|rgb|x|X|sphere|material|translate|+|*|-|/|==|<=|&&|!|\"s\"|// c\n|/* c */| |\n|true|A[0]|B.x|f(1, 2)";

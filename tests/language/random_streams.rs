@@ -6,8 +6,8 @@ use std::sync::atomic::AtomicBool;
 use crate::common;
 use common::{debug, load};
 use glam::DVec3;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::*;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::*;
 
 /// Each sphere's centre, in scene order.
 fn centres(s: &Scene) -> Vec<DVec3> {

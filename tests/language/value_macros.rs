@@ -6,8 +6,9 @@
 use crate::common;
 use common::{debug, load};
 use glam::DVec3;
-use sppm_lang::scene::*;
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::scene::*;
 
 /// Each sphere's centre (in the world) and radius, in scene order.
 fn spheres(objects: &[Object]) -> Vec<(DVec3, f64)> {

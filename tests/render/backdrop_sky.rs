@@ -4,9 +4,10 @@
 
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::Image;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::render::{RenderOptions, render};
 
 const INTEGRATORS: [&str; 5] = ["sppm", "ppm", "photon_map", "path", "whitted"];
 const RES: u32 = 32;
@@ -231,7 +232,7 @@ fn hostile_skies_and_backdrops_get_spanned_diagnostics() {
 #[test]
 fn hostile_library_skies_are_refused() {
     use glam::DVec3;
-    use sppm_lang::scene::{Background, ColorParam, TextureId};
+    use sppm_lang::internals::scene::{Background, ColorParam, TextureId};
     let l = load_source("ok.scn", VIEW, &EvalOptions::default());
     let base = l.scene.expect("loads");
     let mut cases = Vec::new();

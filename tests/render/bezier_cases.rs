@@ -1,8 +1,8 @@
 //! Special cases of the lathe (surface of revolution) intersector, each against a closed form.
 
 use glam::{DVec2, DVec3};
-use sppm_lang::bezier::Solver;
-use sppm_lang::bezier::lathe::{Lathe, Part};
+use sppm_lang::internals::bezier::Solver;
+use sppm_lang::internals::bezier::lathe::{Lathe, Part};
 
 const R: Solver = Solver::Robust;
 
@@ -291,10 +291,10 @@ fn newton_method_is_selectable_and_finds_easy_hits() {
 /// cusp.
 #[test]
 fn candidate_window_keeps_every_candidate_inside_it() {
-    use sppm_lang::bezier::lathe::RayFrame;
-    use sppm_lang::bezier::roots::bracket::Refine;
-    use sppm_lang::bezier::roots::{find_roots_with_noise, root_uncertainty};
-    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::internals::bezier::lathe::RayFrame;
+    use sppm_lang::internals::bezier::roots::bracket::Refine;
+    use sppm_lang::internals::bezier::roots::{find_roots_with_noise, root_uncertainty};
+    use sppm_lang::internals::sampling::SplitMix64;
     let shapes = [goblet_like(), bulge_cusp_dome()];
     let (mut compared, mut skipped) = (0usize, 0usize);
     for (n, l) in shapes.iter().enumerate() {
@@ -432,12 +432,12 @@ fn rays_from_the_surface_that_meet_it_again_within_1e_4() {
 /// roots are certified.
 #[test]
 fn factor_shortcut_matches_the_full_scan_where_f_is_monotone() {
-    use sppm_lang::bezier::lathe::RayFrame;
-    use sppm_lang::bezier::roots::bracket::Refine;
-    use sppm_lang::bezier::roots::{
+    use sppm_lang::internals::bezier::lathe::RayFrame;
+    use sppm_lang::internals::bezier::roots::bracket::Refine;
+    use sppm_lang::internals::bezier::roots::{
         RootKind, find_roots_with_noise, root_spread, strictly_monotone_on, widened,
     };
-    use sppm_lang::sampling::SplitMix64;
+    use sppm_lang::internals::sampling::SplitMix64;
     let shapes = [goblet_like(), bulge_cusp_dome()];
     let (mut simple, mut certified, mut same_bits, mut compared) = (0, 0, 0usize, 0usize);
     let mut max_dt = 0.0f64;
@@ -523,9 +523,9 @@ fn factor_shortcut_matches_the_full_scan_where_f_is_monotone() {
 /// finds both (a factor with one sign at both ends would read as no sign change).
 #[test]
 fn factor_shortcut_is_refused_where_two_roots_of_f_share_a_bracket() {
-    use sppm_lang::bezier::lathe::RayFrame;
-    use sppm_lang::bezier::roots::bracket::Refine;
-    use sppm_lang::bezier::roots::{
+    use sppm_lang::internals::bezier::lathe::RayFrame;
+    use sppm_lang::internals::bezier::roots::bracket::Refine;
+    use sppm_lang::internals::bezier::roots::{
         Root, RootKind, find_roots_with_noise, root_spread, strictly_monotone_on, widened,
     };
     let l = bulge_cusp_dome();

@@ -4,10 +4,11 @@
 use std::sync::atomic::AtomicBool;
 
 use glam::{DVec3, Vec3A};
-use sppm_lang::geometry::Ray;
-use sppm_lang::render::{PreparedScene, RenderOptions, render};
-use sppm_lang::scene::Scene;
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::internals::scene::Scene;
 
 fn scene(objects: &str) -> Scene {
     let text = format!(
@@ -84,7 +85,7 @@ fn rays_through_a_merge_alternate_and_never_meet_inner_surfaces() {
             (DVec3::new(0.3, 0.6, 0.1), 0.45),
         ];
         let mut bad = 0;
-        let mut rng = sppm_lang::sampling::Rng::new(0x1234_5678);
+        let mut rng = sppm_lang::internals::sampling::Rng::new(0x1234_5678);
         let mut f = || f64::from(rng.f32()) * 2.0 - 1.0;
         for _ in 0..4000 {
             let o = DVec3::new(f() * 2.0, 0.6 + f() * 1.5, -2.0 + f() * 0.2);

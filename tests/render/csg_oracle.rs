@@ -18,16 +18,16 @@ use common::empty_scene;
 use std::sync::Arc;
 
 use glam::{DAffine3, DQuat, DVec2, DVec3};
-use sppm_lang::geometry::Ray;
-use sppm_lang::prepare::PreparedScene;
-use sppm_lang::scene::function::{Binary, Unary};
-use sppm_lang::scene::text::text_glyphs;
-use sppm_lang::scene::{
+use sppm_lang::Span;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::prepare::PreparedScene;
+use sppm_lang::internals::scene::function::{Binary, Unary};
+use sppm_lang::internals::scene::text::text_glyphs;
+use sppm_lang::internals::scene::{
     Blob, BlobComponent, ColorParam, Container, Csg, CsgOp, Function, HeightField, HeightGrid,
     Isosurface, Material, MaterialId, Object, Op, Prism, PrismSpline, Scene, ShapeDecl,
     prism_segments,
 };
-use sppm_lang::span::Span;
 
 /// Oracle sampling step along a unit-direction ray; the geometry spans about 4 units.
 const STEP: f64 = 2e-3;
@@ -1139,7 +1139,7 @@ fn the_newer_shapes_as_operands_match_a_point_membership_oracle() {
 /// evaluates the spline itself.
 #[test]
 fn a_sphere_sweep_operand_matches_the_oracle() {
-    use sppm_lang::scene::{SphereSweep, SweepSpline};
+    use sppm_lang::internals::scene::{SphereSweep, SweepSpline};
     let v = DVec3::new;
     let cubic = vec![
         (v(-1.6, -0.3, 0.2), 0.3),

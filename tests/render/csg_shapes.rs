@@ -5,9 +5,9 @@
 
 use glam::Vec3A;
 use sppm_lang::EvalOptions;
-use sppm_lang::geometry::Ray;
-use sppm_lang::render::PreparedScene;
-use sppm_lang::scene::Scene;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::render::PreparedScene;
+use sppm_lang::internals::scene::Scene;
 
 const CUBE: &str = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
 f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
@@ -23,7 +23,7 @@ f 4/1/4 8/2/4 7/3/4 3/4/4\nf 1/1/5 5/2/5 8/3/5 4/4/5\nf -7/1/-1 -6/2/-1 -2/3/-1 
 fn load(dir: &std::path::Path, objects: &str) -> Scene {
     let path = dir.join("s.scn");
     std::fs::write(&path, objects).unwrap();
-    let l = sppm_lang::load_file(&path, &EvalOptions::default()).unwrap();
+    let l = sppm_lang::internals::eval::load_file(&path, &EvalOptions::default()).unwrap();
     assert!(!l.has_errors(), "{objects}: {:?}", l.diagnostics);
     l.scene.unwrap()
 }
@@ -137,7 +137,7 @@ fn a_shape_merged_or_intersected_with_itself_is_the_shape() {
         for op in ["merge", "intersection"] {
             let both = load(dir.path(), &format!("{op} {{ {shape} {shape} }}"));
             let pb = PreparedScene::new(&both).unwrap();
-            let mut rng = sppm_lang::sampling::Rng::new(7);
+            let mut rng = sppm_lang::internals::sampling::Rng::new(7);
             let mut f = || rng.f32() * 2.0 - 1.0;
             let (mut hits, mut inside) = (0, 0);
             for _ in 0..3000 {

@@ -4,7 +4,7 @@ use crate::common;
 
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::render::{RenderOptions, render};
+use sppm_lang::internals::render::{RenderOptions, render};
 
 #[test]
 fn one_and_two_threads_give_identical_exr() {
@@ -78,8 +78,8 @@ fn cancel_stops_and_progress_reports_each_iteration() {
 /// bit-identical pixels.
 #[test]
 fn every_integrator_is_independent_of_the_thread_count() {
-    let methods = sppm_lang::scene::Integrator::ALL.map(|i| (i, false));
-    let gathering = (sppm_lang::scene::Integrator::Sppm, true);
+    let methods = sppm_lang::Integrator::ALL.map(|i| (i, false));
+    let gathering = (sppm_lang::Integrator::Sppm, true);
     for (integrator, final_gather) in methods.into_iter().chain([gathering]) {
         let mut scene = common::cornell_glass(16);
         scene.settings.integrator = integrator;
@@ -151,10 +151,11 @@ fn the_automatic_photon_count_is_independent_of_the_thread_count() {
 #[test]
 fn the_camera_photon_split_is_independent_of_the_thread_count() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/textures.scn");
-    let mut scene = sppm_lang::load_file(&path, &sppm_lang::EvalOptions::default())
-        .unwrap()
-        .scene
-        .expect("textures.scn loads");
+    let mut scene =
+        sppm_lang::internals::eval::load_file(&path, &sppm_lang::EvalOptions::default())
+            .unwrap()
+            .scene
+            .expect("textures.scn loads");
     // Large enough for the photon count to span several chunks of 4096.
     scene.settings.resolution = (128, 96);
     scene.settings.photons = None;
@@ -177,7 +178,7 @@ fn the_camera_photon_split_is_independent_of_the_thread_count() {
 /// Renders `scene` on 1, 2 and 3 threads: each run's photons per iteration and its pixels'
 /// bits.
 fn counts_and_pixels_on_1_2_3_threads(
-    scene: &sppm_lang::scene::Scene,
+    scene: &sppm_lang::internals::scene::Scene,
     iterations: u32,
     seed: u64,
 ) -> Vec<(Vec<u64>, Vec<[u64; 3]>)> {
@@ -214,7 +215,7 @@ fn counts_and_pixels_on_1_2_3_threads(
 /// paths that the first two's samples allocate): 1 and 2 threads give bit-identical pixels.
 #[test]
 fn vcm_splats_are_independent_of_the_thread_count() {
-    use sppm_lang::scene::Integrator;
+    use sppm_lang::Integrator;
     for integrator in [Integrator::Vcm, Integrator::Bpt, Integrator::Lt] {
         let mut scene = common::cornell_glass(48);
         scene.settings.integrator = integrator;

@@ -8,16 +8,16 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use glam::{DAffine3, DVec3, Vec2};
-use sppm_lang::camera::Camera;
-use sppm_lang::film::Image;
-use sppm_lang::integrators::sppm::photon_flux;
-use sppm_lang::render::{PreparedScene, RenderOptions, render};
-use sppm_lang::scene::{
+use sppm_lang::Image;
+use sppm_lang::Span;
+use sppm_lang::internals::camera::Camera;
+use sppm_lang::internals::integrators::sppm::photon_flux;
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, render};
+use sppm_lang::internals::scene::{
     Background, ColorParam, ImageData, Integrator, Mapping, Material, Pattern, Scene, Texture,
     TextureId, Wrap,
 };
-use sppm_lang::span::Span;
-use sppm_lang::textures::{TexCoord, color_param};
+use sppm_lang::internals::textures::{TexCoord, color_param};
 
 /// A constant environment of radiance `l`.
 fn constant_environment(l: f64) -> Background {
@@ -37,7 +37,7 @@ fn constant_environment(l: f64) -> Background {
 fn sphere_scene(res: u32, albedo: ColorParam, l: f64) -> Scene {
     let mut s = common::empty_scene((res, res));
     s.materials.push(Material::Diffuse { albedo });
-    let m = sppm_lang::scene::MaterialId(0);
+    let m = sppm_lang::internals::scene::MaterialId(0);
     common::add_object(&mut s, common::sphere(DVec3::ZERO, 1.0), m, None);
     s.camera.location = DVec3::new(0.0, 0.0, -4.0);
     s.camera.look_at = DVec3::ZERO;
@@ -378,12 +378,12 @@ fn environment_render_does_not_depend_on_thread_count() {
     // A floor under the sphere so photons deposit (second surface).
     common::add_object(
         &mut scene,
-        sppm_lang::scene::ShapeDecl::Quad {
+        sppm_lang::internals::scene::ShapeDecl::Quad {
             origin: DVec3::new(-3.0, -1.0, -3.0),
             edge_u: DVec3::new(0.0, 0.0, 6.0),
             edge_v: DVec3::new(6.0, 0.0, 0.0),
         },
-        sppm_lang::scene::MaterialId(0),
+        sppm_lang::internals::scene::MaterialId(0),
         None,
     );
     let images: Vec<Image> = [1, 2]
@@ -448,7 +448,7 @@ fn background_colour_lights_sppm_and_path_alike() {
         m,
         None,
     );
-    let floor = sppm_lang::scene::ShapeDecl::Quad {
+    let floor = sppm_lang::internals::scene::ShapeDecl::Quad {
         origin: DVec3::new(-3.0, 0.0, -3.0),
         edge_u: DVec3::new(0.0, 0.0, 6.0),
         edge_v: DVec3::new(6.0, 0.0, 0.0),
@@ -647,12 +647,14 @@ fn an_eight_bit_environment_map_is_srgb_decoded() {
         "environment { image \"sky.png\" intensity 2 }\n",
     )
     .unwrap();
-    let l = sppm_lang::load_file(&scene_path, &sppm_lang::EvalOptions::default()).unwrap();
+    let l = sppm_lang::internals::eval::load_file(&scene_path, &sppm_lang::EvalOptions::default())
+        .unwrap();
     let scene = l.scene.unwrap_or_else(|| panic!("{:?}", l.diagnostics));
-    let sppm_lang::scene::Background::Environment { image, .. } = &scene.background else {
+    let sppm_lang::internals::scene::Background::Environment { image, .. } = &scene.background
+    else {
         panic!("no environment");
     };
-    let decode = |c: u8| sppm_lang::scene::srgb_to_linear(c as f32 / 255.0);
+    let decode = |c: u8| sppm_lang::internals::scene::srgb_to_linear(c as f32 / 255.0);
     for (x, want) in [
         (0, [decode(40), decode(128), 0.0]),
         (7, [decode(220), decode(128), 0.0]),
@@ -668,8 +670,12 @@ fn an_eight_bit_environment_map_is_srgb_decoded() {
 }
 
 /// Renders scene `text` with `iterations` iterations and seed `seed`.
-fn render_text(text: &str, iterations: u32, seed: u64) -> sppm_lang::render::RenderOutput {
-    let opts = sppm_lang::render::RenderOptions {
+fn render_text(
+    text: &str,
+    iterations: u32,
+    seed: u64,
+) -> sppm_lang::internals::render::RenderOutput {
+    let opts = sppm_lang::internals::render::RenderOptions {
         iterations: Some(iterations),
         seed: Some(seed),
         ..Default::default()
@@ -785,12 +791,12 @@ fn an_environment_brighter_than_the_colour_limit_is_refused() {
     let opts = RenderOptions::default();
     for intensity in [1e9, 1.0] {
         s.background = bright(intensity);
-        let e = sppm_lang::render::prepare(&s, &opts)
+        let e = sppm_lang::internals::render::prepare(&s, &opts)
             .err()
             .expect("refused");
         assert!(e.message.contains("brightest pixel"), "{}", e.message);
         assert!(!e.message.contains("0000000000"), "{}", e.message);
     }
     s.background = bright(0.5e9 / 8.5e37);
-    assert!(sppm_lang::render::prepare(&s, &opts).is_ok());
+    assert!(sppm_lang::internals::render::prepare(&s, &opts).is_ok());
 }

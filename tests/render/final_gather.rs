@@ -9,8 +9,8 @@ use crate::common;
 
 use common::*;
 use glam::DVec3;
-use sppm_lang::film::Image;
-use sppm_lang::scene::{Integrator, Scene};
+use sppm_lang::Image;
+use sppm_lang::internals::scene::{Integrator, Scene};
 
 /// The image mean's relative error (every pixel should be 1) and the worst pixel's.
 fn errors(img: &Image) -> (f64, f64) {
@@ -85,7 +85,7 @@ fn a_caustic_is_counted_once_with_final_gathering() {
         quad { <-2, 0, -2>, <4, 0, 0>, <0, 0, 4>  material { diffuse rgb <0.8, 0.8, 0.8> } }
         sphere { <0, 0.55, 0>, 0.5  material { glass ior 1.5 } }
     "#;
-    let loaded = sppm_lang::load_source("caustic.scn", text, &Default::default());
+    let loaded = sppm_lang::internals::eval::load_source("caustic.scn", text, &Default::default());
     let scene = loaded.scene.expect("the caustic scene loads");
     let mut images = Vec::new();
     for final_gather in [false, true] {

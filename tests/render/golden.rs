@@ -117,11 +117,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::compare::{self, ImageView};
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{ColorParam, ColorSpace, Material, Scene, load_image};
-use sppm_lang::{EvalOptions, load_file};
+use sppm_lang::EvalOptions;
+use sppm_lang::Image;
+use sppm_lang::internals::compare::{self, ImageView};
+use sppm_lang::internals::eval::load_file;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::{ColorParam, ColorSpace, Material, Scene, load_image};
 
 /// Image width of every golden render; the height follows the scene's aspect ratio.
 const WIDTH: u32 = 64;

@@ -7,11 +7,14 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use glam::Vec3A;
-use sppm_lang::geometry::Ray;
-use sppm_lang::prepare::{PreparedScene, RenderOptions, effective_settings, estimate_memory};
-use sppm_lang::render::render;
-use sppm_lang::scene::Scene;
-use sppm_lang::{EvalOptions, load_file};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_file;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::prepare::{
+    PreparedScene, RenderOptions, effective_settings, estimate_memory,
+};
+use sppm_lang::internals::render::render;
+use sppm_lang::internals::scene::Scene;
 
 /// A UV sphere of radius 1 as OBJ text: `rings * segments * 2` triangles (minus the poles').
 fn sphere_obj(rings: u32, segments: u32) -> String {

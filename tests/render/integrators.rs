@@ -9,11 +9,11 @@ use std::sync::atomic::AtomicBool;
 
 use common::*;
 use glam::DVec3;
-use sppm_lang::film::Image;
-use sppm_lang::integrators::sppm::render_with_state;
-use sppm_lang::integrators::whitted::AMBIENT;
-use sppm_lang::render::{PreparedScene, RenderOptions, effective_settings, render};
-use sppm_lang::scene::{ColorParam, Integrator, Material, ScalarParam, Scene};
+use sppm_lang::Image;
+use sppm_lang::internals::integrators::sppm::render_with_state;
+use sppm_lang::internals::integrators::whitted::AMBIENT;
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, effective_settings, render};
+use sppm_lang::internals::scene::{ColorParam, Integrator, Material, ScalarParam, Scene};
 
 fn run(scene: &Scene, integrator: Integrator, iterations: u32, photons: u64, seed: u64) -> Image {
     let mut s = scene.clone();
@@ -266,7 +266,9 @@ fn every_example_renders_with_every_integrator() {
     names.sort();
     assert!(names.len() >= 6, "examples missing: {names:?}");
     for path in names {
-        let loaded = sppm_lang::load_file(&path, &sppm_lang::EvalOptions::default()).unwrap();
+        let loaded =
+            sppm_lang::internals::eval::load_file(&path, &sppm_lang::EvalOptions::default())
+                .unwrap();
         let mut scene = loaded
             .scene
             .unwrap_or_else(|| panic!("{} does not evaluate", path.display()));
@@ -304,7 +306,11 @@ fn rough_gold_renders_gold_in_every_integrator() {
                            material {{ diffuse rgb 0 }} }}
              sphere {{ <0, 0, 0>, 1 material {{ conductor \"Au\" roughness {roughness} }} }}"
         );
-        let loaded = sppm_lang::load_source("gold.scn", &text, &sppm_lang::EvalOptions::default());
+        let loaded = sppm_lang::internals::eval::load_source(
+            "gold.scn",
+            &text,
+            &sppm_lang::EvalOptions::default(),
+        );
         let scene = loaded.scene.expect("gold scene evaluates");
         for integrator in Integrator::ALL {
             // Light tracing reaches the unit sphere from the enclosing light by about one
@@ -345,7 +351,11 @@ fn blend_renders_the_weighted_mean_of_its_parts_in_every_integrator() {
              #declare Shiny = material {{ mirror rgb 0.9 }}
              quad {{ <-50, 0, -50>, <0, 0, 100>, <100, 0, 0> material {{ {ground} }} }}"
         );
-        let loaded = sppm_lang::load_source("blend.scn", &text, &sppm_lang::EvalOptions::default());
+        let loaded = sppm_lang::internals::eval::load_source(
+            "blend.scn",
+            &text,
+            &sppm_lang::EvalOptions::default(),
+        );
         let messages: Vec<_> = loaded
             .diagnostics
             .iter()
@@ -397,8 +407,11 @@ fn blend_renders_the_weighted_mean_of_its_parts_in_every_integrator() {
         sphere { <0, 0, 0>, 1 material { blend material { glass absorb 0.5 }, material { mirror }
                                           weight texture { checker 0, 1 scale 0.2 } } }
         plane { y, -1 material { blend material { diffuse 0.5 }, material { glass } weight 0.5 } }";
-    let loaded =
-        sppm_lang::load_source("blend_glass.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "blend_glass.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let messages: Vec<_> = loaded
         .diagnostics
         .iter()
@@ -429,8 +442,11 @@ fn vcm_renders_a_diffuse_mirror_blend_lit_through_a_mirror_as_path_tracing_does(
         quad { <-3, 0, -3>, <0, 0, 6>, <6, 0, 0>
                material { blend material { diffuse rgb <0.8, 0.7, 0.5> },
                                 material { mirror rgb 0.9 } weight 0.5 } }";
-    let loaded =
-        sppm_lang::load_source("blend_mirror.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "blend_mirror.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let messages: Vec<_> = loaded
         .diagnostics
         .iter()
@@ -519,7 +535,11 @@ fn a_thin_pane_in_a_furnace_transmits_and_reflects_all() {
          area_light { sphere { <0, 0, 0>, 10 } radiance rgb 1 two_sided
                       material { diffuse rgb 0 } }
          quad { <-2, -2, 0>, <4, 0, 0>, <0, 4, 0> material { glass ior 1.5 thin } }";
-    let loaded = sppm_lang::load_source("pane.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "pane.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let scene = loaded.scene.expect("pane scene evaluates");
     for integrator in Integrator::ALL {
         let m = mean(&run(&scene, integrator, 4, 4_000, 5));
@@ -540,7 +560,11 @@ fn an_orthographic_camera_projects_in_parallel_in_every_integrator() {
              camera {{ {camera} }}
              area_light {{ sphere {{ <0, 0, 0>, 1 }} radiance rgb 1 }}"
         );
-        let loaded = sppm_lang::load_source("ortho.scn", &text, &sppm_lang::EvalOptions::default());
+        let loaded = sppm_lang::internals::eval::load_source(
+            "ortho.scn",
+            &text,
+            &sppm_lang::EvalOptions::default(),
+        );
         let scene = loaded.scene.expect("orthographic scene evaluates");
         let img = run(&scene, integrator, 2, 2_000, 5);
         assert!(mean(&img) > 0.0, "{camera}, {integrator:?}: black");
@@ -570,9 +594,13 @@ fn an_orthographic_camera_projects_in_parallel_in_every_integrator() {
     assert!((15..=17).contains(&n), "fov 30: {n} pixels");
     let text = "camera { orthographic location <0, 0, -3> look_at <0, 0, 0> }
                 area_light { sphere { <0, 0, 0>, 1 } radiance rgb 1 }";
-    let scene = sppm_lang::load_source("ortho.scn", text, &sppm_lang::EvalOptions::default())
-        .scene
-        .expect("orthographic scene evaluates");
+    let scene = sppm_lang::internals::eval::load_source(
+        "ortho.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    )
+    .scene
+    .expect("orthographic scene evaluates");
     for integrator in Integrator::ALL.into_iter().filter(|i| !takes_ortho(i)) {
         let opts = RenderOptions {
             integrator: Some(integrator),
@@ -600,7 +628,11 @@ fn prisms_render_in_every_integrator() {
          prism { cubic_spline conic_sweep 0.5, 1, 8,
            <0, 0>, <0.5, 0>, <0, 0.5>, <-0.5, 0>, <0, -0.5>, <0.5, 0>, <0, 0.5>, <0, 0>
            translate <2.8, 0, 2.8> material { diffuse rgb 0.9 } }";
-    let loaded = sppm_lang::load_source("prism.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "prism.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let scene = loaded.scene.expect("prism scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 9);
@@ -627,7 +659,8 @@ fn superellipsoids_render_in_every_integrator() {
          superellipsoid { <1, 1> scale 0.4 translate <1.5, 1.5, 0> }
          superellipsoid { <3, 3> scale 0.6 translate <-1.5, -1.2, 0>
                           material { glass ior 1.5 } }";
-    let loaded = sppm_lang::load_source("se.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded =
+        sppm_lang::internals::eval::load_source("se.scn", text, &sppm_lang::EvalOptions::default());
     let scene = loaded.scene.expect("superellipsoid scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
@@ -655,7 +688,11 @@ fn blobs_and_isosurfaces_render_in_every_integrator() {
          isosurface { function { sqrt(x*x + y*y + z*z) } threshold 1
                       contained_by { box { <-0.8, -0.8, -0.8>, <0.8, 0.8, 0.8> } }
                       translate <2, 0, 0> material { diffuse rgb <0.05, 0.05, 0.8> } }";
-    let loaded = sppm_lang::load_source("blob.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "blob.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let scene = loaded.scene.expect("blob scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
@@ -700,9 +737,9 @@ fn height_fields_render_in_every_integrator() {
         image::ImageFormat::Png,
     )
     .unwrap();
-    let world = sppm_lang::world::MemoryWorld::new().with("t.png", bytes);
+    let world = sppm_lang::MemoryWorld::new().with("t.png", bytes);
     let options = sppm_lang::EvalOptions {
-        world: sppm_lang::world::SharedWorld::new(world),
+        world: sppm_lang::SharedWorld::new(world),
         ..sppm_lang::EvalOptions::default()
     };
     let text = "settings { resolution <24, 24> max_depth 6 }
@@ -712,7 +749,7 @@ fn height_fields_render_in_every_integrator() {
                         translate <-0.5, 0, -0.5> scale <3, 1, 3> material { diffuse rgb 0.3 } }
          height_field { png \"t.png\" water_level 0.2 translate <-0.5, 0, -0.5> scale 0.6
                         translate <0, 0.6, 0> material { glass ior 1.5 } }";
-    let loaded = sppm_lang::load_source("hf.scn", text, &options);
+    let loaded = sppm_lang::internals::eval::load_source("hf.scn", text, &options);
     let scene = loaded.scene.expect("height field scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
@@ -737,7 +774,11 @@ fn text_renders_in_every_integrator() {
          camera { location <0.376, 0.36, -3> look_at <0.376, 0.36, 0> fov 14 }
          background rgb 0.5
          text { ttf \"DejaVuSans.ttf\" \"HI\" 0.3, 0 material { diffuse rgb 0.2 } }";
-    let loaded = sppm_lang::load_source("text.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "text.scn",
+        text,
+        &sppm_lang::EvalOptions::default(),
+    );
     let scene = loaded.scene.expect("text scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
@@ -771,7 +812,8 @@ fn a_sphere_sweep_renders_in_every_integrator() {
 /// integrator with every pixel finite (checked in `run`), the window `lit` (x0, y0, x1, y1) lit
 /// and the window `grey` showing the background; returns the scene.
 fn lit_on_grey_in_every_integrator(text: &str, lit: [u32; 4], grey: [u32; 4]) -> Scene {
-    let loaded = sppm_lang::load_source("s.scn", text, &sppm_lang::EvalOptions::default());
+    let loaded =
+        sppm_lang::internals::eval::load_source("s.scn", text, &sppm_lang::EvalOptions::default());
     let scene = loaded.scene.expect("the scene evaluates");
     for integrator in Integrator::ALL {
         let img = run(&scene, integrator, 2, 5_000, 4);
@@ -1072,7 +1114,7 @@ fn lt_bpt_and_vcm_keep_the_sky_furnace() {
 #[test]
 #[ignore]
 fn bpt_bias_long_run() {
-    use sppm_lang::render::{prepare, render_prepared};
+    use sppm_lang::internals::render::{prepare, render_prepared};
     let seeds: u64 = std::env::var("SEEDS")
         .ok()
         .and_then(|s| s.parse().ok())

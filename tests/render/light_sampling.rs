@@ -7,12 +7,12 @@
 
 use glam::{DVec3, Vec3A};
 use sppm_lang::EvalOptions;
-use sppm_lang::geometry::Ray;
-use sppm_lang::integrators::direct_lighting;
-use sppm_lang::lights::{Light, LightSampling};
-use sppm_lang::render::{PreparedScene, RenderOptions, prepare};
-use sppm_lang::sampling::Rng;
-use sppm_lang::scene::Scene;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::integrators::direct_lighting;
+use sppm_lang::internals::lights::{Light, LightSampling};
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, prepare};
+use sppm_lang::internals::sampling::Rng;
+use sppm_lang::internals::scene::Scene;
 
 const ALBEDO: f64 = 0.8;
 const RADIANCE: f64 = 10.0;
@@ -24,7 +24,11 @@ fn scene(light: &str) -> Scene {
          plane {{ <0, 1, 0>, 0 material {{ diffuse rgb <{ALBEDO}, {ALBEDO}, {ALBEDO}> }} }}
          area_light {{ {light} radiance rgb <{RADIANCE}, {RADIANCE}, {RADIANCE}> }}"
     );
-    let loaded = sppm_lang::load_source("light_sampling.scn", &text, &EvalOptions::default());
+    let loaded = sppm_lang::internals::eval::load_source(
+        "light_sampling.scn",
+        &text,
+        &EvalOptions::default(),
+    );
     loaded.scene.expect("test scene loads")
 }
 

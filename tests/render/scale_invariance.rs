@@ -4,8 +4,9 @@
 
 use std::sync::atomic::AtomicBool;
 
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::{EvalOptions, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::eval::load_source;
+use sppm_lang::internals::render::{RenderOptions, render};
 
 /// A floor under an area light, with `objects` on it, the whole scaled by `s`.
 fn floor_scene(s: f64, side: u32, objects: &str) -> String {

@@ -3,9 +3,9 @@
 //! before any of them renders.
 
 use sppm_lang::Diagnostic;
-use sppm_lang::chart::Dash;
-use sppm_lang::render::{RenderOptions, prepare};
-use sppm_lang::scene::{DEFAULT_PHOTONS, Integrator, Scene};
+use sppm_lang::internals::chart::Dash;
+use sppm_lang::internals::render::{RenderOptions, prepare};
+use sppm_lang::internals::scene::{DEFAULT_PHOTONS, Integrator, Scene};
 
 /// A method on the chart: an integrator and its parameter changes, and how it is drawn.
 pub struct Method {
@@ -212,7 +212,7 @@ mod tests {
         let src = "settings { resolution <4, 4> photons 100000000000 }\n\
                    camera { location <0, 0, -5> look_at <0, 0, 0> }\n\
                    light { <0, 5, -5> intensity 10 }\nsphere { <0, 0, 0>, 1 }\n";
-        let loaded = sppm_lang::load_source("t.scn", src, &Default::default());
+        let loaded = sppm_lang::internals::eval::load_source("t.scn", src, &Default::default());
         let scene = loaded.scene.expect("the scene loads");
         let chosen = |labels: &[&str]| -> Vec<(Method, Scene)> {
             methods()

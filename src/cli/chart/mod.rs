@@ -22,9 +22,9 @@ use std::process::ExitCode;
 
 use clap::Args;
 use sppm_lang::SourceMap;
-use sppm_lang::compare::{ErrorStats, ImageView, Window, error};
-use sppm_lang::render::{InitialRadius, RenderOptions, effective_settings};
-use sppm_lang::scene::{ColorSpace, Scene, load_image};
+use sppm_lang::internals::compare::{ErrorStats, ImageView, Window, error};
+use sppm_lang::internals::render::{InitialRadius, RenderOptions, effective_settings};
+use sppm_lang::internals::scene::{ColorSpace, Scene, load_image};
 
 use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths};
@@ -161,7 +161,7 @@ fn chart(args: &ChartArgs) -> Result<ExitCode, String> {
         ));
     }
     let reference = load_image(reference_path, ColorSpace::Linear)?;
-    let loaded = sppm_lang::load_file(scene_path, &args.limits.options())
+    let loaded = sppm_lang::internals::eval::load_file(scene_path, &args.limits.options())
         .map_err(|e| e.with_path(scene_path))?;
     print_diagnostics(&loaded.sources, &loaded.diagnostics);
     let mut scene = match &loaded.scene {
@@ -410,7 +410,7 @@ mod tests {
     #[test]
     fn a_later_method_that_fails_leaves_the_earlier_rows_written() {
         let src = "settings { resolution <4, 4> }\nlight { <0, 5, -5> intensity 10 }\n";
-        let scene = sppm_lang::load_source("t.scn", src, &Default::default())
+        let scene = sppm_lang::internals::eval::load_source("t.scn", src, &Default::default())
             .scene
             .expect("the scene loads");
         let chosen: Vec<(Method, Scene)> = methods()

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use sppm_lang::chart::{ChartSpec, Floor, Series, draw};
+use sppm_lang::internals::chart::{ChartSpec, Floor, Series, draw};
 
 use super::{Errors, Row, rank_of, style_of};
 
@@ -46,8 +46,9 @@ pub struct Table {
 /// Reads a CSV written by [`write_outputs`].
 pub fn read_csv(path: &Path) -> Result<Table, String> {
     // As a scene is read: a FIFO would block, /dev/zero would fill the memory.
-    let text = sppm_lang::files::read_text(path, sppm_lang::files::MAX_SOURCE_BYTES)
-        .map_err(|e| e.with_path(path))?;
+    let text =
+        sppm_lang::internals::files::read_text(path, sppm_lang::internals::files::MAX_SOURCE_BYTES)
+            .map_err(|e| e.with_path(path))?;
     let mut table = Table {
         scene: String::new(),
         reference: String::new(),
@@ -300,7 +301,7 @@ pub fn write_outputs(output: &Path, table: &Table) -> Result<(), String> {
 }
 
 fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
-    sppm_lang::atomic_file::write_atomic(path, |_, f| {
+    sppm_lang::internals::atomic_file::write_atomic(path, |_, f| {
         f.write_all(text.as_bytes())
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
     })

@@ -6,10 +6,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use sppm_lang::Diagnostic;
-use sppm_lang::compare::{ImageView, Window, error};
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::Scene;
+use sppm_lang::Image;
+use sppm_lang::internals::compare::{ImageView, Window, error};
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::Scene;
 
 use super::methods::Method;
 use super::{Errors, Row};
@@ -118,7 +118,7 @@ pub fn measure(
     let mut overhead = 0.0f64;
     let mut measured = Vec::new();
     let mut failure = None;
-    let mut on_progress = |p: &sppm_lang::render::Progress| {
+    let mut on_progress = |p: &sppm_lang::internals::render::Progress| {
         let t = p.elapsed.as_secs_f64() - overhead;
         if next < checkpoints.len() && t >= checkpoints[next] {
             let t0 = Instant::now();

@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
 
 use bytes::Bytes;
-use sppm_lang::film::Image;
+use sppm_lang::Image;
 
 pub use access::Access;
 pub use view::{DiagnosticView, diagnostics_view};

@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use sppm_lang::diag::SourceFile;
+use sppm_lang::SourceFile;
 use sppm_lang::{Diagnostic, SourceMap};
 
 use super::Status;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use lsp_types as lsp;
 use sppm_lang::Severity;
-use sppm_lang::ide;
+use sppm_lang::internals::ide;
 
 /// The path a document's URI names: a `file:` URI's path (percent-decoded); for any other
 /// scheme (an unsaved `untitled:` buffer), a path made of the URI under a folder that does not

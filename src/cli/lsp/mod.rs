@@ -1,5 +1,5 @@
 //! `sppm-lang lsp`: a Language Server Protocol server over stdin and stdout. A thin loop over
-//! the library's editor support (`sppm_lang::ide`): it keeps the open documents, answers
+//! the library's editor support (`sppm_lang::internals::ide`): it keeps the open documents, answers
 //! requests on this thread (completion, hover, definition, references, symbols: each reads
 //! the text only) and leaves diagnostics, which evaluate the scene, to a worker thread.
 
@@ -14,8 +14,8 @@ use std::sync::Arc;
 
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types as lsp;
-use sppm_lang::ide::{self, LineIndex, Outline};
-use sppm_lang::world::{FileSystem, Overlay};
+use sppm_lang::internals::ide::{self, LineIndex, Outline};
+use sppm_lang::internals::world::{FileSystem, Overlay};
 
 use worker::{Open, Shared};
 

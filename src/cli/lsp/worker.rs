@@ -11,8 +11,8 @@ use crossbeam_channel::Sender;
 use lsp_server::{Message, Notification};
 use lsp_types::Uri;
 use sppm_lang::Cancel;
-use sppm_lang::ide::{self, CheckLimits};
-use sppm_lang::world::{FileSystem, Overlay, SharedWorld};
+use sppm_lang::internals::ide::{self, CheckLimits};
+use sppm_lang::internals::world::{FileSystem, Overlay, SharedWorld};
 
 /// How long the text must stay unchanged before it is checked.
 pub const DEBOUNCE: Duration = Duration::from_millis(200);

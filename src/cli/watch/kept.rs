@@ -63,7 +63,8 @@ mod tests {
     fn ids() -> (SceneId, SceneId) {
         let id = |bg: &str| {
             let text = format!("background rgb <{bg}, 0, 0>\n");
-            let loaded = sppm_lang::load_source("k.scn", &text, &EvalOptions::default());
+            let loaded =
+                sppm_lang::internals::eval::load_source("k.scn", &text, &EvalOptions::default());
             SceneId::of(loaded.scene.as_ref().expect("a scene"))
         };
         (id("1"), id("0.5"))

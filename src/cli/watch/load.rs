@@ -2,10 +2,11 @@
 
 use std::path::{Path, PathBuf};
 
-use sppm_lang::files::FileError;
-use sppm_lang::scene::{Background, Scene};
-use sppm_lang::span::Span;
-use sppm_lang::{Diagnostic, EvalOptions, Loaded, RangeOverride, SourceMap};
+use sppm_lang::FileError;
+use sppm_lang::Span;
+use sppm_lang::internals::eval::{Loaded, RangeOverride};
+use sppm_lang::internals::scene::{Background, Scene};
+use sppm_lang::{Diagnostic, EvalOptions, SourceMap};
 
 use super::super::check::print_diagnostics;
 use super::status;
@@ -39,10 +40,11 @@ pub fn load(path: &Path, options: &EvalOptions, frame: Option<(&RangeOverride, u
             diagnostics: Vec::new(),
         };
     }
-    let loaded = sppm_lang::load_file(path, options).and_then(|still| match frame {
-        Some((over, k)) => load_frame(path, options, still, over, k),
-        None => Ok(still),
-    });
+    let loaded =
+        sppm_lang::internals::eval::load_file(path, options).and_then(|still| match frame {
+            Some((over, k)) => load_frame(path, options, still, over, k),
+            None => Ok(still),
+        });
     match loaded {
         Ok(loaded) => {
             if !loaded.interrupted {
@@ -86,10 +88,7 @@ pub fn load(path: &Path, options: &EvalOptions, frame: Option<(&RangeOverride, u
                 scene: None,
                 dependencies: vec![path.to_path_buf()],
                 sources: SourceMap::default(),
-                diagnostics: vec![Diagnostic::error(
-                    sppm_lang::span::Span::detached(),
-                    message,
-                )],
+                diagnostics: vec![Diagnostic::error(sppm_lang::Span::detached(), message)],
             }
         }
     }
@@ -107,9 +106,10 @@ fn load_frame(
     let Some(scene) = still.scene.as_ref().filter(|_| !still.has_errors()) else {
         return Ok(still);
     };
-    let problem = match sppm_lang::frame_range(&scene.settings, over) {
+    let problem = match sppm_lang::internals::eval::frame_range(&scene.settings, over) {
         Ok(Some(range)) if range.frames().contains(&k) => {
-            let mut loaded = sppm_lang::load_frame(path, options, &still, over, &range, k)?;
+            let mut loaded =
+                sppm_lang::internals::eval::load_frame(path, options, &still, over, &range, k)?;
             for d in still.dependencies {
                 if !loaded.dependencies.contains(&d) {
                     loaded.dependencies.push(d);

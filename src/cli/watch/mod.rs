@@ -31,7 +31,7 @@ use std::thread::JoinHandle;
 use std::time::{Instant, SystemTime};
 
 use clap::Args;
-use sppm_lang::files::FileError;
+use sppm_lang::FileError;
 use sppm_lang::{Diagnostic, EvalOptions};
 
 use super::identity::SceneId;
@@ -156,8 +156,10 @@ impl Current {
 
 pub fn run(args: &WatchArgs) -> ExitCode {
     // Read as a load reads it: a folder, FIFO or device is named as such.
-    if let Err(e) = sppm_lang::files::open_regular(&args.scene, sppm_lang::files::MAX_SOURCE_BYTES)
-    {
+    if let Err(e) = sppm_lang::internals::files::open_regular(
+        &args.scene,
+        sppm_lang::internals::files::MAX_SOURCE_BYTES,
+    ) {
         let why = match &e {
             FileError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
                 format!("scene file `{}` does not exist", args.scene.display())
@@ -249,7 +251,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
         }
         // The previous files stay watched (and the render in flight goes on) during the load.
         let load_started = SystemTime::now();
-        let over = sppm_lang::RangeOverride {
+        let over = sppm_lang::internals::eval::RangeOverride {
             frames: args.frames,
             clock: args.clock,
         };
@@ -275,7 +277,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             Ok(()) => loaded.scene,
             Err(e) => {
                 status(&format!("error: {e}"));
-                let d = Diagnostic::error(sppm_lang::span::Span::detached(), e);
+                let d = Diagnostic::error(sppm_lang::Span::detached(), e);
                 diagnostics.extend(live::diagnostics_view(&loaded.sources, &[d]));
                 None
             }
@@ -286,7 +288,7 @@ pub fn run(args: &WatchArgs) -> ExitCode {
             Ok(()) => Some(s),
             Err(e) => {
                 status(&format!("error: {e}"));
-                let d = Diagnostic::error(sppm_lang::span::Span::detached(), e);
+                let d = Diagnostic::error(sppm_lang::Span::detached(), e);
                 diagnostics.extend(live::diagnostics_view(&loaded.sources, &[d]));
                 None
             }

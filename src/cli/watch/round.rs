@@ -7,10 +7,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use sppm_lang::Image;
 use sppm_lang::SourceMap;
-use sppm_lang::film::Image;
-use sppm_lang::render::{self, RenderOptions};
-use sppm_lang::scene::Scene;
+use sppm_lang::internals::render::{self, RenderOptions};
+use sppm_lang::internals::scene::Scene;
 
 use super::super::check::print_diagnostics;
 use super::super::live::{self, Hub};
@@ -74,9 +74,11 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
      -> Result<bool, String> {
         let wrote = r.on_disk.write_if_better(written, output.exists(), || {
             if (image.width, image.height) == full_size {
-                image.write(output, exposure)
+                image.write(output, exposure).map_err(|d| d.message)
             } else {
-                upscale(image, full_size).write(output, exposure)
+                upscale(image, full_size)
+                    .write(output, exposure)
+                    .map_err(|d| d.message)
             }
         });
         if let Some(hub) = &r.hub {
@@ -98,7 +100,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
             threads: r.threads,
             memory_limit: r.memory_limit,
             // The page's copies of the image, at the full size whatever the stage.
-            held_memory: r.hub.as_ref().map(|_| sppm_lang::prepare::MemoryItem {
+            held_memory: r.hub.as_ref().map(|_| sppm_lang::MemoryItem {
                 what: "live view",
                 bytes: live::reserved_memory(full_size.0, full_size.1),
             }),

@@ -3,7 +3,7 @@
 
 mod blob;
 mod csg;
-pub(in crate::eval) mod isosurface;
+pub(in crate::internals::eval) mod isosurface;
 
 pub(super) use isosurface::ContainedBy;
 mod height_field;

@@ -3,9 +3,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec2;
 
 use super::*;
+use crate::eval::{EvalOptions, load_file};
 use crate::prepare::{RenderOptions, effective_settings};
 use crate::scene::Scene;
-use crate::{EvalOptions, load_file};
 
 /// The Cornell example at `res` x `res` pixels with `photons` per iteration, seed 4.
 fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
@@ -419,12 +419,12 @@ mod census {
 
     use super::super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
     use crate::camera::Camera;
+    use crate::eval::{EvalOptions, load_file};
     use crate::integrators::common::camera_path::camera_path;
     use crate::integrators::common::photons::trace_photon;
     use crate::integrators::common::streams::Stream;
     use crate::prepare::{EffectiveSettings, PreparedScene, RenderOptions, effective_settings};
     use crate::scene::Scene;
-    use crate::{EvalOptions, load_file};
 
     fn example(name: &str) -> (Scene, EffectiveSettings) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))

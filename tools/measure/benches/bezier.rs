@@ -3,9 +3,9 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
-use sppm_lang::bezier::lathe::Lathe;
-use sppm_lang::bezier::patch::Patch;
-use sppm_lang::bezier::{Solver, Solver as PatchSolver};
+use sppm_lang::internals::bezier::lathe::Lathe;
+use sppm_lang::internals::bezier::patch::Patch;
+use sppm_lang::internals::bezier::{Solver, Solver as PatchSolver};
 use sppm_measure::bezier::{vase_profile, wavy_points};
 
 const RAYS: usize = 4096;

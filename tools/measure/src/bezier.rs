@@ -26,17 +26,17 @@ use std::time::Instant;
 use glam::{DAffine3, DVec2, DVec3};
 use rayon::prelude::*;
 
-use sppm_lang::accel::Bvh;
-use sppm_lang::bezier::lathe::Lathe;
-use sppm_lang::bezier::patch::Patch;
-use sppm_lang::chart::{ChartSpec, Series, draw, draw_panels};
-use sppm_lang::geometry::Ray;
-use sppm_lang::sampling::SplitMix64;
-use sppm_lang::scene::{IntersectMethod, Profile};
-use sppm_lang::shapes::mesh::mesh_triangles;
-use sppm_lang::shapes::patch::BezierPatch;
-use sppm_lang::shapes::primitive::AnyShape;
-use sppm_lang::shapes::revolve::Revolve;
+use sppm_lang::internals::accel::Bvh;
+use sppm_lang::internals::bezier::lathe::Lathe;
+use sppm_lang::internals::bezier::patch::Patch;
+use sppm_lang::internals::chart::{ChartSpec, Series, draw, draw_panels};
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::sampling::SplitMix64;
+use sppm_lang::internals::scene::{IntersectMethod, Profile};
+use sppm_lang::internals::shapes::mesh::mesh_triangles;
+use sppm_lang::internals::shapes::patch::BezierPatch;
+use sppm_lang::internals::shapes::primitive::AnyShape;
+use sppm_lang::internals::shapes::revolve::Revolve;
 
 use crate::reference::{self, RefHit};
 use crate::tessellate::{lathe_mesh, patch_mesh};
@@ -328,7 +328,7 @@ fn analytic(method: Method, shape: AnyShape) -> Subject {
 
 fn mesh_subject(
     method: Method,
-    tessellate: impl FnOnce() -> sppm_lang::scene::MeshData,
+    tessellate: impl FnOnce() -> sppm_lang::internals::scene::MeshData,
 ) -> Result<Subject, String> {
     let start = Instant::now();
     let mesh = tessellate();
@@ -788,7 +788,7 @@ pub fn write_outputs(rows: &[Row], output: &Path) -> Result<Vec<PathBuf>, String
     let mut written = Vec::new();
     let csv_path = output.with_extension("csv");
     let text = csv(rows);
-    sppm_lang::atomic_file::write_atomic(&csv_path, |_, f| {
+    sppm_lang::internals::atomic_file::write_atomic(&csv_path, |_, f| {
         use std::io::Write as _;
         f.write_all(text.as_bytes())
             .map_err(|e| format!("cannot write `{}`: {e}", csv_path.display()))

@@ -12,15 +12,15 @@ use std::time::Instant;
 
 use glam::{DVec2, DVec3, Vec3A};
 
-use sppm_lang::accel::Bvh;
-use sppm_lang::geometry::{Aabb, Ray};
-use sppm_lang::sampling::SplitMix64;
-use sppm_lang::scene::{IntersectMethod, Profile};
-use sppm_lang::shapes::Shape;
-use sppm_lang::shapes::patch::BezierPatch;
-use sppm_lang::shapes::primitive::AnyShape;
-use sppm_lang::shapes::quad::Quad;
-use sppm_lang::shapes::revolve::Revolve;
+use sppm_lang::internals::accel::Bvh;
+use sppm_lang::internals::geometry::{Aabb, Ray};
+use sppm_lang::internals::sampling::SplitMix64;
+use sppm_lang::internals::scene::{IntersectMethod, Profile};
+use sppm_lang::internals::shapes::Shape;
+use sppm_lang::internals::shapes::patch::BezierPatch;
+use sppm_lang::internals::shapes::primitive::AnyShape;
+use sppm_lang::internals::shapes::quad::Quad;
+use sppm_lang::internals::shapes::revolve::Revolve;
 
 use crate::bezier::{T_MIN, random_ray, vase_profile, wavy_points};
 

@@ -5,7 +5,7 @@
 //! a miss or a farther hit.
 
 use glam::DVec3;
-use sppm_lang::shapes::height_field::{Face, HeightField, WatertightRay};
+use sppm_lang::internals::shapes::height_field::{Face, HeightField, WatertightRay};
 
 pub struct RefHeightField {
     triangles: Vec<([DVec3; 3], Face)>,

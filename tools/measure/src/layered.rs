@@ -15,8 +15,8 @@
 //! The product's values are the mean sample weights of its own `Bsdf::sample`.
 
 use glam::{Vec2, Vec3A};
-use sppm_lang::materials::{Bsdf, Lobes, TransportMode};
-use sppm_lang::sampling::Rng;
+use sppm_lang::internals::materials::{Bsdf, Lobes, TransportMode};
+use sppm_lang::internals::sampling::Rng;
 
 /// Fresnel reflectance of a smooth dielectric interface for light arriving at `cos` (> 0)
 /// from the side where the relative index (far side over near side) is `eta`.

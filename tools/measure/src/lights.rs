@@ -13,12 +13,12 @@ use std::time::Instant;
 
 use glam::Vec3A;
 use sppm_lang::EvalOptions;
-use sppm_lang::geometry::Ray;
-use sppm_lang::integrators::direct_lighting;
-use sppm_lang::lights::{Light, LightSampling};
-use sppm_lang::render::{PreparedScene, RenderOptions, prepare};
-use sppm_lang::sampling::Rng;
-use sppm_lang::scene::Scene;
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::integrators::direct_lighting;
+use sppm_lang::internals::lights::{Light, LightSampling};
+use sppm_lang::internals::render::{PreparedScene, RenderOptions, prepare};
+use sppm_lang::internals::sampling::Rng;
+use sppm_lang::internals::scene::Scene;
 
 /// The two test scenes: `(name, scene text)`.
 pub const SCENES: [(&str, &str); 2] = [
@@ -57,7 +57,8 @@ impl Row {
 
 /// The scene text, loaded.
 pub fn scene(text: &str) -> Result<Scene, String> {
-    let loaded = sppm_lang::load_source("lights.scn", text, &EvalOptions::default());
+    let loaded =
+        sppm_lang::internals::eval::load_source("lights.scn", text, &EvalOptions::default());
     loaded
         .scene
         .ok_or_else(|| format!("test scene does not load: {:?}", loaded.diagnostics))

@@ -224,7 +224,7 @@ fn cost(args: &CostArgs) -> Result<(), String> {
 }
 
 fn lights(args: &LightsArgs) -> Result<(), String> {
-    use sppm_lang::lights::LightSampling;
+    use sppm_lang::internals::lights::LightSampling;
     let rows = sppm_measure::lights::run(args.size, args.rounds, args.per_round, &|line| {
         err(&format!("lights: {line}\n"))
     })?;

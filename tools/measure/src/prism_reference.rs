@@ -90,7 +90,7 @@ fn roots(c: &[f64; 4], tol: f64) -> Result<Vec<f64>, ()> {
 
 impl RefPrism {
     /// From the product's scene description (its Bezier segments).
-    pub fn new(p: &sppm_lang::scene::Prism) -> Self {
+    pub fn new(p: &sppm_lang::internals::scene::Prism) -> Self {
         let segs = p
             .segments
             .iter()

@@ -13,9 +13,9 @@
 
 use glam::{DVec2, DVec3};
 
-use sppm_lang::bezier::lathe::{Lathe, Part, RayFrame, Segment};
-use sppm_lang::bezier::roots::bracket::Refine;
-use sppm_lang::bezier::roots::{Root, RootKind};
+use sppm_lang::internals::bezier::lathe::{Lathe, Part, RayFrame, Segment};
+use sppm_lang::internals::bezier::roots::bracket::Refine;
+use sppm_lang::internals::bezier::roots::{Root, RootKind};
 
 /// Width in `s` below which the lathe reference gives up deciding.
 pub const AMBIGUOUS_WIDTH: f64 = 1e-11;
@@ -303,7 +303,7 @@ fn dd_bezier(c: &[f64], s: f64) -> Dd {
 /// it fixes `t` only to `leaf / sin(theta)`: when that exceeds 1e-7 of `t` the ray is flagged
 /// ambiguous (a near-tangent ray whose `t` no method can pin down to 1e-6).
 pub fn patch(
-    patch: &sppm_lang::bezier::patch::Patch,
+    patch: &sppm_lang::internals::bezier::patch::Patch,
     o: DVec3,
     d: DVec3,
     t_min: f64,

@@ -10,10 +10,10 @@
 use std::path::Path;
 use std::time::Instant;
 
-use sppm_lang::accel::Bvh;
-use sppm_lang::render::PreparedScene;
-use sppm_lang::scene::ShapeDecl;
-use sppm_lang::shapes::mesh::TriangleMesh;
+use sppm_lang::internals::accel::Bvh;
+use sppm_lang::internals::render::PreparedScene;
+use sppm_lang::internals::scene::ShapeDecl;
+use sppm_lang::internals::shapes::mesh::TriangleMesh;
 
 /// One step: its name, wall seconds and CPU seconds (summed over the process's threads).
 #[derive(Debug, Clone)]
@@ -84,7 +84,7 @@ pub fn run(obj: &Path, threads: usize) -> Result<Vec<Step>, String> {
         })?;
         drop(baseline);
         let loaded = timed("load the scene (eval, load_obj)", &mut steps, || {
-            sppm_lang::load_source("setup.scn", &text, &Default::default())
+            sppm_lang::internals::eval::load_source("setup.scn", &text, &Default::default())
         });
         let scene = loaded
             .scene

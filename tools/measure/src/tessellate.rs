@@ -4,16 +4,16 @@
 //! Both grids put their vertices on the exact surface (the mesh is inscribed), with the exact
 //! surface normal per vertex and the surface parameters as `uv`. Triangles that collapse (at a
 //! pole of a revolve, where a whole grid row is one point) come out degenerate and are dropped by
-//! [`sppm_lang::shapes::mesh::mesh_triangles`], as for any mesh file.
+//! [`sppm_lang::internals::shapes::mesh::mesh_triangles`], as for any mesh file.
 
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
 
-use sppm_lang::bezier::lathe::Lathe;
-use sppm_lang::bezier::patch::Patch;
-use sppm_lang::scene::MeshData;
+use sppm_lang::internals::bezier::lathe::Lathe;
+use sppm_lang::internals::bezier::patch::Patch;
+use sppm_lang::internals::scene::MeshData;
 
 /// Samples per segment used to estimate its arc length (for sharing rows between segments).
 const LENGTH_SAMPLES: usize = 64;
@@ -139,7 +139,7 @@ pub fn patch_mesh(patch: &Patch, rows: usize, cols: usize) -> MeshData {
 mod tests {
     use super::*;
     use glam::DAffine3;
-    use sppm_lang::shapes::mesh::mesh_triangles;
+    use sppm_lang::internals::shapes::mesh::mesh_triangles;
 
     fn cylinder() -> Lathe {
         Lathe::new(&[vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 2.0)]], None).unwrap()

@@ -11,9 +11,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use sppm_lang::bezier::lathe::Lathe;
-use sppm_lang::eval::{EvalOptions, load_file};
-use sppm_lang::scene::{MeshData, ShapeDecl};
+use sppm_lang::internals::bezier::lathe::Lathe;
+use sppm_lang::internals::eval::{EvalOptions, load_file};
+use sppm_lang::internals::scene::{MeshData, ShapeDecl};
 
 use crate::tessellate::lathe_mesh;
 

@@ -194,14 +194,14 @@ impl ObjectBuilder {
 
 /// The body of `contained_by { ... }`: one box or sphere.
 #[derive(Default)]
-pub(in crate::eval::blocks) struct ContainedBy {
+pub(in crate::internals::eval::blocks) struct ContainedBy {
     container: Option<(Container, Span)>,
 }
 
 static NO_PROPS: [PropSpec; 0] = [];
 
 impl ContainedBy {
-    pub(in crate::eval::blocks) fn finish(self, span: Span) -> SourceResult<Value> {
+    pub(in crate::internals::eval::blocks) fn finish(self, span: Span) -> SourceResult<Value> {
         let Some((c, _)) = self.container else {
             return Err(vec![
                 Error::new("`contained_by` needs a box or a sphere")
@@ -228,7 +228,7 @@ impl ContainedBy {
 }
 
 /// A `contained_by { ... }` anywhere but inside an isosurface (POV-Ray refuses it too).
-pub(in crate::eval) fn container_misplaced(span: Span) -> Diagnostic {
+pub(in crate::internals::eval) fn container_misplaced(span: Span) -> Diagnostic {
     Error::new("`contained_by` belongs inside an `isosurface`")
         .label("not inside an isosurface")
         .help(

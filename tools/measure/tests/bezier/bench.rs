@@ -1,7 +1,7 @@
 //! `sppm_measure::bezier` end to end on a small ray set: the measurement, its CSV and its charts.
 //! (The full run is `cargo run --release -p sppm-measure -- bezier`; its numbers are in docs/measurements.md.)
 
-use sppm_lang::chart::SIZE;
+use sppm_lang::internals::chart::SIZE;
 use sppm_measure::bezier::{Method, Options, Row, Surface, charts, csv, run, write_outputs};
 
 fn small() -> Options {

@@ -24,14 +24,15 @@ use std::path::Path;
 
 use glam::{Affine3A, Vec2};
 use rayon::prelude::*;
-use sppm_lang::bezier::lathe::Lathe;
-use sppm_lang::bezier::patch::Patch;
-use sppm_lang::camera::Camera;
-use sppm_lang::eval::Loaded;
-use sppm_lang::geometry::Ray;
-use sppm_lang::render::PreparedScene;
-use sppm_lang::scene::{Scene, ShapeDecl};
-use sppm_lang::{EvalOptions, load_file, load_source};
+use sppm_lang::EvalOptions;
+use sppm_lang::internals::bezier::lathe::Lathe;
+use sppm_lang::internals::bezier::patch::Patch;
+use sppm_lang::internals::camera::Camera;
+use sppm_lang::internals::eval::Loaded;
+use sppm_lang::internals::eval::{load_file, load_source};
+use sppm_lang::internals::geometry::Ray;
+use sppm_lang::internals::render::PreparedScene;
+use sppm_lang::internals::scene::{Scene, ShapeDecl};
 use sppm_measure::reference::{self, RefHit};
 
 const SIZE: u32 = 1024;

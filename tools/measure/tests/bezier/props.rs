@@ -5,9 +5,9 @@
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
-use sppm_lang::bezier::lathe::{Lathe, Part};
-use sppm_lang::bezier::patch::Patch;
-use sppm_lang::bezier::{Solver, Solver as PatchSolver};
+use sppm_lang::internals::bezier::lathe::{Lathe, Part};
+use sppm_lang::internals::bezier::patch::Patch;
+use sppm_lang::internals::bezier::{Solver, Solver as PatchSolver};
 use sppm_measure::bezier::{vase_profile, wavy_points};
 
 fn vase() -> Lathe {

@@ -8,11 +8,11 @@
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use sppm_lang::bezier::lathe::{Lathe, LatheHit, Part};
-use sppm_lang::bezier::patch::{Patch, PatchHit};
-use sppm_lang::bezier::{Solver, Solver as PatchSolver};
-use sppm_lang::sampling::SplitMix64;
-use sppm_lang::shapes::patch::PIECES;
+use sppm_lang::internals::bezier::lathe::{Lathe, LatheHit, Part};
+use sppm_lang::internals::bezier::patch::{Patch, PatchHit};
+use sppm_lang::internals::bezier::{Solver, Solver as PatchSolver};
+use sppm_lang::internals::sampling::SplitMix64;
+use sppm_lang::internals::shapes::patch::PIECES;
 use sppm_measure::bezier::{vase_profile, wavy_points};
 use sppm_measure::reference;
 
@@ -689,9 +689,9 @@ fn lathe_culling_rays_in_the_flat_planes() {
 mod prism_stress {
     use glam::{DVec2, DVec3};
     use rayon::prelude::*;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::scene::{Prism as ScenePrism, PrismSpline, prism_segments};
-    use sppm_lang::shapes::prism::{Prism, PrismPart};
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::scene::{Prism as ScenePrism, PrismSpline, prism_segments};
+    use sppm_lang::internals::shapes::prism::{Prism, PrismPart};
     use sppm_measure::prism_reference::RefPrism;
 
     /// Rays per case: 10 000 by default (the ten cases take about 15 s together in the dev
@@ -1010,8 +1010,8 @@ mod prism_stress {
 mod superellipsoid_stress {
     use glam::DVec3;
     use rayon::prelude::*;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::shapes::superellipsoid::Superellipsoid;
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::shapes::superellipsoid::Superellipsoid;
     use sppm_measure::superellipsoid_reference::RefSuperellipsoid;
 
     /// Rays per case: 3 000 by default (the reference samples every ray 4 000 times; the seven
@@ -1189,13 +1189,13 @@ mod blob_stress {
 
     use glam::{DAffine3, DQuat, DVec3};
     use rayon::prelude::*;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::scene::function::{Binary, Op, Unary};
-    use sppm_lang::scene::{
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::scene::function::{Binary, Op, Unary};
+    use sppm_lang::internals::scene::{
         Blob as SceneBlob, BlobComponent, Container, Function, Isosurface as SceneIso,
     };
-    use sppm_lang::shapes::blob::Blob;
-    use sppm_lang::shapes::isosurface::{DEFAULT_ACCURACY, Isosurface};
+    use sppm_lang::internals::shapes::blob::Blob;
+    use sppm_lang::internals::shapes::isosurface::{DEFAULT_ACCURACY, Isosurface};
     use sppm_measure::blob_reference::{RefBlob, RefComponent, first_sign_change};
 
     /// Rays per case: 4 000 by default (the references sample every ray thousands of times);
@@ -1718,9 +1718,9 @@ mod height_field_stress {
 
     use glam::DVec3;
     use rayon::prelude::*;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::scene::{self, HeightGrid};
-    use sppm_lang::shapes::height_field::HeightField;
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::scene::{self, HeightGrid};
+    use sppm_lang::internals::shapes::height_field::HeightField;
     use sppm_measure::height_field_reference::RefHeightField;
 
     /// Rays per case: 20 000 by default (the reference tests every one of about 50 000
@@ -1898,11 +1898,11 @@ mod height_field_stress {
 mod text_stress {
     use glam::{DVec2, DVec3, Vec3A};
     use rayon::prelude::*;
-    use sppm_lang::geometry::Ray;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::scene::text::text_glyphs;
-    use sppm_lang::shapes::Shape;
-    use sppm_lang::shapes::prism::Prism;
+    use sppm_lang::internals::geometry::Ray;
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::scene::text::text_glyphs;
+    use sppm_lang::internals::shapes::Shape;
+    use sppm_lang::internals::shapes::prism::Prism;
 
     const DEJAVU: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
@@ -1999,9 +1999,9 @@ mod sweep_stress {
 
     use glam::DVec3;
     use rayon::prelude::*;
-    use sppm_lang::sampling::SplitMix64;
-    use sppm_lang::scene::{SphereSweep as SceneSweep, SweepSpline};
-    use sppm_lang::shapes::sphere_sweep::SphereSweep;
+    use sppm_lang::internals::sampling::SplitMix64;
+    use sppm_lang::internals::scene::{SphereSweep as SceneSweep, SweepSpline};
+    use sppm_lang::internals::shapes::sphere_sweep::SphereSweep;
     use sppm_measure::sweep_reference::RefSweep;
 
     /// Rays per case: 4 000 by default (the reference samples each ray's spheres 2 000 times
