@@ -131,7 +131,9 @@ impl EffectiveSettings {
     /// The initial radius rule for a render of `camera` with these settings: the scene's
     /// `radius`, else [`RADIUS_FOOTPRINTS`] pixel footprints at each pixel's first visible
     /// point (a pixel spans `2 tan(fov / 2) / height` radians), times `radius_scale`; for an
-    /// orthographic camera, as many pixel heights of its view.
+    /// orthographic camera, as many pixel heights of its view. (Hidden from the root's
+    /// documentation: the camera is the crate's own scene model.)
+    #[doc(hidden)]
     pub fn initial_radius(&self, camera: &crate::scene::Camera) -> InitialRadius {
         if let Some(r) = self.radius {
             return InitialRadius::Fixed(r * self.radius_scale);
