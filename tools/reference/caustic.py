@@ -15,7 +15,7 @@ directly (`caustic.mask.exr` is 1 there), the path tracer's elsewhere. It prints
 
 Run from the repository root (the committed image: scalar_rgb, 64x64; see README.md):
     python3 -m venv .venv && .venv/bin/pip install mitsuba numpy
-    nice .venv/bin/python tools/reference/caustic.py [--ptracer-spp 65536] [--path-spp 65536]
+    nice .venv/bin/python tools/reference/caustic.py [--ptracer-spp 16384] [--path-spp 32768]
 
 Model mapping (README.md beside this file): the floor and wall are `rectangle`s with a
 two-sided `diffuse`; `glass ior 1.5` is `dielectric` (int_ior 1.5, ext_ior 1); the sphere
