@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod caustic_reference;
 mod glossy_reference;
 mod reference_image;
 mod render_accuracy;

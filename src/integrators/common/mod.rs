@@ -5,6 +5,7 @@
 pub(crate) mod camera_path;
 pub(crate) mod camera_samples;
 pub(crate) mod direct;
+pub(crate) mod footprint;
 pub(crate) mod photons;
 pub(crate) mod progressive;
 pub(crate) mod streams;

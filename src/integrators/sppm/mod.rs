@@ -5,7 +5,8 @@
 //! light; (2) a photon pass traces photons from the lights (chosen by power) and records where
 //! they arrive from the second surface on, in a hash grid whose cells are sized from the visible
 //! points' radii (a pixel's radius starts at its first visible point: the scene's `radius`, or
-//! 1.5 pixel footprints there, [`crate::prepare::InitialRadius`]); every visible point then gathers the photons within its radius (the BSDF at
+//! 1.5 pixel footprints there, [`crate::prepare::InitialRadius`], the footprint carried through
+//! mirrors and glass by `common/footprint.rs`); every visible point then gathers the photons within its radius (the BSDF at
 //! the point keeps only photons on the side it faces); (3) each pixel updates N, tau and its
 //! radius with alpha. Radiance = Ld / k + tau / (k N_e pi r^2). The deposits are the same as
 //! pbrt-v4's (photon looks up points); only the direction of the lookup differs (`grid.rs` says
@@ -32,6 +33,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::common::camera_path::{VisiblePoint, camera_path, gather_path};
+use super::common::footprint;
 use super::common::progressive::{Finished, iterate};
 use super::common::streams::Stream;
 use super::{Integrator, Progress, RenderOutput, RenderStats};
@@ -154,11 +156,24 @@ pub(crate) fn render_with(
                 if cancel.load(Ordering::Relaxed) {
                     return Vec3A::ZERO;
                 }
-                let mut rng = Stream::Camera.rng(seed, iter, i as u64);
+                let rng0 = Stream::Camera.rng(seed, iter, i as u64);
+                let mut rng = rng0.clone();
                 let (x, y) = (i as u32 % w, i as u32 / w);
                 let (l, vp) = eye_path(scene, &camera, settings, x, y, &mut rng);
+                // The radius follows the pixel's footprint along the path just traced (PPM's
+                // unbalanced eye rays run through the pixel's centre).
                 if px.radius == 0.0
-                    && let Some(r) = vp.and_then(|vp| initial_radius.at(f64::from(vp.distance)))
+                    && let Some(vp) = vp.as_ref()
+                    && let Some(r) = footprint::initial_radius(
+                        initial_radius,
+                        scene,
+                        &camera,
+                        settings,
+                        (x, y),
+                        !balanced,
+                        rng0,
+                        f64::from(vp.distance),
+                    )
                 {
                     px.radius = r;
                 }

@@ -1,0 +1,131 @@
+//! `tools/reference/caustic.scn` (a glass ball focusing two small sphere lights onto a diffuse
+//! floor) against Mitsuba 3 (`tools/reference/caustic.py`, `caustic.exr`, model mapping and
+//! the reference's own noise in `tools/reference/README.md`). Two windows: the first light's
+//! spot on the floor seen directly (the reference there is Mitsuba's particle tracer), and the
+//! second light's spot behind the ball, seen through the ball (Mitsuba's path tracer); the
+//! second window stops a row above a pixel holding a reflection of a light in the ball, whose
+//! noise would swamp the window's.
+//! Each window counts only the pixels of its class in `caustic.mask.exr` (1: every camera ray
+//! of the pixel sees the floor or the wall directly; 2: every one meets the ball).
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use sppm_lang::EvalOptions;
+use sppm_lang::film::Image;
+use sppm_lang::render::{RenderOptions, render};
+use sppm_lang::scene::{ColorSpace, ImageData, load_image};
+
+/// (x0, y0, x1, y1) half-open, in pixels of the 64x64 image, and the mask class counted: the
+/// same as `WINDOWS` in `tools/reference/caustic.py`.
+const DIRECT: ((usize, usize, usize, usize), f32) = ((22, 38, 38, 50), 1.0);
+const THROUGH: ((usize, usize, usize, usize), f32) = ((34, 3, 58, 13), 2.0);
+
+fn load(name: &str) -> ImageData {
+    let path = Path::new("tools/reference").join(name);
+    load_image(&path, ColorSpace::Linear).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// The sum of all channels over the window's pixels of its class, and their count.
+fn window_sum(
+    pixel: impl Fn(usize, usize) -> [f64; 3],
+    mask: &ImageData,
+    ((x0, y0, x1, y1), class): ((usize, usize, usize, usize), f32),
+) -> (f64, usize) {
+    let (mut sum, mut n) = (0.0, 0);
+    for y in y0..y1 {
+        for x in x0..x1 {
+            if mask.pixels[y * mask.width as usize + x][0] == class {
+                sum += pixel(x, y).iter().sum::<f64>();
+                n += 1;
+            }
+        }
+    }
+    (sum, n)
+}
+
+/// Our window mean over the reference's.
+fn ratio(img: &Image, window: ((usize, usize, usize, usize), f32)) -> f64 {
+    let (reference, mask) = (load("caustic.exr"), load("caustic.mask.exr"));
+    assert_eq!((img.width, img.height), (reference.width, reference.height));
+    let at = |x: usize, y: usize| reference.pixels[y * reference.width as usize + x].map(f64::from);
+    let ours = |x: usize, y: usize| img.get(x as u32, y as u32);
+    let (theirs, n) = window_sum(at, &mask, window);
+    let (mine, m) = window_sum(ours, &mask, window);
+    assert!(n > 0 && n == m);
+    mine / theirs
+}
+
+fn render_sppm(iterations: u32, photons: u64, seed: u64) -> Image {
+    let path = Path::new("tools/reference/caustic.scn");
+    let loaded = sppm_lang::load_file(path, &EvalOptions::default()).expect("caustic.scn reads");
+    let scene = loaded.scene.expect("caustic.scn evaluates");
+    let opts = RenderOptions {
+        iterations: Some(iterations),
+        photons: Some(photons),
+        seed: Some(seed),
+        ..Default::default()
+    };
+    render(&scene, &opts, &AtomicBool::new(false), &mut |_| {})
+        .expect("renders")
+        .image
+}
+
+/// Each window holds its spot: far brighter than the rest of its class.
+#[test]
+fn the_windows_hold_the_two_spots() {
+    let (reference, mask) = (load("caustic.exr"), load("caustic.mask.exr"));
+    let at = |x: usize, y: usize| reference.pixels[y * reference.width as usize + x].map(f64::from);
+    let mean = |w| {
+        let (sum, n) = window_sum(at, &mask, w);
+        assert!(n > 100, "{n} pixels in {w:?}");
+        sum / n as f64
+    };
+    let (direct, through) = (mean(DIRECT), mean(THROUGH));
+    let (floor, ball) = (mean(((0, 0, 64, 64), 1.0)), mean(((0, 0, 64, 64), 2.0)));
+    println!(
+        "direct {direct:.4} (floor and wall {floor:.4}), through {through:.4} (ball {ball:.4})"
+    );
+    // Measured: 4.0 and 2.05 times.
+    assert!(direct > 3.0 * floor && through > 1.5 * ball);
+}
+
+/// The default method (SPPM) on the two windows at 32 and 512 iterations.
+fn sppm_windows(iterations: u32, photons: u64) -> (f64, f64) {
+    let img = render_sppm(iterations, photons, 5);
+    let (d, b) = (ratio(&img, DIRECT), ratio(&img, THROUGH));
+    println!("sppm {iterations} iterations of {photons} photons: direct {d:.4}, through {b:.4}");
+    (d, b)
+}
+
+/// At 32 iterations the blur of the radius leaves both windows up to 1 % dark (two seeds at
+/// 800 000 photons: direct 0.992 and 0.991, through 0.996 and 0.996 of the reference's).
+#[test]
+fn sppm_caustic_windows_at_32_iterations() {
+    let (d, b) = sppm_windows(32, 800_000);
+    assert!(
+        (d - 1.0).abs() < 0.02,
+        "direct window {d:.4} of the reference's"
+    );
+    assert!(
+        (b - 1.0).abs() < 0.02,
+        "through window {b:.4} of the reference's"
+    );
+}
+
+#[test]
+#[ignore = "noise-bound: at 512 iterations of 50 000 photons (about 20 s) the windows read \
+            direct 1.0028 and 0.9915, through 0.9902 and 1.0002 of the reference's (seeds 5, \
+            6): the render's own noise is about 0.5 %, and the reference's is 0.18 % (direct) \
+            and 0.39 % (through); a 0.5 % check needs several times the photons"]
+fn sppm_caustic_windows_at_512_iterations() {
+    let (d, b) = sppm_windows(512, 50_000);
+    assert!(
+        (d - 1.0).abs() < 0.005,
+        "direct window {d:.4} of the reference's"
+    );
+    assert!(
+        (b - 1.0).abs() < 0.005,
+        "through window {b:.4} of the reference's"
+    );
+}
