@@ -43,11 +43,12 @@ pub struct Bvh {
     unbounded: Vec<(AnyShape, u32)>,
 }
 
-/// What a closest hit is on: a shape, or triangle `k` of a mesh.
+/// What a closest hit is on: a shape, or triangle `k` of a mesh (with the hit's barycentric
+/// coordinates of its second and third vertex).
 #[derive(Clone, Copy)]
 pub enum Surface<'a> {
     Shape(&'a AnyShape),
-    MeshTriangle(&'a TriangleMesh, usize),
+    MeshTriangle(&'a TriangleMesh, usize, [f32; 2]),
 }
 
 impl<'a> Surface<'a> {
@@ -56,9 +57,9 @@ impl<'a> Surface<'a> {
     pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
         match self {
             Surface::Shape(s) => s.hit_at_uv(ray, lazy, uv),
-            Surface::MeshTriangle(m, k) => match lazy {
+            Surface::MeshTriangle(m, k, b) => match lazy {
                 // A triangle's hit is always `T`.
-                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, ray, t),
+                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, t, *b),
                 LazyHit::Full(h) | LazyHit::Part(h, _) => h,
             },
         }
@@ -357,7 +358,11 @@ impl Bvh {
     ) -> Option<(LazyHit, Surface<'a>, u32)> {
         if c.triangle != u32::MAX {
             let (mesh, k, id) = self.meshes.locate(c.triangle);
-            return Some((LazyHit::T(t_max), Surface::MeshTriangle(mesh, k), id));
+            return Some((
+                LazyHit::T(t_max),
+                Surface::MeshTriangle(mesh, k, c.bary),
+                id,
+            ));
         }
         if c.shape == usize::MAX {
             return best;

@@ -49,6 +49,8 @@ pub(super) struct Closest {
     pub shape: usize,
     /// The mesh triangle hit (its global number; `u32::MAX`: none, or a shape).
     pub triangle: u32,
+    /// The mesh triangle hit's barycentric coordinates (of its second and third vertex).
+    pub bary: [f32; 2],
     /// The hit of a boxed shape or CSG tree (full, with its CSG part, or deferred); `None`
     /// for an analytic shape (only its `t` is known).
     pub boxed: Option<LazyHit>,
@@ -58,6 +60,7 @@ impl Closest {
     pub(super) const NONE: Self = Self {
         shape: usize::MAX,
         triangle: u32::MAX,
+        bary: [0.0; 2],
         boxed: None,
     };
 }
@@ -199,9 +202,10 @@ impl Leaves {
     ) {
         if leaf & PACKETS != 0 {
             for packet in self.direct_packets(leaf) {
-                if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
+                if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
                     *t_max = t;
                     c.triangle = g;
+                    c.bary = b;
                     c.shape = usize::MAX;
                 }
             }
@@ -209,9 +213,10 @@ impl Leaves {
         }
         let leaf = &self.leaves[leaf as usize];
         for packet in self.triangle_packets(leaf) {
-            if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
+            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
                 *t_max = t;
                 c.triangle = g;
+                c.bary = b;
                 c.shape = usize::MAX;
             }
         }

@@ -53,12 +53,13 @@ impl TrianglePacket {
         p
     }
 
-    /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`:
-    /// the same operations in the same order as the scalar [`Triangle`] test, so the same bits.
+    /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`
+    /// and barycentric coordinates: the same operations in the same order as the scalar
+    /// [`Triangle`] test, so the same bits.
     ///
     /// [`Triangle`]: crate::shapes::triangle::Triangle
     #[inline(always)]
-    fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4) {
+    fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4, [Vec4; 2]) {
         let d = [ray.d.x, ray.d.y, ray.d.z].map(Vec4::splat);
         let o = [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat);
         let pv = cross4(&d, &self.e2);
@@ -79,14 +80,15 @@ impl TrianglePacket {
             & !(b1 + b2).cmpgt(one)
             & t.cmpgt(Vec4::splat(t_min))
             & t.cmplt(Vec4::splat(t_max));
-        (mask, t)
+        (mask, t, [b1, b2])
     }
 
-    /// The nearest hit with `t_min < t < t_max`: its triangle and `t` (on equal `t`, the lowest
-    /// lane, as a scalar loop over the triangles in lane order would keep).
+    /// The nearest hit with `t_min < t < t_max`: its triangle, `t` and barycentric coordinates
+    /// (on equal `t`, the lowest lane, as a scalar loop over the triangles in lane order would
+    /// keep).
     #[inline]
-    pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32)> {
-        let (mask, t) = self.hits(ray, t_min, t_max);
+    pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32, [f32; 2])> {
+        let (mask, t, b) = self.hits(ray, t_min, t_max);
         if !mask.any() {
             return None;
         }
@@ -95,7 +97,7 @@ impl TrianglePacket {
         let lane = (t.cmpeq(Vec4::splat(best)) & mask)
             .bitmask()
             .trailing_zeros() as usize;
-        Some((self.ids[lane], best))
+        Some((self.ids[lane], best, [b[0][lane], b[1][lane]]))
     }
 
     /// Whether any triangle of the packet is hit with `t_min < t < t_max`.
@@ -162,7 +164,8 @@ mod tests {
     use crate::shapes::quad::packet_check;
     use crate::shapes::triangle::Triangle;
 
-    /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, and `t`),
+    /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, `t`, and the
+    /// nearest hit's barycentric coordinates),
     /// including rays through vertices and along edges, and the packet's nearest is the
     /// scalar loop's nearest.
     #[test]
@@ -191,7 +194,7 @@ mod tests {
             }
             let ray = Ray::new(o, d);
             let (t_min, t_max) = packet_check::t_range(i);
-            let (mask, t) = packet.hits(&ray, t_min, t_max);
+            let (mask, t, _) = packet.hits(&ray, t_min, t_max);
             // (Random triangles are never degenerate here: `Triangle::new` succeeds.)
             let scalar: Vec<Triangle> = tris
                 .iter()
@@ -200,8 +203,19 @@ mod tests {
             let best = packet_check::lanes(mask, t, count, (t_min, t_max), i, |k, lo, hi| {
                 scalar[k].hit_t(&ray, lo, hi)
             })
-            .map(|(lane, t)| (tris[lane].1, t));
-            assert_eq!(packet.hit_t(&ray, t_min, t_max), best, "case {i}");
+            .map(|(lane, t)| {
+                // The barycentric coordinates of the scalar test, bit for bit.
+                let (_, b1, b2) = scalar[lane].solve(&ray).expect("a hit lane solves");
+                (tris[lane].1, t, [b1, b2])
+            });
+            let bits = |h: Option<(u32, f32, [f32; 2])>| {
+                h.map(|(g, t, b)| (g, t.to_bits(), b.map(f32::to_bits)))
+            };
+            assert_eq!(
+                bits(packet.hit_t(&ray, t_min, t_max)),
+                bits(best),
+                "case {i}"
+            );
             assert_eq!(packet.occluded(&ray, t_min, t_max), best.is_some());
             hits += usize::from(best.is_some());
         }
