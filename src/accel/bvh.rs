@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
-use super::triangles::Meshes;
+use super::triangles::{Meshes, PairTest};
 use super::wide::{
     Avx, BoxRay, BoxTest, Halves, LEAF, WIDTH, WideNode, collapse, far_to_near, still_near,
 };
@@ -280,7 +280,7 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn closest_with<B: BoxTest>(
+    fn closest_with<B: BoxTest + PairTest>(
         &self,
         test: B,
         ray: &Ray,
@@ -306,7 +306,7 @@ impl Bvh {
         loop {
             if cur & LEAF != 0 {
                 self.leaves
-                    .closest(cur & !LEAF, ray, t_min, &mut t_max, &mut c);
+                    .closest(test, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mask, near) = test.hit(node, &boxes, t_min, t_max);
@@ -394,7 +394,13 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn occluded_with<B: BoxTest>(&self, test: B, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    fn occluded_with<B: BoxTest + PairTest>(
+        &self,
+        test: B,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         if self
             .unbounded
             .iter()
@@ -410,7 +416,7 @@ impl Bvh {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                if self.leaves.occluded(cur & !LEAF, ray, t_min, t_max) {
+                if self.leaves.occluded(test, cur & !LEAF, ray, t_min, t_max) {
                     return true;
                 }
             } else {
