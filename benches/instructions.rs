@@ -20,6 +20,17 @@
 //! valgrind ... <path> photon-pass-fixed   # radius 0.0111 (benches/pbrt_compare's)
 //! ```
 //!
+//! Mesh rays, the scale bench's displaced sphere of 10^5 triangles (`benches/scale.rs`): 65 536
+//! camera rays (a 256x256 view of it) or 65 536 diffuse bounces from their hits, each traced
+//! for the closest hit (with the full hit record, as `Bvh::intersect` returns it) and for any
+//! hit. The tracing loops are functions of their own: read their inclusive counts (the mesh's
+//! build and the ray sets are left out).
+//!
+//! ```text
+//! valgrind --tool=callgrind --callgrind-out-file=cg.out <path> mesh-camera   # or mesh-bounce
+//! callgrind_annotate --inclusive=yes cg.out | grep trace_
+//! ```
+//!
 //! `benches/photon_rate.sh` times the same pass on two builds.
 //!
 //! Without valgrind (`cargo bench --bench instructions`) both run once and print their result,
@@ -29,9 +40,13 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+#[path = "support/displaced.rs"]
+mod displaced;
 
 use std::sync::atomic::AtomicBool;
 
+use sppm_lang::internals::accel::Bvh;
+use sppm_lang::internals::geometry::Ray;
 use sppm_lang::internals::render::{PreparedScene, RenderOptions, render};
 
 fn rays() {
@@ -83,6 +98,48 @@ fn photon_pass(radius: Option<f64>) {
     );
 }
 
+/// Closest hits (full records) of `rays`: how many hit, and a sum of their points and
+/// normals (so that the record is computed, and two builds' results can be compared).
+#[inline(never)]
+fn trace_closest(bvh: &Bvh, rays: &[Ray]) -> (usize, f64) {
+    let mut sum = 0.0f64;
+    let mut hits = 0;
+    for ray in rays {
+        if let Some((h, _)) = bvh.intersect(ray, 0.0, f32::INFINITY) {
+            hits += 1;
+            sum += f64::from(h.t + h.p.element_sum() + h.n.element_sum() + h.ns.element_sum());
+        }
+    }
+    (hits, sum)
+}
+
+/// How many of `rays` hit anything.
+#[inline(never)]
+fn trace_any(bvh: &Bvh, rays: &[Ray]) -> usize {
+    rays.iter()
+        .filter(|ray| bvh.occluded(ray, 0.0, f32::INFINITY))
+        .count()
+}
+
+/// The `mesh-camera` (`bounce` false) or `mesh-bounce` workload.
+fn mesh_rays(bounce: bool) {
+    let mesh = displaced::displaced_sphere(100_000);
+    let bvh = displaced::mesh_bvh(displaced::triangle_mesh(&mesh));
+    let camera = displaced::camera_rays(256);
+    let rays = if bounce {
+        displaced::bounce_rays(&bvh, &camera, camera.len())
+    } else {
+        camera
+    };
+    let (hits, sum) = trace_closest(&bvh, &rays);
+    let any = trace_any(&bvh, &rays);
+    println!(
+        "mesh {}: {} rays, {hits} closest hits (sum {sum:.6}), {any} any hits",
+        if bounce { "bounce" } else { "camera" },
+        rays.len()
+    );
+}
+
 fn main() {
     // `cargo bench` passes `--bench`; ignore flags.
     let what: Vec<String> = std::env::args()
@@ -101,5 +158,11 @@ fn main() {
     }
     if all || what.iter().any(|w| w == "photon-pass-fixed") {
         photon_pass(Some(0.0111));
+    }
+    if all || what.iter().any(|w| w == "mesh-camera") {
+        mesh_rays(false);
+    }
+    if all || what.iter().any(|w| w == "mesh-bounce") {
+        mesh_rays(true);
     }
 }

@@ -35,119 +35,19 @@ use std::process::Command;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use glam::Vec3A;
 use sppm_lang::EvalOptions;
 use sppm_lang::internals::accel::Bvh;
 use sppm_lang::internals::chart::{ChartSpec, Dash, Series, draw_panels};
 use sppm_lang::internals::eval::load_file;
 use sppm_lang::internals::geometry::Ray;
 use sppm_lang::internals::render::{RenderOptions, render};
-use sppm_lang::internals::shapes::mesh::TriangleMesh;
+
+#[path = "support/displaced.rs"]
+mod displaced;
+use displaced::{Mesh, bounce_rays, camera_rays, displaced_sphere, mesh_bvh, triangle_mesh};
 
 const CAMERA_SIDE: u32 = 1024;
 const BOUNCE_RAYS: usize = 1 << 20;
-
-struct Mesh {
-    vertices: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
-}
-
-/// A UV sphere of about `n` triangles with smooth bumps of a tenth of its radius.
-fn displaced_sphere(n: usize) -> Mesh {
-    let rings = ((n as f64 / 4.0).sqrt().round() as u32).max(4);
-    let segments = (n as u32 / (2 * rings)).max(4);
-    let mut vertices = Vec::with_capacity(((rings + 1) * segments) as usize);
-    for i in 0..=rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segments {
-            let ph = std::f64::consts::TAU * j as f64 / segments as f64;
-            let r = 1.0
-                + 0.06 * (7.0 * th).sin() * (5.0 * ph).cos()
-                + 0.03 * (23.0 * th + 1.0).sin() * (17.0 * ph).sin();
-            vertices.push([
-                (r * th.sin() * ph.cos()) as f32,
-                (r * th.cos()) as f32,
-                (r * th.sin() * ph.sin()) as f32,
-            ]);
-        }
-    }
-    let idx = |i: u32, j: u32| i * segments + j % segments;
-    let mut triangles = Vec::with_capacity(n);
-    for i in 0..rings {
-        for j in 0..segments {
-            let (a, b, c, d) = (idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1));
-            if i > 0 {
-                triangles.push([a, b, c]);
-            }
-            if i + 1 < rings {
-                triangles.push([b, d, c]);
-            }
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
-
-/// The mesh as the renderer stores it: a shared vertex buffer and three indices per triangle.
-fn triangle_mesh(mesh: &Mesh) -> TriangleMesh {
-    TriangleMesh::from_buffers(mesh.vertices.clone(), &mesh.triangles)
-}
-
-fn mesh_bvh(mesh: TriangleMesh) -> Bvh {
-    Bvh::with_meshes(Vec::new(), vec![(mesh, 0)])
-}
-
-/// Camera rays from a pinhole at distance 2.4 whose view the mesh fills.
-fn camera_rays() -> Vec<Ray> {
-    let eye = Vec3A::new(0.0, 0.3, -2.4);
-    let forward = (-eye).normalize();
-    let right = Vec3A::Y.cross(forward).normalize();
-    let up = forward.cross(right);
-    let half = (25f32.to_radians()).tan();
-    let n = CAMERA_SIDE;
-    (0..n * n)
-        .map(|k| {
-            let (x, y) = (k % n, k / n);
-            let sx = (2.0 * (x as f32 + 0.5) / n as f32 - 1.0) * half;
-            let sy = (1.0 - 2.0 * (y as f32 + 0.5) / n as f32) * half;
-            Ray::new(eye, (forward + sx * right + sy * up).normalize())
-        })
-        .collect()
-}
-
-/// Diffuse bounces: from each camera hit (cycled), a cosine-distributed direction about the
-/// side of the surface the camera saw.
-fn bounce_rays(bvh: &Bvh, camera: &[Ray]) -> Vec<Ray> {
-    let hits: Vec<(Vec3A, Vec3A)> = camera
-        .iter()
-        .filter_map(|r| {
-            let (h, _) = bvh.intersect(r, 0.0, f32::INFINITY)?;
-            let n = if h.n.dot(r.d) < 0.0 { h.n } else { -h.n };
-            Some((h.p, n))
-        })
-        .collect();
-    assert!(!hits.is_empty(), "the camera sees the mesh");
-    let mut state = 0x2545f4914f6cdd1du64;
-    let mut rnd = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
-    (0..BOUNCE_RAYS)
-        .map(|k| {
-            let (p, n) = hits[k % hits.len()];
-            let (u1, u2) = (rnd(), rnd());
-            let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
-            let t = if n.x.abs() > 0.9 { Vec3A::Y } else { Vec3A::X };
-            let (a, b) = (t.cross(n).normalize(), n.cross(t.cross(n).normalize()));
-            let d = a * r * phi.cos() + b * r * phi.sin() + n * (1.0 - u1).max(0.0).sqrt();
-            Ray::new(p + n * 1e-4, d.normalize())
-        })
-        .collect()
-}
 
 fn write_mesh(path: &Path, mesh: &Mesh) {
     let mut out = Vec::with_capacity(8 + mesh.vertices.len() * 12 + mesh.triangles.len() * 12);
@@ -444,9 +344,9 @@ fn main() {
         std::fs::create_dir_all(&dir).unwrap();
         let mesh = displaced_sphere(size);
         let n = mesh.triangles.len();
-        let camera = camera_rays();
+        let camera = camera_rays(CAMERA_SIDE);
         let probe = mesh_bvh(triangle_mesh(&mesh));
-        let bounce = bounce_rays(&probe, &camera);
+        let bounce = bounce_rays(&probe, &camera, BOUNCE_RAYS);
         drop(probe);
         write_mesh(&dir.join("mesh.bin"), &mesh);
         write_rays(&dir.join("camera.bin"), &camera);

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
-use super::triangles::Meshes;
+use super::triangles::{Meshes, PairTest};
 use super::wide::{
     Avx, BoxRay, BoxTest, Halves, LEAF, WIDTH, WideNode, collapse, far_to_near, still_near,
 };
@@ -43,11 +43,12 @@ pub struct Bvh {
     unbounded: Vec<(AnyShape, u32)>,
 }
 
-/// What a closest hit is on: a shape, or triangle `k` of a mesh.
+/// What a closest hit is on: a shape, or triangle `k` of a mesh (with the hit's barycentric
+/// coordinates of its second and third vertex).
 #[derive(Clone, Copy)]
 pub enum Surface<'a> {
     Shape(&'a AnyShape),
-    MeshTriangle(&'a TriangleMesh, usize),
+    MeshTriangle(&'a TriangleMesh, usize, [f32; 2]),
 }
 
 impl<'a> Surface<'a> {
@@ -56,9 +57,9 @@ impl<'a> Surface<'a> {
     pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
         match self {
             Surface::Shape(s) => s.hit_at_uv(ray, lazy, uv),
-            Surface::MeshTriangle(m, k) => match lazy {
+            Surface::MeshTriangle(m, k, b) => match lazy {
                 // A triangle's hit is always `T`.
-                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, ray, t),
+                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, t, *b),
                 LazyHit::Full(h) | LazyHit::Part(h, _) => h,
             },
         }
@@ -279,7 +280,7 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn closest_with<B: BoxTest>(
+    fn closest_with<B: BoxTest + PairTest>(
         &self,
         test: B,
         ray: &Ray,
@@ -305,7 +306,7 @@ impl Bvh {
         loop {
             if cur & LEAF != 0 {
                 self.leaves
-                    .closest(cur & !LEAF, ray, t_min, &mut t_max, &mut c);
+                    .closest(test, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mask, near) = test.hit(node, &boxes, t_min, t_max);
@@ -357,7 +358,11 @@ impl Bvh {
     ) -> Option<(LazyHit, Surface<'a>, u32)> {
         if c.triangle != u32::MAX {
             let (mesh, k, id) = self.meshes.locate(c.triangle);
-            return Some((LazyHit::T(t_max), Surface::MeshTriangle(mesh, k), id));
+            return Some((
+                LazyHit::T(t_max),
+                Surface::MeshTriangle(mesh, k, c.bary),
+                id,
+            ));
         }
         if c.shape == usize::MAX {
             return best;
@@ -389,7 +394,13 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn occluded_with<B: BoxTest>(&self, test: B, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    fn occluded_with<B: BoxTest + PairTest>(
+        &self,
+        test: B,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         if self
             .unbounded
             .iter()
@@ -405,7 +416,7 @@ impl Bvh {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                if self.leaves.occluded(cur & !LEAF, ray, t_min, t_max) {
+                if self.leaves.occluded(test, cur & !LEAF, ray, t_min, t_max) {
                     return true;
                 }
             } else {

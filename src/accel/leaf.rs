@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::geometry::Ray;
 
 use super::build::Item;
-use super::triangles::{Meshes, TrianglePacket};
+use super::triangles::{Meshes, PairTest, TrianglePacket};
 use crate::shapes::primitive::{AnyShape, LazyHit};
 use crate::shapes::quad::{Quad, QuadPacket};
 
@@ -49,6 +49,8 @@ pub(super) struct Closest {
     pub shape: usize,
     /// The mesh triangle hit (its global number; `u32::MAX`: none, or a shape).
     pub triangle: u32,
+    /// The mesh triangle hit's barycentric coordinates (of its second and third vertex).
+    pub bary: [f32; 2],
     /// The hit of a boxed shape or CSG tree (full, with its CSG part, or deferred); `None`
     /// for an analytic shape (only its `t` is known).
     pub boxed: Option<LazyHit>,
@@ -58,6 +60,7 @@ impl Closest {
     pub(super) const NONE: Self = Self {
         shape: usize::MAX,
         triangle: u32::MAX,
+        bary: [0.0; 2],
         boxed: None,
     };
 }
@@ -179,18 +182,24 @@ impl Leaves {
         &self.tri_packets[leaf.tri_packet as usize..][..leaf.tris as usize]
     }
 
-    /// The triangle packets of a leaf referenced by its packets ([`PACKETS`]).
+    /// The triangle packets of a leaf referenced by its packets ([`PACKETS`]): one, or two
+    /// (`Err`).
     #[inline(always)]
-    fn direct_packets(&self, leaf: u32) -> &[TrianglePacket] {
+    fn direct_packets(&self, leaf: u32) -> Result<&TrianglePacket, &[TrianglePacket; 2]> {
         let first = (leaf & (TWO_PACKETS - 1)) as usize;
-        let n = 1 + usize::from(leaf & TWO_PACKETS != 0);
-        &self.tri_packets[first..][..n]
+        if leaf & TWO_PACKETS == 0 {
+            Ok(&self.tri_packets[first])
+        } else {
+            let pair = &self.tri_packets[first..][..2];
+            Err(pair.try_into().expect("a slice of two"))
+        }
     }
 
     /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
     #[inline(always)]
-    pub(super) fn closest(
+    pub(super) fn closest<P: PairTest>(
         &self,
+        test: P,
         leaf: u32,
         ray: &Ray,
         t_min: f32,
@@ -198,20 +207,24 @@ impl Leaves {
         c: &mut Closest,
     ) {
         if leaf & PACKETS != 0 {
-            for packet in self.direct_packets(leaf) {
-                if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
-                    *t_max = t;
-                    c.triangle = g;
-                    c.shape = usize::MAX;
-                }
+            let hit = match self.direct_packets(leaf) {
+                Ok(packet) => packet.hit_t(ray, t_min, *t_max),
+                Err(pair) => test.pair_hit_t(pair, ray, t_min, *t_max),
+            };
+            if let Some((g, t, b)) = hit {
+                *t_max = t;
+                c.triangle = g;
+                c.bary = b;
+                c.shape = usize::MAX;
             }
             return;
         }
         let leaf = &self.leaves[leaf as usize];
         for packet in self.triangle_packets(leaf) {
-            if let Some((g, t)) = packet.hit_t(ray, t_min, *t_max) {
+            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
                 *t_max = t;
                 c.triangle = g;
+                c.bary = b;
                 c.shape = usize::MAX;
             }
         }
@@ -252,13 +265,20 @@ impl Leaves {
 
     /// Whether anything in the leaf referenced by `leaf` is hit with `t_min < t < t_max`.
     #[inline(always)]
-    pub(super) fn occluded(&self, leaf: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    pub(super) fn occluded<P: PairTest>(
+        &self,
+        test: P,
+        leaf: u32,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         use crate::shapes::Shape;
         if leaf & PACKETS != 0 {
-            return self
-                .direct_packets(leaf)
-                .iter()
-                .any(|p| p.occluded(ray, t_min, t_max));
+            return match self.direct_packets(leaf) {
+                Ok(packet) => packet.occluded(ray, t_min, t_max),
+                Err(pair) => test.pair_occluded(pair, ray, t_min, t_max),
+            };
         }
         let leaf = &self.leaves[leaf as usize];
         let start = leaf.shapes as usize + leaf.quads as usize;

@@ -1,5 +1,6 @@
 //! Mesh triangles in the BVH's leaves: four to a packet, each as its first vertex and two edges
-//! in SoA form, tested four at a time by Möller–Trumbore. A packet holds what the test needs and
+//! in SoA form, tested four at a time by Möller–Trumbore (a leaf's two packets eight at a time
+//! where the CPU has AVX). A packet holds what the test needs and
 //! the triangles' numbers; the surface data of the closest hit comes from the mesh's shared
 //! buffers ([`TriangleMesh::hit_at`]).
 
@@ -53,12 +54,13 @@ impl TrianglePacket {
         p
     }
 
-    /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`:
-    /// the same operations in the same order as the scalar [`Triangle`] test, so the same bits.
+    /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`
+    /// and barycentric coordinates: the same operations in the same order as the scalar
+    /// [`Triangle`] test, so the same bits.
     ///
     /// [`Triangle`]: crate::shapes::triangle::Triangle
     #[inline(always)]
-    fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4) {
+    fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4, [Vec4; 2]) {
         let d = [ray.d.x, ray.d.y, ray.d.z].map(Vec4::splat);
         let o = [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat);
         let pv = cross4(&d, &self.e2);
@@ -79,14 +81,15 @@ impl TrianglePacket {
             & !(b1 + b2).cmpgt(one)
             & t.cmpgt(Vec4::splat(t_min))
             & t.cmplt(Vec4::splat(t_max));
-        (mask, t)
+        (mask, t, [b1, b2])
     }
 
-    /// The nearest hit with `t_min < t < t_max`: its triangle and `t` (on equal `t`, the lowest
-    /// lane, as a scalar loop over the triangles in lane order would keep).
+    /// The nearest hit with `t_min < t < t_max`: its triangle, `t` and barycentric coordinates
+    /// (on equal `t`, the lowest lane, as a scalar loop over the triangles in lane order would
+    /// keep).
     #[inline]
-    pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32)> {
-        let (mask, t) = self.hits(ray, t_min, t_max);
+    pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32, [f32; 2])> {
+        let (mask, t, b) = self.hits(ray, t_min, t_max);
         if !mask.any() {
             return None;
         }
@@ -95,13 +98,214 @@ impl TrianglePacket {
         let lane = (t.cmpeq(Vec4::splat(best)) & mask)
             .bitmask()
             .trailing_zeros() as usize;
-        Some((self.ids[lane], best))
+        Some((self.ids[lane], best, [b[0][lane], b[1][lane]]))
     }
 
     /// Whether any triangle of the packet is hit with `t_min < t < t_max`.
     #[inline]
     pub(crate) fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.hits(ray, t_min, t_max).0.any()
+    }
+}
+
+/// The triangle test of a leaf's two packets: [`Halves`] tests them one after the other,
+/// [`Avx`] tests their eight lanes at once. Both give the scalar test's bits, and the same
+/// nearest hit (on equal `t`, the first packet's lanes before the second's).
+///
+/// [`Halves`]: super::wide::Halves
+/// [`Avx`]: super::wide::Avx
+pub(crate) trait PairTest: Copy {
+    /// The nearest hit in `pair` with `t_min < t < t_max`, as [`TrianglePacket::hit_t`].
+    fn pair_hit_t(
+        self,
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])>;
+
+    /// Whether any triangle of `pair` is hit with `t_min < t < t_max`.
+    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool;
+}
+
+impl PairTest for super::wide::Halves {
+    #[inline(always)]
+    fn pair_hit_t(
+        self,
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])> {
+        let first = pair[0].hit_t(ray, t_min, t_max);
+        let limit = first.map_or(t_max, |h| h.1);
+        pair[1].hit_t(ray, t_min, limit).or(first)
+    }
+
+    #[inline(always)]
+    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        pair.iter().any(|p| p.occluded(ray, t_min, t_max))
+    }
+}
+
+impl PairTest for super::wide::Avx {
+    #[inline(always)]
+    fn pair_hit_t(
+        self,
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: an `Avx` value is made only after AVX was detected.
+            unsafe { avx::hit_t(pair, ray, t_min, t_max) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.pair_hit_t(pair, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: as above.
+            unsafe { avx::hits(pair, ray, t_min, t_max).0 != 0 }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.pair_occluded(pair, ray, t_min, t_max)
+    }
+}
+
+/// Two packets as eight AVX lanes: the operations of [`TrianglePacket::hits`], in the same
+/// order, with comparisons of the same NaN behaviour, so each lane gives the same bits.
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use std::arch::x86_64::*;
+
+    use super::TrianglePacket;
+    use crate::geometry::Ray;
+
+    type V3 = [__m256; 3];
+
+    /// The eight lanes' mask (bit `k`: lane `k`; the first packet's lanes are 0..4), `t` and
+    /// barycentric coordinates.
+    ///
+    /// # Safety
+    ///
+    /// The CPU must have AVX.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    pub(super) unsafe fn hits(
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> (u32, __m256, __m256, __m256) {
+        let [a, b] = pair;
+        let join = |x: glam::Vec4, y: glam::Vec4| {
+            _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x.into()), y.into())
+        };
+        let field = |f: fn(&TrianglePacket) -> &[glam::Vec4; 3]| -> V3 {
+            let (x, y) = (f(a), f(b));
+            [join(x[0], y[0]), join(x[1], y[1]), join(x[2], y[2])]
+        };
+        let (v0, e1, e2) = (field(|p| &p.v0), field(|p| &p.e1), field(|p| &p.e2));
+        let mul = |x, y| _mm256_mul_ps(x, y);
+        let add = |x, y| _mm256_add_ps(x, y);
+        let sub = |x, y| _mm256_sub_ps(x, y);
+        let dot = |x: &V3, y: &V3| add(add(mul(x[0], y[0]), mul(x[1], y[1])), mul(x[2], y[2]));
+        let cross = |x: &V3, y: &V3| -> V3 {
+            [
+                sub(mul(x[1], y[2]), mul(x[2], y[1])),
+                sub(mul(x[2], y[0]), mul(x[0], y[2])),
+                sub(mul(x[0], y[1]), mul(x[1], y[0])),
+            ]
+        };
+        let d = [ray.d.x, ray.d.y, ray.d.z].map(|c| _mm256_set1_ps(c));
+        let o = [ray.o.x, ray.o.y, ray.o.z].map(|c| _mm256_set1_ps(c));
+        let pv = cross(&d, &e2);
+        let det = dot(&e1, &pv);
+        let one = _mm256_set1_ps(1.0);
+        let inv = _mm256_div_ps(one, det);
+        let tv = [sub(o[0], v0[0]), sub(o[1], v0[1]), sub(o[2], v0[2])];
+        let b1 = mul(dot(&tv, &pv), inv);
+        let qv = cross(&tv, &e1);
+        let b2 = mul(dot(&d, &qv), inv);
+        let t = mul(dot(&e2, &qv), inv);
+        let zero = _mm256_setzero_ps();
+        let abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0), det);
+        // `cmpneq` and the negated `<`, `>` are true on NaN, the others false, as in
+        // `TrianglePacket::hits`.
+        let and = |x, y| _mm256_and_ps(x, y);
+        let mask = and(
+            and(
+                and(
+                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY)),
+                ),
+                and(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(b1, zero),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(b1, one),
+                ),
+            ),
+            and(
+                and(
+                    _mm256_cmp_ps::<_CMP_NLT_UQ>(b2, zero),
+                    _mm256_cmp_ps::<_CMP_NGT_UQ>(add(b1, b2), one),
+                ),
+                and(
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_set1_ps(t_min)),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_max)),
+                ),
+            ),
+        );
+        (_mm256_movemask_ps(mask) as u32, t, b1, b2)
+    }
+
+    /// [`TrianglePacket::hit_t`] over the eight lanes.
+    ///
+    /// # Safety
+    ///
+    /// The CPU must have AVX.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    pub(super) unsafe fn hit_t(
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])> {
+        // SAFETY: the caller's AVX.
+        let (mask, t, b1, b2) = unsafe { hits(pair, ray, t_min, t_max) };
+        if mask == 0 {
+            return None;
+        }
+        let mut ts = [0.0f32; 8];
+        // SAFETY: `ts` holds eight `f32`s.
+        unsafe { _mm256_storeu_ps(ts.as_mut_ptr(), t) };
+        // The lowest of the nearest lanes, as a scalar loop keeps.
+        let mut lane = mask.trailing_zeros() as usize;
+        let mut rest = mask & (mask - 1);
+        while rest != 0 {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if ts[k] < ts[lane] {
+                lane = k;
+            }
+        }
+        let (mut b1s, mut b2s) = ([0.0f32; 8], [0.0f32; 8]);
+        // SAFETY: as above.
+        unsafe {
+            _mm256_storeu_ps(b1s.as_mut_ptr(), b1);
+            _mm256_storeu_ps(b2s.as_mut_ptr(), b2);
+        }
+        Some((
+            pair[lane / 4].ids[lane % 4],
+            ts[lane],
+            [b1s[lane], b2s[lane]],
+        ))
     }
 }
 
@@ -162,7 +366,8 @@ mod tests {
     use crate::shapes::quad::packet_check;
     use crate::shapes::triangle::Triangle;
 
-    /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, and `t`),
+    /// Each lane gives the scalar triangle test's answer bit for bit (hit or not, `t`, and the
+    /// nearest hit's barycentric coordinates),
     /// including rays through vertices and along edges, and the packet's nearest is the
     /// scalar loop's nearest.
     #[test]
@@ -191,7 +396,7 @@ mod tests {
             }
             let ray = Ray::new(o, d);
             let (t_min, t_max) = packet_check::t_range(i);
-            let (mask, t) = packet.hits(&ray, t_min, t_max);
+            let (mask, t, _) = packet.hits(&ray, t_min, t_max);
             // (Random triangles are never degenerate here: `Triangle::new` succeeds.)
             let scalar: Vec<Triangle> = tris
                 .iter()
@@ -200,10 +405,78 @@ mod tests {
             let best = packet_check::lanes(mask, t, count, (t_min, t_max), i, |k, lo, hi| {
                 scalar[k].hit_t(&ray, lo, hi)
             })
-            .map(|(lane, t)| (tris[lane].1, t));
-            assert_eq!(packet.hit_t(&ray, t_min, t_max), best, "case {i}");
+            .map(|(lane, t)| {
+                // The barycentric coordinates of the scalar test, bit for bit.
+                let (_, b1, b2) = scalar[lane].solve(&ray).expect("a hit lane solves");
+                (tris[lane].1, t, [b1, b2])
+            });
+            let bits = |h: Option<(u32, f32, [f32; 2])>| {
+                h.map(|(g, t, b)| (g, t.to_bits(), b.map(f32::to_bits)))
+            };
+            assert_eq!(
+                bits(packet.hit_t(&ray, t_min, t_max)),
+                bits(best),
+                "case {i}"
+            );
             assert_eq!(packet.occluded(&ray, t_min, t_max), best.is_some());
             hits += usize::from(best.is_some());
+        }
+        assert!(hits > 5000, "{hits} of 20000 cases hit");
+    }
+
+    /// Two packets tested as eight AVX lanes give the nearest hit (triangle, `t` and
+    /// barycentric coordinates, bit for bit) and the occlusion of the two tested one after the
+    /// other, including rays through vertices and edges and ties between the packets.
+    #[test]
+    fn pairs_match_two_packets() {
+        use super::super::wide::{Avx, Halves};
+        let Some(avx) = Avx::detect() else { return };
+        let mut rng = Rng::new(9);
+        let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
+        let mut hits = 0;
+        for i in 0..20000 {
+            let count = 5 + i % 4;
+            let mut tris: Vec<([Vec3A; 3], u32)> = (0..count)
+                .map(|k| ([v(&mut rng), v(&mut rng), v(&mut rng)], 10 + k as u32))
+                .collect();
+            if i % 7 == 0 {
+                // The same triangle in both packets: a tie the first packet wins.
+                tris[4].0 = tris[1].0;
+            }
+            let pair = [
+                TrianglePacket::new(&tris[..4]),
+                TrianglePacket::new(&tris[4..]),
+            ];
+            let mut o = 2.0 * v(&mut rng);
+            let mut d = uniform_sphere(rng.vec2());
+            let p = tris[i % count].0;
+            match i % 10 {
+                0 => d = (p[1] - o).normalize(),
+                1 => d = (p[0] + 0.5 * (p[1] - p[0]) - o).normalize(),
+                2 => o = p[0] + 0.3 * (p[1] - p[0]),
+                3..=6 => {
+                    let (a, b) = (1.2 * rng.f32() - 0.1, 1.2 * rng.f32() - 0.1);
+                    d = (p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]) - o).normalize();
+                }
+                _ => {}
+            }
+            let ray = Ray::new(o, d);
+            let (t_min, t_max) = packet_check::t_range(i);
+            let bits = |h: Option<(u32, f32, [f32; 2])>| {
+                h.map(|(g, t, b)| (g, t.to_bits(), b.map(f32::to_bits)))
+            };
+            let want = Halves.pair_hit_t(&pair, &ray, t_min, t_max);
+            assert_eq!(
+                bits(avx.pair_hit_t(&pair, &ray, t_min, t_max)),
+                bits(want),
+                "case {i}"
+            );
+            assert_eq!(avx.pair_occluded(&pair, &ray, t_min, t_max), want.is_some());
+            assert_eq!(
+                Halves.pair_occluded(&pair, &ray, t_min, t_max),
+                want.is_some()
+            );
+            hits += usize::from(want.is_some());
         }
         assert!(hits > 5000, "{hits} of 20000 cases hit");
     }

@@ -6,7 +6,7 @@ use glam::{DAffine3, Vec2, Vec3A};
 use rayon::prelude::*;
 
 use super::triangle::Triangle;
-use crate::geometry::{Aabb, Hit, Ray};
+use crate::geometry::{Aabb, Hit};
 use crate::scene::MeshData;
 
 /// A mesh in the space its transform maps it to. Degenerate triangles are left out.
@@ -144,22 +144,72 @@ impl TriangleMesh {
             .collect()
     }
 
-    /// The full hit on triangle `k` at ray parameter `t` (a value its intersection returned):
-    /// identical to the stand-alone triangle's.
-    pub fn hit_at(&self, k: usize, ray: &Ray, t: f32) -> Hit {
-        use super::SplitShape;
-        match self.triangle(k) {
-            Ok(tri) => tri.hit_at(ray, t),
-            // Not reached: degenerate triangles are not stored.
-            Err(_) => Hit {
-                t,
-                p: ray.at(t),
-                n: Vec3A::Z,
-                ns: Vec3A::Z,
-                uv: Vec2::ZERO,
-                dpdu: Vec3A::X,
-            },
+    /// The full hit on triangle `k` at ray parameter `t` with barycentric coordinates `b`
+    /// (of its second and third vertex), the values its intersection test returned: read from
+    /// the buffers, with the operations of the stand-alone triangle's `hit_at` in the same
+    /// order, so the same bits, without building the triangle (its area, its normals' checks
+    /// and the intersection test over again).
+    pub fn hit_at(&self, k: usize, t: f32, b: [f32; 2]) -> Hit {
+        let idx = self.indices[k].map(|i| i as usize);
+        let p = idx.map(|i| Vec3A::from(self.positions[i]));
+        let e1 = p[1] - p[0];
+        let e2 = p[2] - p[0];
+        let c = e1.cross(e2);
+        // (Stored triangles are not degenerate: the length is finite and positive.)
+        let n = c / crate::geometry::scaled_length(c);
+        let [b1, b2] = b;
+        let b0 = 1.0 - b1 - b2;
+        let point = p[0] * b0 + p[1] * b1 + p[2] * b2;
+        let ns = match self.vertex_normals(idx) {
+            Some(ns) => {
+                let s = (ns[0] * b0 + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
+                if s == Vec3A::ZERO {
+                    n
+                } else if s.dot(n) < 0.0 {
+                    // Keep the shading normal on the geometric normal's side.
+                    (s - n * (2.0 * s.dot(n))).normalize()
+                } else {
+                    s
+                }
+            }
+            None => n,
+        };
+        let uvs = if self.uvs.is_empty() {
+            [Vec2::ZERO, Vec2::X, Vec2::Y]
+        } else {
+            idx.map(|i| self.uvs[i])
+        };
+        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
+        // dp/du from the uv parameterisation when it is not degenerate.
+        let duv1 = uvs[1] - uvs[0];
+        let duv2 = uvs[2] - uvs[0];
+        let d = duv1.x * duv2.y - duv1.y * duv2.x;
+        let dpdu = if d.abs() > 1e-12 {
+            (e1 * duv2.y - e2 * duv1.y) / d
+        } else {
+            e1
+        };
+        Hit {
+            t,
+            p: point,
+            n,
+            ns,
+            uv,
+            dpdu,
         }
+    }
+
+    /// The vertex normals `idx` name, normalised, when the mesh has normals and all three are
+    /// usable (as [`Triangle::new`] takes them).
+    #[inline]
+    fn vertex_normals(&self, idx: [usize; 3]) -> Option<[Vec3A; 3]> {
+        if self.normals.is_empty() {
+            return None;
+        }
+        let ns = idx.map(|i| Vec3A::from(self.normals[i]));
+        ns.iter()
+            .all(|v| v.is_finite() && v.length() > 0.0)
+            .then(|| ns.map(|v| v.normalize()))
     }
 
     /// Bytes of the buffers.

@@ -40,7 +40,7 @@ impl Triangle {
 impl Triangle {
     /// Möller–Trumbore: `(t, b1, b2)` when the ray crosses the triangle (any `t`).
     #[inline]
-    fn solve(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
+    pub(crate) fn solve(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
         let e1 = self.p[1] - self.p[0];
         let e2 = self.p[2] - self.p[0];
         let pv = ray.d.cross(e2);

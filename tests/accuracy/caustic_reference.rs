@@ -12,9 +12,9 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use sppm_lang::EvalOptions;
-use sppm_lang::film::Image;
-use sppm_lang::render::{RenderOptions, render};
-use sppm_lang::scene::{ColorSpace, ImageData, load_image};
+use sppm_lang::Image;
+use sppm_lang::internals::render::{RenderOptions, render};
+use sppm_lang::internals::scene::{ColorSpace, ImageData, load_image};
 
 /// (x0, y0, x1, y1) half-open, in pixels of the 64x64 image, and the mask class counted: the
 /// same as `WINDOWS` in `tools/reference/caustic.py`.
@@ -58,7 +58,8 @@ fn ratio(img: &Image, window: ((usize, usize, usize, usize), f32)) -> f64 {
 
 fn render_sppm(iterations: u32, photons: u64, seed: u64) -> Image {
     let path = Path::new("tools/reference/caustic.scn");
-    let loaded = sppm_lang::load_file(path, &EvalOptions::default()).expect("caustic.scn reads");
+    let loaded = sppm_lang::internals::eval::load_file(path, &EvalOptions::default())
+        .expect("caustic.scn reads");
     let scene = loaded.scene.expect("caustic.scn evaluates");
     let opts = RenderOptions {
         iterations: Some(iterations),

@@ -140,8 +140,9 @@ fn perpendicular_width(a: Vec3A, b: Vec3A, d: Vec3A) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::EvalOptions;
+    use crate::eval::load_file;
     use crate::prepare::{RenderOptions, effective_settings};
-    use crate::{EvalOptions, load_file};
 
     /// On `tools/reference/caustic.scn` (a glass ball over a floor): the ratio is 1 wherever
     /// the camera sees the floor or the wall directly, and through the ball it is what the
