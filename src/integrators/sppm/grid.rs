@@ -223,14 +223,7 @@ impl Level {
     #[inline]
     fn bucket(&self, p: Vec3A) -> u32 {
         let c = (p - self.bounds.min) * self.inv_cell;
-        // Axis by axis, not `[0, 1, 2].map(..)`: the array map was left a call of ~70
-        // instructions per filed photon.
-        let cell = |v: f32, res: i32| (v as i32).clamp(0, res - 1);
-        let (x, y, z) = (
-            cell(c.x, self.res[0]),
-            cell(c.y, self.res[1]),
-            cell(c.z, self.res[2]),
-        );
+        let [x, y, z] = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, self.res[a] - 1));
         row(y, z, self.bits) + x as u32
     }
 
