@@ -55,8 +55,8 @@ impl LightBounds {
             let near = t0.min(t1).max_element().max(0.0);
             let far = t0.max(t1).min_element();
             // Not `near <= far`: a NaN (a zero direction component with the origin on a
-            // slab's plane) keeps the ray.
-            !(near > far * 1.000_01 + 1e-30)
+            // slab's plane) compares as nothing and keeps the ray.
+            near.partial_cmp(&(far * 1.000_01 + 1e-30)) != Some(std::cmp::Ordering::Greater)
         })
     }
 }
