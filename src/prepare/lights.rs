@@ -1,5 +1,6 @@
 //! Building the lights of a prepared scene that are not emissive shapes: point and spot
-//! lights, validated, and the environment light of a non-black background.
+//! lights, validated, and the environment light of a non-black background; and the boxes
+//! around the emissive shapes ([`LightBounds`]).
 
 use glam::Vec3A;
 
@@ -7,10 +8,58 @@ use super::PreparedScene;
 use super::shapes::v;
 use crate::accel::Bvh;
 use crate::diag::Diagnostic;
+use crate::geometry::{Aabb, Ray};
 use crate::lights::{EnvironmentLight, GroundPhotons, Light, PointLight, Sky, SpotLight};
 use crate::scene::{self, Scene};
 use crate::shapes::Shape;
 use crate::textures;
+
+/// Boxes around the primitives of the area lights, padded: a ray that misses them all cannot
+/// end on an area light. Direct lighting's BSDF sample adds light only where its ray ends on
+/// one (or, with an environment light, escapes), so it skips the closest-hit search for the
+/// others: in the Cornell box most of them (that search was a third of a camera path's cost).
+#[derive(Debug, Clone, Default)]
+pub(super) struct LightBounds {
+    boxes: Vec<Aabb>,
+}
+
+/// The most boxes kept apart; more lights share one box around them all.
+const LIGHT_BOXES: usize = 8;
+
+impl LightBounds {
+    /// The boxes of the emissive primitives' `bounds` (one per primitive).
+    pub(super) fn new(bounds: Vec<Aabb>) -> Self {
+        let mut boxes = bounds;
+        if boxes.len() > LIGHT_BOXES {
+            let all = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            boxes = vec![all];
+        }
+        // Padded well beyond rounding (a shape's hit point, the slab test's arithmetic): the
+        // test must never miss a box the closest hit lies in. A box that is not finite keeps
+        // every ray (a NaN or infinite bound compares false below).
+        for b in &mut boxes {
+            let reach = b.min.abs().max(b.max.abs()).max_element();
+            let pad = 1e-3 * b.diagonal().max_element() + 1e-5 * reach + 1e-6;
+            *b = Aabb::new(b.min - Vec3A::splat(pad), b.max + Vec3A::splat(pad));
+        }
+        LightBounds { boxes }
+    }
+
+    /// Whether `ray` (from its origin on, without end) may meet a box.
+    #[inline]
+    pub(super) fn may_reach(&self, ray: &Ray) -> bool {
+        let inv = ray.d.recip();
+        self.boxes.iter().any(|b| {
+            let t0 = (b.min - ray.o) * inv;
+            let t1 = (b.max - ray.o) * inv;
+            let near = t0.min(t1).max_element().max(0.0);
+            let far = t0.max(t1).min_element();
+            // Not `near <= far`: a NaN (a zero direction component with the origin on a
+            // slab's plane) compares as nothing and keeps the ray.
+            near.partial_cmp(&(far * 1.000_01 + 1e-30)) != Some(std::cmp::Ordering::Greater)
+        })
+    }
+}
 
 /// Appends the scene's point and spot lights to `lights`.
 pub(super) fn push_scene_lights(scene: &Scene, lights: &mut Vec<Light>) -> Result<(), Diagnostic> {

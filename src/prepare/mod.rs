@@ -61,6 +61,8 @@ pub struct PreparedScene<'a> {
     pub prim_object: Vec<u32>,
     /// Area light of each primitive id, or `u32::MAX`.
     pub prim_light: Vec<u32>,
+    /// Boxes around the area lights' primitives ([`Self::may_hit_light`]).
+    light_bounds: lights::LightBounds,
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
     /// How direct lighting chooses a light: by power, except a uniform background, which is
@@ -289,6 +291,7 @@ impl<'a> PreparedScene<'a> {
         let mut prim_object = Vec::new();
         let mut prim_light = Vec::new();
         let mut lights = Vec::new();
+        let mut light_boxes = Vec::new();
         let mut objects = Vec::with_capacity(scene.objects.len());
         let mut instancer = instances::Instancer::new(scene);
         let mut orientation = orient::Orientation::default();
@@ -402,6 +405,7 @@ impl<'a> PreparedScene<'a> {
                         ));
                     }
                     light = lights.len() as u32;
+                    light_boxes.push(s.bounds());
                     lights.push(Light::Area(AreaLight {
                         shape: ls,
                         radiance: color3(e.radiance),
@@ -457,6 +461,7 @@ impl<'a> PreparedScene<'a> {
             bvh,
             prim_object,
             prim_light,
+            light_bounds: lights::LightBounds::new(light_boxes),
             objects,
             lights,
             light_distr,
@@ -550,6 +555,14 @@ impl<'a> PreparedScene<'a> {
     fn reads_uv(&self, prim: u32) -> bool {
         let m = self.prim_material[prim as usize] as usize;
         self.textured.get(m).copied().unwrap_or(true)
+    }
+
+    /// Whether the closest hit of `ray` may be on an area light: false only where the ray
+    /// misses every (padded) box around the lights' primitives. A ray for which this is false
+    /// ends on no light whatever [`Self::intersect`] finds (if anything).
+    #[inline]
+    pub fn may_hit_light(&self, ray: &Ray) -> bool {
+        self.light_bounds.may_reach(ray)
     }
 
     #[inline]

@@ -216,3 +216,45 @@ fn solid_angle_sampling_cuts_the_variance() {
         }
     }
 }
+
+/// `may_hit_light` (direct lighting's BSDF sample skips its ray cast where it says no) never
+/// turns away a ray whose closest hit is on an area light, and turns away most others: rays
+/// from random points of the Cornell box in random directions, and rays aimed at points just
+/// inside and just outside the light's edges (grazing its box).
+#[test]
+fn rays_that_end_on_a_light_are_never_turned_away() {
+    let scene = crate::common::cornell_glass(16);
+    let prepared = PreparedScene::new(&scene).expect("cornell scene");
+    assert!(prepared.environment_light().is_none());
+    let mut rays = crate::common::cornell_rays(100_000);
+    // The light is the square x, z in [-0.25, 0.25] at y = 1.98: aim at its edges.
+    let mut rng = Rng::new(3);
+    for _ in 0..100_000 {
+        let o = Vec3A::new(
+            rng.f32() * 1.8 - 0.9,
+            rng.f32() * 1.9,
+            rng.f32() * 1.8 - 0.9,
+        );
+        let along = rng.f32() * 0.6 - 0.3;
+        let across = 0.25 + (rng.f32() - 0.5) * 2e-3;
+        let side = if rng.f32() < 0.5 { across } else { -across };
+        let target = if rng.f32() < 0.5 {
+            Vec3A::new(along, 1.98, side)
+        } else {
+            Vec3A::new(side, 1.98, along)
+        };
+        rays.push(Ray::new(o, (target - o).normalize()));
+    }
+    let (mut on_light, mut turned_away) = (0, 0);
+    for ray in &rays {
+        let ends_on_light = prepared
+            .intersect(ray, f32::INFINITY)
+            .is_some_and(|h| prepared.area_light(h.prim).is_some());
+        let may = prepared.may_hit_light(ray);
+        assert!(may || !ends_on_light, "{ray:?} ends on the light");
+        on_light += usize::from(ends_on_light);
+        turned_away += usize::from(!may);
+    }
+    assert!(on_light > 10_000, "{on_light} rays on the light");
+    assert!(turned_away > rays.len() / 4, "{turned_away} turned away");
+}

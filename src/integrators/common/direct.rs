@@ -51,27 +51,33 @@ pub fn direct_lighting(
         && !bs.specular
     {
         let ray = scene.spawn_ray(p, n, bs.wi);
-        match scene.intersect(&ray, f32::INFINITY) {
-            Some(h2) => {
-                if let Some((li, al)) = scene.area_light(h2.prim) {
-                    let le = al.le(h2.hit.n, -bs.wi);
-                    if le != Vec3A::ZERO {
-                        let light_pdf = scene.light_distr.pdf(li)
-                            * al.pdf_li_from(p, h2.hit.p, h2.hit.n, on_light(li));
-                        let medium = medium_after(scene, sh, wo, bs.wi, medium);
-                        let absorbed = transmittance(medium, h2.hit.t * ray.d.length());
-                        l += bs.weight * le * absorbed * power_heuristic(bs.pdf, light_pdf);
+        // Only a light adds here: an area light the ray ends on, or the environment light it
+        // escapes to. Without an environment light, a ray that misses every area light's box
+        // is done without a closest-hit search.
+        let env = scene.environment_light();
+        if env.is_some() || scene.may_hit_light(&ray) {
+            match scene.intersect(&ray, f32::INFINITY) {
+                Some(h2) => {
+                    if let Some((li, al)) = scene.area_light(h2.prim) {
+                        let le = al.le(h2.hit.n, -bs.wi);
+                        if le != Vec3A::ZERO {
+                            let light_pdf = scene.light_distr.pdf(li)
+                                * al.pdf_li_from(p, h2.hit.p, h2.hit.n, on_light(li));
+                            let medium = medium_after(scene, sh, wo, bs.wi, medium);
+                            let absorbed = transmittance(medium, h2.hit.t * ray.d.length());
+                            l += bs.weight * le * absorbed * power_heuristic(bs.pdf, light_pdf);
+                        }
                     }
                 }
-            }
-            // A non-black background is the environment light: weigh its BSDF sample against
-            // light sampling.
-            None => {
-                if let Some((li, env)) = scene.environment_light() {
-                    let le = env.le(bs.wi);
-                    if le != Vec3A::ZERO {
-                        let light_pdf = scene.light_distr.pdf(li) * env.pdf_li(bs.wi);
-                        l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
+                // A non-black background is the environment light: weigh its BSDF sample
+                // against light sampling.
+                None => {
+                    if let Some((li, env)) = env {
+                        let le = env.le(bs.wi);
+                        if le != Vec3A::ZERO {
+                            let light_pdf = scene.light_distr.pdf(li) * env.pdf_li(bs.wi);
+                            l += bs.weight * le * power_heuristic(bs.pdf, light_pdf);
+                        }
                     }
                 }
             }
