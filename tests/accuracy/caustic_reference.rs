@@ -92,8 +92,8 @@ fn the_windows_hold_the_two_spots() {
 }
 
 /// The default method (SPPM) on the two windows at 32 and 512 iterations.
-fn sppm_windows(iterations: u32, photons: u64) -> (f64, f64) {
-    let img = render_sppm(iterations, photons, 5);
+fn sppm_windows(iterations: u32, photons: u64, seed: u64) -> (f64, f64) {
+    let img = render_sppm(iterations, photons, seed);
     let (d, b) = (ratio(&img, DIRECT), ratio(&img, THROUGH));
     println!("sppm {iterations} iterations of {photons} photons: direct {d:.4}, through {b:.4}");
     (d, b)
@@ -103,7 +103,7 @@ fn sppm_windows(iterations: u32, photons: u64) -> (f64, f64) {
 /// 800 000 photons: direct 0.992 and 0.991, through 0.996 and 0.996 of the reference's).
 #[test]
 fn sppm_caustic_windows_at_32_iterations() {
-    let (d, b) = sppm_windows(32, 800_000);
+    let (d, b) = sppm_windows(32, 800_000, 5);
     assert!(
         (d - 1.0).abs() < 0.02,
         "direct window {d:.4} of the reference's"
@@ -114,13 +114,21 @@ fn sppm_caustic_windows_at_32_iterations() {
     );
 }
 
+/// The 0.5 % target at 512 iterations, on the mean of four seeds (the renders' own noise is
+/// about 0.5 % between seeds even at 200 000 photons, so one render cannot tell).
 #[test]
-#[ignore = "noise-bound: at 512 iterations of 50 000 photons (about 20 s) the windows read \
-            direct 1.0028 and 0.9915, through 0.9902 and 1.0002 of the reference's (seeds 5, \
-            6): the render's own noise is about 0.5 %, and the reference's is 0.18 % (direct) \
-            and 0.39 % (through); a 0.5 % check needs several times the photons"]
+#[ignore = "measured 2026-11-29 (dev profile, about 150 CPU-s): seeds 5-8 at 512 iterations of \
+            200 000 photons read direct 1.0007, 0.9920, 1.0027, 0.9932 (mean 0.9972 +- 0.0027) \
+            and through 0.9972, 0.9934, 0.9967, 0.9910 (mean 0.9946 +- 0.0015, the reference's \
+            own noise there 0.39 %): the direct window holds 0.5 %, the one through the ball \
+            sits just outside it"]
 fn sppm_caustic_windows_at_512_iterations() {
-    let (d, b) = sppm_windows(512, 50_000);
+    let (mut d, mut b) = (0.0, 0.0);
+    for seed in 5..=8 {
+        let (x, y) = sppm_windows(512, 200_000, seed);
+        (d, b) = (d + x / 4.0, b + y / 4.0);
+    }
+    println!("means of four seeds: direct {d:.4}, through {b:.4}");
     assert!(
         (d - 1.0).abs() < 0.005,
         "direct window {d:.4} of the reference's"
