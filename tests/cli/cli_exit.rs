@@ -310,10 +310,12 @@ fn absurd_flags_are_usage_errors_at_once() {
         );
         assert!(!out_png.exists(), "{flags:?} wrote an image");
     }
-    for flags in [&["--snapshot-every", "1e300"][..], &["--threads", "100000"]] {
-        let mut args = vec!["watch", "examples/furnace.scn", "-o", o];
-        args.extend(flags);
-        usage_error(&args);
+    if cfg!(feature = "watch") {
+        for flags in [&["--snapshot-every", "1e300"][..], &["--threads", "100000"]] {
+            let mut args = vec!["watch", "examples/furnace.scn", "-o", o];
+            args.extend(flags);
+            usage_error(&args);
+        }
     }
 }
 
@@ -573,6 +575,9 @@ fn reference_and_chart_respect_their_time_budgets() {
     assert!(noise["rmse"].as_f64().unwrap() > 0.0, "{json}");
     let noise_img = image::open(dir.path().join("ref.noise.exr")).unwrap();
     assert_eq!((noise_img.width(), noise_img.height()), (48, 48));
+    if !cfg!(feature = "chart") {
+        return;
+    }
 
     let chart = dir.path().join("chart.png");
     let budget = 1.0;
@@ -621,6 +626,7 @@ fn reference_and_chart_respect_their_time_budgets() {
     );
 }
 
+#[cfg(feature = "chart")]
 #[test]
 fn chart_lists_the_reference_as_required() {
     let out = sppm(&["chart", "--help"]);
@@ -698,16 +704,20 @@ fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
         vec!["render".into(), scene.clone(), "-o".into(), dotted],
         vec!["render".into(), s("inc.scn"), "-o".into(), s("inc.png")],
         vec!["render".into(), s("tex.scn"), "-o".into(), s("tex.png")],
-        vec!["watch".into(), scene.clone()],
-        vec![
+    ];
+    if cfg!(feature = "watch") {
+        cases.push(vec!["watch".into(), scene.clone()]);
+    }
+    if cfg!(feature = "chart") {
+        cases.push(vec![
             "chart".into(),
             s("plain.scn"),
             "--reference".into(),
             s("tex.png"),
             "-o".into(),
             s("tex.png"),
-        ],
-    ];
+        ]);
+    }
     if cfg!(unix) {
         cases.push(vec!["render".into(), s("link.scn"), "-o".into(), scene]);
     }
@@ -769,6 +779,9 @@ fn an_unwritable_output_is_refused_before_rendering() {
     for (o, why) in &outputs {
         let start = std::time::Instant::now();
         for command in ["render", "watch"] {
+            if command == "watch" && !cfg!(feature = "watch") {
+                continue;
+            }
             let out = sppm(&[command, scene.to_str().unwrap(), "-o", o.to_str().unwrap()]);
             let err = String::from_utf8_lossy(&out.stderr);
             assert_eq!(out.status.code(), Some(2), "{command} {o:?}:\n{err}");
@@ -795,6 +808,7 @@ fn an_unwritable_output_is_refused_before_rendering() {
 
 /// `out` is a usage error (exit 2, no panic) whose message contains `why`; `what` names the
 /// case.
+#[cfg(feature = "chart")]
 fn refused(out: &Output, what: &str, why: &str) {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{what}:\n{err}");
@@ -806,6 +820,7 @@ fn refused(out: &Output, what: &str, why: &str) {
 /// forever) and a device such as /dev/zero (endless zeros, valid UTF-8, until the memory runs
 /// out) are refused at once.
 #[cfg(unix)]
+#[cfg(feature = "chart")]
 #[test]
 fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();
@@ -836,6 +851,7 @@ fn chart_from_a_fifo_or_a_device_is_refused_at_once() {
 /// is written: the CSV and charts of an earlier run with the same name stay as they were (the
 /// CSV was replaced and the charts left stale), and a new name leaves no file. A table whose times are tiny
 /// (fast iterations) keeps them in its CSV, so it redraws.
+#[cfg(feature = "chart")]
 #[test]
 fn a_chart_that_cannot_be_drawn_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
@@ -886,6 +902,7 @@ fn a_chart_that_cannot_be_drawn_writes_nothing() {
 
 /// `chart` flags that would run for ages (a budget of 1e300 s per method) or chart nothing (an
 /// unknown method, skipped silently before) are usage errors before any rendering.
+#[cfg(feature = "chart")]
 #[test]
 fn absurd_chart_flags_are_usage_errors_at_once() {
     let dir = tempfile::tempdir().unwrap();
@@ -1080,6 +1097,9 @@ fn bad_frame_requests_are_usage_errors_and_write_nothing() {
         vec!["render", a, "--frame", "-1"],
         vec!["watch", s, "--frame", "x"],
     ] {
+        if args[0] == "watch" && !cfg!(feature = "watch") {
+            continue;
+        }
         usage_error(&args);
     }
     assert!(written(dir.path()).is_empty(), "{:?}", written(dir.path()));

@@ -128,6 +128,7 @@ fn ctrl_c_stops_check_during_the_evaluation() {
     endless_evaluation("check", &[], "INT", 1, "interrupted");
 }
 
+#[cfg(feature = "watch")]
 #[test]
 fn ctrl_c_stops_watch_during_the_evaluation() {
     endless_evaluation(

@@ -9,12 +9,20 @@ mod running;
 #[path = "../common/slurm.rs"]
 mod slurm;
 
+// The commands behind a Cargo feature outside the default are tested when it is on
+// (`cargo test --features full`, a CI step).
+#[cfg(feature = "chart")]
 mod chart_cli;
 mod cli_exit;
 mod editor_grammar;
 mod interrupt;
+#[cfg(feature = "watch")]
 mod live_browser;
+#[cfg(feature = "watch")]
 mod live_security;
+#[cfg(feature = "lsp")]
 mod lsp;
+#[cfg(feature = "watch")]
 mod watch_cli;
+#[cfg(feature = "watch")]
 mod watch_saves;
