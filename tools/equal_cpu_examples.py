@@ -1,40 +1,47 @@
 #!/usr/bin/env python3
 """Every example at equal CPU time: path, sppm and vcm (or other methods) against a long path
-reference, whole image and per quadrant, as RMSE ratios.
+reference, whole image and per quadrant, over several seeds, with each example's noise.
 
-For each example the script renders a reference with the path tracer for `--ref-cpu` CPU
-seconds (seed 1000), then each method for `--cpu` CPU seconds (seed 1). CPU time is the user +
-system time of the render process, so the comparison holds on a loaded machine. The number of
-iterations that fits the budget comes from two short calibration renders (1 and 3 iterations:
-the per-iteration cost and the fixed cost of loading and preparing the scene). A render rarely
-lands exactly on the budget, so each RMSE is scaled to the budget as an unbiased method's
-would be (`rmse * sqrt(cpu / budget)`); the table prints the CPU seconds spent.
+For each example the script renders a reference with the path tracer: two halves of
+`--ref-cpu` CPU seconds (seeds 1000 and 1001), averaged. Their difference measures the
+reference's own noise, `mean((a - b)^2) / 4` per pixel, which is subtracted from every
+method's squared error (otherwise it adds to every method and pulls the ratios toward 1).
 
-The reference's own noise adds to every method's error (its variance is about `cpu / ref_cpu`
-of path's at the budget), which pulls the ratios toward 1: keep `--ref-cpu` at 15x `--cpu` or
-more.
+Each method then renders with seeds 1..`--seeds` for the example's budget: `--cpu` CPU
+seconds, or `--fixed-factor` times the largest fixed cost (loading and preparing the scene,
+from the calibration) when that is more, so that setup does not dominate. CPU time is the
+user + system time of the render process, so the comparison holds on a loaded machine. The
+iterations that fit come from two calibration renders (1 and 4 iterations: the per-iteration
+and the fixed cost). A render rarely lands exactly on the budget, so each MSE is scaled to
+the budget as an unbiased method's would be (`mse * cpu / budget`).
+
+Per example and region the table gives each method's RMSE (the root of the mean over seeds
+of the corrected MSE) and vcm's ratio to the better of the others, with its noise: the
+standard error of the ratio from the spread of the per-seed MSEs. A ratio counts as a loss
+only when it is above 1.05 by more than twice its noise, as a win when it is below 1 by more
+than twice its noise.
 
     python3 -m venv .venv && .venv/bin/pip install numpy OpenEXR
     cargo build --release --features cli
     .venv/bin/python tools/equal_cpu_examples.py --binary target/release/sppm-lang \\
-        --width 64 --cpu 4 --ref-cpu 80 --markdown /tmp/table.md
+        --width 64 --cpu 3 --ref-cpu 40 --seeds 3 --jobs 2 --cache target/ecx \\
+        --markdown /tmp/table.md
 
-A render whose fixed cost (loading, preparing: image textures, bump maps) passes the budget
-runs one iteration and says nothing about the method; raise `--cpu` for those examples.
-`tools/every_example.py` is the thorough version for path and SPPM (long references, several
-budgets, edge and window regions, Mitsuba references); this one is the quick table across
-methods.
+Renders are kept under `--cache` by example, method and seed (a JSON of errors and CPU time
+each): a second run with `--rerun vcm` renders only vcm again (after a change to it) and
+reuses the references and the other methods.
 
 Measurement only: nothing in the renderer or its tests imports it.
 """
 
 import argparse
 import glob
+import json
+import math
 import os
-import resource
 import subprocess
 import sys
-import tempfile
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import OpenEXR
@@ -48,36 +55,43 @@ def read_exr(path):
         return np.stack([np.array(ch[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
 
 
-def cpu_of_children():
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def render(a, scene, method, iterations, seed, out):
-    """Renders and returns the CPU seconds spent, or None if the renderer refused."""
-    before = cpu_of_children()
-    p = subprocess.run(
-        [a.binary, "render", scene, "--integrator", method, "--iterations", str(iterations),
-         "--seed", str(seed), "--threads", str(a.threads), "--resolution", f"{a.width}x",
-         "-o", out],
-        capture_output=True, text=True)
-    cpu = cpu_of_children() - before
-    if p.returncode != 0:
-        print(f"  {method} refused: {p.stderr.strip().splitlines()[-1] if p.stderr else '?'}",
+    """Renders and returns the CPU seconds (user + system) of that process alone, or None if
+    the renderer refused."""
+    cmd = [a.binary, "render", scene, "--integrator", method, "--iterations", str(iterations),
+           "--seed", str(seed), "--threads", "1", "--resolution", f"{a.width}x", "-o", out]
+    err_path = out + ".err"
+    with open(err_path, "w") as err_file:
+        # Waited for with wait4 (not Popen.wait) to read the process's own CPU time.
+        # (kept referenced until then, and marked as reaped after, so that no other
+        # thread's Popen reaps it first).
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_file)
+        _, status, ru = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+    err = open(err_path).read()
+    os.remove(err_path)
+    if status != 0:
+        print(f"  {method} refused: {err.strip().splitlines()[-1] if err.strip() else '?'}",
               file=sys.stderr)
         return None
-    return cpu
+    return ru.ru_utime + ru.ru_stime
 
 
-def iterations_for(a, scene, method, budget, out):
-    """Iterations that fill `budget` CPU seconds, from renders of 1 and 3 iterations."""
+def calibrate(a, scene, method, out):
+    """(fixed, per-iteration) CPU seconds of `method` on `scene`, from 1 iteration and from
+    4, 16, ... until the difference is half a second (cheap iterations measured over few
+    would be lost in the scatter of CPU times)."""
     c1 = render(a, scene, method, 1, 99, out)
-    if c1 is None:
-        return None
-    c3 = render(a, scene, method, 3, 99, out)
-    per_it = max((c3 - c1) / 2.0, 1e-3)
-    fixed = max(c1 - per_it, 0.0)
-    return max(1, int(round((budget - fixed) / per_it)))
+    n = 4
+    while c1 is not None:
+        cn = render(a, scene, method, n, 99, out)
+        if cn is None:
+            return None
+        if cn - c1 >= 0.5 or n >= 4096:
+            per_it = max((cn - c1) / (n - 1), 1e-4)
+            return max(c1 - per_it, 0.0), per_it
+        n *= 4
+    return None
 
 
 def regions(h, w):
@@ -90,70 +104,170 @@ def regions(h, w):
             ("bottom right", slice(hy, h), slice(hx, w))]
 
 
-def rmse(img, ref, ys, xs):
+def mse(img, ref, ys, xs):
     d = img[ys, xs] - ref[ys, xs]
-    return float(np.sqrt(np.mean(d * d)))
+    return float(np.mean(d * d))
+
+
+def example(a, name, methods):
+    """Renders what the cache lacks for one example; returns {method: [per-seed result]} and
+    the reference noise per region."""
+    scene = f"examples/{name}.scn"
+    d = os.path.join(a.cache, name)
+    os.makedirs(d, exist_ok=True)
+    refs = [os.path.join(d, f"ref{k}.exr") for k in (0, 1)]
+    meta_path = os.path.join(d, "meta.json")
+    meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
+    if not all(os.path.exists(r) for r in refs):
+        cal = calibrate(a, scene, "path", refs[0])
+        if cal is None:
+            return None
+        n = max(1, int(round((a.ref_cpu / 2 - cal[0]) / cal[1])))
+        for k, r in enumerate(refs):
+            render(a, scene, "path", n, 1000 + k, r)
+    r0, r1 = read_exr(refs[0]), read_exr(refs[1])
+    ref = 0.5 * (r0 + r1)
+    h, w = ref.shape[:2]
+    ref_noise = {rn: mse(r0, r1, ys, xs) / 4 for rn, ys, xs in regions(h, w)}
+    cals = meta.get("calibration", {})
+    for m in methods:
+        if m not in cals or m in a.rerun:
+            c = calibrate(a, scene, m, os.path.join(d, f"cal-{m}.exr"))
+            cals[m] = c
+    meta["calibration"] = cals
+    fixed = max((c[0] for c in cals.values() if c), default=0.0)
+    # Kept from the first run: methods rendered again are measured at the same budget.
+    budget = meta.get("budget", max(a.cpu, a.fixed_factor * fixed))
+    meta["budget"] = budget
+    json.dump(meta, open(meta_path, "w"))
+    results = {}
+    for m in methods:
+        if not cals.get(m):
+            continue
+        fixed_m, per_it = cals[m]
+        n = max(1, int(round((budget - fixed_m) / per_it)))
+        results[m] = []
+        for seed in range(1, a.seeds + 1):
+            res_path = os.path.join(d, f"{m}-{seed}.json")
+            if os.path.exists(res_path) and m not in a.rerun:
+                res = json.load(open(res_path))
+                if "mse_raw" not in res:  # the first version stored it times cpu / budget
+                    res["mse_raw"] = {k: v * budget / res["cpu"] for k, v in res["mse"].items()}
+                results[m].append(res)
+                continue
+            out = os.path.join(d, f"{m}-{seed}.exr")
+            cpu = render(a, scene, m, n, seed, out)
+            if cpu is None:
+                break
+            img = read_exr(out)
+            res = {"cpu": cpu, "iterations": n,
+                   "mse_raw": {rn: mse(img, ref, ys, xs) - ref_noise[rn]
+                               for rn, ys, xs in regions(h, w)}}
+            json.dump(res, open(res_path, "w"))
+            results[m].append(res)
+            # The next seeds' iterations from this render's cost per iteration.
+            if cpu > fixed_m:
+                n = max(1, int(round((budget - fixed_m) * n / (cpu - fixed_m))))
+        print(f"{name} {m}: {n} it., CPU-s "
+              + " ".join(f"{r['cpu']:.1f}" for r in results[m]), file=sys.stderr)
+    return results, cals, budget
+
+
+def scaled(res, region, budget, fixed):
+    """A render's MSE (less the reference's noise) scaled to the budget as an unbiased
+    method's would be: inversely to its CPU time past the method's fixed cost."""
+    raw = res["mse_raw"][region]
+    fixed = min(fixed, 0.9 * res["cpu"], 0.9 * budget)
+    return raw * (res["cpu"] - fixed) / (budget - fixed)
+
+
+def mean_se(xs):
+    """Mean and standard error of the mean."""
+    m = sum(xs) / len(xs)
+    if len(xs) < 2:
+        return m, float("nan")
+    v = sum((x - m) ** 2 for x in xs) / (len(xs) - 1)
+    return m, math.sqrt(v / len(xs))
+
+
+def ratio_with_noise(x, y):
+    """RMSE ratio sqrt(mean x / mean y) of per-seed MSE lists, and its standard error."""
+    mx, sx = mean_se(x)
+    my, sy = mean_se(y)
+    if mx <= 0 or my <= 0:
+        return float("nan"), float("nan")
+    r = math.sqrt(mx / my)
+    return r, 0.5 * r * math.sqrt((sx / mx) ** 2 + (sy / my) ** 2)
+
+
+def verdict(r, se):
+    if r != r:
+        return "?"
+    if r > 1.05 + 2 * se:
+        return "LOSS"
+    if r < 1.0 - 2 * se:
+        return "win"
+    return "tie"
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--binary", default="target/release/sppm-lang")
-    ap.add_argument("--examples", help="comma-separated names (default: every examples/*.scn)")
+    ap.add_argument("--examples", help="comma-separated names (default: every examples/*.scn "
+                    "but animation, whose scene renders frames)")
     ap.add_argument("--methods", default="path,sppm,vcm")
     ap.add_argument("--width", type=int, default=64)
-    ap.add_argument("--cpu", type=float, default=4.0, help="CPU seconds per method")
-    ap.add_argument("--ref-cpu", type=float, default=80.0, help="CPU seconds of the reference")
-    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--cpu", type=float, default=3.0, help="least CPU seconds per method")
+    ap.add_argument("--fixed-factor", type=float, default=3.0,
+                    help="the budget is at least this times the largest fixed cost")
+    ap.add_argument("--ref-cpu", type=float, default=40.0, help="CPU seconds of the reference")
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--jobs", type=int, default=2, help="examples rendered at once")
+    ap.add_argument("--cache", default="target/equal_cpu_examples")
+    ap.add_argument("--rerun", default="", help="methods to render again though cached")
     ap.add_argument("--markdown", help="write the table here too")
     a = ap.parse_args()
+    a.rerun = [m for m in a.rerun.split(",") if m]
     methods = a.methods.split(",")
     names = (a.examples.split(",") if a.examples else
-             sorted(os.path.basename(p)[:-4] for p in glob.glob("examples/*.scn")))
-    tmp = tempfile.mkdtemp(prefix="equal_cpu_examples_")
-    header = ("| example | " + " | ".join(f"{m} RMSE (CPU-s, it.)" for m in methods)
-              + " | vcm / path | vcm / sppm | vcm / better, worst quadrant |")
-    lines = [header, "|" + "---|" * (len(methods) + 4)]
-    for name in names:
-        scene = f"examples/{name}.scn"
-        print(f"{name}:", file=sys.stderr)
-        ref_path = os.path.join(tmp, f"{name}-ref.exr")
-        n_ref = iterations_for(a, scene, "path", a.ref_cpu, ref_path)
-        if n_ref is None or render(a, scene, "path", n_ref, 1000, ref_path) is None:
+             sorted(os.path.basename(p)[:-4] for p in glob.glob("examples/*.scn")
+                    if not p.endswith("animation.scn")))
+    with ThreadPoolExecutor(a.jobs) as pool:
+        done = list(pool.map(lambda n: example(a, n, methods), names))
+    others = [m for m in methods if m != "vcm"]
+    lines = ["| example | budget CPU-s | region | " + " | ".join(f"{m} RMSE" for m in methods)
+             + " | vcm / better (± noise) | verdict |",
+             "|" + "---|" * (len(methods) + 5)]
+    tally = {"whole": {}, "regions": {}}
+    for name, got in zip(names, done):
+        if got is None:
             continue
-        ref = read_exr(ref_path)
-        h, w = ref.shape[:2]
-        errs, cells = {}, []
-        for m in methods:
-            out = os.path.join(tmp, f"{name}-{m}.exr")
-            n = iterations_for(a, scene, m, a.cpu, out)
-            cpu = render(a, scene, m, n, 1, out) if n is not None else None
-            if cpu is None:
-                cells.append("refused")
-                continue
-            img = read_exr(out)
-            scale = np.sqrt(cpu / a.cpu)
-            errs[m] = {r: rmse(img, ref, ys, xs) * scale for r, ys, xs in regions(h, w)}
-            cells.append(f"{errs[m]['whole']:.4g} ({cpu:.1f}, {n})")
-            print(f"  {m}: {n} it. {cpu:.1f} CPU-s, rmse {errs[m]['whole']:.4g}", file=sys.stderr)
-
-        def ratio(x, y, r="whole"):
-            return errs[x][r] / errs[y][r] if x in errs and y in errs and errs[y][r] > 0 else None
-
-        def fmt(v):
-            return "-" if v is None else f"{v:.2f}"
-
-        worst = None
-        if all(m in errs for m in ("vcm", "path", "sppm")):
-            worst = max(errs["vcm"][r] / min(errs["path"][r], errs["sppm"][r])
-                        for r, _, _ in regions(h, w)[1:])
-        lines.append(f"| {name} | " + " | ".join(cells) + f" | {fmt(ratio('vcm', 'path'))}"
-                     f" | {fmt(ratio('vcm', 'sppm'))} | {fmt(worst)} |")
-        print(lines[-1], file=sys.stderr)
+        results, cals, budget = got
+        if "vcm" not in results or not all(m in results for m in others):
+            continue
+        for rn in ["whole", "top left", "top right", "bottom left", "bottom right"]:
+            per = {m: [scaled(r, rn, budget, cals[m][0]) for r in results[m]] for m in methods}
+            rm = {m: math.sqrt(max(mean_se(per[m])[0], 0.0)) for m in methods}
+            better = min(others, key=lambda m: rm[m])
+            r, se = ratio_with_noise(per["vcm"], per[better])
+            v = verdict(r, se)
+            # Strictly better than both: below each beyond noise.
+            if v == "win":
+                v = "win" if all(verdict(*ratio_with_noise(per["vcm"], per[m])) == "win"
+                                 for m in others) else "tie"
+            key = "whole" if rn == "whole" else "regions"
+            tally[key][v] = tally[key].get(v, 0) + 1
+            lines.append(f"| {name if rn == 'whole' else ''} | "
+                         f"{budget:.1f} | {rn} | " if rn == "whole" else f"| | | {rn} | ")
+            lines[-1] += (" | ".join(f"{rm[m]:.4g}" for m in methods)
+                          + f" | {r:.2f} ± {se:.2f} ({better}) | {v} |")
     table = "\n".join(lines)
+    summary = (f"whole image: {tally['whole']}; quadrants: {tally['regions']}")
     print(table)
+    print(summary)
     if a.markdown:
         with open(a.markdown, "w") as f:
-            f.write(table + "\n")
+            f.write(table + "\n\n" + summary + "\n")
 
 
 if __name__ == "__main__":

@@ -98,7 +98,7 @@ impl Vcm {
 /// camera paths vary most (Neyman allocation, as SPPM's camera samples: a directly visible
 /// light's edge, a small light's soft shadow). Each pixel's estimate is the mean of its camera
 /// paths, every one weighted as the only one (unbiased; the light paths are shared).
-const EXTRA_CAMERA_PATHS: f64 = 1.0;
+const EXTRA_CAMERA_PATHS: f64 = 0.5;
 
 /// Light paths traced per parallel task: the unit of work whose results are joined in order.
 const CHUNK: usize = 1024;
