@@ -57,7 +57,7 @@ pub(crate) fn initial_radius(
 /// The width of pixel (x, y)'s footprint at the visible point of the camera path `rng` traces
 /// (as `camera_path` does: the jitter, the lens, then one BSDF sample per specular bounce),
 /// measured across the path's last segment, over the width a straight ray of the path's length
-/// would have: 1 where the camera sees the point directly, below 1 where glass or a curved
+/// would have: exactly 1 where the camera sees the point directly, below 1 where glass or a curved
 /// mirror narrows the beam, above 1 where it widens it; kept within `[MIN_RATIO, 1]`. `None`
 /// where a neighbour ray parts from the path, the path passes a glossy surface, or the camera
 /// is orthographic: the caller keeps the straight-ray rule.
@@ -94,6 +94,13 @@ pub(crate) fn footprint_ratio(
         length += f64::from(sh.hit.t * rays[0].d.length());
         let bsdf = scene.bsdf(&sh);
         if !bsdf.is_specular() {
+            // Seen directly, the footprint is the straight ray's by definition. Measured
+            // instead, the neighbours' crossing of the tangent plane near a silhouette or at
+            // a grazing angle gave ratios from 0.2 to infinity, and ones that changed with the
+            // scene's scale (1 against 1e10).
+            if depth == 0 {
+                return Some(1.0);
+            }
             if bsdf.is_glossy() && depth + 1 < settings.max_depth {
                 return None;
             }
