@@ -118,7 +118,7 @@ fn sppm_caustic_windows_at_32_iterations() {
 /// about 0.5 % between seeds even at 200 000 photons, so one render cannot tell).
 #[test]
 #[ignore = "measured 2026-11-29 (dev profile, about 150 CPU-s): seeds 5-8 at 512 iterations of \
-            200 000 photons read direct 1.0007, 0.9920, 1.0027, 0.9932 (mean 0.9972 +- 0.0027) \
+            200 000 photons read direct 1.0007, 0.9920, 1.0028, 0.9932 (mean 0.9972 +- 0.0027) \
             and through 0.9972, 0.9934, 0.9967, 0.9910 (mean 0.9946 +- 0.0015, the reference's \
             own noise there 0.39 %): the direct window holds 0.5 %, the one through the ball \
             sits just outside it"]
