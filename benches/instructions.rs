@@ -59,23 +59,6 @@ fn rays() {
     println!("rays: 200000 cast, {hits} hit");
 }
 
-fn photons() {
-    let scene = common::cornell_glass(256);
-    let options = RenderOptions {
-        iterations: Some(1),
-        photons: Some(200_000),
-        seed: Some(1),
-        threads: Some(1),
-        ..Default::default()
-    };
-    let cancel = AtomicBool::new(false);
-    let out = render(&scene, &options, &cancel, &mut |_| {}).expect("render");
-    println!(
-        "photons: {} traced, {} deposits (one 256x256 iteration, 1 thread)",
-        out.stats.photons, out.stats.deposits
-    );
-}
-
 /// One SPPM iteration of 200 000 photons on 1 thread, `radius` the initial radius (`None`: the
 /// default rule): the workload of `photon-pass` and `photon-pass-fixed`.
 fn photon_pass(radius: Option<f64>) {
@@ -150,10 +133,8 @@ fn main() {
     if all || what.iter().any(|w| w == "rays") {
         rays();
     }
-    if all || what.iter().any(|w| w == "photons") {
-        photons();
-    }
-    if all || what.iter().any(|w| w == "photon-pass") {
+    // `photons` is the older name of `photon-pass`.
+    if all || what.iter().any(|w| w == "photon-pass" || w == "photons") {
         photon_pass(None);
     }
     if all || what.iter().any(|w| w == "photon-pass-fixed") {

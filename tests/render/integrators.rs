@@ -407,19 +407,7 @@ fn blend_renders_the_weighted_mean_of_its_parts_in_every_integrator() {
         sphere { <0, 0, 0>, 1 material { blend material { glass absorb 0.5 }, material { mirror }
                                           weight texture { checker 0, 1 scale 0.2 } } }
         plane { y, -1 material { blend material { diffuse 0.5 }, material { glass } weight 0.5 } }";
-    let loaded = sppm_lang::internals::eval::load_source(
-        "blend_glass.scn",
-        text,
-        &sppm_lang::EvalOptions::default(),
-    );
-    let messages: Vec<_> = loaded
-        .diagnostics
-        .iter()
-        .map(|d| d.message.clone())
-        .collect();
-    let scene = loaded
-        .scene
-        .unwrap_or_else(|| panic!("glass blend: {messages:?}"));
+    let scene = common::load(text).scene.expect("a scene");
     for integrator in Integrator::ALL {
         assert!(mean(&run(&scene, integrator, 2, 4_000, 1)) > 0.0);
     }
@@ -442,19 +430,7 @@ fn vcm_renders_a_diffuse_mirror_blend_lit_through_a_mirror_as_path_tracing_does(
         quad { <-3, 0, -3>, <0, 0, 6>, <6, 0, 0>
                material { blend material { diffuse rgb <0.8, 0.7, 0.5> },
                                 material { mirror rgb 0.9 } weight 0.5 } }";
-    let loaded = sppm_lang::internals::eval::load_source(
-        "blend_mirror.scn",
-        text,
-        &sppm_lang::EvalOptions::default(),
-    );
-    let messages: Vec<_> = loaded
-        .diagnostics
-        .iter()
-        .map(|d| d.message.clone())
-        .collect();
-    let scene = loaded
-        .scene
-        .unwrap_or_else(|| panic!("blend under a mirror: {messages:?}"));
+    let scene = common::load(text).scene.expect("a scene");
     let (path, path_se, _) = four_seeds(&scene, Integrator::Path, 2048, 0);
     let (vcm, vcm_se, means) = four_seeds(&scene, Integrator::Vcm, 256, 0);
     let sigma = (path_se * path_se + vcm_se * vcm_se).sqrt();
