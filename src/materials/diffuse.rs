@@ -15,6 +15,7 @@ pub fn pdf(wi: Vec3A) -> f32 {
     wi.z.abs() * FRAC_1_PI
 }
 
+#[inline]
 pub fn sample(albedo: Vec3A, wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
     let mut wi = cosine_hemisphere(u);
     if wo.z < 0.0 {

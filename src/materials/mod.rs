@@ -242,6 +242,7 @@ impl Bsdf {
     }
 
     /// Samples an incident direction for outgoing `wo`.
+    #[inline]
     pub fn sample(&self, wo: Vec3A, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let o = self.frame.to_local(wo);
         if o.z == 0.0 {

@@ -612,15 +612,22 @@ impl<'a> PreparedScene<'a> {
 
     /// The BSDF at a hit (black for a `SurfaceHit` whose `prim` no primitive has, which only
     /// a caller making one up can give).
-    #[inline]
+    #[inline(always)]
     pub fn bsdf(&self, sh: &SurfaceHit) -> Bsdf {
         let m = self
             .prim_material
             .get(sh.prim as usize)
             .map_or(usize::MAX, |&m| m as usize);
+        // A constant material (most of them) inline; textures and bumps are a call.
         if let Some(Some(l)) = self.const_lobes.get(m) {
             return Bsdf::new(*l, sh.hit.ns, sh.hit.dpdu, sh.hit.n);
         }
+        self.varying_bsdf(sh, m)
+    }
+
+    /// [`Self::bsdf`] of material `m` when it is not constant.
+    #[inline(never)]
+    fn varying_bsdf(&self, sh: &SurfaceHit, m: usize) -> Bsdf {
         let Some(material) = self.scene.materials.get(m) else {
             let black = Lobes::Diffuse {
                 albedo: Vec3A::ZERO,

@@ -55,6 +55,11 @@ impl PiecewiseConstant1D {
 
     /// Bin chosen by `u` in [0,1) and its probability (discrete use: one item of `n`).
     pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
+        // One item (a scene with one light, chosen once per photon and per light sample): the
+        // search below would find it whatever `u` is.
+        if let [p] = self.pmf[..] {
+            return (p > 0.0).then_some((0, p));
+        }
         if self.pmf.is_empty() {
             return None;
         }
@@ -179,6 +184,26 @@ mod tests {
         }
         assert_eq!(counts, [1000, 0, 3000]);
         assert_eq!(d.pdf(2), 0.75);
+    }
+
+    /// One item: chosen with probability 1 for every `u` (the edges and beyond included),
+    /// whatever its weight (none usable: the choice is uniform); no item: none chosen.
+    #[test]
+    fn one_item_is_always_chosen() {
+        let us = [0.0, 0.25, 0.5, 1.0 - f32::EPSILON, 1.0, -1.0, 2.0];
+        let one = PiecewiseConstant1D::new(&[0.3]);
+        for u in us {
+            assert_eq!(one.sample(u), Some((0, 1.0)), "u {u}");
+        }
+        for w in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            // All weights zero: the choice is uniform, so the one item is still chosen.
+            assert_eq!(
+                PiecewiseConstant1D::new(&[w]).sample(0.5),
+                Some((0, 1.0)),
+                "w {w}"
+            );
+        }
+        assert_eq!(PiecewiseConstant1D::new(&[]).sample(0.5), None);
     }
 
     #[test]

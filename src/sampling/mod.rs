@@ -7,7 +7,7 @@ mod splitmix;
 mod warp;
 
 pub use distribution::{PiecewiseConstant1D, PiecewiseConstant2D};
-pub use rng::{Rng, chain_seed, stream_seed};
+pub use rng::{Rng, chain_seed, index_seed, iteration_seed, stream_seed};
 pub use splitmix::{SplitMix64, mix64, splitmix64};
 pub use warp::{
     concentric_disk, cosine_hemisphere, power_heuristic, uniform_cone, uniform_cone_pdf,

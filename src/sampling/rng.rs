@@ -7,10 +7,23 @@ const MULT: u64 = 0x5851_f42d_4c95_7f2d;
 use super::splitmix::mix64;
 
 /// Hashes (seed, iteration, stream kind, index) into a 64-bit stream seed.
+#[inline]
 pub fn stream_seed(seed: u64, iteration: u32, kind: u32, index: u64) -> u64 {
+    index_seed(iteration_seed(seed, iteration, kind), index)
+}
+
+/// The part of [`stream_seed`] that does not depend on the index: a loop over the items of one
+/// stream and iteration (the photons of a pass) computes it once, then [`index_seed`] per item.
+#[inline]
+pub fn iteration_seed(seed: u64, iteration: u32, kind: u32) -> u64 {
     let a = mix64(seed ^ 0x9e37_79b9_7f4a_7c15);
-    let b = mix64(a ^ ((iteration as u64) << 32 | kind as u64));
-    mix64(b ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03))
+    mix64(a ^ ((iteration as u64) << 32 | kind as u64))
+}
+
+/// [`stream_seed`] of item `index`, from its [`iteration_seed`].
+#[inline]
+pub fn index_seed(iteration_seed: u64, index: u64) -> u64 {
+    mix64(iteration_seed ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03))
 }
 
 /// The render seed of chain `chain` of a still rendered as several chains under `seed`. For one

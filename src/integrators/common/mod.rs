@@ -39,7 +39,7 @@ pub(crate) fn camera_roulette(beta: &mut Vec3A, bounces: u32, rng: &mut Rng) -> 
 /// with the medium's, its value where the path passed in); anywhere else, that of
 /// the `medium` the path is in (see [`medium_after`]): a path inside coloured glass is absorbed
 /// on its way to an object or a light inside the glass as well.
-#[inline]
+#[inline(always)]
 pub(crate) fn attenuate_inside(
     scene: &PreparedScene,
     sh: &SurfaceHit,
@@ -48,6 +48,25 @@ pub(crate) fn attenuate_inside(
     beta: &mut Vec3A,
 ) {
     let inner_side = ray.d.dot(sh.hit.n) > 0.0;
+    // Outside every glass and arriving from the outer side (most segments): nothing absorbs.
+    // Checked inline; the rest is a call.
+    if !inner_side && medium == Vec3A::ZERO {
+        return;
+    }
+    attenuate_glass(scene, sh, ray, medium, inner_side, beta);
+}
+
+/// [`attenuate_inside`] where a glass may absorb (`inner_side`: the segment ends on the inner
+/// side of the surface).
+#[inline(never)]
+fn attenuate_glass(
+    scene: &PreparedScene,
+    sh: &SurfaceHit,
+    ray: &Ray,
+    medium: Vec3A,
+    inner_side: bool,
+    beta: &mut Vec3A,
+) {
     let sigma = match inner_side
         .then(|| scene.glass_absorption_varying(sh))
         .flatten()

@@ -3,7 +3,7 @@
 //! (SPPM's camera pass and its photons, say, draw from different sequences for the same index).
 //! The numeric values are part of every image: changing one changes the renders that use it.
 
-use crate::sampling::{Rng, stream_seed};
+use crate::sampling::{Rng, index_seed, iteration_seed, stream_seed};
 
 /// One use of random numbers. The discriminants are the stream numbers given to
 /// [`stream_seed`] (the compiler rejects two variants with the same number).
@@ -54,6 +54,25 @@ impl Stream {
     pub(crate) fn rng(self, seed: u64, iteration: u32, index: u64) -> Rng {
         Rng::new(stream_seed(seed, iteration, self as u32, index))
     }
+
+    /// The generators of this stream in iteration `iteration`, for a loop over many items:
+    /// the part of the seed they share is hashed once (two of the three mixes per item).
+    #[inline]
+    pub(crate) fn rngs(self, seed: u64, iteration: u32) -> StreamRngs {
+        StreamRngs(iteration_seed(seed, iteration, self as u32))
+    }
+}
+
+/// [`Stream::rngs`]: the generators of one stream and iteration.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct StreamRngs(u64);
+
+impl StreamRngs {
+    /// The generator of item `index`: the one [`Stream::rng`] gives.
+    #[inline]
+    pub(crate) fn rng(self, index: u64) -> Rng {
+        Rng::new(index_seed(self.0, index))
+    }
 }
 
 #[cfg(test)]
@@ -69,5 +88,25 @@ mod tests {
             assert!(!ids[i + 1..].contains(a), "stream {a} used twice");
         }
         assert_eq!(ids, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
+    }
+
+    /// A stream's generators from [`Stream::rngs`] draw the same numbers as [`Stream::rng`]
+    /// for every item (the photon pass uses the first, the images were made with the second).
+    #[test]
+    fn hoisted_generators_are_the_same() {
+        for stream in Stream::ALL {
+            for (seed, iteration) in [(0, 0), (1, 3), (u64::MAX, u32::MAX)] {
+                let rngs = stream.rngs(seed, iteration);
+                for index in [0, 1, 2, 4095, 1 << 40, u64::MAX] {
+                    let (mut a, mut b) = (rngs.rng(index), stream.rng(seed, iteration, index));
+                    let (a, b): (Vec<u32>, Vec<u32>) =
+                        (0..4).map(|_| (a.next_u32(), b.next_u32())).unzip();
+                    assert_eq!(
+                        a, b,
+                        "{stream:?} seed {seed} iteration {iteration} index {index}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -227,8 +227,9 @@ fn trace_photons(
             return;
         }
         let first = lo + c as u64 * PHOTON_CHUNK;
+        let rngs = Stream::Photon.rngs(settings.seed, iter);
         for i in first..(first + PHOTON_CHUNK).min(hi) {
-            let mut rng = Stream::Photon.rng(settings.seed, iter, i);
+            let mut rng = rngs.rng(i);
             trace_classified_photon(
                 scene,
                 settings.max_depth,
