@@ -12,10 +12,13 @@ The script renders both in passes of independent seeds and writes `caustic.exr`:
 tracer's image where all 4x4 stratified camera rays of a pixel hit the floor or the wall
 directly (`caustic.mask.exr` is 1 there), the path tracer's elsewhere. It prints, per window
 (`WINDOWS`), the mean of each pass and the spread of those means (the reference's own noise).
+`--crop through` then renders that window's rectangle alone with `path` (a film crop: the same
+pixels, far more samples) and puts its mean into the window's pixels of class 2.
 
 Run from the repository root (the committed image: scalar_rgb, 64x64; see README.md):
     python3 -m venv .venv && .venv/bin/pip install mitsuba numpy
     nice .venv/bin/python tools/reference/caustic.py [--ptracer-spp 16384] [--path-spp 32768]
+    nice .venv/bin/python tools/reference/caustic.py --crop through [--crop-spp 1048576]
 
 Model mapping (README.md beside this file): the floor and wall are `rectangle`s with a
 two-sided `diffuse`; `glass ior 1.5` is `dielectric` (int_ior 1.5, ext_ior 1); the sphere
@@ -48,6 +51,8 @@ LIGHT2_RADIUS = 0.1
 LIGHT2_RADIANCE = 250.0
 LIGHT_RADIUS = 0.05
 LIGHT_RADIANCE = 1000.0
+# The first seed of `--crop`'s passes (`ptracer` starts at 1000, `path` at 5000).
+CROP_SEED0 = 7000
 # Windows (x0, y0, x1, y1, half-open, in pixels of the 64x64 image): the caustic seen directly
 # on the floor, and seen through the ball. Kept in step with tests/accuracy/caustic_reference.rs.
 # Each window counts only the pixels of its class (`pixel_classes`: 1 floor or wall seen
@@ -55,7 +60,14 @@ LIGHT_RADIANCE = 1000.0
 WINDOWS = {'direct': ((22, 38, 38, 50), 1.0), 'through': ((34, 3, 58, 13), 2.0)}
 
 
-def scene(integrator, spp, size=SIZE):
+def scene(integrator, spp, size=SIZE, crop=None):
+    """The scene; `crop` (x0, y0, x1, y1) renders only that rectangle of the film: Mitsuba's
+    crop keeps each pixel's place in the full image, so its rays are those of the same pixels."""
+    film = {'type': 'hdrfilm', 'width': size, 'height': size,
+            'rfilter': {'type': 'box'}, 'pixel_format': 'rgb', 'component_format': 'float32'}
+    if crop:
+        x0, y0, x1, y1 = crop
+        film.update(crop_offset_x=x0, crop_offset_y=y0, crop_width=x1 - x0, crop_height=y1 - y0)
     black = {'type': 'diffuse', 'reflectance': rgb([0.0, 0.0, 0.0])}
     return {
         'type': 'scene',
@@ -66,9 +78,7 @@ def scene(integrator, spp, size=SIZE):
             'to_world': mi.ScalarTransform4f().look_at(origin=EYE, target=TARGET,
                                                        up=[0.0, 1.0, 0.0]),
             'sampler': {'type': 'independent', 'sample_count': spp},
-            'film': {'type': 'hdrfilm', 'width': size, 'height': size,
-                     'rfilter': {'type': 'box'}, 'pixel_format': 'rgb',
-                     'component_format': 'float32'},
+            'film': film,
         },
         # Floor y = 0, x in [-2, 2], z in [-1, 3]; back wall z = -1, y in [0, 3].
         'floor': {'type': 'rectangle', 'bsdf': lambert(FLOOR),
@@ -114,13 +124,23 @@ def window_mean(img, mask, window):
     return float(img[y0:y1, x0:x1, :][sel].mean())
 
 
-def passes(integrator, spp, pass_spp, size, seed0, mask, log):
-    """Renders `spp // pass_spp` independent passes; returns their mean and the pass images."""
-    sc = mi.load_dict(scene(integrator, pass_spp, size))
+def passes(integrator, spp, pass_spp, size, seed0, mask, log, crop=None, save=None):
+    """Renders `spp // pass_spp` independent passes (of the `crop` rectangle only, if given:
+    placed in a full-size image, zero outside it); returns their mean and the pass images.
+    With `save`, the passes so far go there after each one (scratch, for checking progress)."""
+    sc = mi.load_dict(scene(integrator, pass_spp, size, crop))
     n = max(1, spp // pass_spp)
     imgs = []
     for k in range(n):
-        imgs.append(np.array(mi.render(sc, spp=pass_spp, seed=seed0 + k), dtype=np.float64))
+        img = np.array(mi.render(sc, spp=pass_spp, seed=seed0 + k), dtype=np.float64)
+        if crop:
+            x0, y0, x1, y1 = crop
+            full = np.zeros((size, size, img.shape[2]))
+            full[y0:y1, x0:x1] = img
+            img = full
+        imgs.append(img)
+        if save:
+            np.save(save, np.array(imgs, dtype=np.float32))
         means = ' '.join(f'{name} {window_mean(imgs[-1], mask, w):.5f}' for name, w in WINDOWS.items())
         print(f'{integrator} pass {k + 1}/{n}: {means}', file=log, flush=True)
     return sum(imgs) / n, imgs
@@ -141,6 +161,11 @@ def main():
     ap.add_argument('--pass-spp', type=int, default=1024)
     ap.add_argument('--integrators', default='ptracer,path',
                     help='which to render now (each keeps its passes beside --out)')
+    ap.add_argument('--crop', choices=sorted(WINDOWS),
+                    help="render only this window's rectangle with `path`, finer (--crop-spp); "
+                    "its mean replaces the window's pixels of its class in --out")
+    ap.add_argument('--crop-spp', type=int, default=1048576)
+    ap.add_argument('--crop-pass-spp', type=int, default=16384)
     ap.add_argument('--variant', default='scalar_rgb')
     ap.add_argument('--out', default='tools/reference/caustic.exr')
     ap.add_argument('--preview', help='write one quick path-traced image here and stop')
@@ -153,25 +178,47 @@ def main():
     base = a.out[:-len('.exr')] if a.out.endswith('.exr') else a.out
     mask = pixel_classes(mi.load_dict(scene('path', 1, a.size)), a.size)
     mi.Bitmap(np.repeat(mask[:, :, None], 3, axis=2)).write(base + '.mask.exr')
-    spp = {'ptracer': (a.ptracer_spp, 1000), 'path': (a.path_spp, 5000)}
-    for integrator in [i for i in a.integrators.split(',') if i]:
-        n, seed0 = spp[integrator]
-        _, imgs = passes(integrator, n, a.pass_spp, a.size, seed0, mask, sys.stdout)
+    if a.crop:
         # The passes themselves (scratch, not committed): their spread is the noise.
-        np.save(f'{base}.{integrator}.passes.npy', np.array(imgs, dtype=np.float32))
+        passes('path', a.crop_spp, a.crop_pass_spp, a.size, CROP_SEED0, mask, sys.stdout,
+               crop=WINDOWS[a.crop][0], save=f'{base}.path.{a.crop}.passes.npy')
+    spp = {'ptracer': (a.ptracer_spp, 1000), 'path': (a.path_spp, 5000)}
+    for integrator in [i for i in a.integrators.split(',') if i and not a.crop]:
+        n, seed0 = spp[integrator]
+        passes(integrator, n, a.pass_spp, a.size, seed0, mask, sys.stdout,
+               save=f'{base}.{integrator}.passes.npy')
     done = {i: f'{base}.{i}.passes.npy' for i in spp}
-    if not all(os.path.exists(f) for f in done.values()):
+    if all(os.path.exists(f) for f in done.values()):
+        imgs = {i: np.load(f).astype(np.float64) for i, f in done.items()}
+        pt, path = imgs['ptracer'].mean(axis=0), imgs['path'].mean(axis=0)
+        out = np.where(mask[:, :, None] == 1.0, pt, path)
+        for name, w in WINDOWS.items():
+            pm, pse = spread(imgs['ptracer'], mask, w)
+            qm, qse = spread(imgs['path'], mask, w)
+            print(f'{name}: ptracer {pm:.5f} (+-{pse * 100:.2f} %), '
+                  f'path {qm:.5f} (+-{qse * 100:.2f} %) over {len(imgs["path"])} passes')
+    elif os.path.exists(a.out):
+        # Without the full passes (scratch), the finer windows go into the committed image.
+        out = np.array(mi.Bitmap(a.out), dtype=np.float64)[:, :, :3]
+    else:
         return
-    imgs = {i: np.load(f).astype(np.float64) for i, f in done.items()}
-    pt, path = imgs['ptracer'].mean(axis=0), imgs['path'].mean(axis=0)
-    m = mask[:, :, None] == 1.0
-    mi.Bitmap(np.where(m, pt, path).astype(np.float32)).write(a.out)
-    print(f'wrote {a.out}')
     for name, w in WINDOWS.items():
-        pm, pse = spread(imgs['ptracer'], mask, w)
-        qm, qse = spread(imgs['path'], mask, w)
-        print(f'{name}: ptracer {pm:.5f} (+-{pse * 100:.2f} %), '
-              f'path {qm:.5f} (+-{qse * 100:.2f} %) over {len(imgs["path"])} passes')
+        f = f'{base}.path.{name}.passes.npy'
+        if not os.path.exists(f):
+            continue
+        imgs = np.load(f).astype(np.float64)
+        (x0, y0, x1, y1), cls = w
+        # Only the window's pixels of its class: its other pixels (the ball's outline) and
+        # the rest of the image keep the full render's values.
+        sel = np.zeros(mask.shape, dtype=bool)
+        sel[y0:y1, x0:x1] = mask[y0:y1, x0:x1] == cls
+        before = window_mean(out, mask, w)
+        out[sel] = imgs.mean(axis=0)[sel]
+        cm, cse = spread(imgs, mask, w)
+        print(f'{name}: path crop {cm:.5f} (+-{cse * 100:.3f} %) over {len(imgs)} passes '
+              f'replaces {before:.5f} ({(before / cm - 1) * 100:+.2f} %)')
+    mi.Bitmap(out.astype(np.float32)).write(a.out)
+    print(f'wrote {a.out}')
 
 
 if __name__ == '__main__':
