@@ -56,12 +56,18 @@ impl BoxRay {
     #[inline(always)]
     pub(super) fn new(ray: &Ray) -> Self {
         let inv_d: Vec3A = ray.d.recip();
-        let neg = |a: usize| usize::from(inv_d[a] < 0.0);
+        // Written out per axis: `[0, 1, 2].map(..)` stayed two out-of-line calls in the
+        // traversal (about 40 instructions per query).
+        let (nx, ny, nz) = (
+            3 * usize::from(inv_d.x < 0.0),
+            3 * usize::from(inv_d.y < 0.0),
+            3 * usize::from(inv_d.z < 0.0),
+        );
         Self {
             o: ray.o.to_array(),
             inv_d: inv_d.to_array(),
-            enter: [0, 1, 2].map(|a| a + 3 * neg(a)),
-            leave: [0, 1, 2].map(|a| a + 3 - 3 * neg(a)),
+            enter: [nx, 1 + ny, 2 + nz],
+            leave: [3 - nx, 4 - ny, 5 - nz],
         }
     }
 }
