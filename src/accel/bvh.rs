@@ -9,15 +9,16 @@ use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
 use super::triangles::{Meshes, PairTest};
 use super::wide::{
-    Avx, BoxRay, BoxTest, Halves, LEAF, WIDTH, WideNode, collapse, far_to_near, still_near,
+    Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, push_far_to_near, still_near,
 };
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::{AnyShape, LazyHit};
 
-/// Traversal stack size: up to seven entries per level of the 8-wide tree, which is no deeper
-/// than the binary tree (< 64 levels, see `MEDIAN_DEPTH`).
+/// Traversal stack size: up to seven entries per level of the 8-wide tree (eight for a moment
+/// while a node's children are sorted on it), which is no deeper than the binary tree (< 64
+/// levels, see `MEDIAN_DEPTH`).
 const STACK: usize = 7 * 64;
 /// From this depth on, nodes split at the object median instead of by SAH, so that no tree is
 /// deeper than `MEDIAN_DEPTH + log2(primitives)` (< `STACK` for fewer than 2^31 primitives). SAH
@@ -320,17 +321,14 @@ impl Bvh {
                         cur = node.child[a];
                     } else if rest & (rest - 1) == 0 {
                         let b = rest.trailing_zeros() as usize;
-                        // As `far_to_near` orders them: on equal distances, `b` first.
+                        // As `push_far_to_near` orders them: on equal distances, `b` first.
                         let (first, second) = if near[a] < near[b] { (a, b) } else { (b, a) };
                         stack.push((node.child[second], near[second]));
                         cur = node.child[first];
                     } else {
-                        let mut hits = [(0, 0.0); WIDTH];
-                        let n = far_to_near(node, mask, &near, &mut hits);
-                        for &h in &hits[..n - 1] {
-                            stack.push(h);
-                        }
-                        cur = hits[n - 1].0;
+                        push_far_to_near(node, mask, &near, &mut stack);
+                        // (Never empty: three children or more were pushed.)
+                        cur = stack.pop().map_or(cur, |h| h.0);
                     }
                     continue;
                 }
@@ -422,11 +420,18 @@ impl Bvh {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mask, _) = test.hit(node, &boxes, t_min, t_max);
-                let mut bits = mask;
-                while bits != 0 {
-                    let slot = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    stack.push(node.child[slot]);
+                if mask != 0 {
+                    // Go on to the highest hit slot (the one the stack would give back first)
+                    // and stack the others: no push and pop for the child visited next.
+                    let last = 31 - mask.leading_zeros() as usize;
+                    let mut bits = mask & !(1 << last);
+                    while bits != 0 {
+                        let slot = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        stack.push(node.child[slot]);
+                    }
+                    cur = node.child[last];
+                    continue;
                 }
             }
             match stack.pop() {
