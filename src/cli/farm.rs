@@ -4,61 +4,156 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
-use clap::{ArgGroup, Args, Subcommand};
+use clap::{Arg, ArgAction, ArgGroup, ArgMatches};
 use sppm_lang::internals::farm::{Farm, Task, Work, chain_tasks, parse_job_id};
 
 use super::frames::{self, FramePattern};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, flag, option};
 
 /// Most tasks in one array (Slurm's own limit, `MaxArraySize`, is usually lower).
 const MAX_TASKS: u32 = 100_000;
 
-#[derive(Debug, Args)]
+#[derive(Debug)]
 pub struct FarmArgs {
-    #[command(subcommand)]
     pub scheduler: Scheduler,
 }
 
-#[derive(Debug, Subcommand)]
+#[derive(Debug)]
 pub enum Scheduler {
     /// Write (and with --submit, submit) a Slurm job array of the frames or chains still to
     /// render; a rerun skips the finished ones, so it also retries the failed.
     Slurm(SlurmArgs),
 }
 
-#[derive(Debug, Args)]
-#[command(group(ArgGroup::new("work").required(true).args(["frames", "chains"])))]
+#[derive(Debug)]
 pub struct SlurmArgs {
-    /// The scene file (.scn), on a file system every node sees.
     pub scene: PathBuf,
-    /// Render frames A to B of an animation, a task per frame (`render --frames A..B --frame K`).
-    #[arg(long, value_name = "A..B", value_parser = frames::parse_frames)]
     pub frames: Option<(u32, u32)>,
-    /// Render the still as N chains, a task per chain, and merge them when all succeeded.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_TASKS as i64))]
     pub chains: Option<u32>,
-    /// Frames: the name pattern (default `<scene>_%04d.png`). Chains: the merged image (.exr,
-    /// default `<scene>.exr`); chain K is written beside it as `<name>.chainK.exr`.
-    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// The Slurm partition (default: the cluster's).
-    #[arg(long)]
     pub partition: Option<String>,
-    /// Each task's time limit, in Slurm's form (`30`, `2:00:00`, `1-0`).
-    #[arg(long)]
     pub time: Option<String>,
-    /// CPUs per task; each render runs that many threads.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub cpus_per_task: u32,
-    /// Folder of the batch scripts and logs (default: `<job name>.slurm` beside the output).
-    #[arg(long)]
     pub dir: Option<PathBuf>,
-    /// Submit with `sbatch`; without it the scripts are written and the commands printed.
-    #[arg(long)]
     pub submit: bool,
-    /// Flags given to every render, after `--` (e.g. `-- --iterations 64 --seed 3`).
-    #[arg(last = true, value_name = "RENDER FLAGS")]
     pub render_args: Vec<String>,
+}
+
+impl FarmArgs {
+    /// `farm`'s schedulers on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.subcommand_required(true)
+            .arg_required_else_help(true)
+            .subcommand(SlurmArgs::command(clap::Command::new("slurm").about(
+                "Write (and with --submit, submit) a Slurm job array of the frames or chains \
+                 still to render; a rerun skips the finished ones, so it also retries the failed",
+            )))
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        match m.remove_subcommand() {
+            Some((name, mut sub)) if name == "slurm" => Ok(Self {
+                scheduler: Scheduler::Slurm(SlurmArgs::from_matches(&mut sub)?),
+            }),
+            _ => Err(clap::Error::raw(
+                clap::error::ErrorKind::MissingSubcommand,
+                "a scheduler is required",
+            )),
+        }
+    }
+}
+
+impl SlurmArgs {
+    fn command(cmd: clap::Command) -> clap::Command {
+        cmd.group(
+            ArgGroup::new("work")
+                .required(true)
+                .args(["frames", "chains"]),
+        )
+        .arg(super::scene_arg().help("The scene file (.scn), on a file system every node sees"))
+        .arg(
+            option("frames", "frames", "A..B")
+                .value_parser(frames::parse_frames)
+                .help(
+                    "Render frames A to B of an animation, a task per frame (`render \
+                         --frames A..B --frame K`)",
+                ),
+        )
+        .arg(
+            option("chains", "chains", "N")
+                .value_parser(clap::value_parser!(u32).range(1..=MAX_TASKS as i64))
+                .help(
+                    "Render the still as N chains, a task per chain, and merge them when all \
+                         succeeded",
+                ),
+        )
+        .arg(
+            option("output", "output", "OUTPUT")
+                .short('o')
+                .value_parser(clap::value_parser!(PathBuf))
+                .help(
+                    "Frames: the name pattern (default `<scene>_%04d.png`). Chains: the \
+                         merged image (.exr, default `<scene>.exr`); chain K is written beside it \
+                         as `<name>.chainK.exr`",
+                ),
+        )
+        .arg(
+            option("partition", "partition", "PARTITION")
+                .value_parser(clap::value_parser!(String))
+                .help("The Slurm partition (default: the cluster's)"),
+        )
+        .arg(
+            option("time", "time", "TIME")
+                .value_parser(clap::value_parser!(String))
+                .help("Each task's time limit, in Slurm's form (`30`, `2:00:00`, `1-0`)"),
+        )
+        .arg(
+            option("cpus_per_task", "cpus-per-task", "CPUS_PER_TASK")
+                .value_parser(clap::value_parser!(u32).range(1..=4096))
+                .default_value("1")
+                .help("CPUs per task; each render runs that many threads"),
+        )
+        .arg(
+            option("dir", "dir", "DIR")
+                .value_parser(clap::value_parser!(PathBuf))
+                .help(
+                    "Folder of the batch scripts and logs (default: `<job name>.slurm` \
+                         beside the output)",
+                ),
+        )
+        .arg(flag("submit", "submit").help(
+            "Submit with `sbatch`; without it the scripts are written and the commands printed",
+        ))
+        .arg(
+            Arg::new("render_args")
+                .value_name("RENDER FLAGS")
+                .value_parser(clap::value_parser!(String))
+                .action(ArgAction::Append)
+                .last(true)
+                .help(
+                    "Flags given to every render, after `--` (e.g. `-- --iterations 64 \
+                         --seed 3`)",
+                ),
+        )
+    }
+
+    fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scene: super::required(m, "scene")?,
+            frames: m.remove_one("frames"),
+            chains: m.remove_one("chains"),
+            output: m.remove_one("output"),
+            partition: m.remove_one("partition"),
+            time: m.remove_one("time"),
+            cpus_per_task: super::required(m, "cpus_per_task")?,
+            dir: m.remove_one("dir"),
+            submit: super::switch(m, "submit"),
+            render_args: m
+                .remove_many("render_args")
+                .map(Iterator::collect)
+                .unwrap_or_default(),
+        })
+    }
 }
 
 pub fn run(args: &FarmArgs) -> ExitCode {

@@ -3,18 +3,45 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::Args;
+use clap::{Arg, ArgAction, ArgMatches};
 
 use super::{EXIT_SCENE_ERROR, EXIT_USAGE};
 
-#[derive(Debug, Args)]
+#[derive(Debug)]
 pub struct MergeArgs {
-    /// The chain files (EXR written by `render --chain K/N`).
-    #[arg(required = true)]
     pub chains: Vec<PathBuf>,
-    /// The merged image (.exr, linear).
-    #[arg(short, long)]
     pub output: PathBuf,
+}
+
+impl MergeArgs {
+    /// `merge`'s arguments on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.arg(
+            Arg::new("chains")
+                .value_name("CHAINS")
+                .value_parser(clap::value_parser!(PathBuf))
+                .action(ArgAction::Append)
+                .required(true)
+                .help("The chain files (EXR written by `render --chain K/N`)"),
+        )
+        .arg(
+            super::option("output", "output", "OUTPUT")
+                .short('o')
+                .value_parser(clap::value_parser!(PathBuf))
+                .required(true)
+                .help("The merged image (.exr, linear)"),
+        )
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            chains: m
+                .remove_many("chains")
+                .map(Iterator::collect)
+                .unwrap_or_default(),
+            output: super::required(m, "output")?,
+        })
+    }
 }
 
 pub fn run(args: &MergeArgs) -> ExitCode {

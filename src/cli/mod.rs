@@ -38,7 +38,7 @@ mod watch;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Arg, ArgAction, ArgMatches};
 use sppm_lang::EvalOptions;
 
 /// Scene errors (bad scene text, failed render).
@@ -46,15 +46,159 @@ pub const EXIT_SCENE_ERROR: u8 = 1;
 /// Usage errors (bad arguments, unreadable input file given on the command line).
 pub const EXIT_USAGE: u8 = 2;
 
-#[derive(Debug, Parser)]
-#[command(
-    name = "sppm-lang",
-    version,
-    about = "A scene language and an SPPM renderer"
-)]
+/// The parsed command line. The parser is clap's builder (the derive macros cost a fresh
+/// build's first image more than these lines).
+#[derive(Debug)]
 pub struct Cli {
-    #[command(subcommand)]
     pub command: Command,
+}
+
+impl Cli {
+    /// The command line's grammar: its commands, flags and help.
+    pub fn command() -> clap::Command {
+        let cmd = clap::Command::new("sppm-lang")
+            .version(env!("CARGO_PKG_VERSION"))
+            .about("A scene language and an SPPM renderer")
+            .subcommand_required(true)
+            .arg_required_else_help(true)
+            .subcommand(
+                clap::Command::new("check")
+                    .about("Parse and evaluate a scene; print diagnostics or a summary")
+                    .arg(scene_arg())
+                    .args(SizeArgs::args())
+                    .args(LimitArgs::args()),
+            )
+            .subcommand(render::RenderArgs::command(
+                clap::Command::new("render")
+                    .about("Render a scene with stochastic progressive photon mapping"),
+            ));
+        #[cfg(feature = "watch")]
+        let cmd = cmd.subcommand(watch::WatchArgs::command(
+            clap::Command::new("watch")
+                .about("Re-render a scene every time it or a file it reads is saved"),
+        ));
+        #[cfg(feature = "chart")]
+        let cmd = cmd.subcommand(chart::ChartArgs::command(
+            clap::Command::new("chart").about(
+                "Chart error against render time for every integrator against a reference image",
+            ),
+        ));
+        let cmd = cmd
+            .subcommand(reference::ReferenceArgs::command(
+                clap::Command::new("reference").about(
+                    "Render a reference image for `chart` with the path tracer, in two \
+                     independent halves whose difference estimates its noise (written beside it)",
+                ),
+            ))
+            .subcommand(merge::MergeArgs::command(clap::Command::new("merge").about(
+                "Merge the chains of a still (`render --chain K/N`) into one image, weighted by \
+                 their iterations",
+            )))
+            .subcommand(farm::FarmArgs::command(clap::Command::new("farm").about(
+                "Split the frames or chains of a scene over a cluster's batch scheduler (Slurm)",
+            )));
+        #[cfg(feature = "lsp")]
+        let cmd = cmd.subcommand(
+            clap::Command::new("lsp")
+                .about(
+                    "Serve the Language Server Protocol on stdin and stdout, for editors: \
+                     diagnostics, completion, hover, go to definition, references and the \
+                     outline of scene files",
+                )
+                .arg(
+                    flag("stdio", "stdio")
+                        .help("Accepted for editors that pass it: stdio is the only transport"),
+                ),
+        );
+        cmd
+    }
+
+    /// Parses the process's arguments; on a usage error (or `--help`, `--version`) prints and
+    /// exits as clap does.
+    pub fn parse() -> Self {
+        let mut matches = Self::command().get_matches();
+        Self::from_matches(&mut matches).unwrap_or_else(|e| e.exit())
+    }
+
+    fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        let Some((name, mut sub)) = m.remove_subcommand() else {
+            return Err(clap::Error::raw(
+                clap::error::ErrorKind::MissingSubcommand,
+                "a subcommand is required",
+            ));
+        };
+        let sub = &mut sub;
+        let command = match name.as_str() {
+            "check" => Command::Check {
+                scene: required(sub, "scene")?,
+                size: SizeArgs::from_matches(sub),
+                limits: LimitArgs::from_matches(sub)?,
+            },
+            "render" => Command::Render(render::RenderArgs::from_matches(sub)?),
+            #[cfg(feature = "watch")]
+            "watch" => Command::Watch(watch::WatchArgs::from_matches(sub)?),
+            #[cfg(feature = "chart")]
+            "chart" => Command::Chart(chart::ChartArgs::from_matches(sub)?),
+            "reference" => Command::Reference(reference::ReferenceArgs::from_matches(sub)?),
+            "merge" => Command::Merge(merge::MergeArgs::from_matches(sub)?),
+            "farm" => Command::Farm(farm::FarmArgs::from_matches(sub)?),
+            #[cfg(feature = "lsp")]
+            "lsp" => Command::Lsp,
+            other => {
+                return Err(clap::Error::raw(
+                    clap::error::ErrorKind::InvalidSubcommand,
+                    format!("the subcommand '{other}' wasn't recognized"),
+                ));
+            }
+        };
+        Ok(Self { command })
+    }
+}
+
+/// The positional scene file every command that loads one takes.
+fn scene_arg() -> Arg {
+    Arg::new("scene")
+        .value_name("SCENE")
+        .value_parser(clap::value_parser!(PathBuf))
+        .required(true)
+        .help("The scene file (.scn)")
+}
+
+/// `--long VALUE`, taken once (a repeat replaces it).
+fn option(id: &'static str, long: &'static str, value_name: &'static str) -> Arg {
+    Arg::new(id)
+        .long(long)
+        .value_name(value_name)
+        .action(ArgAction::Set)
+}
+
+/// `--long` without a value.
+fn flag(id: &'static str, long: &'static str) -> Arg {
+    Arg::new(id).long(long).action(ArgAction::SetTrue)
+}
+
+/// An argument the parser has made sure of (required, or with a default).
+fn required<T: Clone + Send + Sync + 'static>(
+    m: &mut ArgMatches,
+    id: &str,
+) -> Result<T, clap::Error> {
+    m.remove_one::<T>(id).ok_or_else(|| {
+        clap::Error::raw(
+            clap::error::ErrorKind::MissingRequiredArgument,
+            format!("the following required argument was not provided: {id}"),
+        )
+    })
+}
+
+/// [`EvalOptions`]' step limit as the default of `--max-steps`.
+fn default_max_steps() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| EvalOptions::default().max_steps.to_string())
+}
+
+/// Whether a flag made by [`flag`] was given.
+fn switch(m: &mut ArgMatches, id: &str) -> bool {
+    m.remove_one::<bool>(id).unwrap_or(false)
 }
 
 /// The limits of the render options, checked again by the render (the library's callers have
@@ -245,19 +389,39 @@ pub struct Resolution {
 }
 
 /// The image size, overriding the scene's `settings { resolution }`.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
 pub struct SizeArgs {
-    /// Image size `WxH` (e.g. 320x240); `320x` or `x240` keeps the scene's aspect ratio.
-    /// Settings derived from the pixel size (the default initial radius) follow it.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub resolution: Option<Resolution>,
-    /// Scale the scene's resolution by F (e.g. 0.25 for a quick preview), keeping its aspect
-    /// ratio.
-    #[arg(long, value_name = "F", value_parser = parse_scale, conflicts_with = "resolution")]
     pub scale: Option<f64>,
 }
 
 impl SizeArgs {
+    pub fn args() -> [Arg; 2] {
+        [
+            option("resolution", "resolution", "WxH")
+                .value_parser(parse_resolution)
+                .help(
+                    "Image size `WxH` (e.g. 320x240); `320x` or `x240` keeps the scene's aspect \
+                     ratio. Settings derived from the pixel size (the default initial radius) \
+                     follow it",
+                ),
+            option("scale", "scale", "F")
+                .value_parser(parse_scale)
+                .conflicts_with("resolution")
+                .help(
+                    "Scale the scene's resolution by F (e.g. 0.25 for a quick preview), keeping \
+                     its aspect ratio",
+                ),
+        ]
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Self {
+        Self {
+            resolution: m.remove_one("resolution"),
+            scale: m.remove_one("scale"),
+        }
+    }
+
     pub fn is_set(&self) -> bool {
         self.resolution.is_some() || self.scale.is_some()
     }
@@ -308,24 +472,51 @@ impl SizeArgs {
 }
 
 /// Limits of the scene interpreter.
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
 pub struct LimitArgs {
-    /// Most iterations a single `#while`/`#for` loop may run.
-    #[arg(long, default_value_t = 1_000_000)]
     pub max_iterations: u64,
-    /// Deepest macro call nesting (recursion depth).
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     pub max_depth: u64,
-    /// Most memory a render may need (e.g. `4G`, `512M`; default: 2 GiB or half the machine's
-    /// memory, whichever is less). Checked against an estimate before rendering starts.
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
     pub memory_limit: Option<u64>,
-    /// Most evaluation steps in all (statements, loop iterations, macro calls, operations).
-    #[arg(long, default_value_t = EvalOptions::default().max_steps, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_steps: u64,
 }
 
 impl LimitArgs {
+    pub fn args() -> [Arg; 4] {
+        [
+            option("max_iterations", "max-iterations", "MAX_ITERATIONS")
+                .value_parser(clap::value_parser!(u64))
+                .default_value("1000000")
+                .help("Most iterations a single `#while`/`#for` loop may run"),
+            option("max_depth", "max-depth", "MAX_DEPTH")
+                .value_parser(clap::value_parser!(u64).range(1..=100_000))
+                .default_value("256")
+                .help("Deepest macro call nesting (recursion depth)"),
+            option("memory_limit", "memory-limit", "BYTES")
+                .value_parser(parse_bytes)
+                .help(
+                    "Most memory a render may need (e.g. `4G`, `512M`; default: 2 GiB or half \
+                     the machine's memory, whichever is less). Checked against an estimate \
+                     before rendering starts",
+                ),
+            option("max_steps", "max-steps", "MAX_STEPS")
+                .value_parser(clap::value_parser!(u64).range(1..))
+                .default_value(default_max_steps())
+                .help(
+                    "Most evaluation steps in all (statements, loop iterations, macro calls, \
+                     operations)",
+                ),
+        ]
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            max_iterations: required(m, "max_iterations")?,
+            max_depth: required(m, "max_depth")?,
+            memory_limit: m.remove_one("memory_limit"),
+            max_steps: required(m, "max_steps")?,
+        })
+    }
+
     pub fn options(&self) -> EvalOptions {
         EvalOptions {
             max_iterations: self.max_iterations,
@@ -342,15 +533,12 @@ impl LimitArgs {
     }
 }
 
-#[derive(Debug, Subcommand)]
+#[derive(Debug)]
 pub enum Command {
     /// Parse and evaluate a scene; print diagnostics or a summary.
     Check {
-        /// The scene file (.scn).
         scene: PathBuf,
-        #[command(flatten)]
         size: SizeArgs,
-        #[command(flatten)]
         limits: LimitArgs,
     },
     /// Render a scene with stochastic progressive photon mapping.
@@ -372,11 +560,8 @@ pub enum Command {
     /// Serve the Language Server Protocol on stdin and stdout, for editors: diagnostics,
     /// completion, hover, go to definition, references and the outline of scene files.
     #[cfg(feature = "lsp")]
-    Lsp {
-        /// Accepted for editors that pass it: stdio is the only transport.
-        #[arg(long)]
-        stdio: bool,
-    },
+    /// (`--stdio` is accepted for editors that pass it: stdio is the only transport.)
+    Lsp,
 }
 
 pub fn run(cli: Cli) -> ExitCode {
@@ -401,7 +586,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Merge(args) => merge::run(&args),
         Command::Farm(args) => farm::run(&args),
         #[cfg(feature = "lsp")]
-        Command::Lsp { .. } => lsp::run(),
+        Command::Lsp => lsp::run(),
     }
 }
 

@@ -19,35 +19,74 @@ use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use clap::Args;
+use clap::ArgMatches;
 use sppm_lang::Image;
 use sppm_lang::Integrator;
 use sppm_lang::internals::compare::{ErrorStats, ImageView, error};
 use sppm_lang::internals::render::{RenderOptions, render};
 
 use super::check::{load_scene, print_diagnostics};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs, option};
 
-#[derive(Debug, Args)]
+#[derive(Debug)]
 pub struct ReferenceArgs {
-    /// The scene file (.scn).
     pub scene: PathBuf,
-    /// Seconds of rendering in all (both halves).
-    #[arg(long, value_name = "S", value_parser = super::parse_seconds)]
     pub time: f64,
-    /// The reference image (.exr); `.noise.exr` and `.noise.json` files go beside it.
-    #[arg(short, long)]
     pub output: PathBuf,
-    /// Seed of the first half (the second uses the next one); default: the scene's.
-    #[arg(long)]
     pub seed: Option<u64>,
-    /// Worker threads.
-    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
-    #[command(flatten)]
     pub size: SizeArgs,
-    #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+impl ReferenceArgs {
+    /// `reference`'s flags on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.arg(super::scene_arg())
+            .arg(
+                option("time", "time", "S")
+                    .value_parser(super::parse_seconds)
+                    .required(true)
+                    .help("Seconds of rendering in all (both halves)"),
+            )
+            .arg(
+                option("output", "output", "OUTPUT")
+                    .short('o')
+                    .value_parser(clap::value_parser!(PathBuf))
+                    .required(true)
+                    .help(
+                        "The reference image (.exr); `.noise.exr` and `.noise.json` files go \
+                         beside it",
+                    ),
+            )
+            .arg(
+                option("seed", "seed", "SEED")
+                    .value_parser(clap::value_parser!(u64))
+                    .help(
+                        "Seed of the first half (the second uses the next one); default: the \
+                         scene's",
+                    ),
+            )
+            .arg(
+                option("threads", "threads", "THREADS")
+                    .value_parser(super::parse_threads)
+                    .help("Worker threads"),
+            )
+            .args(SizeArgs::args())
+            .args(LimitArgs::args())
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scene: super::required(m, "scene")?,
+            time: super::required(m, "time")?,
+            output: super::required(m, "output")?,
+            seed: m.remove_one("seed"),
+            threads: m.remove_one("threads"),
+            size: SizeArgs::from_matches(m),
+            limits: LimitArgs::from_matches(m)?,
+        })
+    }
 }
 
 /// The files a reference `output` comes with: the noise image and the JSON summary.

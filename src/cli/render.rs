@@ -4,7 +4,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::Args;
+use clap::ArgMatches;
 use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::internals::chains::{ChainInfo, write_chain};
 use sppm_lang::internals::eval::RangeOverride;
@@ -18,55 +18,129 @@ use sppm_lang::{Cancel, SourceMap};
 use super::check::print_diagnostics;
 use super::frames::{self, FramePattern};
 use super::identity::SceneId;
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs, option};
 
-#[derive(Debug, Args)]
+#[derive(Debug)]
 pub struct RenderArgs {
-    /// The scene file (.scn).
     pub scene: PathBuf,
-    /// Output image (.png or .exr); default: the scene's name with .png.
-    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// SPPM iterations (overrides the scene's settings).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=super::MAX_ITERATIONS as i64))]
     pub iterations: Option<u32>,
-    /// Photons per iteration.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=super::MAX_PHOTONS))]
     pub photons: Option<u64>,
-    /// Stop after this many seconds (the finished iterations are written; a render that
-    /// finishes no iteration in time writes nothing and fails).
-    #[arg(long, value_parser = super::parse_seconds)]
     pub time_limit: Option<f64>,
-    /// Worker threads (the image does not depend on it).
-    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
-    #[arg(long)]
     pub seed: Option<u64>,
-    /// Write the current image every K iterations.
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
     pub snapshot_every: Option<u32>,
-    /// Rendering method, overriding the scene's `settings { integrator ... }`.
-    #[arg(long, value_parser = parse_integrator)]
     pub integrator: Option<Integrator>,
-    /// Render frames A to B of an animation (both included), over the scene's
-    /// `settings { frames ... }`; the output names a file per frame (`-o out_%04d.png`).
-    #[arg(long, value_name = "A..B", value_parser = frames::parse_frames)]
     pub frames: Option<(u32, u32)>,
-    /// Render frame K of the animation alone (the same image as frame K of the whole range).
-    #[arg(long, value_name = "K", value_parser = frames::parse_frame)]
     pub frame: Option<u32>,
-    /// The clock at the first and the last frame (default: the scene's `clock_range`, else
-    /// 0..1).
-    #[arg(long, value_name = "A..B", value_parser = frames::parse_clock, allow_hyphen_values = true)]
     pub clock: Option<(f64, f64)>,
-    /// Render chain K of N of a still: its own random streams under the seed, written as a
-    /// linear EXR whose header `sppm-lang merge` reads (default output: `<scene>.chainK.exr`).
-    #[arg(long, value_name = "K/N", value_parser = parse_chain)]
     pub chain: Option<(u32, u32)>,
-    #[command(flatten)]
     pub size: SizeArgs,
-    #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+impl RenderArgs {
+    /// `render`'s flags on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.arg(super::scene_arg())
+            .arg(
+                option("output", "output", "OUTPUT")
+                    .short('o')
+                    .value_parser(clap::value_parser!(PathBuf))
+                    .help("Output image (.png or .exr); default: the scene's name with .png"),
+            )
+            .arg(
+                option("iterations", "iterations", "ITERATIONS")
+                    .value_parser(clap::value_parser!(u32).range(1..=super::MAX_ITERATIONS as i64))
+                    .help("SPPM iterations (overrides the scene's settings)"),
+            )
+            .arg(
+                option("photons", "photons", "PHOTONS")
+                    .value_parser(clap::value_parser!(u64).range(1..=super::MAX_PHOTONS))
+                    .help("Photons per iteration"),
+            )
+            .arg(
+                option("time_limit", "time-limit", "TIME_LIMIT")
+                    .value_parser(super::parse_seconds)
+                    .help(
+                        "Stop after this many seconds (the finished iterations are written; a \
+                         render that finishes no iteration in time writes nothing and fails)",
+                    ),
+            )
+            .arg(
+                option("threads", "threads", "THREADS")
+                    .value_parser(super::parse_threads)
+                    .help("Worker threads (the image does not depend on it)"),
+            )
+            .arg(option("seed", "seed", "SEED").value_parser(clap::value_parser!(u64)))
+            .arg(
+                option("snapshot_every", "snapshot-every", "K")
+                    .value_parser(clap::value_parser!(u32).range(1..))
+                    .help("Write the current image every K iterations"),
+            )
+            .arg(
+                option("integrator", "integrator", "INTEGRATOR")
+                    .value_parser(parse_integrator)
+                    .help("Rendering method, overriding the scene's `settings { integrator ... }`"),
+            )
+            .arg(
+                option("frames", "frames", "A..B")
+                    .value_parser(frames::parse_frames)
+                    .help(
+                        "Render frames A to B of an animation (both included), over the scene's \
+                         `settings { frames ... }`; the output names a file per frame (`-o \
+                         out_%04d.png`)",
+                    ),
+            )
+            .arg(
+                option("frame", "frame", "K")
+                    .value_parser(frames::parse_frame)
+                    .help(
+                        "Render frame K of the animation alone (the same image as frame K of the \
+                         whole range)",
+                    ),
+            )
+            .arg(
+                option("clock", "clock", "A..B")
+                    .value_parser(frames::parse_clock)
+                    .allow_hyphen_values(true)
+                    .help(
+                        "The clock at the first and the last frame (default: the scene's \
+                         `clock_range`, else 0..1)",
+                    ),
+            )
+            .arg(
+                option("chain", "chain", "K/N")
+                    .value_parser(parse_chain)
+                    .help(
+                        "Render chain K of N of a still: its own random streams under the seed, \
+                         written as a linear EXR whose header `sppm-lang merge` reads (default \
+                         output: `<scene>.chainK.exr`)",
+                    ),
+            )
+            .args(SizeArgs::args())
+            .args(LimitArgs::args())
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scene: super::required(m, "scene")?,
+            output: m.remove_one("output"),
+            iterations: m.remove_one("iterations"),
+            photons: m.remove_one("photons"),
+            time_limit: m.remove_one("time_limit"),
+            threads: m.remove_one("threads"),
+            seed: m.remove_one("seed"),
+            snapshot_every: m.remove_one("snapshot_every"),
+            integrator: m.remove_one("integrator"),
+            frames: m.remove_one("frames"),
+            frame: m.remove_one("frame"),
+            clock: m.remove_one("clock"),
+            chain: m.remove_one("chain"),
+            size: SizeArgs::from_matches(m),
+            limits: LimitArgs::from_matches(m)?,
+        })
+    }
 }
 
 /// `K/N` with 1 <= K <= N.

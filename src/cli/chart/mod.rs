@@ -20,7 +20,7 @@ mod run;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::Args;
+use clap::ArgMatches;
 use sppm_lang::SourceMap;
 use sppm_lang::internals::compare::{ErrorStats, ImageView, Window, error};
 use sppm_lang::internals::render::{InitialRadius, RenderOptions, effective_settings};
@@ -28,7 +28,7 @@ use sppm_lang::internals::scene::{ColorSpace, Scene, load_image};
 
 use super::check::print_diagnostics;
 use super::reference::{floor_in, noise_paths};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs, option};
 use methods::{Method, methods, parse_methods, rank_of, style_of};
 use outputs::{Floors, output_files, read_csv, write_outputs};
 use run::{Failure, Stop, measure, run_methods};
@@ -37,43 +37,95 @@ use run::{Failure, Stop, measure, run_methods};
 /// its own error is at most about the reference's (sqrt(1.5^2 - 1) = 1.1 times it).
 const AT_FLOOR: f64 = 1.5;
 
-#[derive(Debug, Args)]
-#[command(
-    override_usage = "sppm-lang chart <SCENE> --reference <REF.exr> -o <CHART.png> [OPTIONS]\n       \
-                  sppm-lang chart --from-csv <CSV> -o <CHART.png>"
-)]
+#[derive(Debug)]
 pub struct ChartArgs {
-    /// The scene file (.scn).
-    #[arg(required_unless_present = "from_csv")]
     pub scene: Option<PathBuf>,
-    /// Reference image (linear EXR) of the same resolution, e.g. made by `sppm-lang reference`
-    /// (whose noise estimate beside it marks the error floor). Required unless --from-csv.
-    #[arg(
-        long,
-        value_name = "REF.exr",
-        required_unless_present = "from_csv",
-        help_heading = "Required"
-    )]
     pub reference: Option<PathBuf>,
-    /// Redraw the charts from a CSV this command wrote earlier, without rendering.
-    #[arg(long, value_name = "CSV", conflicts_with_all = ["scene", "reference", "window", "methods"])]
     pub from_csv: Option<PathBuf>,
-    /// Largest time budget per method, in seconds (`60` or `60s`; at most a year).
-    #[arg(long, default_value = "60", value_parser = parse_budget)]
     pub budget: f64,
-    /// Pixel window x0,y0,x1,y1 (columns then rows, half-open) also measured on its own.
-    #[arg(long)]
     pub window: Option<String>,
-    /// Output chart (.png); an .svg and a .csv with the same stem are written beside it.
-    #[arg(short, long, value_name = "CHART.png", help_heading = "Required")]
     pub output: PathBuf,
-    /// Only these methods (comma-separated labels, see the CSV); default: all.
-    #[arg(long)]
     pub methods: Option<String>,
-    #[command(flatten)]
     pub size: SizeArgs,
-    #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+impl ChartArgs {
+    /// `chart`'s flags on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.override_usage(
+            "sppm-lang chart <SCENE> --reference <REF.exr> -o <CHART.png> [OPTIONS]\n       \
+             sppm-lang chart --from-csv <CSV> -o <CHART.png>",
+        )
+        .arg(
+            super::scene_arg()
+                .required(false)
+                .required_unless_present("from_csv"),
+        )
+        .arg(
+            option("reference", "reference", "REF.exr")
+                .value_parser(clap::value_parser!(PathBuf))
+                .required_unless_present("from_csv")
+                .help_heading("Required")
+                .help(
+                    "Reference image (linear EXR) of the same resolution, e.g. made by \
+                     `sppm-lang reference` (whose noise estimate beside it marks the error \
+                     floor). Required unless --from-csv",
+                ),
+        )
+        .arg(
+            option("from_csv", "from-csv", "CSV")
+                .value_parser(clap::value_parser!(PathBuf))
+                .conflicts_with_all(["scene", "reference", "window", "methods"])
+                .help("Redraw the charts from a CSV this command wrote earlier, without rendering"),
+        )
+        .arg(
+            option("budget", "budget", "BUDGET")
+                .value_parser(parse_budget)
+                .default_value("60")
+                .help("Largest time budget per method, in seconds (`60` or `60s`; at most a year)"),
+        )
+        .arg(
+            option("window", "window", "WINDOW")
+                .value_parser(clap::value_parser!(String))
+                .help(
+                    "Pixel window x0,y0,x1,y1 (columns then rows, half-open) also measured on \
+                     its own",
+                ),
+        )
+        .arg(
+            option("output", "output", "CHART.png")
+                .short('o')
+                .value_parser(clap::value_parser!(PathBuf))
+                .required(true)
+                .help_heading("Required")
+                .help(
+                    "Output chart (.png); an .svg and a .csv with the same stem are written \
+                     beside it",
+                ),
+        )
+        .arg(
+            option("methods", "methods", "METHODS")
+                .value_parser(clap::value_parser!(String))
+                .help("Only these methods (comma-separated labels, see the CSV); default: all"),
+        )
+        .args(SizeArgs::args())
+        .args(LimitArgs::args())
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scene: m.remove_one("scene"),
+            reference: m.remove_one("reference"),
+            from_csv: m.remove_one("from_csv"),
+            budget: super::required(m, "budget")?,
+            window: m.remove_one("window"),
+            output: super::required(m, "output")?,
+            methods: m.remove_one("methods"),
+            size: SizeArgs::from_matches(m),
+            limits: LimitArgs::from_matches(m)?,
+        })
+    }
 }
 
 /// One measurement.

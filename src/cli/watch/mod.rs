@@ -30,68 +30,136 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Instant, SystemTime};
 
-use clap::Args;
+use clap::ArgMatches;
 use sppm_lang::FileError;
 use sppm_lang::{Diagnostic, EvalOptions};
 
 use super::identity::SceneId;
 use super::live::{self, Hub};
-use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs};
+use super::{EXIT_SCENE_ERROR, EXIT_USAGE, LimitArgs, SizeArgs, flag, option};
 use kept::OnDisk;
 use load::load;
 use round::{Round, start};
 use watcher::DependencyWatcher;
 
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone)]
 pub struct WatchArgs {
-    /// The scene file (.scn).
     pub scene: PathBuf,
-    /// Output image (.png or .exr); default: the scene's name with `.png`.
-    #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Render a quick low-resolution preview before the full render (the default).
-    #[arg(long, overrides_with = "no_preview")]
-    pub preview: bool,
-    /// Go straight to the full render.
-    #[arg(long)]
+    /// `--no-preview` (a later `--preview` overrides it).
     pub no_preview: bool,
-    /// Clear the terminal before each render (the default on a terminal).
-    #[arg(long, overrides_with = "no_clear")]
-    pub clear: bool,
-    /// Never clear the terminal.
-    #[arg(long)]
+    /// `--no-clear` (a later `--clear` overrides it).
     pub no_clear: bool,
-    /// Write a snapshot at most this often (seconds); the first iteration of each render and
-    /// the final image are always written.
-    #[arg(long, default_value_t = 1.0, value_parser = parse_interval)]
     pub snapshot_every: f64,
-    /// Worker threads for rendering (default: all cores).
-    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
-    /// Also show the render on a local web page (http://127.0.0.1:PORT/, printed at start),
-    /// updated at every snapshot.
-    #[arg(long)]
     pub serve: bool,
-    /// The page's port (0: any free port).
-    #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
     pub port: u16,
-    /// Answer any local client without the page's access token (then every user of this
-    /// machine, and any program, can read the scene and its image).
-    #[arg(long, requires = "serve")]
     pub no_token: bool,
-    /// Show frame K of the scene's animation (its `settings { frames ... }`, or `--frames`).
-    #[arg(long, value_name = "K", value_parser = super::frames::parse_frame)]
     pub frame: Option<u32>,
-    /// The animation's frames, over the scene's (with `--frame`).
-    #[arg(long, value_name = "A..B", value_parser = super::frames::parse_frames, requires = "frame")]
     pub frames: Option<(u32, u32)>,
-    /// The clock at the first and the last frame (with `--frame`).
-    #[arg(long, value_name = "A..B", value_parser = super::frames::parse_clock, requires = "frame", allow_hyphen_values = true)]
     pub clock: Option<(f64, f64)>,
-    #[command(flatten)]
     pub size: SizeArgs,
-    #[command(flatten)]
     pub limits: LimitArgs,
+}
+
+impl WatchArgs {
+    /// `watch`'s flags on `cmd`.
+    pub fn command(cmd: clap::Command) -> clap::Command {
+        cmd.arg(super::scene_arg())
+            .arg(
+                option("output", "output", "OUTPUT")
+                    .short('o')
+                    .value_parser(clap::value_parser!(PathBuf))
+                    .help("Output image (.png or .exr); default: the scene's name with `.png`"),
+            )
+            .arg(flag("preview", "preview").overrides_with("no_preview").help(
+                "Render a quick low-resolution preview before the full render (the default)",
+            ))
+            .arg(flag("no_preview", "no-preview").help("Go straight to the full render"))
+            .arg(
+                flag("clear", "clear")
+                    .overrides_with("no_clear")
+                    .help("Clear the terminal before each render (the default on a terminal)"),
+            )
+            .arg(flag("no_clear", "no-clear").help("Never clear the terminal"))
+            .arg(
+                option("snapshot_every", "snapshot-every", "SNAPSHOT_EVERY")
+                    .value_parser(parse_interval)
+                    .default_value("1")
+                    .help(
+                        "Write a snapshot at most this often (seconds); the first iteration of \
+                         each render and the final image are always written",
+                    ),
+            )
+            .arg(
+                option("threads", "threads", "THREADS")
+                    .value_parser(super::parse_threads)
+                    .help("Worker threads for rendering (default: all cores)"),
+            )
+            .arg(flag("serve", "serve").help(
+                "Also show the render on a local web page (http://127.0.0.1:PORT/, printed at \
+                 start), updated at every snapshot",
+            ))
+            .arg(
+                option("port", "port", "PORT")
+                    .value_parser(clap::value_parser!(u16))
+                    .default_value(default_port())
+                    .requires("serve")
+                    .help("The page's port (0: any free port)"),
+            )
+            .arg(flag("no_token", "no-token").requires("serve").help(
+                "Answer any local client without the page's access token (then every user of \
+                 this machine, and any program, can read the scene and its image)",
+            ))
+            .arg(
+                option("frame", "frame", "K")
+                    .value_parser(super::frames::parse_frame)
+                    .help(
+                        "Show frame K of the scene's animation (its `settings { frames ... }`, or \
+                         `--frames`)",
+                    ),
+            )
+            .arg(
+                option("frames", "frames", "A..B")
+                    .value_parser(super::frames::parse_frames)
+                    .requires("frame")
+                    .help("The animation's frames, over the scene's (with `--frame`)"),
+            )
+            .arg(
+                option("clock", "clock", "A..B")
+                    .value_parser(super::frames::parse_clock)
+                    .requires("frame")
+                    .allow_hyphen_values(true)
+                    .help("The clock at the first and the last frame (with `--frame`)"),
+            )
+            .args(SizeArgs::args())
+            .args(LimitArgs::args())
+    }
+
+    pub fn from_matches(m: &mut ArgMatches) -> Result<Self, clap::Error> {
+        Ok(Self {
+            scene: super::required(m, "scene")?,
+            output: m.remove_one("output"),
+            no_preview: super::switch(m, "no_preview"),
+            no_clear: super::switch(m, "no_clear"),
+            snapshot_every: super::required(m, "snapshot_every")?,
+            threads: m.remove_one("threads"),
+            serve: super::switch(m, "serve"),
+            port: super::required(m, "port")?,
+            no_token: super::switch(m, "no_token"),
+            frame: m.remove_one("frame"),
+            frames: m.remove_one("frames"),
+            clock: m.remove_one("clock"),
+            size: SizeArgs::from_matches(m),
+            limits: LimitArgs::from_matches(m)?,
+        })
+    }
+}
+
+/// [`DEFAULT_PORT`] as the default of `--port`.
+fn default_port() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| DEFAULT_PORT.to_string())
 }
 
 /// The port `--serve` listens on unless told otherwise.

@@ -11,117 +11,358 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Arg, ArgAction, ArgMatches, Command};
 use sppm_measure::bezier::{Method, Options, run, write_outputs};
 
 /// Usage errors (bad arguments, unwritable output), as in `sppm-lang`.
 const EXIT_USAGE: u8 = 2;
 
-#[derive(Debug, Parser)]
-#[command(
-    name = "sppm-measure",
-    about = "Measurements of sppm-lang's own parts (speed against accuracy)"
-)]
 pub struct BenchArgs {
-    #[command(subcommand)]
     pub what: Bench,
 }
 
-#[derive(Debug, Subcommand)]
 pub enum Bench {
-    /// Revolve and patch: robust, Newton settings and tessellated meshes against the reference
-    /// intersector; ns per ray against miss rate and t error (CSV and charts).
     Bezier(BezierArgs),
-    /// Sphere and square lights over a plane: per-point variance of direct light sampled by
-    /// area and by solid angle, wall and CPU time per estimate, and the variance ratio at
-    /// equal CPU time.
     Lights(LightsArgs),
-    /// Cost per ray of the revolves and the patch as a ratio to a quad's, same rays, same run.
     Cost(CostArgs),
-    /// A scene's twin with every revolve replaced by a mesh at a given silhouette accuracy.
     Twin(TwinArgs),
-    /// The set-up of a large OBJ mesh step by step (read, parse, triangles, BVH): wall and CPU
-    /// time on each thread count, rounds alternating.
     Setup(SetupArgs),
-    /// Directional albedo of the rough coat against a random walk through the layer
-    /// (Markdown table).
     Coat(SamplesArgs),
-    /// White-furnace albedo of the rough metal lobe over roughness and angle (Markdown table).
     Furnace(SamplesArgs),
 }
 
-#[derive(Debug, Args)]
 pub struct SamplesArgs {
-    /// Samples (random walks) per table cell.
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(100..=1_000_000_000))]
     pub samples: u64,
 }
 
-#[derive(Debug, Args)]
 pub struct SetupArgs {
-    /// The OBJ file (e.g. the scale bench's `target/scale/n1000000/mesh.obj`).
     pub obj: PathBuf,
-    /// Thread counts, measured in turn within each round.
-    #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub threads: Vec<usize>,
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=20))]
     pub rounds: u32,
 }
 
-#[derive(Debug, Args)]
 pub struct TwinArgs {
-    /// The scene whose revolves are tessellated.
     pub scene: PathBuf,
-    /// Where the twin scene and its OBJ files go.
-    #[arg(short, long, default_value = "target/twin")]
     pub output: PathBuf,
-    /// Largest distance between mesh and surface, in world units.
-    #[arg(long, default_value_t = 1e-3)]
     pub tolerance: f64,
 }
 
-#[derive(Debug, Args)]
 pub struct LightsArgs {
-    /// Points per side of the grid on the plane.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(2..=2048))]
     pub size: u32,
-    /// Rounds (each sampler once per round, alternating which goes first).
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub rounds: u32,
-    /// Estimates per point, sampler and round.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=100_000))]
     pub per_round: u32,
 }
 
-#[derive(Debug, Args)]
 pub struct CostArgs {
-    /// Rays per surface.
-    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     pub rays: u64,
-    /// Timed passes (the median ratio is reported).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub repeats: u64,
 }
 
-#[derive(Debug, Args)]
 pub struct BezierArgs {
-    /// Overview chart (.png or .svg); the CSV, the single charts and the other format are
-    /// written beside it with the same stem.
-    #[arg(short, long, default_value = "docs/charts/bezier.png")]
     pub output: PathBuf,
-    /// Rays per ray kind (the revolve has three kinds, the patch two).
-    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     pub rays: u64,
-    /// Timed passes over the ray set; the median is reported.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub repeats: u64,
-    /// Seed of the ray set.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
 
+/// `--long VALUE` with a default (clap's builder, as `sppm-lang` has it: no derive macros to
+/// build).
+fn option(
+    id: &'static str,
+    long: &'static str,
+    value_name: &'static str,
+    default: &'static str,
+    help: &'static str,
+) -> Arg {
+    Arg::new(id)
+        .long(long)
+        .value_name(value_name)
+        .action(ArgAction::Set)
+        .default_value(default)
+        .help(help)
+}
+
+/// A number option with a range.
+fn ranged_u64(arg: Arg, range: std::ops::RangeInclusive<u64>) -> Arg {
+    arg.value_parser(clap::value_parser!(u64).range(range))
+}
+
+/// A `u32` option with a range.
+fn ranged_u32(arg: Arg, range: std::ops::RangeInclusive<i64>) -> Arg {
+    arg.value_parser(clap::value_parser!(u32).range(range))
+}
+
+fn command() -> Command {
+    let samples = || {
+        ranged_u64(
+            option(
+                "samples",
+                "samples",
+                "SAMPLES",
+                "1000000",
+                "Samples (random walks) per table cell",
+            ),
+            100..=1_000_000_000,
+        )
+    };
+    Command::new("sppm-measure")
+        .about("Measurements of sppm-lang's own parts (speed against accuracy)")
+        .subcommand_required(true)
+        .arg_required_else_help(true)
+        .subcommand(
+            Command::new("bezier")
+                .about(
+                    "Revolve and patch: robust, Newton settings and tessellated meshes against \
+                     the reference intersector; ns per ray against miss rate and t error (CSV and \
+                     charts)",
+                )
+                .arg(
+                    option(
+                        "output",
+                        "output",
+                        "OUTPUT",
+                        "docs/charts/bezier.png",
+                        "Overview chart (.png or .svg); the CSV, the single charts and the other \
+                         format are written beside it with the same stem",
+                    )
+                    .short('o')
+                    .value_parser(clap::value_parser!(PathBuf)),
+                )
+                .arg(ranged_u64(
+                    option(
+                        "rays",
+                        "rays",
+                        "RAYS",
+                        "10000",
+                        "Rays per ray kind (the revolve has three kinds, the patch two)",
+                    ),
+                    1..=10_000_000,
+                ))
+                .arg(ranged_u64(
+                    option(
+                        "repeats",
+                        "repeats",
+                        "REPEATS",
+                        "3",
+                        "Timed passes over the ray set; the median is reported",
+                    ),
+                    1..=1000,
+                ))
+                .arg(
+                    option("seed", "seed", "SEED", "1", "Seed of the ray set")
+                        .value_parser(clap::value_parser!(u64)),
+                ),
+        )
+        .subcommand(
+            Command::new("lights")
+                .about(
+                    "Sphere and square lights over a plane: per-point variance of direct light \
+                     sampled by area and by solid angle, wall and CPU time per estimate, and the \
+                     variance ratio at equal CPU time",
+                )
+                .arg(ranged_u32(
+                    option(
+                        "size",
+                        "size",
+                        "SIZE",
+                        "64",
+                        "Points per side of the grid on the plane",
+                    ),
+                    2..=2048,
+                ))
+                .arg(ranged_u32(
+                    option(
+                        "rounds",
+                        "rounds",
+                        "ROUNDS",
+                        "32",
+                        "Rounds (each sampler once per round, alternating which goes first)",
+                    ),
+                    1..=100_000,
+                ))
+                .arg(ranged_u32(
+                    option(
+                        "per_round",
+                        "per-round",
+                        "PER_ROUND",
+                        "16",
+                        "Estimates per point, sampler and round",
+                    ),
+                    2..=100_000,
+                )),
+        )
+        .subcommand(
+            Command::new("cost")
+                .about(
+                    "Cost per ray of the revolves and the patch as a ratio to a quad's, same \
+                     rays, same run",
+                )
+                .arg(ranged_u64(
+                    option("rays", "rays", "RAYS", "100000", "Rays per surface"),
+                    1..=10_000_000,
+                ))
+                .arg(ranged_u64(
+                    option(
+                        "repeats",
+                        "repeats",
+                        "REPEATS",
+                        "5",
+                        "Timed passes (the median ratio is reported)",
+                    ),
+                    1..=1000,
+                )),
+        )
+        .subcommand(
+            Command::new("twin")
+                .about(
+                    "A scene's twin with every revolve replaced by a mesh at a given silhouette \
+                     accuracy",
+                )
+                .arg(
+                    Arg::new("scene")
+                        .value_name("SCENE")
+                        .required(true)
+                        .value_parser(clap::value_parser!(PathBuf))
+                        .help("The scene whose revolves are tessellated"),
+                )
+                .arg(
+                    option(
+                        "output",
+                        "output",
+                        "OUTPUT",
+                        "target/twin",
+                        "Where the twin scene and its OBJ files go",
+                    )
+                    .short('o')
+                    .value_parser(clap::value_parser!(PathBuf)),
+                )
+                .arg(
+                    option(
+                        "tolerance",
+                        "tolerance",
+                        "TOLERANCE",
+                        "0.001",
+                        "Largest distance between mesh and surface, in world units",
+                    )
+                    .value_parser(clap::value_parser!(f64)),
+                ),
+        )
+        .subcommand(
+            Command::new("setup")
+                .about(
+                    "The set-up of a large OBJ mesh step by step (read, parse, triangles, BVH): \
+                     wall and CPU time on each thread count, rounds alternating",
+                )
+                .arg(
+                    Arg::new("obj")
+                        .value_name("OBJ")
+                        .required(true)
+                        .value_parser(clap::value_parser!(PathBuf))
+                        .help(
+                            "The OBJ file (e.g. the scale bench's \
+                             `target/scale/n1000000/mesh.obj`)",
+                        ),
+                )
+                .arg(
+                    option(
+                        "threads",
+                        "threads",
+                        "THREADS",
+                        "1,2",
+                        "Thread counts, measured in turn within each round",
+                    )
+                    .action(ArgAction::Append)
+                    .value_delimiter(',')
+                    .value_parser(clap::value_parser!(usize)),
+                )
+                .arg(ranged_u32(
+                    Arg::new("rounds")
+                        .long("rounds")
+                        .value_name("ROUNDS")
+                        .action(ArgAction::Set)
+                        .default_value("3"),
+                    1..=20,
+                )),
+        )
+        .subcommand(
+            Command::new("coat")
+                .about(
+                    "Directional albedo of the rough coat against a random walk through the \
+                     layer (Markdown table)",
+                )
+                .arg(samples()),
+        )
+        .subcommand(
+            Command::new("furnace")
+                .about(
+                    "White-furnace albedo of the rough metal lobe over roughness and angle \
+                     (Markdown table)",
+                )
+                .arg(samples()),
+        )
+}
+
+/// A value the parser has made sure of (required, or with a default).
+fn take<T: Clone + Send + Sync + 'static>(m: &mut ArgMatches, id: &str) -> Result<T, clap::Error> {
+    m.remove_one::<T>(id).ok_or_else(|| {
+        clap::Error::raw(
+            clap::error::ErrorKind::MissingRequiredArgument,
+            format!("the following required argument was not provided: {id}"),
+        )
+    })
+}
+
+fn parse_args() -> Result<BenchArgs, clap::Error> {
+    let mut matches = command().get_matches();
+    let Some((name, mut sub)) = matches.remove_subcommand() else {
+        return Err(clap::Error::new(clap::error::ErrorKind::MissingSubcommand));
+    };
+    let m = &mut sub;
+    let what = match name.as_str() {
+        "bezier" => Bench::Bezier(BezierArgs {
+            output: take(m, "output")?,
+            rays: take(m, "rays")?,
+            repeats: take(m, "repeats")?,
+            seed: take(m, "seed")?,
+        }),
+        "lights" => Bench::Lights(LightsArgs {
+            size: take(m, "size")?,
+            rounds: take(m, "rounds")?,
+            per_round: take(m, "per_round")?,
+        }),
+        "cost" => Bench::Cost(CostArgs {
+            rays: take(m, "rays")?,
+            repeats: take(m, "repeats")?,
+        }),
+        "twin" => Bench::Twin(TwinArgs {
+            scene: take(m, "scene")?,
+            output: take(m, "output")?,
+            tolerance: take(m, "tolerance")?,
+        }),
+        "setup" => Bench::Setup(SetupArgs {
+            obj: take(m, "obj")?,
+            threads: m
+                .remove_many("threads")
+                .map(Iterator::collect)
+                .unwrap_or_default(),
+            rounds: take(m, "rounds")?,
+        }),
+        "coat" => Bench::Coat(SamplesArgs {
+            samples: take(m, "samples")?,
+        }),
+        "furnace" => Bench::Furnace(SamplesArgs {
+            samples: take(m, "samples")?,
+        }),
+        _ => return Err(clap::Error::new(clap::error::ErrorKind::InvalidSubcommand)),
+    };
+    Ok(BenchArgs { what })
+}
+
 fn main() -> ExitCode {
-    run_bench(&BenchArgs::parse())
+    match parse_args() {
+        Ok(args) => run_bench(&args),
+        Err(e) => e.exit(),
+    }
 }
 
 /// Writes `text` to stdout; a closed pipe or any other write error is ignored.
