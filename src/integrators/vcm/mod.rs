@@ -7,7 +7,9 @@
 //! camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex, next-event
 //! estimation, connections to every vertex of the light path with the same index, and merges
 //! with the light vertices within the iteration's radius (`grid.rs`). Every technique is
-//! weighted by the power heuristic through the recursive quantities of `mis.rs`.
+//! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
+//! see through mirrors or glass also take camera paths that stop at their first non-delta
+//! bounce, for the part only camera paths sample (`DELTA_CAMERA_PATHS`).
 //!
 //! The radius shrinks as SPPM's does on average: `r_i = r_0 i^((alpha - 1) / 2)` (global, so
 //! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
