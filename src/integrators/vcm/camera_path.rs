@@ -32,13 +32,20 @@ struct State {
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
 /// path with the pixel's index.
-pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: &mut Rng) -> Vec3A {
+pub(super) fn radiance(
+    ctx: &Context,
+    x: u32,
+    y: u32,
+    own: &[LightVertex],
+    rng: &mut Rng,
+    specular_only: bool,
+) -> Radiance {
     let scene = ctx.scene;
     let (jitter, lens) = (rng.vec2(), rng.vec2());
     let mut ray = ctx.camera.ray(x, y, jitter, lens);
     let pdf_camera = f64::from(ctx.camera.pdf_dir(ray.d));
     if pdf_camera.is_nan() || pdf_camera <= 0.0 {
-        return Vec3A::ZERO;
+        return Radiance::default();
     }
     let mut st = State {
         beta: Vec3A::ONE,
@@ -49,10 +56,10 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
         prev: ray.o,
         prev_light: None,
     };
-    let mut l = Vec3A::ZERO;
+    let mut out = Radiance::default();
     loop {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
-            l += st.beta * escaped(ctx, &st, ray.d);
+            *out.part(st.specular) += st.beta * escaped(ctx, &st, ray.d);
             break;
         };
         attenuate_inside(scene, &sh, &ray, st.medium, &mut st.beta);
@@ -63,7 +70,8 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
         if let Some((li, al)) = scene.area_light(sh.prim) {
             let le = al.le(sh.hit.n, wo);
             if le != Vec3A::ZERO {
-                l += st.beta * le * hit_weight(ctx, &st, (li, al), &sh, wo, dist);
+                *out.part(st.specular) +=
+                    st.beta * le * hit_weight(ctx, &st, (li, al), &sh, wo, dist);
             }
         }
         if ctx.mode.light_trace_only && !bsdf.is_specular() {
@@ -72,18 +80,19 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
         if st.len >= ctx.max_len {
             break;
         }
-        if !bsdf.is_specular() {
+        if !bsdf.is_specular() && !specular_only {
+            let l = &mut out.rest;
             if ctx.mode.use_vc {
-                l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
+                *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
                 for v in own {
                     if v.len + 1 + st.len > ctx.max_len {
                         continue;
                     }
-                    l += st.beta * v.beta * connect(ctx, &st, &sh, &bsdf, wo, v);
+                    *l += st.beta * v.beta * connect(ctx, &st, &sh, &bsdf, wo, v);
                 }
             }
             if ctx.mode.use_vm {
-                l += st.beta * merge(ctx, &st, sh.hit.p, &bsdf, wo);
+                *l += st.beta * merge(ctx, &st, sh.hit.p, &bsdf, wo);
             }
         }
         let mode = TransportMode::Radiance;
@@ -91,6 +100,10 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
             break;
         };
         st.specular &= s.specular;
+        out.through_delta |= st.specular;
+        if specular_only && !st.specular {
+            break;
+        }
         st.beta *= s.weight;
         if !camera_roulette(&mut st.beta, st.len, rng) {
             break;
@@ -100,7 +113,27 @@ pub(super) fn radiance(ctx: &Context, x: u32, y: u32, own: &[LightVertex], rng: 
         ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);
         st.len += 1;
     }
-    l
+    out
+}
+
+/// A camera path's radiance in two parts: what it sees through delta bounces alone (emission
+/// and the sky, weight 1: no other technique samples it) and the rest.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Radiance {
+    pub(super) specular: Vec3A,
+    pub(super) rest: Vec3A,
+    /// The path left its first vertex by a delta bounce (a mirror, glass).
+    pub(super) through_delta: bool,
+}
+
+impl Radiance {
+    fn part(&mut self, specular: bool) -> &mut Vec3A {
+        if specular {
+            &mut self.specular
+        } else {
+            &mut self.rest
+        }
+    }
 }
 
 /// What a camera path that leaves the scene sees: the backdrop or sky straight on and after
@@ -274,7 +307,7 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         return Vec3A::ZERO;
     };
     let mut sum = Vec3A::ZERO;
-    grid.for_each_within(ctx.positions, p, ctx.radius, |i| {
+    grid.for_each_within(p, ctx.radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
             return;

@@ -7,7 +7,9 @@
 //! camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex, next-event
 //! estimation, connections to every vertex of the light path with the same index, and merges
 //! with the light vertices within the iteration's radius (`grid.rs`). Every technique is
-//! weighted by the power heuristic through the recursive quantities of `mis.rs`.
+//! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
+//! see through mirrors or glass also take camera paths that stop at their first non-delta
+//! bounce, for the part only camera paths sample (`DELTA_CAMERA_PATHS`).
 //!
 //! The radius shrinks as SPPM's does on average: `r_i = r_0 i^((alpha - 1) / 2)` (global, so
 //! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
@@ -100,6 +102,14 @@ impl Vcm {
 /// paths, every one weighted as the only one (unbiased; the light paths are shared).
 const EXTRA_CAMERA_PATHS: f64 = 0.5;
 
+/// Camera paths per iteration that stop at their first non-delta bounce, in each pixel that
+/// sees through a mirror or glass or whose directly seen emission varies (a light's edge):
+/// they add only what a camera path sees through delta bounces alone (a small light through
+/// glass), which no other technique samples, at the cost of the eye ray and the delta bounces.
+/// That part is the mean of every camera path of the pixel, the rest the mean of the full ones
+/// (both unbiased).
+const DELTA_CAMERA_PATHS: u32 = 4;
+
 /// Light paths traced per parallel task: the unit of work whose results are joined in order.
 const CHUNK: usize = 1024;
 
@@ -118,7 +128,6 @@ struct Context<'c, 's, 'a> {
     radius: f32,
     vm_normalization: f32,
     vertices: &'c [LightVertex],
-    positions: &'c [Vec3A],
     grid: Option<&'c Grid>,
 }
 
@@ -182,6 +191,9 @@ impl Integrator for Vcm {
         // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
         let mut samples = vec![SampleStats::default(); n_paths];
         let mut extra = vec![0u32; n_paths];
+        // Each pixel's delta parts so far, and whether a camera path left its first vertex
+        // by a delta bounce.
+        let mut delta = vec![(SampleStats::default(), false); n_paths];
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         progressive::render_means(job, |iter, stats| {
             let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
@@ -198,7 +210,6 @@ impl Integrator for Vcm {
                 vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_paths as f64))
                     as f32,
                 vertices: &[],
-                positions: &[],
                 grid: None,
             };
             let t_light = Instant::now();
@@ -208,7 +219,6 @@ impl Integrator for Vcm {
             let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
             stats.photon_time += t_light.elapsed();
             ctx.vertices = &pass.vertices;
-            ctx.positions = &pass.positions;
             ctx.grid = has_grid.then_some(&pass.grid);
             let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
             let t_camera = Instant::now();
@@ -216,9 +226,10 @@ impl Integrator for Vcm {
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
             let values: Vec<Vec3A> = samples
                 .par_iter_mut()
+                .zip(delta.par_iter_mut())
                 .zip(extra.par_iter())
                 .enumerate()
-                .map(|(i, (px, &extra))| {
+                .map(|(i, ((px, (sp_stats, seen_delta)), &extra))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
                         return Vec3A::ZERO;
@@ -227,17 +238,32 @@ impl Integrator for Vcm {
                     let start = if i == 0 { 0 } else { ends[i - 1] as usize };
                     let own = &vertices[start..ends[i] as usize];
                     let (x, y) = (i as u32 % w, i as u32 / w);
-                    let mut sum = finite(camera_path::radiance(&ctx, x, y, own, &mut rng));
-                    px.add(sum);
-                    if extra > 0 {
-                        let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
-                        for _ in 0..extra {
-                            let l = finite(camera_path::radiance(&ctx, x, y, own, &mut rng));
-                            px.add(l);
-                            sum += l;
+                    // Delta paths where an earlier iteration's camera paths saw through a
+                    // mirror or glass, or saw varying emission (a light's edge); decided
+                    // before this iteration's paths, so that their count does not depend on them.
+                    let only = if *seen_delta || sp_stats.variance().is_some_and(|v| v > 0.0) {
+                        DELTA_CAMERA_PATHS
+                    } else {
+                        0
+                    };
+                    let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false);
+                    let (mut spec, mut rest) = (finite(first.specular), finite(first.rest));
+                    px.add(spec + rest);
+                    sp_stats.add(spec);
+                    *seen_delta |= first.through_delta;
+                    let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
+                    for k in 0..extra + only {
+                        let r = camera_path::radiance(&ctx, x, y, own, &mut rng, k >= extra);
+                        let (sp, re) = (finite(r.specular), finite(r.rest));
+                        if k < extra {
+                            px.add(sp + re);
                         }
+                        sp_stats.add(sp);
+                        spec += sp;
+                        rest += re;
                     }
-                    finite(sum / (1 + extra) as f32 + splat)
+                    let mean = spec / (1 + extra + only) as f32 + rest / (1 + extra) as f32;
+                    finite(mean + splat)
                 })
                 .collect();
             stats.camera_paths += extra.iter().map(|&e| u64::from(e)).sum::<u64>();
