@@ -57,7 +57,7 @@ impl BoxRay {
     pub(super) fn new(ray: &Ray) -> Self {
         let inv_d: Vec3A = ray.d.recip();
         // Written out per axis: `[0, 1, 2].map(..)` stayed two out-of-line calls in the
-        // traversal (about 80 instructions a query with their set-up).
+        // traversal, paid on every query.
         let (nx, ny, nz) = (
             3 * usize::from(inv_d.x < 0.0),
             3 * usize::from(inv_d.y < 0.0),

@@ -23,6 +23,18 @@ pub(super) fn option(id: &'static str, long: &'static str, value_name: &'static 
         .action(ArgAction::Set)
 }
 
+/// `-o/--output PATH`; each command gives its own help (and whether it is required).
+pub(super) fn output_arg(value_name: &'static str) -> Arg {
+    option("output", "output", value_name)
+        .short('o')
+        .value_parser(clap::value_parser!(PathBuf))
+}
+
+/// `--threads N`, from 1 to [`MAX_THREADS`]; each command gives its own help.
+pub(super) fn threads_arg() -> Arg {
+    option("threads", "threads", "THREADS").value_parser(parse_threads)
+}
+
 /// `--long` without a value.
 pub(super) fn flag(id: &'static str, long: &'static str) -> Arg {
     Arg::new(id).long(long).action(ArgAction::SetTrue)

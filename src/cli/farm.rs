@@ -87,16 +87,11 @@ impl SlurmArgs {
                          succeeded",
                 ),
         )
-        .arg(
-            option("output", "output", "OUTPUT")
-                .short('o')
-                .value_parser(clap::value_parser!(PathBuf))
-                .help(
-                    "Frames: the name pattern (default `<scene>_%04d.png`). Chains: the \
+        .arg(super::output_arg("OUTPUT").help(
+            "Frames: the name pattern (default `<scene>_%04d.png`). Chains: the \
                          merged image (.exr, default `<scene>.exr`); chain K is written beside it \
                          as `<name>.chainK.exr`",
-                ),
-        )
+        ))
         .arg(
             option("partition", "partition", "PARTITION")
                 .value_parser(clap::value_parser!(String))

@@ -25,9 +25,7 @@ impl MergeArgs {
                 .help("The chain files (EXR written by `render --chain K/N`)"),
         )
         .arg(
-            super::option("output", "output", "OUTPUT")
-                .short('o')
-                .value_parser(clap::value_parser!(PathBuf))
+            super::output_arg("OUTPUT")
                 .required(true)
                 .help("The merged image (.exr, linear)"),
         )

@@ -279,3 +279,122 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Lsp => lsp::run(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every argument of every command, given by itself (beside what the command requires)
+    /// with a value its parser accepts, reaches the command's options: clap's builder reads
+    /// each argument by its id, and a type that does not match the parser's would panic only
+    /// when a user gives that argument.
+    #[test]
+    fn every_argument_reads_back() {
+        Cli::command().debug_assert();
+        let bases: &[(&[&str], &[&str])] = &[
+            (&["check"], &["s.scn"]),
+            (&["render"], &["s.scn"]),
+            (&["watch"], &["s.scn"]),
+            (&["chart"], &["s.scn", "--reference", "r.exr"]),
+            (
+                &["reference"],
+                &["s.scn", "--time", "1", "--output", "r.exr"],
+            ),
+            (&["merge"], &["a.exr", "--output", "m.exr"]),
+            (
+                &["farm", "slurm"],
+                &["s.scn", "--output", "f_%02d.png", "--frames", "1..2"],
+            ),
+            (&["lsp"], &[]),
+        ];
+        let values = [
+            "4",
+            "0.5",
+            "x.png",
+            "64x48",
+            "1/2",
+            "1..2",
+            "1G",
+            "sppm",
+            "path,sppm",
+            "1:00:00",
+            "0,0,8,8",
+        ];
+        let root = Cli::command();
+        let mut checked = 0;
+        for (path, base) in bases {
+            let Some(cmd) = path
+                .iter()
+                .try_fold(&root, |c, name| c.find_subcommand(name))
+            else {
+                continue; // a command whose feature is off
+            };
+            for arg in cmd.get_arguments() {
+                let Some(long) = arg.get_long() else { continue };
+                if ["help", "version"].contains(&long) {
+                    continue;
+                }
+                let tries: Vec<Vec<String>> = if arg.get_action().takes_values() {
+                    values
+                        .iter()
+                        .map(|v| vec![format!("--{long}"), v.to_string()])
+                        .collect()
+                } else {
+                    vec![vec![format!("--{long}")]]
+                };
+                // An argument that requires another (`--port` needs `--serve`, watch's `--frames`
+                // needs `--frame`) is tried with each of the command's other arguments beside
+                // it (those that take a value with `1`).
+                let flags: Vec<Vec<String>> = std::iter::once(vec![])
+                    .chain(cmd.get_arguments().filter_map(|a| {
+                        let l = format!("--{}", a.get_long()?);
+                        Some(if a.get_action().takes_values() {
+                            vec![l, "1".to_string()]
+                        } else {
+                            vec![l]
+                        })
+                    }))
+                    .collect();
+                let tries: Vec<Vec<String>> = flags
+                    .iter()
+                    .flat_map(|f| {
+                        tries
+                            .iter()
+                            .map(move |t| f.iter().cloned().chain(t.iter().cloned()).collect())
+                    })
+                    .collect();
+                // The base as it is; without its own value of this argument (given twice
+                // would be refused) or of the farm's `--frames` (`--chains` replaces it in a
+                // required group); or no base (`chart --from-csv` conflicts with a scene).
+                let without = |drop: &str| -> Vec<&str> {
+                    let mut b = base.to_vec();
+                    if let Some(at) = b.iter().position(|a| *a == drop) {
+                        b.drain(at..at + 2);
+                    }
+                    b
+                };
+                let own = format!("--{long}");
+                let variants = [base.to_vec(), without(&own), without("--frames"), vec![]];
+                let parsed = variants.iter().find_map(|base| {
+                    tries.iter().find_map(|extra| {
+                        let argv = ["sppm-lang"]
+                            .iter()
+                            .chain(path.iter())
+                            .chain(base.iter())
+                            .map(|s| s.to_string())
+                            .chain(extra.iter().cloned());
+                        Cli::command().try_get_matches_from(argv).ok()
+                    })
+                });
+                let Some(mut m) = parsed else {
+                    panic!("no test value parses for `{}` --{long}", path.join(" "));
+                };
+                if let Err(e) = Cli::from_matches(&mut m) {
+                    panic!("`{}` --{long}: {e}", path.join(" "));
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 40, "only {checked} arguments checked");
+    }
+}

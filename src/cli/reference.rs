@@ -49,16 +49,10 @@ impl ReferenceArgs {
                     .required(true)
                     .help("Seconds of rendering in all (both halves)"),
             )
-            .arg(
-                option("output", "output", "OUTPUT")
-                    .short('o')
-                    .value_parser(clap::value_parser!(PathBuf))
-                    .required(true)
-                    .help(
-                        "The reference image (.exr); `.noise.exr` and `.noise.json` files go \
+            .arg(super::output_arg("OUTPUT").required(true).help(
+                "The reference image (.exr); `.noise.exr` and `.noise.json` files go \
                          beside it",
-                    ),
-            )
+            ))
             .arg(
                 option("seed", "seed", "SEED")
                     .value_parser(clap::value_parser!(u64))
@@ -67,11 +61,7 @@ impl ReferenceArgs {
                          scene's",
                     ),
             )
-            .arg(
-                option("threads", "threads", "THREADS")
-                    .value_parser(super::parse_threads)
-                    .help("Worker threads"),
-            )
+            .arg(super::threads_arg().help("Worker threads"))
             .args(SizeArgs::args())
             .args(LimitArgs::args())
     }

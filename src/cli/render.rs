@@ -44,9 +44,7 @@ impl RenderArgs {
     pub fn command(cmd: clap::Command) -> clap::Command {
         cmd.arg(super::scene_arg())
             .arg(
-                option("output", "output", "OUTPUT")
-                    .short('o')
-                    .value_parser(clap::value_parser!(PathBuf))
+                super::output_arg("OUTPUT")
                     .help("Output image (.png or .exr); default: the scene's name with .png"),
             )
             .arg(
@@ -67,11 +65,7 @@ impl RenderArgs {
                          render that finishes no iteration in time writes nothing and fails)",
                     ),
             )
-            .arg(
-                option("threads", "threads", "THREADS")
-                    .value_parser(super::parse_threads)
-                    .help("Worker threads (the image does not depend on it)"),
-            )
+            .arg(super::threads_arg().help("Worker threads (the image does not depend on it)"))
             .arg(option("seed", "seed", "SEED").value_parser(clap::value_parser!(u64)))
             .arg(
                 option("snapshot_every", "snapshot-every", "K")

@@ -190,6 +190,10 @@ def main():
     done = {i: f'{base}.{i}.passes.npy' for i in spp}
     if all(os.path.exists(f) for f in done.values()):
         imgs = {i: np.load(f).astype(np.float64) for i, f in done.items()}
+        for i, (n, _) in spp.items():
+            if len(imgs[i]) < n // a.pass_spp:
+                print(f'warning: {done[i]} holds {len(imgs[i])} of {n // a.pass_spp} passes '
+                      '(an interrupted run?)', file=sys.stderr)
         pt, path = imgs['ptracer'].mean(axis=0), imgs['path'].mean(axis=0)
         out = np.where(mask[:, :, None] == 1.0, pt, path)
         for name, w in WINDOWS.items():
@@ -207,6 +211,10 @@ def main():
         if not os.path.exists(f):
             continue
         imgs = np.load(f).astype(np.float64)
+        if len(imgs) < a.crop_spp // a.crop_pass_spp:
+            # Passes are saved as they finish: an interrupted run leaves fewer.
+            print(f'warning: {f} holds {len(imgs)} of {a.crop_spp // a.crop_pass_spp} passes '
+                  '(an interrupted run?)', file=sys.stderr)
         (x0, y0, x1, y1), cls = w
         # Only the window's pixels of its class: its other pixels (the ball's outline) and
         # the rest of the image keep the full render's values.

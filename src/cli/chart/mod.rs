@@ -94,9 +94,7 @@ impl ChartArgs {
                 ),
         )
         .arg(
-            option("output", "output", "CHART.png")
-                .short('o')
-                .value_parser(clap::value_parser!(PathBuf))
+            super::output_arg("CHART.png")
                 .required(true)
                 .help_heading("Required")
                 .help(

@@ -67,9 +67,7 @@ impl WatchArgs {
     pub fn command(cmd: clap::Command) -> clap::Command {
         cmd.arg(super::scene_arg())
             .arg(
-                option("output", "output", "OUTPUT")
-                    .short('o')
-                    .value_parser(clap::value_parser!(PathBuf))
+                super::output_arg("OUTPUT")
                     .help("Output image (.png or .exr); default: the scene's name with `.png`"),
             )
             .arg(flag("preview", "preview").overrides_with("no_preview").help(
@@ -92,8 +90,7 @@ impl WatchArgs {
                     ),
             )
             .arg(
-                option("threads", "threads", "THREADS")
-                    .value_parser(super::parse_threads)
+                super::threads_arg()
                     .help("Worker threads for rendering (default: all cores)"),
             )
             .arg(flag("serve", "serve").help(

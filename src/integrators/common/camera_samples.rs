@@ -35,6 +35,14 @@ impl SampleStats {
         self.sum2 += y * y;
     }
 
+    /// Whether the samples differ: a variance above rounding's (`sum2 - sum^2 / n` of equal
+    /// samples can come out a few ulps above zero).
+    pub(crate) fn varies(&self) -> bool {
+        let n = f64::from(self.n.max(1));
+        let mean = self.sum / n;
+        self.variance().is_some_and(|v| v > 1e-9 * mean * mean)
+    }
+
     /// The sample variance; `None` with fewer than two samples.
     pub(crate) fn variance(&self) -> Option<f64> {
         (self.n >= 2).then(|| {
@@ -90,6 +98,28 @@ pub(crate) fn allocate(stats: &[SampleStats], camera_rays: u64, extra: &mut [u32
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Equal samples never vary, whatever rounding leaves in `sum2 - sum^2 / n`; samples that
+    /// differ in the fourth digit do.
+    #[test]
+    fn equal_samples_do_not_vary() {
+        let mut rounding_left_some = false;
+        for k in 1..400u32 {
+            let v = 0.01 + f64::from(k) * 0.7377;
+            let c = Vec3A::new(v as f32, (v * 0.31) as f32, (v * 1.7) as f32);
+            for n in 2..40 {
+                let mut s = SampleStats::default();
+                (0..n).for_each(|_| s.add(c));
+                rounding_left_some |= s.variance().is_some_and(|v| v > 0.0);
+                assert!(!s.varies(), "{n} samples of {c}");
+                let mut t = s;
+                t.add(c * 1.001);
+                assert!(t.varies(), "{n} samples of {c} and one 1e-3 brighter");
+            }
+        }
+        // The case the threshold is for: without it some of these would vary.
+        assert!(rounding_left_some);
+    }
 
     /// Pixels share the budget in proportion to their standard deviations; constant pixels
     /// get none; without a photon ray there is no budget.

@@ -5,12 +5,12 @@
 //! copied in bucket order, so a query reads each bucket's points from one run of memory. Built
 //! by counting sort into arrays that are kept and reused from one iteration to the next.
 
-use glam::Vec3A;
+use glam::{DVec3, Vec3A};
 
 #[derive(Default)]
 pub(super) struct Grid {
-    min: Vec3A,
-    inv_cell: f32,
+    min: DVec3,
+    inv_cell: f64,
     /// log2 of the table's length.
     bits: u32,
     /// `starts[h]..starts[h + 1]` are the positions in `items` and `points` of the points in
@@ -38,8 +38,8 @@ impl Grid {
         if !(min.is_finite() && max.is_finite()) {
             return false;
         }
-        self.min = min;
-        self.inv_cell = 0.5 / r;
+        self.min = min.as_dvec3();
+        self.inv_cell = 0.5 / f64::from(r);
         let len = points.len().next_power_of_two();
         self.bits = len.trailing_zeros();
         self.items.clear();
@@ -72,9 +72,10 @@ impl Grid {
     }
 
     /// The cell of `p`, in cell units (the integer part is the cell, the rest the position in
-    /// it).
-    fn scaled(&self, p: Vec3A) -> Vec3A {
-        (p - self.min) * self.inv_cell
+    /// it); in f64, whose 53 bits keep the position within a cell exact enough for the choice of
+    /// neighbours in a scene 10^7 radii wide, where f32's 24 would not.
+    fn scaled(&self, p: Vec3A) -> DVec3 {
+        (p.as_dvec3() - self.min) * self.inv_cell
     }
 
     fn cell(&self, p: Vec3A) -> [i64; 3] {
@@ -98,7 +99,7 @@ impl Grid {
         let c = q.floor();
         // The neighbour on each axis is on the side of the cell's half that `p` lies in: a
         // ball of radius r (half a cell) around `p` reaches no further cell.
-        let side = |x: f32, cx: f32| if x - cx >= 0.5 { 1 } else { -1 };
+        let side = |x: f64, cx: f64| if x - cx >= 0.5 { 1 } else { -1 };
         let o = [side(q.x, c.x), side(q.y, c.y), side(q.z, c.z)];
         let c = [c.x as i64, c.y as i64, c.z as i64];
         let r2 = r * r;
@@ -106,9 +107,11 @@ impl Grid {
         let mut seen = [u32::MAX; 8];
         for k in 0..8 {
             let cell = [
-                c[0] + if k & 1 != 0 { o[0] } else { 0 },
-                c[1] + if k & 2 != 0 { o[1] } else { 0 },
-                c[2] + if k & 4 != 0 { o[2] } else { 0 },
+                // Wrapping: a cell index saturated at i64's end (a point ~10^19 cells away)
+                // still hashes, as the build's did.
+                c[0].wrapping_add(if k & 1 != 0 { o[0] } else { 0 }),
+                c[1].wrapping_add(if k & 2 != 0 { o[1] } else { 0 }),
+                c[2].wrapping_add(if k & 4 != 0 { o[2] } else { 0 }),
             ];
             let b = self.bucket(cell);
             if seen[..k].contains(&b) {
@@ -153,5 +156,33 @@ mod tests {
                 .collect();
             assert_eq!(found, expected);
         }
+    }
+
+    /// A scene 10^7 radii wide (one vertex far off, the rest in a small cluster): every point
+    /// within the radius is still found, each once. In f32, `p - min` alone would round the
+    /// cluster's positions to whole cells.
+    #[test]
+    fn a_wide_scene_loses_no_neighbour() {
+        let mut rng = Rng::new(5);
+        let mut points = vec![Vec3A::splat(-1.0e5)];
+        points.extend((0..2000).map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.05));
+        let r = 0.002;
+        let mut grid = Grid::default();
+        assert!(grid.build(&points, r));
+        for _ in 0..500 {
+            let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.05;
+            let mut found = Vec::new();
+            grid.for_each_within(q, r, |i| found.push(i));
+            found.sort_unstable();
+            let expected: Vec<usize> = (0..points.len())
+                .filter(|&i| (points[i] - q).length_squared() <= r * r)
+                .collect();
+            assert_eq!(found, expected);
+        }
+        // A query far from every cell (its index saturates) finds nothing and does not panic.
+        let mut none = true;
+        grid.for_each_within(Vec3A::splat(3.0e38), r, |_| none = false);
+        grid.for_each_within(Vec3A::splat(-3.0e38), r, |_| none = false);
+        assert!(none);
     }
 }

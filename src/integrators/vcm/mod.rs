@@ -32,7 +32,7 @@ mod grid;
 mod light_path;
 mod mis;
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3A};
@@ -224,6 +224,8 @@ impl Integrator for Vcm {
             let t_camera = Instant::now();
             let seed = settings.seed;
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
+            // The delta-only camera paths, counted with the others in the statistics.
+            let delta_paths = AtomicU64::new(0);
             let values: Vec<Vec3A> = samples
                 .par_iter_mut()
                 .zip(delta.par_iter_mut())
@@ -241,11 +243,12 @@ impl Integrator for Vcm {
                     // Delta paths where an earlier iteration's camera paths saw through a
                     // mirror or glass, or saw varying emission (a light's edge); decided
                     // before this iteration's paths, so that their count does not depend on them.
-                    let only = if *seen_delta || sp_stats.variance().is_some_and(|v| v > 0.0) {
+                    let only = if *seen_delta || sp_stats.varies() {
                         DELTA_CAMERA_PATHS
                     } else {
                         0
                     };
+                    delta_paths.fetch_add(u64::from(only), Ordering::Relaxed);
                     let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false);
                     let (mut spec, mut rest) = (finite(first.specular), finite(first.rest));
                     px.add(spec + rest);
@@ -266,7 +269,8 @@ impl Integrator for Vcm {
                     finite(mean + splat)
                 })
                 .collect();
-            stats.camera_paths += extra.iter().map(|&e| u64::from(e)).sum::<u64>();
+            stats.camera_paths +=
+                extra.iter().map(|&e| u64::from(e)).sum::<u64>() + delta_paths.into_inner();
             if extra_budget > 0 {
                 let rays = (n_paths as u64 + extra_budget) as f64 * RAYS_PER_CAMERA_SAMPLE;
                 allocate(&samples, rays as u64, &mut extra);
