@@ -566,4 +566,37 @@ mod tests {
             assert!(hits > 100 || n < 40, "case {case}: {hits} hits");
         }
     }
+
+    /// The hit children go on top of what the stack held (left untouched), far to near, the
+    /// higher slot nearer on equal distances: what a stable sort by distance gives.
+    #[test]
+    fn children_are_pushed_far_to_near() {
+        use super::{WIDTH, push_far_to_near};
+        let mut rng = Rng::new(3);
+        let node = WideNode {
+            planes: [[glam::Vec4::ZERO; 2]; 6],
+            child: std::array::from_fn(|k| 100 + k as u32),
+        };
+        for _ in 0..5000 {
+            let mask = (rng.f32() * 256.0) as u32 & 0xff;
+            // Few distinct distances, so that ties are common.
+            let near: [f32; WIDTH] = std::array::from_fn(|_| (rng.f32() * 4.0).floor());
+            let below = (rng.f32() * 5.0) as usize;
+            let mut stack = arrayvec::ArrayVec::<(u32, f32), 64>::new();
+            for k in 0..below {
+                stack.push((k as u32, -1.0 - k as f32));
+            }
+            push_far_to_near(&node, mask, &near, &mut stack);
+            let mut want: Vec<(u32, f32)> = (0..WIDTH)
+                .filter(|&k| mask & (1 << k) != 0)
+                .map(|k| (100 + k as u32, near[k]))
+                .collect();
+            // Bottom to top: farthest first; equal distances keep slot order (higher on top).
+            want.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let below_kept: Vec<(u32, f32)> =
+                (0..below).map(|k| (k as u32, -1.0 - k as f32)).collect();
+            assert_eq!(&stack[..below], &below_kept[..]);
+            assert_eq!(&stack[below..], &want[..], "mask {mask:#x}, near {near:?}");
+        }
+    }
 }
