@@ -136,6 +136,17 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
+    /// The points the grid finds within `r` of `q` are exactly a brute-force scan's, each once.
+    fn assert_finds_what_brute_force_finds(grid: &Grid, points: &[Vec3A], q: Vec3A, r: f32) {
+        let mut found = Vec::new();
+        grid.for_each_within(q, r, |i| found.push(i));
+        found.sort_unstable();
+        let expected: Vec<usize> = (0..points.len())
+            .filter(|&i| (points[i] - q).length_squared() <= r * r)
+            .collect();
+        assert_eq!(found, expected, "query {q}");
+    }
+
     /// The grid finds exactly the points a brute-force scan finds, each once.
     #[test]
     fn grid_finds_what_brute_force_finds() {
@@ -148,13 +159,7 @@ mod tests {
         assert!(grid.build(&points, r));
         for _ in 0..300 {
             let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 5.0 - 1.5;
-            let mut found = Vec::new();
-            grid.for_each_within(q, r, |i| found.push(i));
-            found.sort_unstable();
-            let expected: Vec<usize> = (0..points.len())
-                .filter(|&i| (points[i] - q).length_squared() <= r * r)
-                .collect();
-            assert_eq!(found, expected);
+            assert_finds_what_brute_force_finds(&grid, &points, q, r);
         }
     }
 
@@ -171,13 +176,7 @@ mod tests {
         assert!(grid.build(&points, r));
         for _ in 0..500 {
             let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.05;
-            let mut found = Vec::new();
-            grid.for_each_within(q, r, |i| found.push(i));
-            found.sort_unstable();
-            let expected: Vec<usize> = (0..points.len())
-                .filter(|&i| (points[i] - q).length_squared() <= r * r)
-                .collect();
-            assert_eq!(found, expected);
+            assert_finds_what_brute_force_finds(&grid, &points, q, r);
         }
         // A query far from every cell (its index saturates) finds nothing and does not panic.
         let mut none = true;
