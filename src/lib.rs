@@ -25,6 +25,13 @@ pub mod internals;
 // Inside the crate every module keeps its short path (`crate::scene::Scene`).
 pub(crate) use internals::*;
 
+/// The repository's root, for unit tests that read its examples and docs: the library's
+/// manifest, and so `CARGO_MANIFEST_DIR`, is `lib/`, one folder below it.
+#[cfg(test)]
+pub(crate) fn repo_root() -> &'static std::path::Path {
+    std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+}
+
 pub use internals::api::{Document, Failure, Prepared, Rendered, load, prepare, render};
 pub use internals::cancel::Cancel;
 pub use internals::diag::{

@@ -281,10 +281,7 @@ mod tests {
 
     #[test]
     fn every_anchor_is_a_section_of_the_reference() {
-        let reference = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(REFERENCE),
-        )
-        .unwrap();
+        let reference = std::fs::read_to_string(crate::repo_root().join(REFERENCE)).unwrap();
         let anchors: Vec<String> = reference
             .lines()
             .filter_map(|l| l.strip_prefix("## ").or_else(|| l.strip_prefix("### ")))

@@ -183,7 +183,7 @@ mod adaptive_tests {
         seed: u64,
         threads: Option<usize>,
     ) -> Vec<[f64; 3]> {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+        let path = crate::repo_root().join("examples/cornell.scn");
         let mut scene: Scene = load_file(&path, &EvalOptions::default())
             .unwrap()
             .scene

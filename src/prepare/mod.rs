@@ -745,7 +745,7 @@ mod tests {
     /// anything else.
     #[test]
     fn hits_leave_out_uv_only_where_no_texture_reads_it() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+        let root = crate::repo_root().join("examples");
         let (mut kept, mut left_out, mut absorbing_kept) = (0usize, 0usize, 0usize);
         // Revolve hits with `uv` kept and left out.
         let mut revolves = (0usize, 0usize);

@@ -467,7 +467,7 @@ mod tests {
     #[test]
     fn shipped_sky_puts_the_sun_where_the_generator_drew_it() {
         // examples/textures/sky.hdr has a sun 35 degrees up at longitude 0.6 rad from +z.
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/textures/sky.hdr");
+        let path = crate::repo_root().join("examples/textures/sky.hdr");
         let img = crate::scene::load_image(&path, crate::scene::ColorSpace::Linear).unwrap();
         let env = EnvironmentMap::new(&img, 1.0, DAffine3::IDENTITY);
         let (elev, phi) = (35f32.to_radians(), 0.6f32);

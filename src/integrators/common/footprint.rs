@@ -158,8 +158,7 @@ mod tests {
     /// all three take the same lobes.
     #[test]
     fn the_footprint_follows_the_beam_through_the_glass() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/reference/caustic.scn");
+        let path = crate::repo_root().join("tools/reference/caustic.scn");
         let scene = load_file(&path, &EvalOptions::default())
             .unwrap()
             .scene

@@ -9,7 +9,7 @@ use crate::scene::Scene;
 
 /// The Cornell example at `res` x `res` pixels with `photons` per iteration, seed 4.
 fn cornell(res: u32, photons: u64) -> (Scene, EffectiveSettings) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cornell.scn");
+    let path = crate::repo_root().join("examples/cornell.scn");
     let mut scene = load_file(&path, &EvalOptions::default())
         .unwrap()
         .scene
@@ -224,7 +224,7 @@ fn a_cancelled_photon_pass_stops_at_once() {
 /// `alpha` 1 (the radius stays as it started): (median, 5th, 95th percentile), and the median
 /// of the same ratio for the earlier rule (one footprint at the look-at distance).
 fn radius_over_footprint(example: &str) -> ((f64, f64, f64), f64) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+    let path = crate::repo_root()
         .join("examples")
         .join(format!("{example}.scn"));
     let mut scene = load_file(&path, &EvalOptions::default())
@@ -321,7 +321,7 @@ fn image_of(
 /// difference, and the test checks that the same bound would catch it.
 #[test]
 fn moving_look_at_along_the_line_of_sight_leaves_the_image_as_it_is() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/smallppm_far.scn");
+    let path = crate::repo_root().join("examples/smallppm_far.scn");
     let base = load_file(&path, &EvalOptions::default())
         .unwrap()
         .scene
@@ -427,7 +427,7 @@ mod census {
     use crate::scene::Scene;
 
     fn example(name: &str) -> (Scene, EffectiveSettings) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        let path = crate::repo_root()
             .join("examples")
             .join(format!("{name}.scn"));
         let scene = load_file(&path, &EvalOptions::default())

@@ -264,7 +264,7 @@ fn the_reader_builds_the_grammars_tree() {
 /// deterministic places.
 #[test]
 fn the_reader_reads_the_repositorys_scenes_as_pest_does() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = crate::repo_root();
     let mut texts = Vec::new();
     for dir in ["examples", "tests/good", "tests/good/parts", "tests/bad"] {
         let Ok(entries) = std::fs::read_dir(root.join(dir)) else {
