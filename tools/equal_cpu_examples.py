@@ -22,7 +22,7 @@ only when it is above 1.05 by more than twice its noise, as a win when it is bel
 than twice its noise.
 
     python3 -m venv .venv && .venv/bin/pip install numpy OpenEXR
-    cargo build --release --features cli
+    cargo build --release --bin sppm-lang
     .venv/bin/python tools/equal_cpu_examples.py --binary target/release/sppm-lang \\
         --width 64 --cpu 3 --ref-cpu 40 --seeds 3 --jobs 2 --cache target/ecx \\
         --markdown /tmp/table.md

@@ -1,7 +1,7 @@
 //! Joins rendered frames into a looping GIF (each frame quantised to its own 256 colours).
 //!
 //! ```text
-//! cargo run --release --bin frames-to-gif -- OUTPUT.gif DELAY_MS FRAME.png...
+//! cargo run --release --features gif --bin frames-to-gif -- OUTPUT.gif DELAY_MS FRAME.png...
 //! ```
 //!
 //! The frames are taken in the order given and must all have the size of the first.

@@ -12,6 +12,10 @@
 //!
 //! Test code (from a file's `#[cfg(test)]` on, and files named `tests.rs`) is not part of the
 //! product's dependency graph and is not checked: a unit test may load a scene from text.
+//!
+//! The library is the package `sppm-lang`, whose manifest (`lib/Cargo.toml`) takes its sources
+//! from this repository's `src/`; the first test checks that, so the files read here are the
+//! ones the library compiles.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -259,7 +263,9 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// The library's modules: `src/` minus the crate root and the file that declares the modules
-/// (`internals.rs`), the binaries and the command line.
+/// (`internals.rs`), the binaries and the command line. Those (`main.rs`, `cli/`, `bin/`) are
+/// the root package's, another crate: the compiler already holds them to the library's public
+/// items, and `crate::` in them is not the library.
 fn library_files() -> Vec<(String, PathBuf)> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
@@ -286,6 +292,13 @@ fn library_files() -> Vec<(String, PathBuf)> {
 
 #[test]
 fn no_module_imports_from_a_stage_above_it() {
+    // The files below are the library's only while its manifest's crate root is `src/lib.rs`.
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("lib/Cargo.toml");
+    let manifest = std::fs::read_to_string(&manifest).expect("lib/Cargo.toml");
+    assert!(
+        manifest.contains("path = \"../src/lib.rs\""),
+        "lib/Cargo.toml no longer builds the library from src/lib.rs"
+    );
     let mut all = Vec::new();
     let files = library_files();
     assert!(files.len() > 50, "found only {} library files", files.len());
