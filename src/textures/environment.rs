@@ -243,7 +243,7 @@ impl EnvironmentMap {
 
 #[cfg(test)]
 mod tests {
-    use std::path::{Path, PathBuf};
+    use std::path::PathBuf;
 
     use glam::{DMat3, DVec3};
 

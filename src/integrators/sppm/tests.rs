@@ -413,7 +413,7 @@ fn extra_camera_samples_calm_the_light_edge() {
 /// Measurement (not a check): where an SPPM iteration's photons go and how many reach a visible
 /// point, with the visible points' radii, on the Cornell box and on `smallppm_far`. Run:
 ///
-///     cargo test --release -p sppm-lang --lib sppm::tests::census -- --ignored --nocapture
+///     cargo test --release --lib sppm::tests::census -- --ignored --nocapture
 mod census {
     use glam::Vec3A;
 
