@@ -9,8 +9,7 @@ mod running;
 #[path = "../common/slurm.rs"]
 mod slurm;
 
-// The commands behind a Cargo feature outside the default are tested when it is on
-// (`cargo test --features full`, a CI step).
+// The commands behind a Cargo feature (all on by default) are tested when it is on.
 #[cfg(feature = "chart")]
 mod chart_cli;
 mod cli_exit;
