@@ -31,7 +31,7 @@ struct State {
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
-/// path with the pixel's index.
+/// path serving the pixel (the pixel's index modulo the light paths' count).
 pub(super) fn radiance(
     ctx: &Context,
     x: u32,

@@ -24,7 +24,7 @@ pub(super) struct Factors {
     pub(super) vm_weight: f64,
     /// `mis(1 / eta)` when connections are used, else 0.
     pub(super) vc_weight: f64,
-    /// Number of light paths per iteration (one per pixel).
+    /// Number of light paths per iteration (one per pixel, or a quarter as many).
     pub(super) light_paths: f64,
 }
 

@@ -2,10 +2,12 @@
 //! bidirectional path tracing (`bpt`: connections only) and light tracing (`lt`: light paths
 //! connected to the camera only) as flags of the same code.
 //!
-//! Each iteration traces one light path per pixel (`light_path.rs`): their non-specular
-//! vertices are stored, and each is connected to a lens point, splatted onto the film. Then one
-//! camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex, next-event
-//! estimation, connections to every vertex of the light path with the same index, and merges
+//! Each iteration traces one light path per pixel, or with merging a quarter as many where
+//! that measured better in the first iterations (`light_count.rs`; `light_path.rs`): their
+//! non-specular vertices are stored, and each is connected to a lens point, splatted onto the
+//! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
+//! next-event estimation, connections to every vertex of the light path with the pixel's index
+//! (modulo the light paths' count), and merges
 //! with the light vertices within the iteration's radius (`grid.rs`). Every technique is
 //! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
@@ -29,6 +31,7 @@
 
 mod camera_path;
 mod grid;
+mod light_count;
 mod light_path;
 mod mis;
 
@@ -47,6 +50,7 @@ use crate::materials::{Bsdf, BsdfSample, TransportMode};
 use crate::prepare::{PreparedScene, SurfaceHit};
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
+use light_count::LightCount;
 use light_path::{LightVertex, Splat};
 use mis::{Factors, Quantities};
 
@@ -195,25 +199,32 @@ impl Integrator for Vcm {
         // by a delta bounce.
         let mut delta = vec![(SampleStats::default(), false); n_paths];
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
+        // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
+        let mut light_count = LightCount::default();
         progressive::render_means(job, |iter, stats| {
             let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
             let radius = radius.max(1e-7);
+            let n_light = if mode.use_vm {
+                light_count.light_paths(iter, n_paths)
+            } else {
+                n_paths
+            };
             let mut ctx = Context {
                 scene,
                 camera: scene.camera,
                 mode,
-                factors: Factors::new(radius, n_paths as f64, mode.use_vc, mode.use_vm),
+                factors: Factors::new(radius, n_light as f64, mode.use_vc, mode.use_vm),
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
                 radius: radius as f32,
-                vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_paths as f64))
+                vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_light as f64))
                     as f32,
                 vertices: &[],
                 grid: None,
             };
             let t_light = Instant::now();
-            if !pass.run(&ctx, n_paths, settings.seed, iter, cancel) {
+            if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
                 return None;
             }
             let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
@@ -237,8 +248,10 @@ impl Integrator for Vcm {
                         return Vec3A::ZERO;
                     }
                     let mut rng = Stream::VcmCamera.rng(seed, iter, i as u64);
-                    let start = if i == 0 { 0 } else { ends[i - 1] as usize };
-                    let own = &vertices[start..ends[i] as usize];
+                    // With fewer light paths than pixels, each serves every n_light-th pixel.
+                    let j = i % n_light;
+                    let start = if j == 0 { 0 } else { ends[j - 1] as usize };
+                    let own = &vertices[start..ends[j] as usize];
                     let (x, y) = (i as u32 % w, i as u32 / w);
                     // Delta paths where an earlier iteration's camera paths saw through a
                     // mirror or glass, or saw varying emission (a light's edge); decided
@@ -275,8 +288,11 @@ impl Integrator for Vcm {
                 let rays = (n_paths as u64 + extra_budget) as f64 * RAYS_PER_CAMERA_SAMPLE;
                 allocate(&samples, rays as u64, &mut extra);
             }
+            if mode.use_vm {
+                light_count.observe(iter, &values);
+            }
             stats.camera_time += t_camera.elapsed();
-            (!cancel.load(Ordering::Relaxed)).then_some((values, n_paths as u64))
+            (!cancel.load(Ordering::Relaxed)).then_some((values, n_light as u64))
         })
     }
 }
@@ -305,11 +321,13 @@ struct LightPass {
 }
 
 impl LightPass {
-    /// Traces one light path per pixel into the buffers. `false` when cancelled.
+    /// Traces `n_paths` light paths into the buffers, light tracing onto a film of `n_pixels`.
+    /// `false` when cancelled.
     fn run(
         &mut self,
         ctx: &Context,
         n_paths: usize,
+        n_pixels: usize,
         seed: u64,
         iter: u32,
         cancel: &AtomicBool,
@@ -338,7 +356,7 @@ impl LightPass {
         self.vertices.clear();
         self.ends.clear();
         self.film.clear();
-        self.film.resize(n_paths, DVec3::ZERO);
+        self.film.resize(n_pixels, DVec3::ZERO);
         for chunk in &self.chunks {
             let base = self.vertices.len() as u32;
             self.ends.extend(chunk.ends.iter().map(|x| x + base));
