@@ -1,5 +1,5 @@
-//! The real binary run once under an address-space limit (`prlimit --as`), its wall time and
-//! peak resident memory measured (`/usr/bin/time -v`), killed after a timeout.
+//! The real binary run once under an address-space limit (`prlimit --as`), its wall and CPU
+//! time and peak resident memory measured (`/usr/bin/time -v`), killed after a timeout.
 //! (Included with `#[path]` by the tests that use it.)
 
 use std::path::Path;
@@ -11,7 +11,12 @@ pub struct Measured {
     pub code: Option<i32>,
     /// The program's stderr (without `time`'s report).
     pub stderr: String,
+    /// Wall seconds.
     pub seconds: f64,
+    /// User + system CPU seconds when `/usr/bin/time` could tell, else the wall seconds: the
+    /// figure a bound on the program's own work compares, which the machine's other load
+    /// stretches far less than the wall time.
+    pub cpu_seconds: f64,
     /// Peak resident memory (bytes), when `/usr/bin/time` could tell.
     pub peak: Option<u64>,
 }
@@ -59,6 +64,18 @@ pub fn run_measured(args: &[&str], address_space: u64, timeout: Duration) -> Mea
         .find_map(|l| l.trim().strip_prefix("Maximum resident set size (kbytes):"))
         .and_then(|v| v.trim().parse::<u64>().ok())
         .map(|kb| kb * 1024);
+    let field = |name: &str| {
+        text.lines()
+            .find_map(|l| l.trim().strip_prefix(name))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+    };
+    let cpu_seconds = match (
+        field("User time (seconds):"),
+        field("System time (seconds):"),
+    ) {
+        (Some(u), Some(s)) => u + s,
+        _ => seconds,
+    };
     let bytes = std::fs::read(stderr_file.path()).unwrap_or_default();
     // `time` reports a child killed by a signal with a line of its own; the exit code it
     // passes on then is not the program's.
@@ -71,6 +88,7 @@ pub fn run_measured(args: &[&str], address_space: u64, timeout: Duration) -> Mea
         },
         stderr: String::from_utf8_lossy(&bytes).into_owned(),
         seconds,
+        cpu_seconds,
         peak,
     }
 }

@@ -42,10 +42,11 @@ fn a_chain_of_includes_each_under_the_limit_is_refused_by_their_total() {
         Duration::from_secs(300),
     );
     println!(
-        "ten includes of {:.1} MB each, limit 512 MiB: exit {:?} in {:.2} s, peak {}",
+        "ten includes of {:.1} MB each, limit 512 MiB: exit {:?} in {:.2} s ({:.2} CPU-s), peak {}",
         filler.len() as f64 / 1e6,
         m.code,
         m.seconds,
+        m.cpu_seconds,
         peak_text(m.peak)
     );
     assert_eq!(m.code, Some(1), "{}", m.stderr);
@@ -87,9 +88,10 @@ fn forty_strings_of_16_mib_are_refused_by_the_total() {
         Duration::from_secs(300),
     );
     println!(
-        "40 strings of 16 MiB, limit 512 MiB: exit {:?} in {:.2} s, peak {}",
+        "40 strings of 16 MiB, limit 512 MiB: exit {:?} in {:.2} s ({:.2} CPU-s), peak {}",
         m.code,
         m.seconds,
+        m.cpu_seconds,
         peak_text(m.peak)
     );
     assert_eq!(m.code, Some(1), "{}", m.stderr);
