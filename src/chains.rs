@@ -11,10 +11,7 @@ use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::Path;
 
-use exr::prelude::{
-    AttributeValue, Image as ExrImage, ReadChannels, ReadLayers, ReadSpecificChannel,
-    SpecificChannels, Text, Vec2, WritableImage,
-};
+use exr::prelude::{AttributeValue, ReadChannels, ReadLayers, ReadSpecificChannel, Text, Vec2};
 
 use crate::film::Image;
 
@@ -82,23 +79,17 @@ pub fn write_chain(path: &Path, image: &Image, info: &ChainInfo) -> Result<(), S
             image.pixels.len()
         ));
     }
-    let width = image.width as usize;
-    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-        let v = image.pixels[p.y() * width + p.x()];
-        (v[0] as f32, v[1] as f32, v[2] as f32)
-    });
-    let mut exr = ExrImage::from_channels((width, image.height as usize), channels);
-    for (key, value) in KEYS.iter().zip(info.values()) {
-        // Keys and values are ASCII (numbers, hex, method names).
-        exr.attributes.other.insert(
-            Text::from(*key),
-            AttributeValue::Text(Text::from(value.as_str())),
-        );
-    }
+    let values = info.values();
+    // Keys and values are ASCII (numbers, hex, method names).
+    let attributes: Vec<(&str, &str)> = KEYS
+        .iter()
+        .zip(&values)
+        .map(|(key, value)| (*key, value.as_str()))
+        .collect();
     crate::atomic_file::write_atomic(path, |_, file| {
         let mut w = BufWriter::new(file);
-        exr.write()
-            .to_buffered(&mut w)
+        image
+            .write_exr(&mut w, &attributes)
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
         w.flush()
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))

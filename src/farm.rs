@@ -176,9 +176,17 @@ pub fn is_complete(work: &Work, task: &Task) -> bool {
         return false;
     }
     match work {
-        Work::Frames { .. } => image::ImageReader::open(&task.output)
-            .and_then(|r| r.with_guessed_format())
-            .is_ok_and(|r| r.into_dimensions().is_ok()),
+        // The bytes through the reader the scene's images use (`ImageReader::open` would build
+        // every format's decoder a second time, for a file reader): the format by the
+        // extension, unless the content says otherwise, as `open` does.
+        Work::Frames { .. } => std::fs::read(&task.output).is_ok_and(|bytes| {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(&bytes[..]));
+            if let Ok(format) = image::ImageFormat::from_path(&task.output) {
+                r.set_format(format);
+            }
+            r.with_guessed_format()
+                .is_ok_and(|r| r.into_dimensions().is_ok())
+        }),
         Work::Chains { count, .. } => read_chain(&task.output).is_ok_and(|c| {
             c.info.chain == task.index && c.info.chains == *count && c.info.iterations > 0
         }),
@@ -309,6 +317,29 @@ mod tests {
         assert!(script.contains("--iterations 4\n"), "{script}");
         assert!(!f.merge_needed());
         assert_eq!(f.merge_script(), None);
+    }
+
+    /// EXR frames are read by their header as PNG ones are; a file named `.png` that holds
+    /// an EXR is still a finished frame (the content decides), and an EXR cut inside its header
+    /// is not.
+    #[test]
+    fn finished_exr_frames_are_skipped() {
+        let dir = tempfile::tempdir().unwrap();
+        let names = ["f_0.exr", "f_1.exr", "f_2.png", "f_3.exr"];
+        let tasks: Vec<Task> = (0..4)
+            .map(|k| Task {
+                index: k,
+                output: dir.path().join(names[k as usize]),
+            })
+            .collect();
+        Image::new(3, 2).write(&tasks[0].output, 1.0).unwrap();
+        Image::new(3, 2).write(&tasks[1].output, 1.0).unwrap();
+        std::fs::copy(&tasks[1].output, &tasks[2].output).unwrap();
+        let whole = std::fs::read(&tasks[1].output).unwrap();
+        std::fs::write(&tasks[3].output, &whole[..20]).unwrap();
+        let f = farm(Work::Frames { first: 0, last: 3 }, tasks, dir.path());
+        let left: Vec<u32> = f.remaining().iter().map(|t| t.index).collect();
+        assert_eq!(left, [3]);
     }
 
     /// A chain is done when its file is that chain's; the merge lists every chain.

@@ -2,10 +2,13 @@
 //! Files are written atomically: a temporary file in the target directory, then a rename.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
-use image::{ImageFormat, Rgb, Rgb32FImage, RgbImage};
+// The PNG encoder by name, not `write_to`: that builds every format's encoder for the
+// writer's type (JPEG, GIF, HDR as well), code the library compiles and never runs.
+use image::codecs::png::PngEncoder;
+use image::{Rgb, RgbImage};
 
 use crate::diag::Diagnostic;
 
@@ -90,14 +93,10 @@ impl Image {
                     let p = self.get(x, y);
                     Rgb(p.map(|v| encode_srgb(v * exposure)))
                 });
-                img.write_to(&mut w, ImageFormat::Png)
+                img.write_with_encoder(PngEncoder::new(&mut w))
+                    .map_err(|e| e.to_string())
             }
-            "exr" => {
-                let img = Rgb32FImage::from_fn(self.width, self.height, |x, y| {
-                    Rgb(self.get(x, y).map(|v| v as f32))
-                });
-                img.write_to(&mut w, ImageFormat::OpenExr)
-            }
+            "exr" => self.write_exr(&mut w, &[]).map_err(|e| e.to_string()),
             _ => {
                 return Err(format!(
                     "unknown image format `.{ext}` for `{}`: use .png or .exr",
@@ -115,6 +114,36 @@ impl Image {
         })?;
         w.flush()
             .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+    }
+}
+
+/// A file writer [`Image::write_exr`] takes: one type for every caller, so `exr`'s writer is
+/// compiled once (it is generic over the writer and the pixel source).
+pub(crate) trait WriteSeek: Write + Seek {}
+
+impl<W: Write + Seek> WriteSeek for W {}
+
+impl Image {
+    /// The image as a linear f32 RGB EXR (`exr`'s default encoding), with `attributes` added
+    /// to its header as text. Render images and chain files are both written here.
+    pub(crate) fn write_exr(
+        &self,
+        w: &mut dyn WriteSeek,
+        attributes: &[(&str, &str)],
+    ) -> Result<(), exr::error::Error> {
+        use exr::prelude::{AttributeValue, Image as ExrImage, SpecificChannels, Text, Vec2};
+        let width = self.width as usize;
+        let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+            let v = self.pixels[p.y() * width + p.x()];
+            (v[0] as f32, v[1] as f32, v[2] as f32)
+        });
+        let mut exr = ExrImage::from_channels((width, self.height as usize), channels);
+        for &(key, value) in attributes {
+            exr.attributes
+                .other
+                .insert(Text::from(key), AttributeValue::Text(Text::from(value)));
+        }
+        exr::prelude::WritableImage::write(&exr).to_buffered(w)
     }
 }
 

@@ -10,10 +10,13 @@
 
 mod axes;
 
+use std::ops::Range;
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::coord::combinators::LogCoord;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// One curve: a label for the legend and its points in drawing order.
@@ -181,41 +184,41 @@ fn write(path: &Path, size: (u32, u32), what: &impl Paint) -> Result<(), String>
     })
 }
 
-type Axis<C> = plotters::coord::combinators::WithKeyPoints<C>;
-
-/// A log axis over `[lo, hi]` with the ticks of [`axes::log_ticks`].
-fn log_axis((lo, hi): (f64, f64)) -> Axis<plotters::coord::combinators::LogCoord<f64>> {
-    let (bold, light) = axes::log_ticks(lo, hi);
-    (lo..hi)
-        .log_scale()
-        .with_key_points(bold)
-        .with_light_points(light)
-}
-
-/// A linear axis with the ticks of [`axes::linear_ticks`]. (plotters' `WithKeyPoints` over its
-/// linear `f64` axis has no label formatting, so the axis is its own type.)
-struct Linear {
-    coord: plotters::coord::types::RangedCoordf64,
+/// An axis over `[lo, hi]`, log or linear, with the ticks of [`axes::log_ticks`] or
+/// [`axes::linear_ticks`]. One type for both kinds: plotters' chart code is generic over the
+/// axis types, and a type per kind would compile all of it once for each of the four pairs.
+struct Axis {
+    scale: Scale,
     bold: Vec<f64>,
     light: Vec<f64>,
 }
 
-/// A linear axis over `[lo, hi]`.
-fn linear_axis((lo, hi): (f64, f64)) -> Linear {
-    let (bold, light) = axes::linear_ticks(lo, hi);
-    Linear {
-        coord: (lo..hi).into(),
-        bold,
-        light,
-    }
+enum Scale {
+    Log(LogCoord<f64>),
+    Linear(RangedCoordf64),
 }
 
-impl Ranged for Linear {
+fn axis((lo, hi): (f64, f64), log: bool) -> Axis {
+    let ((bold, light), scale) = if log {
+        (
+            axes::log_ticks(lo, hi),
+            Scale::Log((lo..hi).log_scale().into()),
+        )
+    } else {
+        (axes::linear_ticks(lo, hi), Scale::Linear((lo..hi).into()))
+    };
+    Axis { scale, bold, light }
+}
+
+impl Ranged for Axis {
     type FormatOption = DefaultFormatting;
     type ValueType = f64;
 
     fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
-        self.coord.map(value, limit)
+        match &self.scale {
+            Scale::Log(c) => c.map(value, limit),
+            Scale::Linear(c) => c.map(value, limit),
+        }
     }
 
     fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
@@ -226,8 +229,18 @@ impl Ranged for Linear {
         }
     }
 
-    fn range(&self) -> std::ops::Range<f64> {
-        self.coord.range()
+    fn range(&self) -> Range<f64> {
+        match &self.scale {
+            Scale::Log(c) => c.range(),
+            Scale::Linear(c) => c.range(),
+        }
+    }
+
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> Range<i32> {
+        match &self.scale {
+            Scale::Log(c) => c.axis_pixel_range(limit),
+            Scale::Linear(c) => c.axis_pixel_range(limit),
+        }
     }
 }
 
@@ -265,79 +278,54 @@ where
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(80);
-    // The four axis kinds are four coordinate types in plotters.
-    macro_rules! body {
-        ($chart:expr) => {{
-            let mut chart = $chart;
-            chart
-                .configure_mesh()
-                .x_desc(&spec.x_label)
-                .y_desc(&spec.y_label)
-                .x_label_formatter(&|v| axes::tick(*v))
-                .y_label_formatter(&|v| axes::tick(*v))
-                .draw()
-                .map_err(err)?;
-            if let Some(f) = floor {
-                let line = vec![(xs.0, f.value), (xs.1, f.value)];
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        line,
-                        6,
-                        6,
-                        FLOOR_COLOUR.stroke_width(2),
-                    ))
-                    .map_err(err)?;
-            }
-            for (i, s) in series.iter().enumerate() {
-                let color = colour_of(i, s);
-                let pts: Vec<(f64, f64)> = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|(x, y)| {
-                        x.is_finite()
-                            && y.is_finite()
-                            && (!spec.log_x || *x > 0.0)
-                            && (!spec.log_y || *y > 0.0)
-                    })
-                    .collect();
-                let style = color.stroke_width(2);
-                match dash_pattern(s.dash) {
-                    None => chart
-                        .draw_series(LineSeries::new(pts.clone(), style))
-                        .map(|_| ()),
-                    Some((on, off)) => chart
-                        .draw_series(DashedLineSeries::new(pts.clone(), on, off, style))
-                        .map(|_| ()),
-                }
-                .map_err(err)?;
-                chart
-                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
-                    .map_err(err)?;
-            }
-        }};
+    let mut chart = builder
+        .build_cartesian_2d(axis(xs, spec.log_x), axis(ys, spec.log_y))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(&spec.x_label)
+        .y_desc(&spec.y_label)
+        .x_label_formatter(&|v| axes::tick(*v))
+        .y_label_formatter(&|v| axes::tick(*v))
+        .draw()
+        .map_err(err)?;
+    if let Some(f) = floor {
+        let line = vec![(xs.0, f.value), (xs.1, f.value)];
+        chart
+            .draw_series(DashedLineSeries::new(
+                line,
+                6,
+                6,
+                FLOOR_COLOUR.stroke_width(2),
+            ))
+            .map_err(err)?;
     }
-    match (spec.log_x, spec.log_y) {
-        (true, true) => body!(
-            builder
-                .build_cartesian_2d(log_axis(xs), log_axis(ys))
-                .map_err(err)?
-        ),
-        (true, false) => body!(
-            builder
-                .build_cartesian_2d(log_axis(xs), linear_axis(ys))
-                .map_err(err)?
-        ),
-        (false, true) => body!(
-            builder
-                .build_cartesian_2d(linear_axis(xs), log_axis(ys))
-                .map_err(err)?
-        ),
-        (false, false) => body!(
-            builder
-                .build_cartesian_2d(linear_axis(xs), linear_axis(ys))
-                .map_err(err)?
-        ),
+    for (i, s) in series.iter().enumerate() {
+        let color = colour_of(i, s);
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(x, y)| {
+                x.is_finite()
+                    && y.is_finite()
+                    && (!spec.log_x || *x > 0.0)
+                    && (!spec.log_y || *y > 0.0)
+            })
+            .collect();
+        let style = color.stroke_width(2);
+        match dash_pattern(s.dash) {
+            None => chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map(|_| ()),
+            Some((on, off)) => chart
+                .draw_series(DashedLineSeries::new(pts.clone(), on, off, style))
+                .map(|_| ()),
+        }
+        .map_err(err)?;
+        chart
+            .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+            .map_err(err)?;
     }
     draw_legend(&legend, series, floor).map_err(err)
 }
