@@ -8,9 +8,7 @@ use rayon::prelude::*;
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
 use super::triangles::{Meshes, PairTest};
-use super::wide::{
-    Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, push_far_to_near, still_near,
-};
+use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
@@ -42,6 +40,9 @@ pub struct Bvh {
     leaves: Leaves,
     meshes: Meshes,
     unbounded: Vec<(AnyShape, u32)>,
+    /// The AVX tests, where the CPU has them: detected once here, not on every query.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    avx: Option<Avx>,
 }
 
 /// What a closest hit is on: a shape, or triangle `k` of a mesh (with the hit's barycentric
@@ -181,6 +182,7 @@ impl Bvh {
             leaves,
             meshes,
             unbounded,
+            avx: Avx::detect(),
         })
     }
 
@@ -260,16 +262,29 @@ impl Bvh {
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = Avx::detect() {
+        if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.
             return unsafe { self.intersect_avx(avx, ray, t_min, t_max) };
         }
+        self.intersect_halves(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::intersect_lazy`] four boxes at a time, out of line: a CPU with AVX never runs
+    /// it, and its frame stays out of every query's.
+    #[inline(never)]
+    fn intersect_halves(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(LazyHit, Surface<'_>, u32)> {
         self.closest_with(Halves, ray, t_min, t_max)
     }
 
-    /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX.
+    /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX (and POPCNT, which
+    /// the children's ranks use).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
+    #[target_feature(enable = "avx,popcnt")]
     fn intersect_avx(
         &self,
         avx: Avx,
@@ -326,7 +341,7 @@ impl Bvh {
                         stack.push((node.child[second], near[second]));
                         cur = node.child[first];
                     } else {
-                        push_far_to_near(node, mask, &near, &mut stack);
+                        test.push_sorted(node, mask, &near, &mut stack);
                         // (Never empty: three children or more were pushed.)
                         cur = stack.pop().map_or(cur, |h| h.0);
                     }
@@ -377,10 +392,16 @@ impl Bvh {
     /// [`Bvh::intersect_lazy`]).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = Avx::detect() {
+        if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.
             return unsafe { self.occluded_avx(avx, ray, t_min, t_max) };
         }
+        self.occluded_halves(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::occluded`] four boxes at a time, out of line as [`Bvh::intersect_halves`].
+    #[inline(never)]
+    fn occluded_halves(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.occluded_with(Halves, ray, t_min, t_max)
     }
 
