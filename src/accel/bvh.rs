@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
 use super::triangles::{Meshes, PairTest};
-use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, still_near};
+use super::wide::{
+    Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, push_far_to_near, still_near,
+};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
@@ -281,10 +283,9 @@ impl Bvh {
         self.closest_with(Halves, ray, t_min, t_max)
     }
 
-    /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX (and POPCNT, which
-    /// the children's ranks use).
+    /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,popcnt")]
+    #[target_feature(enable = "avx")]
     fn intersect_avx(
         &self,
         avx: Avx,
@@ -341,7 +342,7 @@ impl Bvh {
                         stack.push((node.child[second], near[second]));
                         cur = node.child[first];
                     } else {
-                        test.push_sorted(node, mask, &near, &mut stack);
+                        push_far_to_near(node, mask, &near, &mut stack);
                         // (Never empty: three children or more were pushed.)
                         cur = stack.pop().map_or(cur, |h| h.0);
                     }

@@ -80,19 +80,6 @@ pub(super) trait BoxTest: Copy {
     /// plane, parallel to it) is ignored. Unused slots are never in the mask. Both tests do
     /// the same operations in the same order, so they give the same bits.
     fn hit(self, node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
-
-    /// Pushes the hit children of `node` onto `stack` far to near, as [`push_far_to_near`]
-    /// does (the same entries in the same order).
-    #[inline(always)]
-    fn push_sorted<const N: usize>(
-        self,
-        node: &WideNode,
-        mask: u32,
-        near: &[f32; WIDTH],
-        stack: &mut ArrayVec<(u32, f32), N>,
-    ) {
-        push_far_to_near(node, mask, near, stack);
-    }
 }
 
 /// The box test four children at a time (SSE on x86-64).
@@ -127,13 +114,11 @@ impl BoxTest for Halves {
 pub(super) struct Avx(());
 
 impl Avx {
-    /// The AVX box test, if the CPU has AVX (and POPCNT, which every CPU with AVX has).
+    /// The AVX box test, if the CPU has AVX.
     #[inline]
     pub(super) fn detect() -> Option<Self> {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx")
-            && std::arch::is_x86_feature_detected!("popcnt")
-        {
+        if std::arch::is_x86_feature_detected!("avx") {
             return Some(Self(()));
         }
         None
@@ -150,23 +135,6 @@ impl BoxTest for Avx {
         }
         #[cfg(not(target_arch = "x86_64"))]
         Halves.hit(node, ray, t_min, t_max)
-    }
-
-    #[inline(always)]
-    fn push_sorted<const N: usize>(
-        self,
-        node: &WideNode,
-        mask: u32,
-        near: &[f32; WIDTH],
-        stack: &mut ArrayVec<(u32, f32), N>,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: an `Avx` value is made only after AVX and POPCNT were detected.
-            unsafe { push_ranked(node, mask, near, stack) }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        push_far_to_near(node, mask, near, stack);
     }
 }
 
@@ -202,50 +170,6 @@ unsafe fn hit_avx(node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32
     // SAFETY: `out` holds eight `f32`s.
     unsafe { _mm256_storeu_ps(out.as_mut_ptr(), near) };
     (mask, out)
-}
-
-/// [`push_far_to_near`] without its insertion sort: each hit child goes straight to its place,
-/// its rank counted from two compares of its entry distance with all eight at once (the
-/// children entered farther, and those entered as far in a lower slot, go below it). Entry
-/// distances of hit children are never NaN (see [`BoxTest::hit`]), so the ranks are distinct
-/// and fill `0..k` for `k` hit children: the insertion sort's order, ties included.
-///
-/// # Safety
-///
-/// The CPU must have AVX and POPCNT.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,popcnt")]
-#[inline]
-unsafe fn push_ranked<const N: usize>(
-    node: &WideNode,
-    mask: u32,
-    near: &[f32; WIDTH],
-    stack: &mut ArrayVec<(u32, f32), N>,
-) {
-    use std::arch::x86_64::*;
-    let base = stack.len();
-    // Eight entries are pushed and the unused ones dropped again: a fixed-size copy, no
-    // per-child push.
-    let mut sorted = [(0u32, 0.0f32); WIDTH];
-    // SAFETY: `near` holds eight `f32`s.
-    let all = unsafe { _mm256_loadu_ps(near.as_ptr()) };
-    let mut bits = mask;
-    while bits != 0 {
-        let slot = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let d = _mm256_set1_ps(near[slot]);
-        let farther = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(all, d)) as u32;
-        let as_far = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(all, d)) as u32;
-        let lower = (1u32 << slot) - 1;
-        let below = mask & ((farther & !lower) | (as_far & lower));
-        // (At most seven: the child itself is not below itself.)
-        sorted[below.count_ones() as usize % WIDTH] = (node.child[slot], near[slot]);
-    }
-    if stack.try_extend_from_slice(&sorted).is_ok() {
-        stack.truncate(base + mask.count_ones() as usize);
-    } else {
-        push_far_to_near(node, mask, near, stack);
-    }
 }
 
 /// Whether a child entered at `near` may still hold a hit closer than `t_max` (the test of
@@ -644,8 +568,8 @@ mod tests {
     }
 
     /// The hit children go on top of what the stack held (left untouched), far to near, the
-    /// higher slot nearer on equal distances: what a stable sort by distance gives. The AVX
-    /// push by ranks gives the same stack.
+    /// higher slot nearer on equal distances (-0 and +0 equal): what a stable sort by distance
+    /// gives.
     #[test]
     fn children_are_pushed_far_to_near() {
         use super::{WIDTH, push_far_to_near};
@@ -666,18 +590,7 @@ mod tests {
             for k in 0..below {
                 stack.push((k as u32, -1.0 - k as f32));
             }
-            let mut ranked = stack.clone();
-            // A stack with less room than eight entries above what it holds.
-            let mut tight: arrayvec::ArrayVec<(u32, f32), 9> = stack.iter().copied().collect();
             push_far_to_near(&node, mask, &near, &mut stack);
-            if let Some(avx) = Avx::detect() {
-                avx.push_sorted(&node, mask, &near, &mut ranked);
-                assert_eq!(ranked, stack, "mask {mask:#x}, near {near:?}");
-                if below + mask.count_ones() as usize <= 9 {
-                    avx.push_sorted(&node, mask, &near, &mut tight);
-                    assert_eq!(&tight[..], &stack[..], "mask {mask:#x}, near {near:?}");
-                }
-            }
             let mut want: Vec<(u32, f32)> = (0..WIDTH)
                 .filter(|&k| mask & (1 << k) != 0)
                 .map(|k| (100 + k as u32, near[k]))
