@@ -42,6 +42,9 @@ pub struct Bvh {
     leaves: Leaves,
     meshes: Meshes,
     unbounded: Vec<(AnyShape, u32)>,
+    /// The AVX tests, where the CPU has them: detected once here, not on every query.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    avx: Option<Avx>,
 }
 
 /// What a closest hit is on: a shape, or triangle `k` of a mesh (with the hit's barycentric
@@ -181,6 +184,7 @@ impl Bvh {
             leaves,
             meshes,
             unbounded,
+            avx: Avx::detect(),
         })
     }
 
@@ -260,10 +264,22 @@ impl Bvh {
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = Avx::detect() {
+        if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.
             return unsafe { self.intersect_avx(avx, ray, t_min, t_max) };
         }
+        self.intersect_halves(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::intersect_lazy`] four boxes at a time, out of line: a CPU with AVX never runs
+    /// it, and its frame stays out of every query's.
+    #[inline(never)]
+    fn intersect_halves(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(LazyHit, Surface<'_>, u32)> {
         self.closest_with(Halves, ray, t_min, t_max)
     }
 
@@ -377,10 +393,16 @@ impl Bvh {
     /// [`Bvh::intersect_lazy`]).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = Avx::detect() {
+        if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.
             return unsafe { self.occluded_avx(avx, ray, t_min, t_max) };
         }
+        self.occluded_halves(ray, t_min, t_max)
+    }
+
+    /// [`Bvh::occluded`] four boxes at a time, out of line as [`Bvh::intersect_halves`].
+    #[inline(never)]
+    fn occluded_halves(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.occluded_with(Halves, ray, t_min, t_max)
     }
 

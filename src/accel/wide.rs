@@ -568,7 +568,8 @@ mod tests {
     }
 
     /// The hit children go on top of what the stack held (left untouched), far to near, the
-    /// higher slot nearer on equal distances: what a stable sort by distance gives.
+    /// higher slot nearer on equal distances (-0 and +0 equal): what a stable sort by distance
+    /// gives.
     #[test]
     fn children_are_pushed_far_to_near() {
         use super::{WIDTH, push_far_to_near};
@@ -579,8 +580,11 @@ mod tests {
         };
         for _ in 0..5000 {
             let mask = (rng.f32() * 256.0) as u32 & 0xff;
-            // Few distinct distances, so that ties are common.
-            let near: [f32; WIDTH] = std::array::from_fn(|_| (rng.f32() * 4.0).floor());
+            // Few distinct distances, so that ties are common (-0 and +0 among them).
+            let near: [f32; WIDTH] = std::array::from_fn(|k| {
+                let x = (rng.f32() * 4.0).floor();
+                if x == 0.0 && k % 2 == 0 { -0.0 } else { x }
+            });
             let below = (rng.f32() * 5.0) as usize;
             let mut stack = arrayvec::ArrayVec::<(u32, f32), 64>::new();
             for k in 0..below {
@@ -592,7 +596,8 @@ mod tests {
                 .map(|k| (100 + k as u32, near[k]))
                 .collect();
             // Bottom to top: farthest first; equal distances keep slot order (higher on top).
-            want.sort_by(|a, b| b.1.total_cmp(&a.1));
+            // (-0 and +0 are equal distances.)
+            want.sort_by(|a, b| b.1.partial_cmp(&a.1).expect("no NaN"));
             let below_kept: Vec<(u32, f32)> =
                 (0..below).map(|k| (k as u32, -1.0 - k as f32)).collect();
             assert_eq!(&stack[..below], &below_kept[..]);
