@@ -176,10 +176,12 @@ pub fn is_complete(work: &Work, task: &Task) -> bool {
         return false;
     }
     match work {
-        // The bytes through the reader the scene's images use (`ImageReader::open` would build
-        // every format's decoder a second time, for a file reader): the format by the
-        // extension, unless the content says otherwise, as `open` does.
-        Work::Frames { .. } => std::fs::read(&task.output).is_ok_and(|bytes| {
+        // The file's first MiB through the reader the scene's images use (`ImageReader::open`
+        // would build every format's decoder a second time, for a file reader): the format by
+        // the extension, unless the content says otherwise, as `open` does. Only the header
+        // is read, which for our PNG and EXR frames is a few hundred bytes (a foreign frame
+        // with a longer header is rendered again, never taken as done).
+        Work::Frames { .. } => read_head(&task.output, HEADER_BYTES).is_ok_and(|bytes| {
             let mut r = image::ImageReader::new(std::io::Cursor::new(&bytes[..]));
             if let Ok(format) = image::ImageFormat::from_path(&task.output) {
                 r.set_format(format);
@@ -191,6 +193,19 @@ pub fn is_complete(work: &Work, task: &Task) -> bool {
             c.info.chain == task.index && c.info.chains == *count && c.info.iterations > 0
         }),
     }
+}
+
+/// How much of a frame [`is_complete`] reads: its header, not a whole 8K image.
+const HEADER_BYTES: u64 = 1 << 20;
+
+/// At most `limit` bytes from the start of the file at `path`.
+fn read_head(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit)
+        .read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// A job array's index list: runs of consecutive numbers as `a-b`, joined by commas
@@ -325,8 +340,8 @@ mod tests {
     #[test]
     fn finished_exr_frames_are_skipped() {
         let dir = tempfile::tempdir().unwrap();
-        let names = ["f_0.exr", "f_1.exr", "f_2.png", "f_3.exr"];
-        let tasks: Vec<Task> = (0..4)
+        let names = ["f_0.exr", "f_1.exr", "f_2.png", "f_3.exr", "f_4.exr"];
+        let tasks: Vec<Task> = (0..5)
             .map(|k| Task {
                 index: k,
                 output: dir.path().join(names[k as usize]),
@@ -337,7 +352,15 @@ mod tests {
         std::fs::copy(&tasks[1].output, &tasks[2].output).unwrap();
         let whole = std::fs::read(&tasks[1].output).unwrap();
         std::fs::write(&tasks[3].output, &whole[..20]).unwrap();
-        let f = farm(Work::Frames { first: 0, last: 3 }, tasks, dir.path());
+        // A frame longer than what the check reads: only its head is read, and it is done.
+        let mut long = whole.clone();
+        long.resize(2 * HEADER_BYTES as usize, 0);
+        std::fs::write(&tasks[4].output, &long).unwrap();
+        assert_eq!(
+            read_head(&tasks[4].output, HEADER_BYTES).unwrap().len() as u64,
+            HEADER_BYTES
+        );
+        let f = farm(Work::Frames { first: 0, last: 4 }, tasks, dir.path());
         let left: Vec<u32> = f.remaining().iter().map(|t| t.index).collect();
         assert_eq!(left, [3]);
     }

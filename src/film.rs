@@ -105,8 +105,8 @@ impl Image {
             }
         }
         .map_err(|e| {
-            // The encoders wrap the file's own error (a full disk) in messages of their own
-            // (the EXR one says "decoding"): the file's error is the one to show.
+            // The encoders wrap the file's own error (a full disk) in messages of their own:
+            // the file's error is the one to show.
             match w.get_ref().error.as_ref() {
                 Some(io) => format!("cannot write `{}`: {io}", path.display()),
                 None => format!("cannot encode `{}`: {e}", path.display()),
