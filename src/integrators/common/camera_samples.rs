@@ -20,7 +20,7 @@ pub(crate) const MAX_EXTRA: u32 = 63;
 
 /// One pixel's camera samples so far: their number and the sums of their luminance and of its
 /// square, for the variance.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SampleStats {
     n: u32,
     sum: f64,

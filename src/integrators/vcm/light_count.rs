@@ -11,6 +11,8 @@
 
 use glam::Vec3A;
 
+use crate::integrators::common::camera_samples::SampleStats;
+
 /// The shares of the pixels tried: every pixel, a quarter of them.
 pub(super) const SHARES: [f64; 2] = [1.0, 0.25];
 
@@ -20,8 +22,8 @@ pub(super) const PILOT: u32 = 12;
 /// The pilot's per-pixel sums and the share chosen.
 #[derive(Debug, Default)]
 pub(super) struct LightCount {
-    /// Per pixel and share: iterations, the sum of the luminance and of its square.
-    sums: Vec<[(f64, f64); 2]>,
+    /// Per pixel and share: that share's pilot iterations of the pixel.
+    sums: Vec<[SampleStats; 2]>,
     runs: [u32; 2],
     chosen: Option<usize>,
 }
@@ -45,19 +47,16 @@ impl LightCount {
             return;
         }
         let k = self.choice(iter);
-        self.sums.resize(values.len(), [(0.0, 0.0); 2]);
+        self.sums.resize(values.len(), [SampleStats::default(); 2]);
         for (s, v) in self.sums.iter_mut().zip(values) {
-            let y = luminance(*v);
-            s[k].0 += y;
-            s[k].1 += y * y;
+            s[k].add(*v);
         }
         self.runs[k] += 1;
         if self.runs[0] + self.runs[1] >= PILOT {
             let variance = |k: usize| {
-                let n = f64::from(self.runs[k]);
                 self.sums
                     .iter()
-                    .map(|s| ((s[k].1 - s[k].0 * s[k].0 / n) / (n - 1.0)).max(0.0))
+                    .map(|s| s[k].variance().unwrap_or(0.0))
                     .sum::<f64>()
             };
             let (full, fewer) = (variance(0), variance(1));
@@ -65,10 +64,6 @@ impl LightCount {
             self.sums = Vec::new();
         }
     }
-}
-
-fn luminance(c: Vec3A) -> f64 {
-    0.2126 * f64::from(c.x) + 0.7152 * f64::from(c.y) + 0.0722 * f64::from(c.z)
 }
 
 #[cfg(test)]
