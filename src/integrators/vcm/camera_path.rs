@@ -7,7 +7,7 @@
 use glam::Vec3A;
 
 use super::light_path::LightVertex;
-use super::mis::{self, Quantities};
+use super::mis::{self, GatherAt, Quantities};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
@@ -28,6 +28,16 @@ struct State {
     /// estimation's density of a light the path hits).
     prev: Vec3A,
     prev_light: Option<u32>,
+    /// The first bounce was non-specular (a lobe other than a delta one).
+    first_diffuse: bool,
+}
+
+impl State {
+    /// The path's last vertex is its second after a non-specular first, and the final gather
+    /// is on: the merge there is the gather's.
+    fn gather_here(&self, ctx: &Context) -> bool {
+        ctx.factors.gather && self.len == 2 && self.first_diffuse
+    }
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
@@ -55,6 +65,7 @@ pub(super) fn radiance(
         medium: Vec3A::ZERO,
         prev: ray.o,
         prev_light: None,
+        first_diffuse: false,
     };
     let mut out = Radiance::default();
     loop {
@@ -96,9 +107,23 @@ pub(super) fn radiance(
             }
         }
         let mode = TransportMode::Radiance;
-        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut st.q, &mut st.medium, rng) else {
+        let gather = st.gather_here(ctx);
+        let Some(s) = bounce(
+            ctx,
+            &sh,
+            &bsdf,
+            wo,
+            mode,
+            &mut st.q,
+            &mut st.medium,
+            rng,
+            gather,
+        ) else {
             break;
         };
+        if st.len == 1 {
+            st.first_diffuse = !s.specular;
+        }
         st.specular &= s.specular;
         out.through_delta |= st.specular;
         if specular_only && !st.specular {
@@ -233,6 +258,7 @@ fn direct(
     let w = mis::direct(
         &ctx.factors,
         &st.q,
+        st.gather_here(ctx),
         bsdf_pdf,
         bsdf_rev,
         direct_pdf_w,
@@ -279,6 +305,14 @@ fn connect(
     let d2 = f64::from(dist2);
     let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
     let light_pdf_a = f64::from(v.bsdf.pdf(v.wo, -dir)) * f64::from(cos_cam) / d2;
+    // The camera path's second vertex: this one, or the light vertex when this is its first.
+    let gather = if st.gather_here(ctx) {
+        GatherAt::Camera
+    } else if ctx.factors.gather && st.len == 1 {
+        GatherAt::Light
+    } else {
+        GatherAt::Neither
+    };
     let w = mis::connect(
         &ctx.factors,
         &st.q,
@@ -287,6 +321,7 @@ fn connect(
         light_pdf_a,
         f64::from(bsdf.pdf(dir, wo)),
         f64::from(v.bsdf.pdf(-dir, v.wo)),
+        gather,
     );
     if !(w > 0.0 && g > 0.0) {
         return Vec3A::ZERO;
@@ -301,13 +336,22 @@ fn connect(
 
 /// Merges the light vertices within the radius of camera vertex `p` (without the camera
 /// path's throughput): each counts its flux times the camera BSDF over the disk's area and
-/// the number of light paths.
+/// the number of light paths. At the camera path's second vertex after a non-specular first,
+/// with the final gather on, the radius is the gather's.
 fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
-    let Some(grid) = ctx.grid else {
+    let gather = st.gather_here(ctx);
+    let (grid, radius, normalization) = if gather {
+        (ctx.gather_grid, ctx.gather_radius, ctx.gather_normalization)
+    } else {
+        (ctx.grid, ctx.radius, ctx.vm_normalization)
+    };
+    let Some(grid) = grid else {
         return Vec3A::ZERO;
     };
+    // At the camera path's first vertex the light vertex's predecessor is its second.
+    let first = ctx.factors.gather && st.len == 1;
     let mut sum = Vec3A::ZERO;
-    grid.for_each_within(p, ctx.radius, |i| {
+    grid.for_each_within(p, radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
             return;
@@ -318,8 +362,13 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         }
         let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
         let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
-        let w = mis::merge(&ctx.factors, &st.q, &v.q, cam_pdf, cam_rev);
+        let light = if first {
+            v.q.gathered(&ctx.factors)
+        } else {
+            v.q
+        };
+        let w = mis::merge(&ctx.factors, &st.q, &light, cam_pdf, cam_rev, gather);
         sum += f * v.beta * w as f32;
     });
-    sum * ctx.vm_normalization
+    sum * normalization
 }

@@ -121,7 +121,7 @@ pub(super) fn trace(
             return;
         }
         let mode = TransportMode::Importance;
-        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng) else {
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng, false) else {
             return;
         };
         if !roulette(&mut beta, s.weight, rng) {
@@ -160,7 +160,8 @@ fn to_camera(
         1.0
     } else {
         let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
-        mis::to_camera(&ctx.factors, q, camera_pdf_a, rev)
+        // The camera's second vertex is this one's predecessor: its merge is the gather's.
+        mis::to_camera(&ctx.factors, &q.gathered(&ctx.factors), camera_pdf_a, rev)
     };
     let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
     if scene.occluded(&ray, t_max) {

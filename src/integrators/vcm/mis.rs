@@ -9,6 +9,27 @@
 //! Densities enter through `mis` (the power heuristic: squared). The same functions serve both
 //! the renderer and the test that checks their weights against every technique's density
 //! computed by brute force.
+//!
+//! **The final gather.** With final gathering, the merge at a camera path's second vertex
+//! after a non-specular first uses a wider radius `R` (`GATHER_RADIUS_FACTOR` times `r`, as
+//! SPPM's gather points): a technique of its own, whose density is that of the merge at the
+//! same vertex with `pi R^2 N` in place of `pi r^2 N`, and which takes the place of that merge.
+//! In the sums it changes the terms that count the merge at that vertex: in `vc` the merge's
+//! density over a connection's, `vm_weight = mis(pi r^2 N)`, becomes
+//! `gather_weight = mis(pi R^2 N)`; in `vm` the merge's density over the merge at the next
+//! vertex, 1, becomes `gather_ratio = mis(R^2 / r^2)`. The camera path knows which of its
+//! vertices is its second: its `scatter` there, and the merge factor at that vertex in `direct`
+//! and `connect`, take the gather's terms. A light vertex does not know it ahead: it turns out
+//! to be the camera path's second in a connection whose camera part is one vertex (the light
+//! end itself: its merge factor in `connect`), and its predecessor does when light tracing
+//! connects it to the camera or a camera path merges with it at its first vertex. For those
+//! each subpath keeps apart `last`, the coefficient with which its last `scatter` added the
+//! merge at the vertex it scattered at (times `vm_weight` in `vc`, times 1 in `vm`), and
+//! [`Quantities::gathered`] re-evaluates that term with the gather's factors. The gather merge
+//! itself is weighed against the same techniques as the merge with `r` at its vertex, each of
+//! whose densities is now over `R^2 / r^2` times as much: its weight is
+//! `1 / (1 + (w_light + w_camera) / gather_ratio)` from that merge's sums. `vcm::mis::tests`
+//! checks it all against brute force.
 
 /// The heuristic: the power heuristic with exponent 2.
 #[inline]
@@ -26,6 +47,14 @@ pub(super) struct Factors {
     pub(super) vc_weight: f64,
     /// Number of light paths per iteration (one per pixel, or a quarter as many).
     pub(super) light_paths: f64,
+    /// Whether the final gather's merge is used ([`Factors::with_gather`]).
+    pub(super) gather: bool,
+    /// `mis(pi R^2 N)`: the gather merge's density relative to the connection at its vertex
+    /// (without the final gather, `vm_weight`).
+    pub(super) gather_weight: f64,
+    /// `mis(R^2 / r^2)`: the gather merge's density over the merge with `r` at the same vertex
+    /// (without the final gather, 1).
+    pub(super) gather_ratio: f64,
 }
 
 impl Factors {
@@ -35,6 +64,34 @@ impl Factors {
             vm_weight: if use_vm { mis(eta) } else { 0.0 },
             vc_weight: if use_vc { mis(1.0 / eta) } else { 0.0 },
             light_paths,
+            gather: false,
+            gather_weight: if use_vm { mis(eta) } else { 0.0 },
+            gather_ratio: 1.0,
+        }
+    }
+
+    /// The same with the final gather, of radius `factor` times the merges' (nothing changes
+    /// without merging).
+    pub(super) fn with_gather(self, factor: f64) -> Self {
+        if self.vm_weight <= 0.0 {
+            return self;
+        }
+        let ratio = mis(factor * factor);
+        Self {
+            gather: true,
+            gather_weight: self.vm_weight * ratio,
+            gather_ratio: ratio,
+            ..self
+        }
+    }
+
+    /// The merge factor at a vertex: the final gather's where `gather` (the vertex is the
+    /// camera path's second, after a non-specular first), else `vm_weight`.
+    pub(super) fn merge_at(&self, gather: bool) -> f64 {
+        if gather {
+            self.gather_weight
+        } else {
+            self.vm_weight
         }
     }
 }
@@ -45,6 +102,10 @@ pub(super) struct Quantities {
     pub(super) vcm: f64,
     pub(super) vc: f64,
     pub(super) vm: f64,
+    /// The coefficient with which the last `scatter` added the merge at its vertex (the one
+    /// before this), to `vc` times that merge's factor and to `vm` times its ratio to a merge
+    /// with `r`; zero after a light point or a delta bounce (no merge there).
+    pub(super) last: f64,
 }
 
 impl Quantities {
@@ -54,6 +115,7 @@ impl Quantities {
             vcm: mis(f.light_paths / pdf_camera),
             vc: 0.0,
             vm: 0.0,
+            last: 0.0,
         }
     }
 
@@ -73,6 +135,7 @@ impl Quantities {
             vcm: mis(direct_pdf_a / emission_pdf_w),
             vc,
             vm: vc * f.vc_weight,
+            last: 0.0,
         }
     }
 
@@ -86,18 +149,30 @@ impl Quantities {
         self.vcm /= c;
         self.vc /= c;
         self.vm /= c;
+        self.last /= c;
     }
 
     /// Scattering at a non-specular vertex into a direction of cosine `cos_out`, sampled with
-    /// solid-angle density `pdf_dir`; `pdf_rev` is the density of the reverse choice.
-    pub(super) fn scatter(&mut self, f: &Factors, cos_out: f64, pdf_dir: f64, pdf_rev: f64) {
+    /// solid-angle density `pdf_dir`; `pdf_rev` is the density of the reverse choice. `gather`:
+    /// the vertex is the camera path's second after a non-specular first (its merge is the
+    /// final gather's).
+    pub(super) fn scatter(
+        &mut self,
+        f: &Factors,
+        cos_out: f64,
+        pdf_dir: f64,
+        pdf_rev: f64,
+        gather: bool,
+    ) {
         let k = mis(cos_out / pdf_dir);
-        let vc = k * (self.vc * mis(pdf_rev) + self.vcm + f.vm_weight);
-        let vm = k * (self.vm * mis(pdf_rev) + self.vcm * f.vc_weight + 1.0);
+        let ratio = if gather { f.gather_ratio } else { 1.0 };
+        let vc = k * (self.vc * mis(pdf_rev) + self.vcm + f.merge_at(gather));
+        let vm = k * (self.vm * mis(pdf_rev) + self.vcm * f.vc_weight + ratio);
         *self = Self {
             vcm: mis(1.0 / pdf_dir),
             vc,
             vm,
+            last: k,
         };
     }
 
@@ -107,6 +182,21 @@ impl Quantities {
         self.vcm = 0.0;
         self.vc *= mis(cos_out);
         self.vm *= mis(cos_out);
+        self.last = 0.0;
+    }
+
+    /// A light vertex's quantities when the vertex before it is the camera path's second
+    /// (light tracing connects this vertex to the camera, or a camera path merges with it at
+    /// its first vertex): the merge there is the final gather's. Unchanged without it.
+    pub(super) fn gathered(&self, f: &Factors) -> Self {
+        if !f.gather {
+            return *self;
+        }
+        Self {
+            vc: self.vc + self.last * (f.gather_weight - f.vm_weight),
+            vm: self.vm + self.last * (f.gather_ratio - 1.0),
+            ..*self
+        }
     }
 }
 
@@ -122,11 +212,13 @@ pub(super) fn hit_light(cam: &Quantities, direct_pdf_a: f64, emission_pdf_w: f64
 /// the light sample's density per solid angle including the light choice (for a delta light
 /// the squared distance times the choice), `emission_pdf_w` the density of a light path
 /// leaving the light point toward the vertex (light choice, area, direction), the cosines at
-/// the vertex and at the light (1 for a delta light and the environment).
+/// the vertex and at the light (1 for a delta light and the environment). `gather`: the camera
+/// vertex is the camera path's second after a non-specular first.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn direct(
     f: &Factors,
     cam: &Quantities,
+    gather: bool,
     bsdf_pdf: f64,
     bsdf_rev: f64,
     direct_pdf_w: f64,
@@ -136,14 +228,17 @@ pub(super) fn direct(
 ) -> f64 {
     let w_light = mis(bsdf_pdf / direct_pdf_w);
     let w_camera = mis(emission_pdf_w * cos_to_light / (direct_pdf_w * cos_at_light))
-        * (f.vm_weight + cam.vcm + cam.vc * mis(bsdf_rev));
+        * (f.merge_at(gather) + cam.vcm + cam.vc * mis(bsdf_rev));
     1.0 / (w_light + 1.0 + w_camera)
 }
 
 /// A connection between a camera vertex and a light vertex: `cam_pdf_a` the camera BSDF's
 /// density of the light vertex per area, `light_pdf_a` the light BSDF's of the camera vertex;
 /// `cam_rev`, `light_rev` each BSDF's solid-angle density of its own subpath's previous
-/// direction given the connection.
+/// direction given the connection. `gather` says which end is the camera path's second vertex
+/// after a non-specular first, if either: the camera vertex (the camera path's second) or the
+/// light vertex (the camera vertex is the camera path's first).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn connect(
     f: &Factors,
     cam: &Quantities,
@@ -152,14 +247,18 @@ pub(super) fn connect(
     light_pdf_a: f64,
     cam_rev: f64,
     light_rev: f64,
+    gather: GatherAt,
 ) -> f64 {
-    let w_light = mis(cam_pdf_a) * (f.vm_weight + light.vcm + light.vc * mis(light_rev));
-    let w_camera = mis(light_pdf_a) * (f.vm_weight + cam.vcm + cam.vc * mis(cam_rev));
+    let merge_light = f.merge_at(gather == GatherAt::Light);
+    let merge_cam = f.merge_at(gather == GatherAt::Camera);
+    let w_light = mis(cam_pdf_a) * (merge_light + light.vcm + light.vc * mis(light_rev));
+    let w_camera = mis(light_pdf_a) * (merge_cam + cam.vcm + cam.vc * mis(cam_rev));
     1.0 / (w_light + 1.0 + w_camera)
 }
 
-/// A light vertex connected to the camera: `camera_pdf_a` the camera's density of the vertex
-/// per area, `light_rev` the vertex BSDF's density of its previous direction given the
+/// A light vertex connected to the camera: `light` its quantities [`Quantities::gathered`] (the
+/// vertex before it is the camera path's second), `camera_pdf_a` the camera's density of the
+/// vertex per area, `light_rev` the vertex BSDF's density of its previous direction given the
 /// direction toward the camera.
 pub(super) fn to_camera(f: &Factors, light: &Quantities, camera_pdf_a: f64, light_rev: f64) -> f64 {
     let w_light =
@@ -169,16 +268,33 @@ pub(super) fn to_camera(f: &Factors, light: &Quantities, camera_pdf_a: f64, ligh
 
 /// A light vertex merged at a camera vertex: `cam_pdf` the camera BSDF's density of the light
 /// vertex's incoming direction, `cam_rev` that of the camera path's previous direction given it.
+/// At the camera path's first vertex `light` is [`Quantities::gathered`]; `gather`: the camera
+/// vertex is the camera path's second after a non-specular first (the final gather's merge,
+/// radius R).
 pub(super) fn merge(
     f: &Factors,
     cam: &Quantities,
     light: &Quantities,
     cam_pdf: f64,
     cam_rev: f64,
+    gather: bool,
 ) -> f64 {
     let w_light = light.vcm * f.vc_weight + light.vm * mis(cam_pdf);
     let w_camera = cam.vcm * f.vc_weight + cam.vm * mis(cam_rev);
-    1.0 / (w_light + 1.0 + w_camera)
+    if gather {
+        1.0 / (1.0 + (w_light + w_camera) / f.gather_ratio)
+    } else {
+        1.0 / (w_light + 1.0 + w_camera)
+    }
+}
+
+/// Which end of a connection is the camera path's second vertex after a non-specular first
+/// (where the final gather merges), if either.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum GatherAt {
+    Neither,
+    Camera,
+    Light,
 }
 
 #[cfg(test)]

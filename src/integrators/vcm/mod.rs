@@ -17,6 +17,10 @@
 //! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
 //! SPPM's pixel footprint rule at the distance in focus.
 //!
+//! With `final_gather on`, a camera path whose first bounce is non-specular merges at its
+//! second vertex with `GATHER_RADIUS_FACTOR` times the radius (SPPM's gather points' rule),
+//! from a second grid: the final gather, a technique of its own in the weights (`mis.rs`).
+//!
 //! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
 //! direction by the sky's own sampling density, a point of a disk as wide as the bounding
 //! sphere of the finite shapes, outside the scene, facing it. Its position density counts in
@@ -47,7 +51,7 @@ use super::common::{medium_after, progressive};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
-use crate::prepare::{PreparedScene, SurfaceHit};
+use crate::prepare::{GATHER_RADIUS_FACTOR, PreparedScene, SurfaceHit};
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
 use light_count::LightCount;
@@ -133,6 +137,10 @@ struct Context<'c, 's, 'a> {
     vm_normalization: f32,
     vertices: &'c [LightVertex],
     grid: Option<&'c Grid>,
+    /// The final gather's radius, normalization and grid (none without it).
+    gather_radius: f32,
+    gather_normalization: f32,
+    gather_grid: Option<&'c Grid>,
 }
 
 impl Context<'_, '_, '_> {
@@ -150,6 +158,8 @@ impl Context<'_, '_, '_> {
 /// A bounce of a subpath at a surface (light paths in importance mode, camera paths in
 /// radiance mode): samples the BSDF, updates the MIS quantities `q` and the absorbing
 /// `medium` the path is in. The caller applies the sample's weight and Russian roulette.
+/// `gather`: the vertex is a camera path's second after a non-specular first, whose merge is
+/// the final gather's.
 #[allow(clippy::too_many_arguments)]
 fn bounce(
     ctx: &Context,
@@ -160,6 +170,7 @@ fn bounce(
     q: &mut Quantities,
     medium: &mut Vec3A,
     rng: &mut Rng,
+    gather: bool,
 ) -> Option<BsdfSample> {
     let s = bsdf.sample(wo, rng.f32(), rng.vec2(), mode)?;
     let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
@@ -167,7 +178,7 @@ fn bounce(
         q.scatter_specular(cos_out);
     } else {
         let rev = f64::from(bsdf.pdf(s.wi, wo));
-        q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
+        q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev, gather);
     }
     *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
     Some(s)
@@ -191,6 +202,8 @@ impl Integrator for Vcm {
             .unwrap_or(1e-3)
             * self.radius_scale;
         let mode = self.mode;
+        // The final gather where the scene asks for SPPM's (`final_gather on`): merging only.
+        let gather = mode.use_vm && settings.final_gather;
         let mut pass = LightPass::default();
         // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
         let mut samples = vec![SampleStats::default(); n_paths];
@@ -209,11 +222,16 @@ impl Integrator for Vcm {
             } else {
                 n_paths
             };
+            let mut factors = Factors::new(radius, n_light as f64, mode.use_vc, mode.use_vm);
+            if gather {
+                factors = factors.with_gather(GATHER_RADIUS_FACTOR);
+            }
+            let gather_radius = radius * GATHER_RADIUS_FACTOR;
             let mut ctx = Context {
                 scene,
                 camera: scene.camera,
                 mode,
-                factors: Factors::new(radius, n_light as f64, mode.use_vc, mode.use_vm),
+                factors,
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
@@ -222,15 +240,22 @@ impl Integrator for Vcm {
                     as f32,
                 vertices: &[],
                 grid: None,
+                gather_radius: gather_radius as f32,
+                gather_normalization: (1.0
+                    / (std::f64::consts::PI * gather_radius * gather_radius * n_light as f64))
+                    as f32,
+                gather_grid: None,
             };
             let t_light = Instant::now();
             if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
                 return None;
             }
             let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
+            let has_gather = gather && pass.gather_grid.build(&pass.positions, ctx.gather_radius);
             stats.photon_time += t_light.elapsed();
             ctx.vertices = &pass.vertices;
             ctx.grid = has_grid.then_some(&pass.grid);
+            ctx.gather_grid = has_gather.then_some(&pass.gather_grid);
             let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
             let t_camera = Instant::now();
             let seed = settings.seed;
@@ -318,6 +343,8 @@ struct LightPass {
     /// Light tracing's film.
     film: Vec<DVec3>,
     grid: Grid,
+    /// The final gather's grid, cells as wide as its radius needs.
+    gather_grid: Grid,
 }
 
 impl LightPass {

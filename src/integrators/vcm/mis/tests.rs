@@ -4,7 +4,8 @@
 //! and light tracing `N`), and each weight the renderer's functions give from the subpaths'
 //! recursive quantities must equal that technique's power-heuristic weight, and all of them
 //! must sum to one, for VCM and for BPT, for paths from a light's surface and from the sky
-//! (whose first vertex is a direction).
+//! (whose first vertex is a direction), and with the final gather (the merge at the camera
+//! path's second vertex counting `pi R^2 N`).
 
 use super::*;
 use crate::sampling::Rng;
@@ -83,8 +84,9 @@ impl Path {
     }
 
     /// Every technique's density, by brute force: connections with s light vertices (0..n-1),
-    /// light tracing (s = n), then merges at x_1 .. x_{n-1}.
-    fn densities(&self, n_paths: f64, radius: f64, vm: bool) -> Vec<f64> {
+    /// light tracing (s = n), then merges at x_1 .. x_{n-1}; the one at x_{n-2}, the camera
+    /// path's second vertex, with radius `gather` where given (the final gather).
+    fn densities(&self, n_paths: f64, radius: f64, vm: bool, gather: Option<f64>) -> Vec<f64> {
         let n = self.n;
         let mut out = Vec::new();
         for s in 0..=n {
@@ -103,7 +105,11 @@ impl Path {
         }
         if vm {
             for i in 1..n {
-                let mut p = n_paths * std::f64::consts::PI * radius * radius;
+                let r = match gather {
+                    Some(r_gather) if i + 2 == n => r_gather,
+                    _ => radius,
+                };
+                let mut p = n_paths * std::f64::consts::PI * r * r;
                 for j in 0..=i {
                     p *= self.fwd(j);
                 }
@@ -131,17 +137,26 @@ impl Path {
         q.arrive(d0, self.cos_prev[1]);
         light[1] = q;
         for i in 1..n - 1 {
-            q.scatter(f, self.cos_next[i], self.a[i], self.b[i]);
+            q.scatter(f, self.cos_next[i], self.a[i], self.b[i], false);
             q.arrive(Some(self.d[i] * self.d[i]), self.cos_prev[i + 1]);
             light[i + 1] = q;
         }
-        // Camera subpath: quantities at x_{n-1} .. x_0.
+        // Camera subpath: quantities at x_{n-1} .. x_0. Camera vertex t is x_{n-t}; its second,
+        // x_{n-2}, is the final gather's (every vertex here scatters non-specularly). With the
+        // gather off its factors are the plain merge's, so the flag changes nothing there.
         let mut camera = vec![Quantities::default(); n];
         let mut q = Quantities::camera(f, self.cam);
         q.arrive(Some(self.d[n - 1] * self.d[n - 1]), self.cos_next[n - 1]);
         camera[n - 1] = q;
         for i in (0..n - 1).rev() {
-            q.scatter(f, self.cos_prev[i + 1], self.b[i + 1], self.a[i + 1]);
+            let gather = i + 1 + 2 == n;
+            q.scatter(
+                f,
+                self.cos_prev[i + 1],
+                self.b[i + 1],
+                self.a[i + 1],
+                gather,
+            );
             // A path escaping to the sky arrives nowhere.
             if !(i == 0 && self.env) {
                 q.arrive(Some(self.d[i] * self.d[i]), self.cos_next[i]);
@@ -156,6 +171,7 @@ impl Path {
             w.push(direct(
                 f,
                 &camera[1],
+                n == 3,
                 self.b[1],
                 self.a[1],
                 self.nee,
@@ -167,6 +183,12 @@ impl Path {
         // 2 <= s <= n-1: light vertex x_{s-1} to camera vertex x_s.
         for s in 2..n {
             let d2 = self.d[s - 1] * self.d[s - 1];
+            // The camera part is x_s .. x_{n-1}: n - s vertices.
+            let gather = match n - s {
+                2 => GatherAt::Camera,
+                1 => GatherAt::Light,
+                _ => GatherAt::Neither,
+            };
             w.push(connect(
                 f,
                 &camera[s],
@@ -175,29 +197,66 @@ impl Path {
                 self.a[s - 1] * self.cos_prev[s] / d2,
                 self.a[s],
                 self.b[s - 1],
+                gather,
             ));
         }
         // s = n: light tracing from x_{n-1}.
         let d2 = self.d[n - 1] * self.d[n - 1];
         let camera_pdf_a = self.cam * self.cos_next[n - 1] / d2;
-        w.push(to_camera(f, &light[n - 1], camera_pdf_a, self.b[n - 1]));
+        let last = light[n - 1].gathered(f);
+        w.push(to_camera(f, &last, camera_pdf_a, self.b[n - 1]));
         if f.vm_weight > 0.0 {
             for i in 1..n {
-                w.push(merge(f, &camera[i], &light[i], self.b[i], self.a[i]));
+                // At the camera's first vertex the light vertex's predecessor is its second.
+                let l = if i + 1 == n {
+                    light[i].gathered(f)
+                } else {
+                    light[i]
+                };
+                w.push(merge(f, &camera[i], &l, self.b[i], self.a[i], i + 2 == n));
             }
         }
         w
     }
 }
 
+/// Whether the recursive weights of `path` with factors `f` equal the power-heuristic weights
+/// of the brute-force densities `p` and sum to one; the first mismatch otherwise.
+fn check(path: &Path, f: &Factors, p: &[f64]) -> Result<(), String> {
+    let total: f64 = p.iter().map(|x| mis(*x)).sum();
+    let w = path.recursive_weights(f);
+    if w.len() != p.len() {
+        return Err(format!("technique count {} vs {}", w.len(), p.len()));
+    }
+    let sum: f64 = w.iter().sum();
+    if (sum - 1.0).abs() >= 1e-9 {
+        return Err(format!("sum {sum}"));
+    }
+    for (k, (wk, pk)) in w.iter().zip(p).enumerate() {
+        let expected = mis(*pk) / total;
+        if (wk - expected).abs() >= 1e-9 * (1.0 + expected) {
+            return Err(format!("technique {k}: {wk} vs {expected}"));
+        }
+    }
+    Ok(())
+}
+
 #[test]
 fn recursive_weights_equal_brute_force_and_sum_to_one() {
     let mut rng = Rng::new(2024);
-    for (use_vm, env, name) in [
-        (true, false, "vcm"),
-        (false, false, "bpt"),
-        (true, true, "vcm from the sky"),
-        (false, true, "bpt from the sky"),
+    for (use_vm, env, gather, name) in [
+        (true, false, false, "vcm"),
+        (false, false, false, "bpt"),
+        (true, true, false, "vcm from the sky"),
+        (false, true, false, "bpt from the sky"),
+        (true, false, true, "vcm with the final gather"),
+        (true, true, true, "vcm from the sky with the final gather"),
+        (
+            false,
+            false,
+            true,
+            "bpt, the final gather asked (no merges: no change)",
+        ),
     ] {
         for n in 2..=8 {
             for _ in 0..200 {
@@ -205,20 +264,41 @@ fn recursive_weights_equal_brute_force_and_sum_to_one() {
                 path.env = env;
                 let n_paths = 10.0 + 1000.0 * f64::from(rng.f32());
                 let radius = 0.01 + 0.5 * f64::from(rng.f32());
-                let f = Factors::new(radius, n_paths, true, use_vm);
-                let p = path.densities(n_paths, radius, use_vm);
-                let total: f64 = p.iter().map(|x| mis(*x)).sum();
-                let w = path.recursive_weights(&f);
-                assert_eq!(w.len(), p.len(), "{name}: technique count");
-                let sum: f64 = w.iter().sum();
-                assert!((sum - 1.0).abs() < 1e-9, "{name}, {n} segments: sum {sum}");
-                for (k, (wk, pk)) in w.iter().zip(&p).enumerate() {
-                    let expected = mis(*pk) / total;
-                    assert!(
-                        (wk - expected).abs() < 1e-9 * (1.0 + expected),
-                        "{name}, {n} segments, technique {k}: {wk} vs {expected}"
-                    );
+                let factor = 1.5 + 5.0 * f64::from(rng.f32());
+                let mut f = Factors::new(radius, n_paths, true, use_vm);
+                if gather {
+                    f = f.with_gather(factor);
                 }
+                let r_gather = (gather && use_vm).then_some(factor * radius);
+                let p = path.densities(n_paths, radius, use_vm, r_gather);
+                if let Err(e) = check(&path, &f, &p) {
+                    panic!("{name}, {n} segments: {e}");
+                }
+            }
+        }
+    }
+}
+
+/// The comparison sees the final gather's factor: with the recursion's gather radius other
+/// than the brute force's (or none), the weights of every path long enough to have a camera
+/// vertex 2 fail it, and those of a path of 2 segments (no such vertex) do not.
+#[test]
+fn a_wrong_gather_factor_fails_the_comparison() {
+    let mut rng = Rng::new(77);
+    for env in [false, true] {
+        for n in 2..=8 {
+            for _ in 0..50 {
+                let mut path = random_path(n, &mut rng);
+                path.env = env;
+                let n_paths = 10.0 + 1000.0 * f64::from(rng.f32());
+                let radius = 0.01 + 0.5 * f64::from(rng.f32());
+                let p = path.densities(n_paths, radius, true, Some(4.0 * radius));
+                let plain = Factors::new(radius, n_paths, true, true);
+                for f in [plain, plain.with_gather(3.0), plain.with_gather(5.0)] {
+                    let got = check(&path, &f, &p);
+                    assert_eq!(got.is_ok(), n == 2, "{n} segments, env {env}: {got:?}");
+                }
+                assert!(check(&path, &plain.with_gather(4.0), &p).is_ok());
             }
         }
     }
