@@ -279,7 +279,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
         st.max_depth,
         st.seed,
         st.integrator.name(),
-        if st.final_gather && st.integrator == Integrator::Sppm {
+        if st.final_gather && matches!(st.integrator, Integrator::Sppm | Integrator::Vcm) {
             " with final gathering"
         } else {
             ""

@@ -147,7 +147,9 @@ pub struct Settings {
     pub antialias_threshold: Option<f64>,
     /// SPPM's final gathering (`final_gather on`): a visible point gathers only caustic
     /// photons, and one BSDF-sampled gather path per pixel and iteration brings the rest from
-    /// the next diffuse surface. Other integrators ignore it.
+    /// the next diffuse surface. `vcm` merges at a camera path's second vertex (after a
+    /// non-specular first) with the gather's wider radius, as a technique of its own in its
+    /// weights. Other integrators ignore it.
     pub final_gather: bool,
     /// How the scene's coordinates are read (`handedness left`: POV-Ray's).
     pub handedness: Handedness,
