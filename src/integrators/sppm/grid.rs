@@ -223,7 +223,11 @@ impl Level {
     #[inline]
     fn bucket(&self, p: Vec3A) -> u32 {
         let c = (p - self.bounds.min) * self.inv_cell;
-        let [x, y, z] = [0, 1, 2].map(|a| (c[a] as i32).clamp(0, self.res[a] - 1));
+        // Axis by axis: `[0, 1, 2].map(..)` stayed a call of ~69 instructions per filed hit
+        // (docs/measurements.md, "Photon pass").
+        let x = (c.x as i32).clamp(0, self.res[0] - 1);
+        let y = (c.y as i32).clamp(0, self.res[1] - 1);
+        let z = (c.z as i32).clamp(0, self.res[2] - 1);
         row(y, z, self.bits) + x as u32
     }
 
