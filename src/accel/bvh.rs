@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
 use super::triangles::{Meshes, PairTest};
-use super::wide::{Avx, BoxRay, BoxTest, Entry, Halves, LEAF, WideNode, collapse, still_near};
+use super::wide::{
+    Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, push_far_to_near, still_near,
+};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
@@ -315,7 +317,7 @@ impl Bvh {
         let boxes = BoxRay::new(ray);
         // Children still to visit, with their entry distances. An ArrayVec: a fixed array
         // would be zeroed on every call, a cost a short ray notices.
-        let mut stack = ArrayVec::<Entry, STACK>::new();
+        let mut stack = ArrayVec::<(u32, f32), STACK>::new();
         let mut c = Closest::NONE;
         let mut cur = 0u32;
         loop {
@@ -337,21 +339,20 @@ impl Bvh {
                         let b = rest.trailing_zeros() as usize;
                         // As `push_far_to_near` orders them: on equal distances, `b` first.
                         let (first, second) = if near[a] < near[b] { (a, b) } else { (b, a) };
-                        stack.push(Entry {
-                            child: node.child[second],
-                            near: near[second],
-                        });
+                        stack.push((node.child[second], near[second]));
                         cur = node.child[first];
                     } else {
-                        cur = test.push_and_pop(node, mask, &near, &mut stack);
+                        push_far_to_near(node, mask, &near, &mut stack);
+                        // (Never empty: three children or more were pushed.)
+                        cur = stack.pop().map_or(cur, |h| h.0);
                     }
                     continue;
                 }
             }
             loop {
                 match stack.pop() {
-                    Some(e) if still_near(e.near, t_max) => {
-                        cur = e.child;
+                    Some((next, near)) if still_near(near, t_max) => {
+                        cur = next;
                         break;
                     }
                     Some(_) => {}

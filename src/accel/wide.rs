@@ -80,30 +80,6 @@ pub(super) trait BoxTest: Copy {
     /// plane, parallel to it) is ignored. Unused slots are never in the mask. Both tests do
     /// the same operations in the same order, so they give the same bits.
     fn hit(self, node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]);
-
-    /// Pushes the hit children of `node` (`mask` and `near` from [`BoxTest::hit`], three or
-    /// more of them) onto `stack` far to near as [`push_far_to_near`] does, then pops the
-    /// nearest and returns its reference.
-    #[inline(always)]
-    fn push_and_pop<const N: usize>(
-        self,
-        node: &WideNode,
-        mask: u32,
-        near: &[f32; WIDTH],
-        stack: &mut ArrayVec<Entry, N>,
-    ) -> u32 {
-        push_far_to_near(node, mask, near, stack);
-        stack.pop().map_or(EMPTY, |e| e.child)
-    }
-}
-
-/// An entry of the closest-hit traversal's stack: a child reference and its entry distance
-/// (laid out as two `u32`s, so that the AVX push writes four entries per store).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C)]
-pub(super) struct Entry {
-    pub child: u32,
-    pub near: f32,
 }
 
 /// The box test four children at a time (SSE on x86-64).
@@ -160,24 +136,6 @@ impl BoxTest for Avx {
         #[cfg(not(target_arch = "x86_64"))]
         Halves.hit(node, ray, t_min, t_max)
     }
-
-    #[inline(always)]
-    fn push_and_pop<const N: usize>(
-        self,
-        node: &WideNode,
-        mask: u32,
-        near: &[f32; WIDTH],
-        stack: &mut ArrayVec<Entry, N>,
-    ) -> u32 {
-        #[cfg(target_arch = "x86_64")]
-        if stack.remaining_capacity() >= WIDTH {
-            // SAFETY: an `Avx` value is made only after AVX was detected, and the stack has
-            // room for the eight entries the push writes.
-            return unsafe { push_and_pop_avx(node, mask, near, stack) };
-        }
-        push_far_to_near(node, mask, near, stack);
-        stack.pop().map_or(EMPTY, |e| e.child)
-    }
 }
 
 /// [`BoxTest::hit`] eight children at a time.
@@ -212,102 +170,6 @@ unsafe fn hit_avx(node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32
     // SAFETY: `out` holds eight `f32`s.
     unsafe { _mm256_storeu_ps(out.as_mut_ptr(), near) };
     (mask, out)
-}
-
-/// [`BoxTest::push_and_pop`] sorted in registers: each child's key is its entry distance with
-/// the three low bits of the mantissa replaced by `7 - slot` (for distances of at least
-/// [`f32::MIN_POSITIVE`], the float order of the keys is that of the distances, ties and
-/// distances within 8 ulps of each other going by slot, the higher nearer; smaller ones, -0
-/// and negative ones included, are keyed as `MIN_POSITIVE`, larger ones as [`f32::MAX`]).
-/// Unhit slots get the key -inf. A bitonic network of six min/max steps sorts the keys
-/// far to near; the sorted slots pick the children and their exact entry distances, and the
-/// eight entries go to the stack in two stores, the hit ones kept. No key is a NaN or a
-/// subnormal, so the min/max steps work under any floating-point mode.
-///
-/// # Safety
-///
-/// The CPU must have AVX and `stack` room for [`WIDTH`] more entries.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-unsafe fn push_and_pop_avx<const N: usize>(
-    node: &WideNode,
-    mask: u32,
-    near: &[f32; WIDTH],
-    stack: &mut ArrayVec<Entry, N>,
-) -> u32 {
-    use std::arch::x86_64::*;
-    let bits = |b: u32| _mm256_castsi256_ps(_mm256_set1_epi32(b as i32));
-    let one = _mm256_set1_ps(1.0);
-    // Whether a lane's key has bit `b` set, as a lane mask (1.0 with the bit or'ed in differs
-    // from 1.0: a test on normal floats, unlike a test of the bit alone).
-    let has = |v: __m256, b: __m256| {
-        _mm256_cmp_ps::<_CMP_NEQ_OQ>(_mm256_or_ps(_mm256_and_ps(v, b), one), one)
-    };
-    // SAFETY: `near` holds eight `f32`s.
-    let d = unsafe { _mm256_loadu_ps(near.as_ptr()) };
-    let lane_bits = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-    let hit = has(bits(mask), lane_bits);
-    // (`min` first: a NaN distance would become `MAX`.)
-    let clamped = _mm256_max_ps(
-        _mm256_min_ps(d, _mm256_set1_ps(f32::MAX)),
-        _mm256_set1_ps(f32::MIN_POSITIVE),
-    );
-    let rank = _mm256_castsi256_ps(_mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0));
-    let keys = _mm256_or_ps(_mm256_and_ps(clamped, bits(!7)), rank);
-    let mut v = _mm256_blendv_ps(_mm256_set1_ps(f32::NEG_INFINITY), keys, hit);
-    // Bitonic sort, descending: each step compares lane i with lane i ^ j, and `IMM`'s bit i
-    // says that lane i keeps the smaller key.
-    macro_rules! step {
-        ($partner:expr, $imm:literal) => {{
-            let p = $partner;
-            v = _mm256_blend_ps::<$imm>(_mm256_max_ps(v, p), _mm256_min_ps(v, p));
-        }};
-    }
-    step!(_mm256_permute_ps::<0b10_11_00_01>(v), 0x66);
-    step!(_mm256_permute_ps::<0b01_00_11_10>(v), 0x3C);
-    step!(_mm256_permute_ps::<0b10_11_00_01>(v), 0x5A);
-    step!(_mm256_permute2f128_ps::<0x01>(v, v), 0xF0);
-    step!(_mm256_permute_ps::<0b01_00_11_10>(v), 0xCC);
-    step!(_mm256_permute_ps::<0b10_11_00_01>(v), 0xAA);
-    // The sorted slots (low three bits; `vpermilps` reads the two lowest, the third picks the
-    // half).
-    let slot = _mm256_xor_ps(v, bits(7));
-    let upper = has(slot, bits(4));
-    let pick = |x: __m256| {
-        let lo = _mm256_permute2f128_ps::<0x00>(x, x);
-        let hi = _mm256_permute2f128_ps::<0x11>(x, x);
-        let idx = _mm256_castps_si256(slot);
-        _mm256_blendv_ps(
-            _mm256_permutevar_ps(lo, idx),
-            _mm256_permutevar_ps(hi, idx),
-            upper,
-        )
-    };
-    // SAFETY: `child` holds eight `u32`s.
-    let children = pick(unsafe { _mm256_loadu_ps(node.child.as_ptr().cast::<f32>()) });
-    let dists = pick(d);
-    let (a, b) = (
-        _mm256_unpacklo_ps(children, dists),
-        _mm256_unpackhi_ps(children, dists),
-    );
-    let base = stack.len();
-    // The hit children lead the sorted lanes (the others are -inf): their count without a
-    // POPCNT (which baseline x86-64 lacks).
-    let sorted_hit =
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NEQ_OQ>(v, _mm256_set1_ps(f32::NEG_INFINITY)));
-    let count = (!sorted_hit).trailing_zeros() as usize;
-    // SAFETY: the stack has room for eight more entries (the caller's promise); `Entry` is two
-    // `u32`s (`repr(C)`), so 32 bytes hold four entries; the `count` hit children's entries
-    // are initialised by the stores, and the new length keeps all but the nearest.
-    unsafe {
-        let at = stack.as_mut_ptr().add(base).cast::<f32>();
-        _mm256_storeu_ps(at, _mm256_permute2f128_ps::<0x20>(a, b));
-        _mm256_storeu_ps(at.add(8), _mm256_permute2f128_ps::<0x31>(a, b));
-        let top = base + count - 1;
-        stack.set_len(top);
-        (*stack.as_ptr().add(top)).child
-    }
 }
 
 /// Whether a child entered at `near` may still hold a hit closer than `t_max` (the test of
@@ -469,21 +331,18 @@ pub(super) fn push_far_to_near<const N: usize>(
     node: &WideNode,
     mask: u32,
     near: &[f32; WIDTH],
-    stack: &mut ArrayVec<Entry, N>,
+    stack: &mut ArrayVec<(u32, f32), N>,
 ) {
     let base = stack.len();
     let mut bits = mask;
     while bits != 0 {
         let slot = bits.trailing_zeros() as usize;
         bits &= bits - 1;
-        let entry = Entry {
-            child: node.child[slot],
-            near: near[slot],
-        };
+        let entry = (node.child[slot], near[slot]);
         stack.push(entry);
         let s = stack.as_mut_slice();
         let mut at = s.len() - 1;
-        while at > base && s[at - 1].near < entry.near {
+        while at > base && s[at - 1].1 < entry.1 {
             s[at] = s[at - 1];
             at -= 1;
         }
@@ -710,11 +569,10 @@ mod tests {
 
     /// The hit children go on top of what the stack held (left untouched), far to near, the
     /// higher slot nearer on equal distances (-0 and +0 equal): what a stable sort by distance
-    /// gives. The AVX push (then popped) leaves the same stack and returns the nearest child.
+    /// gives.
     #[test]
     fn children_are_pushed_far_to_near() {
-        use super::{Entry, WIDTH, push_far_to_near};
-        let avx = Avx::detect();
+        use super::{WIDTH, push_far_to_near};
         let mut rng = Rng::new(3);
         let node = WideNode {
             planes: [[glam::Vec4::ZERO; 2]; 6],
@@ -728,94 +586,22 @@ mod tests {
                 if x == 0.0 && k % 2 == 0 { -0.0 } else { x }
             });
             let below = (rng.f32() * 5.0) as usize;
-            let mut stack = arrayvec::ArrayVec::<Entry, 64>::new();
+            let mut stack = arrayvec::ArrayVec::<(u32, f32), 64>::new();
             for k in 0..below {
-                stack.push(Entry {
-                    child: k as u32,
-                    near: -1.0 - k as f32,
-                });
+                stack.push((k as u32, -1.0 - k as f32));
             }
-            let before = stack.clone();
             push_far_to_near(&node, mask, &near, &mut stack);
-            let mut want: Vec<Entry> = (0..WIDTH)
+            let mut want: Vec<(u32, f32)> = (0..WIDTH)
                 .filter(|&k| mask & (1 << k) != 0)
-                .map(|k| Entry {
-                    child: 100 + k as u32,
-                    near: near[k],
-                })
+                .map(|k| (100 + k as u32, near[k]))
                 .collect();
             // Bottom to top: farthest first; equal distances keep slot order (higher on top).
             // (-0 and +0 are equal distances.)
-            want.sort_by(|a, b| b.near.partial_cmp(&a.near).expect("no NaN"));
-            assert_eq!(&stack[..below], &before[..]);
+            want.sort_by(|a, b| b.1.partial_cmp(&a.1).expect("no NaN"));
+            let below_kept: Vec<(u32, f32)> =
+                (0..below).map(|k| (k as u32, -1.0 - k as f32)).collect();
+            assert_eq!(&stack[..below], &below_kept[..]);
             assert_eq!(&stack[below..], &want[..], "mask {mask:#x}, near {near:?}");
-            if let (Some(avx), true) = (avx, mask != 0) {
-                let mut by_avx = before.clone();
-                let top = avx.push_and_pop(&node, mask, &near, &mut by_avx);
-                let nearest = stack.pop().expect("a hit child");
-                assert_eq!(top, nearest.child, "mask {mask:#x}, near {near:?}");
-                assert_eq!(by_avx, stack, "mask {mask:#x}, near {near:?}");
-            }
-        }
-    }
-
-    /// The AVX push orders by the distances' keys (three low mantissa bits replaced by the
-    /// slot), so on distances at least 8 ulps apart it gives the order of the insertion sort,
-    /// with the exact distances; tiny, negative and infinite distances go by the clamped key.
-    #[test]
-    fn avx_push_sorts_spread_distances() {
-        use super::{Entry, WIDTH, push_far_to_near};
-        let Some(avx) = Avx::detect() else { return };
-        let mut rng = Rng::new(9);
-        let node = WideNode {
-            planes: [[glam::Vec4::ZERO; 2]; 6],
-            child: std::array::from_fn(|k| 7 * k as u32 + 1),
-        };
-        let key = |d: f32, slot: usize| {
-            let c = d.min(f32::MAX).max(f32::MIN_POSITIVE);
-            f32::from_bits((c.to_bits() & !7) | (7 - slot as u32))
-        };
-        for i in 0..20_000 {
-            let mask = 1 + (rng.f32() * 255.0) as u32 & 0xff;
-            let near: [f32; WIDTH] = std::array::from_fn(|_| match i % 4 {
-                // Spread: random exponents, so rarely within 8 ulps.
-                0 | 1 => rng.f32() * 2f32.powi((rng.f32() * 40.0) as i32 - 20),
-                // Close: a few ulps apart, and the clamped ends.
-                2 => f32::from_bits(0x3f80_0000 + (rng.f32() * 24.0) as u32),
-                _ => [0.0, -0.0, -3.0, 1e-40, f32::INFINITY, f32::MAX, 5.0, 5.0]
-                    [(rng.f32() * 8.0) as usize],
-            });
-            let mut by_avx = arrayvec::ArrayVec::<Entry, 16>::new();
-            let top = avx.push_and_pop(&node, mask, &near, &mut by_avx);
-            let mut want: Vec<(f32, Entry)> = (0..WIDTH)
-                .filter(|&k| mask & (1 << k) != 0)
-                .map(|k| {
-                    let e = Entry {
-                        child: node.child[k],
-                        near: near[k],
-                    };
-                    (key(near[k], k), e)
-                })
-                .collect();
-            want.sort_by(|a, b| b.0.total_cmp(&a.0));
-            let want: Vec<Entry> = want.into_iter().map(|w| w.1).collect();
-            let (last, rest) = want.split_last().expect("a hit child");
-            assert_eq!(top, last.child, "case {i}");
-            assert_eq!(&by_avx[..], rest, "case {i}: mask {mask:#x}, near {near:?}");
-            let spread = {
-                let mut d: Vec<u32> = (0..WIDTH)
-                    .filter(|&k| mask & (1 << k) != 0)
-                    .map(|k| near[k].to_bits())
-                    .collect();
-                d.sort_unstable();
-                d.windows(2).all(|w| w[1] - w[0] >= 8 || w[0] == w[1])
-            };
-            if spread && i % 4 < 2 {
-                let mut by_sort = arrayvec::ArrayVec::<Entry, 16>::new();
-                push_far_to_near(&node, mask, &near, &mut by_sort);
-                assert_eq!(by_sort.pop().map(|e| e.child), Some(top), "case {i}");
-                assert_eq!(by_sort, by_avx, "case {i}");
-            }
         }
     }
 }
