@@ -55,6 +55,9 @@ pub enum Surface<'a> {
     MeshTriangle(&'a TriangleMesh, usize, [f32; 2]),
 }
 
+/// The closest hit on an unbounded shape (an infinite plane), the shape and its id.
+type Unbounded<'a> = Option<(LazyHit, &'a AnyShape, u32)>;
+
 impl<'a> Surface<'a> {
     /// The full hit for a [`LazyHit`] returned for `ray` (see [`AnyShape::hit_at_uv`]).
     #[inline]
@@ -246,11 +249,55 @@ impl Bvh {
     /// for `t` only; the surface data is computed once, for the closest hit. A ray with a NaN
     /// in its origin or a non-finite direction hits none of the bounded shapes.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((
-            surface.hit_at_uv(ray, lazy, true),
-            lazy.part().unwrap_or(id),
-        ))
+        self.intersect_uv(ray, t_min, t_max, |_| true)
+    }
+
+    /// [`Bvh::intersect`], where `uv(id)` says whether a hit on the shape of id `id` (a CSG
+    /// tree's: the part's) needs its `uv` (see [`AnyShape::hit_at_uv`]). The hit record is made
+    /// in the traversal's own frame, straight from what the traversal found: no [`LazyHit`]
+    /// passed on through another frame, and the CPU's features looked at once.
+    #[inline]
+    pub fn intersect_uv(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = self.avx {
+            // SAFETY: an `Avx` value exists only where the CPU has AVX.
+            return unsafe { self.intersect_full_avx(avx, ray, t_min, t_max, uv) };
+        }
+        self.intersect_full_halves(ray, t_min, t_max, uv)
+    }
+
+    /// [`Bvh::intersect_uv`] four boxes at a time, out of line as [`Bvh::intersect_halves`].
+    #[inline(never)]
+    fn intersect_full_halves(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        let (c, t_max, best) = self.closest_with(Halves, ray, t_min, t_max);
+        self.full_hit(ray, c, t_max, best, uv)
+    }
+
+    /// [`Bvh::intersect_uv`] with every operation allowed to use AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn intersect_full_avx(
+        &self,
+        avx: Avx,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        let (c, t_max, best) = self.closest_with(avx, ray, t_min, t_max);
+        self.full_hit(ray, c, t_max, best, uv)
     }
 
     /// Closest hit as a [`LazyHit`], the surface hit and its id. The traversal is compiled
@@ -280,7 +327,8 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
-        self.closest_with(Halves, ray, t_min, t_max)
+        let (c, t_max, best) = self.closest_with(Halves, ray, t_min, t_max);
+        self.closest_hit(c, t_max, best)
     }
 
     /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX.
@@ -293,9 +341,12 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
-        self.closest_with(avx, ray, t_min, t_max)
+        let (c, t_max, best) = self.closest_with(avx, ray, t_min, t_max);
+        self.closest_hit(c, t_max, best)
     }
 
+    /// The closest-hit traversal: what it found in the leaves, the closest `t`, and the
+    /// closest hit on an unbounded shape (which only counts where the leaves found nothing).
     #[inline(always)]
     fn closest_with<B: BoxTest + PairTest>(
         &self,
@@ -303,16 +354,16 @@ impl Bvh {
         ray: &Ray,
         t_min: f32,
         mut t_max: f32,
-    ) -> Option<(LazyHit, Surface<'_>, u32)> {
-        let mut best: Option<(LazyHit, Surface<'_>, u32)> = None;
+    ) -> (Closest, f32, Unbounded<'_>) {
+        let mut best: Unbounded<'_> = None;
         for (s, id) in &self.unbounded {
             if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
                 t_max = h.t();
-                best = Some((h, Surface::Shape(s), *id));
+                best = Some((h, s, *id));
             }
         }
         if self.nodes.is_empty() || !BoxRay::usable(ray) {
-            return best;
+            return (Closest::NONE, t_max, best);
         }
         let boxes = BoxRay::new(ray);
         // Children still to visit, with their entry distances. An ArrayVec: a fixed array
@@ -356,7 +407,7 @@ impl Bvh {
                         break;
                     }
                     Some(_) => {}
-                    None => return self.closest_hit(c, t_max, best),
+                    None => return (c, t_max, best),
                 }
             }
         }
@@ -368,7 +419,7 @@ impl Bvh {
         &'a self,
         c: Closest,
         t_max: f32,
-        best: Option<(LazyHit, Surface<'a>, u32)>,
+        best: Unbounded<'a>,
     ) -> Option<(LazyHit, Surface<'a>, u32)> {
         if c.triangle != u32::MAX {
             let (mesh, k, id) = self.meshes.locate(c.triangle);
@@ -379,7 +430,7 @@ impl Bvh {
             ));
         }
         if c.shape == usize::MAX {
-            return best;
+            return best.map(|(lazy, s, id)| (lazy, Surface::Shape(s), id));
         }
         let lazy = c.boxed.unwrap_or(LazyHit::T(t_max));
         Some((
@@ -387,6 +438,35 @@ impl Bvh {
             Surface::Shape(&self.leaves.shapes[c.shape]),
             self.leaves.ids[c.shape],
         ))
+    }
+
+    /// The full hit record of a closest-hit traversal that ended with `c` and `t_max` (what
+    /// [`Bvh::closest_hit`] and [`Surface::hit_at_uv`] give together), and its id: a CSG
+    /// tree's part's.
+    #[inline(always)]
+    fn full_hit(
+        &self,
+        ray: &Ray,
+        c: Closest,
+        t_max: f32,
+        best: Unbounded<'_>,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        if c.triangle != u32::MAX {
+            let (mesh, k, id) = self.meshes.locate(c.triangle);
+            return Some((mesh.hit_at(k, t_max, c.bary), id));
+        }
+        let (lazy, shape, id) = if c.shape == usize::MAX {
+            best?
+        } else {
+            (
+                c.boxed.unwrap_or(LazyHit::T(t_max)),
+                &self.leaves.shapes[c.shape],
+                self.leaves.ids[c.shape],
+            )
+        };
+        let id = lazy.part().unwrap_or(id);
+        Some((shape.hit_at_uv(ray, lazy, uv(id)), id))
     }
 
     /// Whether anything is hit with `t_min < t < t_max` (with AVX where the CPU has it, as
