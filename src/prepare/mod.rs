@@ -540,10 +540,10 @@ impl<'a> PreparedScene<'a> {
         if !finite(ray) {
             return None;
         }
-        let (lazy, surface, prim) = self.bvh.intersect_lazy(ray, 0.0, t_max)?;
         // A CSG tree names the part hit: its material and texture space are that part's.
-        let prim = lazy.part().unwrap_or(prim);
-        let hit = surface.hit_at_uv(ray, lazy, self.reads_uv(prim));
+        let (hit, prim) = self
+            .bvh
+            .intersect_uv(ray, 0.0, t_max, |prim| self.reads_uv(prim))?;
         Some(SurfaceHit { hit, prim })
     }
 

@@ -174,20 +174,12 @@ impl TriangleMesh {
             }
             None => n,
         };
-        let uvs = if self.uvs.is_empty() {
-            [Vec2::ZERO, Vec2::X, Vec2::Y]
+        // Without uvs, the default parameterisation's constants go through the same operations
+        // (what they fold away is exact: products and a quotient by one); no buffer is read.
+        let (uv, dpdu) = if self.uvs.is_empty() {
+            uv_and_dpdu([Vec2::ZERO, Vec2::X, Vec2::Y], [b0, b1, b2], e1, e2)
         } else {
-            idx.map(|i| self.uvs[i])
-        };
-        let uv = uvs[0] * b0 + uvs[1] * b1 + uvs[2] * b2;
-        // dp/du from the uv parameterisation when it is not degenerate.
-        let duv1 = uvs[1] - uvs[0];
-        let duv2 = uvs[2] - uvs[0];
-        let d = duv1.x * duv2.y - duv1.y * duv2.x;
-        let dpdu = if d.abs() > 1e-12 {
-            (e1 * duv2.y - e2 * duv1.y) / d
-        } else {
-            e1
+            uv_and_dpdu(idx.map(|i| self.uvs[i]), [b0, b1, b2], e1, e2)
         };
         Hit {
             t,
@@ -220,6 +212,23 @@ impl TriangleMesh {
             + self.uvs.capacity() * size_of::<Vec2>()
             + self.indices.capacity() * size_of::<[u32; 3]>()
     }
+}
+
+/// A triangle's `uv` at barycentric coordinates `b` from its vertices' `uvs`, and dp/du from
+/// its edges `e1`, `e2` where that parameterisation is not degenerate (`e1` where it is): the
+/// operations of the stand-alone [`Triangle`]'s hit, in its order.
+#[inline(always)]
+fn uv_and_dpdu(uvs: [Vec2; 3], b: [f32; 3], e1: Vec3A, e2: Vec3A) -> (Vec2, Vec3A) {
+    let uv = uvs[0] * b[0] + uvs[1] * b[1] + uvs[2] * b[2];
+    let duv1 = uvs[1] - uvs[0];
+    let duv2 = uvs[2] - uvs[0];
+    let d = duv1.x * duv2.y - duv1.y * duv2.x;
+    let dpdu = if d.abs() > 1e-12 {
+        (e1 * duv2.y - e2 * duv1.y) / d
+    } else {
+        e1
+    };
+    (uv, dpdu)
 }
 
 /// The mesh's triangles in world space, as stand-alone shapes; smooth normals and uvs when the

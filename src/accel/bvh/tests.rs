@@ -432,3 +432,79 @@ fn degenerate_rays_are_answered_consistently() {
         bvh.occluded(&ray, 0.0, f32::INFINITY) == bvh.intersect(&ray, 0.0, f32::INFINITY).is_some()
     );
 }
+
+/// The hit record made in the traversal's frame ([`Bvh::intersect_uv`]) is the one the lazy
+/// result gives ([`Bvh::intersect_lazy`], then [`Surface::hit_at_uv`]): every field bit for bit
+/// and the id, over a mesh with uvs, one without, spheres, quads and an infinite plane, with
+/// `uv` asked for odd ids only (a sphere's `uv` is then NaN on even ones).
+#[test]
+fn the_hit_record_is_the_lazy_hits() {
+    use crate::scene::MeshData;
+    use crate::shapes::mesh::TriangleMesh;
+    use crate::shapes::plane::Plane;
+    use crate::shapes::quad::Quad;
+    use glam::{DVec2, DVec3};
+    let mut rng = Rng::new(23);
+    let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
+    let mesh = |rng: &mut Rng, uvs: bool| {
+        let positions: Vec<DVec3> = (0..300).map(|_| v(rng).as_dvec3()).collect();
+        let indices = (0..100).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let uvs = if uvs {
+            (0..300)
+                .map(|_| DVec2::new(rng.f32() as f64, rng.f32() as f64))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let data = MeshData {
+            path: "random.obj".into(),
+            positions,
+            indices,
+            normals: Vec::new(),
+            uvs,
+        };
+        TriangleMesh::new(&data, &glam::DAffine3::IDENTITY).unwrap()
+    };
+    let meshes = vec![(mesh(&mut rng, true), 2), (mesh(&mut rng, false), 3)];
+    let mut shapes = vec![(AnyShape::Plane(Plane::new(Vec3A::Y, -1.5).unwrap()), 1)];
+    for k in 0..20u32 {
+        let c = v(&mut rng);
+        let shape = if k % 2 == 0 {
+            AnyShape::Sphere(Sphere::new(c, 0.1 + 0.2 * rng.f32()).unwrap())
+        } else {
+            AnyShape::Quad(Quad::new(c, 0.5 * v(&mut rng), 0.5 * v(&mut rng)).unwrap())
+        };
+        shapes.push((shape, 4 + k));
+    }
+    let bvh = Bvh::with_meshes(shapes, meshes);
+    let uv = |id: u32| id % 2 == 1;
+    let bits = |h: &Hit| {
+        let v = [h.p, h.n, h.ns, h.dpdu].map(|v| v.to_array().map(f32::to_bits));
+        (h.t.to_bits(), v, h.uv.to_array().map(f32::to_bits))
+    };
+    let mut hits = [0usize; 5];
+    for i in 0..8000 {
+        let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
+        let t_max = if i % 3 == 0 { 1.0 } else { f32::INFINITY };
+        let want = bvh.intersect_lazy(&ray, 0.0, t_max).map(|(lazy, s, id)| {
+            let id = lazy.part().unwrap_or(id);
+            (s.hit_at_uv(&ray, lazy, uv(id)), id)
+        });
+        let got = bvh.intersect_uv(&ray, 0.0, t_max, uv);
+        assert_eq!(
+            got.map(|(h, id)| (bits(&h), id)),
+            want.map(|(h, id)| (bits(&h), id)),
+            "ray {i}"
+        );
+        if let Some((h, id)) = got {
+            let kind = match id {
+                1..=3 => id as usize - 1,
+                _ if h.uv.is_nan() => 3,
+                _ => 4,
+            };
+            hits[kind] += 1;
+        }
+    }
+    // Plane, mesh with uvs, mesh without, spheres without uv, other shapes.
+    assert!(hits.iter().all(|&n| n > 40), "{hits:?}");
+}
