@@ -284,9 +284,7 @@ impl Bvh {
         t_max: f32,
         uv: impl Fn(u32) -> bool,
     ) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.closest_with(Halves, ray, t_min, t_max)?;
-        let id = lazy.part().unwrap_or(id);
-        Some((surface.hit_at_uv(ray, lazy, uv(id)), id))
+        self.full_with(Halves, ray, t_min, t_max, uv)
     }
 
     /// [`Bvh::intersect_uv`] with every operation allowed to use AVX.
@@ -300,7 +298,21 @@ impl Bvh {
         t_max: f32,
         uv: impl Fn(u32) -> bool,
     ) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.closest_with(avx, ray, t_min, t_max)?;
+        self.full_with(avx, ray, t_min, t_max, uv)
+    }
+
+    /// The closest hit's full record, completed where the traversal ran (inlined into each
+    /// of the two feature levels above).
+    #[inline(always)]
+    fn full_with<B: BoxTest + PairTest>(
+        &self,
+        test: B,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        let (lazy, surface, id) = self.closest_with(test, ray, t_min, t_max)?;
         let id = lazy.part().unwrap_or(id);
         Some((surface.hit_at_uv(ray, lazy, uv(id)), id))
     }
