@@ -7,9 +7,12 @@
 use glam::Vec3A;
 
 use super::light_path::LightVertex;
-use super::mis::{self, Quantities};
+use std::sync::atomic::Ordering;
+
+use super::mis::{self, Factors, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
+use crate::integrators::common::footprint;
 use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
@@ -20,9 +23,16 @@ use crate::sampling::Rng;
 struct State {
     beta: Vec3A,
     len: u32,
-    q: Quantities,
+    q: Parts,
     /// Every bounce so far specular.
     specular: bool,
+    /// The path's length so far while every bounce is specular.
+    distance: f64,
+    /// The weights' constants for the path's radius, the radius and the merges'
+    /// normalisation `1 / (pi r^2 N)`: set at its first non-specular vertex.
+    factors: Factors,
+    radius: f32,
+    vm_normalization: f32,
     medium: Vec3A,
     /// The previous vertex and the light whose surface it lies on, if any (for next-event
     /// estimation's density of a light the path hits).
@@ -41,6 +51,8 @@ pub(super) fn radiance(
     specular_only: bool,
 ) -> Radiance {
     let scene = ctx.scene;
+    // The stream before the path drew from it: the footprint's neighbour rays retrace it.
+    let rng0 = rng.clone();
     let (jitter, lens) = (rng.vec2(), rng.vec2());
     let mut ray = ctx.camera.ray(x, y, jitter, lens);
     let pdf_camera = f64::from(ctx.camera.pdf_dir(ray.d));
@@ -50,8 +62,12 @@ pub(super) fn radiance(
     let mut st = State {
         beta: Vec3A::ONE,
         len: 1,
-        q: Quantities::camera(&ctx.factors, pdf_camera),
+        q: Parts::camera(ctx.light_paths, pdf_camera),
         specular: true,
+        distance: 0.0,
+        factors: ctx.factors(ctx.radius.scaled(None)),
+        radius: 0.0,
+        vm_normalization: 0.0,
         medium: Vec3A::ZERO,
         prev: ray.o,
         prev_light: None,
@@ -66,6 +82,9 @@ pub(super) fn radiance(
         let wo = -ray.d;
         let bsdf = scene.bsdf(&sh);
         let dist = f64::from(sh.hit.t * ray.d.length());
+        if st.specular {
+            st.distance += dist;
+        }
         st.q.arrive(Some(dist * dist), f64::from(wo.dot(bsdf.frame.n).abs()));
         if let Some((li, al)) = scene.area_light(sh.prim) {
             let le = al.le(sh.hit.n, wo);
@@ -81,6 +100,9 @@ pub(super) fn radiance(
             break;
         }
         if !bsdf.is_specular() && !specular_only {
+            if st.specular {
+                set_radius(ctx, &mut st, (x, y), &rng0);
+            }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
                 *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
@@ -114,6 +136,38 @@ pub(super) fn radiance(
         st.len += 1;
     }
     out
+}
+
+/// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
+/// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, this iteration's
+/// shrink applied. Seen directly it is the straight footprint's, the same rule a light-traced
+/// splat's weight uses at its vertex; through mirrors and glass the footprint carried there
+/// by neighbour rays retraced from `rng0` (for merging only: without it the radius enters no
+/// weight).
+fn set_radius(ctx: &Context, st: &mut State, pixel: (u32, u32), rng0: &Rng) {
+    let rule = ctx.radius.rule;
+    let r0 = if st.len > 1 && ctx.mode.use_vm {
+        let (scene, settings) = (ctx.scene, ctx.settings);
+        let rng = rng0.clone();
+        footprint::initial_radius(
+            rule,
+            scene,
+            &ctx.camera,
+            settings,
+            pixel,
+            false,
+            rng,
+            st.distance,
+        )
+    } else {
+        rule.at(st.distance)
+    }
+    .unwrap_or(ctx.radius.fallback);
+    ctx.largest_r0.fetch_max(r0.to_bits(), Ordering::Relaxed);
+    let r = ctx.radius.scaled(Some(r0));
+    st.factors = ctx.factors(r);
+    st.radius = r as f32;
+    st.vm_normalization = (1.0 / (std::f64::consts::PI * r * r * ctx.light_paths)) as f32;
 }
 
 /// A camera path's radiance in two parts: what it sees through delta bounces alone (emission
@@ -157,7 +211,7 @@ fn escaped(ctx: &Context, st: &State, d: Vec3A) -> Vec3A {
     }
     let direct_pdf = f64::from(scene.light_distr.pdf(li) * env.pdf_li(d));
     let emission_pdf_w = ctx.emission_pdf_w(li, st.prev, Vec3A::ZERO, -d);
-    le * mis::hit_light(&st.q, direct_pdf, emission_pdf_w) as f32
+    le * mis::hit_light(&st.q.at(&st.factors), direct_pdf, emission_pdf_w) as f32
 }
 
 /// The weight of emission from area light `li` hit at `sh`, `dist` from the previous vertex.
@@ -185,7 +239,7 @@ fn hit_weight(
         pn * f64::from(al.pdf_li_from(st.prev, sh.hit.p, sh.hit.n, on_light)) * cos_light
             / (dist * dist);
     let emission_pdf_w = ctx.emission_pdf_w(li, sh.hit.p, sh.hit.n, wo);
-    mis::hit_light(&st.q, direct_pdf_a, emission_pdf_w) as f32
+    mis::hit_light(&st.q.at(&st.factors), direct_pdf_a, emission_pdf_w) as f32
 }
 
 /// Next-event estimation at a camera vertex, weighted against the camera path hitting the
@@ -231,8 +285,8 @@ fn direct(
         )
     };
     let w = mis::direct(
-        &ctx.factors,
-        &st.q,
+        &st.factors,
+        &st.q.at(&st.factors),
         bsdf_pdf,
         bsdf_rev,
         direct_pdf_w,
@@ -280,9 +334,9 @@ fn connect(
     let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
     let light_pdf_a = f64::from(v.bsdf.pdf(v.wo, -dir)) * f64::from(cos_cam) / d2;
     let w = mis::connect(
-        &ctx.factors,
-        &st.q,
-        &v.q,
+        &st.factors,
+        &st.q.at(&st.factors),
+        &v.q.at(&st.factors),
         cam_pdf_a,
         light_pdf_a,
         f64::from(bsdf.pdf(dir, wo)),
@@ -307,7 +361,8 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         return Vec3A::ZERO;
     };
     let mut sum = Vec3A::ZERO;
-    grid.for_each_within(p, ctx.radius, |i| {
+    let cam = st.q.at(&st.factors);
+    grid.for_each_within(p, st.radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
             return;
@@ -318,8 +373,8 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         }
         let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
         let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
-        let w = mis::merge(&ctx.factors, &st.q, &v.q, cam_pdf, cam_rev);
+        let w = mis::merge(&st.factors, &cam, &v.q.at(&st.factors), cam_pdf, cam_rev);
         sum += f * v.beta * w as f32;
     });
-    sum * ctx.vm_normalization
+    sum * st.vm_normalization
 }

@@ -6,6 +6,11 @@
 //! what the next step of the path (not known yet) contributes. With them a weight needs only
 //! the vertex at each end of the connection or merge: no path is revisited.
 //!
+//! A merge's density relative to a connection's, `eta = pi r^2 N`, depends on the radius, and
+//! the radius is each camera path's own (its pixel's footprint where it first meets a
+//! non-specular surface): the quantities are carried in parts ([`Parts`]) that every weight
+//! evaluates with the radius of the camera path at hand.
+//!
 //! Densities enter through `mis` (the power heuristic: squared). The same functions serve both
 //! the renderer and the test that checks their weights against every technique's density
 //! computed by brute force.
@@ -16,7 +21,8 @@ pub(super) fn mis(x: f64) -> f64 {
     x * x
 }
 
-/// Per-iteration constants of the weights.
+/// The constants of the weights for one camera path's radius (and the iteration's light
+/// paths' count).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Factors {
     /// `mis(eta)` with `eta = pi r^2 N` when merging is used, else 0: a merge's density relative
@@ -39,7 +45,8 @@ impl Factors {
     }
 }
 
-/// The recursive quantities of a subpath at its last vertex.
+/// The recursive quantities of a subpath at its last vertex, for the merge factor of the
+/// camera path they meet: what every weight below takes ([`Parts::at`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct Quantities {
     pub(super) vcm: f64,
@@ -47,13 +54,45 @@ pub(super) struct Quantities {
     pub(super) vm: f64,
 }
 
-impl Quantities {
-    /// At the camera: `pdf_camera` is the camera's solid-angle density of the first direction.
-    pub(super) fn camera(f: &Factors, pdf_camera: f64) -> Self {
+/// The recursive quantities of a subpath in parts, for every merge factor at once: with
+/// `E = mis(eta)` ([`Factors::vm_weight`]) and `1 / E` ([`Factors::vc_weight`]),
+///
+/// ```text
+/// vc = vc[0] + E vc[1]        vm = vm[0] + vm[1] / E        (vcm has no E)
+/// ```
+///
+/// By induction over the recursion (`'` the next vertex's, `k = mis(cos_out / pdf_dir)`,
+/// `p = mis(pdf_rev)`):
+/// - at the light's first vertex `vc = mis(cos_light / emission_pdf_w)`, `vm = vc / E`: the
+///   parts `vc = [vc, 0]`, `vm = [0, vc]`; at the camera `vc = vm = 0`;
+/// - `vc' = k (vc p + vcm + E)` gives `vc'[0] = k (vc[0] p + vcm)`, `vc'[1] = k (vc[1] p + 1)`;
+/// - `vm' = k (vm p + vcm / E + 1)` gives `vm'[0] = k (vm[0] p + 1)`, `vm'[1] = k (vm[1] p +
+///   vcm)`;
+/// - `vcm' = mis(1 / pdf_dir)` has no E; arriving, and a delta bounce, scale all three by
+///   factors without E.
+///
+/// So a light path's stored vertex holds its parts, and each connection, merge or light-traced
+/// splat evaluates them with the E of the camera path it meets (for a splat, the camera path
+/// that would end at the light vertex: the radius at the vertex's distance from the lens). The
+/// techniques of one whole path then all see one radius, the camera end's, and the weights
+/// are exactly the power heuristic's for that radius (`mis/tests.rs` checks it with a
+/// different radius per camera path): a radius per camera path keeps them exact. Without
+/// merging E is 0 (and without connections `1 / E` is 0), as in the recursion itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Parts {
+    pub(super) vcm: f64,
+    pub(super) vc: [f64; 2],
+    pub(super) vm: [f64; 2],
+}
+
+impl Parts {
+    /// At the camera: `light_paths` the light paths' count, `pdf_camera` the camera's
+    /// solid-angle density of the first direction.
+    pub(super) fn camera(light_paths: f64, pdf_camera: f64) -> Self {
         Self {
-            vcm: mis(f.light_paths / pdf_camera),
-            vc: 0.0,
-            vm: 0.0,
+            vcm: mis(light_paths / pdf_camera),
+            vc: [0.0; 2],
+            vm: [0.0; 2],
         }
     }
 
@@ -62,17 +101,21 @@ impl Quantities {
     /// light alone), `emission_pdf_w` the emission's density (light choice, area, direction),
     /// `cos_light` the cosine at the light (zero for a delta light: no connection reaches it;
     /// 1 for the environment, whose directions are measured without one).
-    pub(super) fn light(
-        f: &Factors,
-        direct_pdf_a: f64,
-        emission_pdf_w: f64,
-        cos_light: f64,
-    ) -> Self {
+    pub(super) fn light(direct_pdf_a: f64, emission_pdf_w: f64, cos_light: f64) -> Self {
         let vc = mis(cos_light / emission_pdf_w);
         Self {
             vcm: mis(direct_pdf_a / emission_pdf_w),
-            vc,
-            vm: vc * f.vc_weight,
+            vc: [vc, 0.0],
+            vm: [0.0, vc],
+        }
+    }
+
+    /// The quantities for the merge factor of `f`.
+    pub(super) fn at(&self, f: &Factors) -> Quantities {
+        Quantities {
+            vcm: self.vcm,
+            vc: self.vc[0] + f.vm_weight * self.vc[1],
+            vm: self.vm[0] + f.vc_weight * self.vm[1],
         }
     }
 
@@ -84,29 +127,28 @@ impl Quantities {
         }
         let c = mis(cos.abs());
         self.vcm /= c;
-        self.vc /= c;
-        self.vm /= c;
+        self.vc = self.vc.map(|x| x / c);
+        self.vm = self.vm.map(|x| x / c);
     }
 
     /// Scattering at a non-specular vertex into a direction of cosine `cos_out`, sampled with
     /// solid-angle density `pdf_dir`; `pdf_rev` is the density of the reverse choice.
-    pub(super) fn scatter(&mut self, f: &Factors, cos_out: f64, pdf_dir: f64, pdf_rev: f64) {
-        let k = mis(cos_out / pdf_dir);
-        let vc = k * (self.vc * mis(pdf_rev) + self.vcm + f.vm_weight);
-        let vm = k * (self.vm * mis(pdf_rev) + self.vcm * f.vc_weight + 1.0);
+    pub(super) fn scatter(&mut self, cos_out: f64, pdf_dir: f64, pdf_rev: f64) {
+        let (k, p) = (mis(cos_out / pdf_dir), mis(pdf_rev));
         *self = Self {
             vcm: mis(1.0 / pdf_dir),
-            vc,
-            vm,
+            vc: [k * (self.vc[0] * p + self.vcm), k * (self.vc[1] * p + 1.0)],
+            vm: [k * (self.vm[0] * p + 1.0), k * (self.vm[1] * p + self.vcm)],
         };
     }
 
     /// Scattering by a delta lobe: no technique can connect or merge at this vertex, and the
     /// forward and reverse densities are the same.
     pub(super) fn scatter_specular(&mut self, cos_out: f64) {
+        let c = mis(cos_out);
         self.vcm = 0.0;
-        self.vc *= mis(cos_out);
-        self.vm *= mis(cos_out);
+        self.vc = self.vc.map(|x| x * c);
+        self.vm = self.vm.map(|x| x * c);
     }
 }
 

@@ -8,14 +8,19 @@
 //! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
 //! next-event estimation, connections to every vertex of the light path with the pixel's index
 //! (modulo the light paths' count), and merges
-//! with the light vertices within the iteration's radius (`grid.rs`). Every technique is
+//! with the light vertices within the camera path's radius (`grid.rs`). Every technique is
 //! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
 //! bounce, for the part only camera paths sample (`DELTA_CAMERA_PATHS`).
 //!
-//! The radius shrinks as SPPM's does on average: `r_i = r_0 i^((alpha - 1) / 2)` (global, so
-//! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
-//! SPPM's pixel footprint rule at the distance in focus.
+//! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
+//! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
+//! surface, the footprint carried through mirrors and glass by `common::footprint`), and it
+//! shrinks as SPPM's does on average, `r_i = r_0 i^((alpha - 1) / 2)`. The weights stay exact:
+//! a light vertex carries its quantities in parts that each camera path evaluates with its own
+//! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
+//! see its vertex directly. The merge grid is built for the largest radius the previous
+//! iteration's camera paths used (and answers larger queries too).
 //!
 //! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
 //! direction by the sky's own sampling density, a point of a disk as wide as the bounding
@@ -47,12 +52,12 @@ use super::common::{medium_after, progressive};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
-use crate::prepare::{PreparedScene, SurfaceHit};
+use crate::prepare::{EffectiveSettings, InitialRadius, PreparedScene, SurfaceHit};
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
 use light_count::LightCount;
 use light_path::{LightVertex, Splat};
-use mis::{Factors, Quantities};
+use mis::{Factors, Parts};
 
 /// Which techniques run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,19 +125,22 @@ const CHUNK: usize = 1024;
 /// What the camera and light passes of one iteration share.
 struct Context<'c, 's, 'a> {
     scene: &'s PreparedScene<'a>,
+    settings: &'s EffectiveSettings,
     camera: Camera,
     mode: Mode,
-    factors: Factors,
+    /// Light paths this iteration.
+    light_paths: f64,
+    radius: Radius,
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
     /// Light choice for light paths (every light, by power).
     emitters: &'c PiecewiseConstant1D,
     /// Each light's probability in `emitters`.
     emit_probs: &'c [f64],
-    radius: f32,
-    vm_normalization: f32,
     vertices: &'c [LightVertex],
     grid: Option<&'c Grid>,
+    /// The largest `r_0` of this iteration's camera paths so far, as f64 bits.
+    largest_r0: &'c AtomicU64,
 }
 
 impl Context<'_, '_, '_> {
@@ -144,6 +152,35 @@ impl Context<'_, '_, '_> {
         let choice = self.emit_probs.get(li).copied().unwrap_or(0.0);
         let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
         choice * f64::from(pos) * f64::from(d)
+    }
+
+    /// The weights' constants for a camera path of radius `radius` this iteration.
+    fn factors(&self, radius: f64) -> Factors {
+        let m = self.mode;
+        Factors::new(radius, self.light_paths, m.use_vc, m.use_vm)
+    }
+}
+
+/// The radius rule of one iteration.
+#[derive(Debug, Clone, Copy)]
+struct Radius {
+    rule: InitialRadius,
+    /// `Vcm::radius_scale` times the iteration's shrink, `i^((alpha - 1) / 2)`.
+    factor: f64,
+    /// Where the rule has no value: the one at the distance in focus, else 1e-3.
+    fallback: f64,
+}
+
+impl Radius {
+    /// This iteration's radius of a camera path whose first non-specular vertex is
+    /// `distance` from the lens, seen directly (the footprint rule's straight ray), or through
+    /// mirrors and glass with footprint ratio already in `r0`.
+    fn at(&self, distance: f64) -> f64 {
+        self.scaled(self.rule.at(distance))
+    }
+
+    fn scaled(&self, r0: Option<f64>) -> f64 {
+        (r0.unwrap_or(self.fallback) * self.factor).max(1e-7)
     }
 }
 
@@ -157,7 +194,7 @@ fn bounce(
     bsdf: &Bsdf,
     wo: Vec3A,
     mode: TransportMode,
-    q: &mut Quantities,
+    q: &mut Parts,
     medium: &mut Vec3A,
     rng: &mut Rng,
 ) -> Option<BsdfSample> {
@@ -167,7 +204,7 @@ fn bounce(
         q.scatter_specular(cos_out);
     } else {
         let rev = f64::from(bsdf.pdf(s.wi, wo));
-        q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev);
+        q.scatter(cos_out, f64::from(s.pdf), rev);
     }
     *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
     Some(s)
@@ -185,11 +222,11 @@ impl Integrator for Vcm {
         let emit_probs: Vec<f64> = (0..powers.len())
             .map(|i| f64::from(emitters.pdf(i)))
             .collect();
-        let r0 = settings
-            .initial_radius(&scene.scene.camera)
-            .at(scene.camera.focus_distance())
-            .unwrap_or(1e-3)
-            * self.radius_scale;
+        let rule = settings.initial_radius(&scene.scene.camera);
+        let fallback = rule.at(scene.camera.focus_distance()).unwrap_or(1e-3);
+        // The largest radius the last iteration's camera paths used (as f64 bits, positive:
+        // ordered as the values), before its shrink; the grid's cells follow it.
+        let largest_r0 = AtomicU64::new(fallback.to_bits());
         let mode = self.mode;
         let mut pass = LightPass::default();
         // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
@@ -202,8 +239,11 @@ impl Integrator for Vcm {
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
         progressive::render_means(job, |iter, stats| {
-            let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
-            let radius = radius.max(1e-7);
+            let radius = Radius {
+                rule,
+                factor: self.radius_scale * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0)),
+                fallback,
+            };
             let n_light = if mode.use_vm {
                 light_count.light_paths(iter, n_paths)
             } else {
@@ -211,23 +251,25 @@ impl Integrator for Vcm {
             };
             let mut ctx = Context {
                 scene,
+                settings,
                 camera: scene.camera,
                 mode,
-                factors: Factors::new(radius, n_light as f64, mode.use_vc, mode.use_vm),
+                light_paths: n_light as f64,
+                radius,
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
-                radius: radius as f32,
-                vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_light as f64))
-                    as f32,
                 vertices: &[],
                 grid: None,
+                largest_r0: &largest_r0,
             };
             let t_light = Instant::now();
             if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
                 return None;
             }
-            let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
+            let last = f64::from_bits(largest_r0.swap(0, Ordering::Relaxed));
+            let grid_radius = radius.scaled(Some(if last > 0.0 { last } else { fallback }));
+            let has_grid = mode.use_vm && pass.grid.build(&pass.positions, grid_radius as f32);
             stats.photon_time += t_light.elapsed();
             ctx.vertices = &pass.vertices;
             ctx.grid = has_grid.then_some(&pass.grid);
