@@ -7,8 +7,6 @@
 use glam::Vec3A;
 
 use super::light_path::LightVertex;
-use std::sync::atomic::Ordering;
-
 use super::mis::{self, Factors, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
@@ -101,7 +99,7 @@ pub(super) fn radiance(
         }
         if !bsdf.is_specular() && !specular_only {
             if st.specular {
-                set_radius(ctx, &mut st, (x, y), &rng0);
+                out.r0 = set_radius(ctx, &mut st, (x, y), &rng0);
             }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
@@ -143,8 +141,8 @@ pub(super) fn radiance(
 /// shrink applied. Seen directly it is the straight footprint's, the same rule a light-traced
 /// splat's weight uses at its vertex; through mirrors and glass the footprint carried there
 /// by neighbour rays retraced from `rng0` (for merging only: without it the radius enters no
-/// weight).
-fn set_radius(ctx: &Context, st: &mut State, pixel: (u32, u32), rng0: &Rng) {
+/// weight). Returns `r_0`.
+fn set_radius(ctx: &Context, st: &mut State, pixel: (u32, u32), rng0: &Rng) -> f64 {
     let rule = ctx.radius.rule;
     let r0 = if st.len > 1 && ctx.mode.use_vm {
         let (scene, settings) = (ctx.scene, ctx.settings);
@@ -163,11 +161,11 @@ fn set_radius(ctx: &Context, st: &mut State, pixel: (u32, u32), rng0: &Rng) {
         rule.at(st.distance)
     }
     .unwrap_or(ctx.radius.fallback);
-    ctx.largest_r0.fetch_max(r0.to_bits(), Ordering::Relaxed);
     let r = ctx.radius.scaled(Some(r0));
     st.factors = ctx.factors(r);
     st.radius = r as f32;
     st.vm_normalization = (1.0 / (std::f64::consts::PI * r * r * ctx.light_paths)) as f32;
+    r0
 }
 
 /// A camera path's radiance in two parts: what it sees through delta bounces alone (emission
@@ -178,6 +176,8 @@ pub(super) struct Radiance {
     pub(super) rest: Vec3A,
     /// The path left its first vertex by a delta bounce (a mirror, glass).
     pub(super) through_delta: bool,
+    /// The path's initial radius, before the iteration's shrink (0 if it set none).
+    pub(super) r0: f64,
 }
 
 impl Radiance {

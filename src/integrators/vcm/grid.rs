@@ -147,8 +147,10 @@ impl Grid {
     fn for_each_within_wide(&self, p: Vec3A, r: f32, mut f: impl FnMut(usize)) {
         let q = self.scaled(p);
         let e = f64::from(r) * self.inv_cell;
-        let (lo, hi) = ((q - e).floor(), (q + e).floor());
-        let cells = (hi - lo + 1.0).element_product();
+        // Cell indices as `cell` gives them (saturated far away); their count in i128.
+        let (lo, hi) = ((q - e).floor().as_i64vec3(), (q + e).floor().as_i64vec3());
+        let span = |a: i64, b: i64| i128::from(b) - i128::from(a) + 1;
+        let cells = span(lo.x, hi.x) * span(lo.y, hi.y) * span(lo.z, hi.z);
         let r2 = r * r;
         let n_buckets = self.starts.len().saturating_sub(1);
         let mut visit = |s: usize, e: usize| {
@@ -158,25 +160,35 @@ impl Grid {
                 }
             }
         };
-        if !cells.is_finite() || cells > n_buckets as f64 {
+        if cells > n_buckets as i128 {
             return visit(0, self.points.len());
         }
-        let mut buckets = Vec::with_capacity(cells as usize);
-        let (lo, hi) = (lo.as_i64vec3(), hi.as_i64vec3());
+        // Up to 4 x 4 x 4 cells (a radius up to 1.5 times the grid's) on the stack.
+        let mut stack = [0u32; 64];
+        let mut heap = Vec::new();
+        let buckets = if cells <= 64 {
+            &mut stack[..cells as usize]
+        } else {
+            heap.resize(cells as usize, 0);
+            &mut heap[..]
+        };
+        let mut k = 0;
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
                 for x in lo.x..=hi.x {
-                    buckets.push(self.bucket([x, y, z]));
+                    buckets[k] = self.bucket([x, y, z]);
+                    k += 1;
                 }
             }
         }
         buckets.sort_unstable();
-        buckets.dedup();
-        for b in buckets {
-            visit(
-                self.starts[b as usize] as usize,
-                self.starts[b as usize + 1] as usize,
-            );
+        for (j, &b) in buckets.iter().enumerate() {
+            if j == 0 || buckets[j - 1] != b {
+                visit(
+                    self.starts[b as usize] as usize,
+                    self.starts[b as usize + 1] as usize,
+                );
+            }
         }
     }
 }
@@ -237,6 +249,9 @@ mod tests {
         let mut none = true;
         grid.for_each_within(Vec3A::splat(3.0e38), r, |_| none = false);
         grid.for_each_within(Vec3A::splat(-3.0e38), r, |_| none = false);
+        // So with a radius above the grid's.
+        grid.for_each_within(Vec3A::splat(3.0e38), r * 3.0, |_| none = false);
+        grid.for_each_within(Vec3A::splat(-3.0e38), r * 3.0, |_| none = false);
         assert!(none);
     }
 }
