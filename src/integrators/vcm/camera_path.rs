@@ -14,7 +14,7 @@ use crate::integrators::common::footprint;
 use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
-use crate::prepare::SurfaceHit;
+use crate::prepare::{InitialRadius, SurfaceHit};
 use crate::sampling::Rng;
 
 /// The state of a camera path at its last vertex.
@@ -39,7 +39,8 @@ struct State {
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
-/// path serving the pixel (the pixel's index modulo the light paths' count).
+/// path serving the pixel (the pixel's index modulo the light paths' count); `ratio` the
+/// pixel's footprint ratio through mirrors and glass (0 until measured).
 pub(super) fn radiance(
     ctx: &Context,
     x: u32,
@@ -47,6 +48,7 @@ pub(super) fn radiance(
     own: &[LightVertex],
     rng: &mut Rng,
     specular_only: bool,
+    ratio: &mut f64,
 ) -> Radiance {
     let scene = ctx.scene;
     // The stream before the path drew from it: the footprint's neighbour rays retrace it.
@@ -99,7 +101,7 @@ pub(super) fn radiance(
         }
         if !bsdf.is_specular() && !specular_only {
             if st.specular {
-                out.r0 = set_radius(ctx, &mut st, (x, y), &rng0);
+                out.r0 = set_radius(ctx, &mut st, (x, y), &rng0, ratio);
             }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
@@ -139,26 +141,31 @@ pub(super) fn radiance(
 /// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
 /// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, this iteration's
 /// shrink applied. Seen directly it is the straight footprint's, the same rule a light-traced
-/// splat's weight uses at its vertex; through mirrors and glass the footprint carried there
-/// by neighbour rays retraced from `rng0` (for merging only: without it the radius enters no
-/// weight). Returns `r_0`.
-fn set_radius(ctx: &Context, st: &mut State, pixel: (u32, u32), rng0: &Rng) -> f64 {
+/// splat's weight uses at its vertex; through mirrors and glass the straight footprint over
+/// the path's length times the pixel's `ratio` (`common::footprint`), measured by neighbour
+/// rays retraced from `rng0` by the pixel's first camera path that passes a mirror or glass
+/// and kept, as SPPM keeps its pixel's radius (for merging only: without it the radius enters
+/// no weight). A ratio from an earlier path depends on nothing this path or the light paths
+/// sample, so the weights stay exact. Returns `r_0`.
+fn set_radius(
+    ctx: &Context,
+    st: &mut State,
+    pixel: (u32, u32),
+    rng0: &Rng,
+    ratio: &mut f64,
+) -> f64 {
     let rule = ctx.radius.rule;
-    let r0 = if st.len > 1 && ctx.mode.use_vm {
-        let (scene, settings) = (ctx.scene, ctx.settings);
-        let rng = rng0.clone();
-        footprint::initial_radius(
-            rule,
-            scene,
-            &ctx.camera,
-            settings,
-            pixel,
-            false,
-            rng,
-            st.distance,
-        )
-    } else {
-        rule.at(st.distance)
+    let r0 = match rule {
+        InitialRadius::Footprint { .. } if st.len > 1 && ctx.mode.use_vm => {
+            if *ratio == 0.0 {
+                let (scene, settings, camera) = (ctx.scene, ctx.settings, &ctx.camera);
+                let mut rng = rng0.clone();
+                let r = footprint::footprint_ratio(scene, camera, settings, pixel, false, &mut rng);
+                *ratio = r.unwrap_or(1.0);
+            }
+            rule.at(st.distance).map(|r| r * *ratio)
+        }
+        _ => rule.at(st.distance),
     }
     .unwrap_or(ctx.radius.fallback);
     let r = ctx.radius.scaled(Some(r0));

@@ -236,6 +236,8 @@ impl Integrator for Vcm {
         // Each pixel's delta parts so far, and whether a camera path left its first vertex
         // by a delta bounce.
         let mut delta = vec![(SampleStats::default(), false); n_paths];
+        // Each pixel's footprint ratio through mirrors and glass (0 until measured).
+        let mut ratios = vec![0.0; n_paths];
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
@@ -282,8 +284,9 @@ impl Integrator for Vcm {
                 .par_iter_mut()
                 .zip(delta.par_iter_mut())
                 .zip(extra.par_iter())
+                .zip(ratios.par_iter_mut())
                 .enumerate()
-                .map(|(i, ((px, (sp_stats, seen_delta)), &extra))| {
+                .map(|(i, (((px, (sp_stats, seen_delta)), &extra), ratio))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
                         return (Vec3A::ZERO, 0.0);
@@ -303,14 +306,14 @@ impl Integrator for Vcm {
                         0
                     };
                     delta_paths.fetch_add(u64::from(only), Ordering::Relaxed);
-                    let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false);
+                    let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false, ratio);
                     let (mut spec, mut rest) = (finite(first.specular), finite(first.rest));
                     px.add(spec + rest);
                     sp_stats.add(spec);
                     *seen_delta |= first.through_delta;
                     let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
                     for k in 0..extra + only {
-                        let r = camera_path::radiance(&ctx, x, y, own, &mut rng, k >= extra);
+                        let r = camera_path::radiance(&ctx, x, y, own, &mut rng, k >= extra, ratio);
                         let (sp, re) = (finite(r.specular), finite(r.rest));
                         if k < extra {
                             px.add(sp + re);
