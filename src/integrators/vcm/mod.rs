@@ -15,12 +15,13 @@
 //!
 //! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
-//! surface, the footprint carried through mirrors and glass by `common::footprint`), and it
+//! surface, the footprint carried through mirrors and glass by `common::footprint`, measured
+//! once a pixel), and it
 //! shrinks as SPPM's does on average, `r_i = r_0 i^((alpha - 1) / 2)`. The weights stay exact:
 //! a light vertex carries its quantities in parts that each camera path evaluates with its own
 //! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
-//! see its vertex directly. The merge grid is built for the 90th percentile of the radii the
-//! previous iteration's camera paths used (and answers larger queries too).
+//! see its vertex directly. The merge grid is built for the 90th percentile of the radii of
+//! the previous iteration's pixels (their first camera paths), and answers larger queries too.
 //!
 //! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
 //! direction by the sky's own sampling density, a point of a disk as wide as the bounding
@@ -170,9 +171,8 @@ struct Radius {
 }
 
 impl Radius {
-    /// This iteration's radius of a camera path whose first non-specular vertex is
-    /// `distance` from the lens, seen directly (the footprint rule's straight ray), or through
-    /// mirrors and glass with footprint ratio already in `r0`.
+    /// This iteration's radius of a camera path that sees a point `distance` from the lens
+    /// directly (the footprint rule's straight ray): a light-traced splat's.
     fn at(&self, distance: f64) -> f64 {
         self.scaled(self.rule.at(distance))
     }
