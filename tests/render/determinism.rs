@@ -74,13 +74,16 @@ fn cancel_stops_and_progress_reports_each_iteration() {
     assert_eq!(seen, vec![1, 2, 3]);
 }
 
-/// Every integrator, not only SPPM (also with final gathering): 1, 2 and 3 threads give
-/// bit-identical pixels.
+/// Every integrator, not only SPPM (SPPM and VCM also with final gathering): 1, 2 and 3
+/// threads give bit-identical pixels.
 #[test]
 fn every_integrator_is_independent_of_the_thread_count() {
     let methods = sppm_lang::Integrator::ALL.map(|i| (i, false));
-    let gathering = (sppm_lang::Integrator::Sppm, true);
-    for (integrator, final_gather) in methods.into_iter().chain([gathering]) {
+    let gathering = [
+        (sppm_lang::Integrator::Sppm, true),
+        (sppm_lang::Integrator::Vcm, true),
+    ];
+    for (integrator, final_gather) in methods.into_iter().chain(gathering) {
         let mut scene = common::cornell_glass(16);
         scene.settings.integrator = integrator;
         scene.settings.final_gather = final_gather;

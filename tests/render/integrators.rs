@@ -933,22 +933,27 @@ fn a_bumped_white_sphere_in_a_white_furnace_keeps_mean_radiance_one() {
 
 /// Light tracing, bidirectional path tracing and vertex connection and merging against the
 /// exact furnaces (every pixel 1): the image means of four seeds within 0.5 % (vcm's merges
-/// with a small radius, the furnace being uniform where they blur).
+/// with a small radius, the furnace being uniform where they blur), vcm also with the final
+/// gather (its merges at the camera paths' second vertices four times as wide: weights that
+/// did not sum to one there would move the mean by their excess).
 #[test]
 fn lt_bpt_and_vcm_match_the_furnaces() {
     for (name, scene) in [("a", furnace_emitting(16)), ("b", furnace_point(16))] {
         let mut scene = scene;
         scene.settings.radius = Some(0.05);
-        for (integrator, iterations) in [
-            (Integrator::Lt, 1024),
-            (Integrator::Bpt, 64),
-            (Integrator::Vcm, 64),
+        for (integrator, iterations, gather) in [
+            (Integrator::Lt, 1024, false),
+            (Integrator::Bpt, 64, false),
+            (Integrator::Vcm, 64, false),
+            (Integrator::Vcm, 64, true),
         ] {
+            scene.settings.final_gather = gather;
             let (m, se, all) = four_seeds(&scene, integrator, iterations, 0);
             let err = (m - 1.0).abs();
             println!(
-                "furnace ({name}) {:>4}: mean {m:.5} +- {se:.5} {all:.4?}, error {:.3} %",
+                "furnace ({name}) {:>4}{}: mean {m:.5} +- {se:.5} {all:.4?}, error {:.3} %",
                 integrator.name(),
+                if gather { " final gather" } else { "" },
                 100.0 * err
             );
             assert!(err < 0.005, "furnace ({name}) {}: {m}", integrator.name());

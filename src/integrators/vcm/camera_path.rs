@@ -7,14 +7,14 @@
 use glam::Vec3A;
 
 use super::light_path::LightVertex;
-use super::mis::{self, Factors, Parts};
+use super::mis::{self, Factors, GatherAt, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
 use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
-use crate::prepare::{InitialRadius, SurfaceHit};
+use crate::prepare::{GATHER_RADIUS_FACTOR, InitialRadius, SurfaceHit};
 use crate::sampling::Rng;
 
 /// The state of a camera path at its last vertex.
@@ -36,6 +36,16 @@ struct State {
     /// estimation's density of a light the path hits).
     prev: Vec3A,
     prev_light: Option<u32>,
+    /// The first bounce was non-specular (a lobe other than a delta one).
+    first_diffuse: bool,
+}
+
+impl State {
+    /// The path's last vertex is its second after a non-specular first, and the final gather
+    /// is on: the merge there is the gather's (with 4 times the radius set at the first).
+    fn gather_here(&self, ctx: &Context) -> bool {
+        ctx.gather && self.len == 2 && self.first_diffuse
+    }
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
@@ -71,6 +81,7 @@ pub(super) fn radiance(
         medium: Vec3A::ZERO,
         prev: ray.o,
         prev_light: None,
+        first_diffuse: false,
     };
     let mut out = Radiance::default();
     loop {
@@ -118,9 +129,14 @@ pub(super) fn radiance(
             }
         }
         let mode = TransportMode::Radiance;
-        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut st.q, &mut st.medium, rng) else {
+        let ratio = st.factors.merge_ratio(st.gather_here(ctx));
+        let q = &mut st.q;
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, q, &mut st.medium, rng, ratio) else {
             break;
         };
+        if st.len == 1 {
+            st.first_diffuse = !s.specular;
+        }
         st.specular &= s.specular;
         out.through_delta |= st.specular;
         if specular_only && !st.specular {
@@ -294,6 +310,7 @@ fn direct(
     let w = mis::direct(
         &st.factors,
         &st.q.at(&st.factors),
+        st.gather_here(ctx),
         bsdf_pdf,
         bsdf_rev,
         direct_pdf_w,
@@ -340,6 +357,14 @@ fn connect(
     let d2 = f64::from(dist2);
     let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
     let light_pdf_a = f64::from(v.bsdf.pdf(v.wo, -dir)) * f64::from(cos_cam) / d2;
+    // The camera path's second vertex: this one, or the light vertex when this is its first.
+    let gather = if st.gather_here(ctx) {
+        GatherAt::Camera
+    } else if ctx.gather && st.len == 1 {
+        GatherAt::Light
+    } else {
+        GatherAt::Neither
+    };
     let w = mis::connect(
         &st.factors,
         &st.q.at(&st.factors),
@@ -348,6 +373,7 @@ fn connect(
         light_pdf_a,
         f64::from(bsdf.pdf(dir, wo)),
         f64::from(v.bsdf.pdf(-dir, v.wo)),
+        gather,
     );
     if !(w > 0.0 && g > 0.0) {
         return Vec3A::ZERO;
@@ -362,14 +388,29 @@ fn connect(
 
 /// Merges the light vertices within the radius of camera vertex `p` (without the camera
 /// path's throughput): each counts its flux times the camera BSDF over the disk's area and
-/// the number of light paths.
+/// the number of light paths. At the camera path's second vertex after a non-specular first,
+/// with the final gather on, the radius is the gather's, `GATHER_RADIUS_FACTOR` times the
+/// path's own.
 fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
-    let Some(grid) = ctx.grid else {
+    let gather = st.gather_here(ctx);
+    let (grid, radius, normalization) = if gather {
+        let k = GATHER_RADIUS_FACTOR as f32;
+        (
+            ctx.gather_grid,
+            st.radius * k,
+            st.vm_normalization / (k * k),
+        )
+    } else {
+        (ctx.grid, st.radius, st.vm_normalization)
+    };
+    let Some(grid) = grid else {
         return Vec3A::ZERO;
     };
+    // At the camera path's first vertex the light vertex's predecessor is its second.
+    let first = ctx.gather && st.len == 1;
     let mut sum = Vec3A::ZERO;
     let cam = st.q.at(&st.factors);
-    grid.for_each_within(p, st.radius, |i| {
+    grid.for_each_within(p, radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
             return;
@@ -380,8 +421,13 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         }
         let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
         let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
-        let w = mis::merge(&st.factors, &cam, &v.q.at(&st.factors), cam_pdf, cam_rev);
+        let light = if first {
+            v.q.gathered(&st.factors)
+        } else {
+            v.q.at(&st.factors)
+        };
+        let w = mis::merge(&st.factors, &cam, &light, cam_pdf, cam_rev, gather);
         sum += f * v.beta * w as f32;
     });
-    sum * st.vm_normalization
+    sum * normalization
 }

@@ -122,7 +122,7 @@ pub(super) fn trace(
             return;
         }
         let mode = TransportMode::Importance;
-        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng) else {
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng, 1.0) else {
             return;
         };
         if !roulette(&mut beta, s.weight, rng) {
@@ -160,10 +160,11 @@ fn to_camera(
     let w = if ctx.mode.light_trace_only {
         1.0
     } else {
-        // The radius of a camera path through the lens point that sees this vertex directly.
+        // The radius of a camera path through the lens point that sees this vertex directly;
+        // that camera path's second vertex is this one's predecessor: its merge is the gather's.
         let f = ctx.factors(ctx.radius.at(f64::from(cs.dist)));
         let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
-        mis::to_camera(&f, &q.at(&f), camera_pdf_a, rev)
+        mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, rev)
     };
     let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
     if scene.occluded(&ray, t_max) {

@@ -23,6 +23,11 @@
 //! see its vertex directly. The merge grid is built for the 90th percentile of the radii of
 //! the previous iteration's pixels (their first camera paths), and answers larger queries too.
 //!
+//! With `final_gather on`, a camera path whose first bounce is non-specular merges at its
+//! second vertex with `GATHER_RADIUS_FACTOR` times its own radius (SPPM's gather points'
+//! rule), from a second grid built for that factor times the merge grid's radius: the final
+//! gather, a technique of its own in the weights (`mis.rs`).
+//!
 //! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
 //! direction by the sky's own sampling density, a point of a disk as wide as the bounding
 //! sphere of the finite shapes, outside the scene, facing it. Its position density counts in
@@ -53,7 +58,9 @@ use super::common::{medium_after, progressive};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
-use crate::prepare::{EffectiveSettings, InitialRadius, PreparedScene, SurfaceHit};
+use crate::prepare::{
+    EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, PreparedScene, SurfaceHit,
+};
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
 use light_count::LightCount;
@@ -140,6 +147,10 @@ struct Context<'c, 's, 'a> {
     emit_probs: &'c [f64],
     vertices: &'c [LightVertex],
     grid: Option<&'c Grid>,
+    /// The final gather is on (the scene's `final_gather`, with merging).
+    gather: bool,
+    /// The final gather's grid (none without it).
+    gather_grid: Option<&'c Grid>,
 }
 
 impl Context<'_, '_, '_> {
@@ -154,9 +165,15 @@ impl Context<'_, '_, '_> {
     }
 
     /// The weights' constants for a camera path of radius `radius` this iteration.
+    /// With the final gather on, those of its merge too, `GATHER_RADIUS_FACTOR` times `radius`.
     fn factors(&self, radius: f64) -> Factors {
         let m = self.mode;
-        Factors::new(radius, self.light_paths, m.use_vc, m.use_vm)
+        let f = Factors::new(radius, self.light_paths, m.use_vc, m.use_vm);
+        if self.gather {
+            f.with_gather(GATHER_RADIUS_FACTOR)
+        } else {
+            f
+        }
     }
 }
 
@@ -185,6 +202,8 @@ impl Radius {
 /// A bounce of a subpath at a surface (light paths in importance mode, camera paths in
 /// radiance mode): samples the BSDF, updates the MIS quantities `q` and the absorbing
 /// `medium` the path is in. The caller applies the sample's weight and Russian roulette.
+/// `merge_ratio`: the merge's factor at this vertex over the plain merge's (`G` at a camera
+/// path's final gather vertex, else 1: `Factors::merge_ratio`).
 #[allow(clippy::too_many_arguments)]
 fn bounce(
     ctx: &Context,
@@ -195,6 +214,7 @@ fn bounce(
     q: &mut Parts,
     medium: &mut Vec3A,
     rng: &mut Rng,
+    merge_ratio: f64,
 ) -> Option<BsdfSample> {
     let s = bsdf.sample(wo, rng.f32(), rng.vec2(), mode)?;
     let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
@@ -202,7 +222,7 @@ fn bounce(
         q.scatter_specular(cos_out);
     } else {
         let rev = f64::from(bsdf.pdf(s.wi, wo));
-        q.scatter(cos_out, f64::from(s.pdf), rev);
+        q.scatter(cos_out, f64::from(s.pdf), rev, merge_ratio);
     }
     *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
     Some(s)
@@ -229,6 +249,8 @@ impl Integrator for Vcm {
         let mut grid_r0 = fallback;
         let mut r0s = Vec::with_capacity(n_paths);
         let mode = self.mode;
+        // The final gather where the scene asks for SPPM's (`final_gather on`): merging only.
+        let gather = mode.use_vm && settings.final_gather;
         let mut pass = LightPass::default();
         // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
         let mut samples = vec![SampleStats::default(); n_paths];
@@ -264,6 +286,8 @@ impl Integrator for Vcm {
                 emit_probs: &emit_probs,
                 vertices: &[],
                 grid: None,
+                gather,
+                gather_grid: None,
             };
             let t_light = Instant::now();
             if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
@@ -271,9 +295,12 @@ impl Integrator for Vcm {
             }
             let grid_radius = radius.scaled(Some(grid_r0));
             let has_grid = mode.use_vm && pass.grid.build(&pass.positions, grid_radius as f32);
+            let gather_radius = (grid_radius * GATHER_RADIUS_FACTOR) as f32;
+            let has_gather = gather && pass.gather_grid.build(&pass.positions, gather_radius);
             stats.photon_time += t_light.elapsed();
             ctx.vertices = &pass.vertices;
             ctx.grid = has_grid.then_some(&pass.grid);
+            ctx.gather_grid = has_gather.then_some(&pass.gather_grid);
             let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
             let t_camera = Instant::now();
             let seed = settings.seed;
@@ -368,6 +395,8 @@ struct LightPass {
     /// Light tracing's film.
     film: Vec<DVec3>,
     grid: Grid,
+    /// The final gather's grid, cells as wide as its radius needs.
+    gather_grid: Grid,
 }
 
 impl LightPass {
