@@ -191,7 +191,7 @@ impl Path {
             ));
         }
         // 2 <= s <= n-1: light vertex x_{s-1} to camera vertex x_s.
-        for s in 2..n {
+        for (s, cam) in camera.iter().enumerate().skip(2) {
             let d2 = self.d[s - 1] * self.d[s - 1];
             // The camera part is x_s .. x_{n-1}: n - s vertices.
             let gather = match n - s {
@@ -201,7 +201,7 @@ impl Path {
             };
             w.push(connect(
                 f,
-                &camera[s],
+                cam,
                 &light_at(s - 1),
                 self.b[s] * self.cos_next[s - 1] / d2,
                 self.a[s - 1] * self.cos_prev[s] / d2,
@@ -215,16 +215,9 @@ impl Path {
         let camera_pdf_a = self.cam * self.cos_next[n - 1] / d2;
         w.push(to_camera(f, &light_at(n - 1), camera_pdf_a, self.b[n - 1]));
         if f.vm_weight > 0.0 {
-            for i in 1..n {
+            for (i, cam) in camera.iter().enumerate().skip(1) {
                 let gather = i + 2 == n;
-                w.push(merge(
-                    f,
-                    &camera[i],
-                    &light_at(i),
-                    self.b[i],
-                    self.a[i],
-                    gather,
-                ));
+                w.push(merge(f, cam, &light_at(i), self.b[i], self.a[i], gather));
             }
         }
         w
