@@ -7,22 +7,30 @@
 use glam::Vec3A;
 
 use super::light_path::LightVertex;
-use super::mis::{self, GatherAt, Quantities};
+use super::mis::{self, Factors, GatherAt, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
+use crate::integrators::common::footprint;
 use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
-use crate::prepare::SurfaceHit;
+use crate::prepare::{GATHER_RADIUS_FACTOR, InitialRadius, SurfaceHit};
 use crate::sampling::Rng;
 
 /// The state of a camera path at its last vertex.
 struct State {
     beta: Vec3A,
     len: u32,
-    q: Quantities,
+    q: Parts,
     /// Every bounce so far specular.
     specular: bool,
+    /// The path's length so far while every bounce is specular.
+    distance: f64,
+    /// The weights' constants for the path's radius, the radius and the merges'
+    /// normalisation `1 / (pi r^2 N)`: set at its first non-specular vertex.
+    factors: Factors,
+    radius: f32,
+    vm_normalization: f32,
     medium: Vec3A,
     /// The previous vertex and the light whose surface it lies on, if any (for next-event
     /// estimation's density of a light the path hits).
@@ -34,14 +42,15 @@ struct State {
 
 impl State {
     /// The path's last vertex is its second after a non-specular first, and the final gather
-    /// is on: the merge there is the gather's.
+    /// is on: the merge there is the gather's (with 4 times the radius set at the first).
     fn gather_here(&self, ctx: &Context) -> bool {
-        ctx.factors.gather && self.len == 2 && self.first_diffuse
+        ctx.gather && self.len == 2 && self.first_diffuse
     }
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
-/// path serving the pixel (the pixel's index modulo the light paths' count).
+/// path serving the pixel (the pixel's index modulo the light paths' count); `ratio` the
+/// pixel's footprint ratio through mirrors and glass (0 until measured).
 pub(super) fn radiance(
     ctx: &Context,
     x: u32,
@@ -49,8 +58,11 @@ pub(super) fn radiance(
     own: &[LightVertex],
     rng: &mut Rng,
     specular_only: bool,
+    ratio: &mut f64,
 ) -> Radiance {
     let scene = ctx.scene;
+    // The stream before the path drew from it: the footprint's neighbour rays retrace it.
+    let rng0 = rng.clone();
     let (jitter, lens) = (rng.vec2(), rng.vec2());
     let mut ray = ctx.camera.ray(x, y, jitter, lens);
     let pdf_camera = f64::from(ctx.camera.pdf_dir(ray.d));
@@ -60,8 +72,12 @@ pub(super) fn radiance(
     let mut st = State {
         beta: Vec3A::ONE,
         len: 1,
-        q: Quantities::camera(&ctx.factors, pdf_camera),
+        q: Parts::camera(ctx.light_paths, pdf_camera),
         specular: true,
+        distance: 0.0,
+        factors: ctx.factors(ctx.radius.scaled(None)),
+        radius: 0.0,
+        vm_normalization: 0.0,
         medium: Vec3A::ZERO,
         prev: ray.o,
         prev_light: None,
@@ -77,6 +93,9 @@ pub(super) fn radiance(
         let wo = -ray.d;
         let bsdf = scene.bsdf(&sh);
         let dist = f64::from(sh.hit.t * ray.d.length());
+        if st.specular {
+            st.distance += dist;
+        }
         st.q.arrive(Some(dist * dist), f64::from(wo.dot(bsdf.frame.n).abs()));
         if let Some((li, al)) = scene.area_light(sh.prim) {
             let le = al.le(sh.hit.n, wo);
@@ -92,6 +111,9 @@ pub(super) fn radiance(
             break;
         }
         if !bsdf.is_specular() && !specular_only {
+            if st.specular {
+                out.r0 = set_radius(ctx, &mut st, (x, y), &rng0, ratio);
+            }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
                 *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
@@ -107,18 +129,9 @@ pub(super) fn radiance(
             }
         }
         let mode = TransportMode::Radiance;
-        let gather = st.gather_here(ctx);
-        let Some(s) = bounce(
-            ctx,
-            &sh,
-            &bsdf,
-            wo,
-            mode,
-            &mut st.q,
-            &mut st.medium,
-            rng,
-            gather,
-        ) else {
+        let ratio = st.factors.merge_ratio(st.gather_here(ctx));
+        let q = &mut st.q;
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, q, &mut st.medium, rng, ratio) else {
             break;
         };
         if st.len == 1 {
@@ -141,6 +154,43 @@ pub(super) fn radiance(
     out
 }
 
+/// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
+/// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, this iteration's
+/// shrink applied. Seen directly it is the straight footprint's, the same rule a light-traced
+/// splat's weight uses at its vertex; through mirrors and glass the straight footprint over
+/// the path's length times the pixel's `ratio` (`common::footprint`), measured by neighbour
+/// rays retraced from `rng0` by the pixel's first camera path that passes a mirror or glass
+/// and kept, as SPPM keeps its pixel's radius (for merging only: without it the radius enters
+/// no weight). A ratio from an earlier path depends on nothing this path or the light paths
+/// sample, so the weights stay exact. Returns `r_0`.
+fn set_radius(
+    ctx: &Context,
+    st: &mut State,
+    pixel: (u32, u32),
+    rng0: &Rng,
+    ratio: &mut f64,
+) -> f64 {
+    let rule = ctx.radius.rule;
+    let r0 = match rule {
+        InitialRadius::Footprint { .. } if st.len > 1 && ctx.mode.use_vm => {
+            if *ratio == 0.0 {
+                let (scene, settings, camera) = (ctx.scene, ctx.settings, &ctx.camera);
+                let mut rng = rng0.clone();
+                let r = footprint::footprint_ratio(scene, camera, settings, pixel, false, &mut rng);
+                *ratio = r.unwrap_or(1.0);
+            }
+            rule.at(st.distance).map(|r| r * *ratio)
+        }
+        _ => rule.at(st.distance),
+    }
+    .unwrap_or(ctx.radius.fallback);
+    let r = ctx.radius.scaled(Some(r0));
+    st.factors = ctx.factors(r);
+    st.radius = r as f32;
+    st.vm_normalization = (1.0 / (std::f64::consts::PI * r * r * ctx.light_paths)) as f32;
+    r0
+}
+
 /// A camera path's radiance in two parts: what it sees through delta bounces alone (emission
 /// and the sky, weight 1: no other technique samples it) and the rest.
 #[derive(Debug, Clone, Copy, Default)]
@@ -149,6 +199,8 @@ pub(super) struct Radiance {
     pub(super) rest: Vec3A,
     /// The path left its first vertex by a delta bounce (a mirror, glass).
     pub(super) through_delta: bool,
+    /// The path's initial radius, before the iteration's shrink (0 if it set none).
+    pub(super) r0: f64,
 }
 
 impl Radiance {
@@ -182,7 +234,7 @@ fn escaped(ctx: &Context, st: &State, d: Vec3A) -> Vec3A {
     }
     let direct_pdf = f64::from(scene.light_distr.pdf(li) * env.pdf_li(d));
     let emission_pdf_w = ctx.emission_pdf_w(li, st.prev, Vec3A::ZERO, -d);
-    le * mis::hit_light(&st.q, direct_pdf, emission_pdf_w) as f32
+    le * mis::hit_light(&st.q.at(&st.factors), direct_pdf, emission_pdf_w) as f32
 }
 
 /// The weight of emission from area light `li` hit at `sh`, `dist` from the previous vertex.
@@ -210,7 +262,7 @@ fn hit_weight(
         pn * f64::from(al.pdf_li_from(st.prev, sh.hit.p, sh.hit.n, on_light)) * cos_light
             / (dist * dist);
     let emission_pdf_w = ctx.emission_pdf_w(li, sh.hit.p, sh.hit.n, wo);
-    mis::hit_light(&st.q, direct_pdf_a, emission_pdf_w) as f32
+    mis::hit_light(&st.q.at(&st.factors), direct_pdf_a, emission_pdf_w) as f32
 }
 
 /// Next-event estimation at a camera vertex, weighted against the camera path hitting the
@@ -256,8 +308,8 @@ fn direct(
         )
     };
     let w = mis::direct(
-        &ctx.factors,
-        &st.q,
+        &st.factors,
+        &st.q.at(&st.factors),
         st.gather_here(ctx),
         bsdf_pdf,
         bsdf_rev,
@@ -308,15 +360,15 @@ fn connect(
     // The camera path's second vertex: this one, or the light vertex when this is its first.
     let gather = if st.gather_here(ctx) {
         GatherAt::Camera
-    } else if ctx.factors.gather && st.len == 1 {
+    } else if ctx.gather && st.len == 1 {
         GatherAt::Light
     } else {
         GatherAt::Neither
     };
     let w = mis::connect(
-        &ctx.factors,
-        &st.q,
-        &v.q,
+        &st.factors,
+        &st.q.at(&st.factors),
+        &v.q.at(&st.factors),
         cam_pdf_a,
         light_pdf_a,
         f64::from(bsdf.pdf(dir, wo)),
@@ -337,20 +389,27 @@ fn connect(
 /// Merges the light vertices within the radius of camera vertex `p` (without the camera
 /// path's throughput): each counts its flux times the camera BSDF over the disk's area and
 /// the number of light paths. At the camera path's second vertex after a non-specular first,
-/// with the final gather on, the radius is the gather's.
+/// with the final gather on, the radius is the gather's, `GATHER_RADIUS_FACTOR` times the
+/// path's own.
 fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
     let gather = st.gather_here(ctx);
     let (grid, radius, normalization) = if gather {
-        (ctx.gather_grid, ctx.gather_radius, ctx.gather_normalization)
+        let k = GATHER_RADIUS_FACTOR as f32;
+        (
+            ctx.gather_grid,
+            st.radius * k,
+            st.vm_normalization / (k * k),
+        )
     } else {
-        (ctx.grid, ctx.radius, ctx.vm_normalization)
+        (ctx.grid, st.radius, st.vm_normalization)
     };
     let Some(grid) = grid else {
         return Vec3A::ZERO;
     };
     // At the camera path's first vertex the light vertex's predecessor is its second.
-    let first = ctx.factors.gather && st.len == 1;
+    let first = ctx.gather && st.len == 1;
     let mut sum = Vec3A::ZERO;
+    let cam = st.q.at(&st.factors);
     grid.for_each_within(p, radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
@@ -363,11 +422,11 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
         let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
         let light = if first {
-            v.q.gathered(&ctx.factors)
+            v.q.gathered(&st.factors)
         } else {
-            v.q
+            v.q.at(&st.factors)
         };
-        let w = mis::merge(&ctx.factors, &st.q, &light, cam_pdf, cam_rev, gather);
+        let w = mis::merge(&st.factors, &cam, &light, cam_pdf, cam_rev, gather);
         sum += f * v.beta * w as f32;
     });
     sum * normalization

@@ -4,6 +4,10 @@
 //! cells hash into a power-of-two table at least as long as the vertex list. The points are
 //! copied in bucket order, so a query reads each bucket's points from one run of memory. Built
 //! by counting sort into arrays that are kept and reused from one iteration to the next.
+//! Each camera path queries with its own radius: up to the one the grid was built for, the
+//! 2 x 2 x 2 cells; above it (rare: the grid follows the largest radius of the last
+//! iteration), every cell the query's ball overlaps, or every point if those are more than the
+//! table's buckets.
 
 use glam::{DVec3, Vec3A};
 
@@ -11,6 +15,8 @@ use glam::{DVec3, Vec3A};
 pub(super) struct Grid {
     min: DVec3,
     inv_cell: f64,
+    /// The radius the cells are two of wide.
+    radius: f32,
     /// log2 of the table's length.
     bits: u32,
     /// `starts[h]..starts[h + 1]` are the positions in `items` and `points` of the points in
@@ -40,6 +46,7 @@ impl Grid {
         }
         self.min = min.as_dvec3();
         self.inv_cell = 0.5 / f64::from(r);
+        self.radius = r;
         let len = points.len().next_power_of_two();
         self.bits = len.trailing_zeros();
         self.items.clear();
@@ -92,9 +99,11 @@ impl Grid {
         mixed.checked_shr(64 - self.bits).unwrap_or(0) as u32
     }
 
-    /// Calls `f(index)` for every point within `r` of `p` (at most the grid's radius), each
-    /// once.
+    /// Calls `f(index)` for every point within `r` of `p`, each once.
     pub(super) fn for_each_within(&self, p: Vec3A, r: f32, mut f: impl FnMut(usize)) {
+        if r > self.radius {
+            return self.for_each_within_wide(p, r, f);
+        }
         let q = self.scaled(p);
         let c = q.floor();
         // The neighbour on each axis is on the side of the cell's half that `p` lies in: a
@@ -131,6 +140,59 @@ impl Grid {
     }
 }
 
+impl Grid {
+    /// `for_each_within` for a radius above the grid's: the buckets of every cell the ball's
+    /// bounding box overlaps, each once, in bucket order; or every point where those cells
+    /// outnumber the buckets.
+    fn for_each_within_wide(&self, p: Vec3A, r: f32, mut f: impl FnMut(usize)) {
+        let q = self.scaled(p);
+        let e = f64::from(r) * self.inv_cell;
+        // Cell indices as `cell` gives them (saturated far away); their count in i128.
+        let (lo, hi) = ((q - e).floor().as_i64vec3(), (q + e).floor().as_i64vec3());
+        let span = |a: i64, b: i64| i128::from(b) - i128::from(a) + 1;
+        let cells = span(lo.x, hi.x) * span(lo.y, hi.y) * span(lo.z, hi.z);
+        let r2 = r * r;
+        let n_buckets = self.starts.len().saturating_sub(1);
+        let mut visit = |s: usize, e: usize| {
+            for (&pt, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
+                if (pt - p).length_squared() <= r2 {
+                    f(i as usize);
+                }
+            }
+        };
+        if cells > n_buckets as i128 {
+            return visit(0, self.points.len());
+        }
+        // Up to 4 x 4 x 4 cells (a radius up to 1.5 times the grid's) on the stack.
+        let mut stack = [0u32; 64];
+        let mut heap = Vec::new();
+        let buckets = if cells <= 64 {
+            &mut stack[..cells as usize]
+        } else {
+            heap.resize(cells as usize, 0);
+            &mut heap[..]
+        };
+        let mut k = 0;
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    buckets[k] = self.bucket([x, y, z]);
+                    k += 1;
+                }
+            }
+        }
+        buckets.sort_unstable();
+        for (j, &b) in buckets.iter().enumerate() {
+            if j == 0 || buckets[j - 1] != b {
+                visit(
+                    self.starts[b as usize] as usize,
+                    self.starts[b as usize + 1] as usize,
+                );
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,6 +222,11 @@ mod tests {
         for _ in 0..300 {
             let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 5.0 - 1.5;
             assert_finds_what_brute_force_finds(&grid, &points, q, r);
+            // Camera paths with radii smaller and larger than the grid's (up to the whole
+            // point set, where the cells outnumber the buckets).
+            for k in [0.3, 1.7, 4.0, 30.0] {
+                assert_finds_what_brute_force_finds(&grid, &points, q, r * k);
+            }
         }
     }
 
@@ -182,6 +249,9 @@ mod tests {
         let mut none = true;
         grid.for_each_within(Vec3A::splat(3.0e38), r, |_| none = false);
         grid.for_each_within(Vec3A::splat(-3.0e38), r, |_| none = false);
+        // So with a radius above the grid's.
+        grid.for_each_within(Vec3A::splat(3.0e38), r * 3.0, |_| none = false);
+        grid.for_each_within(Vec3A::splat(-3.0e38), r * 3.0, |_| none = false);
         assert!(none);
     }
 }

@@ -7,7 +7,7 @@
 
 use glam::Vec3A;
 
-use super::mis::{self, Quantities};
+use super::mis::{self, Parts};
 use super::{Context, bounce};
 use crate::geometry::Ray;
 use crate::integrators::common::photons::roulette;
@@ -28,7 +28,8 @@ pub(super) struct LightVertex {
     pub(super) beta: Vec3A,
     /// Segments from the light to here.
     pub(super) len: u32,
-    pub(super) q: Quantities,
+    /// The MIS quantities in parts, evaluated with the radius of each camera path it meets.
+    pub(super) q: Parts,
 }
 
 /// Light tracing's contribution to one pixel.
@@ -58,7 +59,7 @@ pub(super) fn trace(
         scene.spawn_ray(ps.p, ps.n, ps.dir)
     };
     let mut beta = ps.beta / pe;
-    let mut q = Quantities::default();
+    let mut q = Parts::default();
     let mut medium = Vec3A::ZERO;
     let mut len = 1u32;
     loop {
@@ -94,7 +95,7 @@ pub(super) fn trace(
                 }
                 Light::Point(_) | Light::Spot(_) => (pn, 0.0),
             };
-            q = Quantities::light(&ctx.factors, direct_pdf_a, emission_pdf_w, cos_light);
+            q = Parts::light(direct_pdf_a, emission_pdf_w, cos_light);
         }
         q.arrive(dist2, cos_in);
         let specular = bsdf.is_specular();
@@ -121,7 +122,7 @@ pub(super) fn trace(
             return;
         }
         let mode = TransportMode::Importance;
-        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng, false) else {
+        let Some(s) = bounce(ctx, &sh, &bsdf, wo, mode, &mut q, &mut medium, rng, 1.0) else {
             return;
         };
         if !roulette(&mut beta, s.weight, rng) {
@@ -140,7 +141,7 @@ fn to_camera(
     bsdf: &Bsdf,
     wo: Vec3A,
     beta: Vec3A,
-    q: &Quantities,
+    q: &Parts,
     medium: Vec3A,
     rng: &mut Rng,
     splats: &mut Vec<Splat>,
@@ -159,16 +160,18 @@ fn to_camera(
     let w = if ctx.mode.light_trace_only {
         1.0
     } else {
+        // The radius of a camera path through the lens point that sees this vertex directly;
+        // that camera path's second vertex is this one's predecessor: its merge is the gather's.
+        let f = ctx.factors(ctx.radius.at(f64::from(cs.dist)));
         let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
-        // The camera's second vertex is this one's predecessor: its merge is the gather's.
-        mis::to_camera(&ctx.factors, &q.gathered(&ctx.factors), camera_pdf_a, rev)
+        mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, rev)
     };
     let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
     if scene.occluded(&ray, t_max) {
         return;
     }
     let absorbed = transmittance(medium_after(scene, sh, wo, cs.to_camera, medium), cs.dist);
-    let c = beta * f * absorbed * (w * camera_pdf_a / ctx.factors.light_paths) as f32;
+    let c = beta * f * absorbed * (w * camera_pdf_a / ctx.light_paths) as f32;
     if c.is_finite() && c.max_element() > 0.0 {
         splats.push((cs.pixel, c));
     }

@@ -6,30 +6,43 @@
 //! what the next step of the path (not known yet) contributes. With them a weight needs only
 //! the vertex at each end of the connection or merge: no path is revisited.
 //!
-//! Densities enter through `mis` (the power heuristic: squared). The same functions serve both
-//! the renderer and the test that checks their weights against every technique's density
-//! computed by brute force.
+//! **A radius per camera path.** A merge's density relative to a connection's,
+//! `eta = pi r^2 N`, depends on the radius, and the radius is each camera path's own (its
+//! pixel's footprint where it first meets a non-specular surface). The quantities are carried
+//! in parts affine in the merge factor `E = mis(eta)` ([`Parts`]): a light vertex stores its
+//! parts, and each connection, merge or light-traced splat evaluates them with the `E` of the
+//! camera path it meets (for a splat, the camera path that would end at the light vertex: the
+//! radius at the vertex's distance from the lens). The techniques of one whole path then all
+//! see one radius, the camera end's, and the weights are exactly the power heuristic's for it.
 //!
 //! **The final gather.** With final gathering, the merge at a camera path's second vertex
-//! after a non-specular first uses a wider radius `R` (`GATHER_RADIUS_FACTOR` times `r`, as
-//! SPPM's gather points): a technique of its own, whose density is that of the merge at the
-//! same vertex with `pi R^2 N` in place of `pi r^2 N`, and which takes the place of that merge.
-//! In the sums it changes the terms that count the merge at that vertex: in `vc` the merge's
-//! density over a connection's, `vm_weight = mis(pi r^2 N)`, becomes
-//! `gather_weight = mis(pi R^2 N)`; in `vm` the merge's density over the merge at the next
-//! vertex, 1, becomes `gather_ratio = mis(R^2 / r^2)`. The camera path knows which of its
-//! vertices is its second: its `scatter` there, and the merge factor at that vertex in `direct`
-//! and `connect`, take the gather's terms. A light vertex does not know it ahead: it turns out
-//! to be the camera path's second in a connection whose camera part is one vertex (the light
-//! end itself: its merge factor in `connect`), and its predecessor does when light tracing
-//! connects it to the camera or a camera path merges with it at its first vertex. For those
-//! each subpath keeps apart `last`, the coefficient with which its last `scatter` added the
-//! merge at the vertex it scattered at (times `vm_weight` in `vc`, times 1 in `vm`), and
-//! [`Quantities::gathered`] re-evaluates that term with the gather's factors. The gather merge
+//! after a non-specular first uses a wider radius `R = GATHER_RADIUS_FACTOR r`, `r` that camera
+//! path's own radius (as SPPM's gather points): a technique of its own, whose density is that
+//! of the merge at the same vertex with `pi R^2 N` in place of `pi r^2 N`, and which takes the
+//! place of that merge. In the sums it changes the terms that count the merge at that vertex:
+//! in `vc` the merge's density over a connection's, `E`, becomes the gather's factor
+//! `E_g = mis(pi R^2 N) = G E`; in `vm` the merge's density over the merge at the next vertex,
+//! 1, becomes `G = mis(R^2 / r^2)` (`Factors::gather_weight`, `Factors::gather_ratio`: both
+//! per camera path, from its `r`). The camera path knows which of its vertices is its second:
+//! its `scatter` there takes `G` in place of 1 in both sums (the parts stay affine in `E`), and
+//! the merge factor at that vertex in `direct` and `connect` is `E_g`. A light vertex does not
+//! know it ahead: it turns out to be the camera path's second in a connection whose camera
+//! part is one vertex (the light end itself: its merge factor in `connect` is that camera
+//! path's `E_g`), and its predecessor does when light tracing connects it to the camera or a
+//! camera path merges with it at its first vertex. For those each light subpath keeps apart
+//! `last`, the coefficient `k` with which its last `scatter` added the merge at the vertex it
+//! scattered at: the parts `[0, k]` of `vc` (the term `k E`) and `[k, 0]` of `vm` (the term
+//! `k`). [`Parts::gathered`] evaluates the quantities with that term re-weighted by the
+//! meeting camera path's gather, `k E_g` and `k G`: affine in `E` like the rest, so the same
+//! stored vertex serves camera paths of every radius, gathering or not. The gather merge
 //! itself is weighed against the same techniques as the merge with `r` at its vertex, each of
 //! whose densities is now over `R^2 / r^2` times as much: its weight is
-//! `1 / (1 + (w_light + w_camera) / gather_ratio)` from that merge's sums. `vcm::mis::tests`
-//! checks it all against brute force.
+//! `1 / (1 + (w_light + w_camera) / G)` from that merge's sums.
+//!
+//! Densities enter through `mis` (the power heuristic: squared). The same functions serve both
+//! the renderer and the test that checks their weights against every technique's density
+//! computed by brute force (`mis/tests.rs`: camera paths of different radii meeting one light
+//! subpath, with and without the final gather).
 
 /// The heuristic: the power heuristic with exponent 2.
 #[inline]
@@ -37,7 +50,8 @@ pub(super) fn mis(x: f64) -> f64 {
     x * x
 }
 
-/// Per-iteration constants of the weights.
+/// The constants of the weights for one camera path's radius (and the iteration's light
+/// paths' count).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Factors {
     /// `mis(eta)` with `eta = pi r^2 N` when merging is used, else 0: a merge's density relative
@@ -49,11 +63,11 @@ pub(super) struct Factors {
     pub(super) light_paths: f64,
     /// Whether the final gather's merge is used ([`Factors::with_gather`]).
     pub(super) gather: bool,
-    /// `mis(pi R^2 N)`: the gather merge's density relative to the connection at its vertex
-    /// (without the final gather, `vm_weight`).
+    /// `E_g = mis(pi R^2 N)`: the gather merge's density relative to the connection at its
+    /// vertex (without the final gather, `vm_weight`).
     pub(super) gather_weight: f64,
-    /// `mis(R^2 / r^2)`: the gather merge's density over the merge with `r` at the same vertex
-    /// (without the final gather, 1).
+    /// `G = mis(R^2 / r^2)`: the gather merge's density over the merge with `r` at the same
+    /// vertex (without the final gather, 1).
     pub(super) gather_ratio: f64,
 }
 
@@ -70,7 +84,7 @@ impl Factors {
         }
     }
 
-    /// The same with the final gather, of radius `factor` times the merges' (nothing changes
+    /// The same with the final gather, of radius `factor` times this one's (nothing changes
     /// without merging).
     pub(super) fn with_gather(self, factor: f64) -> Self {
         if self.vm_weight <= 0.0 {
@@ -94,27 +108,65 @@ impl Factors {
             self.vm_weight
         }
     }
+
+    /// The factor to the merge term a `scatter` adds at a vertex, relative to the plain
+    /// merge's: `G` at the final gather's vertex, else 1.
+    pub(super) fn merge_ratio(&self, gather: bool) -> f64 {
+        if gather { self.gather_ratio } else { 1.0 }
+    }
 }
 
-/// The recursive quantities of a subpath at its last vertex.
+/// The recursive quantities of a subpath at its last vertex, for the merge factor of the
+/// camera path they meet: what every weight below takes ([`Parts::at`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct Quantities {
     pub(super) vcm: f64,
     pub(super) vc: f64,
     pub(super) vm: f64,
-    /// The coefficient with which the last `scatter` added the merge at its vertex (the one
-    /// before this), to `vc` times that merge's factor and to `vm` times its ratio to a merge
-    /// with `r`; zero after a light point or a delta bounce (no merge there).
+}
+
+/// The recursive quantities of a subpath in parts, for every merge factor at once: with
+/// `E = mis(eta)` ([`Factors::vm_weight`]) and `1 / E` ([`Factors::vc_weight`]),
+///
+/// ```text
+/// vc = vc[0] + E vc[1]        vm = vm[0] + vm[1] / E        (vcm has no E)
+/// ```
+///
+/// By induction over the recursion (`'` the next vertex's, `k = mis(cos_out / pdf_dir)`,
+/// `p = mis(pdf_rev)`):
+/// - at the light's first vertex `vc = mis(cos_light / emission_pdf_w)`, `vm = vc / E`: the
+///   parts `vc = [vc, 0]`, `vm = [0, vc]`; at the camera `vc = vm = 0`;
+/// - `vc' = k (vc p + vcm + E)` gives `vc'[0] = k (vc[0] p + vcm)`, `vc'[1] = k (vc[1] p + 1)`;
+/// - `vm' = k (vm p + vcm / E + 1)` gives `vm'[0] = k (vm[0] p + 1)`, `vm'[1] = k (vm[1] p +
+///   vcm)`;
+/// - `vcm' = mis(1 / pdf_dir)` has no E; arriving, and a delta bounce, scale all three by
+///   factors without E;
+/// - at the camera path's final-gather vertex the merge there counts `G E` in `vc'` and `G`
+///   in `vm'` (`G` has no E): `vc'[1] = k (vc[1] p + G)`, `vm'[0] = k (vm[0] p + G)`;
+/// - `last' = k`, the merge term just added, kept apart: `[0, k]` in `vc'`, `[k, 0]` in `vm'`
+///   (scaled by arriving as the rest; zero after a delta bounce and at the light).
+///
+/// So a light path's stored vertex holds its parts, and each connection, merge or light-traced
+/// splat evaluates them with the E of the camera path it meets ([`Parts::at`], or
+/// [`Parts::gathered`] where the vertex before it is that camera path's gather vertex).
+/// Without merging E is 0 (and without connections `1 / E` is 0), as in the recursion itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Parts {
+    pub(super) vcm: f64,
+    pub(super) vc: [f64; 2],
+    pub(super) vm: [f64; 2],
+    /// `k` of the last `scatter` (see above); zero after a light point or a delta bounce.
     pub(super) last: f64,
 }
 
-impl Quantities {
-    /// At the camera: `pdf_camera` is the camera's solid-angle density of the first direction.
-    pub(super) fn camera(f: &Factors, pdf_camera: f64) -> Self {
+impl Parts {
+    /// At the camera: `light_paths` the light paths' count, `pdf_camera` the camera's
+    /// solid-angle density of the first direction.
+    pub(super) fn camera(light_paths: f64, pdf_camera: f64) -> Self {
         Self {
-            vcm: mis(f.light_paths / pdf_camera),
-            vc: 0.0,
-            vm: 0.0,
+            vcm: mis(light_paths / pdf_camera),
+            vc: [0.0; 2],
+            vm: [0.0; 2],
             last: 0.0,
         }
     }
@@ -124,19 +176,40 @@ impl Quantities {
     /// light alone), `emission_pdf_w` the emission's density (light choice, area, direction),
     /// `cos_light` the cosine at the light (zero for a delta light: no connection reaches it;
     /// 1 for the environment, whose directions are measured without one).
-    pub(super) fn light(
-        f: &Factors,
-        direct_pdf_a: f64,
-        emission_pdf_w: f64,
-        cos_light: f64,
-    ) -> Self {
+    pub(super) fn light(direct_pdf_a: f64, emission_pdf_w: f64, cos_light: f64) -> Self {
         let vc = mis(cos_light / emission_pdf_w);
         Self {
             vcm: mis(direct_pdf_a / emission_pdf_w),
-            vc,
-            vm: vc * f.vc_weight,
+            vc: [vc, 0.0],
+            vm: [0.0, vc],
             last: 0.0,
         }
+    }
+
+    /// The quantities for the merge factor of `f`.
+    pub(super) fn at(&self, f: &Factors) -> Quantities {
+        Quantities {
+            vcm: self.vcm,
+            vc: self.vc[0] + f.vm_weight * self.vc[1],
+            vm: self.vm[0] + f.vc_weight * self.vm[1],
+        }
+    }
+
+    /// The quantities for `f` when the vertex before this one is the camera path's final
+    /// gather vertex (light tracing connects this vertex to the camera, or a camera path
+    /// merges with it at its first vertex): the last merge term weighed by `G`, i.e. `E_g` in
+    /// `vc`. The same as [`Parts::at`] without the gather.
+    pub(super) fn gathered(&self, f: &Factors) -> Quantities {
+        if !f.gather {
+            return self.at(f);
+        }
+        let extra = self.last * (f.gather_ratio - 1.0);
+        Self {
+            vc: [self.vc[0], self.vc[1] + extra],
+            vm: [self.vm[0] + extra, self.vm[1]],
+            ..*self
+        }
+        .at(f)
     }
 
     /// Arriving at a surface after a segment of squared length `dist2` (`None`: the light
@@ -147,31 +220,21 @@ impl Quantities {
         }
         let c = mis(cos.abs());
         self.vcm /= c;
-        self.vc /= c;
-        self.vm /= c;
+        self.vc = self.vc.map(|x| x / c);
+        self.vm = self.vm.map(|x| x / c);
         self.last /= c;
     }
 
     /// Scattering at a non-specular vertex into a direction of cosine `cos_out`, sampled with
-    /// solid-angle density `pdf_dir`; `pdf_rev` is the density of the reverse choice. `gather`:
-    /// the vertex is the camera path's second after a non-specular first (its merge is the
-    /// final gather's).
-    pub(super) fn scatter(
-        &mut self,
-        f: &Factors,
-        cos_out: f64,
-        pdf_dir: f64,
-        pdf_rev: f64,
-        gather: bool,
-    ) {
-        let k = mis(cos_out / pdf_dir);
-        let ratio = if gather { f.gather_ratio } else { 1.0 };
-        let vc = k * (self.vc * mis(pdf_rev) + self.vcm + f.merge_at(gather));
-        let vm = k * (self.vm * mis(pdf_rev) + self.vcm * f.vc_weight + ratio);
+    /// solid-angle density `pdf_dir`; `pdf_rev` is the density of the reverse choice.
+    /// `merge_ratio` is the merge's factor at this vertex over the plain merge's
+    /// ([`Factors::merge_ratio`]): `G` at the camera path's final gather vertex, else 1.
+    pub(super) fn scatter(&mut self, cos_out: f64, pdf_dir: f64, pdf_rev: f64, merge_ratio: f64) {
+        let (k, p, g) = (mis(cos_out / pdf_dir), mis(pdf_rev), merge_ratio);
         *self = Self {
             vcm: mis(1.0 / pdf_dir),
-            vc,
-            vm,
+            vc: [k * (self.vc[0] * p + self.vcm), k * (self.vc[1] * p + g)],
+            vm: [k * (self.vm[0] * p + g), k * (self.vm[1] * p + self.vcm)],
             last: k,
         };
     }
@@ -179,24 +242,11 @@ impl Quantities {
     /// Scattering by a delta lobe: no technique can connect or merge at this vertex, and the
     /// forward and reverse densities are the same.
     pub(super) fn scatter_specular(&mut self, cos_out: f64) {
+        let c = mis(cos_out);
         self.vcm = 0.0;
-        self.vc *= mis(cos_out);
-        self.vm *= mis(cos_out);
+        self.vc = self.vc.map(|x| x * c);
+        self.vm = self.vm.map(|x| x * c);
         self.last = 0.0;
-    }
-
-    /// A light vertex's quantities when the vertex before it is the camera path's second
-    /// (light tracing connects this vertex to the camera, or a camera path merges with it at
-    /// its first vertex): the merge there is the final gather's. Unchanged without it.
-    pub(super) fn gathered(&self, f: &Factors) -> Self {
-        if !f.gather {
-            return *self;
-        }
-        Self {
-            vc: self.vc + self.last * (f.gather_weight - f.vm_weight),
-            vm: self.vm + self.last * (f.gather_ratio - 1.0),
-            ..*self
-        }
     }
 }
 
@@ -256,7 +306,7 @@ pub(super) fn connect(
     1.0 / (w_light + 1.0 + w_camera)
 }
 
-/// A light vertex connected to the camera: `light` its quantities [`Quantities::gathered`] (the
+/// A light vertex connected to the camera: `light` its quantities [`Parts::gathered`] (the
 /// vertex before it is the camera path's second), `camera_pdf_a` the camera's density of the
 /// vertex per area, `light_rev` the vertex BSDF's density of its previous direction given the
 /// direction toward the camera.
@@ -268,7 +318,7 @@ pub(super) fn to_camera(f: &Factors, light: &Quantities, camera_pdf_a: f64, ligh
 
 /// A light vertex merged at a camera vertex: `cam_pdf` the camera BSDF's density of the light
 /// vertex's incoming direction, `cam_rev` that of the camera path's previous direction given it.
-/// At the camera path's first vertex `light` is [`Quantities::gathered`]; `gather`: the camera
+/// At the camera path's first vertex `light` is [`Parts::gathered`]; `gather`: the camera
 /// vertex is the camera path's second after a non-specular first (the final gather's merge,
 /// radius R).
 pub(super) fn merge(

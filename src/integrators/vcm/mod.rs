@@ -8,18 +8,25 @@
 //! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
 //! next-event estimation, connections to every vertex of the light path with the pixel's index
 //! (modulo the light paths' count), and merges
-//! with the light vertices within the iteration's radius (`grid.rs`). Every technique is
+//! with the light vertices within the camera path's radius (`grid.rs`). Every technique is
 //! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
 //! bounce, for the part only camera paths sample (`DELTA_CAMERA_PATHS`).
 //!
-//! The radius shrinks as SPPM's does on average: `r_i = r_0 i^((alpha - 1) / 2)` (global, so
-//! that every light path's weights hold for every pixel); `r_0` is the scene's `radius`, else
-//! SPPM's pixel footprint rule at the distance in focus.
+//! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
+//! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
+//! surface, the footprint carried through mirrors and glass by `common::footprint`, measured
+//! once a pixel), and it
+//! shrinks as SPPM's does on average, `r_i = r_0 i^((alpha - 1) / 2)`. The weights stay exact:
+//! a light vertex carries its quantities in parts that each camera path evaluates with its own
+//! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
+//! see its vertex directly. The merge grid is built for the 90th percentile of the radii of
+//! the previous iteration's pixels (their first camera paths), and answers larger queries too.
 //!
 //! With `final_gather on`, a camera path whose first bounce is non-specular merges at its
-//! second vertex with `GATHER_RADIUS_FACTOR` times the radius (SPPM's gather points' rule),
-//! from a second grid: the final gather, a technique of its own in the weights (`mis.rs`).
+//! second vertex with `GATHER_RADIUS_FACTOR` times its own radius (SPPM's gather points'
+//! rule), from a second grid built for that factor times the merge grid's radius: the final
+//! gather, a technique of its own in the weights (`mis.rs`).
 //!
 //! The environment light starts light paths as it emits photons (pbrt-v4's `SampleLe`): a
 //! direction by the sky's own sampling density, a point of a disk as wide as the bounding
@@ -51,12 +58,14 @@ use super::common::{medium_after, progressive};
 use super::{Integrator, Job, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
-use crate::prepare::{GATHER_RADIUS_FACTOR, PreparedScene, SurfaceHit};
+use crate::prepare::{
+    EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, PreparedScene, SurfaceHit,
+};
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
 use light_count::LightCount;
 use light_path::{LightVertex, Splat};
-use mis::{Factors, Quantities};
+use mis::{Factors, Parts};
 
 /// Which techniques run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,22 +133,23 @@ const CHUNK: usize = 1024;
 /// What the camera and light passes of one iteration share.
 struct Context<'c, 's, 'a> {
     scene: &'s PreparedScene<'a>,
+    settings: &'s EffectiveSettings,
     camera: Camera,
     mode: Mode,
-    factors: Factors,
+    /// Light paths this iteration.
+    light_paths: f64,
+    radius: Radius,
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
     /// Light choice for light paths (every light, by power).
     emitters: &'c PiecewiseConstant1D,
     /// Each light's probability in `emitters`.
     emit_probs: &'c [f64],
-    radius: f32,
-    vm_normalization: f32,
     vertices: &'c [LightVertex],
     grid: Option<&'c Grid>,
-    /// The final gather's radius, normalization and grid (none without it).
-    gather_radius: f32,
-    gather_normalization: f32,
+    /// The final gather is on (the scene's `final_gather`, with merging).
+    gather: bool,
+    /// The final gather's grid (none without it).
     gather_grid: Option<&'c Grid>,
 }
 
@@ -153,13 +163,47 @@ impl Context<'_, '_, '_> {
         let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
         choice * f64::from(pos) * f64::from(d)
     }
+
+    /// The weights' constants for a camera path of radius `radius` this iteration.
+    /// With the final gather on, those of its merge too, `GATHER_RADIUS_FACTOR` times `radius`.
+    fn factors(&self, radius: f64) -> Factors {
+        let m = self.mode;
+        let f = Factors::new(radius, self.light_paths, m.use_vc, m.use_vm);
+        if self.gather {
+            f.with_gather(GATHER_RADIUS_FACTOR)
+        } else {
+            f
+        }
+    }
+}
+
+/// The radius rule of one iteration.
+#[derive(Debug, Clone, Copy)]
+struct Radius {
+    rule: InitialRadius,
+    /// `Vcm::radius_scale` times the iteration's shrink, `i^((alpha - 1) / 2)`.
+    factor: f64,
+    /// Where the rule has no value: the one at the distance in focus, else 1e-3.
+    fallback: f64,
+}
+
+impl Radius {
+    /// This iteration's radius of a camera path that sees a point `distance` from the lens
+    /// directly (the footprint rule's straight ray): a light-traced splat's.
+    fn at(&self, distance: f64) -> f64 {
+        self.scaled(self.rule.at(distance))
+    }
+
+    fn scaled(&self, r0: Option<f64>) -> f64 {
+        (r0.unwrap_or(self.fallback) * self.factor).max(1e-7)
+    }
 }
 
 /// A bounce of a subpath at a surface (light paths in importance mode, camera paths in
 /// radiance mode): samples the BSDF, updates the MIS quantities `q` and the absorbing
 /// `medium` the path is in. The caller applies the sample's weight and Russian roulette.
-/// `gather`: the vertex is a camera path's second after a non-specular first, whose merge is
-/// the final gather's.
+/// `merge_ratio`: the merge's factor at this vertex over the plain merge's (`G` at a camera
+/// path's final gather vertex, else 1: `Factors::merge_ratio`).
 #[allow(clippy::too_many_arguments)]
 fn bounce(
     ctx: &Context,
@@ -167,10 +211,10 @@ fn bounce(
     bsdf: &Bsdf,
     wo: Vec3A,
     mode: TransportMode,
-    q: &mut Quantities,
+    q: &mut Parts,
     medium: &mut Vec3A,
     rng: &mut Rng,
-    gather: bool,
+    merge_ratio: f64,
 ) -> Option<BsdfSample> {
     let s = bsdf.sample(wo, rng.f32(), rng.vec2(), mode)?;
     let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
@@ -178,7 +222,7 @@ fn bounce(
         q.scatter_specular(cos_out);
     } else {
         let rev = f64::from(bsdf.pdf(s.wi, wo));
-        q.scatter(&ctx.factors, cos_out, f64::from(s.pdf), rev, gather);
+        q.scatter(cos_out, f64::from(s.pdf), rev, merge_ratio);
     }
     *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
     Some(s)
@@ -196,11 +240,14 @@ impl Integrator for Vcm {
         let emit_probs: Vec<f64> = (0..powers.len())
             .map(|i| f64::from(emitters.pdf(i)))
             .collect();
-        let r0 = settings
-            .initial_radius(&scene.scene.camera)
-            .at(scene.camera.focus_distance())
-            .unwrap_or(1e-3)
-            * self.radius_scale;
+        let rule = settings.initial_radius(&scene.scene.camera);
+        let fallback = rule.at(scene.camera.focus_distance()).unwrap_or(1e-3);
+        // The grid's radius before the iteration's shrink: the 90th percentile of the last
+        // iteration's pixels' `r_0` (of their first camera path). Merges of a larger radius
+        // read more cells; wider cells for all would slow every merge (the largest `r_0` is
+        // 1.3-3x the median on the examples, the 90th percentile 1.05-1.45x).
+        let mut grid_r0 = fallback;
+        let mut r0s = Vec::with_capacity(n_paths);
         let mode = self.mode;
         // The final gather where the scene asks for SPPM's (`final_gather on`): merging only.
         let gather = mode.use_vm && settings.final_gather;
@@ -211,47 +258,45 @@ impl Integrator for Vcm {
         // Each pixel's delta parts so far, and whether a camera path left its first vertex
         // by a delta bounce.
         let mut delta = vec![(SampleStats::default(), false); n_paths];
+        // Each pixel's footprint ratio through mirrors and glass (0 until measured).
+        let mut ratios = vec![0.0; n_paths];
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
         progressive::render_means(job, |iter, stats| {
-            let radius = r0 * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0));
-            let radius = radius.max(1e-7);
+            let radius = Radius {
+                rule,
+                factor: self.radius_scale * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0)),
+                fallback,
+            };
             let n_light = if mode.use_vm {
                 light_count.light_paths(iter, n_paths)
             } else {
                 n_paths
             };
-            let mut factors = Factors::new(radius, n_light as f64, mode.use_vc, mode.use_vm);
-            if gather {
-                factors = factors.with_gather(GATHER_RADIUS_FACTOR);
-            }
-            let gather_radius = radius * GATHER_RADIUS_FACTOR;
             let mut ctx = Context {
                 scene,
+                settings,
                 camera: scene.camera,
                 mode,
-                factors,
+                light_paths: n_light as f64,
+                radius,
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
-                radius: radius as f32,
-                vm_normalization: (1.0 / (std::f64::consts::PI * radius * radius * n_light as f64))
-                    as f32,
                 vertices: &[],
                 grid: None,
-                gather_radius: gather_radius as f32,
-                gather_normalization: (1.0
-                    / (std::f64::consts::PI * gather_radius * gather_radius * n_light as f64))
-                    as f32,
+                gather,
                 gather_grid: None,
             };
             let t_light = Instant::now();
             if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
                 return None;
             }
-            let has_grid = mode.use_vm && pass.grid.build(&pass.positions, ctx.radius);
-            let has_gather = gather && pass.gather_grid.build(&pass.positions, ctx.gather_radius);
+            let grid_radius = radius.scaled(Some(grid_r0));
+            let has_grid = mode.use_vm && pass.grid.build(&pass.positions, grid_radius as f32);
+            let gather_radius = (grid_radius * GATHER_RADIUS_FACTOR) as f32;
+            let has_gather = gather && pass.gather_grid.build(&pass.positions, gather_radius);
             stats.photon_time += t_light.elapsed();
             ctx.vertices = &pass.vertices;
             ctx.grid = has_grid.then_some(&pass.grid);
@@ -262,15 +307,16 @@ impl Integrator for Vcm {
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
             // The delta-only camera paths, counted with the others in the statistics.
             let delta_paths = AtomicU64::new(0);
-            let values: Vec<Vec3A> = samples
+            let (values, r0): (Vec<Vec3A>, Vec<f64>) = samples
                 .par_iter_mut()
                 .zip(delta.par_iter_mut())
                 .zip(extra.par_iter())
+                .zip(ratios.par_iter_mut())
                 .enumerate()
-                .map(|(i, ((px, (sp_stats, seen_delta)), &extra))| {
+                .map(|(i, (((px, (sp_stats, seen_delta)), &extra), ratio))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
-                        return Vec3A::ZERO;
+                        return (Vec3A::ZERO, 0.0);
                     }
                     let mut rng = Stream::VcmCamera.rng(seed, iter, i as u64);
                     // With fewer light paths than pixels, each serves every n_light-th pixel.
@@ -287,14 +333,14 @@ impl Integrator for Vcm {
                         0
                     };
                     delta_paths.fetch_add(u64::from(only), Ordering::Relaxed);
-                    let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false);
+                    let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false, ratio);
                     let (mut spec, mut rest) = (finite(first.specular), finite(first.rest));
                     px.add(spec + rest);
                     sp_stats.add(spec);
                     *seen_delta |= first.through_delta;
                     let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
                     for k in 0..extra + only {
-                        let r = camera_path::radiance(&ctx, x, y, own, &mut rng, k >= extra);
+                        let r = camera_path::radiance(&ctx, x, y, own, &mut rng, k >= extra, ratio);
                         let (sp, re) = (finite(r.specular), finite(r.rest));
                         if k < extra {
                             px.add(sp + re);
@@ -304,9 +350,15 @@ impl Integrator for Vcm {
                         rest += re;
                     }
                     let mean = spec / (1 + extra + only) as f32 + rest / (1 + extra) as f32;
-                    finite(mean + splat)
+                    (finite(mean + splat), first.r0)
                 })
-                .collect();
+                .unzip();
+            r0s.clear();
+            r0s.extend(r0.into_iter().filter(|&r| r > 0.0));
+            if !r0s.is_empty() {
+                let k = (r0s.len() - 1) * 9 / 10;
+                grid_r0 = *r0s.select_nth_unstable_by(k, f64::total_cmp).1;
+            }
             stats.camera_paths +=
                 extra.iter().map(|&e| u64::from(e)).sum::<u64>() + delta_paths.into_inner();
             if extra_budget > 0 {
