@@ -24,6 +24,9 @@ struct State {
     q: Parts,
     /// Every bounce so far specular.
     specular: bool,
+    /// The radius is set (at the first vertex whose BSDF is not specular: once, even if that
+    /// vertex then samples a delta lobe, so that every technique of the path sees one radius).
+    radius_set: bool,
     /// The path's length so far while every bounce is specular.
     distance: f64,
     /// The weights' constants for the path's radius, the radius and the merges'
@@ -74,6 +77,7 @@ pub(super) fn radiance(
         len: 1,
         q: Parts::camera(ctx.light_paths, pdf_camera),
         specular: true,
+        radius_set: false,
         distance: 0.0,
         factors: ctx.factors(ctx.radius.scaled(None)),
         radius: 0.0,
@@ -111,8 +115,9 @@ pub(super) fn radiance(
             break;
         }
         if !bsdf.is_specular() && !specular_only {
-            if st.specular {
+            if !st.radius_set {
                 out.r0 = set_radius(ctx, &mut st, (x, y), &rng0, ratio);
+                st.radius_set = true;
             }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
