@@ -185,6 +185,15 @@ pub(super) fn compact_mesh_bytes(mesh: &MeshData) -> u64 {
         .saturating_add(PER_MESH)
 }
 
+/// Bytes a grid over `vcm`'s light vertices takes per vertex: its index, position, bucket
+/// and about two table slots.
+pub const VCM_GRID_BYTES: u64 = 32;
+
+/// Bytes a stored light vertex of `vcm`, `bpt` or `lt` takes: the vertex (its BSDF and
+/// weights' parts) in its path's chunk and again in the iteration's list, its position and
+/// its merge grid entry (checked against the types' sizes by the light path's tests).
+pub const VCM_VERTEX_BYTES: u64 = 736;
+
 /// The estimate, largest item first.
 pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> {
     let pixels = settings.width() as u64 * settings.height() as u64;
@@ -288,9 +297,14 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
             .photons
             .unwrap_or(DEFAULT_PHOTONS)
             .saturating_mul(3 * 48 * 2),
-        // One light path per pixel and iteration, its stored vertices (about 200 bytes with
-        // their BSDF) at most `max_depth` each, three on average; the grid's index beside them.
-        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => pixels.saturating_mul(3 * 208),
+        // One light path per pixel and iteration, its stored vertices at most `max_depth`
+        // each, three on average; with final gathering `vcm` keeps a second grid.
+        Integrator::Vcm if settings.final_gather => {
+            pixels.saturating_mul(3 * (VCM_VERTEX_BYTES + VCM_GRID_BYTES))
+        }
+        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => {
+            pixels.saturating_mul(3 * VCM_VERTEX_BYTES)
+        }
         Integrator::Path | Integrator::Whitted => 0,
     };
     items.push(MemoryItem {

@@ -24,7 +24,10 @@ use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::{self, TexCoord};
-pub use budget::{MemoryItem, check_memory, default_memory_limit, estimate as estimate_memory};
+pub use budget::{
+    MemoryItem, VCM_GRID_BYTES, VCM_VERTEX_BYTES, check_memory, default_memory_limit,
+    estimate as estimate_memory,
+};
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,

@@ -176,3 +176,33 @@ fn to_camera(
         splats.push((cs.pixel, c));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::LightVertex;
+    use crate::prepare::{VCM_GRID_BYTES, VCM_VERTEX_BYTES};
+    use glam::Vec3A;
+    use std::mem::size_of;
+
+    /// The memory budget's figure for a stored light vertex covers what the light pass keeps
+    /// of it: the vertex in its path's chunk and again in the iteration's list, its position,
+    /// and a grid's entry (index, position, bucket and about two table slots of `u32`).
+    #[test]
+    fn the_memory_budget_covers_a_stored_light_vertex() {
+        let grid = (4 * size_of::<u32>() + size_of::<Vec3A>()) as u64;
+        let vertex = 2 * size_of::<LightVertex>() as u64 + size_of::<Vec3A>() as u64 + grid;
+        assert!(
+            grid <= VCM_GRID_BYTES,
+            "grid entry {grid} > {VCM_GRID_BYTES}"
+        );
+        assert!(
+            vertex <= VCM_VERTEX_BYTES,
+            "light vertex {vertex} > {VCM_VERTEX_BYTES}"
+        );
+        // Not so generous that the budget stops meaning anything.
+        assert!(
+            VCM_VERTEX_BYTES <= vertex + vertex / 4,
+            "{vertex} vs {VCM_VERTEX_BYTES}"
+        );
+    }
+}
