@@ -1,10 +1,11 @@
 //! The multiple-importance weights of vertex connection and merging, computed from three
 //! quantities every subpath carries (Georgiev et al. 2012, "Light transport simulation with
 //! vertex connection and merging", and its technical report's recursive form): `vcm`, `vc` and
-//! `vm`. Each is a sum, over the techniques that would have sampled the subpath's vertices
-//! from the other end, of the ratio of that technique's density to this one's, divided by
-//! what the next step of the path (not known yet) contributes. With them a weight needs only
-//! the vertex at each end of the connection or merge: no path is revisited.
+//! `vm` (with the final gather a fourth, `last`, below). Each is a sum, over the techniques
+//! that would have sampled the subpath's vertices from the other end, of the ratio of that
+//! technique's density to this one's, divided by what the next step of the path (not known
+//! yet) contributes. With them a weight needs only the vertex at each end of the connection or
+//! merge: no path is revisited.
 //!
 //! **A radius per camera path.** A merge's density relative to a connection's,
 //! `eta = pi r^2 N`, depends on the radius, and the radius is each camera path's own (its
