@@ -49,6 +49,13 @@ impl State {
     fn gather_here(&self, ctx: &Context) -> bool {
         ctx.gather && self.len == 2 && self.first_diffuse
     }
+
+    /// The path's last vertex is its first (non-specular: connections and merges happen only
+    /// there) and the final gather is on: the vertex a connection or merge leaves it for is
+    /// the camera path's second, the gather's (a light vertex, or a light vertex's predecessor).
+    fn gather_next(&self, ctx: &Context) -> bool {
+        ctx.gather && self.len == 1
+    }
 }
 
 /// The radiance of one camera path through pixel (x, y); `own` are the vertices of the light
@@ -365,7 +372,7 @@ fn connect(
     // The camera path's second vertex: this one, or the light vertex when this is its first.
     let gather = if st.gather_here(ctx) {
         GatherAt::Camera
-    } else if ctx.gather && st.len == 1 {
+    } else if st.gather_next(ctx) {
         GatherAt::Light
     } else {
         GatherAt::Neither
@@ -412,7 +419,7 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         return Vec3A::ZERO;
     };
     // At the camera path's first vertex the light vertex's predecessor is its second.
-    let first = ctx.gather && st.len == 1;
+    let first = st.gather_next(ctx);
     let mut sum = Vec3A::ZERO;
     let cam = st.q.at(&st.factors);
     grid.for_each_within(p, radius, |i| {
