@@ -5,7 +5,7 @@
 use glam::{DAffine3, Vec2, Vec3A};
 use rayon::prelude::*;
 
-use super::triangle::Triangle;
+use super::triangle::{Triangle, shading_normal, uv_and_dpdu};
 use crate::geometry::{Aabb, Hit};
 use crate::scene::MeshData;
 
@@ -160,20 +160,7 @@ impl TriangleMesh {
         let [b1, b2] = b;
         let b0 = 1.0 - b1 - b2;
         let point = p[0] * b0 + p[1] * b1 + p[2] * b2;
-        let ns = match self.vertex_normals(idx) {
-            Some(ns) => {
-                let s = (ns[0] * b0 + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
-                if s == Vec3A::ZERO {
-                    n
-                } else if s.dot(n) < 0.0 {
-                    // Keep the shading normal on the geometric normal's side.
-                    (s - n * (2.0 * s.dot(n))).normalize()
-                } else {
-                    s
-                }
-            }
-            None => n,
-        };
+        let ns = shading_normal(self.vertex_normals(idx), [b0, b1, b2], n);
         // Without uvs, the default parameterisation's constants go through the same operations
         // (what they fold away is exact: products and a quotient by one); no buffer is read.
         let (uv, dpdu) = if self.uvs.is_empty() {
@@ -212,23 +199,6 @@ impl TriangleMesh {
             + self.uvs.capacity() * size_of::<Vec2>()
             + self.indices.capacity() * size_of::<[u32; 3]>()
     }
-}
-
-/// A triangle's `uv` at barycentric coordinates `b` from its vertices' `uvs`, and dp/du from
-/// its edges `e1`, `e2` where that parameterisation is not degenerate (`e1` where it is): the
-/// operations of the stand-alone [`Triangle`]'s hit, in its order.
-#[inline(always)]
-fn uv_and_dpdu(uvs: [Vec2; 3], b: [f32; 3], e1: Vec3A, e2: Vec3A) -> (Vec2, Vec3A) {
-    let uv = uvs[0] * b[0] + uvs[1] * b[1] + uvs[2] * b[2];
-    let duv1 = uvs[1] - uvs[0];
-    let duv2 = uvs[2] - uvs[0];
-    let d = duv1.x * duv2.y - duv1.y * duv2.x;
-    let dpdu = if d.abs() > 1e-12 {
-        (e1 * duv2.y - e2 * duv1.y) / d
-    } else {
-        e1
-    };
-    (uv, dpdu)
 }
 
 /// The mesh's triangles in world space, as stand-alone shapes; smooth normals and uvs when the

@@ -78,30 +78,8 @@ impl SplitShape for Triangle {
         let e2 = self.p[2] - self.p[0];
         let b0 = 1.0 - b1 - b2;
         let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
-        let ns = match self.normals {
-            Some(ns) => {
-                let s = (ns[0] * b0 + ns[1] * b1 + ns[2] * b2).normalize_or_zero();
-                if s == Vec3A::ZERO {
-                    self.n
-                } else if s.dot(self.n) < 0.0 {
-                    // Keep the shading normal on the geometric normal's side.
-                    (s - self.n * (2.0 * s.dot(self.n))).normalize()
-                } else {
-                    s
-                }
-            }
-            None => self.n,
-        };
-        let uv = self.uvs[0] * b0 + self.uvs[1] * b1 + self.uvs[2] * b2;
-        // dp/du from the uv parameterisation when it is not degenerate.
-        let duv1 = self.uvs[1] - self.uvs[0];
-        let duv2 = self.uvs[2] - self.uvs[0];
-        let d = duv1.x * duv2.y - duv1.y * duv2.x;
-        let dpdu = if d.abs() > 1e-12 {
-            (e1 * duv2.y - e2 * duv1.y) / d
-        } else {
-            e1
-        };
+        let ns = shading_normal(self.normals, [b0, b1, b2], self.n);
+        let (uv, dpdu) = uv_and_dpdu(self.uvs, [b0, b1, b2], e1, e2);
         Hit {
             t,
             p,
@@ -150,4 +128,41 @@ mod tests {
             assert!((hit.t / s - 1.0).abs() < 1e-5, "size {s}: t = {}", hit.t);
         }
     }
+}
+
+/// The shading normal at barycentric coordinates `b` from the vertex normals `ns` (none: the
+/// geometric normal `n`), kept on `n`'s side. Shared with the mesh's hit, which must give the
+/// same bits.
+#[inline(always)]
+pub(super) fn shading_normal(ns: Option<[Vec3A; 3]>, b: [f32; 3], n: Vec3A) -> Vec3A {
+    match ns {
+        Some(ns) => {
+            let s = (ns[0] * b[0] + ns[1] * b[1] + ns[2] * b[2]).normalize_or_zero();
+            if s == Vec3A::ZERO {
+                n
+            } else if s.dot(n) < 0.0 {
+                // Keep the shading normal on the geometric normal's side.
+                (s - n * (2.0 * s.dot(n))).normalize()
+            } else {
+                s
+            }
+        }
+        None => n,
+    }
+}
+
+/// A triangle's `uv` at barycentric coordinates `b` from its vertices' `uvs`, and dp/du from
+/// its edges `e1`, `e2` where that parameterisation is not degenerate (`e1` where it is).
+#[inline(always)]
+pub(super) fn uv_and_dpdu(uvs: [Vec2; 3], b: [f32; 3], e1: Vec3A, e2: Vec3A) -> (Vec2, Vec3A) {
+    let uv = uvs[0] * b[0] + uvs[1] * b[1] + uvs[2] * b[2];
+    let duv1 = uvs[1] - uvs[0];
+    let duv2 = uvs[2] - uvs[0];
+    let d = duv1.x * duv2.y - duv1.y * duv2.x;
+    let dpdu = if d.abs() > 1e-12 {
+        (e1 * duv2.y - e2 * duv1.y) / d
+    } else {
+        e1
+    };
+    (uv, dpdu)
 }
