@@ -163,34 +163,42 @@ impl Grid {
         if cells > n_buckets as i128 {
             return visit(0, self.points.len());
         }
-        // Up to 4 x 4 x 4 cells (a radius up to 1.5 times the grid's) on the stack.
-        let mut stack = [0u32; 64];
-        let mut heap = Vec::new();
-        let buckets = if cells <= 64 {
-            &mut stack[..cells as usize]
-        } else {
-            heap.resize(cells as usize, 0);
-            &mut heap[..]
-        };
-        let mut k = 0;
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    buckets[k] = self.bucket([x, y, z]);
-                    k += 1;
+        // Up to 4 x 4 x 4 cells (a radius up to 1.5 times the grid's) on the stack, more in
+        // a buffer kept by the thread (no allocation a query).
+        let mut each_bucket = |buckets: &mut [u32]| {
+            let mut k = 0;
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        buckets[k] = self.bucket([x, y, z]);
+                        k += 1;
+                    }
                 }
             }
-        }
-        buckets.sort_unstable();
-        for (j, &b) in buckets.iter().enumerate() {
-            if j == 0 || buckets[j - 1] != b {
-                visit(
-                    self.starts[b as usize] as usize,
-                    self.starts[b as usize + 1] as usize,
-                );
+            // Sorted, so a bucket that several cells hash to is read once.
+            buckets.sort_unstable();
+            for (j, &b) in buckets.iter().enumerate() {
+                if j == 0 || buckets[j - 1] != b {
+                    let b = b as usize;
+                    visit(self.starts[b] as usize, self.starts[b + 1] as usize);
+                }
             }
+        };
+        if cells <= 64 {
+            each_bucket(&mut [0u32; 64][..cells as usize]);
+        } else {
+            WIDE_BUCKETS.with_borrow_mut(|buckets| {
+                buckets.clear();
+                buckets.resize(cells as usize, 0);
+                each_bucket(buckets);
+            });
         }
     }
+}
+
+thread_local! {
+    /// The bucket list of a wide query over more than 64 cells, reused by the thread.
+    static WIDE_BUCKETS: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 #[cfg(test)]
