@@ -24,14 +24,13 @@ struct State {
     q: Parts,
     /// Every bounce so far specular.
     specular: bool,
-    /// The radius is set (at the first vertex whose BSDF is not specular: once, even if that
-    /// vertex then samples a delta lobe, so that every technique of the path sees one radius).
-    radius_set: bool,
     /// The path's length so far while every bounce is specular.
     distance: f64,
     /// The weights' constants for the path's radius, the radius and the merges'
     /// normalisation `1 / (pi r^2 N)`: set at its first non-specular vertex.
     factors: Factors,
+    /// 0 until set: at the first vertex whose BSDF is not specular, once, even if that vertex
+    /// then samples a delta lobe, so that every technique of the path sees one radius.
     radius: f32,
     vm_normalization: f32,
     medium: Vec3A,
@@ -84,7 +83,6 @@ pub(super) fn radiance(
         len: 1,
         q: Parts::camera(ctx.light_paths, pdf_camera),
         specular: true,
-        radius_set: false,
         distance: 0.0,
         factors: ctx.factors(ctx.radius.scaled(None)),
         radius: 0.0,
@@ -122,9 +120,8 @@ pub(super) fn radiance(
             break;
         }
         if !bsdf.is_specular() && !specular_only {
-            if !st.radius_set {
+            if st.radius == 0.0 {
                 out.r0 = set_radius(ctx, &mut st, (x, y), &rng0, ratio);
-                st.radius_set = true;
             }
             let l = &mut out.rest;
             if ctx.mode.use_vc {
