@@ -62,8 +62,6 @@ pub(super) struct Factors {
     pub(super) vc_weight: f64,
     /// Number of light paths per iteration (one per pixel, or a quarter as many).
     pub(super) light_paths: f64,
-    /// Whether the final gather's merge is used ([`Factors::with_gather`]).
-    pub(super) gather: bool,
     /// `E_g = mis(pi R^2 N)`: the gather merge's density relative to the connection at its
     /// vertex (without the final gather, `vm_weight`).
     pub(super) gather_weight: f64,
@@ -79,7 +77,6 @@ impl Factors {
             vm_weight: if use_vm { mis(eta) } else { 0.0 },
             vc_weight: if use_vc { mis(1.0 / eta) } else { 0.0 },
             light_paths,
-            gather: false,
             gather_weight: if use_vm { mis(eta) } else { 0.0 },
             gather_ratio: 1.0,
         }
@@ -93,7 +90,6 @@ impl Factors {
         }
         let ratio = mis(factor * factor);
         Self {
-            gather: true,
             gather_weight: self.vm_weight * ratio,
             gather_ratio: ratio,
             ..self
@@ -201,9 +197,6 @@ impl Parts {
     /// merges with it at its first vertex): the last merge term weighed by `G`, i.e. `E_g` in
     /// `vc`. The same as [`Parts::at`] without the gather.
     pub(super) fn gathered(&self, f: &Factors) -> Quantities {
-        if !f.gather {
-            return self.at(f);
-        }
         let extra = self.last * (f.gather_ratio - 1.0);
         Self {
             vc: [self.vc[0], self.vc[1] + extra],
