@@ -108,28 +108,6 @@ impl SplitShape for Triangle {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::shapes::Shape;
-
-    /// Edges 1e11 long are legal (world coordinates go to 1e12), but the square of their cross
-    /// product (1e44) overflows f32: the triangle was refused as "degenerate (zero area)", and
-    /// a mesh silently dropped it.
-    #[test]
-    fn a_triangle_with_edges_1e11_long_is_built_and_hit() {
-        for s in [1e-4f32, 1.0, 1e11] {
-            let tri = Triangle::new([Vec3A::ZERO, s * Vec3A::X, s * Vec3A::Y], None, None)
-                .unwrap_or_else(|e| panic!("size {s}: {e}"));
-            assert!((tri.area / (0.5 * s * s) - 1.0).abs() < 1e-5, "size {s}");
-            assert_eq!(tri.n, Vec3A::Z);
-            let ray = Ray::new(Vec3A::new(0.25 * s, 0.25 * s, -s), Vec3A::Z);
-            let hit = tri.intersect(&ray, 0.0, f32::INFINITY).expect("a hit");
-            assert!((hit.t / s - 1.0).abs() < 1e-5, "size {s}: t = {}", hit.t);
-        }
-    }
-}
-
 /// The shading normal at barycentric coordinates `b` from the vertex normals `ns` (none: the
 /// geometric normal `n`), kept on `n`'s side. Shared with the mesh's hit, which must give the
 /// same bits.
@@ -165,4 +143,26 @@ pub(super) fn uv_and_dpdu(uvs: [Vec2; 3], b: [f32; 3], e1: Vec3A, e2: Vec3A) -> 
         e1
     };
     (uv, dpdu)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::Shape;
+
+    /// Edges 1e11 long are legal (world coordinates go to 1e12), but the square of their cross
+    /// product (1e44) overflows f32: the triangle was refused as "degenerate (zero area)", and
+    /// a mesh silently dropped it.
+    #[test]
+    fn a_triangle_with_edges_1e11_long_is_built_and_hit() {
+        for s in [1e-4f32, 1.0, 1e11] {
+            let tri = Triangle::new([Vec3A::ZERO, s * Vec3A::X, s * Vec3A::Y], None, None)
+                .unwrap_or_else(|e| panic!("size {s}: {e}"));
+            assert!((tri.area / (0.5 * s * s) - 1.0).abs() < 1e-5, "size {s}");
+            assert_eq!(tri.n, Vec3A::Z);
+            let ray = Ray::new(Vec3A::new(0.25 * s, 0.25 * s, -s), Vec3A::Z);
+            let hit = tri.intersect(&ray, 0.0, f32::INFINITY).expect("a hit");
+            assert!((hit.t / s - 1.0).abs() < 1e-5, "size {s}: t = {}", hit.t);
+        }
+    }
 }
