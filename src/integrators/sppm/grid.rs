@@ -225,9 +225,11 @@ impl Level {
         let c = (p - self.bounds.min) * self.inv_cell;
         // Axis by axis: `[0, 1, 2].map(..)` stayed a call of ~69 instructions per filed hit
         // (docs/measurements.md, "Photon pass").
-        let x = (c.x as i32).clamp(0, self.res[0] - 1);
-        let y = (c.y as i32).clamp(0, self.res[1] - 1);
-        let z = (c.z as i32).clamp(0, self.res[2] - 1);
+        // `max` then `min` rather than `clamp`, whose check of its bounds' order cost a
+        // quarter of the filing (`res` is at least 1, so the result is the same).
+        let x = (c.x as i32).max(0).min(self.res[0] - 1);
+        let y = (c.y as i32).max(0).min(self.res[1] - 1);
+        let z = (c.z as i32).max(0).min(self.res[2] - 1);
         row(y, z, self.bits) + x as u32
     }
 
@@ -287,39 +289,80 @@ impl Level {
 /// miss per photon).
 const SLABS: usize = 64;
 
-/// A photon hit as filed: the position with its bucket, then the direction and flux.
+/// A photon hit as filed: the position with its bucket, then the direction and flux (40
+/// bytes, no padding: a round's hits are the photon pass's largest memory, and fresh pages cost
+/// a fault each).
 #[derive(Clone, Copy, Debug)]
 struct Filed {
     p: Vec3,
     bucket: u32,
-    wi: Vec3A,
-    beta: Vec3A,
+    wi: Vec3,
+    beta: Vec3,
 }
 
-/// One parallel task's photon hits, filed by slab. Kept from round to round (and iteration to
-/// iteration) so that its memory is reused: fresh pages cost a fault each.
+impl Filed {
+    const ZERO: Filed = Filed {
+        p: Vec3::ZERO,
+        bucket: 0,
+        wi: Vec3::ZERO,
+        beta: Vec3::ZERO,
+    };
+}
+
+/// One parallel task's photon hits, per level sorted by slab (in push order within a slab).
+/// Kept from round to round (and iteration to iteration) so that its memory is reused.
+///
+/// The hits are pushed into a [`HitBuffer`] the task lends the chunk ([`HitChunk::reset`]),
+/// then sorted by slab into one array per level, sized to the hits ([`HitChunk::seal`]), which
+/// gives the buffer back for the task's next chunk. (A growing array per slab and chunk held
+/// about a third more memory than its hits, and copied them as it grew.)
 #[derive(Default)]
 pub(super) struct HitChunk {
-    /// Per level, per slab.
-    slabs: Vec<Vec<Vec<Filed>>>,
+    levels: Vec<SlabHits>,
+    pending: HitBuffer,
     /// Surfaces the chunk's photons reached (filed or not): its ray casts.
     pub(super) segments: u64,
 }
 
+/// One level's hits of a chunk: slab `s`'s are `hits[starts[s]..starts[s + 1]]`.
+#[derive(Default)]
+struct SlabHits {
+    hits: Vec<Filed>,
+    starts: Vec<u32>,
+}
+
+/// Photon hits per level as pushed, before a chunk sorts them by slab: the memory one task
+/// reuses from chunk to chunk.
+#[derive(Default)]
+pub(super) struct HitBuffer(Vec<Vec<Filed>>);
+
 impl HitChunk {
-    /// Empties the chunk for a round over `cells`.
-    pub(super) fn reset(&mut self, cells: &Cells) {
-        self.slabs.resize_with(cells.levels.len(), Vec::new);
-        for (slabs, level) in self.slabs.iter_mut().zip(&cells.levels) {
-            slabs.resize_with(level.map_or(0, |l| l.slabs()), Vec::new);
+    /// Empties the chunk for a round over `cells`, its hits to be pushed into `buffer` (whose
+    /// memory [`Self::seal`] gives back).
+    pub(super) fn reset(&mut self, cells: &Cells, buffer: HitBuffer) {
+        let n = cells.levels.len();
+        self.levels.resize_with(n, SlabHits::default);
+        for (l, level) in self.levels.iter_mut().zip(&cells.levels) {
+            l.hits.clear();
+            l.starts.clear();
+            l.starts.resize(level.map_or(0, |l| l.slabs()) + 1, 0);
         }
-        self.clear();
+        self.pending = buffer;
+        self.pending.0.resize_with(n, Vec::new);
+        for v in &mut self.pending.0 {
+            v.clear();
+        }
+        self.segments = 0;
     }
 
     /// Drops the hits and the count (a pass that files nothing here).
     pub(super) fn clear(&mut self) {
-        for slab in self.slabs.iter_mut().flatten() {
-            slab.clear();
+        for l in &mut self.levels {
+            l.hits.clear();
+            l.starts.fill(0);
+        }
+        for v in &mut self.pending.0 {
+            v.clear();
         }
         self.segments = 0;
     }
@@ -327,24 +370,62 @@ impl HitChunk {
     /// Files `hit` in every level whose points it may reach (none: dropped).
     #[inline]
     pub(super) fn push(&mut self, cells: &Cells, hit: PhotonHit) {
-        for (slabs, level) in self.slabs.iter_mut().zip(&cells.levels) {
+        for (pending, level) in self.pending.0.iter_mut().zip(&cells.levels) {
             let Some(level) = level else { continue };
             if !level.contains(hit.p) {
                 continue;
             }
-            let bucket = level.bucket(hit.p);
-            slabs[(bucket >> level.slab_shift) as usize].push(Filed {
+            pending.push(Filed {
                 p: hit.p.into(),
-                bucket,
-                wi: hit.wi,
-                beta: hit.beta,
+                bucket: level.bucket(hit.p),
+                wi: hit.wi.into(),
+                beta: hit.beta.into(),
             });
         }
     }
 
+    /// Sorts the pushed hits by slab (a stable counting sort: push order within a slab), for
+    /// [`PhotonGrid::build`], and returns the emptied buffer they were pushed into.
+    pub(super) fn seal(&mut self, cells: &Cells) -> HitBuffer {
+        let levels = self.levels.iter_mut().zip(&mut self.pending.0);
+        for ((sorted, pending), level) in levels.zip(&cells.levels) {
+            let Some(level) = level else {
+                pending.clear();
+                continue;
+            };
+            let starts = &mut sorted.starts;
+            for h in pending.iter() {
+                starts[(h.bucket >> level.slab_shift) as usize + 1] += 1;
+            }
+            for s in 1..starts.len() {
+                starts[s] += starts[s - 1];
+            }
+            // Where each slab's next hit goes (at most `SLABS` slabs).
+            let slabs = starts.len() - 1;
+            let mut next = [0u32; SLABS];
+            next[..slabs].copy_from_slice(&starts[..slabs]);
+            sorted.hits.clear();
+            sorted.hits.reserve_exact(pending.len());
+            sorted.hits.resize(pending.len(), Filed::ZERO);
+            for h in pending.iter() {
+                let s = (h.bucket >> level.slab_shift) as usize;
+                sorted.hits[next[s] as usize] = *h;
+                next[s] += 1;
+            }
+            pending.clear();
+        }
+        std::mem::take(&mut self.pending)
+    }
+
+    /// Level `k`'s hits in slab `s` (none before [`Self::seal`]).
+    fn slab(&self, k: usize, s: usize) -> &[Filed] {
+        let l = &self.levels[k];
+        &l.hits[l.starts[s] as usize..l.starts[s + 1] as usize]
+    }
+
     /// Hits filed (a hit filed in two levels counts twice: the memory it takes).
     pub(super) fn len(&self) -> usize {
-        self.slabs.iter().flatten().map(Vec::len).sum()
+        self.levels.iter().map(|l| l.hits.len()).sum()
     }
 }
 
@@ -364,7 +445,7 @@ struct LevelGrid {
     /// Per entry: the photon's position.
     points: Vec<Vec3A>,
     /// Per entry: the photon's `wi` and flux.
-    flux: Vec<(Vec3A, Vec3A)>,
+    flux: Vec<(Vec3, Vec3)>,
 }
 
 impl PhotonGrid {
@@ -400,7 +481,7 @@ impl LevelGrid {
     fn build(&mut self, cells: Level, chunks: &[HitChunk], k: usize) {
         let (size, width) = (cells.table_size(), cells.slab_width() as usize);
         let totals: Vec<usize> = (0..cells.slabs())
-            .map(|s| chunks.iter().map(|c| c.slabs[k][s].len()).sum())
+            .map(|s| chunks.iter().map(|c| c.slab(k, s).len()).sum())
             .collect();
         let n: usize = totals.iter().sum();
         // Rounds hold a few million hits (`ROUND_HITS`); entry indices are u32.
@@ -410,7 +491,7 @@ impl LevelGrid {
         self.starts[size] = n as u32;
         // Every entry is written below: growing fills the new part only, once.
         self.points.resize(n, Vec3A::ZERO);
-        self.flux.resize(n, (Vec3A::ZERO, Vec3A::ZERO));
+        self.flux.resize(n, (Vec3::ZERO, Vec3::ZERO));
         // Each slab's part of the entry arrays.
         let mut parts = Vec::with_capacity(totals.len());
         let (mut points, mut flux) = (&mut self.points[..n], &mut self.flux[..n]);
@@ -427,7 +508,7 @@ impl LevelGrid {
             .enumerate()
             .for_each(|(s, (starts, (base, points, flux)))| {
                 let first = s * width;
-                let filed = || chunks.iter().flat_map(|c| &c.slabs[k][s]);
+                let filed = || chunks.iter().flat_map(|c| c.slab(k, s));
                 starts.fill(0);
                 for h in filed() {
                     starts[h.bucket as usize - first] += 1;
@@ -460,7 +541,7 @@ impl LevelGrid {
             for k in start as usize..end as usize {
                 if (self.points[k] - p).length_squared() <= r2 {
                     let (wi, beta) = self.flux[k];
-                    f(wi, beta);
+                    f(wi.into(), beta.into());
                 }
             }
         }

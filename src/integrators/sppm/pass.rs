@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
-use super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
+use super::grid::{Cells, HitBuffer, HitChunk, PhotonGrid, PhotonHit};
 use super::pixels::Pixel;
 use super::receiver::Receiver;
 use crate::integrators::common::photons::{trace_classified_photon, trace_photon};
@@ -17,8 +17,8 @@ use crate::prepare::{EffectiveSettings, PreparedScene};
 /// Photons per parallel task of the photon pass.
 const PHOTON_CHUNK: u64 = 4096;
 
-/// Photon hits a round aims to hold before its gather (48 bytes each while filed, as much
-/// again in the grid: about 200 MB in all). A round traces groups of photons until it holds
+/// Photon hits a round aims to hold before its gather (40 bytes each while filed, as much
+/// again in the grid: about 170 MB in all). A round traces groups of photons until it holds
 /// this many hits, has used [`ROUND_CHUNKS`] chunks, or the iteration's photons are done. A
 /// group is sized from the mean hits per photon of everything traced so far, so that it fills
 /// the round without overshooting it much (a statistical bound, not a hard one; the first group
@@ -214,47 +214,58 @@ fn trace_photons(
     cancel: &AtomicBool,
 ) {
     let tasks = chunks.par_iter_mut().zip(gather_chunks.par_iter_mut());
-    tasks.enumerate().for_each(|(c, (chunk, gather_chunk))| {
-        match filing.cells {
-            Some(cells) => chunk.reset(cells),
-            None => chunk.clear(),
-        }
-        match filing.gather_cells {
-            Some(cells) => gather_chunk.reset(cells),
-            None => gather_chunk.clear(),
-        }
-        if cancel.load(Ordering::Relaxed) {
-            return;
-        }
-        let first = lo + c as u64 * PHOTON_CHUNK;
-        let rngs = Stream::Photon.rngs(settings.seed, iter);
-        for i in first..(first + PHOTON_CHUNK).min(hi) {
-            let mut rng = rngs.rng(i);
-            trace_classified_photon(
-                scene,
-                settings.max_depth,
-                &mut rng,
-                |depth, sh, wi, beta, caustic| {
-                    chunk.segments += 1;
-                    if depth > 0 {
-                        let hit = PhotonHit {
-                            p: sh.hit.p,
-                            wi,
-                            beta,
-                        };
-                        if let Some(cells) = filing.cells
-                            && (caustic || !filing.caustic_only)
-                        {
-                            chunk.push(cells, hit);
+    // Each task's buffers for the hits as pushed, lent to one chunk after another.
+    let buffers = || (HitBuffer::default(), HitBuffer::default());
+    tasks
+        .enumerate()
+        .for_each_init(buffers, |buffers, (c, (chunk, gather_chunk))| {
+            let (buffer, gather_buffer) = buffers;
+            match filing.cells {
+                Some(cells) => chunk.reset(cells, std::mem::take(buffer)),
+                None => chunk.clear(),
+            }
+            match filing.gather_cells {
+                Some(cells) => gather_chunk.reset(cells, std::mem::take(gather_buffer)),
+                None => gather_chunk.clear(),
+            }
+            if cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let first = lo + c as u64 * PHOTON_CHUNK;
+            let rngs = Stream::Photon.rngs(settings.seed, iter);
+            for i in first..(first + PHOTON_CHUNK).min(hi) {
+                let mut rng = rngs.rng(i);
+                trace_classified_photon(
+                    scene,
+                    settings.max_depth,
+                    &mut rng,
+                    |depth, sh, wi, beta, caustic| {
+                        chunk.segments += 1;
+                        if depth > 0 {
+                            let hit = PhotonHit {
+                                p: sh.hit.p,
+                                wi,
+                                beta,
+                            };
+                            if let Some(cells) = filing.cells
+                                && (caustic || !filing.caustic_only)
+                            {
+                                chunk.push(cells, hit);
+                            }
+                            if let Some(cells) = filing.gather_cells {
+                                gather_chunk.push(cells, hit);
+                            }
                         }
-                        if let Some(cells) = filing.gather_cells {
-                            gather_chunk.push(cells, hit);
-                        }
-                    }
-                },
-            );
-        }
-    });
+                    },
+                );
+            }
+            if let Some(cells) = filing.cells {
+                *buffer = chunk.seal(cells);
+            }
+            if let Some(cells) = filing.gather_cells {
+                *gather_buffer = gather_chunk.seal(cells);
+            }
+        });
 }
 
 /// What each pixel's visible point gathered in an iteration: the flux (f64, summed in the

@@ -417,7 +417,7 @@ fn extra_camera_samples_calm_the_light_edge() {
 mod census {
     use glam::Vec3A;
 
-    use super::super::grid::{Cells, HitChunk, PhotonGrid, PhotonHit};
+    use super::super::grid::{Cells, HitBuffer, HitChunk, PhotonGrid, PhotonHit};
     use crate::camera::Camera;
     use crate::eval::{EvalOptions, load_file};
     use crate::integrators::common::camera_path::camera_path;
@@ -505,7 +505,7 @@ mod census {
         }
         let cells = Cells::new(vps.iter().map(|(vp, r)| (vp.p, *r))).unwrap();
         let mut chunk = HitChunk::default();
-        chunk.reset(&cells);
+        chunk.reset(&cells, HitBuffer::default());
         let (mut hits, mut in_bounds, mut segments, mut hit_flux) = (0u64, 0u64, 0u64, 0.0f64);
         for i in 0..photons {
             let mut rng = Stream::Photon.rng(1, 0, i);
@@ -534,6 +534,7 @@ mod census {
                 },
             );
         }
+        chunk.seal(&cells);
         let mut grid = PhotonGrid::default();
         grid.build(&cells, std::slice::from_ref(&chunk));
         let mut used = vec![false; hits as usize + 1];

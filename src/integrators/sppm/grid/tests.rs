@@ -12,10 +12,11 @@ fn grid_of(cells: &Cells, photons: &[PhotonHit], tasks: usize) -> PhotonGrid {
     let per = photons.len().div_ceil(tasks);
     let mut chunks: Vec<HitChunk> = (0..tasks).map(|_| HitChunk::default()).collect();
     for (c, chunk) in chunks.iter_mut().enumerate() {
-        chunk.reset(cells);
+        chunk.reset(cells, HitBuffer::default());
         for h in photons.iter().skip(c * per).take(per) {
             chunk.push(cells, *h);
         }
+        chunk.seal(cells);
     }
     let mut grid = PhotonGrid::default();
     grid.build(cells, &chunks);
@@ -106,8 +107,10 @@ fn a_bucket_keeps_the_photons_in_order() {
     let mut rng = Rng::new(9);
     let mut chunks: Vec<HitChunk> = (0..5).map(|_| HitChunk::default()).collect();
     let mut k = 0;
+    // One buffer lent to every chunk in turn, as a task of the photon pass does.
+    let mut buffer = HitBuffer::default();
     for chunk in &mut chunks {
-        chunk.reset(&cells);
+        chunk.reset(&cells, std::mem::take(&mut buffer));
         for _ in 0..200 {
             let p = random_in(&mut rng, 2.0) - Vec3A::ONE;
             chunk.push(
@@ -120,6 +123,7 @@ fn a_bucket_keeps_the_photons_in_order() {
             );
             k += 1;
         }
+        buffer = chunk.seal(&cells);
     }
     let mut grid = PhotonGrid::default();
     grid.build(&cells, &chunks);
