@@ -244,13 +244,12 @@ impl Bvh {
 
     /// Closest hit with `t_min < t < t_max`, and the hit shape's id. Candidates are tested
     /// for `t` only; the surface data is computed once, for the closest hit. A ray with a NaN
-    /// in its origin or a non-finite direction hits none of the bounded shapes.
+    /// in its origin or a non-finite direction hits none of the bounded shapes. The record
+    /// (with its `uv`) is completed in the traversal's frame, as [`Bvh::intersect_uv`] does:
+    /// taking the [`LazyHit`] out of [`Bvh::intersect_lazy`] and completing it here cost
+    /// about 40 instructions a hit more (a second frame and the lazy result copied out).
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((
-            surface.hit_at_uv(ray, lazy, true),
-            lazy.part().unwrap_or(id),
-        ))
+        self.intersect_uv(ray, t_min, t_max, |_| true)
     }
 
     /// [`Bvh::intersect`], where `uv(id)` says whether a hit on the shape of id `id` (a CSG
