@@ -246,8 +246,8 @@ impl Bvh {
     /// for `t` only; the surface data is computed once, for the closest hit. A ray with a NaN
     /// in its origin or a non-finite direction hits none of the bounded shapes. The record
     /// (with its `uv`) is completed in the traversal's frame, as [`Bvh::intersect_uv`] does:
-    /// taking the [`LazyHit`] out of [`Bvh::intersect_lazy`] and completing it here cost
-    /// about 40 instructions a hit more (a second frame and the lazy result copied out).
+    /// taking the [`LazyHit`] out of [`Bvh::intersect_lazy`] and completing it here cost 20-35
+    /// instructions a query more (a second frame and the lazy result copied out).
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
         self.intersect_uv(ray, t_min, t_max, |_| true)
     }
