@@ -244,13 +244,12 @@ impl Bvh {
 
     /// Closest hit with `t_min < t < t_max`, and the hit shape's id. Candidates are tested
     /// for `t` only; the surface data is computed once, for the closest hit. A ray with a NaN
-    /// in its origin or a non-finite direction hits none of the bounded shapes.
+    /// in its origin or a non-finite direction hits none of the bounded shapes. The record
+    /// (with its `uv`) is completed in the traversal's frame, as [`Bvh::intersect_uv`] does:
+    /// taking the [`LazyHit`] out of [`Bvh::intersect_lazy`] and completing it here cost 20-35
+    /// instructions a query more (a second frame and the lazy result copied out).
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.intersect_lazy(ray, t_min, t_max)?;
-        Some((
-            surface.hit_at_uv(ray, lazy, true),
-            lazy.part().unwrap_or(id),
-        ))
+        self.intersect_uv(ray, t_min, t_max, |_| true)
     }
 
     /// [`Bvh::intersect`], where `uv(id)` says whether a hit on the shape of id `id` (a CSG
@@ -389,7 +388,7 @@ impl Bvh {
                 self.leaves
                     .closest(test, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
             } else {
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (mask, near) = test.hit(node, &boxes, t_min, t_max);
                 // Visit the nearest hit child next and stack the others; one or two hit
                 // children (most nodes) take no sort. (At most 7 pushes per level of a tree no
@@ -424,6 +423,18 @@ impl Bvh {
                 }
             }
         }
+    }
+
+    /// Interior node `i`, a child reference without the [`LEAF`] bit (or 0, the root).
+    #[inline(always)]
+    fn node(&self, i: u32) -> &WideNode {
+        debug_assert!((i as usize) < self.nodes.len());
+        // SAFETY: the traversals start at the root, 0, only when there are nodes, and go on
+        // only to references read from the nodes' `child` arrays without the `LEAF` bit: the
+        // collapse writes those as indices of nodes it made (`collapse_at`, and `collapse_run`
+        // shifting a run's by where the run lands). (Unchecked: the bounds check was a compare
+        // and branch per node visited.)
+        unsafe { self.nodes.get_unchecked(i as usize) }
     }
 
     /// The result of a closest-hit traversal that ended with `c` and `t_max`.
@@ -504,7 +515,7 @@ impl Bvh {
                     return true;
                 }
             } else {
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (mask, _) = test.hit(node, &boxes, t_min, t_max);
                 if mask != 0 {
                     // Go on to the highest hit slot (the one the stack would give back first)

@@ -34,13 +34,18 @@ pub(super) struct WideNode {
 pub(super) struct BoxRay {
     o: [f32; 3],
     inv_d: [f32; 3],
-    /// Per axis: the plane (in [`WideNode::planes`]) through which the ray enters the boxes,
-    /// `a` (the minima) or, when the ray runs toward decreasing coordinates, `a + 3` (the
-    /// maxima); always below 6.
+    /// Per axis: the byte offset in a [`WideNode`] of the plane (in [`WideNode::planes`])
+    /// through which the ray enters the boxes, plane `a` (the minima) or, when the ray runs
+    /// toward decreasing coordinates, plane `a + 3` (the maxima); always a plane below 6
+    /// times [`PLANE_BYTES`]. (Offsets, not indices: the AVX test adds them to the node's
+    /// address as they are, where an index took a shift per plane and node.)
     enter: [usize; 3],
-    /// Per axis: the plane through which it leaves them (the other one).
+    /// Per axis: the byte offset of the plane through which it leaves them (the other one).
     leave: [usize; 3],
 }
+
+/// Bytes of one plane of a [`WideNode`] (eight `f32`s).
+const PLANE_BYTES: usize = std::mem::size_of::<[Vec4; 2]>();
 
 impl BoxRay {
     /// Whether the box test can take `ray`: its origin has no NaN and its direction is finite.
@@ -63,11 +68,12 @@ impl BoxRay {
             3 * usize::from(inv_d.y < 0.0),
             3 * usize::from(inv_d.z < 0.0),
         );
+        let p = PLANE_BYTES;
         Self {
             o: ray.o.to_array(),
             inv_d: inv_d.to_array(),
-            enter: [nx, 1 + ny, 2 + nz],
-            leave: [3 - nx, 4 - ny, 5 - nz],
+            enter: [nx * p, (1 + ny) * p, (2 + nz) * p],
+            leave: [(3 - nx) * p, (4 - ny) * p, (5 - nz) * p],
         }
     }
 }
@@ -95,7 +101,10 @@ impl BoxTest for Halves {
             let mut near = Vec4::splat(t_min);
             let mut far = Vec4::splat(t_max);
             for a in 0..3 {
-                let (lo, hi) = (node.planes[ray.enter[a]][h], node.planes[ray.leave[a]][h]);
+                let (lo, hi) = (
+                    node.planes[ray.enter[a] / PLANE_BYTES][h],
+                    node.planes[ray.leave[a] / PLANE_BYTES][h],
+                );
                 let (o, inv_d) = (Vec4::splat(ray.o[a]), Vec4::splat(ray.inv_d[a]));
                 // `x.max(acc)` keeps `acc` where `x` is NaN (SSE `maxps` returns its second
                 // operand when either is NaN), as `Aabb::hit` does.
@@ -148,11 +157,12 @@ impl BoxTest for Avx {
 #[inline]
 unsafe fn hit_avx(node: &WideNode, ray: &BoxRay, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
     use std::arch::x86_64::*;
-    let load = |plane: usize| {
-        // SAFETY: `BoxRay` plane indices are below 6 (see `BoxRay::new`), and a plane,
-        // `[Vec4; 2]`, is eight consecutive `f32`s. (Unchecked: the bounds checks were a
-        // compare and branch per plane and node.)
-        unsafe { _mm256_loadu_ps(node.planes.get_unchecked(plane).as_ptr().cast::<f32>()) }
+    let base = node.planes.as_ptr().cast::<u8>();
+    let load = |offset: usize| {
+        // SAFETY: `BoxRay` plane offsets are those of planes below 6 (see `BoxRay::new`), and
+        // a plane, `[Vec4; 2]`, is eight consecutive `f32`s. (Unchecked: the bounds checks
+        // were a compare and branch per plane and node.)
+        unsafe { _mm256_loadu_ps(base.add(offset).cast::<f32>()) }
     };
     let mut near = _mm256_set1_ps(t_min);
     let mut far = _mm256_set1_ps(t_max);
