@@ -65,6 +65,7 @@ fn photon_pass(radius: Option<f64>) {
     let mut scene = common::cornell_glass(256);
     scene.settings.radius = radius;
     let options = RenderOptions {
+        integrator: Some(sppm_lang::Integrator::Sppm),
         iterations: Some(1),
         photons: Some(200_000),
         seed: Some(1),

@@ -41,7 +41,7 @@ grep -q 'radius 0.0111' "$out/fixed.scn" || {
 timed() {
   local bin=$1 file=$2 photons=$3 t
   TIMEFORMAT='%R %U %S'
-  if ! t=$( { time "$bin" render "$file" --iterations 4 --photons "$photons" --threads 1 \
+  if ! t=$( { time "$bin" render "$file" --integrator sppm --iterations 4 --photons "$photons" --threads 1 \
     --seed 1 -o "$out/image.exr" > "$out/last.log" 2>&1; } 2>&1); then
     echo "error: $bin render $file --photons $photons failed" >&2
     tail -n 20 "$out/last.log" >&2

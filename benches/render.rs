@@ -73,6 +73,7 @@ fn main() {
     let iters = 4;
     let photons = 500_000u64;
     let options = RenderOptions {
+        integrator: Some(sppm_lang::Integrator::Sppm),
         iterations: Some(iters),
         photons: Some(photons),
         seed: Some(1),

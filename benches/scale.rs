@@ -276,6 +276,7 @@ fn render_figures(dir: &Path, mesh: &Mesh) -> (f64, f64) {
     let scene = loaded.scene.expect("the scale scene evaluates");
     let mut first = None;
     let options = RenderOptions {
+        integrator: Some(sppm_lang::Integrator::Sppm),
         memory_limit: Some(16 << 30),
         ..RenderOptions::default()
     };

@@ -258,15 +258,20 @@ pub fn merge(chains: &[(String, Chain)]) -> Result<(Image, u32), String> {
 }
 
 /// Reads `inputs`, merges them ([`merge`]) and writes the merge to `output` (linear EXR, with
-/// no chain header), atomically: on any error nothing is written. Returns the total iterations.
-pub fn merge_files(inputs: &[&Path], output: &Path) -> Result<u32, String> {
+/// no chain header), atomically: on any error nothing is written. Returns the total iterations
+/// and the chains' method.
+pub fn merge_files(inputs: &[&Path], output: &Path) -> Result<(u32, String), String> {
     let chains = inputs
         .iter()
         .map(|p| Ok((p.display().to_string(), read_chain(p)?)))
         .collect::<Result<Vec<_>, String>>()?;
     let (image, total) = merge(&chains)?;
     image.write(output, 1.0).map_err(|d| d.message)?;
-    Ok(total)
+    // `merge` found at least one chain, all of one method.
+    let method = chains
+        .first()
+        .map_or_else(String::new, |(_, c)| c.info.method.clone());
+    Ok((total, method))
 }
 
 #[cfg(test)]
@@ -366,7 +371,10 @@ mod tests {
         assert!(merge_files(&[&pa, &pb], &out).is_err());
         assert!(!out.exists());
         write_chain(&pb, &flat(4, 3, 0.5), &info(2, 6)).unwrap();
-        assert_eq!(merge_files(&[&pa, &pb], &out).unwrap(), 8);
+        assert_eq!(
+            merge_files(&[&pa, &pb], &out).unwrap(),
+            (8, "sppm".to_string())
+        );
         let m = image::open(&out).unwrap().to_rgb32f();
         let want = (2.0 * 0.25 + 6.0 * 0.5) / 8.0;
         assert!((f64::from(m.get_pixel(0, 0)[0]) - want).abs() < 1e-6);

@@ -40,7 +40,9 @@ pub use internals::diag::{
 pub use internals::eval::EvalOptions;
 pub use internals::files::FileError;
 pub use internals::film::Image;
-pub use internals::prepare::{EffectiveSettings, MemoryItem, RenderOptions};
+pub use internals::prepare::{
+    EffectiveSettings, MemoryItem, MethodChoice, MethodSource, RenderOptions,
+};
 pub use internals::render::RenderStats;
 pub use internals::scene::{Antialias, Frame, FrameRange, Handedness, Integrator, Settings};
 pub use internals::span::{FileId, Span};

@@ -51,9 +51,9 @@ cd "$out" # rs_pbrt writes its image into the working directory
 for round in $(seq "${ROUNDS:-3}"); do
   p1=$(seconds "$out/bin/rs_pbrt" -t 1 -p "$out/cornell_100000.pbrt")
   p2=$(seconds "$out/bin/rs_pbrt" -t 1 -p "$out/cornell_1100000.pbrt")
-  s1=$(seconds "$sppm" render "$root/examples/cornell.scn" --iterations 4 --photons 100000 \
+  s1=$(seconds "$sppm" render "$root/examples/cornell.scn" --integrator sppm --iterations 4 --photons 100000 \
     --threads 1 --seed 1 -o "$out/sppm_100000.exr")
-  s2=$(seconds "$sppm" render "$root/examples/cornell.scn" --iterations 4 --photons 1100000 \
+  s2=$(seconds "$sppm" render "$root/examples/cornell.scn" --integrator sppm --iterations 4 --photons 1100000 \
     --threads 1 --seed 1 -o "$out/sppm_1100000.exr")
   ratio=$(awk -v p="$(rate "$p1" "$p2")" -v q="$(rate "$s1" "$s2")" 'BEGIN { printf "%.1f", q / p }')
   printf 'round %s: rs_pbrt (pbrt-v3 SPPM) %s M photons/s, sppm-lang %s M photons/s: %sx (1 thread each)\n' \

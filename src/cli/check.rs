@@ -93,9 +93,21 @@ fn interrupted() -> ExitCode {
     ExitCode::from(EXIT_SCENE_ERROR)
 }
 
-/// What the prepare stage decided: mesh sizes, the focus distance, the initial radius.
+/// What the prepare stage decided: the method and why, mesh sizes, the focus distance, the
+/// initial radius.
 fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> String {
     let mut out = String::new();
+    // The method and why: the option, the scene's setting or the default rule.
+    let method = settings.method_choice();
+    out.push_str(&format!(
+        "integrator: {method}{}\n",
+        if settings.final_gather && matches!(method.integrator, Integrator::Sppm | Integrator::Vcm)
+        {
+            ", with final gathering"
+        } else {
+            ""
+        }
+    ));
     let meshes: Vec<String> = prepared
         .scene
         .objects
@@ -122,8 +134,9 @@ fn render_summary(prepared: &PreparedScene, settings: &EffectiveSettings) -> Str
             " (pinhole camera: everything is sharp)"
         }
     ));
-    match settings.integrator {
-        Integrator::Sppm | Integrator::Ppm => {
+    match settings.method() {
+        // `vcm` merges within each camera path's radius, which starts by SPPM's rule.
+        Integrator::Sppm | Integrator::Ppm | Integrator::Vcm => {
             let text = match settings.initial_radius(&prepared.scene.camera) {
                 InitialRadius::Fixed(r) => format!("{} (from settings)", short_number(r)),
                 InitialRadius::Orthographic(r) => format!(
@@ -269,7 +282,7 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
     ));
     let st = &s.settings;
     out.push_str(&format!(
-        "settings: {}x{}, {} iterations, {} photons/iteration, radius {}, alpha {}, max_depth {}, seed {}, integrator {}{}\n",
+        "settings: {}x{}, {} iterations, {} photons/iteration, radius {}, alpha {}, max_depth {}, seed {}{}\n",
         st.resolution.0,
         st.resolution.1,
         st.iterations,
@@ -278,9 +291,8 @@ pub fn summary(s: &Scene, files_read: usize) -> String {
         short_number(st.alpha),
         st.max_depth,
         st.seed,
-        st.integrator.name(),
-        if st.final_gather && matches!(st.integrator, Integrator::Sppm | Integrator::Vcm) {
-            " with final gathering"
+        if st.final_gather {
+            ", final_gather on"
         } else {
             ""
         }

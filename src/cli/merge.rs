@@ -56,9 +56,9 @@ pub fn run(args: &MergeArgs) -> ExitCode {
     }
     let inputs: Vec<&std::path::Path> = args.chains.iter().map(PathBuf::as_path).collect();
     match sppm_lang::internals::chains::merge_files(&inputs, &args.output) {
-        Ok(total) => {
+        Ok((total, method)) => {
             say!(
-                "wrote {}: {} chains, {total} iterations in all",
+                "wrote {}: {} chains of {method}, {total} iterations in all",
                 args.output.display(),
                 inputs.len()
             );

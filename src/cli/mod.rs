@@ -72,8 +72,10 @@ impl Cli {
                     .args(LimitArgs::args()),
             )
             .subcommand(render::RenderArgs::command(
-                clap::Command::new("render")
-                    .about("Render a scene with stochastic progressive photon mapping"),
+                clap::Command::new("render").about(
+                    "Render a scene with the scene's integrator, `--integrator`'s, or the \
+                         default (docs/integrators.md)",
+                ),
             ));
         #[cfg(feature = "watch")]
         let cmd = cmd.subcommand(watch::WatchArgs::command(

@@ -120,7 +120,7 @@ pub fn run(args: &ReferenceArgs) -> ExitCode {
         }
         Err(code) => return code,
     };
-    scene.settings.integrator = Integrator::Path;
+    scene.settings.integrator = Some(Integrator::Path);
     if let Err(e) = args.size.apply_to(&mut scene) {
         say!("error: {e}");
         return ExitCode::from(EXIT_USAGE);

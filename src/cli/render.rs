@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use sppm_lang::internals::chains::{ChainInfo, write_chain};
 use sppm_lang::internals::eval::RangeOverride;
 use sppm_lang::internals::render::{
-    Progress, RenderOptions, RenderStats, prepare, render_prepared,
+    Progress, RenderOptions, RenderStats, method_choice, prepare, render_prepared,
 };
 use sppm_lang::internals::sampling::chain_seed;
 use sppm_lang::internals::scene::{Integrator, Scene};
@@ -289,7 +289,10 @@ pub(super) fn render_scene(
             }
         },
     };
-    let integrator = args.integrator.unwrap_or(scene.settings.integrator);
+    // The method and why (the flag, the scene's setting or the default rule), as prepare
+    // chooses it.
+    let method = method_choice(scene, args.integrator);
+    let integrator = method.integrator;
     // A chain's header: its iterations are filled in as they finish.
     let base_seed = args.seed.unwrap_or(scene.settings.seed);
     let chain = args.chain.map(|(k, n)| ChainInfo {
@@ -302,7 +305,7 @@ pub(super) fn render_scene(
         // The identity of what is rendered: the scene with the flags' overrides.
         scene: SceneId::of(&Scene {
             settings: sppm_lang::Settings {
-                integrator,
+                integrator: Some(integrator),
                 resolution: resolution.unwrap_or(scene.settings.resolution),
                 ..scene.settings.clone()
             },
@@ -442,7 +445,7 @@ pub(super) fn render_scene(
     }
     let secs = out.elapsed.as_secs_f64().max(1e-9);
     say!(
-        "{} {}: {} iterations{} in {:.2}s{}",
+        "{} {}: {} iterations{} in {:.2}s with {method}{}",
         if out.cancelled {
             "interrupted,"
         } else {
@@ -478,7 +481,7 @@ fn method_statistics(method: Integrator, stats: &RenderStats, secs: f64) -> Stri
         Integrator::Ppm => format!("{}, {} deposits", photons(), stats.deposits),
         Integrator::PhotonMap => photons(),
         Integrator::Vcm | Integrator::Bpt | Integrator::Lt => {
-            format!("{} light paths", stats.photons)
+            format!(", {} light paths", stats.photons)
         }
         Integrator::Path | Integrator::Whitted => String::new(),
     }

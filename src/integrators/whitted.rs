@@ -189,7 +189,7 @@ mod adaptive_tests {
             .scene
             .unwrap();
         scene.settings.resolution = (48, 48);
-        scene.settings.integrator = Integrator::Whitted;
+        scene.settings.integrator = Some(Integrator::Whitted);
         scene.settings.antialias = antialias;
         let options = RenderOptions {
             iterations: Some(iterations),

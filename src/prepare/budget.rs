@@ -272,7 +272,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
     // Per pixel: the film's sums and the image snapshots (f32 RGB twice), plus the method's own
     // state (SPPM: the pixel record, its visible point and its grid entry; with final gathering
     // the gather estimate, its gather point and its grid entry too).
-    let per_pixel = match settings.integrator {
+    let per_pixel = match settings.method() {
         Integrator::Sppm if settings.final_gather => 640,
         Integrator::Sppm | Integrator::Ppm => 400,
         _ => 64,
@@ -281,7 +281,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         what: "film and per-pixel state",
         bytes: pixels.saturating_mul(per_pixel),
     });
-    let photons = match settings.integrator {
+    let photons = match settings.method() {
         // Rounds of at most 2^21 photon hits (32 bytes), filed twice while the grid is built;
         // fewer where the photons of an iteration cannot store that many (at most `max_depth`
         // hits each; the automatic count is taken as the most).
@@ -433,9 +433,9 @@ mod tests {
         let mut scene = scene("sphere { <0,0,0> 1 }");
         scene.settings.resolution = (64, 64);
         scene.settings.photons = Some(10_000_000_000);
-        scene.settings.integrator = Integrator::Sppm;
+        scene.settings.integrator = Some(Integrator::Sppm);
         check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap();
-        scene.settings.integrator = Integrator::PhotonMap;
+        scene.settings.integrator = Some(Integrator::PhotonMap);
         let e = check_memory(&scene, &settings_of(&scene), 2 << 30, None).unwrap_err();
         assert!(
             e.message.contains("photons of one iteration"),

@@ -9,6 +9,7 @@ mod bump;
 mod csg;
 mod instances;
 mod lights;
+mod method;
 mod orient;
 mod settings;
 mod shapes;
@@ -29,6 +30,9 @@ pub use budget::{
     estimate as estimate_memory,
 };
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
+pub use method::{
+    DEFAULT_ELSEWHERE, MethodChoice, MethodSource, default_method, method_choice, needs_a_lens,
+};
 pub use settings::{
     EffectiveSettings, GATHER_RADIUS_FACTOR, InitialRadius, MAX_ITERATIONS, MAX_PHOTONS,
     MAX_THREADS, RADIUS_FOOTPRINTS, RenderOptions, effective_settings,

@@ -1,6 +1,7 @@
 //! The settings a render uses: the scene's `settings` with the command line's overrides applied,
 //! checked once here.
 
+use super::method::{MethodChoice, method_choice, needs_a_lens};
 use crate::diag::Diagnostic;
 use crate::scene::{Antialias, Integrator, Scene, Settings};
 
@@ -35,26 +36,42 @@ pub struct RenderOptions {
 
 /// The settings a render actually uses: the scene's [`Settings`] with the options applied
 /// (resolution, integrator, iterations, photons, seed, time limit) and `max_depth` clamped to
-/// 1..=1024. It reads as those settings (`settings.iterations`, through `Deref`); what is
-/// derived from them is a method ([`EffectiveSettings::width`], ...).
+/// 1..=1024, and the method it runs, chosen by [`method_choice`] (the option, the scene's
+/// setting or the default rule). It reads as those settings (`settings.iterations`, through
+/// `Deref`; their `integrator` is the chosen method); what is derived from them is a method
+/// ([`EffectiveSettings::width`], [`EffectiveSettings::method`], ...).
 #[derive(Debug, Clone, PartialEq)]
-pub struct EffectiveSettings(Settings);
+pub struct EffectiveSettings {
+    settings: Settings,
+    method: MethodChoice,
+}
 
 impl std::ops::Deref for EffectiveSettings {
     type Target = Settings;
     fn deref(&self) -> &Settings {
-        &self.0
+        &self.settings
     }
 }
 
-/// Tests and tools vary one setting of a checked set (`settings.seed = 2`).
+/// Tests and tools vary one setting of a checked set (`settings.seed = 2`); the method is
+/// [`EffectiveSettings::method`]'s, whatever `integrator` they write.
 impl std::ops::DerefMut for EffectiveSettings {
     fn deref_mut(&mut self) -> &mut Settings {
-        &mut self.0
+        &mut self.settings
     }
 }
 
 impl EffectiveSettings {
+    /// The integrator the render runs.
+    pub fn method(&self) -> Integrator {
+        self.method.integrator
+    }
+
+    /// The integrator the render runs and why (`check` and `render` print it).
+    pub fn method_choice(&self) -> MethodChoice {
+        self.method
+    }
+
     /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.resolution.0
@@ -206,15 +223,12 @@ pub fn effective_settings(
             "ask for at most {MAX_PHOTONS} photons per iteration (more iterations add more)"
         )));
     }
-    let integrator = o.integrator.unwrap_or(s.integrator);
+    let method = method_choice(scene, o.integrator);
+    let integrator = method.integrator;
     // Light tracing connects scene points to the lens; an orthographic camera's rays are
     // parallel, so no point but those on a pixel's own ray can reach it (a delta direction).
-    if scene.camera.orthographic
-        && matches!(
-            integrator,
-            Integrator::Vcm | Integrator::Bpt | Integrator::Lt
-        )
-    {
+    // The default rule never chooses such a method for an orthographic camera.
+    if scene.camera.orthographic && needs_a_lens(integrator) {
         return Err(Diagnostic::unplaced(format!(
             "`{}` connects light paths to the camera, which an orthographic camera cannot take",
             integrator.name()
@@ -223,14 +237,17 @@ pub fn effective_settings(
             "render an orthographic view with `sppm`, `path`, `ppm`, `photon_map` or `whitted`",
         ));
     }
-    Ok(EffectiveSettings(Settings {
-        resolution: (width, height),
-        iterations,
-        photons,
-        max_depth: s.max_depth.clamp(1, 1024),
-        seed: o.seed.unwrap_or(s.seed),
-        integrator,
-        time_limit,
-        ..s.clone()
-    }))
+    Ok(EffectiveSettings {
+        settings: Settings {
+            resolution: (width, height),
+            iterations,
+            photons,
+            max_depth: s.max_depth.clamp(1, 1024),
+            seed: o.seed.unwrap_or(s.seed),
+            integrator: Some(integrator),
+            time_limit,
+            ..s.clone()
+        },
+        method,
+    })
 }

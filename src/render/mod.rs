@@ -11,8 +11,8 @@
 
 pub use crate::integrators::{Progress, RenderOutput, RenderStats};
 pub use crate::prepare::{
-    EffectiveSettings, InitialRadius, PreparedScene, RADIUS_FOOTPRINTS, RenderOptions, SurfaceHit,
-    effective_settings, prepare,
+    EffectiveSettings, InitialRadius, MethodChoice, MethodSource, PreparedScene, RADIUS_FOOTPRINTS,
+    RenderOptions, SurfaceHit, effective_settings, method_choice, prepare,
 };
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -66,7 +66,7 @@ pub fn render_prepared(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<RenderOutput, Diagnostic> {
-    let integrator = integrators::for_method(settings.integrator);
+    let integrator = integrators::for_method(settings.method());
     let deadline = settings
         .time_limit
         .and_then(|t| Duration::try_from_secs_f64(t).ok())

@@ -136,7 +136,9 @@ pub struct Settings {
     /// Maximum path depth for camera paths and photon paths.
     pub max_depth: u32,
     pub seed: u64,
-    pub integrator: Integrator,
+    /// The method the scene names (`integrator NAME`); `None`: it names none, and the render
+    /// runs the default rule's (`prepare::default_method`: `sppm` with `final_gather on`).
+    pub integrator: Option<Integrator>,
     /// Exposure multiplier applied before tone mapping to PNG (linear outputs are unscaled).
     pub exposure: f64,
     /// Stop after this many seconds even if iterations remain.
@@ -176,7 +178,7 @@ impl Default for Settings {
             alpha: 2.0 / 3.0,
             max_depth: 16,
             seed: 0,
-            integrator: Integrator::Sppm,
+            integrator: None,
             exposure: 1.0,
             time_limit: None,
             antialias: Antialias::Jitter,
@@ -241,12 +243,11 @@ impl Antialias {
 }
 
 /// Which light-transport algorithm renders the scene.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Integrator {
     Whitted,
     PhotonMap,
     Ppm,
-    #[default]
     Sppm,
     Path,
     /// Vertex connection and merging.

@@ -13,6 +13,7 @@ use std::sync::atomic::AtomicBool;
 
 use sppm_lang::EvalOptions;
 use sppm_lang::Image;
+use sppm_lang::Integrator;
 use sppm_lang::internals::render::{RenderOptions, render};
 use sppm_lang::internals::scene::{ColorSpace, ImageData, load_image};
 
@@ -56,12 +57,15 @@ fn ratio(img: &Image, window: ((usize, usize, usize, usize), f32)) -> f64 {
     mine / theirs
 }
 
-fn render_sppm(iterations: u32, photons: u64, seed: u64) -> Image {
+/// `caustic.scn` rendered by `integrator` (`photons` per iteration: SPPM's; `vcm` traces one
+/// light path per pixel or a quarter as many whatever it is given).
+fn render_with(integrator: Integrator, iterations: u32, photons: u64, seed: u64) -> Image {
     let path = Path::new("tools/reference/caustic.scn");
     let loaded = sppm_lang::internals::eval::load_file(path, &EvalOptions::default())
         .expect("caustic.scn reads");
     let scene = loaded.scene.expect("caustic.scn evaluates");
     let opts = RenderOptions {
+        integrator: Some(integrator),
         iterations: Some(iterations),
         photons: Some(photons),
         seed: Some(seed),
@@ -91,11 +95,19 @@ fn the_windows_hold_the_two_spots() {
     assert!(direct > 3.0 * floor && through > 1.5 * ball);
 }
 
-/// The default method (SPPM) on the two windows at 32 and 512 iterations.
+/// SPPM on the two windows at 32 and 512 iterations.
 fn sppm_windows(iterations: u32, photons: u64, seed: u64) -> (f64, f64) {
-    let img = render_sppm(iterations, photons, seed);
+    let img = render_with(Integrator::Sppm, iterations, photons, seed);
     let (d, b) = (ratio(&img, DIRECT), ratio(&img, THROUGH));
     println!("sppm {iterations} iterations of {photons} photons: direct {d:.4}, through {b:.4}");
+    (d, b)
+}
+
+/// VCM on the two windows.
+fn vcm_windows(iterations: u32, seed: u64) -> (f64, f64) {
+    let img = render_with(Integrator::Vcm, iterations, 0, seed);
+    let (d, b) = (ratio(&img, DIRECT), ratio(&img, THROUGH));
+    println!("vcm {iterations} iterations, seed {seed}: direct {d:.4}, through {b:.4}");
     (d, b)
 }
 
@@ -133,5 +145,50 @@ fn sppm_caustic_windows_at_512_iterations() {
         (d, b) = (d + x / 4.0, b + y / 4.0);
     }
     println!("means of four seeds: direct {d:.4}, through {b:.4}");
+    assert_windows_within(d, b, 0.005);
+}
+
+/// VCM's windows over `seeds` renders of `iterations` each: each render's ratios printed, then
+/// their means and standard errors (the seeds' spread over the square root of their count).
+fn vcm_mean_windows(iterations: u32, seeds: std::ops::Range<u64>) -> (f64, f64) {
+    let (d, b): (Vec<f64>, Vec<f64>) = seeds.map(|seed| vcm_windows(iterations, seed)).unzip();
+    let mean_se = |v: &[f64]| {
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, (var / n).sqrt())
+    };
+    let ((dm, ds), (bm, bs)) = (mean_se(&d), mean_se(&b));
+    println!(
+        "vcm {iterations} iterations, {} seeds: direct {dm:.4} +- {ds:.4}, through {bm:.4} +- {bs:.4}",
+        d.len()
+    );
+    (dm, bm)
+}
+
+/// VCM at 32 iterations: the 2 % target on the mean of 64 seeds. One render is far noisier
+/// than SPPM's (32 iterations of at most one light path per pixel, 4096 at this size, against
+/// SPPM's 800 000 photons an iteration, for a twentieth of its CPU time): over seeds 5-68 a
+/// render's windows spread by 5.5 % (direct) and 5.8 % (through), from 0.90 to 1.14, so one
+/// render cannot meet 2 % (seed 5 read 1.053 and 0.915). Measured 2026-11-30 (dev profile,
+/// about 20 CPU-s for the 64, SPPM's one render about 6.5): direct 1.0023 +- 0.0068, through
+/// 0.9944 +- 0.0073 (mean +- standard error); 32 seeds (1.0121 +- 0.0095, 0.9826 +- 0.0097)
+/// were too few to tell a bias from noise at 2 %.
+#[test]
+fn vcm_caustic_windows_at_32_iterations() {
+    let (d, b) = vcm_mean_windows(32, 5..69);
+    assert_windows_within(d, b, 0.02);
+}
+
+/// VCM's 0.5 % target at 512 iterations, on the mean of 32 seeds: a render's windows spread
+/// by about 1 % between seeds at 512 iterations, so four cannot tell 0.5 %; 32 renders cost
+/// about as much CPU as SPPM's four.
+#[test]
+#[ignore = "measured 2026-11-30 (dev profile, about 140 CPU-s): seeds 5-36 at 512 iterations \
+            read direct 0.9995 +- 0.0017 (seeds 0.982 to 1.019, spread 0.95 %) and through \
+            0.9998 +- 0.0020 (0.976 to 1.018, spread 1.1 %; the reference's own noise there \
+            0.063 %): both windows hold 0.5 %"]
+fn vcm_caustic_windows_at_512_iterations() {
+    let (d, b) = vcm_mean_windows(512, 5..37);
     assert_windows_within(d, b, 0.005);
 }

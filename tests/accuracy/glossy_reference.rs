@@ -54,7 +54,7 @@ fn checkpoints(integrator: Integrator, n: u32, photons: u64) -> Vec<Checkpoint> 
     )
     .expect("glossy.scn reads");
     let mut scene = loaded.scene.expect("glossy.scn evaluates");
-    scene.settings.integrator = integrator;
+    scene.settings.integrator = Some(integrator);
     assert_eq!(
         scene.settings.resolution,
         (reference.width, reference.height)
@@ -240,7 +240,7 @@ fn sheet_ratios(
     let mut scene = loaded
         .scene
         .unwrap_or_else(|| panic!("{sheet}.scn evaluates"));
-    scene.settings.integrator = integrator;
+    scene.settings.integrator = Some(integrator);
     assert_eq!(scene.settings.resolution, size);
     let opts = RenderOptions {
         iterations: Some(4 * n),

@@ -123,7 +123,7 @@ fn furnace_d_an_inner_ball_hides_the_light_behind_it() {
         m,
         Some(emission),
     );
-    s.settings.integrator = sppm_lang::Integrator::Path;
+    s.settings.integrator = Some(sppm_lang::Integrator::Path);
     s.settings.max_depth = 1;
     let img = run(&s, 512, 0);
     assert_finite(&img);

@@ -87,7 +87,7 @@ fn render_half(integrator: Integrator, iterations: u32) -> Image {
     )
     .expect("smallppm.scn reads");
     let mut scene = loaded.scene.expect("smallppm.scn evaluates");
-    scene.settings.integrator = integrator;
+    scene.settings.integrator = Some(integrator);
     let (w, h) = scene.settings.resolution;
     scene.settings.resolution = (w / 2, h / 2);
     let opts = RenderOptions {

@@ -512,6 +512,66 @@ fn check_tells_what_prepare_decided_and_warns_of_a_scene_without_light() {
     assert!((half / full - 2.0).abs() < 1e-4, "{full} then {half}");
 }
 
+/// `check` and `render` say which method runs and why: the flag, the scene's setting, or the
+/// default rule (`sppm` with `final_gather on`, else the rule's method for the others; an
+/// orthographic camera takes no method that needs a lens).
+#[test]
+fn check_and_render_say_which_method_runs_and_why() {
+    use sppm_lang::internals::prepare::{DEFAULT_ELSEWHERE, needs_a_lens};
+    let dir = tempfile::tempdir().unwrap();
+    let elsewhere = DEFAULT_ELSEWHERE.name();
+    let ortho = if needs_a_lens(DEFAULT_ELSEWHERE) {
+        "sppm (default: the scene's camera is orthographic, which vcm cannot take)".to_string()
+    } else {
+        format!("{elsewhere} (default: the scene does not set final_gather)")
+    };
+    let orthographic = "camera { orthographic location <0, 0, -5> look_at <0, 0, 0> up <0, 2, 0> }";
+    for (extra, flags, line) in [
+        (
+            "",
+            &[][..],
+            format!("integrator: {elsewhere} (default: the scene does not set final_gather)\n"),
+        ),
+        (
+            "settings { final_gather on }",
+            &[][..],
+            "integrator: sppm (default: the scene sets final_gather on), with final gathering\n"
+                .to_string(),
+        ),
+        (
+            "settings { integrator path  final_gather on }",
+            &[][..],
+            "integrator: path (the scene's `integrator` setting)\n".to_string(),
+        ),
+        (orthographic, &[][..], format!("integrator: {ortho}\n")),
+        (
+            "settings { integrator path }",
+            &["--integrator", "whitted"][..],
+            "integrator: whitted (set by the render options, `--integrator`)\n".to_string(),
+        ),
+    ] {
+        let scene = dir.path().join("s.scn");
+        std::fs::write(&scene, tiny_scene(extra)).unwrap();
+        let scene = scene.to_str().unwrap();
+        if flags.is_empty() {
+            let out = sppm(&["check", scene]);
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert_eq!(out.status.code(), Some(0), "{extra}: {stdout}");
+            assert!(stdout.contains(&line), "{extra}: {stdout}");
+        }
+        let png = dir.path().join("s.png");
+        let out = render_with(scene, png.to_str().unwrap(), flags);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{extra}: {stderr}");
+        let method = line["integrator: ".len()..].trim_end();
+        let method = method.trim_end_matches(", with final gathering");
+        assert!(
+            stderr.contains(&format!("s with {method}")),
+            "{extra} {flags:?}: {stderr}"
+        );
+    }
+}
+
 /// The closing line gives only the figures the method has: photons for the photon methods,
 /// deposits for SPPM and PPM, neither for the path tracer and Whitted.
 #[test]
@@ -1280,6 +1340,41 @@ fn chains_render_per_thread_count_alike_and_merge_or_refuse() {
         "-o",
         &p("c.png"),
     ]);
+}
+
+/// A chain of the default method and one of the same method named by `--integrator` are one
+/// render's chains (the same scene hash and method) and merge; a chain of another method does
+/// not.
+#[test]
+fn a_chain_of_the_default_method_merges_with_the_same_method_named() {
+    use sppm_lang::internals::prepare::DEFAULT_ELSEWHERE;
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let chain = |k: &str, out: &str, flags: &[&str]| {
+        let args = [
+            &["--resolution", "24x24", "--iterations", "2", "--chain", k][..],
+            flags,
+        ]
+        .concat();
+        succeeded(&render_with("examples/cornell.scn", &p(out), &args));
+    };
+    chain("1/2", "d1.exr", &[]);
+    chain("2/2", "d2.exr", &["--integrator", DEFAULT_ELSEWHERE.name()]);
+    let other = if DEFAULT_ELSEWHERE == sppm_lang::Integrator::Path {
+        "sppm"
+    } else {
+        "path"
+    };
+    chain("2/2", "o2.exr", &["--integrator", other]);
+    let out = sppm(&["merge", &p("d1.exr"), &p("d2.exr"), "-o", &p("m.exr")]);
+    succeeded(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    let said = format!("2 chains of {}, 4 iterations", DEFAULT_ELSEWHERE.name());
+    assert!(err.contains(&said), "{err}");
+    let out = sppm(&["merge", &p("d1.exr"), &p("o2.exr"), "-o", &p("n.exr")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("does not belong"), "{err}");
 }
 
 use crate::slurm;

@@ -327,7 +327,7 @@ fn settings_camera_lights_background() {
         (st.radius, st.alpha, st.exposure, st.time_limit),
         (Some(0.02), 0.5, 2.0, Some(30.0))
     );
-    assert_eq!(st.integrator, Integrator::Path);
+    assert_eq!(st.integrator, Some(Integrator::Path));
     assert_eq!(s.camera.aperture, 0.1);
     assert_eq!(s.camera.focus_distance, Some(3.0));
     assert_eq!(s.lights.len(), 2);

@@ -85,7 +85,7 @@ fn every_integrator_is_independent_of_the_thread_count() {
     ];
     for (integrator, final_gather) in methods.into_iter().chain(gathering) {
         let mut scene = common::cornell_glass(16);
-        scene.settings.integrator = integrator;
+        scene.settings.integrator = Some(integrator);
         scene.settings.final_gather = final_gather;
         let images: Vec<_> = [1, 2, 3]
             .into_iter()
@@ -222,7 +222,7 @@ fn vcm_splats_are_independent_of_the_thread_count() {
     use sppm_lang::Integrator;
     for integrator in [Integrator::Vcm, Integrator::Bpt, Integrator::Lt] {
         let mut scene = common::cornell_glass(48);
-        scene.settings.integrator = integrator;
+        scene.settings.integrator = Some(integrator);
         let iterations = if integrator == Integrator::Vcm { 14 } else { 3 };
         let images: Vec<_> = [1, 2]
             .into_iter()

@@ -126,7 +126,7 @@ fn light_paths_from_an_environment_map_light_the_sphere() {
         (Integrator::Vcm, 32),
         (Integrator::Lt, 2048),
     ] {
-        scene.settings.integrator = integrator;
+        scene.settings.integrator = Some(integrator);
         let means: Vec<f64> = (1..=4)
             .map(|seed| {
                 let opts = RenderOptions {
@@ -279,7 +279,7 @@ fn image_texture(
 /// `transform`, under a white constant environment.
 fn textured_ball(tex: Texture, transform: DAffine3) -> Image {
     let mut scene = sphere_scene(32, ColorParam::Texture(TextureId(0)), 1.0);
-    scene.settings.integrator = Integrator::Path;
+    scene.settings.integrator = Some(Integrator::Path);
     scene.textures.push(tex);
     scene.objects[0].transform = transform;
     run(&scene, 4, 100)
@@ -461,7 +461,7 @@ fn background_colour_lights_sppm_and_path_alike() {
     scene.settings.max_depth = 16;
     let mean = |integrator: Integrator, iterations: u32| {
         let mut s = scene.clone();
-        s.settings.integrator = integrator;
+        s.settings.integrator = Some(integrator);
         let img = run(&s, iterations, 20_000);
         let mut sum = 0.0;
         for y in 0..24 {
@@ -496,7 +496,7 @@ fn environment_image_is_not_mirrored_seen_from_inside() {
         (c + 1) as f32 * 0.1 * if r == 0 { 2.0 } else { 1.0 }
     });
     let mut scene = common::empty_scene((32, 24));
-    scene.settings.integrator = Integrator::Path;
+    scene.settings.integrator = Some(Integrator::Path);
     scene.camera.location = DVec3::ZERO;
     scene.camera.look_at = DVec3::Z;
     scene.camera.fov = 90.0;

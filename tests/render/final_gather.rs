@@ -63,7 +63,7 @@ fn final_gathering_agrees_with_path_tracing_around_glass_and_mirror_balls() {
     let mut s = furnace_with_balls(24);
     s.settings.final_gather = true;
     let (gathered, worst) = errors(&run(&s, 64, 40_000));
-    s.settings.integrator = Integrator::Path;
+    s.settings.integrator = Some(Integrator::Path);
     let (path, _) = errors(&run(&s, 1024, 0));
     println!("balls: final gathering {gathered:+.4} (worst pixel {worst:.4}), path {path:+.4}");
     assert!(
@@ -88,7 +88,7 @@ fn final_gathering_agrees_with_path_tracing_around_glass_and_mirror_balls() {
 #[test]
 fn vcm_with_final_gathering_keeps_the_furnace_with_balls_at_one() {
     let mut s = furnace_with_balls(16);
-    s.settings.integrator = Integrator::Vcm;
+    s.settings.integrator = Some(Integrator::Vcm);
     s.settings.radius = Some(0.1);
     for gather in [false, true] {
         s.settings.final_gather = gather;

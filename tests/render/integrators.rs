@@ -17,7 +17,7 @@ use sppm_lang::internals::scene::{ColorParam, Integrator, Material, ScalarParam,
 
 fn run(scene: &Scene, integrator: Integrator, iterations: u32, photons: u64, seed: u64) -> Image {
     let mut s = scene.clone();
-    s.settings.integrator = integrator;
+    s.settings.integrator = Some(integrator);
     let opts = RenderOptions {
         iterations: Some(iterations),
         photons: Some(photons),
@@ -1116,7 +1116,7 @@ fn bpt_bias_long_run() {
         if let Some(d) = max_depth {
             s.settings.max_depth = d;
         }
-        s.settings.integrator = integrator;
+        s.settings.integrator = Some(integrator);
         let means: Vec<f64> = (first..first + seeds)
             .map(|seed| {
                 let opts = RenderOptions {

@@ -66,7 +66,7 @@ impl Method {
     /// radius (one pixel footprint at the look-at distance), for `sppm-lookat`.
     pub fn scene(&self, scene: &Scene, look_at_radius: f64) -> Scene {
         let mut s = scene.clone();
-        s.settings.integrator = self.integrator;
+        s.settings.integrator = Some(self.integrator);
         if let Some(a) = self.alpha {
             s.settings.alpha = a;
         }

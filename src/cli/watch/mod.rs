@@ -392,14 +392,17 @@ pub fn run(args: &WatchArgs) -> ExitCode {
                     c.stop(false);
                 }
                 round += 1;
+                // The method and why, as the render's prepare chooses it (watch takes no
+                // `--integrator`).
+                let method = sppm_lang::internals::render::method_choice(&scene, None);
                 status(&format!(
-                    "render #{round} started ({})",
+                    "render #{round} started ({}) with {method}",
                     args.scene.display()
                 ));
                 if let Some(hub) = &hub {
                     hub.update(|s| {
                         s.state = "rendering";
-                        s.message = format!("render #{round} started");
+                        s.message = format!("render #{round} started with {method}");
                         s.round = round;
                         s.stage = "";
                         (s.iteration, s.iterations, s.elapsed) = (0, 0, 0.0);

@@ -55,6 +55,8 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
     let number = r.number;
     let snapshot_every = Duration::from_secs_f64(r.snapshot_every);
     let full_size = r.scene.settings.resolution;
+    // The method and why (the preview renders the scene's own), for the page's message.
+    let method = render::method_choice(&r.scene, None);
     let mut stages = Vec::new();
     if r.preview {
         stages.push(("preview", preview_of(&r.scene)));
@@ -124,7 +126,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
             let progress = |s: &mut live::Status| {
                 s.state = "rendering";
                 s.stage = stage;
-                s.message = format!("render #{number} {stage}");
+                s.message = format!("render #{number} {stage} with {method}");
                 s.iteration = p.iteration;
                 s.iterations = p.iterations;
                 s.elapsed = p.elapsed.as_secs_f64();
@@ -203,7 +205,7 @@ fn run(r: Round, cancel: &AtomicBool, keep_image: &AtomicBool) -> Outcome {
                     if stage == "full" {
                         s.state = "finished";
                         s.message = format!(
-                            "render #{number} finished: {} iterations in {:.2} s",
+                            "render #{number} finished: {} iterations in {:.2} s with {method}",
                             out.iterations_done,
                             out.elapsed.as_secs_f64()
                         );

@@ -182,7 +182,8 @@ impl Sink for SettingsBuilder {
             }
             "integrator" => {
                 let names: Vec<&str> = Integrator::ALL.iter().map(|i| i.name()).collect();
-                s.integrator = Integrator::from_name(&word(&args[0], &names)?).expect("known name");
+                s.integrator =
+                    Some(Integrator::from_name(&word(&args[0], &names)?).expect("known name"));
             }
             "exposure" => s.exposure = positive(&args[0], "exposure")?,
             "time_limit" => s.time_limit = Some(positive(&args[0], "time limit")?),
