@@ -48,14 +48,15 @@ pub(super) struct BoxRay {
 const PLANE_BYTES: usize = std::mem::size_of::<[Vec4; 2]>();
 
 impl BoxRay {
-    /// Whether the box test can take `ray`: its origin has no NaN and its direction is finite.
-    /// On an axis where the origin is NaN or the direction infinite (inverse 0) or NaN, every
+    /// Whether the box test can take `ray`: its origin and its direction are finite.
+    /// On an axis where the origin is NaN or infinite or the direction infinite (inverse 0) or
+    /// NaN, slab distances are NaN (or an infinite origin's, infinite either way) and every
     /// slab distance is NaN and ignored; a ray ignored on all three axes would enter every
     /// box, the unused slots' inverted ones too, and reach a child reference that names
     /// nothing. Such a ray has no meaningful hit: the BVH reports none.
     #[inline(always)]
     pub(super) fn usable(ray: &Ray) -> bool {
-        !ray.o.is_nan() && ray.d.is_finite()
+        ray.o.is_finite() && ray.d.is_finite()
     }
 
     #[inline(always)]

@@ -233,7 +233,7 @@ pub enum Command {
         size: SizeArgs,
         limits: LimitArgs,
     },
-    /// Render a scene with stochastic progressive photon mapping.
+    /// Render a scene (with its `integrator`, else the default rule's method).
     Render(render::RenderArgs),
     /// Re-render a scene every time it or a file it reads is saved.
     #[cfg(feature = "watch")]

@@ -34,7 +34,7 @@ impl MethodSource {
             MethodSource::Scene => "the scene's `integrator` setting",
             MethodSource::FinalGather => "default: the scene sets final_gather on",
             MethodSource::Orthographic => {
-                "default: the scene's camera is orthographic, which vcm cannot take"
+                "default: the scene's camera is orthographic, which the default method elsewhere cannot take"
             }
             MethodSource::Elsewhere => "default: the scene does not set final_gather",
         }

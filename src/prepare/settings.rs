@@ -12,7 +12,8 @@ pub const MAX_THREADS: usize = 1024;
 /// Overrides of the scene's `settings` (command-line flags); `None` keeps the scene's value.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RenderOptions {
-    /// The integrator; `None`: the scene's `integrator`.
+    /// The integrator; `None`: the scene's `integrator`, else the default rule's
+    /// ([`crate::prepare::method_choice`]).
     pub integrator: Option<Integrator>,
     /// Width and height in pixels; `None`: the scene's `resolution`.
     pub resolution: Option<(u32, u32)>,

@@ -66,6 +66,9 @@ pub fn render_prepared(
     cancel: &AtomicBool,
     on_progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<RenderOutput, Diagnostic> {
+    // The method was chosen with the settings; a caller that rewrote `integrator` through
+    // `DerefMut` afterwards would run another than it asked for.
+    debug_assert!(settings.integrator.is_none_or(|i| i == settings.method()));
     let integrator = integrators::for_method(settings.method());
     let deadline = settings
         .time_limit

@@ -521,7 +521,7 @@ fn check_and_render_say_which_method_runs_and_why() {
     let dir = tempfile::tempdir().unwrap();
     let elsewhere = DEFAULT_ELSEWHERE.name();
     let ortho = if needs_a_lens(DEFAULT_ELSEWHERE) {
-        "sppm (default: the scene's camera is orthographic, which vcm cannot take)".to_string()
+        "sppm (default: the scene's camera is orthographic, which the default method elsewhere cannot take)".to_string()
     } else {
         format!("{elsewhere} (default: the scene does not set final_gather)")
     };

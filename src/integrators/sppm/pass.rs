@@ -26,7 +26,8 @@ const PHOTON_CHUNK: u64 = 4096;
 /// most there can be). Every size comes from counts that do not depend on the thread count, so
 /// the rounds do not either.
 pub(super) const ROUND_HITS: usize = 1 << 21;
-/// The most chunks in one round: bounds the per-chunk bookkeeping (a slab list each) where
+/// The most chunks in one round: bounds the per-chunk bookkeeping (each level's hits sorted by
+/// slab, with a table of where each slab starts) where
 /// photons leave few hits near the visible points (an open scene, a narrow view).
 pub(super) const ROUND_CHUNKS: usize = 512;
 /// The most photons traced in parallel between two checks of [`ROUND_HITS`].
