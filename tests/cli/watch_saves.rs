@@ -61,9 +61,13 @@ fn a_save_during_the_first_evaluation_is_rendered() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("slow.scn");
     let out = dir.path().join("slow.png");
-    // About 8 steps per turn: 3 million turns are some seconds of evaluation.
-    let slow = "#declare I = 0;\n\
-                #while (I < 3000000)\n  #declare I = I + 1;\n#end\n\
+    // About 8 steps per turn: 20 million turns (4 loops of 5 million: a loop stops at 10
+    // million) are seconds of evaluation even on a fast idle machine (3 million took 0.3 s on
+    // one, 2026-11-30), far more than the 0.2 s the test waits before its save.
+    let slow = "#declare J = 0;\n\
+                #while (J < 4)\n  #declare I = 0;\n\
+                #while (I < 5000000)\n  #declare I = I + 1;\n#end\n\
+                #declare J = J + 1;\n#end\n\
                 #debug \"the slow scene was evaluated\"";
     fs::write(&path, scene(RED, 3, slow)).unwrap();
     let mut w = watch(
@@ -79,11 +83,11 @@ fn a_save_during_the_first_evaluation_is_rendered() {
             "500000000",
         ],
     );
-    std::thread::sleep(Duration::from_secs(1));
+    std::thread::sleep(Duration::from_millis(200));
     let early = w.drain(Duration::from_millis(1));
     assert!(
         early.is_empty(),
-        "the first evaluation ended within 1 s (the test needs it to be running): {early:?}"
+        "the first evaluation ended within 0.2 s (the test needs it to be running): {early:?}"
     );
     fs::write(
         &path,
