@@ -39,14 +39,6 @@ impl MethodSource {
             MethodSource::Elsewhere => "default: the scene does not set final_gather",
         }
     }
-
-    /// Whether the default rule chose the method (the scene names none and no option did).
-    pub fn is_default(self) -> bool {
-        matches!(
-            self,
-            MethodSource::FinalGather | MethodSource::Orthographic | MethodSource::Elsewhere
-        )
-    }
 }
 
 /// The method a render runs and why.
@@ -173,9 +165,7 @@ mod tests {
                 DEFAULT_ELSEWHERE.name()
             )
         );
-        assert!(c.source.is_default());
         let c = method_choice(&scene(Some(Integrator::Path), false, false), None);
         assert_eq!(c.to_string(), "path (the scene's `integrator` setting)");
-        assert!(!c.source.is_default());
     }
 }
