@@ -26,8 +26,8 @@ use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::{self, TexCoord};
 pub use budget::{
-    MemoryItem, VCM_GRID_BYTES, VCM_VERTEX_BYTES, check_memory, default_memory_limit,
-    estimate as estimate_memory,
+    BPT_VERTEX_BYTES, MemoryItem, VCM_GRID_BYTES, VCM_VERTEX_BYTES, check_memory,
+    default_memory_limit, estimate as estimate_memory,
 };
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};
 pub use method::{

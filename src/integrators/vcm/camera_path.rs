@@ -6,7 +6,7 @@
 
 use glam::Vec3A;
 
-use super::light_path::LightVertex;
+use super::light_path::{LightVertex, VertexSurface};
 use super::mis::{self, Factors, GatherAt, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
@@ -64,7 +64,7 @@ pub(super) fn radiance(
     ctx: &Context,
     x: u32,
     y: u32,
-    own: &[LightVertex],
+    own: (&[LightVertex], &[VertexSurface]),
     rng: &mut Rng,
     specular_only: bool,
     ratio: &mut f64,
@@ -126,11 +126,12 @@ pub(super) fn radiance(
             let l = &mut out.rest;
             if ctx.mode.use_vc {
                 *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
-                for v in own {
+                for (v, surface) in own.0.iter().zip(own.1) {
                     if v.len + 1 + st.len > ctx.max_len {
                         continue;
                     }
-                    *l += st.beta * v.beta * connect(ctx, &st, &sh, &bsdf, wo, v);
+                    let c = connect(ctx, &st, &sh, &bsdf, wo, v, surface);
+                    *l += st.beta * Vec3A::from(v.beta) * c;
                 }
             }
             if ctx.mode.use_vm {
@@ -334,7 +335,9 @@ fn direct(
     f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
 }
 
-/// Connects a camera vertex to light vertex `v` (without either path's throughput).
+/// Connects a camera vertex to light vertex `v` on `surface` (without either path's
+/// throughput).
+#[allow(clippy::too_many_arguments)]
 fn connect(
     ctx: &Context,
     st: &State,
@@ -342,10 +345,11 @@ fn connect(
     bsdf: &Bsdf,
     wo: Vec3A,
     v: &LightVertex,
+    surface: &VertexSurface,
 ) -> Vec3A {
     let scene = ctx.scene;
     let p = sh.hit.p;
-    let d = v.p - p;
+    let d = surface.p - p;
     let dist2 = d.length_squared();
     if dist2.is_nan() || dist2 <= 0.0 {
         return Vec3A::ZERO;
@@ -356,16 +360,17 @@ fn connect(
     if f_cam == Vec3A::ZERO {
         return Vec3A::ZERO;
     }
-    let f_light = v.bsdf.f_mode(v.wo, -dir, TransportMode::Importance);
+    let (v_bsdf, v_wo) = (surface.bsdf(), Vec3A::from(v.wo));
+    let f_light = v_bsdf.f_mode(v_wo, -dir, TransportMode::Importance);
     if f_light == Vec3A::ZERO {
         return Vec3A::ZERO;
     }
     let cos_cam = dir.dot(bsdf.frame.n).abs();
-    let cos_light = dir.dot(v.bsdf.frame.n).abs();
+    let cos_light = dir.dot(v_bsdf.frame.n).abs();
     let g = cos_cam * cos_light / dist2;
     let d2 = f64::from(dist2);
     let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
-    let light_pdf_a = f64::from(v.bsdf.pdf(v.wo, -dir)) * f64::from(cos_cam) / d2;
+    let light_pdf_a = f64::from(v_bsdf.pdf(v_wo, -dir)) * f64::from(cos_cam) / d2;
     // The camera path's second vertex: this one, or the light vertex when this is its first.
     let gather = if st.gather_here(ctx) {
         GatherAt::Camera
@@ -381,13 +386,13 @@ fn connect(
         cam_pdf_a,
         light_pdf_a,
         f64::from(bsdf.pdf(dir, wo)),
-        f64::from(v.bsdf.pdf(-dir, v.wo)),
+        f64::from(v_bsdf.pdf(-dir, v_wo)),
         gather,
     );
     if !(w > 0.0 && g > 0.0) {
         return Vec3A::ZERO;
     }
-    let (ray, t_max) = scene.spawn_ray_to(p, sh.hit.n, v.p, v.bsdf.ng);
+    let (ray, t_max) = scene.spawn_ray_to(p, sh.hit.n, surface.p, v_bsdf.ng);
     if scene.occluded(&ray, t_max) {
         return Vec3A::ZERO;
     }
@@ -424,19 +429,20 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         if v.len + st.len > ctx.max_len {
             return;
         }
-        let f = bsdf.f(wo, v.wo);
+        let v_wo = Vec3A::from(v.wo);
+        let f = bsdf.f(wo, v_wo);
         if f == Vec3A::ZERO {
             return;
         }
-        let cam_pdf = f64::from(bsdf.pdf(wo, v.wo));
-        let cam_rev = f64::from(bsdf.pdf(v.wo, wo));
+        let cam_pdf = f64::from(bsdf.pdf(wo, v_wo));
+        let cam_rev = f64::from(bsdf.pdf(v_wo, wo));
         let light = if first {
             v.q.gathered(&st.factors)
         } else {
             v.q.at(&st.factors)
         };
         let w = mis::merge(&st.factors, &cam, &light, cam_pdf, cam_rev, gather);
-        sum += f * v.beta * w as f32;
+        sum += f * Vec3A::from(v.beta) * w as f32;
     });
     sum * normalization
 }

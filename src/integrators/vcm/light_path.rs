@@ -5,44 +5,78 @@
 //! (light tracing); the splats go to a list the caller adds to the film in path order, so the
 //! image does not depend on threads.
 
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 
 use super::mis::{self, Parts};
 use super::{Context, bounce};
+use crate::geometry::Frame;
 use crate::geometry::Ray;
 use crate::integrators::common::photons::roulette;
 use crate::integrators::common::{attenuate_inside, medium_after, transmittance};
 use crate::lights::Light;
-use crate::materials::{Bsdf, TransportMode};
+use crate::materials::{Bsdf, Lobes, TransportMode};
 use crate::prepare::SurfaceHit;
 use crate::sampling::Rng;
 
-/// A stored non-specular vertex of a light path.
+/// A stored non-specular vertex of a light path: what a merge reads of it (the merge grid
+/// holds its position). Its surface, which only connections read, is kept apart
+/// ([`VertexSurface`]), so that the list the merges read is a third of the size and holds no
+/// BSDF.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct LightVertex {
-    pub(super) p: Vec3A,
-    pub(super) bsdf: Bsdf,
     /// Unit direction toward the previous vertex (where the light came from).
-    pub(super) wo: Vec3A,
+    pub(super) wo: Vec3,
     /// The flux arriving here, per light path (before this vertex's BSDF).
-    pub(super) beta: Vec3A,
+    pub(super) beta: Vec3,
     /// Segments from the light to here.
     pub(super) len: u32,
     /// The MIS quantities in parts, evaluated with the radius of each camera path it meets.
     pub(super) q: Parts,
 }
 
+/// The surface of a stored light vertex, for connections: its position and its BSDF in the
+/// compact form [`Bsdf::from_parts`] rebuilds bit for bit (a bump's microsurface as its
+/// perturbed normal alone).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct VertexSurface {
+    pub(super) p: Vec3A,
+    lobes: Lobes,
+    frame: Frame,
+    ng: Vec3A,
+    bump: Option<Vec3>,
+}
+
+impl VertexSurface {
+    fn new(p: Vec3A, bsdf: &Bsdf) -> Self {
+        Self {
+            p,
+            lobes: bsdf.lobes,
+            frame: bsdf.frame,
+            ng: bsdf.ng,
+            bump: bsdf.bump_normal().map(Vec3::from),
+        }
+    }
+
+    /// The vertex's BSDF, as it was when the light path met it.
+    pub(super) fn bsdf(&self) -> Bsdf {
+        Bsdf::from_parts(self.lobes, self.frame, self.ng, self.bump.map(Vec3A::from))
+    }
+}
+
+/// Where [`trace`] stores a light path's vertices: each vertex's merge part and its surface,
+/// at the same index.
+#[derive(Default)]
+pub(super) struct Stored {
+    pub(super) vertices: Vec<LightVertex>,
+    pub(super) surfaces: Vec<VertexSurface>,
+}
+
 /// Light tracing's contribution to one pixel.
 pub(super) type Splat = (u32, Vec3A);
 
-/// Traces one light path, appending its stored vertices to `vertices` and its camera
+/// Traces one light path, appending its stored vertices to `stored` and its camera
 /// connections to `splats`.
-pub(super) fn trace(
-    ctx: &Context,
-    rng: &mut Rng,
-    vertices: &mut Vec<LightVertex>,
-    splats: &mut Vec<Splat>,
-) {
+pub(super) fn trace(ctx: &Context, rng: &mut Rng, stored: &mut Stored, splats: &mut Vec<Splat>) {
     let scene = ctx.scene;
     let Some((li, pe)) = ctx.emitters.sample(rng.f32()) else {
         return;
@@ -106,14 +140,13 @@ pub(super) fn trace(
         // vertex find no BSDF and add nothing.
         let store = !specular || (ctx.mode.use_vm && scene.blend_stores_photons(&sh));
         if store && (ctx.mode.use_vc || ctx.mode.use_vm) {
-            vertices.push(LightVertex {
-                p: sh.hit.p,
-                bsdf,
-                wo,
-                beta,
+            stored.vertices.push(LightVertex {
+                wo: wo.into(),
+                beta: beta.into(),
                 len,
                 q,
             });
+            stored.surfaces.push(VertexSurface::new(sh.hit.p, &bsdf));
         }
         if !specular && (ctx.mode.use_vc || ctx.mode.light_trace_only) {
             to_camera(ctx, &sh, &bsdf, wo, beta, &q, medium, rng, splats);
@@ -179,18 +212,22 @@ fn to_camera(
 
 #[cfg(test)]
 mod tests {
-    use super::LightVertex;
-    use crate::prepare::{VCM_GRID_BYTES, VCM_VERTEX_BYTES};
+    use super::{LightVertex, VertexSurface};
+    use crate::prepare::{BPT_VERTEX_BYTES, VCM_GRID_BYTES, VCM_VERTEX_BYTES};
     use glam::Vec3A;
     use std::mem::size_of;
 
     /// The memory budget's figure for a stored light vertex covers what the light pass keeps
-    /// of it: the vertex in its path's chunk and again in the iteration's list, its position,
-    /// and a grid's entry (index, position, bucket and about two table slots of `u32`).
+    /// of it: the vertex in its path's chunk and again in the iteration's list, its surface
+    /// in the chunk, its position, and a grid's entry (index, position, bucket and about two
+    /// table slots of `u32`).
     #[test]
     fn the_memory_budget_covers_a_stored_light_vertex() {
         let grid = (4 * size_of::<u32>() + size_of::<Vec3A>()) as u64;
-        let vertex = 2 * size_of::<LightVertex>() as u64 + size_of::<Vec3A>() as u64 + grid;
+        let vertex = 2 * size_of::<LightVertex>() as u64
+            + size_of::<VertexSurface>() as u64
+            + size_of::<Vec3A>() as u64
+            + grid;
         assert!(
             grid <= VCM_GRID_BYTES,
             "grid entry {grid} > {VCM_GRID_BYTES}"
@@ -204,5 +241,37 @@ mod tests {
             VCM_VERTEX_BYTES <= vertex + vertex / 4,
             "{vertex} vs {VCM_VERTEX_BYTES}"
         );
+        // `bpt` keeps the chunk's part alone.
+        let chunk = (size_of::<LightVertex>() + size_of::<VertexSurface>()) as u64;
+        assert!(chunk <= BPT_VERTEX_BYTES, "{chunk} > {BPT_VERTEX_BYTES}");
+        assert!(
+            BPT_VERTEX_BYTES <= chunk + chunk / 4,
+            "{chunk} vs {BPT_VERTEX_BYTES}"
+        );
+    }
+
+    /// A stored surface gives back the BSDF it was made from, bit for bit, bumped or not: a
+    /// connection to it evaluates what the light path's own bounce did.
+    #[test]
+    fn a_stored_surface_gives_back_its_bsdf() {
+        use crate::geometry::Frame;
+        use crate::materials::{Bsdf, Lobes};
+        let n = Vec3A::new(0.3, -0.2, 0.9).normalize();
+        let lobes = Lobes::Glossy {
+            albedo: Vec3A::new(0.5, 0.25, 0.125),
+            specular: Vec3A::splat(0.04),
+            alpha: 0.2,
+        };
+        let plain = Bsdf::new(lobes, n, Vec3A::X, n);
+        let np = Vec3A::new(0.5, 0.1, 0.8).normalize();
+        let bumped = Bsdf::bumped(lobes, Frame::from_normal(n), n, np);
+        assert!(bumped.bump_normal().is_some());
+        for bsdf in [plain, bumped] {
+            let back = VertexSurface::new(Vec3A::ONE, &bsdf).bsdf();
+            assert_eq!(back, bsdf);
+            let (wo, wi) = (Vec3A::new(0.1, 0.2, 0.97).normalize(), n);
+            assert_eq!(back.f(wo, wi).to_array(), bsdf.f(wo, wi).to_array());
+            assert_eq!(back.pdf(wo, wi).to_bits(), bsdf.pdf(wo, wi).to_bits());
+        }
     }
 }

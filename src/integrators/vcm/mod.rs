@@ -64,7 +64,7 @@ use crate::prepare::{
 use crate::sampling::{PiecewiseConstant1D, Rng};
 use grid::Grid;
 use light_count::LightCount;
-use light_path::{LightVertex, Splat};
+use light_path::{LightVertex, Splat, Stored, VertexSurface};
 use mis::{Factors, Parts};
 
 /// Which techniques run.
@@ -301,7 +301,7 @@ impl Integrator for Vcm {
             ctx.vertices = &pass.vertices;
             ctx.grid = has_grid.then_some(&pass.grid);
             ctx.gather_grid = has_gather.then_some(&pass.gather_grid);
-            let (vertices, ends, film) = (&pass.vertices, &pass.ends, &pass.film);
+            let (chunks, film) = (&pass.chunks, &pass.film);
             let t_camera = Instant::now();
             let seed = settings.seed;
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
@@ -320,9 +320,7 @@ impl Integrator for Vcm {
                     }
                     let mut rng = Stream::VcmCamera.rng(seed, iter, i as u64);
                     // With fewer light paths than pixels, each serves every n_light-th pixel.
-                    let j = i % n_light;
-                    let start = if j == 0 { 0 } else { ends[j - 1] as usize };
-                    let own = &vertices[start..ends[j] as usize];
+                    let own = light_path_of(chunks, i % n_light);
                     let (x, y) = (i as u32 % w, i as u32 / w);
                     // Delta paths where an earlier iteration's camera paths saw through a
                     // mirror or glass, or saw varying emission (a light's edge); decided
@@ -374,12 +372,36 @@ impl Integrator for Vcm {
     }
 }
 
-/// One chunk's share of a light pass.
+/// One chunk's share of a light pass: its paths' stored vertices, where each path's end,
+/// and its splats. Connections read a path's vertices here; merges read the list every
+/// chunk's vertices are copied to (`LightPass::vertices`), without their surfaces.
 #[derive(Default)]
 struct Chunk {
-    vertices: Vec<LightVertex>,
+    stored: Stored,
     ends: Vec<u32>,
     splats: Vec<Splat>,
+}
+
+/// The stored vertices of light path `j` and their surfaces (none for a path not traced).
+fn light_path_of(chunks: &[Chunk], j: usize) -> (&[LightVertex], &[VertexSurface]) {
+    let Some(chunk) = chunks.get(j / CHUNK) else {
+        return (&[], &[]);
+    };
+    let k = j % CHUNK;
+    let start = if k == 0 {
+        Some(&0)
+    } else {
+        chunk.ends.get(k - 1)
+    };
+    let range = match (start, chunk.ends.get(k)) {
+        (Some(&s), Some(&e)) if s <= e => s as usize..e as usize,
+        _ => return (&[], &[]),
+    };
+    let s = &chunk.stored;
+    match (s.vertices.get(range.clone()), s.surfaces.get(range)) {
+        (Some(v), Some(su)) => (v, su),
+        _ => (&[], &[]),
+    }
 }
 
 /// The light pass's buffers, kept across iterations: once grown to their size, an iteration
@@ -387,10 +409,9 @@ struct Chunk {
 #[derive(Default)]
 struct LightPass {
     chunks: Vec<Chunk>,
-    /// The stored vertices of every light path in path order, and where each path's
-    /// vertices end.
+    /// The stored vertices of every light path in path order, for merges, and their
+    /// positions, for the grids.
     vertices: Vec<LightVertex>,
-    ends: Vec<u32>,
     positions: Vec<Vec3A>,
     /// Light tracing's film.
     film: Vec<DVec3>,
@@ -417,7 +438,8 @@ impl LightPass {
             .par_iter_mut()
             .enumerate()
             .for_each(|(c, chunk)| {
-                chunk.vertices.clear();
+                chunk.stored.vertices.clear();
+                chunk.stored.surfaces.clear();
                 chunk.ends.clear();
                 chunk.splats.clear();
                 if cancel.load(Ordering::Relaxed) {
@@ -425,27 +447,29 @@ impl LightPass {
                 }
                 for i in c * CHUNK..((c + 1) * CHUNK).min(n_paths) {
                     let mut rng = Stream::VcmLight.rng(seed, iter, i as u64);
-                    light_path::trace(ctx, &mut rng, &mut chunk.vertices, &mut chunk.splats);
-                    chunk.ends.push(chunk.vertices.len() as u32);
+                    light_path::trace(ctx, &mut rng, &mut chunk.stored, &mut chunk.splats);
+                    chunk.ends.push(chunk.stored.vertices.len() as u32);
                 }
             });
         if cancel.load(Ordering::Relaxed) {
             return false;
         }
         self.vertices.clear();
-        self.ends.clear();
+        self.positions.clear();
         self.film.clear();
         self.film.resize(n_pixels, DVec3::ZERO);
+        // Only merges read the list and the grids the positions (`bpt` keeps neither).
+        let merges = ctx.mode.use_vm;
         for chunk in &self.chunks {
-            let base = self.vertices.len() as u32;
-            self.ends.extend(chunk.ends.iter().map(|x| x + base));
-            self.vertices.extend_from_slice(&chunk.vertices);
+            if merges {
+                self.vertices.extend_from_slice(&chunk.stored.vertices);
+                self.positions
+                    .extend(chunk.stored.surfaces.iter().map(|s| s.p));
+            }
             for &(pixel, c) in &chunk.splats {
                 self.film[pixel as usize] += c.as_dvec3();
             }
         }
-        self.positions.clear();
-        self.positions.extend(self.vertices.iter().map(|v| v.p));
         true
     }
 }
