@@ -2,15 +2,13 @@
 //! Shapes without finite bounds (infinite planes) are kept in a side list and tested always.
 //! What the leaves hold is packed after the build ([`super::leaf`]).
 
-use arrayvec::ArrayVec;
 use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, Stop, build_until};
 use super::leaf::{Closest, Leaves};
+use super::stack::{Stack, push_far_to_near};
 use super::triangles::{Meshes, PairTest};
-use super::wide::{
-    Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, push_far_to_near, still_near,
-};
+use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
@@ -378,9 +376,8 @@ impl Bvh {
             return best;
         }
         let boxes = BoxRay::new(ray);
-        // Children still to visit, with their entry distances. An ArrayVec: a fixed array
-        // would be zeroed on every call, a cost a short ray notices.
-        let mut stack = ArrayVec::<(u32, f32), STACK>::new();
+        // Children still to visit, with their entry distances.
+        let mut stack = Stack::<(u32, f32), STACK>::new();
         let mut c = Closest::NONE;
         let mut cur = 0u32;
         loop {
@@ -507,7 +504,7 @@ impl Bvh {
             return false;
         }
         let boxes = BoxRay::new(ray);
-        let mut stack = ArrayVec::<u32, STACK>::new();
+        let mut stack = Stack::<u32, STACK>::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
@@ -521,12 +518,7 @@ impl Bvh {
                     // Go on to the highest hit slot (the one the stack would give back first)
                     // and stack the others: no push and pop for the child visited next.
                     let last = 31 - mask.leading_zeros() as usize;
-                    let mut bits = mask & !(1 << last);
-                    while bits != 0 {
-                        let slot = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        stack.push(node.child[slot]);
-                    }
+                    stack.push_children(node, mask & !(1 << last));
                     cur = node.child[last];
                     continue;
                 }

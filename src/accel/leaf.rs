@@ -184,18 +184,28 @@ impl Leaves {
 
     /// The triangle packets of a leaf referenced by its packets ([`PACKETS`]): one, or two
     /// (`Err`).
+    /// (Read without a bounds check: the checks were two compares and branches per leaf.)
     #[inline(always)]
     fn direct_packets(&self, leaf: u32) -> Result<&TrianglePacket, &[TrianglePacket; 2]> {
         let first = (leaf & (TWO_PACKETS - 1)) as usize;
-        if leaf & TWO_PACKETS == 0 {
-            Ok(&self.tri_packets[first])
-        } else {
-            let pair = &self.tri_packets[first..][..2];
-            Err(pair.try_into().expect("a slice of two"))
+        let two = leaf & TWO_PACKETS != 0;
+        debug_assert!(first + 1 + usize::from(two) <= self.tri_packets.len());
+        // SAFETY: the traversals pass only leaf references read from the nodes, and a
+        // reference with `PACKETS` set is made only by `Leaves::push`, after `pack` appended
+        // the leaf's packets (one, or two with `TWO_PACKETS`) from `first` on; the packets
+        // are not changed after the build.
+        unsafe {
+            let p = self.tri_packets.as_ptr().add(first);
+            if two {
+                Err(&*p.cast::<[TrianglePacket; 2]>())
+            } else {
+                Ok(&*p)
+            }
         }
     }
 
     /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
+    /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]).
     #[inline(always)]
     pub(super) fn closest<P: PairTest>(
         &self,
@@ -264,6 +274,7 @@ impl Leaves {
     }
 
     /// Whether anything in the leaf referenced by `leaf` is hit with `t_min < t < t_max`.
+    /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]).
     #[inline(always)]
     pub(super) fn occluded<P: PairTest>(
         &self,

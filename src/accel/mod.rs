@@ -4,6 +4,7 @@ mod build;
 mod bvh;
 mod instance;
 mod leaf;
+mod stack;
 mod triangles;
 mod wide;
 

@@ -332,32 +332,15 @@ impl WideNode {
     }
 }
 
-/// Pushes the hit children of a node (mask and entry distances from [`BoxTest::hit`]) onto
-/// `stack` ordered far to near, the nearest on top (on equal distances, the higher slot
-/// nearer). Each child is sorted into place among the node's entries already pushed (an
-/// insertion sort on the stack itself: sorting into a separate array and copying it over cost
-/// a second pass per node).
-#[inline(always)]
-pub(super) fn push_far_to_near<const N: usize>(
-    node: &WideNode,
-    mask: u32,
-    near: &[f32; WIDTH],
-    stack: &mut ArrayVec<(u32, f32), N>,
-) {
-    let base = stack.len();
-    let mut bits = mask;
-    while bits != 0 {
-        let slot = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let entry = (node.child[slot], near[slot]);
-        stack.push(entry);
-        let s = stack.as_mut_slice();
-        let mut at = s.len() - 1;
-        while at > base && s[at - 1].1 < entry.1 {
-            s[at] = s[at - 1];
-            at -= 1;
+/// A node of unused boxes with the given child references (for tests of what is done with
+/// them).
+#[cfg(test)]
+impl WideNode {
+    pub(super) fn with_children(child: [u32; WIDTH]) -> Self {
+        Self {
+            planes: [[Vec4::ZERO; 2]; 6],
+            child,
         }
-        s[at] = entry;
     }
 }
 
@@ -575,44 +558,6 @@ mod tests {
                 hits += usize::from(want.is_some());
             }
             assert!(hits > 100 || n < 40, "case {case}: {hits} hits");
-        }
-    }
-
-    /// The hit children go on top of what the stack held (left untouched), far to near, the
-    /// higher slot nearer on equal distances (-0 and +0 equal): what a stable sort by distance
-    /// gives.
-    #[test]
-    fn children_are_pushed_far_to_near() {
-        use super::{WIDTH, push_far_to_near};
-        let mut rng = Rng::new(3);
-        let node = WideNode {
-            planes: [[glam::Vec4::ZERO; 2]; 6],
-            child: std::array::from_fn(|k| 100 + k as u32),
-        };
-        for _ in 0..5000 {
-            let mask = (rng.f32() * 256.0) as u32 & 0xff;
-            // Few distinct distances, so that ties are common (-0 and +0 among them).
-            let near: [f32; WIDTH] = std::array::from_fn(|k| {
-                let x = (rng.f32() * 4.0).floor();
-                if x == 0.0 && k % 2 == 0 { -0.0 } else { x }
-            });
-            let below = (rng.f32() * 5.0) as usize;
-            let mut stack = arrayvec::ArrayVec::<(u32, f32), 64>::new();
-            for k in 0..below {
-                stack.push((k as u32, -1.0 - k as f32));
-            }
-            push_far_to_near(&node, mask, &near, &mut stack);
-            let mut want: Vec<(u32, f32)> = (0..WIDTH)
-                .filter(|&k| mask & (1 << k) != 0)
-                .map(|k| (100 + k as u32, near[k]))
-                .collect();
-            // Bottom to top: farthest first; equal distances keep slot order (higher on top).
-            // (-0 and +0 are equal distances.)
-            want.sort_by(|a, b| b.1.partial_cmp(&a.1).expect("no NaN"));
-            let below_kept: Vec<(u32, f32)> =
-                (0..below).map(|k| (k as u32, -1.0 - k as f32)).collect();
-            assert_eq!(&stack[..below], &below_kept[..]);
-            assert_eq!(&stack[below..], &want[..], "mask {mask:#x}, near {near:?}");
         }
     }
 }
