@@ -338,6 +338,7 @@ pub(super) fn render_scene(
         time_limit: args.time_limit,
         threads: args.threads,
         memory_limit: args.limits.memory_limit,
+        chain: args.chain,
         cancel: cancel.clone(),
         ..RenderOptions::default()
     };

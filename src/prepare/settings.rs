@@ -33,6 +33,11 @@ pub struct RenderOptions {
     /// object and inside the BVH build, and fails with [`Diagnostic::interrupted`]; the
     /// render's passes stop as for their own cancel flag.
     pub cancel: crate::cancel::Cancel,
+    /// `(k, n)`: the render is chain k of n of one still (`render --chain k/n`, its seed already
+    /// the chain's own), so that a method whose merge radius shrinks over the iterations takes
+    /// its radii from one render of the n chains' iterations in all (`vcm`: iteration i of
+    /// chain k has that render's iteration i·n + k - 1). `None`: a render of its own.
+    pub chain: Option<(u32, u32)>,
 }
 
 /// The settings a render actually uses: the scene's [`Settings`] with the options applied
@@ -45,6 +50,7 @@ pub struct RenderOptions {
 pub struct EffectiveSettings {
     settings: Settings,
     method: MethodChoice,
+    chain: Option<(u32, u32)>,
 }
 
 impl std::ops::Deref for EffectiveSettings {
@@ -71,6 +77,21 @@ impl EffectiveSettings {
     /// The integrator the render runs and why (`check` and `render` print it).
     pub fn method_choice(&self) -> MethodChoice {
         self.method
+    }
+
+    /// `(k, n)` when the render is chain k of n of a still ([`RenderOptions::chain`]).
+    pub fn chain(&self) -> Option<(u32, u32)> {
+        self.chain
+    }
+
+    /// The iteration of one render of every chain's iterations that this render's iteration
+    /// `iter` (from 0) stands for: `iter` itself outside chains, `iter·n + k - 1` in chain k
+    /// of n. The n chains' iterations are together each of that render's iterations once.
+    pub fn schedule_iteration(&self, iter: u32) -> u64 {
+        match self.chain {
+            Some((k, n)) => u64::from(iter) * u64::from(n) + u64::from(k.saturating_sub(1)),
+            None => u64::from(iter),
+        }
     }
 
     /// Image width in pixels.
@@ -224,6 +245,13 @@ pub fn effective_settings(
             "ask for at most {MAX_PHOTONS} photons per iteration (more iterations add more)"
         )));
     }
+    if let Some((k, n)) = o.chain
+        && !(1..=n).contains(&k)
+    {
+        return Err(Diagnostic::unplaced(format!(
+            "chain {k} of {n} is not a chain: chains are numbered 1 to their count"
+        )));
+    }
     let method = method_choice(scene, o.integrator);
     let integrator = method.integrator;
     // Light tracing connects scene points to the lens; an orthographic camera's rays are
@@ -250,5 +278,50 @@ pub fn effective_settings(
             ..s.clone()
         },
         method,
+        chain: o.chain,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_chain(chain: Option<(u32, u32)>) -> Result<EffectiveSettings, Diagnostic> {
+        let options = RenderOptions {
+            chain,
+            ..RenderOptions::default()
+        };
+        let l =
+            crate::eval::load_source("chain.scn", "sphere { <0, 0, 0>, 1 }", &Default::default());
+        effective_settings(&l.scene.expect("a scene"), &options)
+    }
+
+    /// The iterations of chains 1..=n are together each iteration of one render once; a
+    /// render of its own keeps its numbering.
+    #[test]
+    fn chains_share_out_one_render_s_iterations() {
+        let alone = with_chain(None).unwrap();
+        assert_eq!(alone.schedule_iteration(5), 5);
+        let mut seen: Vec<u64> = (1..=3)
+            .flat_map(|k| {
+                let s = with_chain(Some((k, 3))).unwrap();
+                (0..4).map(move |i| s.schedule_iteration(i))
+            })
+            .collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..12).collect::<Vec<u64>>());
+        let last = with_chain(Some((u32::MAX, u32::MAX))).unwrap();
+        assert_eq!(
+            last.schedule_iteration(u32::MAX),
+            u64::from(u32::MAX) * u64::from(u32::MAX) + u64::from(u32::MAX - 1)
+        );
+    }
+
+    #[test]
+    fn a_chain_outside_its_count_is_refused() {
+        for bad in [(0, 3), (4, 3), (1, 0)] {
+            let e = with_chain(Some(bad)).unwrap_err();
+            assert!(e.message.contains("not a chain"), "{}", e.message);
+        }
+    }
 }

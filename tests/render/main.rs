@@ -10,6 +10,7 @@ mod measured;
 
 mod backdrop_sky;
 mod bezier_cases;
+mod chains;
 mod csg_cost;
 mod csg_glass;
 mod csg_oracle;

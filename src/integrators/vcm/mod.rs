@@ -37,6 +37,13 @@
 //! mirror's reflection of a wall): no light path can reach the lens through it, and it leaves
 //! the far part of an infinite plane under a sky dark.
 //!
+//! A chain of a still (`render --chain k/n`) takes the radius of the iteration it stands for in
+//! one render of all the chains' iterations (`EffectiveSettings::schedule_iteration`), and
+//! first runs `CHAIN_WARM_UP` passes whose values it does not keep, so that its extra and
+//! delta-only camera paths know where the pixels vary from its first kept iteration on: a
+//! render's first two iterations are its noisiest, and every chain would pay them again
+//! (docs/farm.md).
+//!
 //! Determinism: light paths are seeded by their index, camera paths by their pixel, and the
 //! splats of each iteration are added in light-path order.
 
@@ -55,7 +62,7 @@ use rayon::prelude::*;
 use super::common::camera_samples::{RAYS_PER_CAMERA_SAMPLE, SampleStats, allocate};
 use super::common::streams::Stream;
 use super::common::{medium_after, progressive};
-use super::{Integrator, Job, RenderOutput};
+use super::{Integrator, Job, RenderOutput, RenderStats};
 use crate::camera::Camera;
 use crate::materials::{Bsdf, BsdfSample, TransportMode};
 use crate::prepare::{
@@ -126,6 +133,14 @@ const EXTRA_CAMERA_PATHS: f64 = 0.5;
 /// That part is the mean of every camera path of the pixel, the rest the mean of the full ones
 /// (both unbiased).
 const DELTA_CAMERA_PATHS: u32 = 4;
+
+/// Passes a chain runs before its first iteration, whose values are not kept: they measure
+/// where the pixels vary for the extra and delta-only camera paths, which a render lacks in
+/// its first two iterations (then its iterations vary most: `docs/farm.md`).
+const CHAIN_WARM_UP: u32 = 2;
+
+/// Mixed into a chain's seed for its warm-up passes' streams.
+const WARM_UP_SALT: u64 = 0x5be0_cd19_137e_2179;
 
 /// Light paths traced per parallel task: the unit of work whose results are joined in order.
 const CHUNK: usize = 1024;
@@ -263,14 +278,22 @@ impl Integrator for Vcm {
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
-        progressive::render_means(job, |iter, stats| {
+        // One pass: iteration `iter` of the streams of `seed`, with the radius of the
+        // schedule's iteration `global`; `counted` passes feed the light-path count's pilot.
+        let mut pass_of = |iter: u32,
+                           seed: u64,
+                           global: u64,
+                           counted: bool,
+                           stats: &mut RenderStats|
+         -> Option<(Vec<Vec3A>, u64)> {
             let radius = Radius {
                 rule,
-                factor: self.radius_scale * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0)),
+                factor: self.radius_scale
+                    * (global as f64 + 1.0).powf(0.5 * (settings.alpha - 1.0)),
                 fallback,
             };
             let n_light = if mode.use_vm {
-                light_count.light_paths(iter, n_paths)
+                light_count.light_paths(if counted { iter } else { 0 }, n_paths)
             } else {
                 n_paths
             };
@@ -290,7 +313,7 @@ impl Integrator for Vcm {
                 gather_grid: None,
             };
             let t_light = Instant::now();
-            if !pass.run(&ctx, n_light, n_paths, settings.seed, iter, cancel) {
+            if !pass.run(&ctx, n_light, n_paths, seed, iter, cancel) {
                 return None;
             }
             let grid_radius = radius.scaled(Some(grid_r0));
@@ -303,7 +326,6 @@ impl Integrator for Vcm {
             ctx.gather_grid = has_gather.then_some(&pass.gather_grid);
             let (chunks, film) = (&pass.chunks, &pass.film);
             let t_camera = Instant::now();
-            let seed = settings.seed;
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
             // The delta-only camera paths, counted with the others in the statistics.
             let delta_paths = AtomicU64::new(0);
@@ -363,11 +385,36 @@ impl Integrator for Vcm {
                 let rays = (n_paths as u64 + extra_budget) as f64 * RAYS_PER_CAMERA_SAMPLE;
                 allocate(&samples, rays as u64, &mut extra);
             }
-            if mode.use_vm {
+            if mode.use_vm && counted {
                 light_count.observe(iter, &values);
             }
             stats.camera_time += t_camera.elapsed();
             (!cancel.load(Ordering::Relaxed)).then_some((values, n_light as u64))
+        };
+        // A chain first runs `CHAIN_WARM_UP` passes that only teach the adaptive camera paths
+        // (extra and delta-only) where the pixels vary: their values are not kept, and their
+        // streams are those of a seed of their own.
+        let warm_up = match settings.chain() {
+            Some(_) => CHAIN_WARM_UP,
+            None => 0,
+        };
+        let warm_seed = crate::sampling::mix64(settings.seed ^ WARM_UP_SALT);
+        progressive::render_means(job, |iter, stats| {
+            if iter == 0 {
+                for w in 0..warm_up {
+                    pass_of(w, warm_seed, settings.schedule_iteration(0), false, stats)?;
+                }
+            }
+            // A chain's iterations take their radii from one render of all the chains'
+            // iterations (`EffectiveSettings::schedule_iteration`): merged, the chains have
+            // exactly that render's radii.
+            pass_of(
+                iter,
+                settings.seed,
+                settings.schedule_iteration(iter),
+                true,
+                stats,
+            )
         })
     }
 }
