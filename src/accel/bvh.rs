@@ -210,6 +210,13 @@ impl Bvh {
         self
     }
 
+    /// The same BVH queried as on a CPU without AVX.
+    #[cfg(test)]
+    pub(super) fn without_avx(mut self) -> Self {
+        self.avx = None;
+        self
+    }
+
     /// Bounds of the bounded shapes (infinite planes excluded).
     pub fn bounds(&self) -> Aabb {
         self.bounds

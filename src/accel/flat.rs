@@ -311,9 +311,9 @@ mod tests {
     }
 
     /// A BVH that is one leaf of quads and spheres answers without its tree exactly as through
-    /// it: the same shape, the same record bit for bit, and the same occlusion, for rays from
-    /// inside and outside, toward shared edges and corners (equal `t` on two quads), and with
-    /// non-finite origins or directions.
+    /// it, with AVX and without: the same shape, the same record bit for bit, and the same
+    /// occlusion, for rays from inside and outside, toward shared edges and corners (equal `t`
+    /// on two quads), and with non-finite origins or directions.
     #[test]
     fn the_flat_query_gives_the_tree_s_answers() {
         let mut rng = Rng::new(21);
@@ -326,6 +326,7 @@ mod tests {
             };
             let bvh = build(&mut Rng::new(seed));
             let tree = build(&mut Rng::new(seed)).without_flat();
+            let packets = build(&mut Rng::new(seed)).without_avx();
             flat += usize::from(bvh.is_flat());
             for i in 0..200 {
                 let o = if i % 2 == 0 {
@@ -371,6 +372,9 @@ mod tests {
                     tree.occluded(&ray, 0.0, t_max)
                 );
                 assert_eq!(got.is_some(), bvh.occluded(&ray, 0.0, t_max));
+                // Without AVX: the leaf's packets of four.
+                assert_eq!(bits(packets.intersect(&ray, 0.0, t_max)), bits(got));
+                assert_eq!(packets.occluded(&ray, 0.0, t_max), got.is_some());
                 if bvh.is_flat() {
                     hits += usize::from(got.is_some());
                     edges += usize::from(got.is_some() && i % 7 < 3);
