@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use super::build::{Item, Parallelism, Stop, build_until};
+use super::flat::Flat;
 use super::leaf::{Closest, Leaves};
 use super::stack::{Stack, push_far_to_near};
 use super::triangles::{Meshes, PairTest};
@@ -40,6 +41,9 @@ pub struct Bvh {
     leaves: Leaves,
     meshes: Meshes,
     unbounded: Vec<(AnyShape, u32)>,
+    /// The tree's one leaf, when the tree is nothing else and that leaf holds only quads and
+    /// spheres (and there are no unbounded shapes): queried without the tree.
+    flat: Option<Flat>,
     /// The AVX tests, where the CPU has them: detected once here, not on every query.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx: Option<Avx>,
@@ -162,6 +166,10 @@ impl Bvh {
         if stop() {
             return None;
         }
+        let flat = match nodes.as_slice() {
+            [root] if root.count > 0 && unbounded.is_empty() => Flat::of(&leaves, root.offset),
+            _ => None,
+        };
         #[cfg(test)]
         fn below(n: &[Node], i: usize) -> usize {
             if n[i].count > 0 {
@@ -182,8 +190,29 @@ impl Bvh {
             leaves,
             meshes,
             unbounded,
+            flat,
             avx: Avx::detect(),
         })
+    }
+
+    /// Whether queries skip the tree ([`Flat`]).
+    #[cfg(test)]
+    pub(super) fn is_flat(&self) -> bool {
+        self.flat.is_some()
+    }
+
+    /// The same BVH queried through its tree even where it could skip it.
+    #[cfg(test)]
+    pub(super) fn without_flat(mut self) -> Self {
+        self.flat = None;
+        self
+    }
+
+    /// The same BVH queried as on a CPU without AVX.
+    #[cfg(test)]
+    pub(super) fn without_avx(mut self) -> Self {
+        self.avx = None;
+        self
     }
 
     /// Bounds of the bounded shapes (infinite planes excluded).
@@ -264,6 +293,9 @@ impl Bvh {
         t_max: f32,
         uv: impl Fn(u32) -> bool,
     ) -> Option<(Hit, u32)> {
+        if let Some(flat) = &self.flat {
+            return flat.intersect(&self.leaves, self.avx, ray, t_min, t_max, uv);
+        }
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.
@@ -464,6 +496,9 @@ impl Bvh {
     /// Whether anything is hit with `t_min < t < t_max` (with AVX where the CPU has it, as
     /// [`Bvh::intersect_lazy`]).
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        if let Some(flat) = &self.flat {
+            return flat.occluded(&self.leaves, self.avx, ray, t_min, t_max);
+        }
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.

@@ -2,6 +2,7 @@
 
 mod build;
 mod bvh;
+mod flat;
 mod instance;
 mod leaf;
 mod stack;

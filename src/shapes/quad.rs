@@ -199,6 +199,9 @@ impl Quad {
     }
 }
 
+mod octet;
+pub use octet::QuadOctet;
+
 /// Up to four quads tested at once, one per SIMD lane (structure of arrays). Each lane runs
 /// the operations of [`Quad::hit_t`] in the same order (dot products as `(x + y) + z`, as glam
 /// computes them), so a lane's `t` and its accept/reject decision are bit-identical to the
