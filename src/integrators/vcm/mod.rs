@@ -16,12 +16,15 @@
 //! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
 //! surface, the footprint carried through mirrors and glass by `common::footprint`, measured
-//! once a pixel), and it
-//! shrinks as SPPM's does on average, `r_i = r_0 i^((alpha - 1) / 2)`. The weights stay exact:
+//! once a pixel), times the pixel's own scale, which shrinks as SPPM's pixel radius does, by
+//! the light vertices its first camera path found (`pixel_radius.rs`; with `pixel_radius` off,
+//! by the iteration count instead, `r_i = r_0 i^((alpha - 1) / 2)`). The weights stay exact:
 //! a light vertex carries its quantities in parts that each camera path evaluates with its own
 //! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
-//! see its vertex directly. The merge grid is built for the 90th percentile of the radii of
-//! the previous iteration's pixels (their first camera paths), and answers larger queries too.
+//! see its vertex directly (with its pixel's scale). A pixel's scale changes only between
+//! iterations, so each iteration's weights use a radius fixed before it. The merge grid is
+//! built for the 90th percentile of the radii of the previous iteration's pixels (their first
+//! camera paths), and answers larger queries too.
 //!
 //! With `final_gather on`, a camera path whose first bounce is non-specular merges at its
 //! second vertex with `GATHER_RADIUS_FACTOR` times its own radius (SPPM's gather points'
@@ -45,6 +48,7 @@ mod grid;
 mod light_count;
 mod light_path;
 mod mis;
+mod pixel_radius;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -66,6 +70,7 @@ use grid::Grid;
 use light_count::LightCount;
 use light_path::{LightVertex, Splat, Stored, VertexSurface};
 use mis::{Factors, Parts};
+use pixel_radius::PixelRadii;
 
 /// Which techniques run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,6 +107,9 @@ pub struct Vcm {
     pub mode: Mode,
     /// Multiplies the initial radius (tests shrink it toward zero).
     pub radius_scale: f64,
+    /// Each pixel's radius follows the light vertices it found, as SPPM's
+    /// (`pixel_radius.rs`), instead of the iteration count's shrink.
+    pub pixel_radius: bool,
 }
 
 impl Vcm {
@@ -109,6 +117,7 @@ impl Vcm {
         Self {
             mode,
             radius_scale: 1.0,
+            pixel_radius: true,
         }
     }
 }
@@ -139,6 +148,8 @@ struct Context<'c, 's, 'a> {
     /// Light paths this iteration.
     light_paths: f64,
     radius: Radius,
+    /// Each pixel's scale of its radius (`pixel_radius.rs`; empty: 1 for every pixel).
+    pixel_scales: &'c [f64],
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
     /// Light choice for light paths (every light, by power).
@@ -162,6 +173,11 @@ impl Context<'_, '_, '_> {
         let choice = self.emit_probs.get(li).copied().unwrap_or(0.0);
         let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
         choice * f64::from(pos) * f64::from(d)
+    }
+
+    /// Pixel `pixel`'s scale of its radius this iteration.
+    fn pixel_scale(&self, pixel: usize) -> f64 {
+        self.pixel_scales.get(pixel).copied().unwrap_or(1.0)
     }
 
     /// The weights' constants for a camera path of radius `radius` this iteration.
@@ -263,10 +279,17 @@ impl Integrator for Vcm {
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
+        let pixel_radius = self.pixel_radius && mode.use_vm;
+        let mut pixel_radii = PixelRadii::new(if pixel_radius { n_paths } else { 0 });
         progressive::render_means(job, |iter, stats| {
+            let shrink = if pixel_radius {
+                1.0
+            } else {
+                f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0))
+            };
             let radius = Radius {
                 rule,
-                factor: self.radius_scale * f64::from(iter + 1).powf(0.5 * (settings.alpha - 1.0)),
+                factor: self.radius_scale * shrink,
                 fallback,
             };
             let n_light = if mode.use_vm {
@@ -281,6 +304,7 @@ impl Integrator for Vcm {
                 mode,
                 light_paths: n_light as f64,
                 radius,
+                pixel_scales: pixel_radii.scales(),
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
@@ -307,7 +331,7 @@ impl Integrator for Vcm {
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
             // The delta-only camera paths, counted with the others in the statistics.
             let delta_paths = AtomicU64::new(0);
-            let (values, r0): (Vec<Vec3A>, Vec<f64>) = samples
+            let (values, (r0, found)): (Vec<Vec3A>, (Vec<f64>, Vec<u32>)) = samples
                 .par_iter_mut()
                 .zip(delta.par_iter_mut())
                 .zip(extra.par_iter())
@@ -316,7 +340,7 @@ impl Integrator for Vcm {
                 .map(|(i, (((px, (sp_stats, seen_delta)), &extra), ratio))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
-                        return (Vec3A::ZERO, 0.0);
+                        return (Vec3A::ZERO, (0.0, 0));
                     }
                     let mut rng = Stream::VcmCamera.rng(seed, iter, i as u64);
                     // With fewer light paths than pixels, each serves every n_light-th pixel.
@@ -348,7 +372,7 @@ impl Integrator for Vcm {
                         rest += re;
                     }
                     let mean = spec / (1 + extra + only) as f32 + rest / (1 + extra) as f32;
-                    (finite(mean + splat), first.r0)
+                    (finite(mean + splat), (first.r0, first.found))
                 })
                 .unzip();
             r0s.clear();
@@ -365,6 +389,9 @@ impl Integrator for Vcm {
             }
             if mode.use_vm {
                 light_count.observe(iter, &values);
+            }
+            if pixel_radius {
+                pixel_radii.observe(&found, n_light, settings.alpha);
             }
             stats.camera_time += t_camera.elapsed();
             (!cancel.load(Ordering::Relaxed)).then_some((values, n_light as u64))
