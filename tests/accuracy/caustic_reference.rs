@@ -185,9 +185,10 @@ fn vcm_caustic_windows_at_32_iterations() {
 /// about as much CPU as SPPM's four.
 #[test]
 #[ignore = "measured 2026-11-30 (dev profile, about 140 CPU-s): seeds 5-36 at 512 iterations \
-            read direct 0.9995 +- 0.0017 (seeds 0.982 to 1.019, spread 0.95 %) and through \
-            0.9998 +- 0.0020 (0.976 to 1.018, spread 1.1 %; the reference's own noise there \
-            0.063 %): both windows hold 0.5 %"]
+            read direct 1.0041 +- 0.0018 and through 0.9991 +- 0.0021 with each pixel's radius \
+            following the light vertices it found (with the radius shrinking by the iteration \
+            count: 0.9995 +- 0.0017, seeds 0.982 to 1.019, and 0.9998 +- 0.0020, 0.976 to \
+            1.018; the reference's own noise there 0.063 %): both windows hold 0.5 %"]
 fn vcm_caustic_windows_at_512_iterations() {
     let (d, b) = vcm_mean_windows(512, 5..37);
     assert_windows_within(d, b, 0.005);

@@ -93,6 +93,8 @@ pub(super) fn radiance(
         first_diffuse: false,
     };
     let mut out = Radiance::default();
+    // The first merge's count is the pixel's (`pixel_radius.rs`).
+    let mut counted = false;
     loop {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             *out.part(st.specular) += st.beta * escaped(ctx, &st, ray.d);
@@ -135,7 +137,12 @@ pub(super) fn radiance(
                 }
             }
             if ctx.mode.use_vm {
-                *l += st.beta * merge(ctx, &st, sh.hit.p, &bsdf, wo);
+                let (m, found) = merge(ctx, &st, sh.hit.p, &bsdf, wo);
+                *l += st.beta * m;
+                if !counted && !st.gather_here(ctx) {
+                    out.found = found;
+                    counted = true;
+                }
             }
         }
         let mode = TransportMode::Radiance;
@@ -166,13 +173,13 @@ pub(super) fn radiance(
 
 /// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
 /// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, this iteration's
-/// shrink applied. Seen directly it is the straight footprint's, the same rule a light-traced
+/// shrink and the pixel's scale (`pixel_radius.rs`) applied. Seen directly it is the straight footprint's, the same rule a light-traced
 /// splat's weight uses at its vertex; through mirrors and glass the straight footprint over
 /// the path's length times the pixel's `ratio` (`common::footprint`), measured by neighbour
 /// rays retraced from `rng0` by the pixel's first camera path that passes a mirror or glass
 /// and kept, as SPPM keeps its pixel's radius (for merging only: without it the radius enters
 /// no weight). A ratio from an earlier path depends on nothing this path or the light paths
-/// sample, so the weights stay exact. Returns `r_0`.
+/// sample, so the weights stay exact. Returns `r_0` times the pixel's scale.
 fn set_radius(
     ctx: &Context,
     st: &mut State,
@@ -193,7 +200,8 @@ fn set_radius(
         }
         _ => rule.at(st.distance),
     }
-    .unwrap_or(ctx.radius.fallback);
+    .unwrap_or(ctx.radius.fallback)
+        * ctx.pixel_scale((pixel.1 * ctx.settings.resolution.0 + pixel.0) as usize);
     let r = ctx.radius.scaled(Some(r0));
     st.factors = ctx.factors(r);
     st.radius = r as f32;
@@ -209,8 +217,11 @@ pub(super) struct Radiance {
     pub(super) rest: Vec3A,
     /// The path left its first vertex by a delta bounce (a mirror, glass).
     pub(super) through_delta: bool,
-    /// The path's initial radius, before the iteration's shrink (0 if it set none).
+    /// The path's initial radius times its pixel's scale, before the iteration's shrink (0 if
+    /// it set none).
     pub(super) r0: f64,
+    /// The light vertices its first merge found within its radius (not the final gather's).
+    pub(super) found: u32,
 }
 
 impl Radiance {
@@ -404,8 +415,8 @@ fn connect(
 /// path's throughput): each counts its flux times the camera BSDF over the disk's area and
 /// the number of light paths. At the camera path's second vertex after a non-specular first,
 /// with the final gather on, the radius is the gather's, `GATHER_RADIUS_FACTOR` times the
-/// path's own.
-fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
+/// path's own. Also returns how many light vertices it merged with.
+fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> (Vec3A, u32) {
     let gather = st.gather_here(ctx);
     let (grid, radius, normalization) = if gather {
         let k = GATHER_RADIUS_FACTOR as f32;
@@ -418,17 +429,19 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         (ctx.grid, st.radius, st.vm_normalization)
     };
     let Some(grid) = grid else {
-        return Vec3A::ZERO;
+        return (Vec3A::ZERO, 0);
     };
     // At the camera path's first vertex the light vertex's predecessor is its second.
     let first = st.gather_next(ctx);
     let mut sum = Vec3A::ZERO;
+    let mut found = 0u32;
     let cam = st.q.at(&st.factors);
     grid.for_each_within(p, radius, |i| {
         let v = &ctx.vertices[i];
         if v.len + st.len > ctx.max_len {
             return;
         }
+        found = found.saturating_add(1);
         let v_wo = Vec3A::from(v.wo);
         let f = bsdf.f(wo, v_wo);
         if f == Vec3A::ZERO {
@@ -444,5 +457,5 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> Vec3A {
         let w = mis::merge(&st.factors, &cam, &light, cam_pdf, cam_rev, gather);
         sum += f * Vec3A::from(v.beta) * w as f32;
     });
-    sum * normalization
+    (sum * normalization, found)
 }

@@ -195,7 +195,8 @@ fn to_camera(
     } else {
         // The radius of a camera path through the lens point that sees this vertex directly;
         // that camera path's second vertex is this one's predecessor: its merge is the gather's.
-        let f = ctx.factors(ctx.radius.at(f64::from(cs.dist)));
+        let r = ctx.radius.at(f64::from(cs.dist)) * ctx.pixel_scale(cs.pixel as usize);
+        let f = ctx.factors(r);
         let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
         mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, rev)
     };

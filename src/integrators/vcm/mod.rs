@@ -16,12 +16,15 @@
 //! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
 //! surface, the footprint carried through mirrors and glass by `common::footprint`, measured
-//! once a pixel), and it
-//! shrinks as SPPM's does on average, `r_i = r_0 i^((alpha - 1) / 2)`. The weights stay exact:
+//! once a pixel), times the pixel's own scale, which shrinks as SPPM's pixel radius does, by
+//! the light vertices its first camera path found (`pixel_radius.rs`; with `pixel_radius` off,
+//! by the iteration count instead, `r_i = r_0 i^((alpha - 1) / 2)`). The weights stay exact:
 //! a light vertex carries its quantities in parts that each camera path evaluates with its own
 //! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
-//! see its vertex directly. The merge grid is built for the 90th percentile of the radii of
-//! the previous iteration's pixels (their first camera paths), and answers larger queries too.
+//! see its vertex directly (with its pixel's scale). A pixel's scale changes only between
+//! iterations, so each iteration's weights use a radius fixed before it. The merge grid is
+//! built for the 90th percentile of the radii of the previous iteration's pixels (their first
+//! camera paths), and answers larger queries too.
 //!
 //! With `final_gather on`, a camera path whose first bounce is non-specular merges at its
 //! second vertex with `GATHER_RADIUS_FACTOR` times its own radius (SPPM's gather points'
@@ -37,9 +40,10 @@
 //! mirror's reflection of a wall): no light path can reach the lens through it, and it leaves
 //! the far part of an infinite plane under a sky dark.
 //!
-//! A chain of a still (`render --chain k/n`) takes the radius of the iteration it stands for in
-//! one render of all the chains' iterations (`EffectiveSettings::schedule_iteration`), and
-//! first runs `CHAIN_WARM_UP` passes whose values it does not keep, so that its extra and
+//! A chain of a still (`render --chain k/n`), with the global shrink, takes the radius of the
+//! iteration it stands for in one render of all the chains' iterations
+//! (`EffectiveSettings::schedule_iteration`); with a radius per pixel its pixels shrink over
+//! its own iterations, as SPPM's do. It first runs `CHAIN_WARM_UP` passes whose values it does not keep, so that its extra and
 //! delta-only camera paths know where the pixels vary from its first kept iteration on: a
 //! render's first two iterations are its noisiest, and every chain would pay them again
 //! (docs/farm.md).
@@ -52,6 +56,7 @@ mod grid;
 mod light_count;
 mod light_path;
 mod mis;
+mod pixel_radius;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -73,6 +78,7 @@ use grid::Grid;
 use light_count::LightCount;
 use light_path::{LightVertex, Splat, Stored, VertexSurface};
 use mis::{Factors, Parts};
+use pixel_radius::PixelRadii;
 
 /// Which techniques run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -109,6 +115,9 @@ pub struct Vcm {
     pub mode: Mode,
     /// Multiplies the initial radius (tests shrink it toward zero).
     pub radius_scale: f64,
+    /// Each pixel's radius follows the light vertices it found, as SPPM's
+    /// (`pixel_radius.rs`), instead of the iteration count's shrink.
+    pub pixel_radius: bool,
 }
 
 impl Vcm {
@@ -116,6 +125,7 @@ impl Vcm {
         Self {
             mode,
             radius_scale: 1.0,
+            pixel_radius: true,
         }
     }
 }
@@ -154,6 +164,8 @@ struct Context<'c, 's, 'a> {
     /// Light paths this iteration.
     light_paths: f64,
     radius: Radius,
+    /// Each pixel's scale of its radius (`pixel_radius.rs`; empty: 1 for every pixel).
+    pixel_scales: &'c [f64],
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
     /// Light choice for light paths (every light, by power).
@@ -177,6 +189,11 @@ impl Context<'_, '_, '_> {
         let choice = self.emit_probs.get(li).copied().unwrap_or(0.0);
         let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
         choice * f64::from(pos) * f64::from(d)
+    }
+
+    /// Pixel `pixel`'s scale of its radius this iteration.
+    fn pixel_scale(&self, pixel: usize) -> f64 {
+        self.pixel_scales.get(pixel).copied().unwrap_or(1.0)
     }
 
     /// The weights' constants for a camera path of radius `radius` this iteration.
@@ -278,18 +295,25 @@ impl Integrator for Vcm {
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
-        // One pass: iteration `iter` of the streams of `seed`, with the radius of the
-        // schedule's iteration `global`; `counted` passes feed the light-path count's pilot.
+        let pixel_radius = self.pixel_radius && mode.use_vm;
+        let mut pixel_radii = PixelRadii::new(if pixel_radius { n_paths } else { 0 });
+        // One pass: iteration `iter` of the streams of `seed`; `counted` passes feed the
+        // light-path count's pilot and the pixels' radii. Without a radius per pixel the
+        // global shrink follows the schedule's iteration `global`.
         let mut pass_of = |iter: u32,
                            seed: u64,
                            global: u64,
                            counted: bool,
                            stats: &mut RenderStats|
          -> Option<(Vec<Vec3A>, u64)> {
+            let shrink = if pixel_radius {
+                1.0
+            } else {
+                (global as f64 + 1.0).powf(0.5 * (settings.alpha - 1.0))
+            };
             let radius = Radius {
                 rule,
-                factor: self.radius_scale
-                    * (global as f64 + 1.0).powf(0.5 * (settings.alpha - 1.0)),
+                factor: self.radius_scale * shrink,
                 fallback,
             };
             let n_light = if mode.use_vm {
@@ -304,6 +328,7 @@ impl Integrator for Vcm {
                 mode,
                 light_paths: n_light as f64,
                 radius,
+                pixel_scales: pixel_radii.scales(),
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
@@ -329,7 +354,7 @@ impl Integrator for Vcm {
             let finite = |l: Vec3A| if l.is_finite() { l } else { Vec3A::ZERO };
             // The delta-only camera paths, counted with the others in the statistics.
             let delta_paths = AtomicU64::new(0);
-            let (values, r0): (Vec<Vec3A>, Vec<f64>) = samples
+            let (values, (r0, found)): (Vec<Vec3A>, (Vec<f64>, Vec<u32>)) = samples
                 .par_iter_mut()
                 .zip(delta.par_iter_mut())
                 .zip(extra.par_iter())
@@ -338,7 +363,7 @@ impl Integrator for Vcm {
                 .map(|(i, (((px, (sp_stats, seen_delta)), &extra), ratio))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
-                        return (Vec3A::ZERO, 0.0);
+                        return (Vec3A::ZERO, (0.0, 0));
                     }
                     let mut rng = Stream::VcmCamera.rng(seed, iter, i as u64);
                     // With fewer light paths than pixels, each serves every n_light-th pixel.
@@ -370,7 +395,7 @@ impl Integrator for Vcm {
                         rest += re;
                     }
                     let mean = spec / (1 + extra + only) as f32 + rest / (1 + extra) as f32;
-                    (finite(mean + splat), first.r0)
+                    (finite(mean + splat), (first.r0, first.found))
                 })
                 .unzip();
             r0s.clear();
@@ -387,6 +412,9 @@ impl Integrator for Vcm {
             }
             if mode.use_vm && counted {
                 light_count.observe(iter, &values);
+            }
+            if pixel_radius && counted {
+                pixel_radii.observe(&found, n_light, settings.alpha);
             }
             stats.camera_time += t_camera.elapsed();
             (!cancel.load(Ordering::Relaxed)).then_some((values, n_light as u64))
@@ -405,9 +433,9 @@ impl Integrator for Vcm {
                     pass_of(w, warm_seed, settings.schedule_iteration(0), false, stats)?;
                 }
             }
-            // A chain's iterations take their radii from one render of all the chains'
-            // iterations (`EffectiveSettings::schedule_iteration`): merged, the chains have
-            // exactly that render's radii.
+            // With the global shrink, a chain's iterations take their radii from one render of
+            // all the chains' iterations (`EffectiveSettings::schedule_iteration`): merged, the
+            // chains have exactly that render's radii.
             pass_of(
                 iter,
                 settings.seed,
