@@ -296,6 +296,39 @@ impl Bvh {
         if let Some(flat) = &self.flat {
             return flat.intersect(&self.leaves, self.avx, ray, t_min, t_max, uv);
         }
+        self.tree_uv(ray, t_min, t_max, uv)
+    }
+
+    /// [`Bvh::intersect_uv`] for rays with a finite origin and direction: any other ray gets
+    /// `None`, the unbounded shapes' hits included. The flat query checks the ray itself (as
+    /// the tree's box test rejects such rays), so a caller that needs the check does not make
+    /// it twice.
+    #[inline(always)]
+    pub fn intersect_finite_uv(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
+        if let Some(flat) = &self.flat {
+            return flat.intersect(&self.leaves, self.avx, ray, t_min, t_max, uv);
+        }
+        if !super::wide::BoxRay::usable(ray) {
+            return None;
+        }
+        self.tree_uv(ray, t_min, t_max, uv)
+    }
+
+    /// [`Bvh::intersect_uv`] through the tree, at the CPU's feature level.
+    #[inline(always)]
+    fn tree_uv(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        uv: impl Fn(u32) -> bool,
+    ) -> Option<(Hit, u32)> {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = self.avx {
             // SAFETY: an `Avx` value exists only where the CPU has AVX.

@@ -539,18 +539,18 @@ impl<'a> PreparedScene<'a> {
         accel::spawn_ray_to(p, n, target, nt, self.offset_floor)
     }
 
-    /// Not inlined: one copy of the traversal, called from every integrator's loop (inlined
-    /// into each caller it ran fewer instructions but fewer photons/s: docs/measurements.md,
-    /// "Tried and not kept").
-    #[inline(never)]
+    /// Inlined (always): each caller runs the choice of the query (a flat leaf, or the tree
+    /// with AVX or without; each one out-of-line copy) and the tree's check of the ray, and the
+    /// query writes its record into the caller's frame. (The traversal itself inlined into
+    /// each caller ran fewer instructions but fewer photons/s: docs/measurements.md, "Tried and
+    /// not kept".)
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        if !finite(ray) {
-            return None;
-        }
-        // A CSG tree names the part hit: its material and texture space are that part's.
+        // A CSG tree names the part hit: its material and texture space are that part's. A ray
+        // with a non-finite origin or direction hits nothing.
         let (hit, prim) = self
             .bvh
-            .intersect_uv(ray, 0.0, t_max, |prim| self.reads_uv(prim))?;
+            .intersect_finite_uv(ray, 0.0, t_max, |prim| self.reads_uv(prim))?;
         Some(SurfaceHit { hit, prim })
     }
 

@@ -508,3 +508,92 @@ fn the_hit_record_is_the_lazy_hits() {
     // Plane, mesh with uvs, mesh without, spheres without uv, other shapes.
     assert!(hits.iter().all(|&n| n > 40), "{hits:?}");
 }
+
+/// `intersect_finite_uv` answers a finite ray as `intersect_uv` does, and a ray with a NaN or
+/// an infinity in its origin or direction with nothing, on a tree with an unbounded plane and
+/// on a flat leaf.
+#[test]
+fn the_finite_query_drops_non_finite_rays_only() {
+    use crate::shapes::plane::Plane;
+    use crate::shapes::quad::Quad;
+    let mut rng = Rng::new(31);
+    let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
+    // A tree: random quads and spheres and an unbounded plane.
+    let mut shapes = vec![(AnyShape::Plane(Plane::new(Vec3A::Y, -1.5).unwrap()), 0)];
+    for k in 1..7u32 {
+        let c = v(&mut rng);
+        shapes.push(if k % 3 == 0 {
+            (
+                AnyShape::Sphere(Sphere::new(c, 0.2 + 0.2 * rng.f32()).unwrap()),
+                k,
+            )
+        } else {
+            (
+                AnyShape::Quad(Quad::new(c, v(&mut rng), v(&mut rng)).unwrap()),
+                k,
+            )
+        });
+    }
+    let tree = Bvh::new(shapes);
+    // A flat leaf: the five walls of a box (as the Cornell box's) and two spheres in it.
+    let walls = [
+        (Vec3A::new(-1.0, -1.0, -1.0), Vec3A::X * 2.0, Vec3A::Z * 2.0),
+        (Vec3A::new(-1.0, 1.0, -1.0), Vec3A::X * 2.0, Vec3A::Z * 2.0),
+        (Vec3A::new(-1.0, -1.0, -1.0), Vec3A::X * 2.0, Vec3A::Y * 2.0),
+        (Vec3A::new(-1.0, -1.0, -1.0), Vec3A::Z * 2.0, Vec3A::Y * 2.0),
+        (Vec3A::new(1.0, -1.0, -1.0), Vec3A::Z * 2.0, Vec3A::Y * 2.0),
+    ];
+    let mut shapes: Vec<(AnyShape, u32)> = walls
+        .iter()
+        .zip(0..)
+        .map(|(&(o, a, b), k)| (AnyShape::Quad(Quad::new(o, a, b).unwrap()), k))
+        .collect();
+    shapes.push((
+        AnyShape::Sphere(Sphere::new(Vec3A::new(-0.4, -0.6, -0.3), 0.35).unwrap()),
+        5,
+    ));
+    shapes.push((
+        AnyShape::Sphere(Sphere::new(Vec3A::new(0.4, -0.6, 0.3), 0.35).unwrap()),
+        6,
+    ));
+    let flat = Bvh::new(shapes);
+    assert!(!tree.is_flat(), "the tree");
+    assert!(flat.is_flat(), "the box");
+    let uv = |id: u32| id.is_multiple_of(2);
+    let bits = |hit: Option<(Hit, u32)>| {
+        hit.map(|(h, id)| {
+            let v = [h.p, h.n, h.ns, h.dpdu].map(|v| v.to_array().map(f32::to_bits));
+            (h.t.to_bits(), v, h.uv.to_array().map(f32::to_bits), id)
+        })
+    };
+    let (mut hits, mut non_finite) = (0, 0);
+    for i in 0..4000 {
+        let mut ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
+        let finite = i % 4 != 0;
+        if !finite {
+            let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][i % 3];
+            match i % 8 {
+                0 => ray.o.x = bad,
+                _ => ray.d.z = bad,
+            }
+        }
+        for bvh in [&tree, &flat] {
+            let got = bvh.intersect_finite_uv(&ray, 0.0, f32::INFINITY, uv);
+            if finite {
+                assert_eq!(
+                    bits(got),
+                    bits(bvh.intersect_uv(&ray, 0.0, f32::INFINITY, uv)),
+                    "ray {i}"
+                );
+                hits += usize::from(got.is_some());
+            } else {
+                assert!(got.is_none(), "ray {i}: {ray:?}");
+                non_finite += 1;
+            }
+        }
+    }
+    assert!(
+        hits > 1000 && non_finite > 1000,
+        "{hits} hits, {non_finite} non-finite"
+    );
+}
