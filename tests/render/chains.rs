@@ -68,7 +68,8 @@ fn merged(n: u32, iterations: u32, seed: u64) -> Image {
 /// Over seeds 1-4, against a 1024-iteration render of seed 1000: the merge of 4 chains of 64
 /// iterations and one render of 256 (root of the mean squared errors), and of 8 chains of 16
 /// against one of 128, where each chain's first iterations weigh more. Measured 0.98 and
-/// 1.33 (docs/measurements.md, "Chains of `vcm`"); 1.11 and 1.88 before each chain began with
+/// 1.37 since a render of its own has the warm-up passes too (0.98 and 1.33 before:
+/// docs/measurements.md, "Chains of `vcm`"); 1.11 and 1.88 before each chain began with
 /// its warm-up passes (their radii already those of the long render's iterations).
 #[test]
 fn vcm_chains_merge_as_close_as_one_render_of_their_iterations() {

@@ -40,13 +40,15 @@
 //! mirror's reflection of a wall): no light path can reach the lens through it, and it leaves
 //! the far part of an infinite plane under a sky dark.
 //!
-//! A chain of a still (`render --chain k/n`), with the global shrink, takes the radius of the
-//! iteration it stands for in one render of all the chains' iterations
-//! (`EffectiveSettings::schedule_iteration`); with a radius per pixel its pixels shrink over
-//! its own iterations, as SPPM's do. It first runs `CHAIN_WARM_UP` passes whose values it does not keep, so that its extra and
-//! delta-only camera paths know where the pixels vary from its first kept iteration on: a
-//! render's first two iterations are its noisiest, and every chain would pay them again
-//! (docs/farm.md).
+//! A `vcm` render first runs `WARM_UP` passes whose values it does not keep, so that its extra
+//! and delta-only camera paths know where the pixels vary from its first kept iteration on:
+//! without them a render's first two iterations are its noisiest (docs/measurements.md). A
+//! chain of a still (`render --chain k/n`) of any of the three methods does the same (every
+//! chain would pay those iterations again: docs/farm.md). `bpt` and `lt` renders of their own
+//! have none. With a radius per pixel (the default) a chain's pixels shrink their radii over its
+//! own iterations, as SPPM's do; with the global shrink (`Vcm::pixel_radius` off) iteration i
+//! of chain k takes the radius of the iteration it stands for in one render of all the chains'
+//! iterations (`EffectiveSettings::schedule_iteration`).
 //!
 //! Determinism: light paths are seeded by their index, camera paths by their pixel, and the
 //! splats of each iteration are added in light-path order.
@@ -144,12 +146,13 @@ const EXTRA_CAMERA_PATHS: f64 = 0.5;
 /// (both unbiased).
 const DELTA_CAMERA_PATHS: u32 = 4;
 
-/// Passes a chain runs before its first iteration, whose values are not kept: they measure
-/// where the pixels vary for the extra and delta-only camera paths, which a render lacks in
-/// its first two iterations (then its iterations vary most: `docs/farm.md`).
-const CHAIN_WARM_UP: u32 = 2;
+/// Passes a `vcm` render (and every chain) runs before its first iteration, whose values are
+/// not kept: they measure where the pixels vary for the extra and delta-only camera paths,
+/// which a render would otherwise lack in its first two iterations (then its iterations vary
+/// most: `docs/measurements.md`, `docs/farm.md`).
+const WARM_UP: u32 = 2;
 
-/// Mixed into a chain's seed for its warm-up passes' streams.
+/// Mixed into a render's seed for its warm-up passes' streams.
 const WARM_UP_SALT: u64 = 0x5be0_cd19_137e_2179;
 
 /// Light paths traced per parallel task: the unit of work whose results are joined in order.
@@ -419,12 +422,13 @@ impl Integrator for Vcm {
             stats.camera_time += t_camera.elapsed();
             (!cancel.load(Ordering::Relaxed)).then_some((values, n_light as u64))
         };
-        // A chain first runs `CHAIN_WARM_UP` passes that only teach the adaptive camera paths
-        // (extra and delta-only) where the pixels vary: their values are not kept, and their
-        // streams are those of a seed of their own.
-        let warm_up = match settings.chain() {
-            Some(_) => CHAIN_WARM_UP,
-            None => 0,
+        // A render with merging (`vcm`), and every chain, first runs `WARM_UP` passes that
+        // only teach the adaptive camera paths (extra and delta-only) where the pixels vary:
+        // their values are not kept, and their streams are those of a seed of their own.
+        let warm_up = if mode.use_vm || settings.chain().is_some() {
+            WARM_UP
+        } else {
+            0
         };
         let warm_seed = crate::sampling::mix64(settings.seed ^ WARM_UP_SALT);
         progressive::render_means(job, |iter, stats| {
