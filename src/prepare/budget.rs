@@ -189,16 +189,21 @@ pub(super) fn compact_mesh_bytes(mesh: &MeshData) -> u64 {
 /// and about two table slots.
 pub const VCM_GRID_BYTES: u64 = 32;
 
-/// Bytes a stored light vertex of `vcm`, `bpt` or `lt` takes: the vertex (what merges read:
-/// direction, flux, length and weights' parts) in its path's chunk and again in the
-/// iteration's list, its surface (position and compact BSDF) in the chunk, its position for
-/// the grids and its merge grid entry (checked against the types' sizes by the light path's
-/// tests).
-pub const VCM_VERTEX_BYTES: u64 = 368;
+/// Bytes a stored light vertex of `vcm` takes: the vertex (what merges read: direction,
+/// flux, length and weights' parts) in its path's chunk and again in the iteration's list, its
+/// surface (position and compact BSDF) in the chunk, its position for the grids, its merge
+/// grid entry, and the light-traced splat it may make (checked against the types' sizes by
+/// the light path's tests).
+pub const VCM_VERTEX_BYTES: u64 = 400;
 
 /// Bytes a stored light vertex of `bpt` takes: the vertex and its surface in its path's chunk
-/// alone (without merges there is no list and no grid; checked as `VCM_VERTEX_BYTES` is).
-pub const BPT_VERTEX_BYTES: u64 = 240;
+/// alone (without merges there is no list and no grid) and its splat; checked as
+/// `VCM_VERTEX_BYTES` is.
+pub const BPT_VERTEX_BYTES: u64 = 272;
+
+/// Bytes a vertex of a light path of `lt` takes: it stores no vertex, only the splat it may
+/// make toward the lens.
+pub const LT_VERTEX_BYTES: u64 = 32;
 
 /// The estimate, largest item first.
 pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> {
@@ -312,7 +317,8 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         Integrator::Vcm if settings.final_gather => {
             pixels.saturating_mul(3 * (VCM_VERTEX_BYTES + VCM_GRID_BYTES))
         }
-        Integrator::Vcm | Integrator::Lt => pixels.saturating_mul(3 * VCM_VERTEX_BYTES),
+        Integrator::Vcm => pixels.saturating_mul(3 * VCM_VERTEX_BYTES),
+        Integrator::Lt => pixels.saturating_mul(3 * LT_VERTEX_BYTES),
         Integrator::Bpt => pixels.saturating_mul(3 * BPT_VERTEX_BYTES),
         Integrator::Path | Integrator::Whitted => 0,
     };

@@ -26,7 +26,7 @@ use crate::scene::{self, ColorParam, Material, Scene};
 use crate::shapes::Shape;
 use crate::textures::{self, TexCoord};
 pub use budget::{
-    BPT_VERTEX_BYTES, MemoryItem, VCM_GRID_BYTES, VCM_VERTEX_BYTES, check_memory,
+    BPT_VERTEX_BYTES, LT_VERTEX_BYTES, MemoryItem, VCM_GRID_BYTES, VCM_VERTEX_BYTES, check_memory,
     default_memory_limit, estimate as estimate_memory,
 };
 pub use csg::{MAX_CSG_RAY_COST, ray_cost as csg_ray_cost};

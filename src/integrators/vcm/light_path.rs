@@ -195,7 +195,9 @@ fn to_camera(
     } else {
         // The radius of a camera path through the lens point that sees this vertex directly;
         // that camera path's second vertex is this one's predecessor: its merge is the gather's.
-        let r = ctx.radius.at(f64::from(cs.dist)) * ctx.pixel_scale(cs.pixel as usize);
+        let r = ctx
+            .radius
+            .at(f64::from(cs.dist), ctx.pixel_scale(cs.pixel as usize));
         let f = ctx.factors(r);
         let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
         mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, rev)
@@ -213,8 +215,8 @@ fn to_camera(
 
 #[cfg(test)]
 mod tests {
-    use super::{LightVertex, VertexSurface};
-    use crate::prepare::{BPT_VERTEX_BYTES, VCM_GRID_BYTES, VCM_VERTEX_BYTES};
+    use super::{LightVertex, Splat, VertexSurface};
+    use crate::prepare::{BPT_VERTEX_BYTES, LT_VERTEX_BYTES, VCM_GRID_BYTES, VCM_VERTEX_BYTES};
     use glam::Vec3A;
     use std::mem::size_of;
 
@@ -225,10 +227,12 @@ mod tests {
     #[test]
     fn the_memory_budget_covers_a_stored_light_vertex() {
         let grid = (4 * size_of::<u32>() + size_of::<Vec3A>()) as u64;
+        let splat = size_of::<Splat>() as u64;
         let vertex = 2 * size_of::<LightVertex>() as u64
             + size_of::<VertexSurface>() as u64
             + size_of::<Vec3A>() as u64
-            + grid;
+            + grid
+            + splat;
         assert!(
             grid <= VCM_GRID_BYTES,
             "grid entry {grid} > {VCM_GRID_BYTES}"
@@ -242,8 +246,10 @@ mod tests {
             VCM_VERTEX_BYTES <= vertex + vertex / 4,
             "{vertex} vs {VCM_VERTEX_BYTES}"
         );
-        // `bpt` keeps the chunk's part alone.
-        let chunk = (size_of::<LightVertex>() + size_of::<VertexSurface>()) as u64;
+        // `lt` keeps its splats alone.
+        assert!(splat <= LT_VERTEX_BYTES, "{splat} > {LT_VERTEX_BYTES}");
+        // `bpt` keeps the chunk's part alone, and its splats.
+        let chunk = (size_of::<LightVertex>() + size_of::<VertexSurface>()) as u64 + splat;
         assert!(chunk <= BPT_VERTEX_BYTES, "{chunk} > {BPT_VERTEX_BYTES}");
         assert!(
             BPT_VERTEX_BYTES <= chunk + chunk / 4,

@@ -223,10 +223,13 @@ struct Radius {
 }
 
 impl Radius {
-    /// This iteration's radius of a camera path that sees a point `distance` from the lens
-    /// directly (the footprint rule's straight ray): a light-traced splat's.
-    fn at(&self, distance: f64) -> f64 {
-        self.scaled(self.rule.at(distance))
+    /// This iteration's radius of a camera path of a pixel whose radius scale is `scale` that
+    /// sees a point `distance` from the lens directly (the footprint rule's straight ray): a
+    /// light-traced splat's, computed as the camera path's own (`camera_path::set_radius`).
+    fn at(&self, distance: f64, scale: f64) -> f64 {
+        self.scaled(Some(
+            self.rule.at(distance).unwrap_or(self.fallback) * scale,
+        ))
     }
 
     fn scaled(&self, r0: Option<f64>) -> f64 {
