@@ -7,6 +7,17 @@ For each example the script renders a reference with the path tracer: two halves
 reference's own noise, `mean((a - b)^2) / 4` per pixel, which is subtracted from every
 method's squared error (otherwise it adds to every method and pulls the ratios toward 1).
 
+An example lit so that no path tracer can render it (a point light seen by way of a mirror or
+glass: a caustic) is compared with an independent reference instead (`EXTERNAL`: Mitsuba 3's
+particle tracer for smallppm, tools/reference/README.md), on its mask's pixels only (where
+the camera sees a diffuse surface directly: elsewhere that reference holds nothing), every
+region restricted to them. The reference is box-averaged down to the table's resolution
+when that divides its own exactly (a box-filtered image averaged over k x k pixels is the
+box-filtered image at 1/k the resolution, our pixel filter; a pixel is kept if all its
+sub-pixels are in the mask), else the example renders at the reference's resolution. Its
+noise comes from two halves of an independent shorter run, averaged down alike, scaled to
+the reference's samples (a light tracer's variance falls as 1 / spp).
+
 Each method then renders with seeds 1..`--seeds` for the example's budget: `--cpu` CPU
 seconds, or `--fixed-factor` times the largest fixed cost (loading and preparing the scene,
 from the calibration) when that is more, so that setup does not dominate. CPU time is the
@@ -55,11 +66,45 @@ def read_exr(path):
         return np.stack([np.array(ch[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
 
 
-def render(a, scene, method, iterations, seed, out):
+# Examples compared with a committed reference of another renderer: its image, its mask, two
+# halves of an independent run (their difference measures the noise) and the samples per
+# pixel of the image and of the halves together.
+EXTERNAL = {
+    "smallppm": {"image": "tools/reference/smallppm.exr",
+                 "mask": "tools/reference/smallppm.mask.exr",
+                 "halves": ["tools/reference/smallppm.noise.half0.exr",
+                            "tools/reference/smallppm.noise.half1.exr"],
+                 "spp": 8192, "halves_spp": 1024},
+}
+
+
+def box_down(img, k):
+    """The mean of each k x k block (height and width multiples of k)."""
+    h, w = img.shape[:2]
+    return img.reshape(h // k, k, w // k, k, -1).mean(axis=(1, 3))
+
+
+def external_reference(a, spec):
+    """(reference, mask, noise, width to render at) for a committed reference at the table's
+    resolution, the noise each pixel's estimated variance of the reference."""
+    img, mask = read_exr(spec["image"]), read_exr(spec["mask"])[..., :1] > 0.5
+    h0, h1 = (read_exr(p) for p in spec["halves"])
+    h, w = img.shape[:2]
+    k = w // a.width if a.width and w % a.width == 0 and h % (w // a.width) == 0 else 1
+    if k > 1:
+        img, h0, h1 = box_down(img, k), box_down(h0, k), box_down(h1, k)
+        mask = box_down(mask.astype(np.float64), k) > 1.0 - 1e-9
+    # (h0 - h1)^2 / 4 estimates the variance of (h0 + h1) / 2, of `halves_spp` samples.
+    noise = (h0 - h1) ** 2 / 4 * (spec["halves_spp"] / spec["spp"])
+    return img, mask[..., 0], noise, w // k
+
+
+def render(a, scene, method, iterations, seed, out, width=None):
     """Renders and returns the CPU seconds (user + system) of that process alone, or None if
     the renderer refused."""
     cmd = [a.binary, "render", scene, "--integrator", method, "--iterations", str(iterations),
-           "--seed", str(seed), "--threads", "1", "--resolution", f"{a.width}x", "-o", out]
+           "--seed", str(seed), "--threads", "1", "--resolution", f"{width or a.width}x",
+           "-o", out]
     err_path = out + ".err"
     with open(err_path, "w") as err_file:
         # Waited for with wait4 (not Popen.wait) to read the process's own CPU time.
@@ -77,14 +122,14 @@ def render(a, scene, method, iterations, seed, out):
     return ru.ru_utime + ru.ru_stime
 
 
-def calibrate(a, scene, method, out):
+def calibrate(a, scene, method, out, width=None):
     """(fixed, per-iteration) CPU seconds of `method` on `scene`, from 1 iteration and from
     4, 16, ... until the difference is half a second (cheap iterations measured over few
     would be lost in the scatter of CPU times)."""
-    c1 = render(a, scene, method, 1, 99, out)
+    c1 = render(a, scene, method, 1, 99, out, width)
     n = 4
     while c1 is not None:
-        cn = render(a, scene, method, n, 99, out)
+        cn = render(a, scene, method, n, 99, out, width)
         if cn is None:
             return None
         if cn - c1 >= 0.5 or n >= 4096:
@@ -104,9 +149,12 @@ def regions(h, w):
             ("bottom right", slice(hy, h), slice(hx, w))]
 
 
-def mse(img, ref, ys, xs):
+def mse(img, ref, ys, xs, mask=None):
+    """Mean squared difference over a region, on the pixels of `mask` in it if given."""
     d = img[ys, xs] - ref[ys, xs]
-    return float(np.mean(d * d))
+    if mask is not None:
+        d = d[mask[ys, xs]]
+    return float(np.mean(d * d)) if d.size else float("nan")
 
 
 def example(a, name, methods):
@@ -118,21 +166,32 @@ def example(a, name, methods):
     refs = [os.path.join(d, f"ref{k}.exr") for k in (0, 1)]
     meta_path = os.path.join(d, "meta.json")
     meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
-    if not all(os.path.exists(r) for r in refs):
-        cal = calibrate(a, scene, "path", refs[0])
-        if cal is None:
-            return None
-        n = max(1, int(round((a.ref_cpu / 2 - cal[0]) / cal[1])))
-        for k, r in enumerate(refs):
-            render(a, scene, "path", n, 1000 + k, r)
-    r0, r1 = read_exr(refs[0]), read_exr(refs[1])
-    ref = 0.5 * (r0 + r1)
-    h, w = ref.shape[:2]
-    ref_noise = {rn: mse(r0, r1, ys, xs) / 4 for rn, ys, xs in regions(h, w)}
+    ext, mask, width = EXTERNAL.get(name), None, a.width
+    if ext:
+        ref, mask, noise, width = external_reference(a, ext)
+        h, w = ref.shape[:2]
+        zero = np.zeros_like(noise)
+        ref_noise = {rn: mse(noise, zero, ys, xs, mask) for rn, ys, xs in regions(h, w)}
+    else:
+        if not all(os.path.exists(r) for r in refs):
+            cal = calibrate(a, scene, "path", refs[0])
+            if cal is None:
+                return None
+            n = max(1, int(round((a.ref_cpu / 2 - cal[0]) / cal[1])))
+            for k, r in enumerate(refs):
+                render(a, scene, "path", n, 1000 + k, r)
+        r0, r1 = read_exr(refs[0]), read_exr(refs[1])
+        ref = 0.5 * (r0 + r1)
+        h, w = ref.shape[:2]
+        ref_noise = {rn: mse(r0, r1, ys, xs) / 4 for rn, ys, xs in regions(h, w)}
+    # Results measured against another reference (an older run's) are rendered again.
+    ref_kind = ext["image"] if ext else "path"
+    if width != a.width:
+        print(f"{name}: rendered at the reference's width {width}", file=sys.stderr)
     cals = meta.get("calibration", {})
     for m in methods:
         if m not in cals or m in a.rerun:
-            c = calibrate(a, scene, m, os.path.join(d, f"cal-{m}.exr"))
+            c = calibrate(a, scene, m, os.path.join(d, f"cal-{m}.exr"), width)
             cals[m] = c
     meta["calibration"] = cals
     fixed = max((c[0] for c in cals.values() if c), default=0.0)
@@ -149,19 +208,23 @@ def example(a, name, methods):
         results[m] = []
         for seed in range(1, a.seeds + 1):
             res_path = os.path.join(d, f"{m}-{seed}.json")
-            if os.path.exists(res_path) and m not in a.rerun:
-                res = json.load(open(res_path))
+            res = json.load(open(res_path)) if os.path.exists(res_path) else None
+            if res and m not in a.rerun and res.get("reference", "path") == ref_kind:
                 if "mse_raw" not in res:  # the first version stored it times cpu / budget
                     res["mse_raw"] = {k: v * budget / res["cpu"] for k, v in res["mse"].items()}
                 results[m].append(res)
                 continue
             out = os.path.join(d, f"{m}-{seed}.exr")
-            cpu = render(a, scene, m, n, seed, out)
+            cpu = render(a, scene, m, n, seed, out, width)
             if cpu is None:
                 break
             img = read_exr(out)
-            res = {"cpu": cpu, "iterations": n,
-                   "mse_raw": {rn: mse(img, ref, ys, xs) - ref_noise[rn]
+            if img.shape != ref.shape:
+                print(f"  {name} {m}: {img.shape} against a reference of {ref.shape}",
+                      file=sys.stderr)
+                break
+            res = {"cpu": cpu, "iterations": n, "reference": ref_kind,
+                   "mse_raw": {rn: mse(img, ref, ys, xs, mask) - ref_noise[rn]
                                for rn, ys, xs in regions(h, w)}}
             json.dump(res, open(res_path, "w"))
             results[m].append(res)
@@ -257,7 +320,8 @@ def main():
                                  for m in others) else "tie"
             key = "whole" if rn == "whole" else "regions"
             tally[key][v] = tally[key].get(v, 0) + 1
-            lines.append(f"| {name if rn == 'whole' else ''} | "
+            label = f"{name} (masked, {EXTERNAL[name]['image']})" if name in EXTERNAL else name
+            lines.append(f"| {label if rn == 'whole' else ''} | "
                          f"{budget:.1f} | {rn} | " if rn == "whole" else f"| | | {rn} | ")
             lines[-1] += (" | ".join(f"{rm[m]:.4g}" for m in methods)
                           + f" | {r:.2f} ± {se:.2f} ({better}) | {v} |")

@@ -17,6 +17,16 @@ Run from the repository root (the committed image: scalar_rgb, see tools/referen
     .venv/bin/python tools/reference/smallppm.py --spp 8192 --pass-spp 512 \
         [--out tools/reference/smallppm.exr]
 
+The committed image has no halves. Its noise is estimated from an independent, shorter run of
+the same scene whose even and odd passes are kept apart (`--halves`: OUT.half0.exr and
+OUT.half1.exr, each the mean of its passes, in half floats):
+    .venv/bin/python tools/reference/smallppm.py --spp 1024 --pass-spp 256 --seed 2000 \
+        --halves --out /tmp/smallppm.noise.exr
+    cp /tmp/smallppm.noise.half[01].exr tools/reference/
+A light tracer's passes are independent, so a pixel's variance falls as 1 / spp; the script
+prints the measured ratio (one pass's variance over one half's, n passes a half: n expected).
+`tools/equal_cpu_examples.py` scales the halves' noise to the committed image's 8192 spp.
+
 Model mapping beyond smallppm_far.py's: `light { p intensity I }` (a point light of radiant
 intensity I W/sr) is a `point` emitter with `intensity` I at p.
 """
@@ -76,6 +86,9 @@ def main():
     ap.add_argument('--height', type=int, default=192)
     ap.add_argument('--variant', default='scalar_rgb')
     ap.add_argument('--out', default='tools/reference/smallppm.exr')
+    ap.add_argument('--seed', type=int, default=1000, help='seed of the first pass')
+    ap.add_argument('--halves', action='store_true',
+                    help='also write the even and odd passes apart (OUT.half0.exr, .half1.exr)')
     a = ap.parse_args()
     mi.set_variant(a.variant)
     passes = max(1, a.spp // a.pass_spp)
@@ -86,8 +99,11 @@ def main():
     print(f'mask: {int(mask.sum())} of {mask.size} pixels see a diffuse surface', flush=True)
     # Even and odd passes apart: half their difference estimates the full image's noise.
     halves = [None, None]
+    first_pair = []
     for k in range(passes):
-        img = np.array(mi.render(sc, spp=a.pass_spp, seed=1000 + k), dtype=np.float64)
+        img = np.array(mi.render(sc, spp=a.pass_spp, seed=a.seed + k), dtype=np.float64)
+        if k < 2:
+            first_pair.append(img)
         h = k % 2
         halves[h] = img if halves[h] is None else halves[h] + img
         acc = halves[0] if halves[1] is None else halves[0] + halves[1]
@@ -98,6 +114,16 @@ def main():
             diff = (halves[0] - halves[1])[mask > 0.5] / n
             line += f'; noise RMSE on the mask about {np.sqrt(np.mean(diff ** 2)) / 2:.5f}'
         print(line, flush=True)
+    if a.halves and passes >= 2 and passes % 2 == 0:
+        n = passes // 2
+        stem = a.out[:-len('.exr')] if a.out.endswith('.exr') else a.out
+        for h in (0, 1):
+            mi.Bitmap((halves[h] / n).astype(np.float16)).write(f'{stem}.half{h}.exr')
+        on = mask > 0.5
+        var_pass = np.mean(((first_pair[0] - first_pair[1])[on]) ** 2) / 2
+        var_half = np.mean(((halves[0] - halves[1])[on] / n) ** 2) / 2
+        print(f'variance on the mask: one pass {var_pass:.4g}, one half ({n} passes) '
+              f'{var_half:.4g}, ratio {var_pass / var_half:.3f} ({n} for 1 / spp)', flush=True)
 
 
 if __name__ == '__main__':
