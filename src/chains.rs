@@ -7,9 +7,7 @@
 //! samples, but not their bias: each chain shrinks its own progressive radii over its own Iₖ
 //! iterations, so the radius bias of the merge stays that of a render of Iₖ iterations. The
 //! render knows the chain (`RenderOptions::chain`): a chain of `vcm`, `bpt` or `lt` first runs
-//! two warm-up passes it does not keep, and with `vcm`'s global shrink (not the default) chain
-//! k of N takes the radii of iterations k - 1, N + k - 1, ... of one render of all the chains'
-//! iterations (docs/farm.md).
+//! two warm-up passes it does not keep (docs/farm.md).
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};

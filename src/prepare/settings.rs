@@ -85,16 +85,6 @@ impl EffectiveSettings {
         self.chain
     }
 
-    /// The iteration of one render of every chain's iterations that this render's iteration
-    /// `iter` (from 0) stands for: `iter` itself outside chains, `iter·n + k - 1` in chain k
-    /// of n. The n chains' iterations are together each of that render's iterations once.
-    pub fn schedule_iteration(&self, iter: u32) -> u64 {
-        match self.chain {
-            Some((k, n)) => u64::from(iter) * u64::from(n) + u64::from(k.saturating_sub(1)),
-            None => u64::from(iter),
-        }
-    }
-
     /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.resolution.0
@@ -295,27 +285,6 @@ mod tests {
         let l =
             crate::eval::load_source("chain.scn", "sphere { <0, 0, 0>, 1 }", &Default::default());
         effective_settings(&l.scene.expect("a scene"), &options)
-    }
-
-    /// The iterations of chains 1..=n are together each iteration of one render once; a
-    /// render of its own keeps its numbering.
-    #[test]
-    fn chains_share_out_one_render_s_iterations() {
-        let alone = with_chain(None).unwrap();
-        assert_eq!(alone.schedule_iteration(5), 5);
-        let mut seen: Vec<u64> = (1..=3)
-            .flat_map(|k| {
-                let s = with_chain(Some((k, 3))).unwrap();
-                (0..4).map(move |i| s.schedule_iteration(i))
-            })
-            .collect();
-        seen.sort_unstable();
-        assert_eq!(seen, (0..12).collect::<Vec<u64>>());
-        let last = with_chain(Some((u32::MAX, u32::MAX))).unwrap();
-        assert_eq!(
-            last.schedule_iteration(u32::MAX),
-            u64::from(u32::MAX) * u64::from(u32::MAX) + u64::from(u32::MAX - 1)
-        );
     }
 
     #[test]

@@ -172,8 +172,8 @@ pub(super) fn radiance(
 }
 
 /// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
-/// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, this iteration's
-/// shrink and the pixel's scale (`pixel_radius.rs`) applied. Seen directly it is the straight footprint's, the same rule a light-traced
+/// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, the pixel's scale
+/// (`pixel_radius.rs`) applied. Seen directly it is the straight footprint's, the same rule a light-traced
 /// splat's weight uses at its vertex; through mirrors and glass the straight footprint over
 /// the path's length times the pixel's `ratio` (`common::footprint`), measured by neighbour
 /// rays retraced from `rng0` by the pixel's first camera path that passes a mirror or glass
@@ -217,8 +217,8 @@ pub(super) struct Radiance {
     pub(super) rest: Vec3A,
     /// The path left its first vertex by a delta bounce (a mirror, glass).
     pub(super) through_delta: bool,
-    /// The path's initial radius times its pixel's scale, before the iteration's shrink (0 if
-    /// it set none).
+    /// The path's initial radius times its pixel's scale, before `Vcm::radius_scale` (0 if it
+    /// set none).
     pub(super) r0: f64,
     /// The light vertices its first merge found within its radius (not the final gather's).
     pub(super) found: u32,

@@ -17,8 +17,7 @@
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
 //! surface, the footprint carried through mirrors and glass by `common::footprint`, measured
 //! once a pixel), times the pixel's own scale, which shrinks as SPPM's pixel radius does, by
-//! the light vertices its first camera path found (`pixel_radius.rs`; with `pixel_radius` off,
-//! by the iteration count instead, `r_i = r_0 i^((alpha - 1) / 2)`). The weights stay exact:
+//! the light vertices its first camera path found (`pixel_radius.rs`). The weights stay exact:
 //! a light vertex carries its quantities in parts that each camera path evaluates with its own
 //! radius (`mis.rs`), and a light-traced splat with the radius of a camera path that would
 //! see its vertex directly (with its pixel's scale). A pixel's scale changes only between
@@ -45,10 +44,7 @@
 //! without them a render's first two iterations are its noisiest (docs/measurements.md). A
 //! chain of a still (`render --chain k/n`) of any of the three methods does the same (every
 //! chain would pay those iterations again: docs/farm.md). `bpt` and `lt` renders of their own
-//! have none. With a radius per pixel (the default) a chain's pixels shrink their radii over its
-//! own iterations, as SPPM's do; with the global shrink (`Vcm::pixel_radius` off) iteration i
-//! of chain k takes the radius of the iteration it stands for in one render of all the chains'
-//! iterations (`EffectiveSettings::schedule_iteration`).
+//! have none. A chain's pixels shrink their radii over its own iterations, as SPPM's do.
 //!
 //! Determinism: light paths are seeded by their index, camera paths by their pixel, and the
 //! splats of each iteration are added in light-path order.
@@ -117,9 +113,6 @@ pub struct Vcm {
     pub mode: Mode,
     /// Multiplies the initial radius (tests shrink it toward zero).
     pub radius_scale: f64,
-    /// Each pixel's radius follows the light vertices it found, as SPPM's
-    /// (`pixel_radius.rs`), instead of the iteration count's shrink.
-    pub pixel_radius: bool,
 }
 
 impl Vcm {
@@ -127,7 +120,6 @@ impl Vcm {
         Self {
             mode,
             radius_scale: 1.0,
-            pixel_radius: true,
         }
     }
 }
@@ -216,7 +208,7 @@ impl Context<'_, '_, '_> {
 #[derive(Debug, Clone, Copy)]
 struct Radius {
     rule: InitialRadius,
-    /// `Vcm::radius_scale` times the iteration's shrink, `i^((alpha - 1) / 2)`.
+    /// `Vcm::radius_scale` (each pixel's shrink is its scale: `pixel_radius.rs`).
     factor: f64,
     /// Where the rule has no value: the one at the distance in focus, else 1e-3.
     fallback: f64,
@@ -280,7 +272,7 @@ impl Integrator for Vcm {
             .collect();
         let rule = settings.initial_radius(&scene.scene.camera);
         let fallback = rule.at(scene.camera.focus_distance()).unwrap_or(1e-3);
-        // The grid's radius before the iteration's shrink: the 90th percentile of the last
+        // The grid's radius before `Vcm::radius_scale`: the 90th percentile of the last
         // iteration's pixels' `r_0` (of their first camera path). Merges of a larger radius
         // read more cells; wider cells for all would slow every merge (the largest `r_0` is
         // 1.3-3x the median on the examples, the 90th percentile 1.05-1.45x).
@@ -301,25 +293,19 @@ impl Integrator for Vcm {
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
         // With merging, the light paths' count is measured (`light_count.rs`); else one a pixel.
         let mut light_count = LightCount::default();
-        let pixel_radius = self.pixel_radius && mode.use_vm;
-        let mut pixel_radii = PixelRadii::new(if pixel_radius { n_paths } else { 0 });
+        // Each pixel's radius shrinks by the light vertices it found (merging only: without
+        // it the radius enters no weight).
+        let mut pixel_radii = PixelRadii::new(if mode.use_vm { n_paths } else { 0 });
         // One pass: iteration `iter` of the streams of `seed`; `counted` passes feed the
-        // light-path count's pilot and the pixels' radii. Without a radius per pixel the
-        // global shrink follows the schedule's iteration `global`.
+        // light-path count's pilot and the pixels' radii.
         let mut pass_of = |iter: u32,
                            seed: u64,
-                           global: u64,
                            counted: bool,
                            stats: &mut RenderStats|
          -> Option<(Vec<Vec3A>, u64)> {
-            let shrink = if pixel_radius {
-                1.0
-            } else {
-                (global as f64 + 1.0).powf(0.5 * (settings.alpha - 1.0))
-            };
             let radius = Radius {
                 rule,
-                factor: self.radius_scale * shrink,
+                factor: self.radius_scale,
                 fallback,
             };
             let n_light = if mode.use_vm {
@@ -419,7 +405,7 @@ impl Integrator for Vcm {
             if mode.use_vm && counted {
                 light_count.observe(iter, &values);
             }
-            if pixel_radius && counted {
+            if mode.use_vm && counted {
                 pixel_radii.observe(&found, n_light, settings.alpha);
             }
             stats.camera_time += t_camera.elapsed();
@@ -437,19 +423,10 @@ impl Integrator for Vcm {
         progressive::render_means(job, |iter, stats| {
             if iter == 0 {
                 for w in 0..warm_up {
-                    pass_of(w, warm_seed, settings.schedule_iteration(0), false, stats)?;
+                    pass_of(w, warm_seed, false, stats)?;
                 }
             }
-            // With the global shrink, a chain's iterations take their radii from one render of
-            // all the chains' iterations (`EffectiveSettings::schedule_iteration`): merged, the
-            // chains have exactly that render's radii.
-            pass_of(
-                iter,
-                settings.seed,
-                settings.schedule_iteration(iter),
-                true,
-                stats,
-            )
+            pass_of(iter, settings.seed, true, stats)
         })
     }
 }
