@@ -11,7 +11,9 @@ use super::mis::{self, Factors, GatherAt, Parts};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
-use crate::integrators::common::{attenuate_inside, camera_roulette, medium_after, transmittance};
+use crate::integrators::common::{
+    attenuate_inside, camera_roulette_scaled, medium_after, refraction_scale, transmittance,
+};
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::{GATHER_RADIUS_FACTOR, InitialRadius, SurfaceHit};
@@ -40,6 +42,9 @@ struct State {
     prev_light: Option<u32>,
     /// The first bounce was non-specular (a lobe other than a delta one).
     first_diffuse: bool,
+    /// The product of the bounces' [`refraction_scale`]s: the roulette judges `beta` with
+    /// the refractions' `1 / eta^2` undone.
+    eta_scale: f32,
 }
 
 impl State {
@@ -91,6 +96,7 @@ pub(super) fn radiance(
         prev: ray.o,
         prev_light: None,
         first_diffuse: false,
+        eta_scale: 1.0,
     };
     let mut out = Radiance::default();
     // The first merge's count is the pixel's (`pixel_radius.rs`).
@@ -160,7 +166,8 @@ pub(super) fn radiance(
             break;
         }
         st.beta *= s.weight;
-        if !camera_roulette(&mut st.beta, st.len, rng) {
+        st.eta_scale *= refraction_scale(&bsdf, wo, s.wi);
+        if !camera_roulette_scaled(&mut st.beta, st.eta_scale, st.len, rng) {
             break;
         }
         st.prev = sh.hit.p;
