@@ -11,7 +11,7 @@ use glam::Vec3A;
 
 use super::common::direct::direct_lighting;
 use super::common::progressive;
-use super::common::{attenuate_inside, camera_roulette, medium_after};
+use super::common::{attenuate_inside, camera_roulette, medium_after, refraction_scale};
 use super::{Integrator, RenderOutput};
 use crate::camera::Camera;
 use crate::materials::TransportMode;
@@ -52,6 +52,9 @@ fn radiance(
     let mut camera_chain = true;
     // The absorption of the glass the path is inside (zero: none).
     let mut medium = Vec3A::ZERO;
+    // The product of the bounces' refraction scales: the roulette judges `beta` without
+    // the `1 / eta^2` of the glass the path is in.
+    let mut eta_scale = 1.0;
     for depth in 0..max_depth {
         let Some(sh) = scene.intersect(&ray, f32::INFINITY) else {
             // After a non-specular bounce the escaped direction was already counted by
@@ -77,7 +80,8 @@ fn radiance(
         specular_bounce = s.specular;
         camera_chain &= s.specular;
         beta *= s.weight;
-        if !camera_roulette(&mut beta, depth + 1, rng) {
+        eta_scale *= refraction_scale(&bsdf, wo, s.wi);
+        if !camera_roulette(&mut beta, eta_scale, depth + 1, rng) {
             break;
         }
         ray = scene.spawn_ray(sh.hit.p, sh.hit.n, s.wi);

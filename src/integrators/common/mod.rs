@@ -21,21 +21,16 @@ use crate::sampling::Rng;
 const ROULETTE_BOUNCES: u32 = 4;
 
 /// Russian roulette for a camera path after its `bounces`-th bounce, whose throughput is now
-/// `beta`: from the fourth bounce on, it ends with probability `1 - max(beta)` (at most 0.95)
-/// and survivors carry the difference. Returns whether the path goes on with a usable `beta`.
+/// `beta`: from the fourth bounce on, it ends with probability `1 - max(beta * eta_scale)` (at
+/// most 0.95) and survivors carry the difference. Returns whether the path goes on with a
+/// usable `beta`. `eta_scale` is the product of the path's [`refraction_scale`]s, which undoes
+/// the `1 / eta^2` a radiance path takes on entering glass (and gives back on leaving it), as
+/// pbrt's `etaScale` does. Judged on `beta` alone, a camera path inside glass would end with
+/// probability `1 - 1/eta^2` (0.56 at index 1.5) at every roulette there, though the light it
+/// carries is not smaller: on `crystal_tree` that doubled the variance of what the camera sees
+/// through the glass.
 #[inline]
-pub(crate) fn camera_roulette(beta: &mut Vec3A, bounces: u32, rng: &mut Rng) -> bool {
-    camera_roulette_scaled(beta, 1.0, bounces, rng)
-}
-
-/// [`camera_roulette`] judged on `beta * eta_scale`: `eta_scale` is the product of the
-/// path's [`refraction_scale`]s, which undoes the `1 / eta^2` a radiance path takes on
-/// entering glass (and gives back on leaving it), as pbrt's `etaScale` does. Judged on `beta`
-/// alone, a camera path inside glass would end with probability `1 - 1/eta^2` (0.56 at index
-/// 1.5) at every roulette there, though the light it carries is not smaller: on
-/// `crystal_tree` that doubled the variance of what the camera sees through the glass.
-#[inline]
-pub(crate) fn camera_roulette_scaled(
+pub(crate) fn camera_roulette(
     beta: &mut Vec3A,
     eta_scale: f32,
     bounces: u32,
@@ -156,7 +151,7 @@ pub(crate) fn medium_after(
 mod tests {
     use glam::{Vec2, Vec3A};
 
-    use super::{camera_roulette_scaled, refraction_scale};
+    use super::{camera_roulette, refraction_scale};
     use crate::materials::{Bsdf, Lobes, TransportMode};
     use crate::sampling::Rng;
 
@@ -217,9 +212,9 @@ mod tests {
         let n = 20_000;
         for _ in 0..n {
             let mut beta = Vec3A::splat(1.0 / 2.25);
-            plain += u32::from(camera_roulette_scaled(&mut beta, 1.0, 4, &mut rng));
+            plain += u32::from(camera_roulette(&mut beta, 1.0, 4, &mut rng));
             let mut beta = Vec3A::splat(1.0 / 2.25);
-            scaled += u32::from(camera_roulette_scaled(&mut beta, 2.25, 4, &mut rng));
+            scaled += u32::from(camera_roulette(&mut beta, 2.25, 4, &mut rng));
             assert!((beta.x - 1.0 / 2.25 / 0.95).abs() < 1e-6 || beta.x == 1.0 / 2.25);
         }
         let (plain, scaled) = (f64::from(plain) / n as f64, f64::from(scaled) / n as f64);

@@ -12,7 +12,7 @@ use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
 use crate::integrators::common::{
-    attenuate_inside, camera_roulette_scaled, medium_after, refraction_scale, transmittance,
+    attenuate_inside, camera_roulette, medium_after, refraction_scale, transmittance,
 };
 use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
@@ -167,7 +167,7 @@ pub(super) fn radiance(
         }
         st.beta *= s.weight;
         st.eta_scale *= refraction_scale(&bsdf, wo, s.wi);
-        if !camera_roulette_scaled(&mut st.beta, st.eta_scale, st.len, rng) {
+        if !camera_roulette(&mut st.beta, st.eta_scale, st.len, rng) {
             break;
         }
         st.prev = sh.hit.p;
