@@ -224,8 +224,7 @@ pub(super) struct Radiance {
     pub(super) rest: Vec3A,
     /// The path left its first vertex by a delta bounce (a mirror, glass).
     pub(super) through_delta: bool,
-    /// The path's initial radius times its pixel's scale, before `Vcm::radius_scale` (0 if it
-    /// set none).
+    /// The path's initial radius times its pixel's scale (0 if it set none).
     pub(super) r0: f64,
     /// The light vertices its first merge found within its radius (not the final gather's).
     pub(super) found: u32,

@@ -111,16 +111,11 @@ impl Mode {
 #[derive(Debug, Clone, Copy)]
 pub struct Vcm {
     pub mode: Mode,
-    /// Multiplies the initial radius (tests shrink it toward zero).
-    pub radius_scale: f64,
 }
 
 impl Vcm {
     pub fn new(mode: Mode) -> Self {
-        Self {
-            mode,
-            radius_scale: 1.0,
-        }
+        Self { mode }
     }
 }
 
@@ -208,8 +203,6 @@ impl Context<'_, '_, '_> {
 #[derive(Debug, Clone, Copy)]
 struct Radius {
     rule: InitialRadius,
-    /// `Vcm::radius_scale` (each pixel's shrink is its scale: `pixel_radius.rs`).
-    factor: f64,
     /// Where the rule has no value: the one at the distance in focus, else 1e-3.
     fallback: f64,
 }
@@ -225,7 +218,7 @@ impl Radius {
     }
 
     fn scaled(&self, r0: Option<f64>) -> f64 {
-        (r0.unwrap_or(self.fallback) * self.factor).max(1e-7)
+        r0.unwrap_or(self.fallback).max(1e-7)
     }
 }
 
@@ -272,7 +265,7 @@ impl Integrator for Vcm {
             .collect();
         let rule = settings.initial_radius(&scene.scene.camera);
         let fallback = rule.at(scene.camera.focus_distance()).unwrap_or(1e-3);
-        // The grid's radius before `Vcm::radius_scale`: the 90th percentile of the last
+        // The grid's radius: the 90th percentile of the last
         // iteration's pixels' `r_0` (of their first camera path). Merges of a larger radius
         // read more cells; wider cells for all would slow every merge (the largest `r_0` is
         // 1.3-3x the median on the examples, the 90th percentile 1.05-1.45x).
@@ -303,11 +296,7 @@ impl Integrator for Vcm {
                            counted: bool,
                            stats: &mut RenderStats|
          -> Option<(Vec<Vec3A>, u64)> {
-            let radius = Radius {
-                rule,
-                factor: self.radius_scale,
-                fallback,
-            };
+            let radius = Radius { rule, fallback };
             let n_light = if mode.use_vm {
                 light_count.light_paths(if counted { iter } else { 0 }, n_paths)
             } else {
