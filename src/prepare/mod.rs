@@ -96,6 +96,9 @@ pub struct PreparedScene<'a> {
     textured: Vec<bool>,
     /// Per material: whether it is glass, and its absorption where that is a constant.
     glass: Vec<GlassAbsorption>,
+    /// Whether any material may absorb inside (a glass whose absorption is not zero, or may
+    /// not be): where none does, every path's medium is zero ([`Self::absorbs`]).
+    absorbs: bool,
     /// Per material: for a bumped one, how far one object unit reaches in its height's
     /// pattern space ([`textures::bump::pattern_scale`], which sets the difference step);
     /// 1 otherwise.
@@ -496,6 +499,7 @@ impl<'a> PreparedScene<'a> {
                 })
                 .collect(),
             offset_floor: 0.0,
+            absorbs: false,
             isosurfaces,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
@@ -517,6 +521,11 @@ impl<'a> PreparedScene<'a> {
             },
             prim: 0,
         };
+        prepared.absorbs = prepared.glass.iter().any(|g| match g {
+            GlassAbsorption::NotGlass => false,
+            GlassAbsorption::Constant(sigma) => *sigma != Vec3A::ZERO,
+            GlassAbsorption::Textured | GlassAbsorption::Blended => true,
+        });
         prepared.const_lobes = scene
             .materials
             .iter()
@@ -676,6 +685,14 @@ impl<'a> PreparedScene<'a> {
             .map_or(usize::MAX, |&m| m as usize);
         matches!(self.scene.materials.get(m), Some(Material::Blend { .. }))
             && self.rough_parts.get(m) == Some(&true)
+    }
+
+    /// Whether some material may absorb light inside it (a glass with an absorption that is
+    /// not a constant zero). Where this is false, a path's medium is zero everywhere: no
+    /// absorption to track or apply.
+    #[inline]
+    pub fn absorbs(&self) -> bool {
+        self.absorbs
     }
 
     /// For a hit on glass, its absorption coefficient (zero for clear glass); `None` for any
