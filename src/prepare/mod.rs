@@ -7,6 +7,7 @@ use rayon::prelude::*;
 mod budget;
 mod bump;
 mod csg;
+mod emitters;
 mod instances;
 mod lights;
 mod method;
@@ -19,7 +20,7 @@ use crate::accel::{self, Bvh};
 use crate::camera::Camera;
 use crate::diag::Diagnostic;
 use crate::geometry::{Frame, Hit, Ray};
-use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light};
+use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light, PhotonSample};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
@@ -70,6 +71,8 @@ pub struct PreparedScene<'a> {
     pub prim_light: Vec<u32>,
     /// Boxes around the area lights' primitives ([`Self::may_hit_light`]).
     light_bounds: lights::LightBounds,
+    /// Per light: its photons' emitter where it is a rectangle ([`emitters::QuadEmitter`]).
+    quad_emitters: Vec<Option<emitters::QuadEmitter>>,
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
     /// How direct lighting chooses a light: by power, except a uniform background, which is
@@ -472,6 +475,7 @@ impl<'a> PreparedScene<'a> {
             prim_object,
             prim_light,
             light_bounds: lights::LightBounds::new(light_boxes),
+            quad_emitters: Vec::new(),
             objects,
             lights,
             light_distr,
@@ -521,6 +525,11 @@ impl<'a> PreparedScene<'a> {
             },
             prim: 0,
         };
+        prepared.quad_emitters = prepared
+            .lights
+            .iter()
+            .map(emitters::QuadEmitter::of)
+            .collect();
         prepared.absorbs = prepared.glass.iter().any(|g| match g {
             GlassAbsorption::NotGlass => false,
             GlassAbsorption::Constant(sigma) => *sigma != Vec3A::ZERO,
@@ -685,6 +694,16 @@ impl<'a> PreparedScene<'a> {
             .map_or(usize::MAX, |&m| m as usize);
         matches!(self.scene.materials.get(m), Some(Material::Blend { .. }))
             && self.rough_parts.get(m) == Some(&true)
+    }
+
+    /// A photon from light `li` ([`Light::sample_photon`]), for `u1` and `u2` in [0,1)^2.
+    /// A rectangle's photons come from its [`emitters::QuadEmitter`] (the same photons).
+    #[inline]
+    pub fn sample_photon(&self, li: usize, u1: glam::Vec2, u2: glam::Vec2) -> Option<PhotonSample> {
+        match self.quad_emitters.get(li) {
+            Some(Some(e)) => e.sample_photon(u1, u2),
+            _ => self.lights.get(li)?.sample_photon(u1, u2),
+        }
     }
 
     /// Whether some material may absorb light inside it (a glass with an absorption that is
