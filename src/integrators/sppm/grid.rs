@@ -537,8 +537,18 @@ impl LevelGrid {
             return;
         };
         let r2 = r * r;
-        for (lo, hi) in cells.bucket_runs(p, r) {
-            let (start, end) = (self.starts[lo as usize], self.starts[hi as usize]);
+        // Every run's entries are located and their first cache lines asked for before the
+        // first run is read, so that the runs' cache misses overlap (the entries themselves,
+        // and their order, are the runs').
+        let mut runs = cells.bucket_runs(p, r);
+        for run in &mut runs {
+            *run = (self.starts[run.0 as usize], self.starts[run.1 as usize]);
+            if run.0 < run.1 {
+                points::prefetch(&self.points, run.0 as usize);
+                points::prefetch(&self.flux, run.0 as usize);
+            }
+        }
+        for (start, end) in runs {
             points::within(&self.points, start as usize, end as usize, p, r2, |k| {
                 let (wi, beta) = self.flux[k];
                 f(wi.into(), beta.into());

@@ -27,6 +27,21 @@ pub(super) fn within(
     one_by_one(points, start, end, p, r2, f);
 }
 
+/// Asks the CPU to bring the cache line of `items[k]` in: a hint, which changes no result
+/// (nothing where `k` is out of range, or on a CPU other than x86-64).
+#[inline(always)]
+pub(super) fn prefetch<T>(items: &[T], k: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(item) = items.get(k) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch reads nothing into the program and cannot fault; the address is
+        // an element's.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>((item as *const T).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (items, k);
+}
+
 /// [`within`] one entry at a time, from `start` on (`end` at most the length of `points`).
 #[inline]
 fn one_by_one(
