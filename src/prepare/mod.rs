@@ -7,6 +7,7 @@ use rayon::prelude::*;
 mod budget;
 mod bump;
 mod csg;
+mod emitters;
 mod instances;
 mod lights;
 mod method;
@@ -19,7 +20,7 @@ use crate::accel::{self, Bvh};
 use crate::camera::Camera;
 use crate::diag::Diagnostic;
 use crate::geometry::{Frame, Hit, Ray};
-use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light};
+use crate::lights::{AreaLight, EnvironmentLight, GroundPhotons, Light, PhotonSample};
 use crate::materials::{Bsdf, Lobes, eval};
 use crate::sampling::PiecewiseConstant1D;
 use crate::scene::{self, ColorParam, Material, Scene};
@@ -70,6 +71,8 @@ pub struct PreparedScene<'a> {
     pub prim_light: Vec<u32>,
     /// Boxes around the area lights' primitives ([`Self::may_hit_light`]).
     light_bounds: lights::LightBounds,
+    /// Per light: its photons' emitter where it is a rectangle ([`emitters::QuadEmitter`]).
+    quad_emitters: Vec<Option<emitters::QuadEmitter>>,
     pub objects: Vec<ObjectInfo>,
     pub lights: Vec<Light>,
     /// How direct lighting chooses a light: by power, except a uniform background, which is
@@ -96,6 +99,9 @@ pub struct PreparedScene<'a> {
     textured: Vec<bool>,
     /// Per material: whether it is glass, and its absorption where that is a constant.
     glass: Vec<GlassAbsorption>,
+    /// Whether any material may absorb inside (a glass whose absorption is not zero, or may
+    /// not be): where none does, every path's medium is zero ([`Self::absorbs`]).
+    absorbs: bool,
     /// Per material: for a bumped one, how far one object unit reaches in its height's
     /// pattern space ([`textures::bump::pattern_scale`], which sets the difference step);
     /// 1 otherwise.
@@ -469,6 +475,7 @@ impl<'a> PreparedScene<'a> {
             prim_object,
             prim_light,
             light_bounds: lights::LightBounds::new(light_boxes),
+            quad_emitters: Vec::new(),
             objects,
             lights,
             light_distr,
@@ -496,6 +503,7 @@ impl<'a> PreparedScene<'a> {
                 })
                 .collect(),
             offset_floor: 0.0,
+            absorbs: false,
             isosurfaces,
         };
         // The scene's extent: its finite objects and its camera (infinite planes have none).
@@ -517,6 +525,16 @@ impl<'a> PreparedScene<'a> {
             },
             prim: 0,
         };
+        prepared.quad_emitters = prepared
+            .lights
+            .iter()
+            .map(emitters::QuadEmitter::of)
+            .collect();
+        prepared.absorbs = prepared.glass.iter().any(|g| match g {
+            GlassAbsorption::NotGlass => false,
+            GlassAbsorption::Constant(sigma) => *sigma != Vec3A::ZERO,
+            GlassAbsorption::Textured | GlassAbsorption::Blended => true,
+        });
         prepared.const_lobes = scene
             .materials
             .iter()
@@ -676,6 +694,24 @@ impl<'a> PreparedScene<'a> {
             .map_or(usize::MAX, |&m| m as usize);
         matches!(self.scene.materials.get(m), Some(Material::Blend { .. }))
             && self.rough_parts.get(m) == Some(&true)
+    }
+
+    /// A photon from light `li` ([`Light::sample_photon`]), for `u1` and `u2` in [0,1)^2.
+    /// A rectangle's photons come from its [`emitters::QuadEmitter`] (the same photons).
+    #[inline]
+    pub fn sample_photon(&self, li: usize, u1: glam::Vec2, u2: glam::Vec2) -> Option<PhotonSample> {
+        match self.quad_emitters.get(li) {
+            Some(Some(e)) => e.sample_photon(u1, u2),
+            _ => self.lights.get(li)?.sample_photon(u1, u2),
+        }
+    }
+
+    /// Whether some material may absorb light inside it (a glass with an absorption that is
+    /// not a constant zero). Where this is false, a path's medium is zero everywhere: no
+    /// absorption to track or apply.
+    #[inline]
+    pub fn absorbs(&self) -> bool {
+        self.absorbs
     }
 
     /// For a hit on glass, its absorption coefficient (zero for clear glass); `None` for any

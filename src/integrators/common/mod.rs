@@ -76,6 +76,10 @@ pub(crate) fn attenuate_inside(
     medium: Vec3A,
     beta: &mut Vec3A,
 ) {
+    // No material absorbs: the medium is zero and every glass clear.
+    if !scene.absorbs() {
+        return;
+    }
     let inner_side = ray.d.dot(sh.hit.n) > 0.0;
     // Outside every glass and arriving from the outer side (most segments): nothing absorbs.
     // Checked inline; the rest is a call.
@@ -135,6 +139,10 @@ pub(crate) fn medium_after(
     wi: Vec3A,
     medium: Vec3A,
 ) -> Vec3A {
+    // No material absorbs: every glass's absorption is zero, as the medium is.
+    if !scene.absorbs() {
+        return medium;
+    }
     let n = sh.hit.n;
     let (o, i) = (wo.dot(n), wi.dot(n));
     if o * i >= 0.0 {

@@ -37,7 +37,7 @@ pub(crate) fn trace_classified_photon(
     };
     let (u1, u2) = (rng.vec2(), rng.vec2());
     let (mut ray, mut beta, mut all_specular, first) = if li < scene.lights.len() {
-        let Some(ps) = scene.lights[li].sample_photon(u1, u2) else {
+        let Some(ps) = scene.sample_photon(li, u1, u2) else {
             return;
         };
         // An environment photon starts on a disk just outside the finite shapes, not at

@@ -11,7 +11,8 @@
 //! The cells are a little over `r_max` wide, so the photons within `r <= r_max` of a point lie
 //! in the (at most) 3x3x3 cells that meet the cube of half-width `r` around it. A photon is stored once per level (below), in the cell
 //! that holds it; the entries of a bucket are contiguous, positions (all the distance test
-//! reads) in one array and the photon's direction and flux in a parallel one.
+//! reads, four entries at a time: `grid/points.rs`) in one array and the photon's direction
+//! and flux in a parallel one.
 //!
 //! Radii can span orders of magnitude (each pixel's radius follows the distance to its visible
 //! point: an infinite floor seen up to the horizon). Cells sized by the largest radius would
@@ -536,17 +537,26 @@ impl LevelGrid {
             return;
         };
         let r2 = r * r;
-        for (lo, hi) in cells.bucket_runs(p, r) {
-            let (start, end) = (self.starts[lo as usize], self.starts[hi as usize]);
-            for k in start as usize..end as usize {
-                if (self.points[k] - p).length_squared() <= r2 {
-                    let (wi, beta) = self.flux[k];
-                    f(wi.into(), beta.into());
-                }
+        // Every run's entries are located and their first cache lines asked for before the
+        // first run is read, so that the runs' cache misses overlap (the entries themselves,
+        // and their order, are the runs').
+        let mut runs = cells.bucket_runs(p, r);
+        for run in &mut runs {
+            *run = (self.starts[run.0 as usize], self.starts[run.1 as usize]);
+            if run.0 < run.1 {
+                points::prefetch(&self.points, run.0 as usize);
+                points::prefetch(&self.flux, run.0 as usize);
             }
+        }
+        for (start, end) in runs {
+            points::within(&self.points, start as usize, end as usize, p, r2, |k| {
+                let (wi, beta) = self.flux[k];
+                f(wi.into(), beta.into());
+            });
         }
     }
 }
 
+mod points;
 #[cfg(test)]
 mod tests;
