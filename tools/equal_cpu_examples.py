@@ -158,8 +158,8 @@ def mse(img, ref, ys, xs, mask=None):
 
 
 def example(a, name, methods):
-    """Renders what the cache lacks for one example; returns {method: [per-seed result]} and
-    the reference noise per region."""
+    """Renders what the cache lacks for one example; returns ({method: [per-seed result]},
+    the calibrations, the budget, the width rendered at)."""
     scene = f"examples/{name}.scn"
     d = os.path.join(a.cache, name)
     os.makedirs(d, exist_ok=True)
@@ -170,8 +170,9 @@ def example(a, name, methods):
     if ext:
         ref, mask, noise, width = external_reference(a, ext)
         h, w = ref.shape[:2]
-        zero = np.zeros_like(noise)
-        ref_noise = {rn: mse(noise, zero, ys, xs, mask) for rn, ys, xs in regions(h, w)}
+        # `noise` is already each pixel's variance: its mean over a region's masked pixels.
+        ref_noise = {rn: float(np.mean(noise[ys, xs][mask[ys, xs]]))
+                     for rn, ys, xs in regions(h, w)}
     else:
         if not all(os.path.exists(r) for r in refs):
             cal = calibrate(a, scene, "path", refs[0])
@@ -184,8 +185,9 @@ def example(a, name, methods):
         ref = 0.5 * (r0 + r1)
         h, w = ref.shape[:2]
         ref_noise = {rn: mse(r0, r1, ys, xs) / 4 for rn, ys, xs in regions(h, w)}
-    # Results measured against another reference (an older run's) are rendered again.
-    ref_kind = ext["image"] if ext else "path"
+    # Results measured against another reference (an older run's, another width, an older
+    # noise estimate) are rendered again.
+    ref_kind = f"{ext['image']}#noise-mean#{width}" if ext else "path"
     if width != a.width:
         print(f"{name}: rendered at the reference's width {width}", file=sys.stderr)
     cals = meta.get("calibration", {})
@@ -233,7 +235,7 @@ def example(a, name, methods):
                 n = max(1, int(round((budget - fixed_m) * n / (cpu - fixed_m))))
         print(f"{name} {m}: {n} it., CPU-s "
               + " ".join(f"{r['cpu']:.1f}" for r in results[m]), file=sys.stderr)
-    return results, cals, budget
+    return results, cals, budget, width
 
 
 def scaled(res, region, budget, fixed):
@@ -305,8 +307,10 @@ def main():
     for name, got in zip(names, done):
         if got is None:
             continue
-        results, cals, budget = got
-        if "vcm" not in results or not all(m in results for m in others):
+        results, cals, budget, width = got
+        if "vcm" not in results or not all(results.get(m) for m in methods):
+            print(f"{name}: not in the table (a method was refused or rendered no seed)",
+                  file=sys.stderr)
             continue
         for rn in ["whole", "top left", "top right", "bottom left", "bottom right"]:
             per = {m: [scaled(r, rn, budget, cals[m][0]) for r in results[m]] for m in methods}
@@ -320,7 +324,8 @@ def main():
                                  for m in others) else "tie"
             key = "whole" if rn == "whole" else "regions"
             tally[key][v] = tally[key].get(v, 0) + 1
-            label = f"{name} (masked, {EXTERNAL[name]['image']})" if name in EXTERNAL else name
+            label = (f"{name} (masked, {EXTERNAL[name]['image']}, {width} px)"
+                     if name in EXTERNAL else name)
             lines.append(f"| {label if rn == 'whole' else ''} | "
                          f"{budget:.1f} | {rn} | " if rn == "whole" else f"| | | {rn} | ")
             lines[-1] += (" | ".join(f"{rm[m]:.4g}" for m in methods)

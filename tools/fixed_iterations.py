@@ -48,6 +48,10 @@ def main():
     if len(seeds) < 2:
         sys.exit("two seeds at least (the standard error)")
     d = os.path.join(a.cache, a.example)
+    if not all(os.path.exists(os.path.join(d, f"ref{k}.exr")) for k in (0, 1)):
+        sys.exit(f"{d} holds no path reference (ref0.exr, ref1.exr): an example that "
+                 "equal_cpu_examples.py compares with a committed reference (smallppm) is not "
+                 "measured here")
     r0, r1 = read_exr(os.path.join(d, "ref0.exr")), read_exr(os.path.join(d, "ref1.exr"))
     ref, ref_noise = (r0 + r1) / 2, np.mean((r0 - r1) ** 2) / 4
     scene = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples",

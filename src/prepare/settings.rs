@@ -34,10 +34,8 @@ pub struct RenderOptions {
     /// render's passes stop as for their own cancel flag.
     pub cancel: crate::cancel::Cancel,
     /// `(k, n)`: the render is chain k of n of one still (`render --chain k/n`, its seed already
-    /// the chain's own). `vcm`, `bpt` and `lt` chains then run two warm-up passes they do not
-    /// keep, and `vcm` with its global shrink (not the default) takes its radii from one render
-    /// of the n chains' iterations in all (iteration i of chain k has that render's iteration
-    /// i·n + k - 1). `None`: a render of its own.
+    /// the chain's own). `bpt` and `lt` chains then run two warm-up passes they do not keep,
+    /// as every `vcm` render does. `None`: a render of its own.
     pub chain: Option<(u32, u32)>,
 }
 

@@ -89,7 +89,7 @@ pub(super) fn radiance(
         q: Parts::camera(ctx.light_paths, pdf_camera),
         specular: true,
         distance: 0.0,
-        factors: ctx.factors(ctx.radius.scaled(None)),
+        factors: ctx.factors(ctx.radius.or_fallback(None)),
         radius: 0.0,
         vm_normalization: 0.0,
         medium: Vec3A::ZERO,
@@ -180,8 +180,8 @@ pub(super) fn radiance(
 
 /// Sets the camera path's radius at its first non-specular vertex, `st.distance` along it:
 /// SPPM's initial radius (`r_0`) for a pixel whose camera path this is, the pixel's scale
-/// (`pixel_radius.rs`) applied. Seen directly it is the straight footprint's, the same rule a light-traced
-/// splat's weight uses at its vertex; through mirrors and glass the straight footprint over
+/// (`pixel_radius.rs`) applied. Seen directly it is the straight footprint's, the same rule a
+/// light-traced splat's weight uses at its vertex; through mirrors and glass the straight footprint over
 /// the path's length times the pixel's `ratio` (`common::footprint`), measured by neighbour
 /// rays retraced from `rng0` by the pixel's first camera path that passes a mirror or glass
 /// and kept, as SPPM keeps its pixel's radius (for merging only: without it the radius enters
@@ -209,7 +209,7 @@ fn set_radius(
     }
     .unwrap_or(ctx.radius.fallback)
         * ctx.pixel_scale((pixel.1 * ctx.settings.resolution.0 + pixel.0) as usize);
-    let r = ctx.radius.scaled(Some(r0));
+    let r = ctx.radius.or_fallback(Some(r0));
     st.factors = ctx.factors(r);
     st.radius = r as f32;
     st.vm_normalization = (1.0 / (std::f64::consts::PI * r * r * ctx.light_paths)) as f32;

@@ -199,7 +199,8 @@ impl Context<'_, '_, '_> {
     }
 }
 
-/// The radius rule of one iteration.
+/// The merge radius rule: the initial radius of a camera path from what it sees (a pixel's
+/// shrink is applied by the caller, `pixel_radius.rs`).
 #[derive(Debug, Clone, Copy)]
 struct Radius {
     rule: InitialRadius,
@@ -208,16 +209,17 @@ struct Radius {
 }
 
 impl Radius {
-    /// This iteration's radius of a camera path of a pixel whose radius scale is `scale` that
-    /// sees a point `distance` from the lens directly (the footprint rule's straight ray): a
-    /// light-traced splat's, computed as the camera path's own (`camera_path::set_radius`).
+    /// The radius of a camera path of a pixel whose radius scale is `scale` that sees a point
+    /// `distance` from the lens directly (the footprint rule's straight ray): a light-traced
+    /// splat's, computed as the camera path's own (`camera_path::set_radius`).
     fn at(&self, distance: f64, scale: f64) -> f64 {
-        self.scaled(Some(
+        self.or_fallback(Some(
             self.rule.at(distance).unwrap_or(self.fallback) * scale,
         ))
     }
 
-    fn scaled(&self, r0: Option<f64>) -> f64 {
+    /// `r0`, or the fallback where there is none, kept above 1e-7.
+    fn or_fallback(&self, r0: Option<f64>) -> f64 {
         r0.unwrap_or(self.fallback).max(1e-7)
     }
 }
@@ -265,10 +267,10 @@ impl Integrator for Vcm {
             .collect();
         let rule = settings.initial_radius(&scene.scene.camera);
         let fallback = rule.at(scene.camera.focus_distance()).unwrap_or(1e-3);
-        // The grid's radius: the 90th percentile of the last
-        // iteration's pixels' `r_0` (of their first camera path). Merges of a larger radius
-        // read more cells; wider cells for all would slow every merge (the largest `r_0` is
-        // 1.3-3x the median on the examples, the 90th percentile 1.05-1.45x).
+        // The grid's radius: the 90th percentile of the last iteration's pixels' `r_0` (of
+        // their first camera path). Merges of a larger radius read more cells; wider cells
+        // for all would slow every merge (the largest `r_0` is 1.3-3x the median on the
+        // examples, the 90th percentile 1.05-1.45x).
         let mut grid_r0 = fallback;
         let mut r0s = Vec::with_capacity(n_paths);
         let mode = self.mode;
@@ -291,12 +293,12 @@ impl Integrator for Vcm {
         let mut pixel_radii = PixelRadii::new(if mode.use_vm { n_paths } else { 0 });
         // One pass: iteration `iter` of the streams of `seed`; `counted` passes feed the
         // light-path count's pilot and the pixels' radii.
+        let radius = Radius { rule, fallback };
         let mut pass_of = |iter: u32,
                            seed: u64,
                            counted: bool,
                            stats: &mut RenderStats|
          -> Option<(Vec<Vec3A>, u64)> {
-            let radius = Radius { rule, fallback };
             let n_light = if mode.use_vm {
                 light_count.light_paths(if counted { iter } else { 0 }, n_paths)
             } else {
@@ -322,7 +324,7 @@ impl Integrator for Vcm {
             if !pass.run(&ctx, n_light, n_paths, seed, iter, cancel) {
                 return None;
             }
-            let grid_radius = radius.scaled(Some(grid_r0));
+            let grid_radius = radius.or_fallback(Some(grid_r0));
             let has_grid = mode.use_vm && pass.grid.build(&pass.positions, grid_radius as f32);
             let gather_radius = (grid_radius * GATHER_RADIUS_FACTOR) as f32;
             let has_gather = gather && pass.gather_grid.build(&pass.positions, gather_radius);
