@@ -206,10 +206,13 @@ impl Leaves {
 
     /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
     /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]).
+    /// `lanes` is `ray` as `test` set it up for the triangle packets, once per query.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn closest<P: PairTest>(
         &self,
         test: P,
+        lanes: &P::Lanes,
         leaf: u32,
         ray: &Ray,
         t_min: f32,
@@ -218,8 +221,8 @@ impl Leaves {
     ) {
         if leaf & PACKETS != 0 {
             let hit = match self.direct_packets(leaf) {
-                Ok(packet) => packet.hit_t(ray, t_min, *t_max),
-                Err(pair) => test.pair_hit_t(pair, ray, t_min, *t_max),
+                Ok(packet) => test.packet_hit_t(lanes, packet, ray, t_min, *t_max),
+                Err(pair) => test.pair_hit_t(lanes, pair, ray, t_min, *t_max),
             };
             if let Some((g, t, b)) = hit {
                 *t_max = t;
@@ -231,7 +234,7 @@ impl Leaves {
         }
         let leaf = &self.leaves[leaf as usize];
         for packet in self.triangle_packets(leaf) {
-            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
+            if let Some((g, t, b)) = test.packet_hit_t(lanes, packet, ray, t_min, *t_max) {
                 *t_max = t;
                 c.triangle = g;
                 c.bary = b;
@@ -274,11 +277,13 @@ impl Leaves {
     }
 
     /// Whether anything in the leaf referenced by `leaf` is hit with `t_min < t < t_max`.
-    /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]).
+    /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]);
+    /// `lanes` is `ray` as `test` set it up for the triangle packets, once per query.
     #[inline(always)]
     pub(super) fn occluded<P: PairTest>(
         &self,
         test: P,
+        lanes: &P::Lanes,
         leaf: u32,
         ray: &Ray,
         t_min: f32,
@@ -287,8 +292,8 @@ impl Leaves {
         use crate::shapes::Shape;
         if leaf & PACKETS != 0 {
             return match self.direct_packets(leaf) {
-                Ok(packet) => packet.occluded(ray, t_min, t_max),
-                Err(pair) => test.pair_occluded(pair, ray, t_min, t_max),
+                Ok(packet) => test.packet_occluded(lanes, packet, ray, t_min, t_max),
+                Err(pair) => test.pair_occluded(lanes, pair, ray, t_min, t_max),
             };
         }
         let leaf = &self.leaves[leaf as usize];
@@ -296,7 +301,7 @@ impl Leaves {
         let end = leaf.shapes as usize + leaf.count as usize;
         self.triangle_packets(leaf)
             .iter()
-            .any(|p| p.occluded(ray, t_min, t_max))
+            .any(|p| test.packet_occluded(lanes, p, ray, t_min, t_max))
             || self
                 .quad_packets(leaf)
                 .iter()
