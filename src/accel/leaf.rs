@@ -232,9 +232,25 @@ impl Leaves {
             }
             return;
         }
+        self.closest_in_record(leaf, ray, t_min, t_max, c);
+    }
+
+    /// [`Leaves::closest`] for a leaf with a [`Leaf`] record (shapes, quads, or more than two
+    /// triangle packets), out of line: inlined, its tests' set-up (the quad packets' broadcasts
+    /// of the ray among it) was hoisted into every query of the traversal, for leaves that a
+    /// tree of mesh triangles alone never has.
+    #[inline(never)]
+    fn closest_in_record(
+        &self,
+        leaf: u32,
+        ray: &Ray,
+        t_min: f32,
+        t_max: &mut f32,
+        c: &mut Closest,
+    ) {
         let leaf = &self.leaves[leaf as usize];
         for packet in self.triangle_packets(leaf) {
-            if let Some((g, t, b)) = test.packet_hit_t(lanes, packet, ray, t_min, *t_max) {
+            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
                 *t_max = t;
                 c.triangle = g;
                 c.bary = b;
@@ -289,19 +305,26 @@ impl Leaves {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        use crate::shapes::Shape;
         if leaf & PACKETS != 0 {
             return match self.direct_packets(leaf) {
                 Ok(packet) => test.packet_occluded(lanes, packet, ray, t_min, t_max),
                 Err(pair) => test.pair_occluded(lanes, pair, ray, t_min, t_max),
             };
         }
+        self.occluded_in_record(leaf, ray, t_min, t_max)
+    }
+
+    /// [`Leaves::occluded`] for a leaf with a [`Leaf`] record, out of line as
+    /// [`Leaves::closest_in_record`].
+    #[inline(never)]
+    fn occluded_in_record(&self, leaf: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        use crate::shapes::Shape;
         let leaf = &self.leaves[leaf as usize];
         let start = leaf.shapes as usize + leaf.quads as usize;
         let end = leaf.shapes as usize + leaf.count as usize;
         self.triangle_packets(leaf)
             .iter()
-            .any(|p| test.packet_occluded(lanes, p, ray, t_min, t_max))
+            .any(|p| p.occluded(ray, t_min, t_max))
             || self
                 .quad_packets(leaf)
                 .iter()
