@@ -232,45 +232,12 @@ impl Leaves {
             }
             return;
         }
-        self.closest_in_record(leaf, ray, t_min, t_max, c);
-    }
-
-    /// [`Leaves::closest`] for a leaf with a [`Leaf`] record (shapes, quads, or more than two
-    /// triangle packets), out of line: inlined, its tests' set-up (the quad packets' broadcasts
-    /// of the ray among it) was hoisted into every query of the traversal, for leaves that a
-    /// tree of mesh triangles alone never has.
-    #[inline(never)]
-    fn closest_in_record(
-        &self,
-        leaf: u32,
-        ray: &Ray,
-        t_min: f32,
-        t_max: &mut f32,
-        c: &mut Closest,
-    ) {
         let leaf = &self.leaves[leaf as usize];
-        for packet in self.triangle_packets(leaf) {
-            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
-                *t_max = t;
-                c.triangle = g;
-                c.bary = b;
-                c.shape = usize::MAX;
-            }
+        if leaf.tris != 0 || leaf.quads != 0 {
+            self.closest_packets_in_record(leaf, ray, t_min, t_max, c);
         }
-        if leaf.count == 0 {
-            return;
-        }
-        let start = leaf.shapes as usize;
-        let end = start + leaf.count as usize;
-        for (p, packet) in self.quad_packets(leaf).iter().enumerate() {
-            if let Some((lane, t)) = packet.hit_t(ray, t_min, *t_max) {
-                *t_max = t;
-                c.shape = start + 4 * p + lane;
-                c.triangle = u32::MAX;
-                c.boxed = None;
-            }
-        }
-        let rest = start + leaf.quads as usize;
+        let rest = leaf.shapes as usize + leaf.quads as usize;
+        let end = leaf.shapes as usize + leaf.count as usize;
         for (k, s) in self.shapes[rest..end].iter().enumerate() {
             match s.analytic_t(ray, t_min, *t_max) {
                 Ok(Some(t)) => {
@@ -288,6 +255,40 @@ impl Leaves {
                         c.boxed = Some(h);
                     }
                 }
+            }
+        }
+    }
+
+    /// The packets of a leaf with a [`Leaf`] record (its triangle packets, then its quad
+    /// packets) for [`Leaves::closest`], out of line: inlined, their set-up (the quad
+    /// packets' broadcasts of the ray among it) was hoisted into every query of the
+    /// traversal, for leaves that a tree of mesh triangles alone never has. (The leaf's other
+    /// shapes stay inline: out of line, a call per leaf cost a tree of spheres 3 % more
+    /// instructions, see docs/measurements.md.)
+    #[inline(never)]
+    fn closest_packets_in_record(
+        &self,
+        leaf: &Leaf,
+        ray: &Ray,
+        t_min: f32,
+        t_max: &mut f32,
+        c: &mut Closest,
+    ) {
+        for packet in self.triangle_packets(leaf) {
+            if let Some((g, t, b)) = packet.hit_t(ray, t_min, *t_max) {
+                *t_max = t;
+                c.triangle = g;
+                c.bary = b;
+                c.shape = usize::MAX;
+            }
+        }
+        let start = leaf.shapes as usize;
+        for (p, packet) in self.quad_packets(leaf).iter().enumerate() {
+            if let Some((lane, t)) = packet.hit_t(ray, t_min, *t_max) {
+                *t_max = t;
+                c.shape = start + 4 * p + lane;
+                c.triangle = u32::MAX;
+                c.boxed = None;
             }
         }
     }
@@ -311,17 +312,24 @@ impl Leaves {
                 Err(pair) => test.pair_occluded(lanes, pair, ray, t_min, t_max),
             };
         }
-        self.occluded_in_record(leaf, ray, t_min, t_max)
-    }
-
-    /// [`Leaves::occluded`] for a leaf with a [`Leaf`] record, out of line as
-    /// [`Leaves::closest_in_record`].
-    #[inline(never)]
-    fn occluded_in_record(&self, leaf: u32, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         use crate::shapes::Shape;
         let leaf = &self.leaves[leaf as usize];
+        if (leaf.tris != 0 || leaf.quads != 0)
+            && self.occluded_packets_in_record(leaf, ray, t_min, t_max)
+        {
+            return true;
+        }
         let start = leaf.shapes as usize + leaf.quads as usize;
         let end = leaf.shapes as usize + leaf.count as usize;
+        self.shapes[start..end]
+            .iter()
+            .any(|s| s.occluded(ray, t_min, t_max))
+    }
+
+    /// The packets of a leaf with a [`Leaf`] record for [`Leaves::occluded`], out of line as
+    /// [`Leaves::closest_packets_in_record`].
+    #[inline(never)]
+    fn occluded_packets_in_record(&self, leaf: &Leaf, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.triangle_packets(leaf)
             .iter()
             .any(|p| p.occluded(ray, t_min, t_max))
@@ -329,9 +337,6 @@ impl Leaves {
                 .quad_packets(leaf)
                 .iter()
                 .any(|p| p.occluded(ray, t_min, t_max))
-            || self.shapes[start..end]
-                .iter()
-                .any(|s| s.occluded(ray, t_min, t_max))
     }
 
     pub(super) fn memory_bytes(&self) -> usize {
