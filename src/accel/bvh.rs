@@ -441,6 +441,7 @@ impl Bvh {
             return best;
         }
         let boxes = BoxRay::new(ray);
+        let lanes = test.lanes(ray);
         // Children still to visit, with their entry distances.
         let mut stack = Stack::<(u32, f32), STACK>::new();
         let mut c = Closest::NONE;
@@ -448,7 +449,7 @@ impl Bvh {
         loop {
             if cur & LEAF != 0 {
                 self.leaves
-                    .closest(test, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
+                    .closest(test, &lanes, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
             } else {
                 let node = self.node(cur);
                 let (mask, near) = test.hit(node, &boxes, t_min, t_max);
@@ -572,11 +573,15 @@ impl Bvh {
             return false;
         }
         let boxes = BoxRay::new(ray);
+        let lanes = test.plain_lanes(ray);
         let mut stack = Stack::<u32, STACK>::new();
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                if self.leaves.occluded(test, cur & !LEAF, ray, t_min, t_max) {
+                if self
+                    .leaves
+                    .occluded(test, &lanes, cur & !LEAF, ray, t_min, t_max)
+                {
                     return true;
                 }
             } else {

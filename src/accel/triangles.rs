@@ -63,6 +63,19 @@ impl TrianglePacket {
     fn hits(&self, ray: &Ray, t_min: f32, t_max: f32) -> (BVec4A, Vec4, [Vec4; 2]) {
         let d = [ray.d.x, ray.d.y, ray.d.z].map(Vec4::splat);
         let o = [ray.o.x, ray.o.y, ray.o.z].map(Vec4::splat);
+        self.hits_with(&d, &o, t_min, t_max)
+    }
+
+    /// [`TrianglePacket::hits`] with the ray's direction `d` and origin `o` already broadcast.
+    #[inline(always)]
+    fn hits_with(
+        &self,
+        d: &[Vec4; 3],
+        o: &[Vec4; 3],
+        t_min: f32,
+        t_max: f32,
+    ) -> (BVec4A, Vec4, [Vec4; 2]) {
+        let d = *d;
         let pv = cross4(&d, &self.e2);
         let det = dot4(&self.e1, &pv);
         let inv = Vec4::ONE / det;
@@ -89,7 +102,12 @@ impl TrianglePacket {
     /// keep).
     #[inline]
     pub(crate) fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, f32, [f32; 2])> {
-        let (mask, t, b) = self.hits(ray, t_min, t_max);
+        self.nearest(self.hits(ray, t_min, t_max))
+    }
+
+    /// The nearest of the lanes `hits` returned (see [`TrianglePacket::hit_t`]).
+    #[inline(always)]
+    fn nearest(&self, (mask, t, b): (BVec4A, Vec4, [Vec4; 2])) -> Option<(u32, f32, [f32; 2])> {
         if !mask.any() {
             return None;
         }
@@ -114,10 +132,48 @@ impl TrianglePacket {
 ///
 /// [`Halves`]: super::wide::Halves
 /// [`Avx`]: super::wide::Avx
+///
+/// A traversal sets the ray up for the leaf tests once per query ([`PairTest::lanes`]), and
+/// both tests, of one packet and of two, take their broadcasts of the ray from it: where the
+/// CPU has AVX, the four-lane test reads the low halves of the eight-lane test's registers
+/// (each set of broadcasts was otherwise made and spilled twice per query).
 pub(crate) trait PairTest: Copy {
+    /// The ray as the leaf tests take it.
+    type Lanes;
+
+    /// Sets `ray` up for the leaf tests, one set of broadcasts for both (the closest-hit
+    /// traversal's set-up).
+    fn lanes(self, ray: &Ray) -> Self::Lanes;
+
+    /// Sets `ray` up for the leaf tests, leaving the compiler free to broadcast it again
+    /// for each test (the any-hit traversal's set-up: its loop keeps the broadcasts in
+    /// registers, and sharing them cost it about 1 % more instructions).
+    fn plain_lanes(self, ray: &Ray) -> Self::Lanes;
+
+    /// [`TrianglePacket::hit_t`], the same bits.
+    fn packet_hit_t(
+        self,
+        lanes: &Self::Lanes,
+        packet: &TrianglePacket,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])>;
+
+    /// [`TrianglePacket::occluded`].
+    fn packet_occluded(
+        self,
+        lanes: &Self::Lanes,
+        packet: &TrianglePacket,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool;
+
     /// The nearest hit in `pair` with `t_min < t < t_max`, as [`TrianglePacket::hit_t`].
     fn pair_hit_t(
         self,
+        lanes: &Self::Lanes,
         pair: &[TrianglePacket; 2],
         ray: &Ray,
         t_min: f32,
@@ -125,13 +181,53 @@ pub(crate) trait PairTest: Copy {
     ) -> Option<(u32, f32, [f32; 2])>;
 
     /// Whether any triangle of `pair` is hit with `t_min < t < t_max`.
-    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool;
+    fn pair_occluded(
+        self,
+        lanes: &Self::Lanes,
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool;
 }
 
 impl PairTest for super::wide::Halves {
+    type Lanes = ();
+
+    #[inline(always)]
+    fn lanes(self, _: &Ray) {}
+
+    #[inline(always)]
+    fn plain_lanes(self, _: &Ray) {}
+
+    #[inline(always)]
+    fn packet_hit_t(
+        self,
+        _: &(),
+        packet: &TrianglePacket,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(u32, f32, [f32; 2])> {
+        packet.hit_t(ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn packet_occluded(
+        self,
+        _: &(),
+        packet: &TrianglePacket,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        packet.occluded(ray, t_min, t_max)
+    }
+
     #[inline(always)]
     fn pair_hit_t(
         self,
+        _: &(),
         pair: &[TrianglePacket; 2],
         ray: &Ray,
         t_min: f32,
@@ -143,171 +239,130 @@ impl PairTest for super::wide::Halves {
     }
 
     #[inline(always)]
-    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    fn pair_occluded(
+        self,
+        _: &(),
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         pair.iter().any(|p| p.occluded(ray, t_min, t_max))
     }
 }
 
+/// The ray as the AVX leaf tests take it.
+#[cfg(target_arch = "x86_64")]
+type AvxLanes = avx::Lanes;
+#[cfg(not(target_arch = "x86_64"))]
+type AvxLanes = ();
+
 impl PairTest for super::wide::Avx {
+    type Lanes = AvxLanes;
+
     #[inline(always)]
-    fn pair_hit_t(
-        self,
-        pair: &[TrianglePacket; 2],
-        ray: &Ray,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<(u32, f32, [f32; 2])> {
+    fn lanes(self, ray: &Ray) -> AvxLanes {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: an `Avx` value is made only after AVX was detected.
-            unsafe { avx::hit_t(pair, ray, t_min, t_max) }
+            unsafe { avx::lanes(ray) }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        super::wide::Halves.pair_hit_t(pair, ray, t_min, t_max)
+        let _ = ray;
     }
 
     #[inline(always)]
-    fn pair_occluded(self, pair: &[TrianglePacket; 2], ray: &Ray, t_min: f32, t_max: f32) -> bool {
+    fn plain_lanes(self, ray: &Ray) -> AvxLanes {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: as above.
-            unsafe { avx::hits(pair, ray, t_min, t_max).0 != 0 }
+            unsafe { avx::plain_lanes(ray) }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        super::wide::Halves.pair_occluded(pair, ray, t_min, t_max)
+        let _ = ray;
     }
-}
 
-/// Two packets as eight AVX lanes: the operations of [`TrianglePacket::hits`], in the same
-/// order, with comparisons of the same NaN behaviour, so each lane gives the same bits.
-#[cfg(target_arch = "x86_64")]
-mod avx {
-    use std::arch::x86_64::*;
-
-    use super::TrianglePacket;
-    use crate::geometry::Ray;
-
-    type V3 = [__m256; 3];
-
-    /// The eight lanes' mask (bit `k`: lane `k`; the first packet's lanes are 0..4), `t` and
-    /// barycentric coordinates.
-    ///
-    /// # Safety
-    ///
-    /// The CPU must have AVX.
-    #[target_feature(enable = "avx")]
-    #[inline]
-    pub(super) unsafe fn hits(
-        pair: &[TrianglePacket; 2],
+    #[inline(always)]
+    fn packet_hit_t(
+        self,
+        lanes: &AvxLanes,
+        packet: &TrianglePacket,
         ray: &Ray,
         t_min: f32,
         t_max: f32,
-    ) -> (u32, __m256, __m256, __m256) {
-        let [a, b] = pair;
-        let join = |x: glam::Vec4, y: glam::Vec4| {
-            _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x.into()), y.into())
-        };
-        let field = |f: fn(&TrianglePacket) -> &[glam::Vec4; 3]| -> V3 {
-            let (x, y) = (f(a), f(b));
-            [join(x[0], y[0]), join(x[1], y[1]), join(x[2], y[2])]
-        };
-        let (v0, e1, e2) = (field(|p| &p.v0), field(|p| &p.e1), field(|p| &p.e2));
-        let mul = |x, y| _mm256_mul_ps(x, y);
-        let add = |x, y| _mm256_add_ps(x, y);
-        let sub = |x, y| _mm256_sub_ps(x, y);
-        let dot = |x: &V3, y: &V3| add(add(mul(x[0], y[0]), mul(x[1], y[1])), mul(x[2], y[2]));
-        let cross = |x: &V3, y: &V3| -> V3 {
-            [
-                sub(mul(x[1], y[2]), mul(x[2], y[1])),
-                sub(mul(x[2], y[0]), mul(x[0], y[2])),
-                sub(mul(x[0], y[1]), mul(x[1], y[0])),
-            ]
-        };
-        let d = [ray.d.x, ray.d.y, ray.d.z].map(|c| _mm256_set1_ps(c));
-        let o = [ray.o.x, ray.o.y, ray.o.z].map(|c| _mm256_set1_ps(c));
-        let pv = cross(&d, &e2);
-        let det = dot(&e1, &pv);
-        let one = _mm256_set1_ps(1.0);
-        let inv = _mm256_div_ps(one, det);
-        let tv = [sub(o[0], v0[0]), sub(o[1], v0[1]), sub(o[2], v0[2])];
-        let b1 = mul(dot(&tv, &pv), inv);
-        let qv = cross(&tv, &e1);
-        let b2 = mul(dot(&d, &qv), inv);
-        let t = mul(dot(&e2, &qv), inv);
-        let zero = _mm256_setzero_ps();
-        let abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0), det);
-        // `cmpneq` and the negated `<`, `>` are true on NaN, the others false, as in
-        // `TrianglePacket::hits`.
-        let and = |x, y| _mm256_and_ps(x, y);
-        let mask = and(
-            and(
-                and(
-                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(abs, _mm256_set1_ps(f32::INFINITY)),
-                ),
-                and(
-                    _mm256_cmp_ps::<_CMP_GE_OQ>(b1, zero),
-                    _mm256_cmp_ps::<_CMP_LE_OQ>(b1, one),
-                ),
-            ),
-            and(
-                and(
-                    _mm256_cmp_ps::<_CMP_NLT_UQ>(b2, zero),
-                    _mm256_cmp_ps::<_CMP_NGT_UQ>(add(b1, b2), one),
-                ),
-                and(
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(t, _mm256_set1_ps(t_min)),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_max)),
-                ),
-            ),
-        );
-        (_mm256_movemask_ps(mask) as u32, t, b1, b2)
+    ) -> Option<(u32, f32, [f32; 2])> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = ray;
+            // SAFETY: as above.
+            packet.nearest(unsafe { avx::packet_hits(lanes, packet, t_min, t_max) })
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.packet_hit_t(lanes, packet, ray, t_min, t_max)
     }
 
-    /// [`TrianglePacket::hit_t`] over the eight lanes.
-    ///
-    /// # Safety
-    ///
-    /// The CPU must have AVX.
-    #[target_feature(enable = "avx")]
-    #[inline]
-    pub(super) unsafe fn hit_t(
+    #[inline(always)]
+    fn packet_occluded(
+        self,
+        lanes: &AvxLanes,
+        packet: &TrianglePacket,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = ray;
+            // SAFETY: as above.
+            unsafe { avx::packet_hits(lanes, packet, t_min, t_max) }
+                .0
+                .any()
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.packet_occluded(lanes, packet, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn pair_hit_t(
+        self,
+        lanes: &AvxLanes,
         pair: &[TrianglePacket; 2],
         ray: &Ray,
         t_min: f32,
         t_max: f32,
     ) -> Option<(u32, f32, [f32; 2])> {
-        // SAFETY: the caller's AVX.
-        let (mask, t, b1, b2) = unsafe { hits(pair, ray, t_min, t_max) };
-        if mask == 0 {
-            return None;
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = ray;
+            // SAFETY: as above.
+            unsafe { avx::hit_t(lanes, pair, t_min, t_max) }
         }
-        let mut ts = [0.0f32; 8];
-        // SAFETY: `ts` holds eight `f32`s.
-        unsafe { _mm256_storeu_ps(ts.as_mut_ptr(), t) };
-        // The lowest of the nearest lanes, as a scalar loop keeps.
-        let mut lane = mask.trailing_zeros() as usize;
-        let mut rest = mask & (mask - 1);
-        while rest != 0 {
-            let k = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            if ts[k] < ts[lane] {
-                lane = k;
-            }
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.pair_hit_t(lanes, pair, ray, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn pair_occluded(
+        self,
+        lanes: &AvxLanes,
+        pair: &[TrianglePacket; 2],
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = ray;
+            // SAFETY: as above.
+            unsafe { avx::hits(lanes, pair, t_min, t_max).0 != 0 }
         }
-        let (mut b1s, mut b2s) = ([0.0f32; 8], [0.0f32; 8]);
-        // SAFETY: as above.
-        unsafe {
-            _mm256_storeu_ps(b1s.as_mut_ptr(), b1);
-            _mm256_storeu_ps(b2s.as_mut_ptr(), b2);
-        }
-        Some((
-            pair[lane / 4].ids[lane % 4],
-            ts[lane],
-            [b1s[lane], b2s[lane]],
-        ))
+        #[cfg(not(target_arch = "x86_64"))]
+        super::wide::Halves.pair_occluded(lanes, pair, ray, t_min, t_max)
     }
 }
+
+#[cfg(target_arch = "x86_64")]
+mod avx;
 
 /// The BVH's meshes, each with its caller id, and the first global triangle number of each.
 #[derive(Default)]
@@ -433,7 +488,7 @@ mod tests {
         let Some(avx) = Avx::detect() else { return };
         let mut rng = Rng::new(9);
         let v = |rng: &mut Rng| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - Vec3A::ONE;
-        let mut hits = 0;
+        let (mut hits, mut single) = (0, 0);
         for i in 0..20000 {
             let count = 5 + i % 4;
             let mut tris: Vec<([Vec3A; 3], u32)> = (0..count)
@@ -465,19 +520,40 @@ mod tests {
             let bits = |h: Option<(u32, f32, [f32; 2])>| {
                 h.map(|(g, t, b)| (g, t.to_bits(), b.map(f32::to_bits)))
             };
-            let want = Halves.pair_hit_t(&pair, &ray, t_min, t_max);
+            let lanes = avx.lanes(&ray);
+            let want = Halves.pair_hit_t(&(), &pair, &ray, t_min, t_max);
             assert_eq!(
-                bits(avx.pair_hit_t(&pair, &ray, t_min, t_max)),
+                bits(avx.pair_hit_t(&lanes, &pair, &ray, t_min, t_max)),
                 bits(want),
                 "case {i}"
             );
-            assert_eq!(avx.pair_occluded(&pair, &ray, t_min, t_max), want.is_some());
             assert_eq!(
-                Halves.pair_occluded(&pair, &ray, t_min, t_max),
+                avx.pair_occluded(&lanes, &pair, &ray, t_min, t_max),
                 want.is_some()
             );
+            assert_eq!(
+                Halves.pair_occluded(&(), &pair, &ray, t_min, t_max),
+                want.is_some()
+            );
+            // Each packet alone through the AVX set-up (the low halves of the pair's
+            // broadcasts): the four-lane test's bits.
+            for packet in &pair {
+                let want = packet.hit_t(&ray, t_min, t_max);
+                assert_eq!(
+                    bits(avx.packet_hit_t(&lanes, packet, &ray, t_min, t_max)),
+                    bits(want),
+                    "case {i}"
+                );
+                assert_eq!(
+                    avx.packet_occluded(&lanes, packet, &ray, t_min, t_max),
+                    want.is_some(),
+                    "case {i}"
+                );
+                single += usize::from(want.is_some());
+            }
             hits += usize::from(want.is_some());
         }
         assert!(hits > 5000, "{hits} of 20000 cases hit");
+        assert!(single > 5000, "{single} packets hit");
     }
 }
