@@ -144,6 +144,17 @@ impl TriangleMesh {
             .collect()
     }
 
+    /// Triangle `k`'s geometric normal, not normalised: the cross product of its edges from the
+    /// first vertex to the second and to the third (the direction [`TriangleMesh::hit_at`]'s
+    /// `n` has; its length is twice the triangle's area). For a caller that needs a hit's
+    /// triangle and orientation but not its shading record (what Embree's closest hit returns
+    /// as `Ng`).
+    #[inline]
+    pub fn geometric_normal(&self, k: usize) -> Vec3A {
+        let p = self.indices[k].map(|i| Vec3A::from(self.positions[i as usize]));
+        (p[1] - p[0]).cross(p[2] - p[0])
+    }
+
     /// The full hit on triangle `k` at ray parameter `t` with barycentric coordinates `b`
     /// (of its second and third vertex), the values its intersection test returned: read from
     /// the buffers, with the operations of the stand-alone triangle's `hit_at` in the same

@@ -436,7 +436,8 @@ fn degenerate_rays_are_answered_consistently() {
 /// The hit record made in the traversal's frame ([`Bvh::intersect_uv`]) is the one the lazy
 /// result gives ([`Bvh::intersect_lazy`], then [`Surface::hit_at_uv`]): every field bit for bit
 /// and the id, over a mesh with uvs, one without, spheres, quads and an infinite plane, with
-/// `uv` asked for odd ids only (a sphere's `uv` is then NaN on even ones).
+/// `uv` asked for odd ids only (a sphere's `uv` is then NaN on even ones); and a mesh hit's
+/// [`TriangleMesh::geometric_normal`], normalised, is the record's normal.
 #[test]
 fn the_hit_record_is_the_lazy_hits() {
     use crate::scene::MeshData;
@@ -486,11 +487,21 @@ fn the_hit_record_is_the_lazy_hits() {
     for i in 0..8000 {
         let ray = Ray::new(2.0 * v(&mut rng), uniform_sphere(rng.vec2()));
         let t_max = if i % 3 == 0 { 1.0 } else { f32::INFINITY };
-        let want = bvh.intersect_lazy(&ray, 0.0, t_max).map(|(lazy, s, id)| {
+        let lazy = bvh.intersect_lazy(&ray, 0.0, t_max);
+        let want = lazy.map(|(lazy, s, id)| {
             let id = lazy.part().unwrap_or(id);
             (s.hit_at_uv(&ray, lazy, uv(id)), id)
         });
         let got = bvh.intersect_uv(&ray, 0.0, t_max, uv);
+        // A triangle's geometric normal, normalised, is its record's `n`.
+        if let (Some((_, Surface::MeshTriangle(m, k, _), _)), Some((h, _))) = (lazy, got) {
+            let c = m.geometric_normal(k);
+            let n = c / crate::geometry::scaled_length(c);
+            assert_eq!(
+                n.to_array().map(f32::to_bits),
+                h.n.to_array().map(f32::to_bits)
+            );
+        }
         assert_eq!(
             got.map(|(h, id)| (bits(&h), id)),
             want.map(|(h, id)| (bits(&h), id)),
