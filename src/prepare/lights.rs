@@ -1,15 +1,18 @@
 //! Building the lights of a prepared scene that are not emissive shapes: point and spot
 //! lights, validated, and the environment light of a non-black background; and the boxes
-//! around the emissive shapes ([`LightBounds`]).
+//! around the emissive shapes ([`LightBounds`]). And the prepared scene's light queries: the
+//! area light of a primitive, a light's photons, the environment light and the background.
 
 use glam::Vec3A;
 
-use super::PreparedScene;
 use super::shapes::v;
+use super::{NO_LIGHT, PreparedScene};
 use crate::accel::Bvh;
 use crate::diag::Diagnostic;
 use crate::geometry::{Aabb, Ray};
-use crate::lights::{EnvironmentLight, GroundPhotons, Light, PointLight, Sky, SpotLight};
+use crate::lights::{
+    AreaLight, EnvironmentLight, GroundPhotons, Light, PhotonSample, PointLight, Sky, SpotLight,
+};
 use crate::scene::{self, Scene};
 use crate::shapes::Shape;
 use crate::textures;
@@ -301,6 +304,51 @@ pub(super) fn facing_away(prepared: &PreparedScene) -> Vec<Diagnostic> {
             )
         })
         .collect()
+}
+
+impl PreparedScene<'_> {
+    /// The area light a primitive belongs to.
+    #[inline]
+    pub fn area_light(&self, prim: u32) -> Option<(usize, &AreaLight)> {
+        let l = *self.prim_light.get(prim as usize)?;
+        if l == NO_LIGHT {
+            return None;
+        }
+        match &self.lights[l as usize] {
+            Light::Area(a) => Some((l as usize, a)),
+            _ => None,
+        }
+    }
+
+    /// A photon from light `li` ([`Light::sample_photon`]), for `u1` and `u2` in [0,1)^2.
+    /// A rectangle's photons come from its [`super::emitters::QuadEmitter`] (the same photons).
+    #[inline]
+    pub fn sample_photon(&self, li: usize, u1: glam::Vec2, u2: glam::Vec2) -> Option<PhotonSample> {
+        match self.quad_emitters.get(li) {
+            Some(Some(e)) => e.sample_photon(u1, u2),
+            _ => self.lights.get(li)?.sample_photon(u1, u2),
+        }
+    }
+
+    /// The radiance a ray leaving the scene in direction `dir` sees: the environment light's (a
+    /// map or a background colour), or black.
+    #[inline]
+    pub fn background_radiance(&self, dir: Vec3A) -> Vec3A {
+        match self.environment_light() {
+            Some((_, env)) => env.le(dir),
+            None => Vec3A::ZERO,
+        }
+    }
+
+    /// The environment light and its index in `lights`.
+    #[inline]
+    pub fn environment_light(&self) -> Option<(usize, &EnvironmentLight)> {
+        let i = self.environment?;
+        match &self.lights[i] {
+            Light::Environment(e) => Some((i, e)),
+            _ => None,
+        }
+    }
 }
 
 #[cfg(test)]
