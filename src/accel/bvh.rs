@@ -311,13 +311,10 @@ impl Bvh {
         t_max: f32,
         uv: impl Fn(u32) -> bool,
     ) -> Option<(Hit, u32)> {
-        if let Some(flat) = &self.flat {
-            return flat.intersect(&self.leaves, self.avx, ray, t_min, t_max, uv);
-        }
-        if !super::wide::BoxRay::usable(ray) {
+        if self.flat.is_none() && !super::wide::BoxRay::usable(ray) {
             return None;
         }
-        self.tree_uv(ray, t_min, t_max, uv)
+        self.intersect_uv(ray, t_min, t_max, uv)
     }
 
     /// [`Bvh::intersect_uv`] through the tree, at the CPU's feature level.
