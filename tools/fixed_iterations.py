@@ -23,15 +23,8 @@ import sys
 import tempfile
 
 import numpy as np
-import OpenEXR
 
-
-def read_exr(path):
-    with OpenEXR.File(path) as f:
-        ch = f.channels()
-        if "RGB" in ch:
-            return np.array(ch["RGB"].pixels, dtype=np.float64)
-        return np.stack([np.array(ch[c].pixels, dtype=np.float64) for c in "RGB"], axis=-1)
+from equal_cpu_examples import read_exr
 
 
 def main():
