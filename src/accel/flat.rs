@@ -10,7 +10,7 @@
 use super::leaf::{Leaf, Leaves};
 use super::wide::Avx;
 use crate::geometry::{Hit, Ray};
-use crate::shapes::primitive::{AnyShape, LazyHit};
+use crate::shapes::primitive::AnyShape;
 use crate::shapes::quad::{Quad, QuadOctet};
 use crate::shapes::sphere::Sphere;
 use crate::shapes::{Shape, SplitShape};
@@ -20,6 +20,8 @@ pub(super) struct Flat {
     leaf: Leaf,
     /// The leaf's quads (at most eight: a leaf holds at most eight shapes), lane by lane.
     octet: QuadOctet,
+    /// The same quads, in the leaf's order, for the hit's record.
+    quads: Vec<Quad>,
     /// The leaf's shapes after its quads (all spheres), in the leaf's order.
     spheres: Vec<Sphere>,
 }
@@ -119,6 +121,7 @@ impl Flat {
         Some(Self {
             leaf,
             octet: QuadOctet::new(&quads)?,
+            quads,
             spheres,
         })
     }
@@ -231,15 +234,12 @@ impl Flat {
         }
         let k = best?;
         let (id, t) = (leaves.ids[start + k], t_max);
-        let hit = match k.checked_sub(rest) {
-            Some(k) => self.spheres[k].hit_at_uv(ray, t, uv(id)),
-            None => match &leaves.shapes[start + k] {
-                AnyShape::Quad(q) => q.hit_at(ray, t),
-                // (Never: `of` took the leaf only with quads there.)
-                s => s.hit_at_uv(ray, LazyHit::T(t), uv(id)),
-            },
-        };
-        Some((hit, id))
+        // Each branch writes its record into the result itself (merged, the record was built
+        // in a temporary and copied), with `uv` and `t` in one store (`Hit::from_parts`).
+        match k.checked_sub(rest) {
+            Some(k) => Some((self.spheres[k].hit_at_uv(ray, t, uv(id)), id)),
+            None => Some((self.quads[k].hit_at(ray, t), id)),
+        }
     }
 
     #[inline(always)]

@@ -297,7 +297,8 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
         bytes: pixels.saturating_mul(per_pixel),
     });
     let photons = match settings.method() {
-        // Rounds of at most 2^21 photon hits, 40 bytes while filed and 40 again in the grid;
+        // Rounds of at most 2^21 photon hits, 44 bytes while filed (the 40-byte record and its
+        // bucket apart) and 40 again in the grid;
         // fewer where the photons of an iteration cannot store that many (at most `max_depth`
         // hits each; the automatic count is taken as the most).
         Integrator::Sppm | Integrator::Ppm => {
@@ -305,7 +306,7 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
                 n.saturating_mul(u64::from(settings.max_depth).max(1))
                     .min(1 << 21)
             });
-            hits.saturating_mul(80)
+            hits.saturating_mul(84)
         }
         // Three stored hits of 48 bytes per photon, in the list and in the kd-tree.
         Integrator::PhotonMap => settings

@@ -303,14 +303,7 @@ impl SplitShape for Quad {
     /// The full surface data at ray parameter `t` (a value [`Quad::hit_t`] returned).
     fn hit_at(&self, ray: &Ray, t: f32) -> Hit {
         let (s, v) = self.st(ray, t);
-        Hit {
-            t,
-            p: ray.at(t),
-            n: self.n,
-            ns: self.n,
-            uv: Vec2::new(s, v),
-            dpdu: self.eu,
-        }
+        Hit::from_parts(t, ray.at(t), self.n, self.n, Vec2::new(s, v), self.eu)
     }
 
     fn bounds(&self) -> Aabb {

@@ -70,14 +70,7 @@ impl Sphere {
             Vec2::NAN
         };
         let dpdu = Vec3A::new(rel.z, 0.0, -rel.x) * (2.0 * PI);
-        Hit {
-            t,
-            p: self.center + rel,
-            n,
-            ns: n,
-            uv,
-            dpdu,
-        }
+        Hit::from_parts(t, self.center + rel, n, n, uv, dpdu)
     }
 
     #[inline]

@@ -17,8 +17,8 @@ use crate::prepare::{EffectiveSettings, PreparedScene};
 /// Photons per parallel task of the photon pass.
 const PHOTON_CHUNK: u64 = 4096;
 
-/// Photon hits a round aims to hold before its gather (40 bytes each while filed, as much
-/// again in the grid: about 170 MB in all). A round traces groups of photons until it holds
+/// Photon hits a round aims to hold before its gather (44 bytes each while filed, 40 in the
+/// grid: about 176 MB in all). A round traces groups of photons until it holds
 /// this many hits, has used [`ROUND_CHUNKS`] chunks, or the iteration's photons are done. A
 /// group is sized from the mean hits per photon of everything traced so far, so that it fills
 /// the round without overshooting it much (a statistical bound, not a hard one; the first group
