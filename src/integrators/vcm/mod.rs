@@ -11,7 +11,8 @@
 //! with the light vertices within the camera path's radius (`grid.rs`). Every technique is
 //! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
-//! bounce, for the part only camera paths sample (`DELTA_CAMERA_PATHS`).
+//! bounce, for the part only camera paths sample: more where that part has varied
+//! (`DELTA_CAMERA_PATHS`) than where it has not yet (`DELTA_CAMERA_PATHS_QUIET`).
 //!
 //! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular
@@ -125,13 +126,20 @@ impl Vcm {
 /// paths, every one weighted as the only one (unbiased; the light paths are shared).
 const EXTRA_CAMERA_PATHS: f64 = 0.5;
 
-/// Camera paths per iteration that stop at their first non-delta bounce, in each pixel that
-/// sees through a mirror or glass or whose directly seen emission varies (a light's edge):
-/// they add only what a camera path sees through delta bounces alone (a small light through
-/// glass), which no other technique samples, at the cost of the eye ray and the delta bounces.
-/// That part is the mean of every camera path of the pixel, the rest the mean of the full ones
-/// (both unbiased).
+/// Camera paths per iteration that stop at their first non-delta bounce, in each pixel whose
+/// delta part has varied (a light's edge, a light seen through glass): they add only what a
+/// camera path sees through delta bounces alone, which no other technique samples, at the cost
+/// of the eye ray and the delta bounces. That part is the mean of every camera path of the
+/// pixel, the rest the mean of the full ones (both unbiased).
 const DELTA_CAMERA_PATHS: u32 = 4;
+
+/// Delta-only camera paths per iteration in a pixel whose camera paths have left their first
+/// vertex by a delta bounce but whose delta part has not varied yet: enough to find a light
+/// seen rarely through glass (after which the pixel takes `DELTA_CAMERA_PATHS`), fewer where
+/// the delta bounces only ever reach a non-delta surface (on `crystal_tree` 93 % of the
+/// delta-only paths were in such pixels and 1 in 1 700 of all of them saw any light, for a
+/// third of the render's CPU time: docs/measurements.md).
+const DELTA_CAMERA_PATHS_QUIET: u32 = 2;
 
 /// Passes a `vcm` render (and every chain) runs before its first iteration, whose values are
 /// not kept: they measure where the pixels vary for the extra and delta-only camera paths,
@@ -352,11 +360,14 @@ impl Integrator for Vcm {
                     // With fewer light paths than pixels, each serves every n_light-th pixel.
                     let own = light_path_of(chunks, i % n_light);
                     let (x, y) = (i as u32 % w, i as u32 / w);
-                    // Delta paths where an earlier iteration's camera paths saw through a
-                    // mirror or glass, or saw varying emission (a light's edge); decided
-                    // before this iteration's paths, so that their count does not depend on them.
-                    let only = if *seen_delta || sp_stats.varies() {
+                    // Delta paths where an earlier iteration's camera paths saw varying
+                    // emission through delta bounces or straight on (a light's edge), fewer
+                    // where they only saw through a mirror or glass; decided before this
+                    // iteration's paths, so that their count does not depend on them.
+                    let only = if sp_stats.varies() {
                         DELTA_CAMERA_PATHS
+                    } else if *seen_delta {
+                        DELTA_CAMERA_PATHS_QUIET
                     } else {
                         0
                     };
