@@ -9,7 +9,7 @@ mod stack;
 mod triangles;
 mod wide;
 
-pub use bvh::{Bvh, Surface};
+pub use bvh::{Bvh, Surface, Unbuilt};
 
 use glam::Vec3A;
 
