@@ -9,6 +9,7 @@ use super::flat::Flat;
 use super::leaf::{Closest, Leaves};
 use super::stack::{Stack, push_far_to_near};
 use super::triangles::{Meshes, PairTest};
+use super::unbuilt::Unbuilt;
 use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, NODE_UNIT, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
@@ -77,28 +78,6 @@ impl<'a> Surface<'a> {
             Surface::Shape(s) => Some(s),
             Surface::MeshTriangle(..) => None,
         }
-    }
-}
-
-/// Why a build gave no BVH.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Unbuilt {
-    /// The build's `stop` said yes.
-    Stopped,
-    /// The tree has more nodes than its child references can name (see
-    /// [`super::wide::fits`]: over a billion triangles).
-    TooLarge,
-}
-
-impl std::fmt::Display for Unbuilt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Unbuilt::Stopped => "the build was stopped",
-            Unbuilt::TooLarge => {
-                "too many primitives for one BVH: its nodes would pass the 16 GiB its child \
-                 references can address"
-            }
-        })
     }
 }
 
