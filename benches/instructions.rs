@@ -170,7 +170,7 @@ fn spheres() {
             (AnyShape::Sphere(sphere), k)
         })
         .collect();
-    let bvh = Bvh::new(shapes);
+    let bvh = Bvh::new(shapes).expect("a BVH of bench size");
     let rays = displaced::camera_rays(256);
     let (hits, sum) = trace_closest(&bvh, &rays);
     let any = trace_any(&bvh, &rays);

@@ -57,7 +57,7 @@ pub fn triangle_mesh(mesh: &Mesh) -> TriangleMesh {
 }
 
 pub fn mesh_bvh(mesh: TriangleMesh) -> Bvh {
-    Bvh::with_meshes(Vec::new(), vec![(mesh, 0)])
+    Bvh::with_meshes(Vec::new(), vec![(mesh, 0)]).expect("a BVH of bench size")
 }
 
 /// `side` x `side` camera rays from a pinhole at distance 2.4 whose view the mesh fills.

@@ -9,7 +9,8 @@ use super::flat::Flat;
 use super::leaf::{Closest, Leaves};
 use super::stack::{Stack, push_far_to_near};
 use super::triangles::{Meshes, PairTest};
-use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, WideNode, collapse, still_near};
+use super::unbuilt::Unbuilt;
+use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, NODE_UNIT, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
@@ -81,23 +82,28 @@ impl<'a> Surface<'a> {
 }
 
 impl Bvh {
-    pub fn new(shapes: Vec<(AnyShape, u32)>) -> Self {
+    /// A BVH over `shapes` ([`Bvh::with_meshes`] without meshes).
+    pub fn new(shapes: Vec<(AnyShape, u32)>) -> Result<Self, Unbuilt> {
         Self::with_meshes(shapes, Vec::new())
     }
 
-    /// A BVH over `shapes` and the triangles of `meshes` (each mesh with the id its hits get).
-    pub fn with_meshes(shapes: Vec<(AnyShape, u32)>, meshes: Vec<(TriangleMesh, u32)>) -> Self {
+    /// A BVH over `shapes` and the triangles of `meshes` (each mesh with the id its hits get);
+    /// [`Unbuilt::TooLarge`] when its tree would have more nodes than it can address.
+    pub fn with_meshes(
+        shapes: Vec<(AnyShape, u32)>,
+        meshes: Vec<(TriangleMesh, u32)>,
+    ) -> Result<Self, Unbuilt> {
         Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH, &|| false)
-            .expect("unreachable: only `stop` ends a build early, and this one never says yes")
     }
 
     /// [`Bvh::with_meshes`], asking `stop` between the build's phases and inside the tree's
-    /// build at a coarse grain (a subtree of a few thousand items): `None` once it said yes.
+    /// build at a coarse grain (a subtree of a few thousand items): [`Unbuilt::Stopped`] once
+    /// it said yes.
     pub fn with_meshes_until(
         shapes: Vec<(AnyShape, u32)>,
         meshes: Vec<(TriangleMesh, u32)>,
         stop: &(dyn Fn() -> bool + Sync),
-    ) -> Option<Self> {
+    ) -> Result<Self, Unbuilt> {
         Self::with_median_depth(shapes, meshes, MEDIAN_DEPTH, stop)
     }
 
@@ -106,7 +112,7 @@ impl Bvh {
         meshes: Vec<(TriangleMesh, u32)>,
         median_depth: usize,
         stop: Stop,
-    ) -> Option<Self> {
+    ) -> Result<Self, Unbuilt> {
         // Boxes in parallel; most scenes (every mesh) have only bounded shapes.
         let boxes: Vec<Aabb> = shapes.par_iter().map(|(s, _)| s.bounds()).collect();
         let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();
@@ -142,13 +148,14 @@ impl Bvh {
             .collect();
         drop(triangles);
         if stop() {
-            return None;
+            return Err(Unbuilt::Stopped);
         }
         let mut nodes: Vec<Node> =
-            build_until(&mut items, median_depth, Parallelism::DEFAULT, stop)?;
+            build_until(&mut items, median_depth, Parallelism::DEFAULT, stop)
+                .ok_or(Unbuilt::Stopped)?;
         nodes.shrink_to_fit();
         if stop() {
-            return None;
+            return Err(Unbuilt::Stopped);
         }
         // Pack each leaf's contents; its node then names the leaf.
         let mut slots: Vec<Option<(AnyShape, u32)>> = bounded.into_iter().map(Some).collect();
@@ -164,7 +171,7 @@ impl Bvh {
         }
         leaves.shrink_to_fit();
         if stop() {
-            return None;
+            return Err(Unbuilt::Stopped);
         }
         let flat = match nodes.as_slice() {
             [root] if root.count > 0 && unbounded.is_empty() => Flat::of(&leaves, root.offset),
@@ -178,7 +185,8 @@ impl Bvh {
                 1 + below(n, i + 1).max(below(n, n[i].offset as usize))
             }
         }
-        Some(Self {
+        let wide = collapse(&nodes).ok_or(Unbuilt::TooLarge)?;
+        Ok(Self {
             #[cfg(test)]
             binary_depth: if nodes.is_empty() {
                 0
@@ -186,7 +194,7 @@ impl Bvh {
                 below(&nodes, 0)
             },
             bounds: nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
-            nodes: collapse(&nodes),
+            nodes: wide,
             leaves,
             meshes,
             unbounded,
@@ -485,16 +493,22 @@ impl Bvh {
         }
     }
 
-    /// Interior node `i`, a child reference without the [`LEAF`] bit (or 0, the root).
+    /// The interior node of child reference `r` (without the [`LEAF`] bit; 0, the root): the
+    /// node `r * NODE_UNIT` bytes from the first.
     #[inline(always)]
-    fn node(&self, i: u32) -> &WideNode {
-        debug_assert!((i as usize) < self.nodes.len());
+    fn node(&self, r: u32) -> &WideNode {
+        let at = r as usize * NODE_UNIT;
+        debug_assert!(at.is_multiple_of(size_of::<WideNode>()));
+        debug_assert!(at / size_of::<WideNode>() < self.nodes.len());
         // SAFETY: the traversals start at the root, 0, only when there are nodes, and go on
         // only to references read from the nodes' `child` arrays without the `LEAF` bit: the
-        // collapse writes those as indices of nodes it made (`collapse_at`, and `collapse_run`
-        // shifting a run's by where the run lands). (Unchecked: the bounds check was a compare
-        // and branch per node visited.)
-        unsafe { self.nodes.get_unchecked(i as usize) }
+        // collapse writes those as the offsets (in `NODE_UNIT`s) of nodes it made, whole
+        // nodes from the first (`collapse` turning the indices of `collapse_at` and
+        // `collapse_run` into offsets, after checking the last one fits below `LEAF`).
+        // (Unchecked, and a byte offset rather than an index: the bounds check was a compare
+        // and branch per node visited, the index a multiply by the node's size on the way
+        // from a popped reference to its node's loads.)
+        unsafe { &*self.nodes.as_ptr().cast::<u8>().add(at).cast::<WideNode>() }
     }
 
     /// The result of a closest-hit traversal that ended with `c` and `t_max`.

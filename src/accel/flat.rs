@@ -322,7 +322,7 @@ mod tests {
             let seed = 1000 + case as u64;
             let build = |rng: &mut Rng| {
                 let shapes = scene(rng, case);
-                Bvh::new(shapes.into_iter().zip(0..).collect())
+                Bvh::new(shapes.into_iter().zip(0..).collect()).expect("a BVH of test size")
             };
             let bvh = build(&mut Rng::new(seed));
             let tree = build(&mut Rng::new(seed)).without_flat();

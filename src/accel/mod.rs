@@ -7,9 +7,11 @@ mod instance;
 mod leaf;
 mod stack;
 mod triangles;
+mod unbuilt;
 mod wide;
 
 pub use bvh::{Bvh, Surface};
+pub use unbuilt::Unbuilt;
 
 use glam::Vec3A;
 

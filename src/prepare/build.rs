@@ -11,7 +11,7 @@ use super::{
     NO_LIGHT, ObjectInfo, PreparedScene, Stop, SurfaceHit, color3, csg, emitters, instances,
     lights, orient, unless,
 };
-use crate::accel::{self, Bvh};
+use crate::accel::{self, Bvh, Unbuilt};
 use crate::camera::Camera;
 use crate::diag::Diagnostic;
 use crate::geometry::Hit;
@@ -203,8 +203,10 @@ impl<'a> PreparedScene<'a> {
         objects.extend(csg_parts);
         lights::push_scene_lights(scene, &mut lights)?;
         unless(stop)?;
-        let bvh =
-            Bvh::with_meshes_until(shapes, meshes, stop).ok_or_else(Diagnostic::interrupted)?;
+        let bvh = Bvh::with_meshes_until(shapes, meshes, stop).map_err(|e| match e {
+            Unbuilt::Stopped => Diagnostic::interrupted(),
+            Unbuilt::TooLarge => Diagnostic::unplaced(e.to_string()),
+        })?;
         unless(stop)?;
         let environment = lights::push_environment(scene, &bvh, &mut lights);
         unless(stop)?;

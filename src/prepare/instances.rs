@@ -78,7 +78,9 @@ impl Instancer {
                 if tris.is_empty() {
                     return Err(format!("mesh `{}` has no triangles", mesh.path.display()));
                 }
-                let bvh = Arc::new(Bvh::with_meshes(Vec::new(), vec![(tris, 0)]));
+                let bvh = Bvh::with_meshes(Vec::new(), vec![(tris, 0)])
+                    .map_err(|e| format!("mesh `{}`: {e}", mesh.path.display()))?;
+                let bvh = Arc::new(bvh);
                 self.built.insert((id, reverse), bvh.clone());
                 bvh
             }

@@ -81,9 +81,10 @@ fn median_splits_bound_the_depth_and_keep_hits() {
     let sah = depth(&spheres_bvh(&chain, usize::MAX));
     assert!(sah > 20, "SAH alone builds a deep tree here ({sah})");
     assert!(
-        depth(&Bvh::new(
-            chain.iter().map(|s| (AnyShape::Sphere(*s), 0)).collect()
-        )) <= STACK
+        depth(
+            &Bvh::new(chain.iter().map(|s| (AnyShape::Sphere(*s), 0)).collect())
+                .expect("a BVH of test size")
+        ) <= STACK
     );
     let mut rng = Rng::new(3);
     let cloud = sphere_cloud(&mut rng, 300);
@@ -173,7 +174,8 @@ fn leaves_of_mixed_shapes_match_brute_force() {
                 .enumerate()
                 .map(|(i, s)| (copy_shape(s), 100 + i as u32))
                 .collect(),
-        );
+        )
+        .expect("a BVH of test size");
         packed_leaves += bvh.leaves.leaves.iter().filter(|l| l.quads > 0).count();
         two_packets += bvh.leaves.leaves.iter().filter(|l| l.quads > 4).count();
         for _ in 0..50 {
@@ -243,6 +245,7 @@ fn packing_and_collapse_are_the_same_on_any_thread_count() {
                 spheres.iter().map(|s| (AnyShape::Sphere(*s), 1)).collect(),
                 vec![(mesh, 2)],
             )
+            .expect("a BVH of test size")
         })
     };
     let one = build(1);
@@ -391,7 +394,7 @@ fn degenerate_rays_are_answered_consistently() {
         AnyShape::Sphere(Sphere::new(Vec3A::new(3.0, 0.0, 0.0), 0.5).unwrap()),
         9,
     )];
-    let bvh = Bvh::with_meshes(spheres, vec![(m, 1)]);
+    let bvh = Bvh::with_meshes(spheres, vec![(m, 1)]).expect("a BVH of test size");
     let nan = f32::NAN;
     let inf = f32::INFINITY;
     let odd = [
@@ -477,7 +480,7 @@ fn the_hit_record_is_the_lazy_hits() {
         };
         shapes.push((shape, 4 + k));
     }
-    let bvh = Bvh::with_meshes(shapes, meshes);
+    let bvh = Bvh::with_meshes(shapes, meshes).expect("a BVH of test size");
     let uv = |id: u32| id % 2 == 1;
     let bits = |h: &Hit| {
         let v = [h.p, h.n, h.ns, h.dpdu].map(|v| v.to_array().map(f32::to_bits));
@@ -545,7 +548,7 @@ fn the_finite_query_drops_non_finite_rays_only() {
             )
         });
     }
-    let tree = Bvh::new(shapes);
+    let tree = Bvh::new(shapes).expect("a BVH of test size");
     // A flat leaf: the five walls of a box (as the Cornell box's) and two spheres in it.
     let walls = [
         (Vec3A::new(-1.0, -1.0, -1.0), Vec3A::X * 2.0, Vec3A::Z * 2.0),
@@ -567,7 +570,7 @@ fn the_finite_query_drops_non_finite_rays_only() {
         AnyShape::Sphere(Sphere::new(Vec3A::new(0.4, -0.6, 0.3), 0.35).unwrap()),
         6,
     ));
-    let flat = Bvh::new(shapes);
+    let flat = Bvh::new(shapes).expect("a BVH of test size");
     assert!(!tree.is_flat(), "the tree");
     assert!(flat.is_flat(), "the box");
     let uv = |id: u32| id.is_multiple_of(2);

@@ -125,7 +125,7 @@ fn a_compact_mesh_estimate_follows_what_it_holds() {
         let m = mesh(n, scattered, attributes);
         let tris = TriangleMesh::new(&m, &glam::DAffine3::IDENTITY).unwrap();
         assert_eq!(tris.len(), m.indices.len());
-        let bvh = Bvh::with_meshes(Vec::new(), vec![(tris, 0)]);
+        let bvh = Bvh::with_meshes(Vec::new(), vec![(tris, 0)]).expect("a BVH of test size");
         let measured = bvh.memory_bytes() as f64;
         let estimate = compact_mesh_bytes(&m) as f64;
         let t = m.indices.len() as f64;

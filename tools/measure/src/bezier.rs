@@ -320,7 +320,7 @@ struct Subject {
 fn analytic(method: Method, shape: AnyShape) -> Subject {
     Subject {
         method,
-        bvh: Bvh::new(vec![(shape, 0)]),
+        bvh: Bvh::new(vec![(shape, 0)]).expect("one shape fits"),
         triangles: 0,
         build_ms: 0.0,
     }
@@ -338,7 +338,8 @@ fn mesh_subject(
         tris.into_iter()
             .map(|t| (AnyShape::Triangle(t), 0))
             .collect(),
-    );
+    )
+    .map_err(|e| e.to_string())?;
     Ok(Subject {
         method,
         bvh,

@@ -81,8 +81,8 @@ fn pair(
     let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
     let rays = random_rays(lo, hi, rays, 7);
     let subjects = [
-        Bvh::new(surface.into_iter().map(|s| (s, 0)).collect()),
-        Bvh::new(vec![(section_quad(lo, hi)?, 0)]),
+        Bvh::new(surface.into_iter().map(|s| (s, 0)).collect()).map_err(|e| e.to_string())?,
+        Bvh::new(vec![(section_quad(lo, hi)?, 0)]).map_err(|e| e.to_string())?,
     ];
     let mut passes = Vec::new();
     let mut hits = 0usize;

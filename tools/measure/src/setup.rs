@@ -100,7 +100,8 @@ pub fn run(obj: &Path, threads: usize) -> Result<Vec<Step>, String> {
         })?;
         let bvh = timed("Bvh::with_meshes", &mut steps, || {
             Bvh::with_meshes(Vec::new(), vec![(compact, 0)])
-        });
+        })
+        .map_err(|e| e.to_string())?;
         timed("drop the BVH", &mut steps, || drop(bvh));
         let prepared = timed("(check) PreparedScene::new", &mut steps, || {
             PreparedScene::new(&scene)
