@@ -26,9 +26,16 @@ for i in $(seq "$pairs"); do
     [ "$v" = B ] && bin=$b
     start=$(date +%T)
     l0=$(cut -d' ' -f1 /proc/loadavg)
-    out=$(nice "$bin" --bench 2>&1)
+    out=$(nice "$bin" --bench 2>&1) || {
+      echo "error: $bin --bench failed:" >&2
+      echo "$out" | tail -5 >&2
+      exit 1
+    }
     l1=$(cut -d' ' -f1 /proc/loadavg)
     echo "=== $v pair $i $start load $l0-$l1"
-    echo "$out" | grep -E 'triangles$|build:|memory:|/1 '
+    echo "$out" | grep -E 'triangles$|build:|memory:|/1 ' || {
+      echo "error: no figures in the output of $bin --bench" >&2
+      exit 1
+    }
   done
 done

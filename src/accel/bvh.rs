@@ -9,7 +9,7 @@ use super::flat::Flat;
 use super::leaf::{Closest, Leaves};
 use super::stack::{Stack, push_far_to_near};
 use super::triangles::{Meshes, PairTest};
-use super::unbuilt::Unbuilt;
+use super::unbuilt::{self, Unbuilt};
 use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, NODE_UNIT, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
 use crate::shapes::Shape;
@@ -31,6 +31,9 @@ const MEDIAN_DEPTH: usize = 32;
 /// `offset` is its leaf reference (see [`super::leaf::PACKETS`]).
 pub(super) use super::build::BuildNode as Node;
 
+mod surface;
+pub use surface::Surface;
+
 /// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
 /// primitive index).
 pub struct Bvh {
@@ -48,37 +51,6 @@ pub struct Bvh {
     /// The AVX tests, where the CPU has them: detected once here, not on every query.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx: Option<Avx>,
-}
-
-/// What a closest hit is on: a shape, or triangle `k` of a mesh (with the hit's barycentric
-/// coordinates of its second and third vertex).
-#[derive(Clone, Copy)]
-pub enum Surface<'a> {
-    Shape(&'a AnyShape),
-    MeshTriangle(&'a TriangleMesh, usize, [f32; 2]),
-}
-
-impl<'a> Surface<'a> {
-    /// The full hit for a [`LazyHit`] returned for `ray` (see [`AnyShape::hit_at_uv`]).
-    #[inline]
-    pub fn hit_at_uv(&self, ray: &Ray, lazy: LazyHit, uv: bool) -> Hit {
-        match self {
-            Surface::Shape(s) => s.hit_at_uv(ray, lazy, uv),
-            Surface::MeshTriangle(m, k, b) => match lazy {
-                // A triangle's hit is always `T`.
-                LazyHit::T(t) | LazyHit::Deferred(t, _) => m.hit_at(*k, t, *b),
-                LazyHit::Full(h) | LazyHit::Part(h, _) => h,
-            },
-        }
-    }
-
-    /// The shape hit, unless it is a mesh triangle.
-    pub fn shape(self) -> Option<&'a AnyShape> {
-        match self {
-            Surface::Shape(s) => Some(s),
-            Surface::MeshTriangle(..) => None,
-        }
-    }
 }
 
 impl Bvh {
@@ -113,6 +85,9 @@ impl Bvh {
         median_depth: usize,
         stop: Stop,
     ) -> Result<Self, Unbuilt> {
+        if unbuilt::too_many(shapes.len(), meshes.iter().map(|(m, _)| m.len())) {
+            return Err(Unbuilt::TooLarge);
+        }
         // Boxes in parallel; most scenes (every mesh) have only bounded shapes.
         let boxes: Vec<Aabb> = shapes.par_iter().map(|(s, _)| s.bounds()).collect();
         let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();

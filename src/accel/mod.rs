@@ -11,7 +11,7 @@ mod unbuilt;
 mod wide;
 
 pub use bvh::{Bvh, Surface};
-pub use unbuilt::Unbuilt;
+pub use unbuilt::{MAX_PRIMITIVES, Unbuilt};
 
 use glam::Vec3A;
 

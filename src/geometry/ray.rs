@@ -48,6 +48,15 @@ struct HitParts {
     uv_t: Vec4,
 }
 
+// The layout `Hit::from_parts` relies on, checked by the compiler.
+const _: () = {
+    use std::mem::{offset_of, size_of};
+    assert!(size_of::<Hit>() == size_of::<HitParts>());
+    assert!(offset_of!(Hit, dpdu) == offset_of!(HitParts, dpdu));
+    assert!(offset_of!(Hit, uv) == offset_of!(HitParts, uv_t));
+    assert!(offset_of!(Hit, t) == offset_of!(HitParts, uv_t) + 8);
+};
+
 impl Hit {
     /// The record of these parts, the same as the struct literal, but with `uv` and `t` put
     /// together in a register and stored at once. Built field by field, they are two stores
