@@ -156,13 +156,7 @@ fn mesh_rays(bounce: bool) {
 fn spheres() {
     use sppm_lang::internals::shapes::primitive::AnyShape;
     use sppm_lang::internals::shapes::sphere::Sphere;
-    let mut state = 0x9e3779b97f4a7c15u64;
-    let mut rnd = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rnd = displaced::uniform_floats(0x9e3779b97f4a7c15);
     let shapes: Vec<(AnyShape, u32)> = (0..20_000)
         .map(|k| {
             let c = glam::Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - 1.0;

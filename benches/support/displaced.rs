@@ -90,13 +90,7 @@ pub fn bounce_rays(bvh: &Bvh, camera: &[Ray], count: usize) -> Vec<Ray> {
         })
         .collect();
     assert!(!hits.is_empty(), "the camera sees the mesh");
-    let mut state = 0x2545f4914f6cdd1du64;
-    let mut rnd = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rnd = uniform_floats(0x2545f4914f6cdd1d);
     (0..count)
         .map(|k| {
             let (p, n) = hits[k % hits.len()];
@@ -108,4 +102,16 @@ pub fn bounce_rays(bvh: &Bvh, camera: &[Ray], count: usize) -> Vec<Ray> {
             Ray::new(p + n * 1e-4, d.normalize())
         })
         .collect()
+}
+
+/// Floats uniform in [0, 1) from a xorshift64 generator seeded with `seed` (not zero): the
+/// benches' fixed, dependency-free random numbers.
+pub fn uniform_floats(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    }
 }
