@@ -85,7 +85,7 @@ impl SourceFile {
     }
 
     /// The line, line start and column of byte `offset` (clamped to the text), reading at most
-    /// [`BLOCK`] bytes.
+    /// `BLOCK` bytes.
     pub fn locate(&self, offset: usize) -> Location {
         let bytes = self.text.as_bytes();
         let offset = offset.min(bytes.len());

@@ -5,14 +5,14 @@
 //! reported together. Loops and macro recursion are bounded by [`EvalOptions`].
 //!
 //! The files of this module, leaves first:
-//! - [`value`]: runtime values and the definitions they hold (imports nothing else from `eval`);
+//! - `value`: runtime values and the definitions they hold (imports nothing else from `eval`);
 //! - `builtins`: built-in functions and constants;
 //! - `args`: property arguments and their readers; `props`: property specs and transforms;
 //! - `scope`: bindings and lookups; `expr`: expressions; `random`: random streams (`seed`,
 //!   `rand`); `directives`: directives; `macros`: macro calls, as statements and as values;
 //!   `include`: `#include` and path resolution; `stdlib`: the built-in `std/` files;
 //! - `memory`: the memory a load holds (parsed text, strings, images) against its limit;
-//! - `blocks`: one builder per block kind (the [`blocks::Sink`] of its body);
+//! - `blocks`: one builder per block kind (the `blocks::Sink` of its body);
 //! - `lower`: lowering definitions into scene objects, material and texture ids, and assets.
 
 mod animation;
@@ -93,7 +93,7 @@ pub struct EvalOptions {
 /// Deepest nesting of blocks and macro calls together. Each level takes about 3.3 KB of the
 /// evaluation thread's stack (measured: a macro nesting 60 `union` blocks per call, release
 /// build; a macro call with its `#if` body, about 2.9 KB of resident stack, dev build); the
-/// thread gets [`EVAL_STACK`], three times what this many levels of blocks need. A smaller
+/// thread gets `EVAL_STACK`, three times what this many levels of blocks need. A smaller
 /// stack, taken when the address space is limited, holds proportionally fewer levels.
 pub const MAX_EVAL_NESTING: usize = 100_000;
 /// The memory limit a load (its parsed text, strings and images) is held to when the caller

@@ -36,7 +36,7 @@ pub enum Lobes {
         tint: Vec3A,
     },
     /// `eta`: inside over outside index of refraction; `alpha` below
-    /// [`rough_dielectric::MIN_ALPHA`] is smooth glass (delta lobes), else frosted glass's
+    /// `rough_dielectric::MIN_ALPHA` is smooth glass (delta lobes), else frosted glass's
     /// GGX alpha (rough_dielectric.rs).
     Glass {
         eta: f32,

@@ -313,7 +313,7 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 }
 
 /// Reads a Wavefront OBJ file from the disk (all models merged, faces triangulated). Files of
-/// the common form are read on every core ([`super::obj::parse`]); the others, and every file
+/// the common form are read on every core (`obj::parse`); the others, and every file
 /// with an error, by `tobj`.
 pub fn load_obj(path: &std::path::Path) -> Result<MeshData, AssetError> {
     load_obj_in(&FileSystem, path)

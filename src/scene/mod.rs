@@ -410,7 +410,7 @@ pub enum ShapeDecl {
         normal: DVec3,
         offset: f64,
     },
-    /// Parallelogram `origin + s*edge_u + t*edge_v`, s,t in [0,1]; normal `edge_u x edge_v`.
+    /// Parallelogram `origin + s*edge_u + t*edge_v`, s,t in \[0,1\]; normal `edge_u x edge_v`.
     Quad {
         origin: DVec3,
         edge_u: DVec3,

@@ -47,7 +47,7 @@ static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
 });
 
 /// Parses one file. On failure returns its syntax errors, in order, up to
-/// [`MAX_SYNTAX_ERRORS`](super::recover::MAX_SYNTAX_ERRORS) ([`super::recover`]).
+/// `MAX_SYNTAX_ERRORS` (`recover`).
 pub fn parse(file: FileId, text: &str) -> SourceResult<Vec<Item>> {
     let stray = check_nesting(file, text)?;
     // A byte order mark may only open the file: `chunk` does not know where it stands.

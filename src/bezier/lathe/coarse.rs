@@ -24,7 +24,7 @@ const COARSE_PAD: f32 = 1e-4;
 /// the test does not judge (the lathe gets no coarse test, the ray is let through).
 const TAME: f32 = 1e15;
 
-/// A union shell for the coarse test: heights and radii padded by [`COARSE_PAD`] of the size.
+/// A union shell for the coarse test: heights and radii padded by `COARSE_PAD` of the size.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CoarseShell {
     h0: f32,

@@ -4,7 +4,7 @@
 //! - Only `GET` and `HEAD` (405 otherwise), no request bodies (400), a request line and headers
 //!   of at most [`MAX_HEAD`] bytes (hyper answers 431 or 414 and closes), the head within
 //!   [`HEAD_TIMEOUT`], and a write that makes no progress for
-//!   [`WRITE_STALL`](super::stall::WRITE_STALL) closes its connection.
+//!   [`super::stall::WRITE_STALL`] closes its connection.
 //! - Every request first passes [`Access`]: `Host`, `Origin`, token (403 otherwise).
 //! - At most [`MAX_CONNECTIONS`] connections, [`MAX_STREAMS`] of them event streams and
 //!   [`MAX_IMAGE_SENDS`] of them sending an image; past these a client gets 503 and the others

@@ -206,8 +206,8 @@ impl DependencyWatcher {
         self.wait_batch(deadline, stop).map(|b| b.files)
     }
 
-    /// Like [`wait`](Self::wait), also telling when the first event of the batch arrived (the
-    /// start of the save-to-picture latency).
+    /// Like `wait` (the tests' form, which returns the files only), also telling when the
+    /// first event of the batch arrived (the start of the save-to-picture latency).
     pub fn wait_batch(
         &mut self,
         deadline: Option<Instant>,

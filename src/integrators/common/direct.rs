@@ -15,7 +15,7 @@ use crate::sampling::{Rng, power_heuristic};
 /// Reflected (or, through frosted glass, transmitted) direct radiance toward `wo`, at a point
 /// inside a medium of absorption `medium` (zero: none). A light sample or a BSDF sample that
 /// reaches a light crosses no other surface, so the whole way to the light is in the medium on
-/// its side of this surface ([`medium_after`]: the same one but across frosted glass).
+/// its side of this surface (`medium_after`: the same one but across frosted glass).
 pub fn direct_lighting(
     scene: &PreparedScene,
     sh: &SurfaceHit,

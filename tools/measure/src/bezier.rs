@@ -11,13 +11,14 @@
 //! - Speed: nanoseconds per ray, the median over `repeats` passes over the ray set; the methods
 //!   take turns on every chunk of rays (in a rotating order), so a change in the machine's load
 //!   hits them alike. Each is also given as a ratio to the robust method's time in the same run.
-//! - Accuracy, against [`reference`] (the slow intersectors that share no root finder with the
-//!   production code), on the rays the reference can decide: misses (the reference hits, the
-//!   method does not) as a share of the reference's hits, false hits (the method hits, the
-//!   reference does not) as a share of the reference's misses, and the relative error of `t` on
-//!   rays both hit (median, 99th percentile, maximum; above [`FAR`] it is counted as a far hit:
-//!   for an analytic method a hit on another part of the surface, e.g. a Newton root behind the
-//!   nearest one). The renderer's `t` is f32, so about 6e-8 is the floor of every method here.
+//! - Accuracy, against [`reference`](mod@crate::reference) (the slow intersectors that share no
+//!   root finder with the production code), on the rays the reference can decide: misses (the
+//!   reference hits, the method does not) as a share of the reference's hits, false hits (the
+//!   method hits, the reference does not) as a share of the reference's misses, and the
+//!   relative error of `t` on rays both hit (median, 99th percentile, maximum; above [`FAR`] it
+//!   is counted as a far hit: for an analytic method a hit on another part of the surface, e.g.
+//!   a Newton root behind the nearest one). The renderer's `t` is f32, so about 6e-8 is the
+//!   floor of every method here.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

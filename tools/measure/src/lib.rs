@@ -12,7 +12,7 @@
 //!   equal time (`cargo run --release -p sppm-measure -- lights`).
 //! - [`prism_reference`]: a slow reference intersector of `prism`, the oracle of its stress
 //!   test.
-//! - [`reference`]: slow, obviously right intersectors of the Bezier surfaces, the oracles of
+//! - [`reference`](mod@reference): slow, obviously right intersectors of the Bezier surfaces, the oracles of
 //!   the study and of the stress tests.
 //! - [`sweep_reference`]: a slow reference intersector of the curved `sphere_sweep` (dense
 //!   sampling along the curve and golden-section refinement), the oracle of its stress test.
