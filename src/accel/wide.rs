@@ -8,6 +8,9 @@ use rayon::prelude::*;
 
 use super::bvh::Node as BinaryNode;
 use crate::geometry::{Aabb, Ray};
+use plan::Choice;
+
+mod plan;
 
 /// Children per node.
 pub(super) const WIDTH: usize = 8;
@@ -199,15 +202,16 @@ pub(super) fn still_near(near: f32, t_max: f32) -> bool {
     near <= t_max * FAR_SCALE
 }
 
-/// Binary nodes from which the collapse works in parallel.
+/// Binary nodes from which the collapse (and its plan) works in parallel.
 const PARALLEL_NODES: usize = 1 << 14;
 /// Levels of the wide tree whose subtrees are collapsed as parallel tasks (up to 8^2 tasks).
 const PARALLEL_LEVELS: usize = 2;
 
 /// Collapses the binary tree (flattened depth-first: an interior node's first child follows
 /// it, `offset` names the second; a leaf's `offset` is its leaf reference) into 8-wide nodes,
-/// depth-first: each node takes its two children, then repeatedly replaces the interior child
-/// of largest surface area by that child's two children, up to eight. The root is node 0.
+/// depth-first: each node takes its two children's subtrees opened as the [`plan`] says (the
+/// collapse of least summed surface area over the wide nodes), in the binary tree's order.
+/// The root is node 0.
 ///
 /// In a large tree the subtrees of the top levels are collapsed in parallel, each into its
 /// own run of nodes, and the runs are joined in depth-first order: the nodes are the same on
@@ -233,7 +237,8 @@ pub(super) fn collapse(nodes: &[BinaryNode]) -> Option<Vec<WideNode>> {
     } else {
         0
     };
-    let mut out = collapse_run(nodes, 0, levels);
+    let plan = plan::plan(nodes, PARALLEL_NODES);
+    let mut out = collapse_run(nodes, &plan, 0, levels);
     if !fits(out.len()) {
         return None;
     }
@@ -260,16 +265,16 @@ pub(super) fn fits(count: usize) -> bool {
 
 /// The wide subtree of interior binary node `i` as a run of nodes whose references count from
 /// the run's start; `levels` more levels are collapsed in parallel.
-fn collapse_run(nodes: &[BinaryNode], i: usize, levels: usize) -> Vec<WideNode> {
+fn collapse_run(nodes: &[BinaryNode], plan: &[Choice], i: usize, levels: usize) -> Vec<WideNode> {
     let mut out = Vec::new();
     if levels == 0 {
-        collapse_at(nodes, i, &mut out);
+        collapse_at(nodes, plan, i, &mut out);
         return out;
     }
-    let kids = kids_of(nodes, i);
+    let kids = kids_of(nodes, plan, i);
     let runs: Vec<Option<Vec<WideNode>>> = kids
         .par_iter()
-        .map(|&k| (nodes[k].count == 0).then(|| collapse_run(nodes, k, levels - 1)))
+        .map(|&k| (nodes[k].count == 0).then(|| collapse_run(nodes, plan, k, levels - 1)))
         .collect();
     out.push(WideNode::from_children(nodes, &[], &[]));
     let mut refs: ArrayVec<u32, WIDTH> = ArrayVec::new();
@@ -296,17 +301,17 @@ fn collapse_run(nodes: &[BinaryNode], i: usize, levels: usize) -> Vec<WideNode> 
     out
 }
 
-fn collapse_at(nodes: &[BinaryNode], i: usize, out: &mut Vec<WideNode>) -> u32 {
+fn collapse_at(nodes: &[BinaryNode], plan: &[Choice], i: usize, out: &mut Vec<WideNode>) -> u32 {
     let idx = out.len();
     out.push(WideNode::from_children(nodes, &[], &[]));
-    let kids = kids_of(nodes, i);
+    let kids = kids_of(nodes, plan, i);
     let refs: ArrayVec<u32, WIDTH> = kids
         .iter()
         .map(|&k| {
             if nodes[k].count > 0 {
                 LEAF | nodes[k].offset
             } else {
-                collapse_at(nodes, k, out)
+                collapse_at(nodes, plan, k, out)
             }
         })
         .collect();
@@ -314,27 +319,20 @@ fn collapse_at(nodes: &[BinaryNode], i: usize, out: &mut Vec<WideNode>) -> u32 {
     idx as u32
 }
 
-/// The children of wide node made from interior binary node `i`: its two children, opened up
-/// to eight, the interior one of largest surface area first.
-fn kids_of(nodes: &[BinaryNode], i: usize) -> ArrayVec<usize, WIDTH> {
-    let mut kids: ArrayVec<usize, WIDTH> = ArrayVec::new();
-    kids.push(i + 1);
-    kids.push(nodes[i].offset as usize);
-    while !kids.is_full() {
-        let widest = kids
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| nodes[**k].count == 0)
-            .max_by(|a, b| {
-                let area = |k: usize| nodes[k].bounds.surface_area();
-                area(*a.1).total_cmp(&area(*b.1))
-            })
-            .map(|(j, _)| j);
-        let Some(j) = widest else { break };
-        let k = kids.remove(j);
-        kids.insert(j, nodes[k].offset as usize);
-        kids.insert(j, k + 1);
-    }
+/// The children of the wide node made from interior binary node `i`: its two children's
+/// subtrees opened into eight slots as `plan` says, in the binary tree's order.
+fn kids_of(nodes: &[BinaryNode], plan: &[Choice], i: usize) -> ArrayVec<usize, WIDTH> {
+    let mut kids = ArrayVec::new();
+    // (From 1 to 7 by construction: clamped so that the two shares always make eight.)
+    let first = usize::from(plan[i][0]).clamp(1, WIDTH - 1);
+    plan::open(nodes, plan, i + 1, first, &mut kids);
+    plan::open(
+        nodes,
+        plan,
+        nodes[i].offset as usize,
+        WIDTH - first,
+        &mut kids,
+    );
     kids
 }
 

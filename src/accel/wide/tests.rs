@@ -155,7 +155,8 @@ fn parallel_collapse_matches_the_serial_one() {
         nodes.len()
     );
     let mut serial = Vec::new();
-    super::collapse_at(&nodes, 0, &mut serial);
+    let plan = super::plan::plan(&nodes, usize::MAX);
+    super::collapse_at(&nodes, &plan, 0, &mut serial);
     assert!(serial.len() > 1000);
     for threads in [1, 2, 4] {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -176,6 +177,150 @@ fn parallel_collapse_matches_the_serial_one() {
             };
             assert_eq!(p.child, s.child.map(offset), "node {k}, {threads} threads");
         }
+    }
+}
+
+/// The binary nodes that become wide nodes in the collapse of `nodes` (the root first), each
+/// with its children; checks that each has two to eight and that every binary leaf is in the
+/// slots once.
+fn wide_roots(nodes: &[BinaryNode], kids: impl Fn(usize) -> Vec<usize>) -> Vec<usize> {
+    let mut roots = vec![0];
+    let mut seen = vec![false; nodes.len()];
+    let mut k = 0;
+    while k < roots.len() {
+        let children = kids(roots[k]);
+        assert!(
+            (2..=8).contains(&children.len()),
+            "{} children",
+            children.len()
+        );
+        for c in children {
+            assert!(!seen[c], "node {c} in two slots");
+            seen[c] = true;
+            if nodes[c].count == 0 {
+                roots.push(c);
+            }
+        }
+        k += 1;
+    }
+    for (i, n) in nodes.iter().enumerate() {
+        assert!(n.count == 0 || seen[i], "leaf {i} in no slot");
+    }
+    roots
+}
+
+/// The summed surface area of the wide nodes made from `roots`.
+fn area(nodes: &[BinaryNode], roots: &[usize]) -> f64 {
+    roots
+        .iter()
+        .map(|&r| f64::from(nodes[r].bounds.surface_area()))
+        .sum()
+}
+
+/// The children of the wide node made from interior node `i` by the greedy collapse: its two
+/// children, then the interior child of largest area opened, until eight.
+fn greedy(nodes: &[BinaryNode], i: usize) -> Vec<usize> {
+    let mut kids = vec![i + 1, nodes[i].offset as usize];
+    while kids.len() < 8 {
+        let widest = (0..kids.len())
+            .filter(|&j| nodes[kids[j]].count == 0)
+            .max_by(|&a, &b| {
+                let area = |j: usize| nodes[kids[j]].bounds.surface_area();
+                area(a).total_cmp(&area(b))
+            });
+        let Some(j) = widest else { break };
+        let k = kids.remove(j);
+        kids.insert(j, nodes[k].offset as usize);
+        kids.insert(j, k + 1);
+    }
+    kids
+}
+
+/// The plan's collapse of a random tree of at most 16 leaves against every collapse of it
+/// (every set of interior nodes made wide nodes whose nodes have at most eight children):
+/// none has a smaller summed area of wide nodes.
+#[test]
+fn the_plan_has_the_least_summed_area_of_any_collapse() {
+    let mut rng = Rng::new(7);
+    let (mut tried, mut worse) = (0, 0);
+    while tried < 300 {
+        let mut nodes = Vec::new();
+        random_tree(&mut rng, &mut nodes, 5);
+        let interior: Vec<usize> = (1..nodes.len()).filter(|&i| nodes[i].count == 0).collect();
+        if nodes[0].count > 0 || interior.len() > 14 {
+            continue;
+        }
+        tried += 1;
+        let plan = super::plan::plan(&nodes, usize::MAX);
+        let got = area(
+            &nodes,
+            &wide_roots(&nodes, |i| super::kids_of(&nodes, &plan, i).to_vec()),
+        );
+        let mut best = f64::INFINITY;
+        for set in 0u32..1 << interior.len() {
+            let wide = |i: usize| {
+                i == 0
+                    || interior
+                        .iter()
+                        .position(|&k| k == i)
+                        .is_some_and(|p| set >> p & 1 != 0)
+            };
+            // A wide node's slots: its children, each opened (its children in its place)
+            // unless it is a leaf or a wide node itself.
+            fn slots(nodes: &[BinaryNode], wide: &dyn Fn(usize) -> bool, c: usize) -> usize {
+                if nodes[c].count > 0 || wide(c) {
+                    1
+                } else {
+                    slots(nodes, wide, c + 1) + slots(nodes, wide, nodes[c].offset as usize)
+                }
+            }
+            let mut total = 0.0;
+            let mut fits = true;
+            for w in (0..nodes.len()).filter(|&i| nodes[i].count == 0 && wide(i)) {
+                let n =
+                    slots(&nodes, &wide, w + 1) + slots(&nodes, &wide, nodes[w].offset as usize);
+                fits &= n <= 8;
+                total += f64::from(nodes[w].bounds.surface_area());
+            }
+            if fits {
+                best = best.min(total);
+            }
+        }
+        assert!(got <= best * (1.0 + 1e-6), "plan {got}, best {best}");
+        let theirs = area(&nodes, &wide_roots(&nodes, |i| greedy(&nodes, i)));
+        worse += usize::from(theirs > best * (1.0 + 1e-6));
+    }
+    // (The search can tell: the greedy collapse is above the least on some of these trees.)
+    assert!(
+        worse > 0,
+        "the greedy collapse was the least on all {tried} trees"
+    );
+    println!("the greedy collapse above the least on {worse} of {tried} trees");
+}
+
+/// On large random trees the plan's collapse has a smaller summed area of wide nodes than
+/// the greedy one (open the interior child of largest area until eight), and fewer nodes.
+#[test]
+fn the_plan_beats_the_greedy_collapse() {
+    for seed in 0..4 {
+        let mut nodes = Vec::new();
+        random_tree(&mut Rng::new(100 + seed), &mut nodes, 12);
+        let plan = super::plan::plan(&nodes, usize::MAX);
+        let ours = wide_roots(&nodes, |i| super::kids_of(&nodes, &plan, i).to_vec());
+        let theirs = wide_roots(&nodes, |i| greedy(&nodes, i));
+        let (a, b) = (area(&nodes, &ours), area(&nodes, &theirs));
+        assert!(a < b, "seed {seed}: plan {a}, greedy {b}");
+        assert!(
+            ours.len() < theirs.len(),
+            "seed {seed}: {} against {} nodes",
+            ours.len(),
+            theirs.len()
+        );
+        println!(
+            "seed {seed}: area {a:.1} against {b:.1}, {} against {} nodes",
+            ours.len(),
+            theirs.len()
+        );
     }
 }
 
