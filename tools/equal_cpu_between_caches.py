@@ -23,7 +23,10 @@ from equal_cpu_examples import ratio_with_noise, scaled  # noqa: E402
 def renders(cache, name, method, seeds):
     d = os.path.join(cache, name)
     meta = json.load(open(os.path.join(d, "meta.json")))
-    budget, fixed = meta["budget"], meta["calibration"][method][0]
+    calibration = (meta.get("calibration") or {}).get(method)
+    if not calibration:
+        sys.exit(f"error: {d}/meta.json has no calibration of {method}: render it first")
+    budget, fixed = meta["budget"], calibration[0]
     res = [json.load(open(os.path.join(d, f"{method}-{s}.json"))) for s in range(1, seeds + 1)]
     return res, budget, fixed
 

@@ -2,7 +2,7 @@
 run to run: the order of their compressed chunks). Prints, for each channel that differs, how
 many of its values differ and the largest difference; exits 1 if any does.
 
-    /work/venv-py/bin/python tools/exr_identical.py a.exr b.exr   # a venv with numpy, OpenEXR
+    python3 tools/exr_identical.py a.exr b.exr   # a Python with numpy and OpenEXR
 
 Measurement only: nothing in the renderer or its tests imports it.
 """

@@ -152,11 +152,10 @@ const HEAVY_BVH: u64 = 200;
 /// light distributions (f64 power, three f32 per distribution).
 const PER_LIGHT: u64 = size_of::<crate::lights::Light>() as u64 + 8 + 2 * 12;
 
-/// The BVH's bytes per triangle of a mesh kept in compact form: its share of the 4-wide nodes,
-/// of the leaf records and of the triangle packets (160 bytes per four triangles). Measured 51
-/// to 64 bytes on sheets and scattered triangles of 128 to 500 000 triangles (the test below)
-/// and 56 on the scale benchmark's 10^6; the rest is the margin for partly filled packets and
-/// wider nodes.
+/// The BVH's bytes per triangle of a mesh kept in compact form: its share of the 8-wide nodes,
+/// of the leaf records and of the triangle packets (160 bytes per four triangles), as the test
+/// below measures it on sheets and scattered triangles of 128 to 500 000 triangles; the rest is
+/// the margin for partly filled packets.
 const BVH_PER_TRIANGLE: u64 = 100;
 /// Bytes per compact mesh whatever its size: a tree's root, a leaf and a packet at least.
 const PER_MESH: u64 = 1 << 10;

@@ -20,10 +20,11 @@
 //! - `cost(n, j) = min(cost(n, j - 1), split(n, j))` for `j` from 2 (`n` opened);
 //! - `split(n, j)`: the least `cost(first, k) + cost(second, j - k)`, `k` from 1 to `j - 1`;
 //!
-//! a leaf costs 0 in any number of slots. Ties keep the fewer slots and the smaller `k`; a NaN
-//! or infinite area (boxes at the edge of `f32`'s range) makes no comparison win, which leaves a
-//! valid plan. Each node's choices depend only on its subtree, so the plan is the same on any
-//! number of threads.
+//! a leaf costs 0 in any number of slots. Ties keep the fewer slots and the smaller `k`. A NaN
+//! area (a flat box spanning more than `f32`'s range on another axis) counts as infinite; an
+//! infinite cost never wins a comparison against a finite one, and every choice stays in its
+//! range whatever the costs, so such boxes leave a valid plan. Each node's choices depend only on
+//! its subtree, so the plan is the same on any number of threads.
 
 use super::{BinaryNode, WIDTH};
 
@@ -71,7 +72,9 @@ fn subtree(
             subtree(nodes, plan, base, second, end, parallel_from),
         )
     };
-    let (cost, choice) = combine(nodes[n].bounds.surface_area(), &a, &b);
+    let area = nodes[n].bounds.surface_area();
+    let area = if area.is_nan() { f32::INFINITY } else { area };
+    let (cost, choice) = combine(area, &a, &b);
     plan[n - base] = choice;
     cost
 }

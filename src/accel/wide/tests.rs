@@ -180,9 +180,18 @@ fn parallel_collapse_matches_the_serial_one() {
     }
 }
 
+/// One past the last node of node `i`'s subtree (flattened depth-first).
+fn subtree_end(nodes: &[BinaryNode], i: usize) -> usize {
+    if nodes[i].count > 0 {
+        i + 1
+    } else {
+        subtree_end(nodes, nodes[i].offset as usize)
+    }
+}
+
 /// The binary nodes that become wide nodes in the collapse of `nodes` (the root first), each
-/// with its children; checks that each has two to eight and that every binary leaf is in the
-/// slots once.
+/// with its children; checks that each has two to eight, all in its subtree below it, and that
+/// every binary leaf is in the slots once.
 fn wide_roots(nodes: &[BinaryNode], kids: impl Fn(usize) -> Vec<usize>) -> Vec<usize> {
     let mut roots = vec![0];
     let mut seen = vec![false; nodes.len()];
@@ -194,7 +203,9 @@ fn wide_roots(nodes: &[BinaryNode], kids: impl Fn(usize) -> Vec<usize>) -> Vec<u
             "{} children",
             children.len()
         );
+        let (r, end) = (roots[k], subtree_end(nodes, roots[k]));
         for c in children {
+            assert!(r < c && c < end, "node {c} is not below node {r}");
             assert!(!seen[c], "node {c} in two slots");
             seen[c] = true;
             if nodes[c].count == 0 {
@@ -286,7 +297,13 @@ fn the_plan_has_the_least_summed_area_of_any_collapse() {
                 best = best.min(total);
             }
         }
+        // (Not below the least either: that would be a collapse the search does not count as
+        // one. The plan chose in f32, hence the tolerance above.)
         assert!(got <= best * (1.0 + 1e-6), "plan {got}, best {best}");
+        assert!(
+            got >= best * (1.0 - 1e-12),
+            "plan {got} below every collapse's {best}"
+        );
         let theirs = area(&nodes, &wide_roots(&nodes, |i| greedy(&nodes, i)));
         worse += usize::from(theirs > best * (1.0 + 1e-6));
     }
@@ -321,6 +338,38 @@ fn the_plan_beats_the_greedy_collapse() {
             ours.len(),
             theirs.len()
         );
+    }
+}
+
+/// Boxes whose area is NaN (flat, spanning more than `f32`'s range on another axis) or
+/// infinite leave a valid collapse: every leaf in one slot, two to eight children a node.
+#[test]
+fn boxes_of_nan_or_infinite_area_leave_a_valid_collapse() {
+    let mut rng = Rng::new(5);
+    for seed in 0..8 {
+        let mut nodes = Vec::new();
+        random_tree(&mut Rng::new(200 + seed), &mut nodes, 9);
+        if nodes[0].count > 0 {
+            continue;
+        }
+        for n in nodes.iter_mut() {
+            let u = rng.f32();
+            if u < 0.1 {
+                // x spans 4e38 (infinite in f32), y is flat: area inf * 0 = NaN.
+                n.bounds = Aabb::new(
+                    glam::Vec3A::new(-2e38, 0.5, 0.0),
+                    glam::Vec3A::new(2e38, 0.5, 1.0),
+                );
+                assert!(n.bounds.surface_area().is_nan());
+            } else if u < 0.2 {
+                n.bounds = Aabb::new(glam::Vec3A::splat(-3e38), glam::Vec3A::splat(3e38));
+                assert!(n.bounds.surface_area().is_infinite());
+            }
+        }
+        let plan = super::plan::plan(&nodes, usize::MAX);
+        let roots = wide_roots(&nodes, |i| super::kids_of(&nodes, &plan, i).to_vec());
+        let wide = super::collapse(&nodes).expect("fits");
+        assert_eq!(wide.len(), roots.len(), "seed {seed}");
     }
 }
 
