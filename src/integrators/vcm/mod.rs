@@ -8,8 +8,10 @@
 //! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
 //! next-event estimation, connections to every vertex of the light path with the pixel's index
 //! (modulo the light paths' count), and merges
-//! with the light vertices within the camera path's radius (`grid.rs`). Every technique is
-//! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
+//! with the light vertices within the camera path's radius (`grid.rs`); a connection that would
+//! add little to its pixel plays Russian roulette before its shadow ray (`roulette.rs`). Every
+//! technique is weighted by the power heuristic through the recursive quantities of `mis.rs`.
+//! Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
 //! bounce, for the part only camera paths sample: more where that part has varied
 //! (`DELTA_CAMERA_PATHS`) than where it has not yet (`DELTA_CAMERA_PATHS_QUIET`).

@@ -126,7 +126,7 @@ mod tests {
     /// none for a mean of zero or one that is not finite.
     #[test]
     fn floors_wait_for_their_samples() {
-        let mut stats = vec![SampleStats::default(); 4];
+        let mut stats = [SampleStats::default(); 4];
         for k in 0..CONNECT_ROULETTE_SAMPLES {
             let v = if k % 2 == 0 { 1.0 } else { 3.0 };
             stats[0].add(Vec3A::splat(v));
