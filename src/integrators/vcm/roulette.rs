@@ -11,7 +11,7 @@
 //! light is seen directly (its edge, `cornell`'s pixels beside the lamp) its emission made the
 //! floor ten or more times what any connection there adds, so that 2 % of those pixels'
 //! connections survived, each counting fifty times. The floors are set before each pass from
-//! the earlier ones (a pixel's own draws never set its floor), in pixel order, and only once a
+//! the earlier ones (a pass's own paths never move its floors), in pixel order, and only once a
 //! pixel has `CONNECT_ROULETTE_SAMPLES` camera paths: a mean of a few, raised by one bright
 //! path, would make the floor follow the noise. Each draw comes from the pixel's own stream,
 //! so the image is the same on any thread count.
