@@ -43,6 +43,11 @@ impl SampleStats {
         self.variance().is_some_and(|v| v > 1e-9 * mean * mean)
     }
 
+    /// The mean luminance of the samples; `None` with fewer than `min` (or none).
+    pub(crate) fn mean_of(&self, min: u32) -> Option<f64> {
+        (self.n >= min.max(1)).then(|| self.sum / f64::from(self.n))
+    }
+
     /// The sample variance; `None` with fewer than two samples.
     pub(crate) fn variance(&self) -> Option<f64> {
         (self.n >= 2).then(|| {

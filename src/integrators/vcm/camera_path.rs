@@ -8,6 +8,7 @@ use glam::Vec3A;
 
 use super::light_path::{LightVertex, VertexSurface};
 use super::mis::{self, Factors, GatherAt, Parts};
+use super::roulette::{connection_roulette, luminance};
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
@@ -134,12 +135,20 @@ pub(super) fn radiance(
             let l = &mut out.rest;
             if ctx.mode.use_vc {
                 *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
+                let floor = ctx.connect_floor((y * ctx.settings.resolution.0 + x) as usize);
                 for (v, surface) in own.0.iter().zip(own.1) {
                     if v.len + 1 + st.len > ctx.max_len {
                         continue;
                     }
-                    let c = connect(ctx, &st, &sh, &bsdf, wo, v, surface);
-                    *l += st.beta * Vec3A::from(v.beta) * c;
+                    let throughput = st.beta * Vec3A::from(v.beta);
+                    let at = Vertices {
+                        sh: &sh,
+                        bsdf: &bsdf,
+                        wo,
+                        v,
+                        surface,
+                    };
+                    *l += throughput * connect(ctx, &st, &at, (throughput, floor), rng);
                 }
             }
             if ctx.mode.use_vm {
@@ -352,18 +361,33 @@ fn direct(
     f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
 }
 
-/// Connects a camera vertex to light vertex `v` on `surface` (without either path's
-/// throughput).
-#[allow(clippy::too_many_arguments)]
+/// The two ends of a connection: the camera vertex (`sh`, its BSDF, the direction back along
+/// the camera path) and light vertex `v` on `surface`.
+struct Vertices<'a> {
+    sh: &'a SurfaceHit,
+    bsdf: &'a Bsdf,
+    wo: Vec3A,
+    v: &'a LightVertex,
+    surface: &'a VertexSurface,
+}
+
+/// Connects a camera vertex to a light vertex (without either path's throughput). `roulette`:
+/// both paths' throughput and the pixel's floor (`roulette.rs`): a connection whose weighted
+/// contribution falls below the floor plays Russian roulette before its shadow ray.
 fn connect(
     ctx: &Context,
     st: &State,
-    sh: &SurfaceHit,
-    bsdf: &Bsdf,
-    wo: Vec3A,
-    v: &LightVertex,
-    surface: &VertexSurface,
+    at: &Vertices,
+    (throughput, floor): (Vec3A, f32),
+    rng: &mut Rng,
 ) -> Vec3A {
+    let Vertices {
+        sh,
+        bsdf,
+        wo,
+        v,
+        surface,
+    } = *at;
     let scene = ctx.scene;
     let p = sh.hit.p;
     let d = surface.p - p;
@@ -409,12 +433,16 @@ fn connect(
     if !(w > 0.0 && g > 0.0) {
         return Vec3A::ZERO;
     }
+    let c = f_cam * f_light * (g * w as f32);
+    let Some(scale) = connection_roulette(luminance(throughput * c), floor, rng) else {
+        return Vec3A::ZERO;
+    };
     let (ray, t_max) = scene.spawn_ray_to(p, sh.hit.n, surface.p, v_bsdf.ng);
     if scene.occluded(&ray, t_max) {
         return Vec3A::ZERO;
     }
     let absorbed = transmittance(medium_after(scene, sh, wo, dir, st.medium), dist);
-    f_cam * f_light * absorbed * (g * w as f32)
+    c * absorbed * scale
 }
 
 /// Merges the light vertices within the radius of camera vertex `p` (without the camera

@@ -8,8 +8,10 @@
 //! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
 //! next-event estimation, connections to every vertex of the light path with the pixel's index
 //! (modulo the light paths' count), and merges
-//! with the light vertices within the camera path's radius (`grid.rs`). Every technique is
-//! weighted by the power heuristic through the recursive quantities of `mis.rs`. Pixels that
+//! with the light vertices within the camera path's radius (`grid.rs`); a connection that would
+//! add little to its pixel plays Russian roulette before its shadow ray (`roulette.rs`). Every
+//! technique is weighted by the power heuristic through the recursive quantities of `mis.rs`.
+//! Pixels that
 //! see through mirrors or glass also take camera paths that stop at their first non-delta
 //! bounce, for the part only camera paths sample: more where that part has varied
 //! (`DELTA_CAMERA_PATHS`) than where it has not yet (`DELTA_CAMERA_PATHS_QUIET`).
@@ -56,6 +58,7 @@ mod light_count;
 mod light_path;
 mod mis;
 mod pixel_radius;
+mod roulette;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -164,6 +167,9 @@ struct Context<'c, 's, 'a> {
     radius: Radius,
     /// Each pixel's scale of its radius (`pixel_radius.rs`; empty: 1 for every pixel).
     pixel_scales: &'c [f64],
+    /// Each pixel's connection roulette floor this iteration (`roulette.rs`; 0 or missing: no
+    /// roulette).
+    connect_floors: &'c [f32],
     /// Longest path, in segments: the path tracer's (`max_depth` bounces and a light sample).
     max_len: u32,
     /// Light choice for light paths (every light, by power).
@@ -187,6 +193,11 @@ impl Context<'_, '_, '_> {
         let choice = self.emit_probs.get(li).copied().unwrap_or(0.0);
         let (pos, d) = self.scene.lights[li].emission_pdf(p, n, dir);
         choice * f64::from(pos) * f64::from(d)
+    }
+
+    /// Pixel `pixel`'s connection roulette floor this iteration (0: none).
+    fn connect_floor(&self, pixel: usize) -> f32 {
+        self.connect_floors.get(pixel).copied().unwrap_or(0.0)
     }
 
     /// Pixel `pixel`'s scale of its radius this iteration.
@@ -288,9 +299,10 @@ impl Integrator for Vcm {
         // Each pixel's camera paths so far, and its extra camera paths for the next iteration.
         let mut samples = vec![SampleStats::default(); n_paths];
         let mut extra = vec![0u32; n_paths];
-        // Each pixel's delta parts so far, and whether a camera path left its first vertex
-        // by a delta bounce.
-        let mut delta = vec![(SampleStats::default(), false); n_paths];
+        // Each pixel's delta parts so far, whether a camera path left its first vertex by a
+        // delta bounce, and the non-delta parts of its full camera paths (its connections'
+        // roulette floor: `roulette.rs`).
+        let mut parts = vec![(SampleStats::default(), false, SampleStats::default()); n_paths];
         // Each pixel's footprint ratio through mirrors and glass (0 until measured).
         let mut ratios = vec![0.0; n_paths];
         let extra_budget = (n_paths as f64 * EXTRA_CAMERA_PATHS) as u64;
@@ -302,6 +314,7 @@ impl Integrator for Vcm {
         // One pass: iteration `iter` of the streams of `seed`; `counted` passes feed the
         // light-path count's pilot and the pixels' radii.
         let radius = Radius { rule, fallback };
+        let mut floors: Vec<f32> = Vec::with_capacity(n_paths);
         let mut pass_of = |iter: u32,
                            seed: u64,
                            counted: bool,
@@ -312,6 +325,11 @@ impl Integrator for Vcm {
             } else {
                 n_paths
             };
+            // Decided before the pass from the earlier ones, in pixel order.
+            floors.clear();
+            if mode.use_vc {
+                roulette::floors(parts.iter().map(|p| &p.2), &mut floors);
+            }
             let mut ctx = Context {
                 scene,
                 settings,
@@ -320,6 +338,7 @@ impl Integrator for Vcm {
                 light_paths: n_light as f64,
                 radius,
                 pixel_scales: pixel_radii.scales(),
+                connect_floors: &floors,
                 max_len: settings.max_depth.saturating_add(1),
                 emitters: &emitters,
                 emit_probs: &emit_probs,
@@ -347,11 +366,11 @@ impl Integrator for Vcm {
             let delta_paths = AtomicU64::new(0);
             let (values, (r0, found)): (Vec<Vec3A>, (Vec<f64>, Vec<u32>)) = samples
                 .par_iter_mut()
-                .zip(delta.par_iter_mut())
+                .zip(parts.par_iter_mut())
                 .zip(extra.par_iter())
                 .zip(ratios.par_iter_mut())
                 .enumerate()
-                .map(|(i, (((px, (sp_stats, seen_delta)), &extra), ratio))| {
+                .map(|(i, (((px, (sp_stats, seen_delta, rs)), &extra), ratio))| {
                     let splat = film[i].as_vec3a();
                     if cancel.load(Ordering::Relaxed) {
                         return (Vec3A::ZERO, (0.0, 0));
@@ -375,6 +394,7 @@ impl Integrator for Vcm {
                     let first = camera_path::radiance(&ctx, x, y, own, &mut rng, false, ratio);
                     let (mut spec, mut rest) = (finite(first.specular), finite(first.rest));
                     px.add(spec + rest);
+                    rs.add(rest);
                     sp_stats.add(spec);
                     *seen_delta |= first.through_delta;
                     let mut rng = Stream::VcmCameraExtra.rng(seed, iter, i as u64);
@@ -383,6 +403,7 @@ impl Integrator for Vcm {
                         let (sp, re) = (finite(r.specular), finite(r.rest));
                         if k < extra {
                             px.add(sp + re);
+                            rs.add(re);
                         }
                         sp_stats.add(sp);
                         spec += sp;
