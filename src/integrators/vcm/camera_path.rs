@@ -8,7 +8,7 @@ use glam::Vec3A;
 
 use super::light_path::{LightVertex, VertexSurface};
 use super::mis::{self, Factors, GatherAt, Parts};
-use super::roulette::{connection_roulette, luminance};
+use super::roulette::connection_roulette;
 use super::{Context, bounce};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
@@ -19,6 +19,7 @@ use crate::lights::AreaLight;
 use crate::materials::{Bsdf, TransportMode};
 use crate::prepare::{GATHER_RADIUS_FACTOR, InitialRadius, SurfaceHit};
 use crate::sampling::Rng;
+use crate::textures::luminance;
 
 /// The state of a camera path at its last vertex.
 struct State {

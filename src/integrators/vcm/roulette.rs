@@ -16,8 +16,6 @@
 //! path, would make the floor follow the noise. Each draw comes from the pixel's own stream,
 //! so the image is the same on any thread count.
 
-use glam::Vec3A;
-
 use crate::integrators::common::camera_samples::SampleStats;
 use crate::sampling::Rng;
 
@@ -54,13 +52,10 @@ pub(super) fn connection_roulette(y: f32, floor: f32, rng: &mut Rng) -> Option<f
     (p > 0.0 && rng.f32() < p).then(|| 1.0 / p)
 }
 
-pub(super) fn luminance(c: Vec3A) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3A;
 
     /// The roulette keeps a connection's expectation: below the floor the mean of its factor
     /// over many draws is 1 (and each survivor counts up to the floor); at or above it, or
