@@ -41,8 +41,9 @@ pub(super) struct Grid {
 }
 
 /// `x.floor()` without a call to libm's `floor` (x86-64 without SSE4.1 has no rounding
-/// instruction): exact, since every f64 of magnitude 2^52 or more (and infinity, NaN) is its own
-/// floor, and below that the truncation to i64 is exact.
+/// instruction): exact up to the sign of zero (-0.0 gives +0.0, which no caller tells apart),
+/// since every f64 of magnitude 2^52 or more (and infinity, NaN) is its own floor, and below
+/// that the truncation to i64 is exact.
 #[inline]
 fn floor(x: f64) -> f64 {
     if x.abs() < 4_503_599_627_370_496.0 {
@@ -134,10 +135,21 @@ impl Grid {
     /// The points of fine bucket `b` within `sqrt(r2)` of `p`, in index order.
     #[inline(always)]
     fn visit(&self, b: u32, p: Vec3A, r2: f32, f: &mut impl FnMut(usize)) {
-        let (s, e) = (
+        self.visit_range(self.range(b), p, r2, f);
+    }
+
+    /// The positions in `items` and `points` of fine bucket `b`'s points.
+    #[inline(always)]
+    fn range(&self, b: u32) -> (usize, usize) {
+        (
             self.starts[b as usize] as usize,
             self.starts[b as usize + 1] as usize,
-        );
+        )
+    }
+
+    /// The points at positions `s..e` within `sqrt(r2)` of `p`, in index order.
+    #[inline(always)]
+    fn visit_range(&self, (s, e): (usize, usize), p: Vec3A, r2: f32, f: &mut impl FnMut(usize)) {
         for (&pt, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
             if (pt - p).length_squared() <= r2 {
                 f(i as usize);
@@ -148,12 +160,10 @@ impl Grid {
     /// The points of several fine buckets (distinct, at most 8: a query's cells, or one order
     /// bucket's) within `sqrt(r2)` of `p`, merged in index order.
     fn visit_merged(&self, buckets: &[u32], p: Vec3A, r2: f32, f: &mut impl FnMut(usize)) {
+        debug_assert!(buckets.len() <= 8, "{} buckets", buckets.len());
         let mut ranges = [(0usize, 0usize); 8];
         for (range, &b) in ranges.iter_mut().zip(buckets) {
-            *range = (
-                self.starts[b as usize] as usize,
-                self.starts[b as usize + 1] as usize,
-            );
+            *range = self.range(b);
         }
         let ranges = &mut ranges[..buckets.len().min(8)];
         loop {
@@ -220,16 +230,8 @@ impl Grid {
             }
         }
         if !shared {
-            let ranges = fine.map(|b| {
-                let b = b as usize;
-                (self.starts[b] as usize, self.starts[b + 1] as usize)
-            });
-            for (s, e) in ranges {
-                for (&pt, &i) in self.points[s..e].iter().zip(&self.items[s..e]) {
-                    if (pt - p).length_squared() <= r2 {
-                        f(i as usize);
-                    }
-                }
+            for range in fine.map(|b| self.range(b)) {
+                self.visit_range(range, p, r2, &mut f);
             }
             return;
         }
@@ -275,16 +277,20 @@ impl Grid {
         let lo = (q - e).to_array().map(|x| floor(x) as i64);
         let hi = (q + e).to_array().map(|x| floor(x) as i64);
         let span = |a: i64, b: i64| i128::from(b) - i128::from(a) + 1;
-        let cells = span(lo[0], hi[0]) * span(lo[1], hi[1]) * span(lo[2], hi[2]);
+        // `None` past i128 (an infinite radius, or one ~10^13 times the grid's): more cells than
+        // any table's buckets.
+        let cells = span(lo[0], hi[0])
+            .checked_mul(span(lo[1], hi[1]))
+            .and_then(|c| c.checked_mul(span(lo[2], hi[2])));
         let r2 = r * r;
         let n_order = (self.starts.len().saturating_sub(1)) >> SUB_BITS;
-        if cells > n_order as i128 {
+        let Some(cells) = cells.filter(|&c| c <= n_order as i128) else {
             let all: [u32; 1 << SUB_BITS] = std::array::from_fn(|k| k as u32);
             for order in 0..n_order as u32 {
                 self.visit_fine(&all.map(|k| (order << SUB_BITS) + k), p, r2, &mut f);
             }
             return;
-        }
+        };
         // Up to 4 x 4 x 4 cells (a radius up to 1.5 times the grid's) on the stack, more in
         // a buffer kept by the thread (no allocation a query).
         let mut each_bucket = |buckets: &mut [u32]| {
@@ -307,19 +313,15 @@ impl Grid {
                 while end < buckets.len() && buckets[end] >> SUB_BITS == order {
                     end += 1;
                 }
-                if buckets[end - 1] == buckets[j] {
-                    self.visit(buckets[j], p, r2, &mut f);
-                } else {
-                    let mut fine = [0u32; 1 << SUB_BITS];
-                    let mut n = 0;
-                    for &b in &buckets[j..end] {
-                        if n == 0 || fine[n - 1] != b {
-                            fine[n] = b;
-                            n += 1;
-                        }
+                let mut fine = [0u32; 1 << SUB_BITS];
+                let mut n = 0;
+                for &b in &buckets[j..end] {
+                    if n == 0 || fine[n - 1] != b {
+                        fine[n] = b;
+                        n += 1;
                     }
-                    self.visit_merged(&fine[..n], p, r2, &mut f);
                 }
+                self.visit_fine(&fine[..n], p, r2, &mut f);
                 j = end;
             }
         };
@@ -344,6 +346,62 @@ thread_local! {
 mod tests {
     use super::*;
     use crate::sampling::Rng;
+
+    /// The grid's `floor` is `f64::floor` (up to the sign of zero) at the edges of its
+    /// branches: just below integers, around 2^52, beyond i64, infinities and NaN.
+    #[test]
+    fn floor_is_f64_floor() {
+        let below_one = 1.0 - f64::EPSILON / 2.0;
+        let big = 4_503_599_627_370_496.0; // 2^52
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            -1e-300,
+            1e-300,
+            below_one,
+            -below_one,
+            -1.0,
+            2.5,
+            -2.5,
+            big,
+            -big,
+            big - 0.5,
+            -(big - 0.5),
+            big + 1.0,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN,
+        ];
+        let mut rng = Rng::new(21);
+        xs.extend((0..10_000).map(|_| (f64::from(rng.f32()) - 0.5) * 1e6));
+        for x in xs {
+            let (a, b) = (floor(x), x.floor());
+            assert!(a == b, "floor({x:e}) = {a:e}, f64::floor {b:e}");
+        }
+        assert!(floor(f64::NAN).is_nan());
+    }
+
+    /// A wide query whose ball spans more cells than i128 counts (an infinite radius) finds
+    /// every point, as brute force does.
+    #[test]
+    fn a_query_of_infinite_radius_finds_every_point() {
+        let points: Vec<Vec3A> = (0..50)
+            .map(|k| Vec3A::new(k as f32, (k * 7 % 13) as f32, -(k as f32)))
+            .collect();
+        let mut grid = Grid::default();
+        assert!(grid.build(&points, 0.5));
+        for r in [f32::INFINITY, f32::MAX, 1e30] {
+            let mut found = Vec::new();
+            grid.for_each_within(Vec3A::ZERO, r, |i| found.push(i));
+            found.sort_unstable();
+            assert_eq!(found, (0..50).collect::<Vec<_>>(), "radius {r}");
+        }
+    }
 
     /// The points the grid finds within `r` of `q` are exactly a brute-force scan's, each once.
     fn assert_finds_what_brute_force_finds(grid: &Grid, points: &[Vec3A], q: Vec3A, r: f32) {

@@ -7,14 +7,13 @@
 //! non-specular vertices are stored, and each is connected to a lens point, splatted onto the
 //! film. Then one camera path per pixel (`camera_path.rs`) adds, at every non-specular vertex,
 //! next-event estimation, connections to every vertex of the light path with the pixel's index
-//! (modulo the light paths' count), and merges
-//! with the light vertices within the camera path's radius (`grid.rs`); a connection that would
-//! add little to its pixel plays Russian roulette before its shadow ray (`roulette.rs`). Every
-//! technique is weighted by the power heuristic through the recursive quantities of `mis.rs`.
-//! Pixels that
-//! see through mirrors or glass also take camera paths that stop at their first non-delta
-//! bounce, for the part only camera paths sample: more where that part has varied
-//! (`DELTA_CAMERA_PATHS`) than where it has not yet (`DELTA_CAMERA_PATHS_QUIET`).
+//! (modulo the light paths' count), and merges with the light vertices within the camera
+//! path's radius (`grid.rs`); a connection that would add little to its pixel plays Russian
+//! roulette before its shadow ray (`roulette.rs`). Every technique is weighted by the power
+//! heuristic through the recursive quantities of `mis.rs`. Pixels that see through mirrors or
+//! glass also take camera paths that stop at their first non-delta bounce, for the part only
+//! camera paths sample: more where that part has varied (`DELTA_CAMERA_PATHS`) than where it
+//! has not yet (`DELTA_CAMERA_PATHS_QUIET`).
 //!
 //! Each camera path has its own radius: `r_0` is the scene's `radius` if set (the same for
 //! every path), else SPPM's (1.5 pixel footprints where the path first meets a non-specular

@@ -43,12 +43,16 @@ pub(super) fn floors<'a>(rest: impl Iterator<Item = &'a SampleStats>, out: &mut 
 /// Russian roulette of a connection of luminance `y` (before its shadow ray) against the
 /// pixel's `floor`: below it the connection goes on with probability `y / floor` and counts
 /// `floor / y` times (its expectation unchanged); at or above it, or without a floor, it goes
-/// on with factor 1 and draws nothing. `None`: dropped.
+/// on with factor 1 and draws nothing. `None`: dropped. The probability is rounded up to a
+/// multiple of 2^-24, the steps of [`Rng::f32`], so that a draw below it has exactly that
+/// probability and the factor (its inverse, at most 2^24, never infinite) keeps the
+/// expectation exactly.
 pub(super) fn connection_roulette(y: f32, floor: f32, rng: &mut Rng) -> Option<f32> {
     if !(floor > 0.0 && y < floor) {
         return Some(1.0);
     }
-    let p = y / floor;
+    const STEPS: f32 = (1u32 << 24) as f32;
+    let p = ((y / floor) * STEPS).ceil() / STEPS;
     (p > 0.0 && rng.f32() < p).then(|| 1.0 / p)
 }
 
@@ -68,7 +72,12 @@ mod tests {
             let mut sum = 0.0f64;
             for _ in 0..n {
                 if let Some(k) = connection_roulette(y, floor, &mut rng) {
-                    assert!((k * y - floor).abs() <= 1e-5 * floor, "{k} {y} {floor}");
+                    // A survivor adds up to its floor: `floor / y` within the rounding of
+                    // the probability to the generator's steps.
+                    assert!(
+                        k * y <= floor * (1.0 + 1e-6) && k * y >= floor * (1.0 - 1e-3),
+                        "{k} {y} {floor}"
+                    );
                     sum += f64::from(k);
                 }
             }
@@ -88,6 +97,16 @@ mod tests {
         }
         let mut rng = Rng::new(5);
         assert_eq!(connection_roulette(0.0, 0.1, &mut rng), None);
+        // A contribution far below the floor (a subnormal one too) keeps a finite factor: the
+        // probability's least step.
+        for y in [1e-12f32, 1e-40] {
+            let p = 1.0 / (1u32 << 24) as f32;
+            let mut rng = Rng::new(13);
+            let k = (0..1 << 28)
+                .find_map(|_| connection_roulette(y, 0.1, &mut rng))
+                .expect("a survivor in 2^28 draws at probability 2^-24");
+            assert_eq!(k, 1.0 / p, "y {y}");
+        }
     }
 
     /// A sum of connections, some below the floor, keeps its mean under the roulette: the
