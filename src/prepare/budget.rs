@@ -282,13 +282,14 @@ pub fn estimate(scene: &Scene, settings: &EffectiveSettings) -> Vec<MemoryItem> 
     // Per pixel: the film's sums and the image snapshots (f32 RGB twice), plus the method's own
     // state (SPPM: the pixel record, its visible point and its grid entry; with final gathering
     // the gather estimate, its gather point and its grid entry too; `vcm`, `bpt` and `lt`:
-    // the camera samples' and delta parts' statistics, the extra paths' count, the footprint
-    // ratio, the first radius, the pass's values, the merges found and the radius scale, the
-    // light-path count's pilot sums, and light tracing's film: 192 bytes).
+    // the camera samples', delta parts' and non-delta parts' statistics, the connection
+    // roulette's floor, the extra paths' count, the footprint ratio, the first radius, the
+    // pass's values, the merges found and the radius scale, the light-path count's pilot sums,
+    // and light tracing's film: 220 bytes).
     let per_pixel = match settings.method() {
         Integrator::Sppm if settings.final_gather => 640,
         Integrator::Sppm | Integrator::Ppm => 400,
-        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => 64 + 192,
+        Integrator::Vcm | Integrator::Bpt | Integrator::Lt => 64 + 220,
         _ => 64,
     };
     items.push(MemoryItem {
