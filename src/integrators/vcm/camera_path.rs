@@ -136,7 +136,7 @@ pub(super) fn radiance(
             let l = &mut out.rest;
             if ctx.mode.use_vc {
                 *l += st.beta * direct(ctx, &st, &sh, &bsdf, wo, rng);
-                let floor = ctx.connect_floor((y * ctx.settings.resolution.0 + x) as usize);
+                let floor = ctx.connect_floor(ctx.pixel_index(x, y));
                 for (v, surface) in own.0.iter().zip(own.1) {
                     if v.len + 1 + st.len > ctx.max_len {
                         continue;
@@ -218,7 +218,7 @@ fn set_radius(
         _ => rule.at(st.distance),
     }
     .unwrap_or(ctx.radius.fallback)
-        * ctx.pixel_scale((pixel.1 * ctx.settings.resolution.0 + pixel.0) as usize);
+        * ctx.pixel_scale(ctx.pixel_index(pixel.0, pixel.1));
     let r = ctx.radius.or_fallback(Some(r0));
     st.factors = ctx.factors(r);
     st.radius = r as f32;

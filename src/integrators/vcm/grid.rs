@@ -236,29 +236,22 @@ impl Grid {
             return;
         }
         for k in 0..8 {
-            let (b, order) = (fine[k], fine[k] >> SUB_BITS);
+            let order = fine[k] >> SUB_BITS;
             // An order bucket an earlier cell hashed to is read already.
             if fine[..k].iter().any(|&a| a >> SUB_BITS == order) {
                 continue;
             }
-            // Later cells in the same order bucket but another fine bucket: theirs are read
-            // with this one's, merged by index.
-            if fine[k + 1..]
-                .iter()
-                .all(|&a| a >> SUB_BITS != order || a == b)
-            {
-                self.visit(b, p, r2, &mut f);
-            } else {
-                let mut shared = [0u32; 8];
-                let mut n = 0;
-                for &a in &fine[k..] {
-                    if a >> SUB_BITS == order && !shared[..n].contains(&a) {
-                        shared[n] = a;
-                        n += 1;
-                    }
+            // This order bucket's fine buckets among this and the later cells, each once:
+            // read merged by index where there are several.
+            let mut shared = [0u32; 8];
+            let mut n = 0;
+            for &a in &fine[k..] {
+                if a >> SUB_BITS == order && !shared[..n].contains(&a) {
+                    shared[n] = a;
+                    n += 1;
                 }
-                self.visit_merged(&shared[..n], p, r2, &mut f);
             }
+            self.visit_fine(&shared[..n], p, r2, &mut f);
         }
     }
 }
@@ -347,6 +340,11 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
+    /// A uniform point of the unit cube.
+    fn unit_point(rng: &mut Rng) -> Vec3A {
+        Vec3A::new(rng.f32(), rng.f32(), rng.f32())
+    }
+
     /// The grid's `floor` is `f64::floor` (up to the sign of zero) at the edges of its
     /// branches: just below integers, around 2^52, beyond i64, infinities and NaN.
     #[test]
@@ -419,13 +417,13 @@ mod tests {
     fn grid_finds_what_brute_force_finds() {
         let mut rng = Rng::new(11);
         let points: Vec<Vec3A> = (0..3000)
-            .map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 4.0 - 1.0)
+            .map(|_| unit_point(&mut rng) * 4.0 - 1.0)
             .collect();
         let r = 0.2;
         let mut grid = Grid::default();
         assert!(grid.build(&points, r));
         for _ in 0..300 {
-            let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 5.0 - 1.5;
+            let q = unit_point(&mut rng) * 5.0 - 1.5;
             assert_finds_what_brute_force_finds(&grid, &points, q, r);
             // Camera paths with radii smaller and larger than the grid's (up to the whole
             // point set, where the cells outnumber the buckets).
@@ -495,14 +493,12 @@ mod tests {
     fn queries_report_points_in_the_order_tables_order() {
         let mut rng = Rng::new(3);
         for n in [1, 2, 3, 5, 9, 40, 600] {
-            let points: Vec<Vec3A> = (0..n)
-                .map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.0)
-                .collect();
+            let points: Vec<Vec3A> = (0..n).map(|_| unit_point(&mut rng) * 2.0).collect();
             let r = 0.3;
             let mut grid = Grid::default();
             assert!(grid.build(&points, r));
             for _ in 0..200 {
-                let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 2.4 - 0.2;
+                let q = unit_point(&mut rng) * 2.4 - 0.2;
                 for k in [1.0, 0.5, 1.3, 2.5, 20.0] {
                     let mut found = Vec::new();
                     grid.for_each_within(q, r * k, |i| found.push(i));
@@ -520,12 +516,12 @@ mod tests {
     fn a_wide_scene_loses_no_neighbour() {
         let mut rng = Rng::new(5);
         let mut points = vec![Vec3A::splat(-1.0e5)];
-        points.extend((0..2000).map(|_| Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.05));
+        points.extend((0..2000).map(|_| unit_point(&mut rng) * 0.05));
         let r = 0.002;
         let mut grid = Grid::default();
         assert!(grid.build(&points, r));
         for _ in 0..500 {
-            let q = Vec3A::new(rng.f32(), rng.f32(), rng.f32()) * 0.05;
+            let q = unit_point(&mut rng) * 0.05;
             assert_finds_what_brute_force_finds(&grid, &points, q, r);
         }
         // A query far from every cell (its index saturates) finds nothing and does not panic.

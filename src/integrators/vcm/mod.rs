@@ -194,6 +194,11 @@ impl Context<'_, '_, '_> {
         choice * f64::from(pos) * f64::from(d)
     }
 
+    /// The index of pixel (`x`, `y`) in the per-pixel arrays (row by row).
+    fn pixel_index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.settings.resolution.0 as usize + x as usize
+    }
+
     /// Pixel `pixel`'s connection roulette floor this iteration (0: none).
     fn connect_floor(&self, pixel: usize) -> f32 {
         self.connect_floors.get(pixel).copied().unwrap_or(0.0)
