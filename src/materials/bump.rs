@@ -98,6 +98,23 @@ impl Microsurface {
         self.walk(lobes, o, i).1
     }
 
+    /// [`Self::f`], [`Self::pdf`] and the reverse pair's `pdf(i, o)` from two walks (the one
+    /// that gives `f` gives one of the densities too): the same values as the three calls.
+    pub fn eval(
+        &self,
+        lobes: &Lobes,
+        o: Vec3A,
+        i: Vec3A,
+        mode: TransportMode,
+    ) -> (Vec3A, f32, f32) {
+        let (forward, reverse) = (self.walk(lobes, o, i), self.walk(lobes, i, o));
+        let f = match mode {
+            TransportMode::Radiance => forward.0 / i.z.abs(),
+            TransportMode::Importance => reverse.0 / o.z.abs(),
+        };
+        (f, forward.1, reverse.1)
+    }
+
     /// Samples the walk from `o`: the first facet, the lobes, the exit.
     pub fn sample(
         &self,

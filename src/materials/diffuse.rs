@@ -12,7 +12,13 @@ pub fn f(albedo: Vec3A) -> Vec3A {
 }
 
 pub fn pdf(wi: Vec3A) -> f32 {
-    wi.z.abs() * FRAC_1_PI
+    pdf_cos(wi.z)
+}
+
+/// [`pdf`] of a direction whose local cosine is `cos`.
+#[inline]
+pub fn pdf_cos(cos: f32) -> f32 {
+    cos.abs() * FRAC_1_PI
 }
 
 #[inline]

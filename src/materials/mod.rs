@@ -12,6 +12,8 @@ pub mod eval;
 mod glossy;
 mod mirror;
 mod rough_dielectric;
+#[cfg(test)]
+mod tests;
 mod thin_dielectric;
 
 use glam::{Vec2, Vec3A};
@@ -79,6 +81,17 @@ pub struct Bsdf {
     /// A bump or normal map's perturbed normal, as a microsurface in the shading frame
     /// (bump.rs); `None` for a surface without one, which pays only this check.
     pub bump: Option<bump::Microsurface>,
+}
+
+/// A BSDF's value and both densities for one pair of directions ([`Bsdf::eval`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BsdfEval {
+    /// [`Bsdf::f_mode`]`(wo, wi, mode)`.
+    pub f: Vec3A,
+    /// [`Bsdf::pdf`]`(wo, wi)`: the density of sampling `wi` from `wo`.
+    pub pdf: f32,
+    /// [`Bsdf::pdf`]`(wi, wo)`: the density of the reverse choice.
+    pub pdf_rev: f32,
 }
 
 /// A sampled direction.
@@ -168,16 +181,24 @@ impl Bsdf {
     /// `ng`) agrees with the shading frame's, for a BSDF that transmits or not.
     #[inline]
     fn local_pair(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<(Vec3A, Vec3A)> {
+        self.local_cosines(wo, wi, transmits)?;
+        Some((self.frame.to_local(wo), self.frame.to_local(wi)))
+    }
+
+    /// [`Self::local_pair`]'s side tests alone: the pair's local cosines (the `z` of its
+    /// local directions, bit for bit) where it passes them.
+    #[inline]
+    fn local_cosines(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<(f32, f32)> {
         let reflect = wo.dot(self.ng) * wi.dot(self.ng);
         if reflect == 0.0 || (!transmits && reflect < 0.0) {
             return None;
         }
-        let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
-        let local = o.z * i.z;
+        let (co, ci) = (wo.dot(self.frame.n), wi.dot(self.frame.n));
+        let local = co * ci;
         if local == 0.0 || (local > 0.0) != (reflect > 0.0) {
             return None;
         }
-        Some((o, i))
+        Some((co, ci))
     }
 
     /// BSDF value for light arriving from `wi` and leaving toward `wo` (radiance transport:
@@ -200,6 +221,13 @@ impl Bsdf {
                 return Vec3A::ZERO;
             };
             return tint * rough_dielectric::eval(eta, alpha, o, i, mode).0;
+        }
+        // A Lambertian lobe needs the side tests alone.
+        if let Lobes::Diffuse { albedo } = self.lobes {
+            return match self.local_cosines(wo, wi, false) {
+                Some(_) => diffuse::f(albedo),
+                None => Vec3A::ZERO,
+            };
         }
         let Some((o, i)) = self.local_pair(wo, wi, false) else {
             return Vec3A::ZERO;
@@ -235,10 +263,63 @@ impl Bsdf {
             };
             return rough_dielectric::eval(eta, alpha, o, i, TransportMode::Radiance).1;
         }
+        // A Lambertian lobe needs the local cosines alone.
+        if let Lobes::Diffuse { .. } = self.lobes {
+            return self
+                .local_cosines(wo, wi, false)
+                .map_or(0.0, |(_, ci)| diffuse::pdf_cos(ci));
+        }
         let Some((o, i)) = self.local_pair(wo, wi, false) else {
             return 0.0;
         };
         self.lobes.pdf_reflect(o, i)
+    }
+
+    /// [`Bsdf::f_mode`], [`Bsdf::pdf`] and the reverse [`Bsdf::pdf`] of one pair at once, bit
+    /// for bit the three calls' values, with one side test and one change to the local frame
+    /// where the three take one each (the side tests and the local cosines of a pair are
+    /// symmetric in its two directions). `None` where `f` is zero: a caller that needs the
+    /// densities only with a nonzero value (a connection, a merge, next-event estimation) is
+    /// spared them there.
+    #[inline]
+    pub fn eval(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Option<BsdfEval> {
+        // A Lambertian lobe needs the local cosines alone.
+        if let (None, Lobes::Diffuse { albedo }) = (&self.bump, self.lobes) {
+            let (co, ci) = self.local_cosines(wo, wi, false)?;
+            let f = diffuse::f(albedo);
+            return (f != Vec3A::ZERO).then(|| BsdfEval {
+                f,
+                pdf: diffuse::pdf_cos(ci),
+                pdf_rev: diffuse::pdf_cos(co),
+            });
+        }
+        let rough_glass = self.rough_glass();
+        let transmits = self.bump.is_some() || rough_glass.is_some();
+        let (o, i) = self.local_pair(wo, wi, transmits)?;
+        let (f, pdf, pdf_rev) = if let Some(m) = &self.bump {
+            m.eval(&self.lobes, o, i, mode)
+        } else if let Some((eta, tint, alpha)) = rough_glass {
+            // The density does not depend on the transport mode.
+            let (f, pdf) = rough_dielectric::eval(eta, alpha, o, i, mode);
+            let f = tint * f;
+            if f == Vec3A::ZERO {
+                return None;
+            }
+            let rev = rough_dielectric::eval(eta, alpha, i, o, TransportMode::Radiance).1;
+            (f, pdf, rev)
+        } else {
+            let f = self.lobes.f_reflect(o, i);
+            if f == Vec3A::ZERO {
+                return None;
+            }
+            (
+                f,
+                self.lobes.pdf_reflect(o, i),
+                self.lobes.pdf_reflect(i, o),
+            )
+        };
+        // A bump's walk gives its value with a density: tested last.
+        (f != Vec3A::ZERO).then_some(BsdfEval { f, pdf, pdf_rev })
     }
 
     /// Samples an incident direction for outgoing `wo`.

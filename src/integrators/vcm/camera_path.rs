@@ -317,17 +317,19 @@ fn direct(
         return Vec3A::ZERO;
     };
     let (li, ls) = (sl.light, &sl.sample);
-    let f = bsdf.f(wo, ls.wi);
+    let Some(e) = bsdf.eval(wo, ls.wi, TransportMode::Radiance) else {
+        return Vec3A::ZERO;
+    };
     let cos_to_light = ls.wi.dot(bsdf.frame.n).abs();
-    if f == Vec3A::ZERO || cos_to_light == 0.0 {
+    if cos_to_light == 0.0 {
         return Vec3A::ZERO;
     }
     let pn = f64::from(sl.light_pdf);
-    let bsdf_rev = f64::from(bsdf.pdf(ls.wi, wo));
+    let bsdf_rev = f64::from(e.pdf_rev);
     let (bsdf_pdf, direct_pdf_w, emission_pdf_w, cos_at_light) = if scene.environment == Some(li) {
         // The sky's directions are measured without a cosine at the light.
         (
-            f64::from(bsdf.pdf(wo, ls.wi)),
+            f64::from(e.pdf),
             pn * f64::from(ls.pdf),
             ctx.emission_pdf_w(li, sh.hit.p, Vec3A::ZERO, -ls.wi),
             1.0,
@@ -338,7 +340,7 @@ fn direct(
         (0.0, pn * dist2, e, 1.0)
     } else {
         (
-            f64::from(bsdf.pdf(wo, ls.wi)),
+            f64::from(e.pdf),
             pn * f64::from(ls.pdf),
             ctx.emission_pdf_w(li, ls.p, ls.n, -ls.wi),
             f64::from(ls.n.dot(ls.wi).abs()),
@@ -359,7 +361,7 @@ fn direct(
         return Vec3A::ZERO;
     }
     let absorbed = sl.transmittance(scene, sh, wo, st.medium);
-    f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
+    e.f * ls.li * absorbed * (w * f64::from(cos_to_light) / (pn * f64::from(ls.pdf))) as f32
 }
 
 /// The two ends of a connection: the camera vertex (`sh`, its BSDF, the direction back along
@@ -398,21 +400,19 @@ fn connect(
     }
     let dist = dist2.sqrt();
     let dir = d / dist;
-    let f_cam = bsdf.f(wo, dir);
-    if f_cam == Vec3A::ZERO {
+    let Some(cam) = bsdf.eval(wo, dir, TransportMode::Radiance) else {
         return Vec3A::ZERO;
-    }
+    };
     let (v_bsdf, v_wo) = (surface.bsdf(), Vec3A::from(v.wo));
-    let f_light = v_bsdf.f_mode(v_wo, -dir, TransportMode::Importance);
-    if f_light == Vec3A::ZERO {
+    let Some(light) = v_bsdf.eval(v_wo, -dir, TransportMode::Importance) else {
         return Vec3A::ZERO;
-    }
+    };
     let cos_cam = dir.dot(bsdf.frame.n).abs();
     let cos_light = dir.dot(v_bsdf.frame.n).abs();
     let g = cos_cam * cos_light / dist2;
     let d2 = f64::from(dist2);
-    let cam_pdf_a = f64::from(bsdf.pdf(wo, dir)) * f64::from(cos_light) / d2;
-    let light_pdf_a = f64::from(v_bsdf.pdf(v_wo, -dir)) * f64::from(cos_cam) / d2;
+    let cam_pdf_a = f64::from(cam.pdf) * f64::from(cos_light) / d2;
+    let light_pdf_a = f64::from(light.pdf) * f64::from(cos_cam) / d2;
     // The camera path's second vertex: this one, or the light vertex when this is its first.
     let gather = if st.gather_here(ctx) {
         GatherAt::Camera
@@ -427,14 +427,14 @@ fn connect(
         &v.q.at(&st.factors),
         cam_pdf_a,
         light_pdf_a,
-        f64::from(bsdf.pdf(dir, wo)),
-        f64::from(v_bsdf.pdf(-dir, v_wo)),
+        f64::from(cam.pdf_rev),
+        f64::from(light.pdf_rev),
         gather,
     );
     if !(w > 0.0 && g > 0.0) {
         return Vec3A::ZERO;
     }
-    let c = f_cam * f_light * (g * w as f32);
+    let c = cam.f * light.f * (g * w as f32);
     let Some(scale) = connection_roulette(luminance(throughput * c), floor, rng) else {
         return Vec3A::ZERO;
     };
@@ -478,19 +478,17 @@ fn merge(ctx: &Context, st: &State, p: Vec3A, bsdf: &Bsdf, wo: Vec3A) -> (Vec3A,
         }
         found = found.saturating_add(1);
         let v_wo = Vec3A::from(v.wo);
-        let f = bsdf.f(wo, v_wo);
-        if f == Vec3A::ZERO {
+        let Some(e) = bsdf.eval(wo, v_wo, TransportMode::Radiance) else {
             return;
-        }
-        let cam_pdf = f64::from(bsdf.pdf(wo, v_wo));
-        let cam_rev = f64::from(bsdf.pdf(v_wo, wo));
+        };
+        let (cam_pdf, cam_rev) = (f64::from(e.pdf), f64::from(e.pdf_rev));
         let light = if first {
             v.q.gathered(&st.factors)
         } else {
             v.q.at(&st.factors)
         };
         let w = mis::merge(&st.factors, &cam, &light, cam_pdf, cam_rev, gather);
-        sum += f * Vec3A::from(v.beta) * w as f32;
+        sum += e.f * Vec3A::from(v.beta) * w as f32;
     });
     (sum * normalization, found)
 }

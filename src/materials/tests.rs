@@ -1,0 +1,93 @@
+//! [`Bsdf::eval`] against the separate calls it stands for.
+
+use glam::Vec3A;
+
+use super::{Bsdf, Lobes, TransportMode};
+use crate::geometry::Frame;
+use crate::sampling::{Rng, uniform_sphere};
+
+/// One lobe of every kind, with parameters drawn from `r` (frosted glass and the rough
+/// conductor and coat at a random roughness, their smooth forms too).
+fn lobes(r: &mut Rng, kind: usize) -> Lobes {
+    let color = |r: &mut Rng| Vec3A::new(r.f32(), r.f32(), r.f32());
+    let alpha = |r: &mut Rng| [0.0, 1e-3, 0.05, r.f32()][(r.f32() * 4.0) as usize % 4];
+    match kind {
+        0 => Lobes::Diffuse { albedo: color(r) },
+        // A black Lambertian lobe: `f` zero for every pair.
+        1 => Lobes::Diffuse {
+            albedo: Vec3A::ZERO,
+        },
+        2 => Lobes::Mirror { tint: color(r) },
+        3 => Lobes::Glass {
+            eta: 1.0 + r.f32(),
+            tint: color(r),
+            alpha: alpha(r),
+        },
+        4 => Lobes::ThinGlass {
+            eta: 1.0 + r.f32(),
+            tint: color(r),
+        },
+        5 => Lobes::Glossy {
+            albedo: color(r),
+            specular: color(r),
+            alpha: alpha(r).max(1e-3),
+        },
+        6 => Lobes::Conductor {
+            eta: color(r) * 2.0,
+            k: color(r) * 4.0,
+            alpha: alpha(r),
+        },
+        _ => Lobes::Coated {
+            albedo: color(r),
+            eta: 1.0 + r.f32(),
+            alpha: alpha(r),
+        },
+    }
+}
+
+/// `eval` gives `f_mode`, `pdf` and the reverse `pdf` bit for bit, and `None` exactly where
+/// `f_mode` is zero, for every kind of lobe, bumped or not, in a tilted frame whose geometric
+/// normal differs from the shading normal (so that the side tests reject some pairs), in
+/// both transport modes.
+#[test]
+fn eval_gives_the_separate_calls_values() {
+    let mut r = Rng::new(11);
+    let (mut some, mut none) = (0, 0);
+    for n in 0..80_000 {
+        let ns = uniform_sphere(r.vec2());
+        let ng = (ns + 0.3 * uniform_sphere(r.vec2())).normalize();
+        let tangent = uniform_sphere(r.vec2());
+        let l = lobes(&mut r, n % 8);
+        let b = if n % 3 == 0 {
+            let np = (ns + 0.5 * uniform_sphere(r.vec2())).normalize();
+            Bsdf::bumped(l, Frame::from_normal_tangent(ns, tangent), ng, np)
+        } else {
+            Bsdf::new(l, ns, tangent, ng)
+        };
+        let (wo, wi) = (uniform_sphere(r.vec2()), uniform_sphere(r.vec2()));
+        for mode in [TransportMode::Radiance, TransportMode::Importance] {
+            let f = b.f_mode(wo, wi, mode);
+            match b.eval(wo, wi, mode) {
+                Some(e) => {
+                    some += 1;
+                    assert_eq!(
+                        e.f.to_array().map(f32::to_bits),
+                        f.to_array().map(f32::to_bits)
+                    );
+                    assert_ne!(f, Vec3A::ZERO);
+                    assert_eq!(e.pdf.to_bits(), b.pdf(wo, wi).to_bits(), "{b:?}");
+                    assert_eq!(e.pdf_rev.to_bits(), b.pdf(wi, wo).to_bits(), "{b:?}");
+                }
+                None => {
+                    none += 1;
+                    assert_eq!(f, Vec3A::ZERO, "{b:?} {wo} {wi}");
+                }
+            }
+        }
+    }
+    // Both outcomes were exercised often.
+    assert!(
+        some > 20_000 && none > 20_000,
+        "{some} with a value, {none} without"
+    );
+}
