@@ -155,6 +155,16 @@ impl Bsdf {
         }
     }
 
+    /// Whether [`Bsdf::sample`] may return a delta (specular) sample: a delta BSDF, or a
+    /// smooth coat's mirror reflection; bumped or not. Where this is false, no sample is
+    /// specular.
+    pub fn samples_delta(&self) -> bool {
+        match self.lobes {
+            Lobes::Coated { alpha, .. } => alpha == 0.0,
+            _ => self.is_specular(),
+        }
+    }
+
     /// A glossy lobe sharp enough (GGX alpha below 0.3, roughness below about 0.55) that a
     /// density estimate of the light arriving on it is noisy: photon methods follow camera
     /// paths through it, by BSDF sampling, to the next surface (pbrt's SPPM does so for every

@@ -91,3 +91,38 @@ fn eval_gives_the_separate_calls_values() {
         "{some} with a value, {none} without"
     );
 }
+
+/// A BSDF that [`Bsdf::samples_delta`] says has no delta lobe never gives a specular sample,
+/// and each kind that says it has one does give one: every kind of lobe, bumped or not, in
+/// both transport modes.
+#[test]
+fn samples_delta_says_which_bsdfs_give_specular_samples() {
+    let mut r = Rng::new(12);
+    let mut specular_seen = [false; 8];
+    for n in 0..160_000 {
+        let kind = n % 8;
+        let l = lobes(&mut r, kind);
+        let b = if n % 3 == 0 {
+            let np = (Vec3A::Z + 0.5 * uniform_sphere(r.vec2())).normalize();
+            Bsdf::bumped(l, Frame::from_normal(Vec3A::Z), Vec3A::Z, np)
+        } else {
+            Bsdf::new(l, Vec3A::Z, Vec3A::X, Vec3A::Z)
+        };
+        let wo = uniform_sphere(r.vec2());
+        let mode = if n % 2 == 0 {
+            TransportMode::Radiance
+        } else {
+            TransportMode::Importance
+        };
+        if let Some(s) = b.sample(wo, r.f32(), r.vec2(), mode) {
+            if s.specular {
+                assert!(b.samples_delta(), "{b:?}: a specular sample {s:?}");
+                specular_seen[kind] = true;
+            }
+        }
+    }
+    // The mirror, smooth glass, the pane, the smooth conductor and the smooth coat.
+    for kind in [2, 3, 4, 6, 7] {
+        assert!(specular_seen[kind], "kind {kind} gave no specular sample");
+    }
+}

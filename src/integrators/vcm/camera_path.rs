@@ -9,7 +9,7 @@ use glam::Vec3A;
 use super::light_path::{LightVertex, VertexSurface};
 use super::mis::{self, Factors, GatherAt, Parts};
 use super::roulette::connection_roulette;
-use super::{Context, bounce};
+use super::{Context, bounce, bounce_numbers};
 use crate::integrators::common::direct::sample_light;
 use crate::integrators::common::footprint;
 use crate::integrators::common::{
@@ -160,6 +160,13 @@ pub(super) fn radiance(
                     counted = true;
                 }
             }
+        }
+        if specular_only && !bsdf.samples_delta() {
+            // The bounce would sample a lobe that is not a delta one, and the path would end
+            // with it: it ends here, its numbers drawn all the same (the pixel's next camera
+            // path draws from the same stream).
+            bounce_numbers(rng);
+            break;
         }
         let mode = TransportMode::Radiance;
         let ratio = st.factors.merge_ratio(st.gather_here(ctx));

@@ -264,7 +264,8 @@ fn bounce(
     rng: &mut Rng,
     merge_ratio: f64,
 ) -> Option<BsdfSample> {
-    let s = bsdf.sample(wo, rng.f32(), rng.vec2(), mode)?;
+    let (uc, u) = bounce_numbers(rng);
+    let s = bsdf.sample(wo, uc, u, mode)?;
     let cos_out = f64::from(s.wi.dot(bsdf.frame.n).abs());
     if s.specular {
         q.scatter_specular(cos_out);
@@ -274,6 +275,13 @@ fn bounce(
     }
     *medium = medium_after(ctx.scene, sh, wo, s.wi, *medium);
     Some(s)
+}
+
+/// The numbers [`bounce`] draws from `rng` (whether or not its BSDF then samples a direction):
+/// a path that ends where it would bounce draws them too, so that the stream goes on as
+/// though it had bounced.
+fn bounce_numbers(rng: &mut Rng) -> (f32, glam::Vec2) {
+    (rng.f32(), rng.vec2())
 }
 
 impl Integrator for Vcm {
