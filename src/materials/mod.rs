@@ -291,7 +291,7 @@ impl Bsdf {
     /// symmetric in its two directions). `None` where `f` is zero: a caller that needs the
     /// densities only with a nonzero value (a connection, a merge, next-event estimation) is
     /// spared them there.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Option<BsdfEval> {
         // A Lambertian lobe needs the local cosines alone.
         if let (None, Lobes::Diffuse { albedo }) = (&self.bump, self.lobes) {
@@ -303,6 +303,13 @@ impl Bsdf {
                 pdf_rev: diffuse::pdf_cos(co),
             });
         }
+        self.eval_other(wo, wi, mode)
+    }
+
+    /// [`Bsdf::eval`] of every BSDF but a plain Lambertian one (a call: the Lambertian case,
+    /// the most common, stays small enough to inline).
+    #[inline(never)]
+    fn eval_other(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Option<BsdfEval> {
         let rough_glass = self.rough_glass();
         let transmits = self.bump.is_some() || rough_glass.is_some();
         let (o, i) = self.local_pair(wo, wi, transmits)?;
