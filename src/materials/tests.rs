@@ -114,11 +114,11 @@ fn samples_delta_says_which_bsdfs_give_specular_samples() {
         } else {
             TransportMode::Importance
         };
-        if let Some(s) = b.sample(wo, r.f32(), r.vec2(), mode) {
-            if s.specular {
-                assert!(b.samples_delta(), "{b:?}: a specular sample {s:?}");
-                specular_seen[kind] = true;
-            }
+        if let Some(s) = b.sample(wo, r.f32(), r.vec2(), mode)
+            && s.specular
+        {
+            assert!(b.samples_delta(), "{b:?}: a specular sample {s:?}");
+            specular_seen[kind] = true;
         }
     }
     // The mirror, smooth glass, the pane, the smooth conductor and the smooth coat.
