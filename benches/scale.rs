@@ -26,6 +26,11 @@
 //! reports Embree's rays/s both raw and with the loop's cost taken out. Its build uses all the
 //! cores it sees (TBB), and so does the project's (rayon).
 //!
+//! Knobs for measuring one effect at a time: `SCALE_QUERIES=closest` (or `any`) traces only
+//! those queries, `SCALE_ONE_THREAD=1` leaves out the two-thread runs, and
+//! `SCALE_STACK_PAD=n` calls the traversals `n` frames deeper on the stack, printing the
+//! tracing thread's stack offset modulo 4096 (`stack ...` on stderr).
+//!
 //! Results: a table on stdout, `target/scale/results.json`, and the curves drawn by the
 //! project's chart code into `target/scale/scale.png`.
 
@@ -116,25 +121,37 @@ enum Query {
 /// Whether `ray` hits the mesh, with the closest hit's record as Embree's `rtcIntersect1`
 /// makes it (`t`, the barycentric `u` and `v`, the triangle's index, the geometry's id and the
 /// unnormalised geometric normal `Ng`), so that both sides give the same information out:
-/// [`Bvh::intersect_lazy`] and [`TriangleMesh::geometric_normal`], not the shading record
-/// (point, unit and shading normals, uv, dp/du) of [`Bvh::intersect`], which Embree leaves
-/// to its caller.
-///
-/// [`TriangleMesh::geometric_normal`]: sppm_lang::internals::shapes::mesh::TriangleMesh::geometric_normal
+/// [`Bvh::intersect_ng`] (`Ng` from the triangle packet the hit was found in, as Embree's
+/// leaf intersector has it), not the shading record (point, unit and shading normals, uv,
+/// dp/du) of [`Bvh::intersect`], which Embree leaves to its caller.
 #[inline]
 fn closest_record(bvh: &Bvh, ray: &Ray) -> bool {
-    match bvh.intersect_lazy(ray, 0.0, f32::INFINITY) {
-        Some((lazy, Surface::MeshTriangle(mesh, k, uv), id)) => {
-            std::hint::black_box((lazy.t(), uv, k, id, mesh.geometric_normal(k)));
+    match bvh.intersect_ng(ray, 0.0, f32::INFINITY) {
+        Some((lazy, Surface::MeshTriangle(_, k, uv), id, ng)) => {
+            std::hint::black_box((lazy.t(), uv, k, id, ng));
             true
         }
         // (The bench's trees hold mesh triangles only.)
-        Some((lazy, Surface::Shape(_), id)) => {
+        Some((lazy, Surface::Shape(_), id, _)) => {
             std::hint::black_box((lazy.t(), id));
             true
         }
         None => false,
     }
+}
+
+/// Runs `f` `n` frames deeper on the stack (48 bytes a frame in the release build), to
+/// measure how the traversals' speed depends on the stack pointer they are called with
+/// (`SCALE_STACK_PAD`).
+#[inline(never)]
+fn padded(n: usize, f: &mut dyn FnMut() -> (f64, usize)) -> (f64, usize) {
+    if n == 0 {
+        return f();
+    }
+    let buf = [0u8; 1];
+    std::hint::black_box(&buf);
+    let r = padded(n - 1, f);
+    std::hint::black_box(r)
 }
 
 /// Traces `rays` on `threads` threads; returns (wall seconds, summed CPU seconds, hits).
@@ -146,15 +163,26 @@ fn trace(bvh: &Bvh, rays: &[Ray], query: Query, threads: usize) -> (f64, f64, us
             .chunks(chunk)
             .map(|part| {
                 s.spawn(move || {
-                    let c0 = thread_cpu();
-                    let hits = part
-                        .iter()
-                        .filter(|r| match query {
-                            Query::Closest => closest_record(bvh, r),
-                            Query::Any => bvh.occluded(r, 0.0, f32::INFINITY),
-                        })
-                        .count();
-                    (thread_cpu() - c0, hits)
+                    let pad: usize = std::env::var("SCALE_STACK_PAD")
+                        .ok()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(0);
+                    padded(pad, &mut || {
+                        let probe = 0u8;
+                        if std::env::var_os("SCALE_STACK_PAD").is_some() {
+                            eprintln!("stack {}", (&raw const probe as usize) & 4095);
+                        }
+                        std::hint::black_box(&probe);
+                        let c0 = thread_cpu();
+                        let hits = part
+                            .iter()
+                            .filter(|r| match query {
+                                Query::Closest => closest_record(bvh, r),
+                                Query::Any => bvh.occluded(r, 0.0, f32::INFINITY),
+                            })
+                            .count();
+                        (thread_cpu() - c0, hits)
+                    })
                 })
             })
             .collect();
@@ -223,11 +251,19 @@ fn ours(mesh: &Mesh, camera: &[Ray], bounce: &[Ray]) -> Figures {
         .map(|(what, b)| format!("{what} {:.1}", *b as f64 / n as f64))
         .collect();
     println!("  (ours, bytes/triangle: {})", parts.join(", "));
+    let only = std::env::var("SCALE_QUERIES").unwrap_or_default();
+    let one_thread = std::env::var_os("SCALE_ONE_THREAD").is_some();
     for (set, rays) in [("camera", camera), ("bounce", bounce)] {
         for (q, query) in [("closest", Query::Closest), ("any", Query::Any)] {
+            if !only.is_empty() && only != q {
+                continue;
+            }
             let (_, cpu, _) = trace(&bvh, rays, query, 1);
             f.rays
                 .push((format!("{set}/{q}/1"), rays.len() as f64 / cpu));
+            if one_thread {
+                continue;
+            }
             let (wall, _, _) = trace(&bvh, rays, query, 2);
             f.rays
                 .push((format!("{set}/{q}/2"), rays.len() as f64 / wall));

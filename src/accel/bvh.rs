@@ -31,7 +31,9 @@ const MEDIAN_DEPTH: usize = 32;
 /// `offset` is its leaf reference (see [`super::leaf::PACKETS`]).
 pub(super) use super::build::BuildNode as Node;
 
+mod record;
 mod surface;
+pub use record::NgHit;
 pub use surface::Surface;
 
 /// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
@@ -354,7 +356,8 @@ impl Bvh {
         t_max: f32,
         uv: impl Fn(u32) -> bool,
     ) -> Option<(Hit, u32)> {
-        let (lazy, surface, id) = self.closest_with(test, ray, t_min, t_max)?;
+        let (lazy, surface, id) =
+            self.closest_with::<B, false>(test, ray, t_min, t_max, &mut None)?;
         let id = lazy.part().unwrap_or(id);
         Some((surface.hit_at_uv(ray, lazy, uv(id)), id))
     }
@@ -386,7 +389,7 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
-        self.closest_with(Halves, ray, t_min, t_max)
+        self.closest_with::<_, false>(Halves, ray, t_min, t_max, &mut None)
     }
 
     /// [`Bvh::intersect_lazy`] with every operation allowed to use AVX.
@@ -399,16 +402,20 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
-        self.closest_with(avx, ray, t_min, t_max)
+        self.closest_with::<_, false>(avx, ray, t_min, t_max, &mut None)
     }
 
+    /// The closest-hit traversal; with `NG`, also the hit triangle's geometric normal in `ng`
+    /// ([`Bvh::intersect_ng`]: a copy of the traversal of its own, so that the others' code
+    /// stays as it was).
     #[inline(always)]
-    fn closest_with<B: BoxTest + PairTest>(
+    fn closest_with<B: BoxTest + PairTest, const NG: bool>(
         &self,
         test: B,
         ray: &Ray,
         t_min: f32,
         mut t_max: f32,
+        ng: &mut Option<glam::Vec3A>,
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
         let mut best: Option<(LazyHit, Surface<'_>, u32)> = None;
         for (s, id) in &self.unbounded {
@@ -428,8 +435,15 @@ impl Bvh {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                self.leaves
-                    .closest(test, &lanes, cur & !LEAF, ray, t_min, &mut t_max, &mut c);
+                self.leaves.closest::<B, NG>(
+                    test,
+                    &lanes,
+                    cur & !LEAF,
+                    ray,
+                    t_min,
+                    &mut t_max,
+                    &mut c,
+                );
             } else {
                 let node = self.node(cur);
                 let (mask, near) = test.hit(node, &boxes, t_min, t_max);
@@ -462,7 +476,12 @@ impl Bvh {
                         break;
                     }
                     Some(_) => {}
-                    None => return self.closest_hit(c, t_max, best),
+                    None => {
+                        if NG {
+                            *ng = self.triangle_normal(&c);
+                        }
+                        return self.closest_hit(c, t_max, best);
+                    }
                 }
             }
         }
@@ -484,33 +503,6 @@ impl Bvh {
         // and branch per node visited, the index a multiply by the node's size on the way
         // from a popped reference to its node's loads.)
         unsafe { &*self.nodes.as_ptr().cast::<u8>().add(at).cast::<WideNode>() }
-    }
-
-    /// The result of a closest-hit traversal that ended with `c` and `t_max`.
-    #[inline(always)]
-    fn closest_hit<'a>(
-        &'a self,
-        c: Closest,
-        t_max: f32,
-        best: Option<(LazyHit, Surface<'a>, u32)>,
-    ) -> Option<(LazyHit, Surface<'a>, u32)> {
-        if c.triangle != u32::MAX {
-            let (mesh, k, id) = self.meshes.locate(c.triangle);
-            return Some((
-                LazyHit::T(t_max),
-                Surface::MeshTriangle(mesh, k, c.bary),
-                id,
-            ));
-        }
-        if c.shape == usize::MAX {
-            return best;
-        }
-        let lazy = c.boxed.unwrap_or(LazyHit::T(t_max));
-        Some((
-            lazy,
-            Surface::Shape(&self.leaves.shapes[c.shape]),
-            self.leaves.ids[c.shape],
-        ))
     }
 
     /// Whether anything is hit with `t_min < t < t_max` (with AVX where the CPU has it, as

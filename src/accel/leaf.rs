@@ -1,6 +1,7 @@
 //! What a BVH leaf holds, packed after the build: its mesh triangles four to a packet, its
 //! quads four to a packet (when it has two or more), and its other shapes one by one.
 
+use glam::Vec3A;
 use rayon::prelude::*;
 
 use crate::geometry::Ray;
@@ -54,6 +55,12 @@ pub(super) struct Closest {
     /// The hit of a boxed shape or CSG tree (full, with its CSG part, or deferred); `None`
     /// for an analytic shape (only its `t` is known).
     pub boxed: Option<LazyHit>,
+    /// The reference of the last leaf referenced by its packets ([`PACKETS`]) in which a
+    /// triangle was recorded (0: none), kept only by the traversal that asks for it
+    /// ([`Leaves::closest`]'s `KEEP_LEAF`). Written with the hit and never cleared, so it may
+    /// name a leaf of an earlier, farther hit: [`Leaves::packet_normal`] checks that the leaf
+    /// holds the triangle.
+    pub leaf: u32,
 }
 
 impl Closest {
@@ -62,6 +69,7 @@ impl Closest {
         triangle: u32::MAX,
         bary: [0.0; 2],
         boxed: None,
+        leaf: 0,
     };
 }
 
@@ -190,7 +198,8 @@ impl Leaves {
         let first = (leaf & (TWO_PACKETS - 1)) as usize;
         let two = leaf & TWO_PACKETS != 0;
         debug_assert!(first + 1 + usize::from(two) <= self.tri_packets.len());
-        // SAFETY: the traversals pass only leaf references read from the nodes, and a
+        // SAFETY: the traversals pass only leaf references read from the nodes (or kept from
+        // them, `Closest::leaf`), and a
         // reference with `PACKETS` set is made only by `Leaves::push`, after `pack` appended
         // the leaf's packets (one, or two with `TWO_PACKETS`) from `first` on; the packets
         // are not changed after the build.
@@ -204,12 +213,45 @@ impl Leaves {
         }
     }
 
-    /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`.
+    /// The unnormalised geometric normal of triangle `g` (its number over all meshes) from
+    /// the packets of leaf reference `leaf` (a [`Closest::leaf`]), if that leaf is referenced
+    /// by its packets and holds the triangle: the bits of [`TriangleMesh::geometric_normal`]
+    /// (see [`TrianglePacket::geometric_normal_at`]), read from packets the traversal has just
+    /// tested rather than from the mesh's buffers.
+    ///
+    /// [`TriangleMesh::geometric_normal`]: crate::shapes::mesh::TriangleMesh::geometric_normal
+    #[inline(always)]
+    pub(super) fn packet_normal(&self, leaf: u32, g: u32) -> Option<Vec3A> {
+        if leaf & PACKETS == 0 {
+            return None;
+        }
+        let first = (leaf & (TWO_PACKETS - 1)) as usize;
+        let two = leaf & TWO_PACKETS != 0;
+        debug_assert!(first + 1 + usize::from(two) <= self.tri_packets.len());
+        // The lanes holding `g` over the leaf's one or two packets (bits 4..8: the second),
+        // and the packet of the first of them, picked without a branch (a hit's packet and
+        // lane are as good as random).
+        let p = self.tri_packets.as_ptr();
+        // SAFETY: a reference with `PACKETS` names one packet from `first` on, two with
+        // `TWO_PACKETS` (see `Leaves::direct_packets`); `first + two` is one of them.
+        let (a, b) = unsafe { (&*p.add(first), &*p.add(first + usize::from(two))) };
+        let mask = a.lanes_of(g) | ((b.lanes_of(g) << 4) & if two { 0xf0 } else { 0 });
+        if mask == 0 {
+            return None;
+        }
+        let lane = mask.trailing_zeros() as usize;
+        // SAFETY: `lane >= 4` only from the second packet's bits, set only with `two`.
+        let packet = unsafe { &*p.add(first + (lane >> 2)) };
+        Some(packet.geometric_normal_at(lane))
+    }
+
+    /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`
+    /// (and with `KEEP_LEAF`, a triangle's leaf in [`Closest::leaf`]).
     /// `leaf` is a reference read from this BVH's nodes (see [`Leaves::direct_packets`]).
     /// `lanes` is `ray` as `test` set it up for the triangle packets, once per query.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub(super) fn closest<P: PairTest>(
+    pub(super) fn closest<P: PairTest, const KEEP_LEAF: bool>(
         &self,
         test: P,
         lanes: &P::Lanes,
@@ -229,6 +271,9 @@ impl Leaves {
                 c.triangle = g;
                 c.bary = b;
                 c.shape = usize::MAX;
+                if KEEP_LEAF {
+                    c.leaf = leaf;
+                }
             }
             return;
         }

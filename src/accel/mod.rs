@@ -10,7 +10,7 @@ mod triangles;
 mod unbuilt;
 mod wide;
 
-pub use bvh::{Bvh, Surface};
+pub use bvh::{Bvh, NgHit, Surface};
 pub use unbuilt::{MAX_PRIMITIVES, Unbuilt};
 
 use glam::Vec3A;

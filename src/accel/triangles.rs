@@ -54,6 +54,39 @@ impl TrianglePacket {
         p
     }
 
+    /// The lanes that hold triangle `g` (its number over all the BVH's meshes), as bits.
+    #[inline(always)]
+    pub(crate) fn lanes_of(&self, g: u32) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: SSE2 is part of x86-64; `ids` is four `u32`s, read unaligned. (One
+            // compare of the four: the compiler made four compares and their bits of it.)
+            unsafe {
+                let ids = _mm_loadu_si128(self.ids.as_ptr().cast());
+                let eq = _mm_cmpeq_epi32(ids, _mm_set1_epi32(g as i32));
+                _mm_movemask_ps(_mm_castsi128_ps(eq)) as u32
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        (0..4).fold(0, |m, l| m | (u32::from(self.ids[l] == g) << l))
+    }
+
+    /// The unnormalised geometric normal (`e1 x e2`) of the triangle in lane `lane % 4`: the
+    /// operations of [`TriangleMesh::geometric_normal`] on the same edges (the packet's are
+    /// `v1 - v0` and `v2 - v0` of the mesh's positions), so the same bits. (The lane picks
+    /// addresses, not a branch: on a hit's random lane, a branch or jump table was
+    /// mispredicted.)
+    #[inline(always)]
+    pub(crate) fn geometric_normal_at(&self, lane: usize) -> Vec3A {
+        let l = lane % 4;
+        let edge = |e: &[Vec4; 3]| {
+            let at = |a: usize| AsRef::<[f32; 4]>::as_ref(&e[a])[l];
+            Vec3A::new(at(0), at(1), at(2))
+        };
+        edge(&self.e1).cross(edge(&self.e2))
+    }
+
     /// The lanes whose triangle the ray crosses with `t_min < t < t_max`, and each lane's `t`
     /// and barycentric coordinates: the same operations in the same order as the scalar
     /// [`Triangle`] test, so the same bits.
