@@ -29,13 +29,13 @@
 //! Knobs for measuring one effect at a time: `SCALE_QUERIES=closest` (or `any`) traces only
 //! those queries, `SCALE_ONE_THREAD=1` leaves out the two-thread runs, and
 //! `SCALE_STACK_PAD=n` calls the traversals `n` frames deeper on the stack, printing the
-//! tracing thread's stack offset modulo 4096 (`stack ...` on stderr).
+//! tracing thread's stack offset modulo 4096 (`stack ...` on stderr); with any of them set
+//! the results files are not written.
 //!
 //! Results: a table on stdout, `target/scale/results.json`, and the curves drawn by the
 //! project's chart code into `target/scale/scale.png`.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
@@ -51,66 +51,12 @@ use sppm_lang::internals::render::{RenderOptions, render};
 #[path = "support/displaced.rs"]
 mod displaced;
 use displaced::{Mesh, bounce_rays, camera_rays, displaced_sphere, mesh_bvh, triangle_mesh};
+#[path = "support/scale_files.rs"]
+mod scale_files;
+use scale_files::{process_cpu, thread_cpu, write_mesh, write_obj, write_rays};
 
 const CAMERA_SIDE: u32 = 1024;
 const BOUNCE_RAYS: usize = 1 << 20;
-
-fn write_mesh(path: &Path, mesh: &Mesh) {
-    let mut out = Vec::with_capacity(8 + mesh.vertices.len() * 12 + mesh.triangles.len() * 12);
-    out.extend((mesh.vertices.len() as u32).to_le_bytes());
-    out.extend((mesh.triangles.len() as u32).to_le_bytes());
-    for v in mesh.vertices.iter().flatten() {
-        out.extend(v.to_le_bytes());
-    }
-    for i in mesh.triangles.iter().flatten() {
-        out.extend(i.to_le_bytes());
-    }
-    std::fs::write(path, out).unwrap();
-}
-
-fn write_rays(path: &Path, rays: &[Ray]) {
-    let mut out = Vec::with_capacity(4 + rays.len() * 24);
-    out.extend((rays.len() as u32).to_le_bytes());
-    for r in rays {
-        for c in r.o.to_array().into_iter().chain(r.d.to_array()) {
-            out.extend(c.to_le_bytes());
-        }
-    }
-    std::fs::write(path, out).unwrap();
-}
-
-fn write_obj(path: &Path, mesh: &Mesh) {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    for v in &mesh.vertices {
-        writeln!(f, "v {} {} {}", v[0], v[1], v[2]).unwrap();
-    }
-    for t in &mesh.triangles {
-        writeln!(f, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1).unwrap();
-    }
-    f.flush().unwrap();
-}
-
-/// CPU time of the calling thread in seconds (Linux: `/proc/thread-self/schedstat`, in ns).
-fn thread_cpu() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-        .map_or(f64::NAN, |ns| ns as f64 * 1e-9)
-}
-
-/// CPU time of the process's live threads in seconds (Linux: the sum of
-/// `/proc/self/task/*/schedstat`; rayon's pool threads live as long as the process).
-fn process_cpu() -> f64 {
-    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
-        return f64::NAN;
-    };
-    dir.filter_map(|e| {
-        let s = std::fs::read_to_string(e.ok()?.path().join("schedstat")).ok()?;
-        s.split_whitespace().next()?.parse::<u64>().ok()
-    })
-    .map(|ns| ns as f64 * 1e-9)
-    .sum()
-}
 
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Query {
@@ -140,9 +86,8 @@ fn closest_record(bvh: &Bvh, ray: &Ray) -> bool {
     }
 }
 
-/// Runs `f` `n` frames deeper on the stack (48 bytes a frame in the release build), to
-/// measure how the traversals' speed depends on the stack pointer they are called with
-/// (`SCALE_STACK_PAD`).
+/// Runs `f` `n` frames deeper on the stack, to measure how the traversals' speed depends on
+/// the stack pointer they are called with (`SCALE_STACK_PAD`).
 #[inline(never)]
 fn padded(n: usize, f: &mut dyn FnMut() -> (f64, usize)) -> (f64, usize) {
     if n == 0 {
@@ -252,7 +197,11 @@ fn ours(mesh: &Mesh, camera: &[Ray], bounce: &[Ray]) -> Figures {
         .collect();
     println!("  (ours, bytes/triangle: {})", parts.join(", "));
     let only = std::env::var("SCALE_QUERIES").unwrap_or_default();
-    let one_thread = std::env::var_os("SCALE_ONE_THREAD").is_some();
+    if !matches!(only.as_str(), "" | "closest" | "any") {
+        eprintln!("SCALE_QUERIES={only}: `closest` or `any`");
+        std::process::exit(2);
+    }
+    let one_thread = std::env::var("SCALE_ONE_THREAD").is_ok_and(|v| v == "1");
     for (set, rays) in [("camera", camera), ("bounce", bounce)] {
         for (q, query) in [("closest", Query::Closest), ("any", Query::Any)] {
             if !only.is_empty() && only != q {
@@ -519,6 +468,13 @@ fn main() {
         json.push('\n');
     }
     json.push_str("]\n");
+    if ["SCALE_QUERIES", "SCALE_ONE_THREAD", "SCALE_STACK_PAD"]
+        .iter()
+        .any(|k| std::env::var_os(k).is_some())
+    {
+        println!("\n(a SCALE_ knob set: results.json and scale.png left as they were)");
+        return;
+    }
     std::fs::write(root.join("results.json"), json).unwrap();
     chart(&root.join("scale.png"), &rows);
     println!("\nwrote {}", root.join("results.json").display());

@@ -406,8 +406,8 @@ impl Bvh {
     }
 
     /// The closest-hit traversal; with `NG`, also the hit triangle's geometric normal in `ng`
-    /// ([`Bvh::intersect_ng`]: a copy of the traversal of its own, so that the others' code
-    /// stays as it was).
+    /// ([`Bvh::intersect_ng`]: an instance of its own, so that keeping the hit's leaf costs
+    /// the other queries nothing).
     #[inline(always)]
     fn closest_with<B: BoxTest + PairTest, const NG: bool>(
         &self,

@@ -33,6 +33,13 @@ pub(super) struct Leaf {
 pub(super) const PACKETS: u32 = 1 << 30;
 const TWO_PACKETS: u32 = 1 << 29;
 
+/// The index of the first triangle packet of a leaf referenced by its packets ([`PACKETS`]),
+/// and whether it has a second.
+#[inline(always)]
+fn packet_span(leaf: u32) -> (usize, bool) {
+    ((leaf & (TWO_PACKETS - 1)) as usize, leaf & TWO_PACKETS != 0)
+}
+
 /// The packed contents of all leaves.
 #[derive(Default)]
 pub(super) struct Leaves {
@@ -195,11 +202,9 @@ impl Leaves {
     /// (Read without a bounds check: the checks were two compares and branches per leaf.)
     #[inline(always)]
     fn direct_packets(&self, leaf: u32) -> Result<&TrianglePacket, &[TrianglePacket; 2]> {
-        let first = (leaf & (TWO_PACKETS - 1)) as usize;
-        let two = leaf & TWO_PACKETS != 0;
+        let (first, two) = packet_span(leaf);
         debug_assert!(first + 1 + usize::from(two) <= self.tri_packets.len());
-        // SAFETY: the traversals pass only leaf references read from the nodes (or kept from
-        // them, `Closest::leaf`), and a
+        // SAFETY: the traversals pass only leaf references read from the nodes, and a
         // reference with `PACKETS` set is made only by `Leaves::push`, after `pack` appended
         // the leaf's packets (one, or two with `TWO_PACKETS`) from `first` on; the packets
         // are not changed after the build.
@@ -225,24 +230,19 @@ impl Leaves {
         if leaf & PACKETS == 0 {
             return None;
         }
-        let first = (leaf & (TWO_PACKETS - 1)) as usize;
-        let two = leaf & TWO_PACKETS != 0;
-        debug_assert!(first + 1 + usize::from(two) <= self.tri_packets.len());
+        let (first, two) = packet_span(leaf);
+        // (Checked reads: once a query, and `leaf` may be any value.)
+        let packets = self.tri_packets.get(first..=first + usize::from(two))?;
         // The lanes holding `g` over the leaf's one or two packets (bits 4..8: the second),
-        // and the packet of the first of them, picked without a branch (a hit's packet and
-        // lane are as good as random).
-        let p = self.tri_packets.as_ptr();
-        // SAFETY: a reference with `PACKETS` names one packet from `first` on, two with
-        // `TWO_PACKETS` (see `Leaves::direct_packets`); `first + two` is one of them.
-        let (a, b) = unsafe { (&*p.add(first), &*p.add(first + usize::from(two))) };
+        // and the packet of the first of them, picked by index rather than a branch (a hit's
+        // packet and lane are as good as random).
+        let (a, b) = (&packets[0], &packets[packets.len() - 1]);
         let mask = a.lanes_of(g) | ((b.lanes_of(g) << 4) & if two { 0xf0 } else { 0 });
         if mask == 0 {
             return None;
         }
         let lane = mask.trailing_zeros() as usize;
-        // SAFETY: `lane >= 4` only from the second packet's bits, set only with `two`.
-        let packet = unsafe { &*p.add(first + (lane >> 2)) };
-        Some(packet.geometric_normal_at(lane))
+        Some(packets.get(lane >> 2)?.geometric_normal_at(lane))
     }
 
     /// Tests the leaf referenced by `leaf` for a hit closer than `t_max`, recording it in `c` and `t_max`

@@ -1,4 +1,5 @@
-//! [`Bsdf::eval`] against the separate calls it stands for.
+//! [`Bsdf::eval`] against the separate calls it stands for, and [`Bsdf::samples_delta`]
+//! against the samples.
 
 use glam::Vec3A;
 
@@ -94,7 +95,8 @@ fn eval_gives_the_separate_calls_values() {
 
 /// A BSDF that [`Bsdf::samples_delta`] says has no delta lobe never gives a specular sample,
 /// and each kind that says it has one does give one: every kind of lobe, bumped or not, in
-/// both transport modes.
+/// both transport modes; and it says so exactly for the smooth kinds (mirror, pane, and glass,
+/// conductor or coat of roughness 0), not for the rough ones.
 #[test]
 fn samples_delta_says_which_bsdfs_give_specular_samples() {
     let mut r = Rng::new(12);
@@ -102,12 +104,24 @@ fn samples_delta_says_which_bsdfs_give_specular_samples() {
     for n in 0..160_000 {
         let kind = n % 8;
         let l = lobes(&mut r, kind);
+        let smooth = match l {
+            Lobes::Diffuse { .. } | Lobes::Glossy { .. } => Some(false),
+            Lobes::Mirror { .. } | Lobes::ThinGlass { .. } => Some(true),
+            Lobes::Glass { alpha, .. }
+            | Lobes::Conductor { alpha, .. }
+            | Lobes::Coated { alpha, .. } => {
+                (alpha == 0.0 || alpha >= 0.05).then_some(alpha == 0.0)
+            }
+        };
         let b = if n % 3 == 0 {
             let np = (Vec3A::Z + 0.5 * uniform_sphere(r.vec2())).normalize();
             Bsdf::bumped(l, Frame::from_normal(Vec3A::Z), Vec3A::Z, np)
         } else {
             Bsdf::new(l, Vec3A::Z, Vec3A::X, Vec3A::Z)
         };
+        if let Some(smooth) = smooth {
+            assert_eq!(b.samples_delta(), smooth, "{b:?}");
+        }
         let wo = uniform_sphere(r.vec2());
         let mode = if n % 2 == 0 {
             TransportMode::Radiance

@@ -27,9 +27,11 @@ impl Bvh {
     /// triangle packet the traversal found the hit in (just tested, so in the cache) where
     /// that leaf is referenced by its packets, else from the mesh's buffers. (From the
     /// buffers, an incoherent ray's hit waited on two dependent loads, the triangle's indices
-    /// and then its positions, usually from memory in a large mesh.) The traversal is a copy
-    /// of [`Bvh::intersect_lazy`]'s that also keeps the leaf of the hit; the others are not
-    /// changed.
+    /// and then its positions, usually from memory in a large mesh.) The traversal is an
+    /// instance of [`Bvh::intersect_lazy`]'s that also keeps the leaf of the hit (the other
+    /// instances do not). The renderer asks for full records ([`Bvh::intersect`]); this is
+    /// the record an embedder used to Embree's `rtcIntersect1` gets, and the scale bench's
+    /// closest-hit query.
     ///
     /// [`TriangleMesh::geometric_normal`]: crate::shapes::mesh::TriangleMesh::geometric_normal
     #[inline]
@@ -148,6 +150,58 @@ mod tests {
             uvs: Vec::new(),
         };
         TriangleMesh::new(&data, &DAffine3::IDENTITY).unwrap()
+    }
+
+    /// Every triangle of a mesh-only tree is found in the packets of exactly one leaf, with
+    /// `TriangleMesh::geometric_normal`'s bits (so `intersect_ng` takes its normals from the
+    /// packets there, not from the buffers); a leaf that does not hold a triangle, a leaf
+    /// without packets and a reference naming packets past the end give none.
+    #[test]
+    fn every_triangle_has_its_normal_in_one_leafs_packets() {
+        use crate::accel::leaf::PACKETS;
+        use crate::accel::wide::LEAF;
+        let mut rng = Rng::new(47);
+        let bvh = Bvh::with_meshes(
+            Vec::new(),
+            vec![
+                (random_mesh(&mut rng, 2000), 3),
+                (random_mesh(&mut rng, 300), 5),
+            ],
+        )
+        .unwrap();
+        // The leaf references, from the root down.
+        let (mut leaves, mut todo) = (Vec::new(), vec![0u32]);
+        while let Some(r) = todo.pop() {
+            for &c in &bvh.node(r).child {
+                if c == u32::MAX {
+                } else if c & LEAF != 0 {
+                    leaves.push(c & !LEAF);
+                } else {
+                    todo.push(c);
+                }
+            }
+        }
+        let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+        let mut found = vec![0u32; 2300];
+        for &leaf in &leaves {
+            assert_ne!(
+                leaf & PACKETS,
+                0,
+                "a mesh-only tree's leaves are referenced by packets"
+            );
+            for (g, n) in found.iter_mut().enumerate() {
+                if let Some(ng) = bvh.leaves.packet_normal(leaf, g as u32) {
+                    let (mesh, k, _) = bvh.meshes.locate(g as u32);
+                    assert_eq!(bits(ng), bits(mesh.geometric_normal(k)), "triangle {g}");
+                    *n += 1;
+                }
+            }
+        }
+        assert!(found.iter().all(|&n| n == 1), "{found:?}");
+        assert!(leaves.len() > 100, "{} leaves", leaves.len());
+        assert_eq!(bvh.leaves.packet_normal(0, 0), None);
+        assert_eq!(bvh.leaves.packet_normal(leaves[0] & !PACKETS, 0), None);
+        assert_eq!(bvh.leaves.packet_normal(PACKETS | (PACKETS - 1), 0), None);
     }
 
     /// `intersect_ng` gives `intersect_lazy`'s hit (the same `t`, barycentrics, triangle and

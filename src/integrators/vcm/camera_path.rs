@@ -343,8 +343,8 @@ fn direct(
         )
     } else if ls.delta {
         let dist2 = f64::from((ls.p - sh.hit.p).length_squared());
-        let e = ctx.emission_pdf_w(li, ls.p, ls.n, -ls.wi);
-        (0.0, pn * dist2, e, 1.0)
+        let emission = ctx.emission_pdf_w(li, ls.p, ls.n, -ls.wi);
+        (0.0, pn * dist2, emission, 1.0)
     } else {
         (
             f64::from(e.pdf),
