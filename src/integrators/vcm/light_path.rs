@@ -183,8 +183,12 @@ fn to_camera(
     let Some(cs) = ctx.camera.sample_toward(sh.hit.p, rng.vec2()) else {
         return;
     };
-    let f = bsdf.f_mode(wo, cs.to_camera, TransportMode::Importance);
-    if f == Vec3A::ZERO {
+    // The value and the reverse density (toward `wo` from the camera's direction) at once.
+    let Some(e) = bsdf.eval(wo, cs.to_camera, TransportMode::Importance) else {
+        return;
+    };
+    let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
+    if scene.occluded(&ray, t_max) {
         return;
     }
     let cos = cs.to_camera.dot(bsdf.frame.n).abs();
@@ -199,15 +203,10 @@ fn to_camera(
             .radius
             .at(f64::from(cs.dist), ctx.pixel_scale(cs.pixel as usize));
         let f = ctx.factors(r);
-        let rev = f64::from(bsdf.pdf(cs.to_camera, wo));
-        mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, rev)
+        mis::to_camera(&f, &q.gathered(&f), camera_pdf_a, f64::from(e.pdf_rev))
     };
-    let (ray, t_max) = scene.spawn_ray_to(sh.hit.p, sh.hit.n, cs.lens, Vec3A::ZERO);
-    if scene.occluded(&ray, t_max) {
-        return;
-    }
     let absorbed = transmittance(medium_after(scene, sh, wo, cs.to_camera, medium), cs.dist);
-    let c = beta * f * absorbed * (w * camera_pdf_a / ctx.light_paths) as f32;
+    let c = beta * e.f * absorbed * (w * camera_pdf_a / ctx.light_paths) as f32;
     if c.is_finite() && c.max_element() > 0.0 {
         splats.push((cs.pixel, c));
     }
