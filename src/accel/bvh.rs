@@ -12,9 +12,9 @@ use super::triangles::{Meshes, PairTest};
 use super::unbuilt::{self, Unbuilt};
 use super::wide::{Avx, BoxRay, BoxTest, Halves, LEAF, NODE_UNIT, WideNode, collapse, still_near};
 use crate::geometry::{Aabb, Hit, Ray};
+use crate::shapes::Shape;
 use crate::shapes::mesh::TriangleMesh;
 use crate::shapes::primitive::{AnyShape, LazyHit};
-use crate::shapes::{Shape, SplitShape};
 
 /// Traversal stack size: up to seven entries per level of the 8-wide tree (eight for a moment
 /// while a node's children are sorted on it), which is no deeper than the binary tree (< 64
@@ -33,8 +33,10 @@ pub(super) use super::build::BuildNode as Node;
 
 mod record;
 mod surface;
+mod unbounded;
 pub use record::NgHit;
 pub use surface::Surface;
+use unbounded::{unbounded_hit, unbounded_occludes};
 
 /// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
 /// primitive index).
@@ -579,26 +581,6 @@ impl Bvh {
                 None => return false,
             }
         }
-    }
-}
-
-/// [`AnyShape::intersect_lazy`] of an unbounded shape, a plane's test inlined: every query
-/// tests each of a scene's planes (its walls and floor), and the call and the dispatch cost
-/// more than a plane's own test (the same function, so the same hits).
-#[inline(always)]
-fn unbounded_hit(s: &AnyShape, ray: &Ray, t_min: f32, t_max: f32) -> Option<LazyHit> {
-    match s {
-        AnyShape::Plane(p) => p.hit_t(ray, t_min, t_max).map(LazyHit::T),
-        s => s.intersect_lazy(ray, t_min, t_max),
-    }
-}
-
-/// [`Shape::occluded`] of an unbounded shape, a plane's test inlined as in [`unbounded_hit`].
-#[inline(always)]
-fn unbounded_occludes(s: &AnyShape, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-    match s {
-        AnyShape::Plane(p) => p.hit_t(ray, t_min, t_max).is_some(),
-        s => s.occluded(ray, t_min, t_max),
     }
 }
 
