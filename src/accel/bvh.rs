@@ -33,10 +33,8 @@ pub(super) use super::build::BuildNode as Node;
 
 mod record;
 mod surface;
-mod unbounded;
 pub use record::NgHit;
 pub use surface::Surface;
-use unbounded::{unbounded_hit, unbounded_occludes};
 
 /// The accelerator: owns the shapes and meshes, each tagged with a caller id (e.g. a
 /// primitive index).
@@ -421,7 +419,7 @@ impl Bvh {
     ) -> Option<(LazyHit, Surface<'_>, u32)> {
         let mut best: Option<(LazyHit, Surface<'_>, u32)> = None;
         for (s, id) in &self.unbounded {
-            if let Some(h) = unbounded_hit(s, ray, t_min, t_max) {
+            if let Some(h) = s.intersect_lazy(ray, t_min, t_max) {
                 t_max = h.t();
                 best = Some((h, Surface::Shape(s), *id));
             }
@@ -545,7 +543,7 @@ impl Bvh {
         if self
             .unbounded
             .iter()
-            .any(|(s, _)| unbounded_occludes(s, ray, t_min, t_max))
+            .any(|(s, _)| s.occluded(ray, t_min, t_max))
         {
             return true;
         }

@@ -1,4 +1,4 @@
-//! The unbounded shapes' side list (a plane's tests inlined) against brute force.
+//! The unbounded shapes' side list against brute force.
 
 use glam::Vec3A;
 
