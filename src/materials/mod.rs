@@ -94,6 +94,14 @@ pub struct BsdfEval {
     pub pdf_rev: f32,
 }
 
+/// Whether a pair's local cosines `co`, `ci` (shading frame) are nonzero and put it on the
+/// same side as its geometric test did (`reflect`, the product of its cosines with `ng`).
+#[inline]
+fn shading_sides_agree(reflect: f32, co: f32, ci: f32) -> bool {
+    let local = co * ci;
+    local != 0.0 && (local > 0.0) == (reflect > 0.0)
+}
+
 /// A sampled direction.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BsdfSample {
@@ -191,24 +199,26 @@ impl Bsdf {
     /// `ng`) agrees with the shading frame's, for a BSDF that transmits or not.
     #[inline]
     fn local_pair(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<(Vec3A, Vec3A)> {
-        self.local_cosines(wo, wi, transmits)?;
-        Some((self.frame.to_local(wo), self.frame.to_local(wi)))
+        let reflect = self.geometric_sides(wo, wi, transmits)?;
+        let (o, i) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        shading_sides_agree(reflect, o.z, i.z).then_some((o, i))
     }
 
     /// [`Self::local_pair`]'s side tests alone: the pair's local cosines (the `z` of its
     /// local directions, bit for bit) where it passes them.
     #[inline]
     fn local_cosines(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<(f32, f32)> {
-        let reflect = wo.dot(self.ng) * wi.dot(self.ng);
-        if reflect == 0.0 || (!transmits && reflect < 0.0) {
-            return None;
-        }
+        let reflect = self.geometric_sides(wo, wi, transmits)?;
         let (co, ci) = (wo.dot(self.frame.n), wi.dot(self.frame.n));
-        let local = co * ci;
-        if local == 0.0 || (local > 0.0) != (reflect > 0.0) {
-            return None;
-        }
-        Some((co, ci))
+        shading_sides_agree(reflect, co, ci).then_some((co, ci))
+    }
+
+    /// The product of the pair's cosines with `ng` (its sign: reflection or transmission),
+    /// where it is not zero and, for a BSDF that does not transmit, the pair is on one side.
+    #[inline]
+    fn geometric_sides(&self, wo: Vec3A, wi: Vec3A, transmits: bool) -> Option<f32> {
+        let reflect = wo.dot(self.ng) * wi.dot(self.ng);
+        (!(reflect == 0.0 || (!transmits && reflect < 0.0))).then_some(reflect)
     }
 
     /// BSDF value for light arriving from `wi` and leaving toward `wo` (radiance transport:
