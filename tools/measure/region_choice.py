@@ -88,6 +88,7 @@ def pilot(a, name, seed, cals, budget, width):
     at the pilot's time as measured."""
     imgs, cpu, its, rho = {}, {}, {}, {}
     os.environ["HYBRID_MASK"] = "15"
+    os.environ["HYBRID_SPPM"] = "0"
     for m in ("sppm", "vcm"):
         fixed_m, per_it = cals[m]
         its[m] = max(1, int(round(budget * a.pilot / 4 / per_it)))
@@ -167,6 +168,12 @@ def example(a, name):
         bits = {}
         for k, q in enumerate(QUADRANTS):
             bits[choice[q]] = bits.get(choice[q], 0) | (1 << k)
+        # `--shared`: one `vcm` render whose `sppm` quadrants take SPPM's estimator from its
+        # light paths (`HYBRID_SPPM`, the measuring build of hybrid_sppm_2d7dd08.patch).
+        os.environ["HYBRID_SPPM"] = "0"
+        if a.shared:
+            os.environ["HYBRID_SPPM"] = str(bits.get("sppm", 0))
+            bits = {"vcm": 15}
         plan = plan_of(bits, cals, sized)
         fixed = max(f for _, _, f in plan.values())
         # The time past the fixed cost left after the pilot, shared by the pixels (or
@@ -231,6 +238,9 @@ def main():
                     help="the pilot's share of the budget (rule `pilot`)")
     # What ecx.external_reference reads.
     ap.add_argument("--ref-cpu", type=float, default=24.0)
+    ap.add_argument("--shared", action="store_true",
+                    help="one vcm render, its sppm quadrants by SPPM's estimator from its "
+                    "light paths")
     ap.add_argument("--assign", action="append", default=[],
                     help="name=m1,m2,m3,m4: the quadrants' methods instead of the oracle's")
     ap.add_argument("--share", action="append", default=[],
