@@ -3,12 +3,19 @@
 sppm: each quadrant of an example rendered by one method, the image put together from them.
 
 Reads a cache of `tools/equal_cpu_examples.py` (its references, budgets, calibrations and
-per-seed errors of path, sppm and vcm) and renders, per seed, each chosen method on its own
-quadrants only, with the measuring build of `tools/measure/patches/hybrid_mask_2d7dd08.patch`
-(`HYBRID_MASK`: the quadrants a render traces; the other pixels stay black and cost no camera
-path; sppm's photons and vcm's light paths are counted for the traced pixels, as each method
-counts them for an image of that many pixels; light-traced splats outside are dropped before
-their shadow ray). Two rules choose:
+per-seed errors of path, sppm and vcm) and renders, per seed (seeds 101.., independent of the
+cache's), each chosen method on its own quadrants only, with the measuring build of
+`tools/measure/patches/hybrid_regions_2d7dd08.patch`. `HYBRID_MASK`: the quadrants a render
+traces; the other pixels stay black and cost no camera path; sppm's photons (whole chunks of
+4096, at least one: at 64 pixels across often the full image's count) and vcm's light paths
+are counted for the traced pixels, as each method counts them for an image of that many
+pixels; the extra camera samples and sppm's camera/photon balance are taken over the traced
+pixels; a vcm camera path connects to the light path of its rank among them; light-traced
+splats outside are dropped before their shadow ray. `HYBRID_SPPM` (with `--shared`): one vcm
+render whose `sppm` quadrants take SPPM's estimator from its light vertices (from their
+second segment on), `HYBRID_SPPM_EXTRA` extra camera samples a pixel for their direct light,
+`HYBRID_SPPM_PATHS` light paths a pixel of theirs (default 0: vcm's count alone; the paths
+past vcm's count are not light-traced nor merged by vcm's pixels). Rules:
 
 - `--rule oracle`: per quadrant the method with the lowest RMSE there in the cache (it knows
   the reference: an upper bound for a rule by quadrant), or `--assign`'s choice;
@@ -34,6 +41,7 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 
 import numpy as np
@@ -77,16 +85,19 @@ def quadrant_slices(h, w):
 def pilot(a, name, seed, cals, budget, width):
     """The reference-free rule: `sppm` and `vcm` each render the whole image twice (their own
     seeds) for `--pilot` of the budget in all; per quadrant each one's squared error at the
-    full budget is predicted from those four images alone, and the smaller wins. Returns
-    (choice, the pilot's CPU past the fixed cost, vcm's pilot images as (sum, iterations)).
+    time left after the pilot is predicted from those four images alone, and the smaller
+    wins. Returns (choice, the pilot's CPU past the fixed cost, vcm's pilot images as (sum,
+    iterations)). The pilot's renders' fixed costs are not counted (a hybrid loads the scene
+    once).
 
-    vcm (taken as unbiased): its variance, the mean over the quadrant's pixels of
-    (a - b)^2 / 2, falls as 1 / time. sppm: its variance likewise from its two images, falling
-    as time^-alpha (alpha = 2/3, the default); its squared bias, the mean of (mean of sppm's
-    two - mean of vcm's two)^2 less both means' variances, as time^-2(1 - alpha) (the radius'
-    area shrinks as iterations^(alpha - 1)). With `--rule pilot-equal` the two are compared
-    at the pilot's time as measured."""
-    imgs, cpu, its, rho = {}, {}, {}, {}
+    vcm (taken as unbiased; its merges' radius shrinks, so it is only nearly so): its
+    variance, the mean over the quadrant's pixels of (a - b)^2 / 2, falls as 1 / time. sppm:
+    its variance likewise from its two images, falling as time^-alpha (the scene's `alpha`,
+    else 2/3); its squared bias, the mean of (mean of sppm's two - mean of vcm's two)^2 less
+    both means' variances, as time^-2(1 - alpha) (the radius' area shrinks as
+    iterations^(alpha - 1)). With `--rule pilot-equal` the two are compared at the pilot's
+    time as measured."""
+    imgs, cpu, its = {}, {}, {}
     os.environ["HYBRID_MASK"] = "15"
     os.environ["HYBRID_SPPM"] = "0"
     for m in ("sppm", "vcm"):
@@ -101,10 +112,11 @@ def pilot(a, name, seed, cals, budget, width):
                 return None
             cpu[m] += max(c - fixed_m, 0.0)
             imgs[m].append(ecx.read_exr(out))
-        # The share of a full render's time past its fixed cost that one pilot image had.
-        rho[m] = cpu[m] / 2 / (budget - fixed_m)
-    rho_s, rho_v = rho["sppm"], rho["vcm"]
-    alpha = 2.0 / 3.0
+    # A pilot image's time over the time left after the pilot (past the fixed cost).
+    left = max(budget - max(cals[m][0] for m in cpu) - cpu["sppm"] - cpu["vcm"], 1e-3)
+    rho_s, rho_v = cpu["sppm"] / 2 / left, cpu["vcm"] / 2 / left
+    found = re.search(r"\balpha\s+([0-9.]+)", open(f"examples/{name}.scn").read())
+    alpha = float(found.group(1)) if found else 2.0 / 3.0
     (s0, s1), (v0, v1) = imgs["sppm"], imgs["vcm"]
     h, w = s0.shape[:2]
     choice = {}
@@ -169,7 +181,7 @@ def example(a, name):
         for k, q in enumerate(QUADRANTS):
             bits[choice[q]] = bits.get(choice[q], 0) | (1 << k)
         # `--shared`: one `vcm` render whose `sppm` quadrants take SPPM's estimator from its
-        # light paths (`HYBRID_SPPM`, the measuring build of hybrid_sppm_2d7dd08.patch).
+        # light paths (`HYBRID_SPPM`).
         os.environ["HYBRID_SPPM"] = "0"
         if a.shared:
             os.environ["HYBRID_SPPM"] = str(bits.get("sppm", 0))
@@ -186,7 +198,9 @@ def example(a, name):
             n = max(1, int(round(left * share / per_it)))
             out = os.path.join(a.out, f"{name}-{m}-{b}-{seed}.exr")
             os.environ["HYBRID_MASK"] = str(b)
-            c = ecx.render(a, f"examples/{name}.scn", m, n, seed, out, width)
+            # Seeds of their own: the cache's renders with seeds 1.. are what it is compared
+            # with.
+            c = ecx.render(a, f"examples/{name}.scn", m, n, 100 + seed, out, width)
             if c is None:
                 return None
             # The scene is loaded and prepared once in a hybrid: one fixed cost, the largest.
@@ -195,7 +209,8 @@ def example(a, name):
             sized[m, b] = (spent + max(c - fixed_m, 1e-3), its + n)
             part = ecx.read_exr(out)
             if m == "vcm" and reuse is not None:
-                # vcm's pilot iterations are unbiased too: kept, weighted by iterations.
+                # vcm's pilot iterations estimate the same pixels: kept, weighted by
+                # iterations (not by their variance).
                 part = (part * n + reuse[0] * (reuse[1] / 2)) / (n + reuse[1])
             for k, (q, ys, xs) in enumerate(quadrant_slices(h, w)):
                 if b & (1 << k):
@@ -250,6 +265,8 @@ def main():
     a.methods = a.methods.split(",")
     a.assign = {k: v.split(",") for k, v in (x.split("=") for x in a.assign)}
     a.share = {tuple(k.split(":")): float(v) for k, v in (x.split("=") for x in a.share)}
+    if a.shared and a.rule != "oracle":
+        ap.error("--shared takes the oracle's or --assign's choice")
     os.makedirs(a.out, exist_ok=True)
     lines = ["| example | region | method chosen (seeds) | vcm / better | hybrid / better | "
              "verdict |",
