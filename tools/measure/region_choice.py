@@ -7,7 +7,7 @@ per-seed errors of path, sppm and vcm) and renders, per seed (seeds 101.., indep
 cache's), each chosen method on its own quadrants only, with the measuring build of
 `tools/measure/patches/hybrid_regions_2d7dd08.patch`. `HYBRID_MASK`: the quadrants a render
 traces; the other pixels stay black and cost no camera path; sppm's photons (whole chunks of
-4096, at least one: at 64 pixels across often the full image's count) and vcm's light paths
+4096, at least one: for room's top half half the full image's count) and vcm's light paths
 are counted for the traced pixels, as each method counts them for an image of that many
 pixels; the extra camera samples and sppm's camera/photon balance are taken over the traced
 pixels; a vcm camera path connects to the light path of its rank among them; light-traced
