@@ -56,6 +56,67 @@ pub struct Farm {
 }
 
 impl Farm {
+    /// Whether the scripts can carry every value as given: the partition a Slurm partition
+    /// name, the time limit in Slurm's form ([`check_time`]), and the paths, the job's name
+    /// and the render flags free of control characters. A newline would end an `#SBATCH`
+    /// line: what follows it would be read as another directive or, in the script's body,
+    /// a command. The scripts are only written for a farm that passes.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(p) = &self.partition {
+            check_partition(p)?;
+        }
+        if let Some(t) = &self.time {
+            check_time(t)?;
+        }
+        let paths = [
+            &self.binary,
+            &self.scene,
+            &self.output,
+            &self.workdir,
+            &self.dir,
+        ];
+        let outputs = self.tasks.iter().map(|t| &t.output);
+        let merged = match &self.work {
+            Work::Chains { merged, .. } => Some(merged),
+            Work::Frames { .. } => None,
+        };
+        for path in paths.into_iter().chain(outputs).chain(merged) {
+            let text = path.to_string_lossy();
+            if text.chars().any(char::is_control) {
+                return Err(format!(
+                    "the path {text:?} holds a control character, which a batch script \
+                     cannot carry"
+                ));
+            }
+        }
+        // The flags `farm` sets for each task itself.
+        const SET: [&str; 6] = [
+            "--threads",
+            "--output",
+            "--frame",
+            "--frames",
+            "--chain",
+            "-o",
+        ];
+        for a in &self.render_args {
+            let flag = a.split('=').next().unwrap_or(a);
+            if SET.contains(&flag) || (a.starts_with("-o") && !a.starts_with("--")) {
+                return Err(format!(
+                    "the render flag `{a}` is set by `farm` for each task (`--threads` from \
+                     `--cpus-per-task`; `-o`, `--frame(s)`, `--chain` per task)"
+                ));
+            }
+        }
+        for text in std::iter::once(&self.name).chain(&self.render_args) {
+            if text.chars().any(char::is_control) {
+                return Err(format!(
+                    "{text:?} holds a control character, which a batch script cannot carry"
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The tasks whose output is not a complete file (see [`is_complete`]).
     pub fn remaining(&self) -> Vec<&Task> {
         self.tasks
@@ -247,6 +308,49 @@ pub fn quote(text: &str) -> String {
     }
 }
 
+/// A Slurm partition name, or a comma-separated list of them (letters, digits, `_`, `-`,
+/// `.`).
+pub fn check_partition(p: &str) -> Result<(), String> {
+    let name = |n: &str| {
+        !n.is_empty()
+            && n.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
+    };
+    if p.split(',').all(name) {
+        Ok(())
+    } else {
+        Err(format!(
+            "`--partition {p:?}` is not a Slurm partition name (letters, digits, `_`, `-`, \
+             `.`; several separated by commas)"
+        ))
+    }
+}
+
+/// A time limit in one of Slurm's forms: `minutes`, `minutes:seconds`,
+/// `hours:minutes:seconds`, `days-hours`, `days-hours:minutes`, `days-hours:minutes:seconds`,
+/// or `UNLIMITED` / `INFINITE`.
+pub fn check_time(t: &str) -> Result<(), String> {
+    let number = |n: &str| !n.is_empty() && n.len() <= 9 && n.bytes().all(|b| b.is_ascii_digit());
+    let fields = |f: &str, most: usize| {
+        let parts: Vec<&str> = f.split(':').collect();
+        parts.len() <= most && parts.iter().all(|p| number(p))
+    };
+    let ok = t.eq_ignore_ascii_case("unlimited")
+        || t.eq_ignore_ascii_case("infinite")
+        || match t.split_once('-') {
+            Some((days, rest)) => number(days) && fields(rest, 3),
+            None => fields(t, 3),
+        };
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "`--time {t:?}` is not a Slurm time limit (`30`, `30:00`, `2:00:00`, `1-0`, \
+             `1-12:00`, `1-12:00:00`, `UNLIMITED`)"
+        ))
+    }
+}
+
 /// The job id in `sbatch --parsable`'s output (`123` or `123;cluster`).
 pub fn parse_job_id(stdout: &str) -> Option<u64> {
     let line = stdout.lines().map(str::trim).find(|l| !l.is_empty())?;
@@ -291,6 +395,70 @@ mod tests {
         assert_eq!(quote("it's"), "'it'\\''s'");
         assert_eq!(quote("$HOME;rm"), "'$HOME;rm'");
         assert_eq!(quote(""), "''");
+    }
+
+    /// The values a batch script carries are checked: a newline in the time limit, the
+    /// partition, a path or a render flag would start a directive or a command of its own.
+    #[test]
+    fn values_the_scripts_cannot_carry_are_refused() {
+        for t in [
+            "30",
+            "30:00",
+            "2:00:00",
+            "1-0",
+            "1-12:30",
+            "1-12:30:00",
+            "UNLIMITED",
+        ] {
+            assert_eq!(check_time(t), Ok(()), "{t}");
+        }
+        for t in [
+            "",
+            "1\n#SBATCH --wrap=x",
+            "1:2:3:4",
+            "a",
+            "1-2-3",
+            "1-",
+            "-1",
+            ":30",
+            "1 h",
+        ] {
+            assert!(check_time(t).is_err(), "{t:?}");
+        }
+        for p in ["gpu", "debug,long", "part_1.a-b"] {
+            assert_eq!(check_partition(p), Ok(()), "{p}");
+        }
+        for p in ["", "a\nb", "a b", "gpu,", "a;b"] {
+            assert!(check_partition(p).is_err(), "{p:?}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let tasks = vec![Task {
+            index: 0,
+            output: dir.path().join("f_0000.png"),
+        }];
+        let good = farm(Work::Frames { first: 0, last: 0 }, tasks, dir.path());
+        assert_eq!(good.check(), Ok(()));
+        let mut f = good.clone();
+        f.time = Some("1\necho INJECTED".into());
+        assert!(f.check().is_err());
+        let mut f = good.clone();
+        f.workdir = "/data\n#SBATCH --wrap=x".into();
+        assert!(f.check().unwrap_err().contains("control character"));
+        let mut f = good.clone();
+        f.render_args.push("--seed\r".into());
+        assert!(f.check().is_err());
+        for set in [
+            "--chain",
+            "--chain=1/2",
+            "-o",
+            "-ox.png",
+            "--threads",
+            "--frames",
+        ] {
+            let mut f = good.clone();
+            f.render_args.push(set.into());
+            assert!(f.check().unwrap_err().contains("set by `farm`"), "{set}");
+        }
     }
 
     #[test]

@@ -352,7 +352,7 @@ fn plan(args: &SlurmArgs) -> Result<Farm, String> {
     );
     let binary =
         std::env::current_exe().map_err(|e| format!("cannot find this program's file: {e}"))?;
-    Ok(Farm {
+    let farm = Farm {
         work,
         tasks,
         binary,
@@ -365,7 +365,9 @@ fn plan(args: &SlurmArgs) -> Result<Farm, String> {
         partition: args.partition.clone(),
         time: args.time.clone(),
         cpus_per_task: args.cpus_per_task,
-    })
+    };
+    farm.check()?;
+    Ok(farm)
 }
 
 fn write_script(path: &Path, text: &str) -> Result<(), String> {
