@@ -1634,34 +1634,21 @@ fn farm_slurm_writes_scripts_and_refuses_bad_requests() {
         &["farm", "slurm", &scene, "--chains", "0"],
         &["farm", "slurm", &p("missing.scn"), "--chains", "2"],
         &["farm", "slurm", &scene, "--frames", "0..200000"],
-        // A newline would end the `#SBATCH` line: the rest a directive or a command of its own.
-        &[
-            "farm",
-            "slurm",
-            &scene,
-            "--chains",
-            "2",
-            "-o",
-            &p("n.exr"),
-            "--time",
-            "1\n#SBATCH --wrap=x\necho INJECTED",
-        ],
-        &[
-            "farm",
-            "slurm",
-            &scene,
-            "--chains",
-            "2",
-            "-o",
-            &p("n.exr"),
-            "--partition",
-            "a\nb",
-        ],
         &[
             "farm", "slurm", &scene, "--chains", "2", "--time", "2 hours",
         ],
     ] {
         usage_error(bad);
+    }
+    // A newline would end the `#SBATCH` line: the rest a directive or a command of its own.
+    let out = p("n.exr");
+    for (flag, value) in [
+        ("--time", "1\n#SBATCH --wrap=x\necho INJECTED"),
+        ("--partition", "a\nb"),
+    ] {
+        usage_error(&[
+            "farm", "slurm", &scene, "--chains", "2", "-o", &out, flag, value,
+        ]);
     }
     let left: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
