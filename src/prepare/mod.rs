@@ -213,7 +213,7 @@ impl<'a> PreparedScene<'a> {
                             "{n} ray{} gave up on this isosurface after {} stretches each and \
                              were taken as misses: the image may show holes or specks on it",
                             if n == 1 { "" } else { "s" },
-                            crate::shapes::isosurface::MAX_VISITS
+                            iso.max_visits()
                         ),
                     )
                     .with_label("rays gave up here")

@@ -166,6 +166,12 @@ pub struct Function {
 }
 
 impl Function {
+    /// The operations of one evaluation (calls to other functions included: the program is
+    /// flat).
+    pub fn ops(&self) -> usize {
+        self.code.len()
+    }
+
     /// Checks `code`, a program of `params` parameters using `slots` slots (parameters first).
     pub fn new(params: usize, slots: usize, code: Vec<Op>) -> Result<Function, FunctionError> {
         if code.len() > MAX_OPS {

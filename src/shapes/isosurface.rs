@@ -12,8 +12,10 @@
 //! feature thinner than the accuracy). A crossing is refined by a bracketed regula falsi to
 //! full precision. No crossing between features
 //! thicker than the accuracy is skipped, whatever the function's gradient: nothing is assumed
-//! of it. A ray may visit at most [`MAX_VISITS`] stretches; one that needs more is counted
-//! ([`Isosurface::exhausted`]) and treated as a miss.
+//! of it. A ray may visit at most [`MAX_VISITS`] stretches, fewer for a function of many
+//! operations ([`visit_budget`]: a ray's work is bounded in operations, so that one ray of a
+//! costly function cannot hold a render, or its interruption, for minutes); one that needs
+//! more is counted ([`Isosurface::exhausted`]) and treated as a miss.
 //!
 //! Without `open`, the container's walls close the solid where the function is below the
 //! threshold on them. The normal is the function's gradient by central differences (a wall's
@@ -33,6 +35,21 @@ use crate::scene::{self, Container, Function};
 /// Most stretches one ray may visit (each one interval evaluation of the function).
 pub const MAX_VISITS: u32 = 200_000;
 
+/// Most function operations one ray may spend on its stretches: [`MAX_VISITS`] stretches of a
+/// function of 64 operations (a 60 000-operation function gets 213 stretches; one ray then
+/// costs about as much as one of the smallest functions' at its cap).
+pub const MAX_RAY_OPS: u64 = MAX_VISITS as u64 * 64;
+
+/// The least stretches a ray may visit, however costly the function: enough to halve a
+/// chord down to the accuracy along one path (64 levels, two stretches each).
+const MIN_VISITS: u32 = 128;
+
+/// The stretches a ray of a function of `ops` operations may visit.
+pub fn visit_budget(ops: usize) -> u32 {
+    let by_ops = MAX_RAY_OPS / (ops.max(1) as u64);
+    by_ops.clamp(u64::from(MIN_VISITS), u64::from(MAX_VISITS)) as u32
+}
+
 pub use crate::scene::blob::DEFAULT_ACCURACY;
 
 pub struct Isosurface {
@@ -44,6 +61,8 @@ pub struct Isosurface {
     /// The step of the normal's central differences.
     h: f64,
     exhausted: AtomicU64,
+    /// The stretches one ray may visit ([`visit_budget`]).
+    max_visits: u32,
 }
 
 /// What a ray meets: the surface, or a wall of the container.
@@ -73,7 +92,13 @@ impl Isosurface {
             accuracy: iso.accuracy,
             h: iso.accuracy.min(1e-7 * (hi - lo).length()),
             exhausted: AtomicU64::new(0),
+            max_visits: visit_budget(iso.function.ops()),
         })
+    }
+
+    /// The stretches one ray may visit before it is taken as a miss.
+    pub fn max_visits(&self) -> u32 {
+        self.max_visits
     }
 
     /// Rays given up as misses since the shape was made, their stretches exhausted.
@@ -169,7 +194,7 @@ impl Isosurface {
         let mut visits = 0;
         while let Some((lo, hi, glo, ghi)) = stack.pop() {
             visits += 1;
-            if visits > MAX_VISITS {
+            if visits > self.max_visits {
                 self.exhausted.fetch_add(1, Ordering::Relaxed);
                 return Some(None);
             }
@@ -353,6 +378,31 @@ mod tests {
             accuracy: 1e-9,
         })
         .unwrap()
+    }
+
+    /// A ray's stretches are bounded in operations: a costly function gets fewer of them, so
+    /// one undecided ray of it cannot hold a render (or its interruption) for minutes.
+    #[test]
+    fn a_costly_function_gets_fewer_stretches() {
+        assert_eq!(visit_budget(1), MAX_VISITS);
+        assert_eq!(visit_budget(64), MAX_VISITS);
+        assert_eq!(visit_budget(60_000), 213);
+        // The largest function allowed: 195 stretches, above the floor.
+        assert_eq!(visit_budget(crate::scene::function::MAX_OPS), 195);
+        assert_eq!(visit_budget(usize::MAX), MIN_VISITS);
+        assert_eq!(iso(radius_code(), 1.0, false).max_visits(), MAX_VISITS);
+        let mut code = radius_code();
+        for _ in 0..30_000 {
+            code.extend([Op::Const(0.0), Op::Binary(Binary::Add)]);
+        }
+        let costly = iso(code, 1.0, false);
+        assert_eq!(costly.max_visits(), visit_budget(60_012));
+        // The same sphere: a ray through it still finds the surface.
+        let m = costly.nearest(DVec3::new(0.0, 0.0, -3.0), DVec3::Z, 0.0, f64::INFINITY);
+        assert!(
+            matches!(m, Some(Meet::Surface(t)) if (t - 2.0).abs() < 1e-9),
+            "{m:?}"
+        );
     }
 
     #[test]
