@@ -157,6 +157,23 @@ def mse(img, ref, ys, xs, mask=None):
     return float(np.mean(d * d)) if d.size else float("nan")
 
 
+def reference(a, name):
+    """(reference, mask or None, the reference's noise per region, width to render at) of an
+    example: the committed external one, or the two path-traced halves in the cache."""
+    ext = EXTERNAL.get(name)
+    if ext:
+        ref, mask, noise, width = external_reference(a, ext)
+        h, w = ref.shape[:2]
+        # `noise` is already each pixel's variance: its mean over a region's masked pixels.
+        return ref, mask, {rn: float(np.mean(noise[ys, xs][mask[ys, xs]]))
+                           for rn, ys, xs in regions(h, w)}, width
+    d = os.path.join(a.cache, name)
+    r0, r1 = (read_exr(os.path.join(d, f"ref{k}.exr")) for k in (0, 1))
+    h, w = r0.shape[:2]
+    return 0.5 * (r0 + r1), None, {rn: mse(r0, r1, ys, xs) / 4
+                                   for rn, ys, xs in regions(h, w)}, a.width
+
+
 def example(a, name, methods):
     """Renders what the cache lacks for one example; returns ({method: [per-seed result]},
     the calibrations, the budget, the width rendered at)."""
@@ -166,25 +183,16 @@ def example(a, name, methods):
     refs = [os.path.join(d, f"ref{k}.exr") for k in (0, 1)]
     meta_path = os.path.join(d, "meta.json")
     meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
-    ext, mask, width = EXTERNAL.get(name), None, a.width
-    if ext:
-        ref, mask, noise, width = external_reference(a, ext)
-        h, w = ref.shape[:2]
-        # `noise` is already each pixel's variance: its mean over a region's masked pixels.
-        ref_noise = {rn: float(np.mean(noise[ys, xs][mask[ys, xs]]))
-                     for rn, ys, xs in regions(h, w)}
-    else:
-        if not all(os.path.exists(r) for r in refs):
-            cal = calibrate(a, scene, "path", refs[0])
-            if cal is None:
-                return None
-            n = max(1, int(round((a.ref_cpu / 2 - cal[0]) / cal[1])))
-            for k, r in enumerate(refs):
-                render(a, scene, "path", n, 1000 + k, r)
-        r0, r1 = read_exr(refs[0]), read_exr(refs[1])
-        ref = 0.5 * (r0 + r1)
-        h, w = ref.shape[:2]
-        ref_noise = {rn: mse(r0, r1, ys, xs) / 4 for rn, ys, xs in regions(h, w)}
+    ext = EXTERNAL.get(name)
+    if not ext and not all(os.path.exists(r) for r in refs):
+        cal = calibrate(a, scene, "path", refs[0])
+        if cal is None:
+            return None
+        n = max(1, int(round((a.ref_cpu / 2 - cal[0]) / cal[1])))
+        for k, r in enumerate(refs):
+            render(a, scene, "path", n, 1000 + k, r)
+    ref, mask, ref_noise, width = reference(a, name)
+    h, w = ref.shape[:2]
     # Results measured against another reference (an older run's, another width, an older
     # noise estimate) are rendered again.
     ref_kind = f"{ext['image']}#noise-mean#{width}" if ext else "path"

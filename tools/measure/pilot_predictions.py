@@ -16,15 +16,16 @@ Measurement only: nothing in the renderer or its tests imports it.
 import argparse
 import json
 import os
-import re
 import sys
 
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.dirname(__file__))
 import equal_cpu_examples as ecx  # noqa: E402
+from region_choice import QUADRANTS, cached, pilot_terms, scene_alpha  # noqa: E402
 
-QUADRANTS = ["top left", "top right", "bottom left", "bottom right"]
+
 
 
 def main():
@@ -42,29 +43,22 @@ def main():
         d = os.path.join(a.cache, name)
         meta = json.load(open(os.path.join(d, "meta.json")))
         budget, cals = meta["budget"], meta["calibration"]
-        found = re.search(r"\balpha\s+([0-9.]+)", open(f"examples/{name}.scn").read())
-        alpha = float(found.group(1)) if found else 2.0 / 3.0
-        reached = {m: {q: np.mean([ecx.scaled(json.load(open(os.path.join(d, f"{m}-{s}.json"))),
-                                              q, budget, cals[m][0])
-                                   for s in range(1, a.seeds + 1)]) for q in QUADRANTS}
+        alpha = scene_alpha(name)
+        reached = {m: {q: np.mean(v) for q, v in cached(a, name, m, budget, cals[m][0]).items()}
                    for m in ("sppm", "vcm")}
         rows = {q: [] for q in QUADRANTS}
         for seed in range(1, a.seeds + 1):
-            img = {(m, k): ecx.read_exr(os.path.join(a.pilots, f"{name}-pilot-{m}-{seed}-{k}.exr"))
-                   for m in ("sppm", "vcm") for k in (0, 1)}
+            imgs = {m: [ecx.read_exr(os.path.join(a.pilots, f"{name}-pilot-{m}-{seed}-{k}.exr"))
+                        for k in (0, 1)] for m in ("sppm", "vcm")}
             rho = {}
             for m in ("sppm", "vcm"):
                 its = max(1, int(round(budget * a.pilot / 4 / cals[m][1])))
                 rho[m] = its * cals[m][1] / (budget - cals[m][0])
-            s0, s1, v0, v1 = img["sppm", 0], img["sppm", 1], img["vcm", 0], img["vcm", 1]
-            h, w = s0.shape[:2]
+            h, w = imgs["sppm"][0].shape[:2]
             for q, ys, xs in ecx.regions(h, w):
                 if q not in rows:
                     continue
-                vs = float(np.mean((s0[ys, xs] - s1[ys, xs]) ** 2) / 2)
-                vv = float(np.mean((v0[ys, xs] - v1[ys, xs]) ** 2) / 2)
-                dm = 0.5 * (s0 + s1) - 0.5 * (v0 + v1)
-                b2 = max(float(np.mean(dm[ys, xs] ** 2)) - vs / 2 - vv / 2, 0.0)
+                vs, vv, b2 = pilot_terms(imgs, ys, xs)
                 rows[q].append((vs * rho["sppm"] ** alpha,
                                 b2 * rho["sppm"] ** (2 * (1 - alpha)), vv * rho["vcm"]))
         for q in QUADRANTS:

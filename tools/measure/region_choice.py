@@ -52,21 +52,6 @@ import equal_cpu_examples as ecx  # noqa: E402
 QUADRANTS = ["top left", "top right", "bottom left", "bottom right"]
 
 
-def reference(a, name):
-    """(reference, mask or None, per-region noise, width) as the table's script has them."""
-    ext = ecx.EXTERNAL.get(name)
-    if ext:
-        ref, mask, noise, width = ecx.external_reference(a, ext)
-        h, w = ref.shape[:2]
-        return ref, mask, {rn: float(np.mean(noise[ys, xs][mask[ys, xs]]))
-                           for rn, ys, xs in ecx.regions(h, w)}, width
-    d = os.path.join(a.cache, name)
-    r0, r1 = (ecx.read_exr(os.path.join(d, f"ref{k}.exr")) for k in (0, 1))
-    h, w = r0.shape[:2]
-    return 0.5 * (r0 + r1), None, {rn: ecx.mse(r0, r1, ys, xs) / 4
-                                   for rn, ys, xs in ecx.regions(h, w)}, a.width
-
-
 def cached(a, name, m, budget, fixed):
     """Method m's per-seed scaled MSEs per region, from the cache."""
     d = os.path.join(a.cache, name)
@@ -80,6 +65,28 @@ def cached(a, name, m, budget, fixed):
 
 def quadrant_slices(h, w):
     return [(q, ys, xs) for q, ys, xs in ecx.regions(h, w) if q in QUADRANTS]
+
+
+def pilot_terms(imgs, ys, xs):
+    """From a pilot's two images of each method ({"sppm": [a, b], "vcm": [a, b]}), over a
+    region: sppm's variance, vcm's variance (each half the mean squared difference of its
+    two images) and sppm's squared bias (the squared difference of the two methods' means,
+    less both means' variances; at least 0)."""
+    (s0, s1), (v0, v1) = imgs["sppm"], imgs["vcm"]
+
+    def var(x, y):
+        return float(np.mean((x[ys, xs] - y[ys, xs]) ** 2) / 2)
+
+    var_s, var_v = var(s0, s1), var(v0, v1)
+    d = 0.5 * (s0 + s1) - 0.5 * (v0 + v1)
+    bias2 = max(float(np.mean(d[ys, xs] ** 2)) - var_s / 2 - var_v / 2, 0.0)
+    return var_s, var_v, bias2
+
+
+def scene_alpha(name):
+    """The example's `alpha`, else the default 2/3."""
+    found = re.search(r"\balpha\s+([0-9.]+)", open(f"examples/{name}.scn").read())
+    return float(found.group(1)) if found else 2.0 / 3.0
 
 
 def pilot(a, name, seed, cals, budget, width):
@@ -115,17 +122,11 @@ def pilot(a, name, seed, cals, budget, width):
     # A pilot image's time over the time left after the pilot (past the fixed cost).
     left = max(budget - max(cals[m][0] for m in cpu) - cpu["sppm"] - cpu["vcm"], 1e-3)
     rho_s, rho_v = cpu["sppm"] / 2 / left, cpu["vcm"] / 2 / left
-    found = re.search(r"\balpha\s+([0-9.]+)", open(f"examples/{name}.scn").read())
-    alpha = float(found.group(1)) if found else 2.0 / 3.0
-    (s0, s1), (v0, v1) = imgs["sppm"], imgs["vcm"]
-    h, w = s0.shape[:2]
+    alpha = scene_alpha(name)
+    h, w = imgs["sppm"][0].shape[:2]
     choice = {}
     for q, ys, xs in quadrant_slices(h, w):
-        def var(x, y):
-            return float(np.mean((x[ys, xs] - y[ys, xs]) ** 2) / 2)
-        var_s, var_v = var(s0, s1), var(v0, v1)
-        d = 0.5 * (s0 + s1) - 0.5 * (v0 + v1)
-        bias2 = max(float(np.mean(d[ys, xs] ** 2)) - var_s / 2 - var_v / 2, 0.0)
+        var_s, var_v, bias2 = pilot_terms(imgs, ys, xs)
         if a.rule == "pilot":
             mse_v = var_v * rho_v
             mse_s = var_s * rho_s ** alpha + bias2 * rho_s ** (2 * (1 - alpha))
@@ -133,7 +134,7 @@ def pilot(a, name, seed, cals, budget, width):
             # `pilot-equal`: compared as they are, at the pilot's time.
             mse_v, mse_s = var_v, var_s + bias2
         choice[q] = "vcm" if mse_v < mse_s else "sppm"
-    return choice, cpu["sppm"] + cpu["vcm"], (v0 + v1, 2 * its["vcm"])
+    return choice, cpu["sppm"] + cpu["vcm"], (sum(imgs["vcm"]), 2 * its["vcm"])
 
 
 def plan_of(bits, cals, sized):
@@ -154,7 +155,7 @@ def example(a, name):
     d = os.path.join(a.cache, name)
     meta = json.load(open(os.path.join(d, "meta.json")))
     budget, cals = meta["budget"], meta["calibration"]
-    ref, mask, ref_noise, width = reference(a, name)
+    ref, mask, ref_noise, width = ecx.reference(a, name)
     h, w = ref.shape[:2]
     per = {m: cached(a, name, m, budget, cals[m][0]) for m in a.methods}
     rmse = {m: {rn: math.sqrt(max(ecx.mean_se(v)[0], 0.0)) for rn, v in per[m].items()}
