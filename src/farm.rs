@@ -57,10 +57,12 @@ pub struct Farm {
 
 impl Farm {
     /// Whether the scripts can carry every value as given: the partition a Slurm partition
-    /// name, the time limit in Slurm's form ([`check_time`]), and the paths, the job's name
-    /// and the render flags free of control characters. A newline would end an `#SBATCH`
-    /// line: what follows it would be read as another directive or, in the script's body,
-    /// a command. The scripts are only written for a farm that passes.
+    /// name, the time limit in Slurm's form ([`check_time`]), the paths, the job's name and
+    /// the render flags free of control characters, and none of the render flags `farm`
+    /// sets itself. A newline would end an `#SBATCH` line: what follows it would be read as
+    /// another directive or, in the script's body, a command. The scripts do not check
+    /// again: call this before writing them (the command line writes none for a farm that
+    /// fails it).
     pub fn check(&self) -> Result<(), String> {
         if let Some(p) = &self.partition {
             check_partition(p)?;
@@ -80,12 +82,20 @@ impl Farm {
             Work::Chains { merged, .. } => Some(merged),
             Work::Frames { .. } => None,
         };
-        for path in paths.into_iter().chain(outputs).chain(merged) {
-            let text = path.to_string_lossy();
+        let texts = paths
+            .into_iter()
+            .chain(outputs)
+            .chain(merged)
+            .map(|p| p.to_string_lossy())
+            .chain(
+                std::iter::once(&self.name)
+                    .chain(&self.render_args)
+                    .map(Into::into),
+            );
+        for text in texts {
             if text.chars().any(char::is_control) {
                 return Err(format!(
-                    "the path {text:?} holds a control character, which a batch script \
-                     cannot carry"
+                    "{text:?} holds a control character, which a batch script cannot carry"
                 ));
             }
         }
@@ -104,13 +114,6 @@ impl Farm {
                 return Err(format!(
                     "the render flag `{a}` is set by `farm` for each task (`--threads` from \
                      `--cpus-per-task`; `-o`, `--frame(s)`, `--chain` per task)"
-                ));
-            }
-        }
-        for text in std::iter::once(&self.name).chain(&self.render_args) {
-            if text.chars().any(char::is_control) {
-                return Err(format!(
-                    "{text:?} holds a control character, which a batch script cannot carry"
                 ));
             }
         }
@@ -331,10 +334,7 @@ pub fn check_partition(p: &str) -> Result<(), String> {
 /// or `UNLIMITED` / `INFINITE`.
 pub fn check_time(t: &str) -> Result<(), String> {
     let number = |n: &str| !n.is_empty() && n.len() <= 9 && n.bytes().all(|b| b.is_ascii_digit());
-    let fields = |f: &str, most: usize| {
-        let parts: Vec<&str> = f.split(':').collect();
-        parts.len() <= most && parts.iter().all(|p| number(p))
-    };
+    let fields = |f: &str, most: usize| f.split(':').count() <= most && f.split(':').all(number);
     let ok = t.eq_ignore_ascii_case("unlimited")
         || t.eq_ignore_ascii_case("infinite")
         || match t.split_once('-') {
@@ -443,6 +443,9 @@ mod tests {
         assert!(f.check().is_err());
         let mut f = good.clone();
         f.workdir = "/data\n#SBATCH --wrap=x".into();
+        assert!(f.check().unwrap_err().contains("control character"));
+        let mut f = good.clone();
+        f.tasks[0].output = dir.path().join("f\n0000.png");
         assert!(f.check().unwrap_err().contains("control character"));
         let mut f = good.clone();
         f.render_args.push("--seed\r".into());

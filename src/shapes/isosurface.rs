@@ -40,14 +40,10 @@ pub const MAX_VISITS: u32 = 200_000;
 /// costs about as much as one of the smallest functions' at its cap).
 pub const MAX_RAY_OPS: u64 = MAX_VISITS as u64 * 64;
 
-/// The least stretches a ray may visit, however costly the function: enough to halve a
-/// chord down to the accuracy along one path (64 levels, two stretches each).
-const MIN_VISITS: u32 = 128;
-
-/// The stretches a ray of a function of `ops` operations may visit.
+/// The stretches a ray of a function of `ops` operations may visit (195 at the largest
+/// function allowed, [`crate::scene::function::MAX_OPS`]).
 pub fn visit_budget(ops: usize) -> u32 {
-    let by_ops = MAX_RAY_OPS / (ops.max(1) as u64);
-    by_ops.clamp(u64::from(MIN_VISITS), u64::from(MAX_VISITS)) as u32
+    (MAX_RAY_OPS / ops.max(1) as u64).clamp(1, u64::from(MAX_VISITS)) as u32
 }
 
 pub use crate::scene::blob::DEFAULT_ACCURACY;
@@ -387,9 +383,9 @@ mod tests {
         assert_eq!(visit_budget(1), MAX_VISITS);
         assert_eq!(visit_budget(64), MAX_VISITS);
         assert_eq!(visit_budget(60_000), 213);
-        // The largest function allowed: 195 stretches, above the floor.
+        // The largest function allowed: 195 stretches.
         assert_eq!(visit_budget(crate::scene::function::MAX_OPS), 195);
-        assert_eq!(visit_budget(usize::MAX), MIN_VISITS);
+        assert_eq!(visit_budget(usize::MAX), 1);
         assert_eq!(iso(radius_code(), 1.0, false).max_visits(), MAX_VISITS);
         let mut code = radius_code();
         for _ in 0..30_000 {
